@@ -1,0 +1,43 @@
+"""Coerce and check array inputs: float64, the expected trailing shape, finite values."""
+
+import numpy as np
+
+from rot_tools.errors import RotationError
+
+
+def as_float_array(x, tail, name):
+    """Return x as a float64 array whose shape ends in ``tail``, or raise RotationError."""
+    try:
+        arr = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise RotationError(f'{name} must be numeric: {exc}') from None
+    if arr.shape[arr.ndim - len(tail):] != tail or arr.ndim < len(tail):
+        want = '(..., ' + ', '.join(map(str, tail)) + ')' if tail else 'any shape'
+        raise RotationError(f'{name} must have shape {want}, got {arr.shape}')
+    return arr
+
+
+def require_finite(arr, name):
+    """Raise RotationError naming how many entries of arr are NaN/Inf and where the first is."""
+    finite = np.isfinite(arr)
+    if not finite.all():
+        bad = np.argwhere(~finite)
+        first = tuple(int(i) for i in bad[0])
+        raise RotationError(
+            f'{name} must be finite: {len(bad)} non-finite value(s), '
+            f'first {arr[first]} at index {first}')
+    return arr
+
+
+def finite_array(x, tail, name):
+    """as_float_array followed by require_finite."""
+    return require_finite(as_float_array(x, tail, name), name)
+
+
+def unit_vectors(v):
+    """Return (v / |v|, |v|) for v (..., 3); zero vectors give (0, 0, 1) and norm 0."""
+    norm = np.sqrt(np.einsum('...i,...i->...', v, v))
+    safe = np.where(norm > 0, norm, 1.0)
+    unit = v / safe[..., None]
+    unit = np.where((norm > 0)[..., None], unit, np.array([0.0, 0.0, 1.0]))
+    return unit, norm

@@ -1,0 +1,144 @@
+"""Rotation matrices: elementary rotations, the skew matrix, validity checks, quaternions.
+
+Conventions used throughout rot_tools: column vectors, active rotations, ``p' = R p``;
+a rotation matrix R is 3x3 orthogonal with det R = +1 (seed 000, Theorem 1). Every function
+takes one item or a batch with any leading shape ``...``.
+"""
+
+import numpy as np
+
+from rot_tools._arrays import as_float_array, finite_array
+from rot_tools.errors import RotationError
+
+ROTATION_TOL = 1e-9
+"""Default tolerance of is_rotation / validate_rotation on max|RᵀR − I| and |det R − 1|."""
+
+
+def _elementary(angle, i):
+    """Rotation by ``angle`` about coordinate axis i: the (j, k) plane turns, j, k cyclic after i."""
+    a = finite_array(angle, (), 'angle')
+    c, s = np.cos(a), np.sin(a)
+    j, k = (i + 1) % 3, (i + 2) % 3
+    out = np.zeros(a.shape + (3, 3))
+    out[..., i, i] = 1.0
+    out[..., j, j] = c
+    out[..., k, k] = c
+    out[..., k, j] = s
+    out[..., j, k] = -s
+    return out
+
+
+def rot_x(a):
+    """Rot_x(a) = [[1, 0, 0], [0, cos a, −sin a], [0, sin a, cos a]]; (...) → (..., 3, 3)."""
+    return _elementary(a, 0)
+
+
+def rot_y(a):
+    """Rot_y(a) = [[cos a, 0, sin a], [0, 1, 0], [−sin a, 0, cos a]]; (...) → (..., 3, 3)."""
+    return _elementary(a, 1)
+
+
+def rot_z(a):
+    """Rot_z(a) = [[cos a, −sin a, 0], [sin a, cos a, 0], [0, 0, 1]]; (...) → (..., 3, 3)."""
+    return _elementary(a, 2)
+
+
+def skew(v):
+    """[v]× = [[0, −v3, v2], [v3, 0, −v1], [−v2, v1, 0]], so skew(v) @ w == cross(v, w)."""
+    v = as_float_array(v, (3,), 'v')
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -z, y
+    out[..., 1, 0], out[..., 1, 2] = z, -x
+    out[..., 2, 0], out[..., 2, 1] = -y, x
+    return out
+
+
+def _defects(R):
+    """Per item: (max|RᵀR − I|, det R); NaN where R is not finite."""
+    gram = np.matmul(np.swapaxes(R, -1, -2), R)
+    gram[..., [0, 1, 2], [0, 1, 2]] -= 1.0
+    err = np.abs(gram).max(axis=(-2, -1))
+    det = np.einsum('...i,...i->...', R[..., 0, :], np.cross(R[..., 1, :], R[..., 2, :]))
+    return err, det
+
+
+def is_rotation(R, tol=ROTATION_TOL):
+    """True where max|RᵀR − I| ≤ tol and |det R − 1| ≤ tol; False for non-finite items.
+
+    R is (..., 3, 3); the result is a bool, or a bool array of shape (...). A shape that is
+    not (..., 3, 3) raises RotationError.
+    """
+    R = as_float_array(R, (3, 3), 'R')
+    with np.errstate(invalid='ignore'):
+        err, det = _defects(R)
+        ok = (err <= tol) & (np.abs(det - 1.0) <= tol)
+    return ok if ok.ndim else bool(ok)
+
+
+def validate_rotation(R, tol=ROTATION_TOL):
+    """Return R as a float64 array, or raise RotationError naming the defect.
+
+    Checked in order: shape (..., 3, 3), finite entries, orthogonality max|RᵀR − I| ≤ tol
+    (the message gives the size), det R = +1 (det −1 is a reflection).
+    """
+    R = finite_array(R, (3, 3), 'R')
+    err, det = _defects(R)
+    where = '' if R.ndim == 2 else ' (worst at item {})'
+    if not (err <= tol).all():
+        worst = np.unravel_index(np.argmax(err), err.shape)
+        raise RotationError(
+            f'R is not a rotation matrix: max|RᵀR − I| = {float(err[worst]):.3g} > tol {tol:g}'
+            + where.format(tuple(map(int, worst))))
+    dev = np.abs(det - 1.0)
+    if not (dev <= tol).all():
+        worst = np.unravel_index(np.argmax(dev), dev.shape)
+        kind = 'a reflection' if det[worst] < 0 else 'not a rotation'
+        raise RotationError(
+            f'R is {kind}: det R = {float(det[worst]):.6g}, expected +1'
+            + where.format(tuple(map(int, worst))))
+    return R
+
+
+def checked_rotation(R, check):
+    """validate_rotation(R) when check is true, else R as a float64 (..., 3, 3) array."""
+    return validate_rotation(R) if check else as_float_array(R, (3, 3), 'R')
+
+
+def nearest_rotation(R):
+    """The rotation closest to R in the Frobenius norm: U·diag(1, 1, det UVᵀ)·Vᵀ from R = USVᵀ.
+
+    For matrices typed with a few significant digits; a reflection (det R < 0) is refused,
+    since its nearest rotation is not what anyone meant.
+    """
+    R = finite_array(R, (3, 3), 'R')
+    if (np.linalg.det(R) <= 0).any():
+        raise RotationError('R has det R ≤ 0 (a reflection or singular), not near a rotation')
+    u, _, vt = np.linalg.svd(R)
+    return u @ vt  # det U·det Vᵀ = sign(det R) = +1
+
+
+def quaternion_to_matrix(q):
+    """Rotation matrix of q = (x, y, z, w) — the ROS message order; q is normalised first.
+
+    With s = 2/|q|²: R = I − s·[[y²+z², −(xy−zw), −(xz+yw)], ...] (the standard unit-quaternion
+    matrix scaled so that any non-zero q gives a rotation). (..., 4) → (..., 3, 3). The only
+    quaternion function in rot_tools: for message boundaries.
+    """
+    q = finite_array(q, (4,), 'quaternion (x, y, z, w)')
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    n2 = x * x + y * y + z * z + w * w
+    if not (n2 > 0).all():
+        raise RotationError('quaternion (x, y, z, w) must be non-zero, got |q| = 0')
+    s = 2.0 / n2
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1.0 - s * (y * y + z * z)
+    out[..., 0, 1] = s * (x * y - z * w)
+    out[..., 0, 2] = s * (x * z + y * w)
+    out[..., 1, 0] = s * (x * y + z * w)
+    out[..., 1, 1] = 1.0 - s * (x * x + z * z)
+    out[..., 1, 2] = s * (y * z - x * w)
+    out[..., 2, 0] = s * (x * z - y * w)
+    out[..., 2, 1] = s * (y * z + x * w)
+    out[..., 2, 2] = 1.0 - s * (x * x + y * y)
+    return out
