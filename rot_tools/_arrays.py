@@ -33,11 +33,3 @@ def finite_array(x, tail, name):
     """as_float_array followed by require_finite."""
     return require_finite(as_float_array(x, tail, name), name)
 
-
-def unit_vectors(v):
-    """Return (v / |v|, |v|) for v (..., 3); zero vectors give (0, 0, 1) and norm 0."""
-    norm = np.sqrt(np.einsum('...i,...i->...', v, v))
-    safe = np.where(norm > 0, norm, 1.0)
-    unit = v / safe[..., None]
-    unit = np.where((norm > 0)[..., None], unit, np.array([0.0, 0.0, 1.0]))
-    return unit, norm

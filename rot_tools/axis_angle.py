@@ -10,47 +10,84 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 
 import numpy as np
 
-from rot_tools._arrays import finite_array, unit_vectors
+from rot_tools._arrays import finite_array
+from rot_tools._backend import apply, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import checked_rotation
+
+
+def _rodrigues(ops, x, y, z, angle):
+    """Entries of cos θ·I + (1 − cos θ)·l̂l̂ᵀ + sin θ·[l̂]× for a unit (x, y, z).
+
+    From the half angle: 1 − cos θ = 2 sin²(θ/2) keeps its relative precision near 0,
+    sin θ = 2 sin(θ/2) cos(θ/2), cos θ = 1 − 2 sin²(θ/2).
+    """
+    sh, ch = ops.sin(0.5 * angle), ops.cos(0.5 * angle)
+    v = 2.0 * sh * sh
+    s, c = 2.0 * sh * ch, 1.0 - v
+    return [[c + v * x * x, v * x * y - s * z, v * x * z + s * y],
+            [v * x * y + s * z, c + v * y * y, v * y * z - s * x],
+            [v * x * z - s * y, v * y * z + s * x, c + v * z * z]]
+
+
+def _axis_angle_kernel(ops, axis, angle):
+    (x, y, z), norm = unit(ops, axis)
+    return _rodrigues(ops, x, y, z, angle), norm
 
 
 def axis_angle_to_matrix(axis, angle):
     """Rodrigues (seed 000 eq. 7): axis (..., 3), angle (...) → (..., 3, 3), broadcasting.
 
     The axis is normalised. A zero axis with a zero angle gives the identity; a zero axis with
-    a non-zero angle raises RotationError. 1 − cos θ is evaluated as 2 sin²(θ/2), which keeps
-    its relative precision at small angles.
+    a non-zero angle raises RotationError.
     """
     axis = finite_array(axis, (3,), 'axis')
     angle = finite_array(angle, (), 'angle')
-    unit, norm = unit_vectors(axis)
+    matrix, norm = apply(_axis_angle_kernel, [(axis, (3,)), (angle, ())],
+                         [((3, 3), np.float64), ((), np.float64)])
     bad = (norm == 0) & (angle != 0)
     if np.any(bad):
         first = float(np.broadcast_to(angle, bad.shape)[bad].flat[0])
         raise RotationError(f'axis is zero but the angle is {first:g} rad: a rotation needs '
                             'a direction (a zero axis is allowed only with angle 0)')
-    x, y, z = unit[..., 0], unit[..., 1], unit[..., 2]
-    c, s = np.cos(angle), np.sin(angle)
-    v = 2.0 * np.sin(0.5 * angle) ** 2
-    shape = np.broadcast_shapes(unit.shape[:-1], angle.shape)
-    out = np.empty(shape + (3, 3))
-    out[..., 0, 0] = c + v * x * x
-    out[..., 0, 1] = v * x * y - s * z
-    out[..., 0, 2] = v * x * z + s * y
-    out[..., 1, 0] = v * x * y + s * z
-    out[..., 1, 1] = c + v * y * y
-    out[..., 1, 2] = v * y * z - s * x
-    out[..., 2, 0] = v * x * z - s * y
-    out[..., 2, 1] = v * y * z + s * x
-    out[..., 2, 2] = c + v * z * z
-    return out
+    return matrix
+
+
+def _rotvec_kernel(ops, v):
+    (x, y, z), angle = unit(ops, v)
+    return (_rodrigues(ops, x, y, z, angle),)
 
 
 def rotvec_to_matrix(rotvec):
     """Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity."""
     rotvec = finite_array(rotvec, (3,), 'rotation vector')
-    return axis_angle_to_matrix(rotvec, np.sqrt(np.einsum('...i,...i->...', rotvec, rotvec)))
+    (matrix,) = apply(_rotvec_kernel, [(rotvec, (3,))], [((3, 3), np.float64)])
+    return matrix
+
+
+def axis_angle_kernel(ops, m):
+    """(unit axis, angle ∈ [0, π]) of the rotation m; see matrix_to_axis_angle."""
+    w = [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
+    cos = 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
+    skew_axis, sin = unit(ops, w)
+    angle = ops.atan2(sin, cos)
+    # Near π the skew part vanishes with sin θ: take the axis from the symmetric part
+    # (R + Rᵀ)/2 − cos θ·I = (1 − cos θ)·l̂l̂ᵀ, its column with the largest diagonal entry.
+    d0, d1, d2 = m[0][0] - cos, m[1][1] - cos, m[2][2] - cos
+    s01, s02, s12 = (
+        0.5 * (m[0][1] + m[1][0]), 0.5 * (m[0][2] + m[2][0]), 0.5 * (m[1][2] + m[2][1]))
+    first = (d0 >= d1) & (d0 >= d2)
+    second = (d1 > d0) & (d1 >= d2)
+    col = [ops.where(first, d0, ops.where(second, s01, s02)),
+           ops.where(first, s01, ops.where(second, d1, s12)),
+           ops.where(first, s02, ops.where(second, s12, d2))]
+    sym_axis, _ = unit(ops, col)
+    # Its sign from the skew part (free at exactly π, where w = 0).
+    flip = sym_axis[0] * w[0] + sym_axis[1] * w[1] + sym_axis[2] * w[2] < 0
+    sign = ops.where(flip, -1.0, 1.0)
+    near_pi = cos < 0
+    axis = [ops.where(near_pi, sign * a, b) + 0.0 for a, b in zip(sym_axis, skew_axis)]
+    return axis, angle
 
 
 def matrix_to_axis_angle(R, *, check=True):
@@ -65,31 +102,16 @@ def matrix_to_axis_angle(R, *, check=True):
     free: the largest component is made positive). At θ = 0 the axis is (0, 0, 1).
     """
     R = checked_rotation(R, check)
-    w = 0.5 * np.stack([R[..., 2, 1] - R[..., 1, 2],
-                        R[..., 0, 2] - R[..., 2, 0],
-                        R[..., 1, 0] - R[..., 0, 1]], axis=-1)
-    cos = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
-    axis, sin = unit_vectors(w)
-    angle = np.arctan2(sin, cos)
-    near_pi = cos < 0
-    if np.any(near_pi):
-        axis[near_pi] = _axis_near_pi(R[near_pi], cos[near_pi], w[near_pi])
-    return axis, angle
+    return apply(axis_angle_kernel, [(R, (3, 3))], [((3,), np.float64), ((), np.float64)])
 
 
-def _axis_near_pi(R, cos, w):
-    """Unit axis from the symmetric part (1 − cos θ)·l̂l̂ᵀ, signed so that l̂·w ≥ 0; (n,3,3)."""
-    sym = 0.5 * (R + np.swapaxes(R, -1, -2))
-    diag = np.arange(3)
-    sym[..., diag, diag] -= cos[..., None]
-    best = np.argmax(sym[..., diag, diag], axis=-1)
-    column = np.take_along_axis(sym, best[..., None, None], axis=-1)[..., 0]
-    axis = column / np.linalg.norm(column, axis=-1, keepdims=True)
-    flip = np.einsum('...i,...i->...', axis, w) < 0
-    return np.where(flip[..., None], -axis, axis)
+def _rotvec_of_matrix_kernel(ops, m):
+    axis, angle = axis_angle_kernel(ops, m)
+    return ([a * angle for a in axis],)
 
 
 def matrix_to_rotvec(R, *, check=True):
     """Rotation vector θ·l̂ of R, θ ∈ [0, π]; (..., 3, 3) → (..., 3)."""
-    axis, angle = matrix_to_axis_angle(R, check=check)
-    return axis * angle[..., None]
+    R = checked_rotation(R, check)
+    (rotvec,) = apply(_rotvec_of_matrix_kernel, [(R, (3, 3))], [((3,), np.float64)])
+    return rotvec

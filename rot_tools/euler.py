@@ -24,9 +24,13 @@ defined; the result is flagged ``degenerate``, θ3 is set to 0 and θ1 carries t
 angle (for lower-case sequences too).
 """
 
+import math
+from functools import partial
+
 import numpy as np
 
 from rot_tools._arrays import finite_array
+from rot_tools._backend import apply
 from rot_tools.errors import RotationError
 from rot_tools.so3 import checked_rotation
 
@@ -40,6 +44,19 @@ GIMBAL_LOCK_TOL = 1e-6
 """Default distance (rad) of θ2 from its singular value below which a result is degenerate."""
 
 
+def _parse(seq):
+    axes = ['XYZ'.index(a) for a in seq.upper()]
+    extrinsic = seq.islower()
+    if extrinsic:
+        axes.reverse()
+    i, j, last = axes
+    sigma = 1.0 if j == (i + 1) % 3 else -1.0
+    return i, j, 3 - i - j, sigma, last == i, extrinsic
+
+
+_PARSED = {seq: _parse(seq) for seq in EULER_SEQUENCES}
+
+
 def parse_sequence(seq):
     """Return (i, j, k, sigma, proper, extrinsic) for an Euler sequence name.
 
@@ -47,41 +64,38 @@ def parse_sequence(seq):
     with k the axis that is neither i nor j; sigma = +1 when (i, j, k) is a cyclic
     permutation of (0, 1, 2), else −1; proper is true for i-j-i sequences.
     """
-    if not isinstance(seq, str) or seq not in EULER_SEQUENCES:
+    try:
+        return _PARSED[seq]
+    except (KeyError, TypeError):
         raise RotationError(
             f'unknown Euler sequence {seq!r}: use one of {", ".join(EULER_SEQUENCES[:12])} '
-            '(intrinsic) or the same in lower case (extrinsic)')
-    extrinsic = seq.islower()
-    axes = [_AXES.index(a) for a in seq.upper()]
-    if extrinsic:
-        axes.reverse()
-    i, j, last = axes
-    k = 3 - i - j
-    sigma = 1.0 if j == (i + 1) % 3 else -1.0
-    return i, j, k, sigma, last == i, extrinsic
+            '(intrinsic) or the same in lower case (extrinsic)') from None
 
 
-def _intrinsic_entries(c1, s1, c2, s2, c3, s3, i, j, k, sig, proper):
-    """Entries {(row, col): value} of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i or k.
+def _matrix_kernel(ops, a, spec):
+    """Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i (proper) or k (Tait–Bryan).
 
-    Derived by applying the three elementary rotations to the unit vectors (seed 000 eq. 1 is
-    the case i, j, k = z, y, x, sig = −1).
+    Derived by applying the three elementary rotations to the unit vectors; seed 000 eq. 1
+    is the case (i, j, k) = (z, y, x), sigma = −1.
     """
+    i, j, k, sig, proper, extrinsic = spec
+    t1, t2, t3 = (a[2], a[1], a[0]) if extrinsic else a
+    c1, s1, c2, s2, c3, s3 = (
+        ops.cos(t1), ops.sin(t1), ops.cos(t2), ops.sin(t2), ops.cos(t3), ops.sin(t3))
+    m = [[None] * 3 for _ in range(3)]
     if proper:
-        return {
-            (i, i): c2, (i, j): s2 * s3, (i, k): sig * s2 * c3,
-            (j, i): s1 * s2, (j, j): c1 * c3 - s1 * c2 * s3,
-            (j, k): -sig * (c1 * s3 + s1 * c2 * c3),
-            (k, i): -sig * c1 * s2, (k, j): sig * (c1 * c2 * s3 + s1 * c3),
-            (k, k): c1 * c2 * c3 - s1 * s3,
-        }
-    return {
-        (i, i): c2 * c3, (i, j): -sig * c2 * s3, (i, k): sig * s2,
-        (j, i): sig * c1 * s3 + s1 * s2 * c3, (j, j): c1 * c3 - sig * s1 * s2 * s3,
-        (j, k): -sig * s1 * c2,
-        (k, i): s1 * s3 - sig * c1 * s2 * c3, (k, j): c1 * s2 * s3 + sig * s1 * c3,
-        (k, k): c1 * c2,
-    }
+        m[i][i], m[i][j], m[i][k] = c2, s2 * s3, sig * s2 * c3
+        m[j][i], m[j][j], m[j][k] = (
+            s1 * s2, c1 * c3 - s1 * c2 * s3, -sig * (c1 * s3 + s1 * c2 * c3))
+        m[k][i], m[k][j], m[k][k] = (
+            -sig * c1 * s2, sig * (c1 * c2 * s3 + s1 * c3), c1 * c2 * c3 - s1 * s3)
+    else:
+        m[i][i], m[i][j], m[i][k] = c2 * c3, -sig * c2 * s3, sig * s2
+        m[j][i], m[j][j], m[j][k] = (
+            sig * c1 * s3 + s1 * s2 * c3, c1 * c3 - sig * s1 * s2 * s3, -sig * s1 * c2)
+        m[k][i], m[k][j], m[k][k] = (
+            s1 * s3 - sig * c1 * s2 * c3, c1 * s2 * s3 + sig * s1 * c3, c1 * c2)
+    return (m,)
 
 
 def euler_to_matrix(angles, seq='ZYX'):
@@ -90,61 +104,65 @@ def euler_to_matrix(angles, seq='ZYX'):
     Intrinsic 'ABC': R = Rot_a(θ1)·Rot_b(θ2)·Rot_c(θ3); extrinsic 'abc': R = Rot_c(θ3)·Rot_b(θ2)·
     Rot_a(θ1). Any of the 24 names of EULER_SEQUENCES; another string raises RotationError.
     """
-    i, j, k, sig, proper, extrinsic = parse_sequence(seq)
+    spec = parse_sequence(seq)
     a = finite_array(angles, (3,), 'Euler angles')
-    if extrinsic:
-        a = a[..., ::-1]
-    c, s = np.cos(a), np.sin(a)
-    entries = _intrinsic_entries(
-        c[..., 0], s[..., 0], c[..., 1], s[..., 1], c[..., 2], s[..., 2], i, j, k, sig, proper)
-    out = np.empty(a.shape[:-1] + (3, 3))
-    for (row, col), value in entries.items():
-        out[..., row, col] = value
-    return out
+    (matrix,) = apply(partial(_matrix_kernel, spec=spec), [(a, (3,))], [((3, 3), np.float64)])
+    return matrix
 
 
-def _wrap(angle):
+def _wrap(ops, angle):
     """Map −π to +π (and −0 to +0) so that outer angles lie in (−π, π]."""
-    return np.where(angle == -np.pi, np.pi, angle) + 0.0
+    return ops.where(angle == -math.pi, math.pi, angle) + 0.0
+
+
+def _angles_kernel(ops, m, spec, lock_tol):
+    """Euler angles of m; see matrix_to_euler for the method."""
+    i, j, k, sig, proper, extrinsic = spec
+    if proper:  # R[i,i] = cos θ2, (R[j,i], −σR[k,i]) = sin θ2·(sin θ1, cos θ1)
+        y1, x1 = m[j][i], -sig * m[k][i]
+        rho = ops.sqrt(y1 * y1 + x1 * x1)
+        t2 = ops.atan2(rho, m[i][i])
+        lock = ops.minimum(t2, math.pi - t2) <= lock_tol
+        sign3, other = -sig, k
+    else:  # R[i,k] = σ sin θ2, (−σR[j,k], R[k,k]) = cos θ2·(sin θ1, cos θ1)
+        y1, x1 = -sig * m[j][k], m[k][k]
+        rho = ops.sqrt(y1 * y1 + x1 * x1)
+        t2 = ops.atan2(sig * m[i][k], rho)
+        lock = math.pi / 2 - ops.abs(t2) <= lock_tol
+        sign3, other = sig, i
+    t1 = ops.atan2(y1, x1)
+    safe = ops.where(rho > 0, rho, 1.0)
+    c1, s1 = x1 / safe, y1 / safe
+    # Peel: row j of Rot_i(θ1)ᵀ·R = c1·R[j] + σ s1·R[k] is row j of Rot_m(θ3), m the last
+    # axis, whose entries are cos θ3 at column j and sign3·sin θ3 at column `other`.
+    t3 = ops.atan2(sign3 * (c1 * m[j][other] + sig * s1 * m[k][other]),
+                   c1 * m[j][j] + sig * s1 * m[k][j])
+    if extrinsic:
+        # Solved as the reversed intrinsic sequence: its first angle is the extrinsic θ3,
+        # the one to zero at lock; its last then comes from the peel with θ1 = 0.
+        free = ops.atan2(sign3 * m[j][other], m[j][j])
+        t1, t3 = ops.where(lock, free, t3), ops.where(lock, 0.0, t1)
+    else:
+        # At lock R·e_j = Rot_i(θ1)·e_j = cos θ1·e_j + σ sin θ1·e_k carries the free angle.
+        t1 = ops.where(lock, ops.atan2(sig * m[k][j], m[j][j]), t1)
+        t3 = ops.where(lock, 0.0, t3)
+    return [_wrap(ops, t1), t2 + 0.0, _wrap(ops, t3)], lock
 
 
 def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     """Euler angles of R: returns (angles (..., 3), degenerate (...) bool).
 
     θ2 from the entries that do not involve θ1, θ3 (Tait–Bryan: R[i,k] = σ sin θ2 with
-    hypot(R[k,k], R[j,k]) = |cos θ2|; proper: R[i,i] = cos θ2, hypot(R[j,i], R[k,i]) = sin θ2),
-    each as an atan2 so it is accurate at every angle. θ1 from the column/row that carries it.
-    θ3 is then *peeled*: row j of Rot_i(θ1)ᵀ·R is row j of Rot_m(θ3), so θ3 absorbs any error
-    of θ1 and euler_to_matrix reproduces R to rounding even a hair from gimbal lock (the two
-    separate atan2 of the textbook lose digits there). At lock (degenerate) θ3 = 0 and θ1 is the
-    free angle read from column j: R·e_j = Rot_i(θ1)·e_j. Lower-case sequences are solved as
-    the reversed intrinsic sequence whose *first* angle is zeroed instead, then read back.
+    |(R[k,k], R[j,k])| = |cos θ2|; proper: R[i,i] = cos θ2, |(R[j,i], R[k,i])| = sin θ2),
+    each as an atan2 so it is accurate at every angle. θ1 from the column that carries it.
+    θ3 is then *peeled*: row j of Rot_i(θ1)ᵀ·R is row j of Rot_m(θ3), so θ3 absorbs any
+    rounding of θ1 and euler_to_matrix reproduces R to rounding even a hair from gimbal lock
+    (two separate atan2, as in textbooks, lose digits there). At lock (degenerate: θ2 within
+    lock_tol of ±π/2 or of 0, π) θ3 = 0 and θ1 is the free angle. Lower-case sequences are
+    solved as the reversed intrinsic sequence with its *first* angle zeroed, then read back.
     Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
     """
-    i, j, k, sig, proper, extrinsic = parse_sequence(seq)
+    spec = parse_sequence(seq)
     R = checked_rotation(R, check)
-    m = [[R[..., r, c] for c in range(3)] for r in range(3)]
-    if proper:
-        t2 = np.arctan2(np.hypot(m[j][i], m[k][i]), m[i][i])
-        t1 = np.arctan2(m[j][i], -sig * m[k][i])
-        lock = np.minimum(t2, np.pi - t2) <= lock_tol
-    else:
-        t2 = np.arctan2(sig * m[i][k], np.hypot(m[k][k], m[j][k]))
-        t1 = np.arctan2(-sig * m[j][k], m[k][k])
-        lock = np.pi / 2 - np.abs(t2) <= lock_tol
-    # Row j of Rot_i(θ1)ᵀ·R, i.e. c1·R[j] + σ s1·R[k], is row j of Rot_m(θ3), m the last axis.
-    c1, s1 = np.cos(t1), np.sin(t1)
-    row = [c1 * m[j][c] + sig * s1 * m[k][c] for c in range(3)]
-    sign3 = -sig if proper else sig
-    other = k if proper else i
-    t3 = np.arctan2(sign3 * row[other], row[j])
-    if extrinsic:
-        # Intrinsic reversed: the first angle here is the extrinsic θ3, the one to zero.
-        free_last = np.arctan2(sign3 * m[j][other], m[j][j])  # the peel with θ1 = 0
-        t1, t3 = np.where(lock, 0.0, t1), np.where(lock, free_last, t3)
-        t1, t3 = t3, t1
-    else:
-        t1 = np.where(lock, np.arctan2(sig * m[k][j], m[j][j]), t1)
-        t3 = np.where(lock, 0.0, t3)
-    angles = np.stack([_wrap(t1), t2 + 0.0, _wrap(t3)], axis=-1)
-    return angles, lock
+    kernel = partial(_angles_kernel, spec=spec, lock_tol=lock_tol)
+    return apply(kernel, [(R, (3, 3))], [((3,), np.float64), ((), np.bool_)])

@@ -23,12 +23,14 @@ At θ = π the direction's sign is the one matrix_to_axis_angle picks, and trans
 and twist follow it.
 """
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 
-from rot_tools._arrays import finite_array, unit_vectors
-from rot_tools.axis_angle import axis_angle_to_matrix, matrix_to_axis_angle
+from rot_tools._arrays import finite_array
+from rot_tools._backend import apply, cross, dot, unit
+from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
 from rot_tools.errors import RotationError
 from rot_tools.so3 import checked_rotation
 
@@ -56,40 +58,45 @@ class Screw(NamedTuple):
     pitch: np.ndarray
 
 
-def _dot(u, v):
-    return np.einsum('...i,...i->...', u, v)
-
-
 def _rigid(R, b, check):
-    """Validate (R, b) and broadcast them to one batch shape."""
-    R = checked_rotation(R, check)
-    b = finite_array(b, (3,), 'translation b')
-    shape = np.broadcast_shapes(R.shape[:-2], b.shape[:-1])
-    return np.broadcast_to(R, shape + (3, 3)), np.broadcast_to(b, shape + (3,))
+    """Validate R and b: ((R, (3, 3)), (b, (3,))) inputs for apply."""
+    return [(checked_rotation(R, check), (3, 3)), (finite_array(b, (3,), 'translation b'), (3,))]
+
+
+def _screw_kernel(ops, m, b):
+    """The Screw of (m, b); see screw_from_transform."""
+    axis, angle = axis_angle_kernel(ops, m)
+    b_dir, b_norm = unit(ops, b)
+    translating = angle < PURE_TRANSLATION_ANGLE
+    direction = [ops.where(translating, p, q) for p, q in zip(b_dir, axis)]
+    d = ops.where(translating, b_norm, dot(b, axis))
+    b_perp = [bi - d * li for bi, li in zip(b, direction)]
+    turning = ops.where(translating, 1.0, angle)  # no division by a zero angle below
+    cot_half = ops.where(translating, 0.0, 1.0 / ops.tan(0.5 * turning))
+    swing = cross(direction, b_perp)
+    point = [ops.where(translating, 0.0, 0.5 * (p + cot_half * q)) for p, q in zip(b_perp, swing)]
+    pitch = ops.where(translating, ops.where(b_norm > 0, math.inf, 0.0), d / turning)
+    return (direction, point, cross(point, direction), ops.where(translating, 0.0, angle),
+            d + 0.0, pitch + 0.0)
+
+
+_VEC, _SCALAR = ((3,), np.float64), ((), np.float64)
 
 
 def screw_from_transform(R, b, *, check=True):
     """Chasles decomposition of p ↦ R·p + b as a Screw (formulas in the module docstring).
 
-    R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ from matrix_to_axis_angle; then
-    d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
+    R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ as matrix_to_axis_angle gives them;
+    then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
     """
-    R, b = _rigid(R, b, check)
-    axis, angle = matrix_to_axis_angle(R, check=False)
-    translating = angle < PURE_TRANSLATION_ANGLE
-    b_dir, b_norm = unit_vectors(b)
-    direction = np.where(translating[..., None], b_dir, axis)
-    d = np.where(translating, b_norm, _dot(b, axis))
-    b_perp = b - d[..., None] * direction
-    with np.errstate(divide='ignore'):
-        cot_half = np.where(translating, 0.0, 1.0 / np.tan(0.5 * angle))
-    point = 0.5 * (b_perp + cot_half[..., None] * np.cross(direction, b_perp))
-    point = np.where(translating[..., None], 0.0, point)
-    angle = np.where(translating, 0.0, angle)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        pitch = np.where(translating, np.where(b_norm > 0, np.inf, 0.0), d / angle)
-    return Screw(direction, point, np.cross(point, direction), angle + 0.0, d + 0.0,
-                 pitch + 0.0)
+    return Screw(*apply(_screw_kernel, _rigid(R, b, check), [_VEC] * 3 + [_SCALAR] * 3))
+
+
+def _log_kernel(ops, m, b):
+    direction, point, _, angle, d, _ = _screw_kernel(ops, m, b)
+    swing = cross(direction, point)
+    return ([angle * li for li in direction]
+            + [d * li - angle * si for li, si in zip(direction, swing)],)
 
 
 def screw_log(R, b, *, check=True):
@@ -97,10 +104,23 @@ def screw_log(R, b, *, check=True):
 
     θ·v = −θ·l̂ × c + d·l̂; a pure translation gives (0, b). Inverse of screw_exp.
     """
-    s = screw_from_transform(R, b, check=check)
-    theta = s.angle[..., None]
-    moving = -theta * np.cross(s.direction, s.point) + s.translation[..., None] * s.direction
-    return np.concatenate([theta * s.direction, moving], axis=-1)
+    (twist,) = apply(_log_kernel, _rigid(R, b, check), [((6,), np.float64)])
+    return twist
+
+
+def _exp_kernel(ops, twist):
+    axis, theta = unit(ops, twist[:3])
+    u = twist[3:]
+    d = dot(axis, u)
+    half = 0.5 * theta
+    sh = ops.sin(half)
+    zero = theta == 0  # sin θ/θ → 1 and (1 − cos θ)/θ → 0; no cancellation elsewhere
+    inv = 1.0 / ops.where(zero, 1.0, theta)
+    sinc = ops.where(zero, 1.0, 2.0 * sh * ops.cos(half) * inv)
+    versinc = 2.0 * sh * sh * inv
+    swing = cross(axis, u)
+    b = [sinc * (ui - d * li) + versinc * si + d * li for ui, li, si in zip(u, axis, swing)]
+    return _rodrigues(ops, axis[0], axis[1], axis[2], theta), b
 
 
 def screw_exp(twist):
@@ -110,14 +130,7 @@ def screw_exp(twist):
     b = (sin θ/θ)·u⊥ + ((1 − cos θ)/θ)·l̂ × u + (l̂·u)·l̂, which is smooth at θ = 0 (b = u).
     """
     twist = finite_array(twist, (6,), 'twist')
-    axis, theta = unit_vectors(twist[..., :3])
-    u = twist[..., 3:]
-    d = _dot(axis, u)
-    u_perp = u - d[..., None] * axis
-    sinc = np.sinc(theta / np.pi)                                   # sin θ / θ
-    versinc = np.sin(0.5 * theta) * np.sinc(0.5 * theta / np.pi)   # (1 − cos θ) / θ
-    b = sinc[..., None] * u_perp + versinc[..., None] * np.cross(axis, u) + d[..., None] * axis
-    return axis_angle_to_matrix(axis, theta), b
+    return apply(_exp_kernel, [(twist, (6,))], [((3, 3), np.float64), _VEC])
 
 
 def transform_from_screw(direction, point, angle, translation):
@@ -131,9 +144,10 @@ def transform_from_screw(direction, point, angle, translation):
     point = finite_array(point, (3,), 'point')
     angle = finite_array(angle, (), 'angle')
     translation = finite_array(translation, (), 'translation')
-    axis, norm = unit_vectors(direction)
+    norm = np.linalg.norm(direction, axis=-1)
     if not (norm > 0).all():
         raise RotationError('screw direction must be non-zero, got |direction| = 0')
+    axis = direction / norm[..., None]
     theta = angle[..., None]
     moving = -theta * np.cross(axis, point) + translation[..., None] * axis
     shape = np.broadcast_shapes(axis.shape, moving.shape)
@@ -146,8 +160,8 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
     T(s) = T0 · exp(s · log(T0⁻¹ T1)): every point moves along one helix about the relative
     screw axis; T(0) = T0 and T(1) = T1. Returns (R(s) (..., 3, 3), b(s) (..., 3)).
     """
-    R0, b0 = _rigid(R0, b0, check)
-    R1, b1 = _rigid(R1, b1, check)
+    (R0, _), (b0, _) = _rigid(R0, b0, check)
+    (R1, _), (b1, _) = _rigid(R1, b1, check)
     R0t = np.swapaxes(R0, -1, -2)
     rel_R = R0t @ R1
     rel_b = np.einsum('...ij,...j->...i', R0t, b1 - b0)

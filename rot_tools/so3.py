@@ -8,6 +8,7 @@ takes one item or a batch with any leading shape ``...``.
 import numpy as np
 
 from rot_tools._arrays import as_float_array, finite_array
+from rot_tools._backend import apply
 from rot_tools.errors import RotationError
 
 ROTATION_TOL = 1e-9
@@ -54,13 +55,22 @@ def skew(v):
     return out
 
 
-def _defects(R):
-    """Per item: (max|RᵀR − I|, det R); NaN where R is not finite."""
-    gram = np.matmul(np.swapaxes(R, -1, -2), R)
-    gram[..., [0, 1, 2], [0, 1, 2]] -= 1.0
-    err = np.abs(gram).max(axis=(-2, -1))
-    det = np.einsum('...i,...i->...', R[..., 0, :], np.cross(R[..., 1, :], R[..., 2, :]))
+def _defects_kernel(ops, m):
+    """(max|RᵀR − I|, det R): the six distinct entries of the Gram matrix RᵀR, and the
+    triple product of the rows. NaN entries propagate to NaN (never ≤ tol)."""
+    err = 0.0
+    for a, b in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)):
+        gram = m[0][a] * m[0][b] + m[1][a] * m[1][b] + m[2][a] * m[2][b]
+        err = ops.maximum(err, ops.abs(gram - 1.0 if a == b else gram))
+    det = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+           - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+           + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
     return err, det
+
+
+def _defects(R):
+    """Per item: (max|RᵀR − I|, det R)."""
+    return apply(_defects_kernel, [(R, (3, 3))], [((), np.float64), ((), np.float64)])
 
 
 def is_rotation(R, tol=ROTATION_TOL):
@@ -70,9 +80,10 @@ def is_rotation(R, tol=ROTATION_TOL):
     not (..., 3, 3) raises RotationError.
     """
     R = as_float_array(R, (3, 3), 'R')
-    with np.errstate(invalid='ignore'):
-        err, det = _defects(R)
-        ok = (err <= tol) & (np.abs(det - 1.0) <= tol)
+    finite = np.isfinite(R).all(axis=(-2, -1))
+    with np.errstate(invalid='ignore', over='ignore'):
+        err, det = _defects(np.where(finite[..., None, None], R, 0.0))
+    ok = finite & (err <= tol) & (np.abs(det - 1.0) <= tol)
     return ok if ok.ndim else bool(ok)
 
 
@@ -121,24 +132,22 @@ def nearest_rotation(R):
 def quaternion_to_matrix(q):
     """Rotation matrix of q = (x, y, z, w) — the ROS message order; q is normalised first.
 
-    With s = 2/|q|²: R = I − s·[[y²+z², −(xy−zw), −(xz+yw)], ...] (the standard unit-quaternion
+    With s = 2/|q|²: R = I − s·[[y²+z², −(xy−zw), −(xz+yw)], ...] (the unit-quaternion
     matrix scaled so that any non-zero q gives a rotation). (..., 4) → (..., 3, 3). The only
-    quaternion function in rot_tools: for message boundaries.
+    quaternion function in rot_tools: for message boundaries. Zero or non-finite q raises.
     """
     q = finite_array(q, (4,), 'quaternion (x, y, z, w)')
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    n2 = x * x + y * y + z * z + w * w
-    if not (n2 > 0).all():
+    matrix, norm2 = apply(_quaternion_kernel, [(q, (4,))],
+                          [((3, 3), np.float64), ((), np.float64)])
+    if not (norm2 > 0).all():
         raise RotationError('quaternion (x, y, z, w) must be non-zero, got |q| = 0')
-    s = 2.0 / n2
-    out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = 1.0 - s * (y * y + z * z)
-    out[..., 0, 1] = s * (x * y - z * w)
-    out[..., 0, 2] = s * (x * z + y * w)
-    out[..., 1, 0] = s * (x * y + z * w)
-    out[..., 1, 1] = 1.0 - s * (x * x + z * z)
-    out[..., 1, 2] = s * (y * z - x * w)
-    out[..., 2, 0] = s * (x * z - y * w)
-    out[..., 2, 1] = s * (y * z + x * w)
-    out[..., 2, 2] = 1.0 - s * (x * x + y * y)
-    return out
+    return matrix
+
+
+def _quaternion_kernel(ops, q):
+    x, y, z, w = q
+    n2 = x * x + y * y + z * z + w * w
+    s = 2.0 / ops.where(n2 > 0, n2, 1.0)
+    return [[1.0 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
+            [s * (x * y + z * w), 1.0 - s * (x * x + z * z), s * (y * z - x * w)],
+            [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y)]], n2

@@ -1,0 +1,120 @@
+"""One formula, two engines: Python floats for a single item, NumPy chunks for a batch.
+
+Every conversion in rot_tools is written once as a *kernel*: a function of an ops namespace
+and of the entries of its inputs (a matrix as ``m[row][col]``, a vector as ``v[i]``, a scalar
+as itself), returning the entries of its outputs. ``apply`` runs a kernel
+
+- on a single item with Python floats and the ``math`` module (a chain of small NumPy calls
+  costs ~10× more per item than plain floats), or
+- on a batch, in chunks of CHUNK items whose entries are NumPy views, so the temporaries stay
+  in cache and the memory used beyond the inputs and outputs stays small.
+
+Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
+not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
+"""
+
+import math
+
+import numpy as np
+
+CHUNK = 32768
+
+
+class _FloatOps:
+    """Scalar engine: Python floats."""
+
+    atan2 = staticmethod(math.atan2)
+    sqrt = staticmethod(math.sqrt)
+    sin = staticmethod(math.sin)
+    cos = staticmethod(math.cos)
+    tan = staticmethod(math.tan)
+    abs = staticmethod(abs)
+    maximum = staticmethod(max)
+    minimum = staticmethod(min)
+
+    @staticmethod
+    def where(cond, a, b):
+        return a if cond else b
+
+
+class _ArrayOps:
+    """Batch engine: NumPy arrays (errors on the discarded branch of a where are silenced)."""
+
+    atan2 = staticmethod(np.arctan2)
+    sqrt = staticmethod(np.sqrt)
+    sin = staticmethod(np.sin)
+    cos = staticmethod(np.cos)
+    tan = staticmethod(np.tan)
+    abs = staticmethod(np.abs)
+    maximum = staticmethod(np.maximum)
+    minimum = staticmethod(np.minimum)
+    where = staticmethod(np.where)
+
+
+FLOATS = _FloatOps()
+ARRAYS = _ArrayOps()
+
+
+def _entries(arr, tail):
+    """Nested entries of the trailing dims: scalar → arr, (n,) → list, (r, c) → list of rows."""
+    if not tail:
+        return arr
+    if len(tail) == 1:
+        return [arr[..., i] for i in range(tail[0])]
+    return [[arr[..., i, j] for j in range(tail[1])] for i in range(tail[0])]
+
+
+def _write(out, value, tail):
+    if not tail:
+        out[...] = value
+    elif len(tail) == 1:
+        for i in range(tail[0]):
+            out[..., i] = value[i]
+    else:
+        for i in range(tail[0]):
+            for j in range(tail[1]):
+                out[..., i, j] = value[i][j]
+
+
+def apply(kernel, inputs, outputs):
+    """Run ``kernel(ops, *entries)`` on one item or on a batch.
+
+    inputs: sequence of (float64 array, trailing shape), already checked; their batch shapes
+    broadcast. outputs: sequence of (trailing shape, dtype). Returns a tuple of arrays of shape
+    batch + trailing shape (NumPy scalars for a single item).
+    """
+    shapes = [a.shape[:a.ndim - len(t)] for a, t in inputs]
+    shape = np.broadcast_shapes(*shapes)
+    if not shape:
+        result = kernel(FLOATS, *(a.tolist() for a, _ in inputs))
+        return tuple(np.asarray(r, dtype=dt)[()] if not t else np.array(r, dtype=dt)
+                     for r, (t, dt) in zip(result, outputs))
+    flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in inputs]
+    n = flat[0].shape[0]
+    outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
+    with np.errstate(divide='ignore', invalid='ignore'):
+        for start in range(0, n, CHUNK):
+            chunk = slice(start, start + CHUNK)
+            result = kernel(ARRAYS, *(_entries(f[chunk], t) for f, (_, t) in zip(flat, inputs)))
+            for out, value, (t, _) in zip(outs, result, outputs):
+                _write(out[chunk], value, t)
+    return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
+
+
+def dot(u, v):
+    """u·v of two 3-vectors given as entry lists."""
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def cross(u, v):
+    """u × v of two 3-vectors given as entry lists."""
+    return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+
+
+def unit(ops, v):
+    """(v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector."""
+    norm = ops.sqrt(dot(v, v))
+    inv = 1.0 / ops.where(norm > 0, norm, 1.0)
+    zero = norm == 0
+    return [ops.where(zero, 0.0, v[0] * inv) + 0.0, ops.where(zero, 0.0, v[1] * inv) + 0.0,
+            ops.where(zero, 1.0, v[2] * inv)], norm
