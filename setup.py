@@ -1,0 +1,28 @@
+from setuptools import setup
+
+package_name = 'rot_tools'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=[package_name],
+    data_files=[
+        ('share/ament_index/resource_index/packages',
+            ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools', 'numpy'],
+    extras_require={'test': ['pytest', 'hypothesis']},
+    zip_safe=True,
+    maintainer='rot_tools maintainers',
+    maintainer_email='maintainers@rot-tools.example.org',
+    description='Rotations, Euler angles, axis-angle and screw motions for ROS 2 and NumPy',
+    license='Apache-2.0',
+    python_requires='>=3.10',
+    entry_points={
+        'console_scripts': [
+            'rotation_node = rot_tools.rotation_node:main',
+            'rot-tools = rot_tools.cli:main',
+        ],
+    },
+)

@@ -1,0 +1,147 @@
+"""Packaging: package.xml, the installed metadata and a real `colcon build` of the package."""
+
+import ast
+import importlib.metadata
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+
+from catkin_pkg.package import parse_package
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGE = 'rot_tools'
+CONSOLE_SCRIPTS = {
+    'rotation_node': 'rot_tools.rotation_node:main',
+    'rot-tools': 'rot_tools.cli:main',
+}
+# exec_depends the contract (SPEC §3) needs whatever the code happens to import today.
+REQUIRED_EXEC_DEPENDS = {
+    'rclpy', 'geometry_msgs', 'std_msgs', 'std_srvs', 'nav_msgs', 'visualization_msgs',
+    'rcl_interfaces', 'builtin_interfaces', 'python3-numpy',
+}
+# rosdep keys of the non-ROS third-party modules rot_tools may import.
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml'}
+# Packages the ROS wheels registered in this environment's ament index (sys.prefix/share).
+AMENT_INDEX = Path(sys.prefix, 'share', 'ament_index', 'resource_index', 'packages')
+COLCON_TIMEOUT = 300  # seconds; the build itself takes about 1 s
+SOURCE_IGNORE = shutil.ignore_patterns(
+    '.*', 'build', 'install', 'log', '__pycache__', '*.egg-info')
+
+
+@pytest.fixture(scope='module')
+def manifest():
+    warnings = []
+    package = parse_package(str(REPO / 'package.xml'), warnings=warnings)
+    assert warnings == []
+    return package
+
+
+def _imported_top_level_modules(path):
+    """Absolute imports of one module, as top-level names."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name.split('.')[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+            names.add(node.module.split('.')[0])
+    return names
+
+
+def test_package_xml_parses_with_catkin_pkg(manifest):
+    assert manifest.package_format == 3
+    assert manifest.name == PACKAGE
+    assert manifest.version == importlib.metadata.version(PACKAGE)
+    assert manifest.licenses == ['Apache-2.0']
+    assert manifest.get_build_type() == 'ament_python'
+    assert manifest.description.strip()
+    assert REQUIRED_EXEC_DEPENDS <= {dep.name for dep in manifest.exec_depends}
+    assert {'python3-pytest', 'python3-hypothesis'} <= {dep.name for dep in manifest.test_depends}
+
+
+def test_package_xml_declares_every_package_the_code_imports(manifest):
+    sources = sorted((REPO / PACKAGE).glob('*.py'))
+    assert sources, 'no rot_tools/*.py found'
+    declared = {dep.name for dep in manifest.exec_depends}
+    assert AMENT_INDEX.is_dir(), f'no ament index at {AMENT_INDEX}: are the ROS wheels installed?'
+    missing = {}
+    for path in sources:
+        for name in _imported_top_level_modules(path):
+            if name in sys.stdlib_module_names or name == PACKAGE:
+                continue
+            if (AMENT_INDEX / name).is_file():
+                key = name
+            else:
+                assert name in ROSDEP_KEYS, (
+                    f'{path.name} imports {name!r}, which is neither a ROS package nor in '
+                    'ROSDEP_KEYS: add its rosdep key to package.xml and ROSDEP_KEYS')
+                key = ROSDEP_KEYS[name]
+            if key not in declared:
+                missing.setdefault(key, []).append(path.name)
+    assert missing == {}, f'imported but not an <exec_depend> in package.xml: {missing}'
+
+
+def test_installed_distribution_matches_setup():
+    dist = importlib.metadata.distribution(PACKAGE)
+    scripts = {ep.name: ep.value for ep in dist.entry_points if ep.group == 'console_scripts'}
+    assert scripts == CONSOLE_SCRIPTS
+    assert {'numpy', 'setuptools'} <= {req.split()[0] for req in dist.requires}
+
+
+@pytest.fixture(scope='session')
+def colcon_install(tmp_path_factory):
+    """`colcon build` the package in a fresh workspace; return its install prefix."""
+    workspace = tmp_path_factory.mktemp('colcon_ws')
+    shutil.copytree(REPO, workspace / 'src' / PACKAGE, ignore=SOURCE_IGNORE)
+    colcon = Path(sys.executable).with_name('colcon')
+    if not colcon.is_file():
+        colcon = shutil.which('colcon')
+    assert colcon, 'colcon not found: pip install -r requirements-test.txt'
+    env = dict(os.environ, AMENT_PREFIX_PATH=sys.prefix,
+               COLCON_HOME=str(workspace / 'colcon_home'))
+    try:
+        result = subprocess.run(
+            [str(colcon), 'build', '--base-paths', 'src'], cwd=workspace, env=env,
+            stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=COLCON_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f'colcon build took more than {COLCON_TIMEOUT} s')
+    assert result.returncode == 0, f'colcon build failed:\n{result.stdout}\n{result.stderr}'
+    return workspace / 'install' / PACKAGE
+
+
+def _run_in_workspace(prefix, *command):
+    """Run a command the way a ROS user does: after sourcing the workspace's setup.sh."""
+    script = '. "$1" && shift && exec "$@"'
+    setup = prefix.parent / 'setup.sh'
+    return subprocess.run(
+        ['sh', '-c', script, 'sh', str(setup), *map(str, command)], cwd=prefix.parent,
+        stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=60)
+
+
+def test_colcon_installs_executables_where_ros2_run_finds_them(colcon_install):
+    for name in CONSOLE_SCRIPTS:
+        executable = colcon_install / 'lib' / PACKAGE / name
+        assert executable.is_file(), f'{executable} missing'
+        assert os.access(executable, os.X_OK), f'{executable} is not executable'
+
+
+def test_colcon_installs_manifest_and_ament_index_marker(colcon_install):
+    share = colcon_install / 'share'
+    assert (share / PACKAGE / 'package.xml').read_text() == (REPO / 'package.xml').read_text()
+    assert (share / 'ament_index' / 'resource_index' / 'packages' / PACKAGE).is_file()
+
+
+def test_installed_package_is_imported_from_the_install_space(colcon_install):
+    result = _run_in_workspace(
+        colcon_install, sys.executable, '-c', 'import rot_tools; print(rot_tools.__file__)')
+    assert result.returncode == 0, result.stderr
+    assert Path(result.stdout.strip()).is_relative_to(colcon_install)
+
+
+def test_installed_cli_runs(colcon_install):
+    result = _run_in_workspace(colcon_install, colcon_install / 'lib' / PACKAGE / 'rot-tools',
+                               '--help')
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith('usage: rot-tools')
