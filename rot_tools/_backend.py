@@ -29,6 +29,7 @@ class _FloatOps:
     cos = staticmethod(math.cos)
     tan = staticmethod(math.tan)
     abs = staticmethod(abs)
+    any = staticmethod(bool)
     maximum = staticmethod(max)
     minimum = staticmethod(min)
 
@@ -46,6 +47,7 @@ class _ArrayOps:
     cos = staticmethod(np.cos)
     tan = staticmethod(np.tan)
     abs = staticmethod(np.abs)
+    any = staticmethod(np.any)
     maximum = staticmethod(np.maximum)
     minimum = staticmethod(np.minimum)
     where = staticmethod(np.where)
@@ -83,12 +85,14 @@ def apply(kernel, inputs, outputs):
     broadcast. outputs: sequence of (trailing shape, dtype). Returns a tuple of arrays of shape
     batch + trailing shape (NumPy scalars for a single item).
     """
-    shapes = [a.shape[:a.ndim - len(t)] for a, t in inputs]
-    shape = np.broadcast_shapes(*shapes)
-    if not shape:
-        result = kernel(FLOATS, *(a.tolist() for a, _ in inputs))
-        return tuple(np.asarray(r, dtype=dt)[()] if not t else np.array(r, dtype=dt)
-                     for r, (t, dt) in zip(result, outputs))
+    for a, t in inputs:
+        if a.ndim != len(t):
+            break
+    else:  # a single item
+        result = kernel(FLOATS, *[a.tolist() for a, _ in inputs])
+        return tuple([np.array(r, dtype=dt) if t else dt(r)
+                      for r, (t, dt) in zip(result, outputs)])
+    shape = np.broadcast_shapes(*(a.shape[:a.ndim - len(t)] for a, t in inputs))
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in inputs]
     n = flat[0].shape[0]
     outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
@@ -111,10 +115,22 @@ def cross(u, v):
     return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
 
 
+def norm(ops, v):
+    """|v| of a 3-vector entry list, without overflow or underflow of |v|² for any finite v."""
+    n2 = dot(v, v)
+    nonzero = (v[0] != 0) | (v[1] != 0) | (v[2] != 0)
+    if ops.any(((n2 < 1e-290) & nonzero) | (n2 > 1e290)):  # rare: rescale by max |v_i|
+        big = ops.maximum(ops.maximum(ops.abs(v[0]), ops.abs(v[1])), ops.abs(v[2]))
+        safe = ops.where(big > 0, big, 1.0)
+        scaled = [vi / safe for vi in v]  # (not vi * (1 / big): 1 / big overflows if tiny)
+        return big * ops.sqrt(dot(scaled, scaled))
+    return ops.sqrt(n2)
+
+
 def unit(ops, v):
     """(v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector."""
-    norm = ops.sqrt(dot(v, v))
-    inv = 1.0 / ops.where(norm > 0, norm, 1.0)
-    zero = norm == 0
-    return [ops.where(zero, 0.0, v[0] * inv) + 0.0, ops.where(zero, 0.0, v[1] * inv) + 0.0,
-            ops.where(zero, 1.0, v[2] * inv)], norm
+    n = norm(ops, v)
+    zero = n == 0
+    safe = ops.where(zero, 1.0, n)
+    return [ops.where(zero, 0.0, v[0] / safe) + 0.0, ops.where(zero, 0.0, v[1] / safe) + 0.0,
+            ops.where(zero, 1.0, v[2] / safe)], n

@@ -11,7 +11,7 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 import numpy as np
 
 from rot_tools._arrays import finite_array
-from rot_tools._backend import apply, unit
+from rot_tools._backend import apply, norm, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import checked_rotation
 
@@ -25,9 +25,11 @@ def _rodrigues(ops, x, y, z, angle):
     sh, ch = ops.sin(0.5 * angle), ops.cos(0.5 * angle)
     v = 2.0 * sh * sh
     s, c = 2.0 * sh * ch, 1.0 - v
-    return [[c + v * x * x, v * x * y - s * z, v * x * z + s * y],
-            [v * x * y + s * z, c + v * y * y, v * y * z - s * x],
-            [v * x * z - s * y, v * y * z + s * x, c + v * z * z]]
+    vx, vy, vz, sx, sy, sz = v * x, v * y, v * z, s * x, s * y, s * z
+    vxy, vxz, vyz = vx * y, vx * z, vy * z
+    return [[c + vx * x, vxy - sz, vxz + sy],
+            [vxy + sz, c + vy * y, vyz - sx],
+            [vxz - sy, vyz + sx, c + vz * z]]
 
 
 def _axis_angle_kernel(ops, axis, angle):
@@ -54,8 +56,9 @@ def axis_angle_to_matrix(axis, angle):
 
 
 def _rotvec_kernel(ops, v):
-    (x, y, z), angle = unit(ops, v)
-    return (_rodrigues(ops, x, y, z, angle),)
+    angle = norm(ops, v)
+    safe = ops.where(angle > 0, angle, 1.0)  # any axis will do at angle 0
+    return (_rodrigues(ops, v[0] / safe, v[1] / safe, v[2] / safe, angle),)
 
 
 def rotvec_to_matrix(rotvec):

@@ -144,10 +144,10 @@ def transform_from_screw(direction, point, angle, translation):
     point = finite_array(point, (3,), 'point')
     angle = finite_array(angle, (), 'angle')
     translation = finite_array(translation, (), 'translation')
-    norm = np.linalg.norm(direction, axis=-1)
-    if not (norm > 0).all():
+    if not np.any(direction, axis=-1).all():
         raise RotationError('screw direction must be non-zero, got |direction| = 0')
-    axis = direction / norm[..., None]
+    axis = direction / np.abs(direction).max(axis=-1, keepdims=True)
+    axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
     theta = angle[..., None]
     moving = -theta * np.cross(axis, point) + translation[..., None] * axis
     shape = np.broadcast_shapes(axis.shape, moving.shape)

@@ -95,6 +95,8 @@ def validate_rotation(R, tol=ROTATION_TOL):
     """
     R = finite_array(R, (3, 3), 'R')
     err, det = _defects(R)
+    if R.ndim == 2 and err <= tol and abs(det - 1.0) <= tol:
+        return R
     where = '' if R.ndim == 2 else ' (worst at item {})'
     if not (err <= tol).all():
         worst = np.unravel_index(np.argmax(err), err.shape)
