@@ -1,0 +1,292 @@
+"""Every representation of one rigid transform (R, b) as plain data, and its YAML / JSON text.
+
+The data takes one path: (R, b) → :func:`transform_report` → :func:`to_yaml` or
+:func:`to_json`. The ``rot-tools`` command line and the node's ``~/describe`` service print
+the same report, so the key names below are part of the contract; they never depend on
+options. Radians unless a key or ``unit`` says otherwise; lengths in the unit of b.
+
+``transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False)`` returns a
+dict of plain Python data (float, bool, str, list, dict; no NumPy types), keys in this
+order::
+
+    matrix:            [[r11, r12, r13], [r21, r22, r23], [r31, r32, r33]]   (list of rows)
+    axis_angle:
+      axis:            unit l̂ (at angle 0 it is [0, 0, 1])
+      angle:           θ ∈ [0, π], rad
+      angle_deg:       θ in degrees
+      rotation_vector: θ·l̂, rad
+      second_solution: the same rotation the other way round (seed 000 §3.3: about −l̂
+                       through −θ), as {axis: −l̂, angle: 2π − θ, angle_deg: 360 − θ°}
+    euler:
+      sequence:        e.g. ZYX (upper case intrinsic, lower case extrinsic)
+      unit:            rad | deg (``degrees``)
+      angles:          [θ1, θ2, θ3]
+      degenerate:      true at gimbal lock (then θ3 = 0 and θ1 carries the free angle)
+      all_sequences:   only with ``all_sequences=True``: for each of the 24 sequences,
+                       in rot_tools.EULER_SEQUENCES order, {angles: [...], degenerate: ...}
+    translation:       b = [x, y, z] (only when b is given)
+    screw:             only when b is given (Chasles: rotation θ about the line through
+                       ``point`` along ``direction``, then ``translation`` along it)
+      direction:       unit l̂
+      point:           the axis point closest to the origin (⊥ l̂)
+      moment:          point × direction (Plücker)
+      angle:           θ ∈ [0, π], rad
+      angle_deg:       θ in degrees
+      translation:     d, signed, along l̂
+      pitch:           d/θ (length per rad); inf for a pure translation, 0 for the identity
+
+``degrees`` only switches the Euler angles (``euler.unit``); axis-angle and screw angles
+always come in both ``angle`` (rad) and ``angle_deg``.
+
+Text forms. Numbers are rounded to ``precision`` significant digits *and* decimal places
+(default 12), so rounding noise such as 6.1e-17 prints as 0.0; −0.0 prints as 0.0;
+``precision=None`` keeps full float precision.
+
+- :func:`to_yaml`: a small deterministic emitter (no PyYAML needed), readable by any YAML
+  1.1/1.2 parser. Mappings in block style, lists of scalars as flow lists
+  ``[0.0, 0.0, 1.0]``, a matrix as a block list of flow rows; a mapping nested two or more
+  levels deep whose values are all scalars or flat lists is written in flow style
+  (``{axis: [...], angle: ...}``). Floats always carry a dot (``1.0e-05``), infinities
+  and NaN are ``.inf``, ``-.inf``, ``.nan``; strings are quoted when YAML would read them
+  as something else.
+- :func:`to_json`: the same structure; JSON has no infinity, so ``inf``, ``-inf`` and
+  ``nan`` are written as the strings ``"inf"``, ``"-inf"``, ``"nan"`` (Python's
+  ``float()`` reads them back).
+"""
+
+import json
+import math
+import re
+
+import numpy as np
+
+from rot_tools import (
+    EULER_SEQUENCES, matrix_to_axis_angle, matrix_to_euler, screw_from_transform,
+    validate_rotation)
+from rot_tools.errors import RotationError
+
+DEFAULT_PRECISION = 12
+"""Significant digits and decimal places of printed numbers."""
+
+
+def _floats(a):
+    """Return a NumPy array (or scalar) as nested lists of Python floats."""
+    return np.asarray(a, dtype=np.float64).tolist()
+
+
+def _deg(rad):
+    return float(np.degrees(rad))
+
+
+def _euler(R, seq, degrees):
+    angles, degenerate = matrix_to_euler(R, seq)
+    angles = np.degrees(angles) if degrees else angles
+    return _floats(angles), bool(degenerate)
+
+
+def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
+    """Every representation of the rotation R (3, 3), and of (R, b) when b (3,) is given.
+
+    R is validated as rot_tools.validate_rotation does (tol 1e-9); project a matrix typed
+    with few digits with rot_tools.nearest_rotation first. Returns the dict described in
+    the module docstring. RotationError for a bad R, b, or sequence.
+    """
+    R = validate_rotation(R)
+    if R.shape != (3, 3):
+        raise RotationError(f'transform_report takes one rotation (3, 3), got {R.shape}')
+    if seq not in EULER_SEQUENCES:
+        raise RotationError(
+            f'unknown Euler sequence {seq!r}: use one of {" ".join(EULER_SEQUENCES)}')
+    axis, angle = matrix_to_axis_angle(R)
+    angle = float(angle)
+    angles, degenerate = _euler(R, seq, degrees)
+    euler = {
+        'sequence': seq,
+        'unit': 'deg' if degrees else 'rad',
+        'angles': angles,
+        'degenerate': degenerate,
+    }
+    if all_sequences:
+        euler['all_sequences'] = {}
+        for name in EULER_SEQUENCES:
+            angles, degenerate = _euler(R, name, degrees)
+            euler['all_sequences'][name] = {'angles': angles, 'degenerate': degenerate}
+    report = {
+        'matrix': _floats(R),
+        'axis_angle': {
+            'axis': _floats(axis),
+            'angle': angle,
+            'angle_deg': _deg(angle),
+            'rotation_vector': _floats(axis * angle),
+            'second_solution': {
+                'axis': _floats(-axis),
+                'angle': 2.0 * math.pi - angle,
+                'angle_deg': 360.0 - _deg(angle),
+            },
+        },
+        'euler': euler,
+    }
+    if b is not None:
+        b = np.asarray(b, dtype=np.float64)
+        if b.shape != (3,):
+            raise RotationError(f'translation b must have shape (3,), got {b.shape}')
+        screw = screw_from_transform(R, b)
+        report['translation'] = _floats(b)
+        report['screw'] = {
+            'direction': _floats(screw.direction),
+            'point': _floats(screw.point),
+            'moment': _floats(screw.moment),
+            'angle': float(screw.angle),
+            'angle_deg': _deg(screw.angle),
+            'translation': float(screw.translation),
+            'pitch': float(screw.pitch),
+        }
+    return report
+
+
+# ---------------------------------------------------------------------------------------
+# Numbers
+
+
+def round_number(x, precision=DEFAULT_PRECISION):
+    """Round x to ``precision`` significant digits and decimal places; −0.0 → 0.0."""
+    x = float(x)
+    if precision is None or not math.isfinite(x):
+        return x + 0.0
+    x = round(x, precision)
+    if x != 0.0:
+        x = float(f'{x:.{precision}g}')
+    return x + 0.0  # −0.0 + 0.0 == +0.0
+
+
+def _float_text(x):
+    """Return repr(x) with a dot in the mantissa (YAML 1.1 reads 1e-05 as text)."""
+    s = repr(x)
+    if 'e' in s and '.' not in s:
+        s = s.replace('e', '.0e')
+    return s
+
+
+# ---------------------------------------------------------------------------------------
+# YAML
+
+_PLAIN = re.compile(r'[A-Za-z_/][A-Za-z0-9_./ -]*\Z')
+_YAML_WORDS = frozenset(
+    'y n yes no true false on off null ~'.split())
+
+
+def _yaml_scalar(x, precision):
+    if x is None:
+        return 'null'
+    if isinstance(x, (bool, np.bool_)):
+        return 'true' if x else 'false'
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    if isinstance(x, (float, np.floating)):
+        x = round_number(x, precision)
+        if math.isnan(x):
+            return '.nan'
+        if math.isinf(x):
+            return '.inf' if x > 0 else '-.inf'
+        return _float_text(x)
+    if isinstance(x, str):
+        if _PLAIN.match(x) and not x.endswith(' ') and x.lower() not in _YAML_WORDS:
+            return x
+        return json.dumps(x)  # a JSON string is a valid YAML double-quoted scalar
+    raise TypeError(f'to_yaml: cannot write {type(x).__name__} {x!r}')
+
+
+def _is_scalar(x):
+    return not isinstance(x, (dict, list, tuple))
+
+
+def _is_flat(x):
+    return isinstance(x, (list, tuple)) and all(_is_scalar(v) for v in x)
+
+
+def _yaml_flow(x, precision):
+    if isinstance(x, dict):
+        return '{' + ', '.join(
+            f'{_yaml_scalar(k, precision)}: {_yaml_flow(v, precision)}'
+            for k, v in x.items()) + '}'
+    if isinstance(x, (list, tuple)):
+        return '[' + ', '.join(_yaml_flow(v, precision) for v in x) + ']'
+    return _yaml_scalar(x, precision)
+
+
+def _yaml_value(x, indent, depth, precision):
+    """(inline text, following block lines) of x as the value of a key or list item."""
+    if _is_scalar(x) or _is_flat(x) or not x:
+        return _yaml_flow(x, precision), []
+    if isinstance(x, dict) and depth >= 3 and all(
+            _is_scalar(v) or _is_flat(v) for v in x.values()):
+        return _yaml_flow(x, precision), []
+    return None, _yaml_block(x, indent, depth, precision)
+
+
+def _yaml_block(x, indent, depth, precision):
+    pad = '  ' * indent
+    lines = []
+    if isinstance(x, dict):
+        for k, v in x.items():
+            inline, block = _yaml_value(v, indent + 1, depth + 1, precision)
+            key = _yaml_scalar(k, precision)
+            lines.append(f'{pad}{key}: {inline}' if inline is not None else f'{pad}{key}:')
+            lines.extend(block)
+    else:
+        for v in x:
+            inline, block = _yaml_value(v, indent + 1, depth + 1, precision)
+            if inline is not None:
+                lines.append(f'{pad}- {inline}')
+            else:  # the nested block starts on the dash line
+                lines.append(f'{pad}- {block[0].lstrip()}')
+                lines.extend(block[1:])
+    return lines
+
+
+def to_yaml(data, precision=DEFAULT_PRECISION):
+    """Return a YAML document (ending in a newline) of a dict of plain data; deterministic."""
+    if not isinstance(data, dict):
+        raise TypeError('to_yaml takes a dict')
+    if not data:
+        return '{}\n'
+    return '\n'.join(_yaml_block(data, 0, 0, precision)) + '\n'
+
+
+# ---------------------------------------------------------------------------------------
+# JSON
+
+
+def _json_scalar(x, precision):
+    if isinstance(x, (float, np.floating)):
+        x = round_number(x, precision)
+        if not math.isfinite(x):
+            return json.dumps(str(x))  # "inf", "-inf", "nan"
+        return _float_text(x)
+    if isinstance(x, (bool, np.bool_)):
+        return 'true' if x else 'false'
+    if isinstance(x, (int, np.integer)):
+        return str(int(x))
+    if x is None or isinstance(x, str):
+        return json.dumps(x)
+    raise TypeError(f'to_json: cannot write {type(x).__name__} {x!r}')
+
+
+def _json(x, indent, precision):
+    if _is_scalar(x):
+        return _json_scalar(x, precision)
+    if _is_flat(x) or not x:
+        inner = ', '.join(_json_scalar(v, precision) for v in x)
+        return '[' + inner + ']' if isinstance(x, (list, tuple)) else '{}'
+    pad = '  ' * (indent + 1)
+    if isinstance(x, dict):
+        items = [f'{pad}{json.dumps(str(k))}: {_json(v, indent + 1, precision)}'
+                 for k, v in x.items()]
+        return '{\n' + ',\n'.join(items) + '\n' + '  ' * indent + '}'
+    items = [f'{pad}{_json(v, indent + 1, precision)}' for v in x]
+    return '[\n' + ',\n'.join(items) + '\n' + '  ' * indent + ']'
+
+
+def to_json(data, precision=DEFAULT_PRECISION):
+    """Return a JSON document (ending in a newline); lists of numbers on one line."""
+    return _json(data, 0, precision) + '\n'

@@ -1,0 +1,331 @@
+"""rot-tools as a user runs it: the installed console script, in a subprocess.
+
+Output values are parsed (JSON with the standard library, YAML with PyYAML when present) and
+compared with the math module; the printed precision is 12 digits, so values agree to
+~1e-11. Bad input must give exactly one ``rot-tools: error:`` line and exit status 2.
+"""
+
+import json
+import math
+import os
+from pathlib import Path
+import re
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import rot_tools
+from rot_tools import (
+    axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_axis_angle,
+    matrix_to_euler, nearest_rotation, rot_x, rot_y, rot_z, screw_from_transform,
+    transform_from_screw)
+
+PRINTED = {'rtol': 1e-11, 'atol': 1e-11}  # what 12 printed digits allow
+
+
+def _find_script():
+    """Find the installed rot-tools: in this venv's bin, an ament prefix, or on PATH."""
+    candidates = [
+        Path(sys.executable).parent / 'rot-tools',             # pip install into this venv
+        Path(sys.prefix) / 'bin' / 'rot-tools',
+        Path(sys.prefix) / 'lib' / 'rot_tools' / 'rot-tools',  # setup.cfg install_scripts
+    ]
+    # colcon install space: <prefix>/lib/python3.X/site-packages/rot_tools/__init__.py
+    parents = Path(rot_tools.__file__).resolve().parents
+    if len(parents) > 4:
+        candidates.append(parents[4] / 'lib' / 'rot_tools' / 'rot-tools')
+    found = [str(c) for c in candidates if c.is_file() and os.access(c, os.X_OK)]
+    return found[0] if found else shutil.which('rot-tools')
+
+
+@pytest.fixture(scope='module')
+def script():
+    path = _find_script()
+    if path is None:
+        pytest.fail('the rot-tools console script is not installed next to '
+                    f'{sys.executable} nor on PATH: install the package first '
+                    "(`pip install .` or the README's test command)")
+    return path
+
+
+def run(script, *args):
+    return subprocess.run([script, *map(str, args)], capture_output=True, encoding='utf-8',
+                          errors='replace', timeout=60)
+
+
+def ok(script, *args):
+    """Run, require success and a clean stderr, and return the parsed output."""
+    proc = run(script, *args)
+    assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
+    if '--json' in args:
+        return json.loads(proc.stdout, parse_constant=_no_json_constants)
+    yaml = pytest.importorskip('yaml')
+    return yaml.safe_load(proc.stdout)
+
+
+def _no_json_constants(name):
+    raise ValueError(f'{name} is not JSON')
+
+
+def close(actual, expected):
+    np.testing.assert_allclose(np.asarray(actual, dtype=float), expected, **PRINTED)
+
+
+def _axis_sign(printed, axis, angle):
+    """At θ = π the axis sign is the implementation's choice (and rounding decides it)."""
+    return -1.0 if math.pi - angle < 1e-9 and np.dot(printed, axis) < 0 else 1.0
+
+
+def check_rotation(rep, R, seq='ZYX', deg=False):
+    """Every rotation representation in rep against the math module for R."""
+    close(rep['matrix'], R)
+    axis, angle = matrix_to_axis_angle(R)
+    aa = rep['axis_angle']
+    axis = axis * _axis_sign(aa['axis'], axis, angle)
+    close(aa['axis'], axis)
+    close([aa['angle'], aa['angle_deg']], [angle, math.degrees(angle)])
+    close(aa['rotation_vector'], axis * angle)
+    two = aa['second_solution']
+    close(two['axis'], -axis)
+    close([two['angle'], two['angle_deg']], [2 * math.pi - angle, 360 - math.degrees(angle)])
+    close(axis_angle_to_matrix(two['axis'], two['angle']), R)
+    angles, degenerate = matrix_to_euler(R, seq)
+    eu = rep['euler']
+    assert (eu['sequence'], eu['unit'], eu['degenerate']) == (
+        seq, 'deg' if deg else 'rad', bool(degenerate))
+    close(eu['angles'], np.degrees(angles) if deg else angles)
+
+
+# ---------------------------------------------------------------------------------------
+# Each subcommand
+
+
+@pytest.mark.parametrize('fmt', ['yaml', 'json'])
+def test_euler_negative_angle_and_options_after_the_arguments(script, fmt):
+    rep = ok(script, 'euler', 'ZYX', '-30', '20', '10', '--deg', *(['--json'] * (fmt == 'json')))
+    a, b, c = np.radians([-30.0, 20.0, 10.0])
+    R = rot_z(a) @ rot_y(b) @ rot_x(c)  # seed 000 eq. 1
+    check_rotation(rep, R, deg=True)
+    close(rep['euler']['angles'], [-30.0, 20.0, 10.0])
+    assert list(rep) == ['matrix', 'axis_angle', 'euler']
+
+
+def test_euler_extrinsic_with_output_sequence_and_exponent_numbers(script):
+    rep = ok(script, 'euler', 'zyx', '-1.5e-1', '2e-1', '0.3', '--seq', 'XYZ', '--json')
+    R = rot_x(0.3) @ rot_y(0.2) @ rot_z(-0.15)  # extrinsic: first angle applied first
+    check_rotation(rep, R, seq='XYZ')
+    close(rep['euler']['angles'], [0.3, 0.2, -0.15])  # 'zyx' (a, b, c) is 'XYZ' (c, b, a)
+
+
+def test_options_before_the_command(script):
+    rep = ok(script, '--json', '--deg', '--seq', 'ZXZ', 'euler', 'YXY', '10', '-120', '35')
+    check_rotation(rep, euler_to_matrix(np.radians([10.0, -120.0, 35.0]), 'YXY'), 'ZXZ',
+                   deg=True)
+
+
+def test_all_sequences_at_gimbal_lock(script):
+    rep = ok(script, 'euler', 'ZYX', '25', '90', '0', '--deg', '--all-sequences', '--json')
+    R = rot_z(math.radians(25)) @ rot_y(math.pi / 2)
+    check_rotation(rep, R, deg=True)
+    assert rep['euler']['degenerate'] is True
+    table = rep['euler']['all_sequences']
+    assert list(table) == list(EULER_SEQUENCES)
+    for seq, entry in table.items():
+        angles, degenerate = matrix_to_euler(R, seq)
+        assert entry['degenerate'] is bool(degenerate), seq
+        close(entry['angles'], np.degrees(angles))
+        close(euler_to_matrix(np.radians(entry['angles']), seq), R)
+    assert [s for s, e in table.items() if e['degenerate']] == ['ZYX', 'xyz']
+
+
+def test_matrix_typed_with_six_digits(script):
+    typed = [0.866025, -0.5, 0, 0.5, 0.866025, 0, 0, 0, 1]  # Rot_z(30°) to six digits
+    rep = ok(script, 'matrix', *typed, '--deg', '--seq', 'zyz')
+    R = nearest_rotation(np.reshape(typed, (3, 3)))
+    check_rotation(rep, R, seq='zyz', deg=True)
+    assert rep['axis_angle']['angle_deg'] == pytest.approx(30.0, abs=1e-4)
+    # The same matrix is refused at a tolerance tighter than its typing error (~6e-7).
+    proc = run(script, 'matrix', *typed, '--tol', '1e-7')
+    assert proc.returncode == 2
+    assert re.fullmatch(r'rot-tools: error: matrix: R is not a rotation matrix: '
+                        r'max\|RᵀR − I\| = \S+ > tol 1e-07 \(the tolerance is --tol\)\n',
+                        proc.stderr)
+
+
+def test_axis_angle_in_degrees_prints_exact_values(script):
+    proc = run(script, 'axis-angle', '0', '0', '1', '90', '--deg')
+    assert proc.returncode == 0
+    assert '-0.0' not in proc.stdout and 'e-1' not in proc.stdout  # no noise like 6e-17
+    assert '  - [0.0, -1.0, 0.0]\n  - [1.0, 0.0, 0.0]\n  - [0.0, 0.0, 1.0]\n' in proc.stdout
+    assert '  angle_deg: 90.0\n' in proc.stdout and '    angle_deg: 270.0\n' in proc.stdout
+
+
+def test_axis_angle_normalises_the_axis(script):
+    rep = ok(script, 'axis-angle', '2', '-1', '2', '2.5', '--json')
+    check_rotation(rep, axis_angle_to_matrix([2.0, -1.0, 2.0], 2.5))
+    close(rep['axis_angle']['axis'], [2 / 3, -1 / 3, 2 / 3])
+
+
+@pytest.mark.parametrize('args, vector', [
+    (['0', '0', '-1e-3'], [0.0, 0.0, -1e-3]),
+    (['0', '-90', '0', '--deg'], [0.0, -math.pi / 2, 0.0]),
+    (['3', '-2', '0.5', '--precision', '17'], [3.0, -2.0, 0.5]),  # |v| > π: angle 2π − |v|
+])
+def test_rotvec(script, args, vector):
+    rep = ok(script, 'rotvec', *args, '--json')
+    check_rotation(rep, axis_angle_to_matrix(vector, np.linalg.norm(vector)),
+                   deg='--deg' in args)
+
+
+def test_precision(script):
+    rep = ok(script, 'rotvec', '0.1', '0.2', '0.3', '--precision', '4', '--json')
+    assert rep['axis_angle']['angle'] == 0.3742  # |(0.1, 0.2, 0.3)| = 0.374165...
+    assert rep['matrix'][0][0] == round(float(rot_tools.rotvec_to_matrix([.1, .2, .3])[0, 0]), 4)
+
+
+def _check_screw(rep, R, b):
+    s = screw_from_transform(R, b)
+    sc = rep['screw']
+    sign = _axis_sign(sc['direction'], s.direction, s.angle)  # at π translation follows
+    close(rep['translation'], b)
+    close(sc['direction'], sign * s.direction)
+    close(sc['point'], s.point)
+    close(sc['moment'], sign * s.moment)
+    close([sc['angle'], sc['angle_deg'], sc['translation'], sc['pitch']],
+          [s.angle, math.degrees(s.angle), sign * s.translation, sign * s.pitch])
+    close(np.cross(sc['point'], sc['direction']), sc['moment'])
+    # Independent check: the printed screw rebuilds the transform.
+    R2, b2 = transform_from_screw(sc['direction'], sc['point'], sc['angle'], sc['translation'])
+    close(R2, R)
+    close(b2, b)
+    return sc
+
+
+@pytest.mark.parametrize('fmt', ['yaml', 'json'])
+def test_screw_from_euler(script, fmt):
+    rep = ok(script, 'screw', '--euler', 'ZYX', '90', '0', '0', '--translation', '1', '0',
+             '0.5', '--deg', *(['--json'] * (fmt == 'json')))
+    R = rot_z(math.pi / 2)
+    check_rotation(rep, R, deg=True)
+    sc = _check_screw(rep, R, [1.0, 0.0, 0.5])
+    close(sc['direction'], [0, 0, 1])
+    close(sc['point'], [0.5, 0.5, 0])
+    close([sc['translation'], sc['pitch']], [0.5, 0.5 / (math.pi / 2)])
+
+
+@pytest.mark.parametrize('rotation, R', [
+    (['--rotation', '0.936293', '-0.289629', '0.198669', '0.312992', '0.944702', '-0.0978434',
+      '-0.159345', '0.153792', '0.975170'], None),
+    (['--axis-angle', '1', '1', '0', '-180', '--deg'], axis_angle_to_matrix([1, 1, 0], math.pi)),
+    (['--rotvec', '-0.2', '0.1', '2.5'], axis_angle_to_matrix([-.2, .1, 2.5], 2.5099800796)),
+])
+def test_screw_rotation_forms(script, rotation, R):
+    if R is None:  # the --rotation matrix is typed with six digits: projected first
+        R = nearest_rotation(np.reshape([float(x) for x in rotation[1:]], (3, 3)))
+    b = [-1.0, 2.0, 0.25]
+    rep = ok(script, 'screw', *rotation, '--translation', *b, '--json')
+    check_rotation(rep, R, deg='--deg' in rotation)
+    _check_screw(rep, R, b)
+
+
+def test_pure_translation_pitch_is_inf_in_yaml_and_json(script):
+    proc = run(script, 'screw', '--translation', '0', '-3', '4')
+    assert proc.returncode == 0 and '  pitch: .inf\n' in proc.stdout
+    rep = ok(script, 'screw', '--translation', '0', '-3', '4', '--json')
+    sc = rep['screw']
+    assert sc['pitch'] == 'inf' and float(sc['pitch']) == math.inf
+    assert (sc['direction'], sc['angle'], sc['translation']) == ([0.0, -0.6, 0.8], 0.0, 5.0)
+    check_rotation(rep, np.eye(3))
+
+
+def test_yaml_and_json_carry_the_same_report(script):
+    yaml = pytest.importorskip('yaml')
+    args = ['screw', '--euler', 'xzx', '0.3', '2', '-1', '--translation', '1', '2', '3',
+            '--all-sequences']
+    from_yaml = yaml.safe_load(run(script, *args).stdout)
+    from_json = ok(script, *args, '--json')
+    assert from_yaml == from_json
+
+
+# ---------------------------------------------------------------------------------------
+# Help
+
+
+@pytest.mark.parametrize('command', ['euler', 'matrix', 'axis-angle', 'rotvec', 'screw'])
+def test_help_has_usage_and_examples_that_run(script, command):
+    proc = run(script, command, '--help')
+    assert proc.returncode == 0 and proc.stderr == ''
+    assert proc.stdout.startswith(f'usage: rot-tools {command} ')
+    examples = proc.stdout.split('\nexamples:\n', 1)[1].splitlines()
+    assert examples and all(line.startswith('  rot-tools ') for line in examples)
+    first = examples[0].split()[1:]
+    assert run(script, *first).returncode == 0
+
+
+def test_main_help(script):
+    proc = run(script, '--help')
+    assert proc.returncode == 0 and proc.stdout.startswith('usage: rot-tools ')
+    for command in ('euler', 'matrix', 'axis-angle', 'rotvec', 'screw'):
+        assert f'\n    {command} ' in proc.stdout
+
+
+# ---------------------------------------------------------------------------------------
+# Bad input: one line on stderr, status 2
+
+
+@pytest.mark.parametrize('args, message', [
+    # wrong count
+    ('euler ZYX 1 2', 'euler ZYX angles: expected 3 numbers, got 2'),
+    ('euler ZYX 1 2 3 4', 'euler ZYX angles: expected 3 numbers, got 4'),
+    ('matrix 1 0 0 0 1 0 0 0', 'matrix: expected 9 numbers, got 8'),
+    ('axis-angle 0 0 1', 'axis-angle X Y Z ANGLE: expected 4 numbers, got 3'),
+    ('rotvec 1 2 3 4', 'rotvec X Y Z: expected 3 numbers, got 4'),
+    ('screw --translation 1 2', 'argument --translation: expected 3 arguments'),
+    ('screw --rotation 1 0 0 --translation 1 2 3', 'argument --rotation: expected 9 arguments'),
+    ('screw --rotvec 1 2 3', 'the following arguments are required: --translation'),
+    ('euler', 'the following arguments are required: SEQ'),
+    ('', 'the following arguments are required: COMMAND'),
+    # not numbers / not finite
+    ('euler ZYX 1 x 3', "argument ANGLE: not a number: 'x'"),
+    ('matrix 1 0 0 0 1 0 0 0 1,0', "argument ENTRY: not a number: '1,0'"),
+    ('screw --euler ZYX 1 q 3 --translation 0 0 0', "argument --euler: not a number: 'q'"),
+    ('screw --translation 1 two 3', "argument --translation: not a number: 'two'"),
+    ('euler ZYX nan 0 0', "argument ANGLE: not a finite number: 'nan'"),
+    ('rotvec -inf 0 0', "argument COMPONENT: not a finite number: '-inf'"),
+    ('axis-angle 0 0 1 1e999', "argument NUMBER: not a finite number: '1e999'"),
+    ('matrix 1 0 0 0 1 0 0 0 Infinity', "argument ENTRY: not a finite number: 'Infinity'"),
+    # not a rotation
+    ('matrix 1 0.2 0 0 1 0 0 0 1',
+     r'matrix: R is not a rotation matrix: max|RᵀR − I| = 0.2 > tol 1e-05 '
+     '(the tolerance is --tol)'),
+    ('matrix 0 0 0 0 0 0 0 0 0', 'matrix: R is not a rotation matrix: max|RᵀR − I| = 1 '),
+    ('matrix 1 0 0 0 1 0 0 0 -1', 'matrix: R is a reflection: det R = -1, expected +1'),
+    ('screw --rotation -1 0 0 0 -1 0 0 0 -1 --translation 0 0 0',
+     'argument --rotation: R is a reflection: det R = -1, expected +1'),
+    ('matrix 1 0 0 0 1 0 0 0 1 --tol -1', "argument --tol: must be >= 0, got '-1'"),
+    # sequences
+    ('euler ABC 1 2 3', "argument SEQ: unknown Euler sequence 'ABC': use one of the 12"),
+    ('euler ZyX 1 2 3', "argument SEQ: unknown Euler sequence 'ZyX'"),
+    ('euler XXY 1 2 3', "argument SEQ: unknown Euler sequence 'XXY'"),
+    ('rotvec 1 2 3 --seq zyX', "argument --seq: unknown Euler sequence 'zyX'"),
+    ('screw --euler XYZW 1 2 3 --translation 0 0 0', 'argument --euler: unknown Euler sequ'),
+    # axis
+    ('axis-angle 0 0 0 1', 'axis-angle: axis is zero but the angle is 1 rad'),
+    ('screw --axis-angle 0 0 0 -2 --translation 1 2 3',
+     'argument --axis-angle: axis is zero but the angle is -2 rad'),
+    # options
+    ('euler ZYX 1 2 3 --precision 0', "argument --precision: expected an integer 1..17, got '0'"),
+    ('euler ZYX 1 2 3 --bogus', 'unrecognized arguments: --bogus'),
+    ('quaternion 0 0 0 1', "argument COMMAND: invalid choice: 'quaternion'"),
+    ('screw --rotvec 1 2 3 --euler ZYX 1 2 3 --translation 0 0 0',
+     'argument --euler: not allowed with argument --rotvec'),
+])
+def test_bad_input_is_one_line_and_status_2(script, args, message):
+    proc = run(script, *args.split())
+    assert proc.returncode == 2, proc
+    assert proc.stdout == ''
+    assert proc.stderr.startswith(f'rot-tools: error: {message}'), proc.stderr
+    assert proc.stderr.endswith('\n') and proc.stderr.count('\n') == 1, proc.stderr

@@ -1,0 +1,271 @@
+"""rot_tools.report: the report's keys and values, and its YAML / JSON text."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rot_tools import (
+    axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
+    rot_z, RotationError, screw_from_transform)
+from rot_tools.report import round_number, to_json, to_yaml, transform_report
+
+TOL = 1e-12
+R0 = rot_z(0.3) @ rot_y(-0.7) @ rot_x(2.1)
+B0 = np.array([0.4, -1.5, 2.0])
+
+
+def _walk(x):
+    yield x
+    if isinstance(x, dict):
+        for v in x.values():
+            yield from _walk(v)
+    elif isinstance(x, list):
+        for v in x:
+            yield from _walk(v)
+
+
+def _no_constants(name):
+    raise ValueError(f'JSON constant {name} is not valid JSON')
+
+
+def _json_loads(text):
+    """Strict JSON: NaN / Infinity tokens (which json.loads accepts by default) fail."""
+    return json.loads(text, parse_constant=_no_constants)
+
+
+# ---------------------------------------------------------------------------------------
+# transform_report
+
+
+def test_keys_in_order_and_plain_python_types():
+    rep = transform_report(R0, B0)
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'translation', 'screw']
+    assert list(rep['axis_angle']) == [
+        'axis', 'angle', 'angle_deg', 'rotation_vector', 'second_solution']
+    assert list(rep['axis_angle']['second_solution']) == ['axis', 'angle', 'angle_deg']
+    assert list(rep['euler']) == ['sequence', 'unit', 'angles', 'degenerate']
+    assert list(rep['screw']) == [
+        'direction', 'point', 'moment', 'angle', 'angle_deg', 'translation', 'pitch']
+    assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler']
+    for item in _walk(rep):
+        assert type(item) in (dict, list, float, bool, str), (type(item), item)
+
+
+def test_values_match_the_math():
+    rep = transform_report(R0, B0)
+    np.testing.assert_array_equal(rep['matrix'], R0)
+    aa = rep['axis_angle']
+    np.testing.assert_allclose(axis_angle_to_matrix(aa['axis'], aa['angle']), R0, atol=TOL)
+    np.testing.assert_allclose(aa['rotation_vector'], np.multiply(aa['axis'], aa['angle']),
+                               atol=TOL)
+    assert aa['angle_deg'] == pytest.approx(math.degrees(aa['angle']), abs=TOL)
+    eu = rep['euler']
+    assert (eu['sequence'], eu['unit'], eu['degenerate']) == ('ZYX', 'rad', False)
+    np.testing.assert_allclose(eu['angles'], [0.3, -0.7, 2.1], atol=TOL)
+    assert rep['translation'] == B0.tolist()
+    s = screw_from_transform(R0, B0)
+    sc = rep['screw']
+    for key in ('direction', 'point', 'moment'):
+        np.testing.assert_array_equal(sc[key], getattr(s, key))
+    assert (sc['angle'], sc['translation'], sc['pitch']) == (s.angle, s.translation, s.pitch)
+    assert sc['angle_deg'] == pytest.approx(math.degrees(sc['angle']), abs=TOL)
+
+
+@pytest.mark.parametrize('angle', [0.0, 1e-9, 0.5, 2.0, math.pi - 1e-9, math.pi])
+def test_both_axis_angle_solutions_give_the_matrix(angle):
+    R = axis_angle_to_matrix([1.0, -2.0, 0.5], angle)
+    aa = transform_report(R)['axis_angle']
+    two = aa['second_solution']
+    assert 0.0 <= aa['angle'] <= math.pi
+    assert two['angle'] == pytest.approx(2 * math.pi - aa['angle'], abs=TOL)
+    assert two['angle_deg'] == pytest.approx(360.0 - aa['angle_deg'], abs=1e-10)
+    np.testing.assert_array_equal(two['axis'], -np.array(aa['axis']))
+    np.testing.assert_allclose(axis_angle_to_matrix(aa['axis'], aa['angle']), R, atol=TOL)
+    np.testing.assert_allclose(axis_angle_to_matrix(two['axis'], two['angle']), R, atol=TOL)
+
+
+def test_degrees_switch_the_euler_angles_only():
+    rad = transform_report(R0, B0, seq='zxz')
+    deg = transform_report(R0, B0, seq='zxz', degrees=True)
+    assert (rad['euler']['unit'], deg['euler']['unit']) == ('rad', 'deg')
+    assert deg['euler']['sequence'] == 'zxz'
+    np.testing.assert_allclose(deg['euler']['angles'], np.degrees(rad['euler']['angles']),
+                               atol=1e-12)
+    np.testing.assert_allclose(euler_to_matrix(np.radians(deg['euler']['angles']), 'zxz'), R0,
+                               atol=TOL)
+    for key in ('axis_angle', 'screw', 'matrix', 'translation'):
+        assert deg[key] == rad[key]
+
+
+def test_gimbal_lock_flag_and_all_sequences():
+    R = rot_z(0.4) @ rot_y(math.pi / 2)  # ZYX (0.4, π/2, 0): locked
+    rep = transform_report(R, degrees=True, all_sequences=True)
+    eu = rep['euler']
+    assert eu['degenerate'] is True
+    np.testing.assert_allclose(eu['angles'], [math.degrees(0.4), 90.0, 0.0], atol=1e-10)
+    table = eu['all_sequences']
+    assert list(table) == list(EULER_SEQUENCES) and len(table) == 24
+    for seq, entry in table.items():
+        angles, degenerate = matrix_to_euler(R, seq)
+        assert entry['degenerate'] is bool(degenerate), seq
+        np.testing.assert_allclose(entry['angles'], np.degrees(angles), atol=1e-12)
+        np.testing.assert_allclose(euler_to_matrix(np.radians(entry['angles']), seq), R,
+                                   atol=1e-12)
+    # Extrinsic xyz is intrinsic ZYX read backwards: locked too. ZYZ (0.4, π/2, 0) is not.
+    assert table['xyz']['degenerate'] and table['xyz']['angles'][1] == 90.0
+    assert not table['ZYZ']['degenerate']
+    np.testing.assert_allclose(table['ZYZ']['angles'], [math.degrees(0.4), 90.0, 0.0],
+                               atol=1e-12)
+    assert 'all_sequences' not in transform_report(R)['euler']
+
+
+def test_pure_translation_has_infinite_pitch():
+    rep = transform_report(np.eye(3), [0.0, 3.0, 4.0])
+    sc = rep['screw']
+    assert sc['pitch'] == math.inf
+    np.testing.assert_allclose(sc['direction'], [0.0, 0.6, 0.8], rtol=0, atol=TOL)
+    assert (sc['angle'], sc['translation']) == (0.0, pytest.approx(5.0, abs=TOL))
+    assert 'pitch: .inf\n' in to_yaml(rep)
+    text = to_json(rep)
+    assert '"pitch": "inf"' in text
+    assert _json_loads(text)['screw']['pitch'] == 'inf'
+    assert float(_json_loads(text)['screw']['pitch']) == math.inf
+
+
+def test_identity_screw():
+    sc = transform_report(np.eye(3), np.zeros(3))['screw']
+    assert sc == {'direction': [0.0, 0.0, 1.0], 'point': [0.0, 0.0, 0.0],
+                  'moment': [0.0, 0.0, 0.0], 'angle': 0.0, 'angle_deg': 0.0,
+                  'translation': 0.0, 'pitch': 0.0}
+
+
+@pytest.mark.parametrize('args, match', [
+    ((np.diag([1.0, 1.0, -1.0]),), 'reflection'),
+    ((np.eye(3) * 1.1,), r'not a rotation matrix: max\|RᵀR − I\| = 0\.21'),
+    ((np.stack([np.eye(3)] * 2),), r'one rotation \(3, 3\), got \(2, 3, 3\)'),
+    ((np.eye(3), [1.0, 2.0]), r'translation b must have shape \(3,\)'),
+    ((np.eye(3), None, 'ZyX'), "unknown Euler sequence 'ZyX'"),
+])
+def test_bad_input_raises(args, match):
+    with pytest.raises(RotationError, match=match):
+        transform_report(*args)
+
+
+# ---------------------------------------------------------------------------------------
+# Numbers and text
+
+
+@pytest.mark.parametrize('x, precision, expected', [
+    (-0.0, 12, '0.0'),
+    (6.123233995736766e-17, 12, '0.0'),
+    (-6.123233995736766e-17, 12, '0.0'),
+    (math.pi, 12, '3.14159265359'),
+    (math.pi, 4, '3.142'),
+    (180.00000000000003, 12, '180.0'),
+    (123456789.123456789, 12, '123456789.123'),
+    (1e-5, 12, '1.0e-05'),
+    (1e16, 12, '1.0e+16'),
+    (0.1 + 0.2, None, '0.30000000000000004'),
+    (math.inf, 12, '.inf'),
+    (-math.inf, 12, '-.inf'),
+    (math.nan, 12, '.nan'),
+])
+def test_yaml_numbers(x, precision, expected):
+    assert to_yaml({'x': x}, precision=precision) == f'x: {expected}\n'
+
+
+def test_round_number():
+    assert math.copysign(1.0, round_number(-1e-20)) == 1.0
+    assert round_number(2.0 / 3.0) == 0.666666666667
+    assert round_number(2.0 / 3.0, 3) == 0.667
+    assert round_number(-2.0 / 3.0, None) == -2.0 / 3.0
+    assert round_number(math.inf) == math.inf
+
+
+def test_yaml_layout_is_fixed():
+    rep = transform_report(rot_z(math.pi / 2), [1.0, 0.0, 0.5], degrees=True)
+    assert to_yaml(rep) == """\
+matrix:
+  - [0.0, -1.0, 0.0]
+  - [1.0, 0.0, 0.0]
+  - [0.0, 0.0, 1.0]
+axis_angle:
+  axis: [0.0, 0.0, 1.0]
+  angle: 1.5707963268
+  angle_deg: 90.0
+  rotation_vector: [0.0, 0.0, 1.5707963268]
+  second_solution:
+    axis: [0.0, 0.0, -1.0]
+    angle: 4.71238898038
+    angle_deg: 270.0
+euler:
+  sequence: ZYX
+  unit: deg
+  angles: [90.0, 0.0, 0.0]
+  degenerate: false
+translation: [1.0, 0.0, 0.5]
+screw:
+  direction: [0.0, 0.0, 1.0]
+  point: [0.5, 0.5, 0.0]
+  moment: [0.5, -0.5, 0.0]
+  angle: 1.5707963268
+  angle_deg: 90.0
+  translation: 0.5
+  pitch: 0.318309886184
+"""
+
+
+TRICKY = {
+    'floats': [0.0, -1.5, 1e-5, 1e16, 2.0 / 3.0, 1e-300, math.inf, -math.inf],
+    'ints': [0, -3, 10 ** 20],
+    'flags': [True, False, None],
+    'strings': ['ZYX', 'zyx', 'yes', 'No', 'on', 'OFF', 'y', 'n', 'null', '~', 'true', '',
+                '1.5', '0x1F', '.inf', '-x', ' lead', 'trail ', 'a: b', 'a #b', '#c', '[x]',
+                '{y}', '*a', '&b', '!t', '%p', '@q', '`r', "'s'", '"d"', 'line\nbreak',
+                'tab\tin', 'ünïcode θ', '/rot_tools/pose', 'map'],
+    'nested': {'empty_list': [], 'empty_dict': {}, 'deep': {'a': {'b': {'c': [1.0, 2.0]}}},
+               'rows': [[1.0, 2.0], [3.0, 4.0]], 'records': [{'k': 1, 'v': [0.5]}, {'k': 2}],
+               'yes': 'key that YAML 1.1 would read as a bool', '3': 'numeric key'},
+    'refused': {'total': 3, 'non-finite': 2, 'bad quaternion': 1},
+}
+
+
+def test_yaml_round_trips_through_pyyaml():
+    yaml = pytest.importorskip('yaml')
+    assert yaml.safe_load(to_yaml(TRICKY, precision=None)) == TRICKY
+    rep = transform_report(R0, B0, all_sequences=True)
+    assert yaml.safe_load(to_yaml(rep, precision=None)) == rep
+    loaded = yaml.safe_load(to_yaml(rep))
+    np.testing.assert_allclose(loaded['matrix'], R0, atol=1e-12)
+    assert math.isnan(yaml.safe_load(to_yaml({'x': math.nan}))['x'])
+
+
+def test_json_round_trips():
+    text = to_json(TRICKY, precision=None)
+    expected = dict(TRICKY, floats=TRICKY['floats'][:-2] + ['inf', '-inf'])
+    assert _json_loads(text) == expected
+    rep = transform_report(R0, B0, all_sequences=True)
+    assert _json_loads(to_json(rep, precision=None)) == rep
+    assert '    "axis": [' in to_json(rep)  # vectors on one line
+    assert _json_loads(to_json({'x': [-0.0, math.nan]})) == {'x': [0.0, 'nan']}
+
+
+def test_emitters_refuse_unknown_types():
+    with pytest.raises(TypeError, match='ndarray'):
+        to_yaml({'m': np.eye(3)})
+    with pytest.raises(TypeError, match='ndarray'):
+        to_json({'m': np.eye(3)})
+    with pytest.raises(TypeError, match='takes a dict'):
+        to_yaml([1.0])
+
+
+def test_cli_and_report_need_neither_yaml_nor_ros():
+    code = ('import sys, rot_tools.cli, rot_tools.report; '
+            'print(sorted(m for m in ("yaml", "rclpy") if m in sys.modules))')
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         check=True, timeout=60).stdout
+    assert out.strip() == '[]'
