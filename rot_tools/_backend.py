@@ -17,6 +17,8 @@ import math
 
 import numpy as np
 
+from rot_tools.errors import RotationError
+
 CHUNK = 32768
 
 
@@ -92,7 +94,12 @@ def apply(kernel, inputs, outputs):
         result = kernel(FLOATS, *[a.tolist() for a, _ in inputs])
         return tuple([np.array(r, dtype=dt) if t else dt(r)
                       for r, (t, dt) in zip(result, outputs)])
-    shape = np.broadcast_shapes(*(a.shape[:a.ndim - len(t)] for a, t in inputs))
+    batches = [a.shape[:a.ndim - len(t)] for a, t in inputs]
+    try:
+        shape = np.broadcast_shapes(*batches)
+    except ValueError:
+        raise RotationError(f'batch shapes {" and ".join(map(str, batches))} do not broadcast'
+                            ) from None
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in inputs]
     n = flat[0].shape[0]
     outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
