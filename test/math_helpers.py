@@ -1,0 +1,246 @@
+"""Independent reference helpers for the math tests.
+
+Everything here is written from the formulas of SPEC §2 and the seeds, with plain NumPy, and
+never calls rot_tools: the tests compare rot_tools against these constructions, not against
+itself.
+"""
+
+import itertools
+import re
+
+from hypothesis import strategies as st
+import numpy as np
+
+PI = np.pi
+
+# The 12 sequence names of SPEC §2; upper case intrinsic, lower case extrinsic.
+TAIT_BRYAN = ('XYZ', 'XZY', 'YXZ', 'YZX', 'ZXY', 'ZYX')
+PROPER = ('XYX', 'XZX', 'YXY', 'YZY', 'ZXZ', 'ZYZ')
+INTRINSIC = TAIT_BRYAN + PROPER
+ALL_SEQUENCES = INTRINSIC + tuple(s.lower() for s in INTRINSIC)
+
+# Deterministic, bounded hypothesis settings for every property test.
+HYPOTHESIS_SETTINGS = dict(derandomize=True, max_examples=60, deadline=None, database=None)
+
+
+def max_abs(x):
+    """Return max |x| over all elements as a Python float (0 for an empty array)."""
+    x = np.asarray(x, dtype=float)
+    return float(np.max(np.abs(x))) if x.size else 0.0
+
+
+def ref_elementary(axis, angle):
+    """Return Rot_x / Rot_y / Rot_z (seed 000 §1) for `axis` in 'xyz', batched over `angle`."""
+    a = np.asarray(angle, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    one, zero = np.ones_like(a), np.zeros_like(a)
+    rows = {
+        'x': ((one, zero, zero), (zero, c, -s), (zero, s, c)),
+        'y': ((c, zero, s), (zero, one, zero), (-s, zero, c)),
+        'z': ((c, -s, zero), (s, c, zero), (zero, zero, one)),
+    }[axis.lower()]
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+
+
+def ref_euler(angles, seq):
+    """Explicit product of elementary rotations (SPEC §2).
+
+    Intrinsic (upper case): R = Rot_a1(t1) Rot_a2(t2) Rot_a3(t3).
+    Extrinsic (lower case): R = Rot_a3(t3) Rot_a2(t2) Rot_a1(t1).
+    """
+    angles = np.asarray(angles, dtype=float)
+    mats = [ref_elementary(seq[i], angles[..., i]) for i in range(3)]
+    if seq.isupper():
+        return mats[0] @ mats[1] @ mats[2]
+    return mats[2] @ mats[1] @ mats[0]
+
+
+def singular_values(seq):
+    """Middle-angle values at which the sequence is in gimbal lock."""
+    return (-PI / 2, PI / 2) if seq.upper() in TAIT_BRYAN else (0.0, PI)
+
+
+def middle_range(seq):
+    """Return the closed range of the middle angle (SPEC §2)."""
+    return (-PI / 2, PI / 2) if seq.upper() in TAIT_BRYAN else (0.0, PI)
+
+
+def ref_skew(v):
+    """Return [v]x of seed 001 eq. 17, batched."""
+    v = np.asarray(v, dtype=float)
+    z = np.zeros(v.shape[:-1])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([np.stack([z, -w, y], -1),
+                     np.stack([w, z, -x], -1),
+                     np.stack([-y, x, z], -1)], -2)
+
+
+def seed_rodrigues_eq7(axis, angle):
+    """Rot_l(theta), seed 000 eq. 7, element by element as printed (axis must be unit)."""
+    axis = np.asarray(axis, dtype=float)
+    t = np.asarray(angle, dtype=float)
+    lx, ly, lz = axis[..., 0], axis[..., 1], axis[..., 2]
+    c, s = np.cos(t), np.sin(t)
+    v = 1.0 - c
+    return np.stack([
+        np.stack([lx * lx * v + c, lx * ly * v - lz * s, lx * lz * v + ly * s], -1),
+        np.stack([lx * ly * v + lz * s, ly * ly * v + c, ly * lz * v - lx * s], -1),
+        np.stack([lx * lz * v - ly * s, ly * lz * v + lx * s, lz * lz * v + c], -1),
+    ], -2)
+
+
+def seed_rodrigues_eq18(u, phi):
+    """R(u, phi) = I cos(phi) + (1 - cos(phi)) u u^T + sin(phi) [u]x (seed 001 eq. 18)."""
+    u = np.asarray(u, dtype=float)
+    phi = np.asarray(phi, dtype=float)[..., None, None]
+    return (np.eye(3) * np.cos(phi) + (1.0 - np.cos(phi)) * (u[..., :, None] * u[..., None, :])
+            + np.sin(phi) * ref_skew(u))
+
+
+def expm(a, squarings=None):
+    """Matrix exponential by scaling and squaring of a Taylor series (no eigen-decomposition).
+
+    The squaring runs on E = exp(A / 2^s) - I, E <- 2E + E E, which keeps the small part
+    exact instead of rounding it against the identity.  For an se(3) 4x4 matrix the series
+    of the translation column converges as fast as the rotation block, so the scaling is
+    chosen from the upper-left 3x3 block only.
+    """
+    a = np.asarray(a, dtype=float)
+    n = a.shape[-1]
+    block = a[..., :3, :3]
+    norm = float(np.max(np.sum(np.abs(block), axis=-1))) if block.size else 0.0
+    if squarings is None:
+        squarings = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
+    x = a / 2.0 ** squarings
+    term = np.broadcast_to(np.eye(n), a.shape).copy()
+    small = np.zeros_like(a)
+    for k in range(1, 30):
+        term = term @ x / k
+        small = small + term
+    for _ in range(squarings):
+        small = 2.0 * small + small @ small
+    return np.eye(n) + small
+
+
+def expm_twist(twist):
+    """(R, b) = exp of the se(3) matrix [[ [w]x, v ], [0, 0]] for twist = (w, v), batched."""
+    twist = np.asarray(twist, dtype=float)
+    m = np.zeros(twist.shape[:-1] + (4, 4))
+    m[..., :3, :3] = ref_skew(twist[..., :3])
+    m[..., :3, 3] = twist[..., 3:]
+    e = expm(m)
+    return e[..., :3, :3], e[..., :3, 3]
+
+
+def rotate_minus_identity(axis, angle, p):
+    """(R - I) p for R = Rodrigues(axis, angle), accurate for tiny angles and huge |p|.
+
+    (R - I) p = sin(t) l x p - 2 sin^2(t/2) (p - (p.l) l); no matrix entry is rounded to 1.
+    """
+    axis = np.asarray(axis, dtype=float)
+    t = np.asarray(angle, dtype=float)[..., None]
+    p = np.asarray(p, dtype=float)
+    perp = p - np.sum(p * axis, axis=-1, keepdims=True) * axis
+    return np.sin(t) * np.cross(axis, p) - 2.0 * np.sin(t / 2.0) ** 2 * perp
+
+
+def ref_quaternion_to_matrix(q):
+    """Textbook unit-quaternion matrix with q = (x, y, z, w), the ROS order."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    x, y, z, w = (q[..., i] for i in range(4))
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], -1),
+        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], -1),
+        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)
+
+
+def cube_rotations():
+    """Return the 24 rotations that map the cube onto itself, exact signed permutations.
+
+    Their entries are exactly 0 and +/-1 (with -0.0 where a product of signs gives it), which
+    puts them at gimbal locks, at angle pi and at the +/-pi boundaries of the Euler ranges.
+    """
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            m = np.zeros((3, 3))
+            for row, col in enumerate(perm):
+                m[row, col] = signs[row]
+            if np.linalg.det(m) > 0:
+                out.append(m)
+    return np.array(out)
+
+
+def random_unit_vectors(rng, n):
+    """Return n random unit vectors, shape (n, 3)."""
+    v = rng.normal(size=(n, 3))
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def random_axis_angle(rng, n):
+    """Return (axis (n,3), angle (n,) in [0, pi], R (n,3,3)) built with seed eq. 7."""
+    axis = random_unit_vectors(rng, n)
+    angle = rng.uniform(0.0, PI, size=n)
+    return axis, angle, seed_rodrigues_eq7(axis, angle)
+
+
+def random_euler_angles(rng, n, seq):
+    """Return n random angle triples in the canonical ranges of `seq`."""
+    lo, hi = middle_range(seq)
+    return np.stack([rng.uniform(-PI, PI, n), rng.uniform(lo, hi, n),
+                     rng.uniform(-PI, PI, n)], axis=-1)
+
+
+def random_translations(rng, n):
+    """Return n translations with norms spread log-uniformly over 1e-3 .. 1e3."""
+    return random_unit_vectors(rng, n) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
+
+
+def wrap(a):
+    """Wrap angles to (-pi, pi]."""
+    a = np.asarray(a, dtype=float)
+    w = np.mod(a + PI, 2 * PI) - PI
+    return np.where(w <= -PI, w + 2 * PI, w)
+
+
+def angle_error(a, b):
+    """Max |a - b| taken modulo 2 pi."""
+    d = np.abs(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+    d = np.mod(d, 2 * PI)
+    return max_abs(np.minimum(d, 2 * PI - d))
+
+
+def polar_rotation(m, iterations=60):
+    """Orthogonal polar factor by Newton's iteration X <- (X + X^-T) / 2 (no SVD)."""
+    x = np.asarray(m, dtype=float)
+    for _ in range(iterations):
+        x = 0.5 * (x + np.swapaxes(np.linalg.inv(x), -1, -2))
+    return x
+
+
+_NUMBER = re.compile(r'[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?')
+
+
+def numbers_in(message):
+    """All decimal numbers written in a message, as floats."""
+    return [float(x) for x in _NUMBER.findall(message)]
+
+
+def mentions_magnitude(message, value, factor=2.0):
+    """Tell whether the message writes a number within `factor` of |value|."""
+    value = abs(value)
+    return any(value / factor <= abs(x) <= value * factor for x in numbers_in(message))
+
+
+def unit_vectors():
+    """Hypothesis strategy: unit 3-vectors (rejecting near-zero draws)."""
+    comp = st.floats(-1.0, 1.0, allow_nan=False)
+    return st.tuples(comp, comp, comp).map(np.array).filter(
+        lambda v: np.linalg.norm(v) > 1e-3).map(lambda v: v / np.linalg.norm(v))
+
+
+def angles_in(lo, hi):
+    """Hypothesis strategy: finite floats in [lo, hi]."""
+    return st.floats(lo, hi, allow_nan=False, allow_infinity=False)

@@ -1,0 +1,342 @@
+"""Every invalid input raises RotationError (a ValueError) saying what was wrong and how much."""
+
+import re
+
+import math_helpers as h
+import numpy as np
+import pytest
+from rot_tools import (
+    axis_angle_to_matrix, euler_to_matrix, is_rotation, matrix_to_axis_angle, matrix_to_euler,
+    matrix_to_rotvec, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
+    RotationError, rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate,
+    screw_log, skew, transform_from_screw, validate_rotation)
+
+I3 = np.eye(3)
+Z3 = np.zeros(3)
+NON_FINITE = r'(?i)finite|nan|inf'
+
+
+def shape_pattern(got):
+    """Message names the expected trailing shape and the shape it got."""
+    return r'(?i)shape.*' + re.escape(str(tuple(got)))
+
+
+def non_orthogonal(eps):
+    """R with max|R^T R - I| = eps and det R = 1 exactly (one off-diagonal entry perturbed)."""
+    r = np.eye(3)
+    r[0, 1] = eps
+    return r
+
+
+# ---- the exception type ----------------------------------------------------------------
+
+
+def test_rotation_error_is_a_value_error():
+    assert issubclass(RotationError, ValueError)
+    with pytest.raises(ValueError):
+        validate_rotation(np.zeros((2, 2)))
+
+
+# ---- rotation matrices: every function that takes R ------------------------------------
+
+TAKES_R = {
+    'validate_rotation': validate_rotation,
+    'matrix_to_euler': matrix_to_euler,
+    'matrix_to_axis_angle': matrix_to_axis_angle,
+    'matrix_to_rotvec': matrix_to_rotvec,
+    'screw_from_transform': lambda r: screw_from_transform(r, np.zeros(np.shape(r)[:-1])),
+    'screw_log': lambda r: screw_log(r, np.zeros(np.shape(r)[:-1])),
+    'screw_interpolate': lambda r: screw_interpolate(r, Z3, I3, Z3, 0.5),
+}
+
+
+@pytest.mark.parametrize('name', TAKES_R)
+@pytest.mark.parametrize('shape', [(3,), (3, 4), (4, 3), (2, 2), (2, 2, 2), (5, 3, 2)])
+def test_wrong_matrix_shape(name, shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        TAKES_R[name](np.zeros(shape))
+
+
+@pytest.mark.parametrize('name', TAKES_R)
+@pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
+def test_non_finite_matrix(name, bad):
+    r = np.stack([I3, I3])
+    r[1, 2, 0] = bad
+    with pytest.raises(RotationError, match=NON_FINITE) as info:
+        TAKES_R[name](r)
+    assert str(bad).lower().lstrip('-') in str(info.value).lower()
+
+
+@pytest.mark.parametrize('name', TAKES_R)
+@pytest.mark.parametrize('eps', [1e-8, 1e-3, 0.5])
+def test_non_orthogonal_matrix_names_the_error_size(name, eps):
+    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation') as info:
+        TAKES_R[name](non_orthogonal(eps))
+    assert h.mentions_magnitude(str(info.value), eps), str(info.value)
+
+
+@pytest.mark.parametrize('name', TAKES_R)
+def test_scaled_matrix_names_the_error_size(name):
+    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation') as info:
+        TAKES_R[name](1.01 * rot_z(0.3))
+    assert h.mentions_magnitude(str(info.value), 1.01 ** 2 - 1), str(info.value)
+
+
+@pytest.mark.parametrize('name', TAKES_R)
+@pytest.mark.parametrize('reflection', [np.diag([1.0, 1.0, -1.0]), -I3, -rot_x(0.4)])
+def test_reflection(name, reflection):
+    with pytest.raises(RotationError, match=r'(?i)reflection|det') as info:
+        TAKES_R[name](reflection)
+    assert -1.0 in h.numbers_in(str(info.value)), str(info.value)
+
+
+def test_non_orthogonal_item_inside_a_batch():
+    batch = rot_z(np.linspace(0, 3, 6))
+    batch[4] = non_orthogonal(1e-4)
+    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation') as info:
+        matrix_to_axis_angle(batch)
+    assert h.mentions_magnitude(str(info.value), 1e-4)
+
+
+def test_within_tolerance_is_accepted_beyond_is_refused():
+    validate_rotation(non_orthogonal(5e-10))
+    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation'):
+        validate_rotation(non_orthogonal(5e-9))
+    validate_rotation(non_orthogonal(5e-9), tol=1e-8)
+
+
+def test_non_numeric_matrix():
+    with pytest.raises(RotationError):
+        validate_rotation('not a matrix')
+
+
+def test_nearest_rotation_refuses_what_cannot_be_projected():
+    with pytest.raises(RotationError, match=shape_pattern((2, 3))):
+        nearest_rotation(np.zeros((2, 3)))
+    with pytest.raises(RotationError, match=NON_FINITE):
+        nearest_rotation(np.full((3, 3), np.nan))
+    with pytest.raises(RotationError, match=r'(?i)det|reflection|singular'):
+        nearest_rotation(np.diag([1.0, 1.0, -1.0]))
+
+
+# ---- check=False skips validation ------------------------------------------------------
+
+
+@pytest.mark.parametrize('name', ['matrix_to_euler', 'matrix_to_axis_angle',
+                                  'matrix_to_rotvec', 'screw_from_transform', 'screw_log'])
+def test_check_false_skips_validation(name):
+    f = {'matrix_to_euler': matrix_to_euler, 'matrix_to_axis_angle': matrix_to_axis_angle,
+         'matrix_to_rotvec': matrix_to_rotvec,
+         'screw_from_transform': lambda r, check: screw_from_transform(r, Z3, check=check),
+         'screw_log': lambda r, check: screw_log(r, Z3, check=check)}[name]
+    r = non_orthogonal(1e-6) @ rot_y(0.4)
+    with pytest.raises(RotationError):
+        f(r, check=True)
+    f(r, check=False)
+
+
+# ---- is_rotation -----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize('shape', [(3,), (3, 4), (2, 2), (4, 3, 2)])
+def test_is_rotation_raises_for_bad_shapes(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        is_rotation(np.zeros(shape))
+
+
+def test_is_rotation_is_false_for_non_finite():
+    assert not is_rotation(np.full((3, 3), np.inf))
+    assert is_rotation(np.stack([I3, I3 * np.nan])).tolist() == [True, False]
+
+
+# ---- Euler -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize('seq', ['ZYx', 'zYX', 'XXY', 'xxy', 'ABC', '', 'ZYXZ', 'ZY', 'XYW',
+                                 ' ZYX', 'Z-Y-X'])
+def test_unknown_euler_sequence(seq):
+    with pytest.raises(RotationError, match=r'(?i)sequence.*' + re.escape(repr(seq))):
+        euler_to_matrix(Z3, seq)
+    with pytest.raises(RotationError, match=r'(?i)sequence.*' + re.escape(repr(seq))):
+        matrix_to_euler(I3, seq)
+
+
+@pytest.mark.parametrize('seq', [None, 123, ('Z', 'Y', 'X')])
+def test_euler_sequence_not_a_string(seq):
+    with pytest.raises(RotationError, match=r'(?i)sequence'):
+        euler_to_matrix(Z3, seq)
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
+def test_non_finite_euler_angles(bad):
+    angles = np.zeros((4, 3))
+    angles[2, 1] = bad
+    with pytest.raises(RotationError, match=NON_FINITE):
+        euler_to_matrix(angles, 'XYZ')
+
+
+@pytest.mark.parametrize('shape', [(), (2,), (4,), (5, 2)])
+def test_wrong_euler_angles_shape(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        euler_to_matrix(np.zeros(shape), 'ZYX')
+
+
+# ---- elementary rotations and skew -----------------------------------------------------
+
+
+@pytest.mark.parametrize('f', [rot_x, rot_y, rot_z])
+@pytest.mark.parametrize('bad', [np.nan, np.inf])
+def test_non_finite_elementary_angle(f, bad):
+    with pytest.raises(RotationError, match=NON_FINITE):
+        f([0.0, bad])
+
+
+@pytest.mark.parametrize('shape', [(), (2,), (4,), (3, 2)])
+def test_wrong_skew_shape(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        skew(np.zeros(shape))
+
+
+def test_non_finite_skew():
+    # SPEC §2: never a silent NaN.
+    with pytest.raises(RotationError, match=NON_FINITE):
+        skew([1.0, np.nan, 2.0])
+
+
+# ---- axis-angle and rotation vectors ---------------------------------------------------
+
+
+@pytest.mark.parametrize('angle', [0.5, -1e-3, 1e-12, np.pi])
+def test_zero_axis_with_non_zero_angle(angle):
+    with pytest.raises(RotationError, match=r'(?i)zero') as info:
+        axis_angle_to_matrix(Z3, angle)
+    assert h.mentions_magnitude(str(info.value), angle, factor=1.01), str(info.value)
+
+
+def test_zero_axis_inside_a_batch():
+    with pytest.raises(RotationError, match=r'(?i)zero'):
+        axis_angle_to_matrix([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]], [0.5, 0.3])
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf])
+def test_non_finite_axis(bad):
+    with pytest.raises(RotationError, match=r'(?i)axis.*(finite|nan|inf)'):
+        axis_angle_to_matrix([0.0, bad, 1.0], 0.5)
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
+def test_non_finite_angle(bad):
+    with pytest.raises(RotationError, match=r'(?i)angle.*(finite|nan|inf)'):
+        axis_angle_to_matrix([0.0, 0.0, 1.0], [0.1, bad])
+
+
+@pytest.mark.parametrize('shape', [(), (2,), (4,), (2, 4)])
+def test_wrong_axis_shape(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        axis_angle_to_matrix(np.ones(shape), 0.5)
+
+
+def test_axis_and_angle_shapes_that_do_not_broadcast():
+    with pytest.raises(RotationError, match=r'(?i)broadcast|shape'):
+        axis_angle_to_matrix(np.ones((3, 3)), np.ones(4))
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf])
+def test_non_finite_rotation_vector(bad):
+    with pytest.raises(RotationError, match=NON_FINITE):
+        rotvec_to_matrix([[0.0, 0.0, 1.0], [bad, 0.0, 0.0]])
+
+
+@pytest.mark.parametrize('shape', [(), (2,), (4,)])
+def test_wrong_rotation_vector_shape(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        rotvec_to_matrix(np.ones(shape))
+
+
+# ---- quaternions -----------------------------------------------------------------------
+
+
+def test_zero_quaternion():
+    with pytest.raises(RotationError, match=r'(?i)zero|norm'):
+        quaternion_to_matrix([0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(RotationError, match=r'(?i)zero|norm'):
+        quaternion_to_matrix([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]])
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
+def test_non_finite_quaternion(bad):
+    with pytest.raises(RotationError, match=NON_FINITE):
+        quaternion_to_matrix([0.0, bad, 0.0, 1.0])
+
+
+@pytest.mark.parametrize('shape', [(), (3,), (5,), (2, 3)])
+def test_wrong_quaternion_shape(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        quaternion_to_matrix(np.ones(shape))
+
+
+# ---- screws ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize('f', [screw_from_transform, screw_log])
+@pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
+def test_non_finite_translation(f, bad):
+    with pytest.raises(RotationError, match=r'(?i)translation.*(finite|nan|inf)'):
+        f(I3, [0.0, bad, 1.0])
+
+
+@pytest.mark.parametrize('f', [screw_from_transform, screw_log])
+@pytest.mark.parametrize('shape', [(), (2,), (4,)])
+def test_wrong_translation_shape(f, shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        f(I3, np.zeros(shape))
+
+
+@pytest.mark.parametrize('bad', [np.nan, np.inf])
+def test_non_finite_twist(bad):
+    with pytest.raises(RotationError, match=NON_FINITE):
+        screw_exp([0.0, 0.0, 1.0, bad, 0.0, 0.0])
+
+
+@pytest.mark.parametrize('shape', [(), (3,), (5,), (7,)])
+def test_wrong_twist_shape(shape):
+    with pytest.raises(RotationError, match=shape_pattern(shape)):
+        screw_exp(np.zeros(shape))
+
+
+def test_transform_from_screw_zero_direction():
+    with pytest.raises(RotationError, match=r'(?i)direction.*(zero|0)'):
+        transform_from_screw(Z3, Z3, 1.0, 0.0)
+
+
+@pytest.mark.parametrize('field', ['direction', 'point', 'angle', 'translation'])
+@pytest.mark.parametrize('bad', [np.nan, np.inf])
+def test_transform_from_screw_non_finite(field, bad):
+    args = {'direction': np.array([0.0, 0.0, 1.0]), 'point': np.zeros(3), 'angle': 1.0,
+            'translation': 0.5}
+    if np.ndim(args[field]):
+        args[field] = np.array([0.0, bad, 1.0])
+    else:
+        args[field] = bad
+    with pytest.raises(RotationError, match=NON_FINITE):
+        transform_from_screw(**args)
+
+
+@pytest.mark.parametrize('field', ['direction', 'point'])
+def test_transform_from_screw_wrong_shape(field):
+    args = {'direction': np.array([0.0, 0.0, 1.0]), 'point': np.zeros(3)}
+    args[field] = np.zeros(4)
+    with pytest.raises(RotationError, match=shape_pattern((4,))):
+        transform_from_screw(args['direction'], args['point'], 1.0, 0.0)
+
+
+def test_screw_interpolate_non_finite_fraction():
+    with pytest.raises(RotationError, match=NON_FINITE):
+        screw_interpolate(I3, Z3, rot_z(1.0), [1.0, 0.0, 0.0], np.nan)
+
+
+def test_screw_interpolate_bad_end_transform():
+    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation'):
+        screw_interpolate(I3, Z3, 2.0 * I3, Z3, 0.5)
+    with pytest.raises(RotationError, match=NON_FINITE):
+        screw_interpolate(I3, Z3, I3, [np.inf, 0.0, 0.0], 0.5)

@@ -1,0 +1,232 @@
+"""Elementary rotations, skew, validity checks, nearest rotation, quaternion boundary."""
+
+from hypothesis import given, settings
+import math_helpers as h
+import numpy as np
+import pytest
+from rot_tools import (
+    is_rotation, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z, RotationError,
+    skew, validate_rotation)
+
+N = 10_000
+PI = h.PI
+ELEMENTARY = {'x': rot_x, 'y': rot_y, 'z': rot_z}
+
+
+@pytest.mark.parametrize('axis', 'xyz')
+def test_elementary_rotations_match_seed_matrices(axis):
+    rng = np.random.default_rng(1)
+    special = np.array([0.0, h.PI, -h.PI, h.PI / 2, -h.PI / 2, 1e-12, 2 * h.PI, 7.0])
+    angles = np.concatenate([rng.uniform(-2 * h.PI, 2 * h.PI, N), special])
+    got = ELEMENTARY[axis](angles)
+    assert got.shape == (N + special.size, 3, 3)
+    assert got.dtype == np.float64
+    assert h.max_abs(got - h.ref_elementary(axis, angles)) <= 1e-15
+    assert np.all(is_rotation(got))
+
+
+@pytest.mark.parametrize('axis', 'xyz')
+def test_elementary_rotation_shapes(axis):
+    f = ELEMENTARY[axis]
+    assert f(0.3).shape == (3, 3)
+    assert f(np.float64(0.3)).shape == (3, 3)
+    assert f([0.1, 0.2]).shape == (2, 3, 3)
+    batch = np.linspace(-3, 3, 10).reshape(2, 5)
+    out = f(batch)
+    assert out.shape == (2, 5, 3, 3)
+    assert h.max_abs(out[1, 3] - f(batch[1, 3])) == 0.0
+
+
+def test_elementary_rotations_rotate_counter_clockwise():
+    # Rot_z(90 deg) takes x to y, Rot_x takes y to z, Rot_y takes z to x (right hand).
+    e = np.eye(3)
+    assert h.max_abs(rot_z(h.PI / 2) @ e[0] - e[1]) <= 1e-16
+    assert h.max_abs(rot_x(h.PI / 2) @ e[1] - e[2]) <= 1e-16
+    assert h.max_abs(rot_y(h.PI / 2) @ e[2] - e[0]) <= 1e-16
+
+
+def test_skew_is_cross_product():
+    rng = np.random.default_rng(2)
+    v = rng.normal(size=(N, 3)) * 10.0 ** rng.uniform(-3, 3, size=(N, 1))
+    w = rng.normal(size=(N, 3))
+    s = skew(v)
+    assert s.shape == (N, 3, 3)
+    assert h.max_abs(s - h.ref_skew(v)) == 0.0
+    assert h.max_abs(s + np.swapaxes(s, -1, -2)) == 0.0
+    cross = np.cross(v, w)
+    err = np.abs(np.einsum('nij,nj->ni', s, w) - cross).max(-1)
+    assert np.all(err <= 1e-15 * np.linalg.norm(v, axis=-1) * np.linalg.norm(w, axis=-1))
+
+
+def test_skew_shapes():
+    assert skew([1.0, 2.0, 3.0]).shape == (3, 3)
+    assert skew(np.ones((4, 5, 3))).shape == (4, 5, 3, 3)
+    assert h.max_abs(skew([1.0, 2.0, 3.0]) @ [4.0, 5.0, 6.0] - np.cross([1, 2, 3], [4, 5, 6])) == 0
+
+
+def test_is_rotation_on_random_rotations():
+    rng = np.random.default_rng(3)
+    _, _, r = h.random_axis_angle(rng, N)
+    ok = is_rotation(r)
+    assert ok.shape == (N,)
+    assert ok.dtype == np.bool_
+    assert ok.all()
+
+
+def test_is_rotation_single_item_is_a_bool():
+    out = is_rotation(np.eye(3))
+    assert np.ndim(out) == 0
+    assert isinstance(out, (bool, np.bool_))
+    assert out
+    assert not is_rotation(2.0 * np.eye(3))
+
+
+def test_is_rotation_tolerance():
+    r = rot_z(0.4) @ rot_x(1.1)
+    small = r.copy()
+    small[0, 1] += 1e-10          # max|R^T R - I| ~ 1e-10 <= 1e-9
+    large = r.copy()
+    large[0, 1] += 1e-8           # ~ 1e-8 > 1e-9
+    assert is_rotation(small)
+    assert not is_rotation(large)
+    assert is_rotation(large, tol=1e-7)
+    assert not is_rotation(small, tol=1e-11)
+
+
+def test_is_rotation_rejects_reflections_and_scalings():
+    assert not is_rotation(np.diag([1.0, 1.0, -1.0]))
+    assert not is_rotation(-rot_y(0.7))
+    assert not is_rotation(np.zeros((3, 3)))
+    assert not is_rotation(1.001 * np.eye(3))
+
+
+def test_is_rotation_false_for_non_finite_items_in_a_batch():
+    batch = np.stack([np.eye(3)] * 4)
+    batch[1, 0, 0] = np.nan
+    batch[2, 2, 1] = np.inf
+    batch[3, 1, 2] = -np.inf
+    assert is_rotation(batch).tolist() == [True, False, False, False]
+    assert not is_rotation(np.full((3, 3), np.nan))
+
+
+def test_is_rotation_keeps_2d_batch_shape():
+    batch = rot_x(np.linspace(0, 3, 12).reshape(3, 4))
+    batch[2, 1] = np.diag([1.0, -1.0, 1.0])
+    out = is_rotation(batch)
+    assert out.shape == (3, 4)
+    assert out.sum() == 11 and not out[2, 1]
+
+
+def test_validate_rotation_returns_its_input():
+    rng = np.random.default_rng(4)
+    _, _, r = h.random_axis_angle(rng, 100)
+    assert np.array_equal(validate_rotation(r), r)
+    assert np.array_equal(validate_rotation(r[0]), r[0])
+    assert validate_rotation(r.reshape(10, 10, 3, 3)).shape == (10, 10, 3, 3)
+    nearly = r[0].copy()
+    nearly[2, 2] += 5e-10
+    assert np.array_equal(validate_rotation(nearly), nearly)
+    assert np.array_equal(validate_rotation(nearly, tol=1e-9), nearly)
+
+
+def test_nearest_rotation_of_a_rotation_is_itself():
+    rng = np.random.default_rng(5)
+    _, _, r = h.random_axis_angle(rng, N)
+    assert h.max_abs(nearest_rotation(r) - r) <= 1e-15 * 4
+
+
+def test_nearest_rotation_is_the_polar_factor():
+    # Independent reference: Newton's iteration for the orthogonal polar factor (no SVD).
+    rng = np.random.default_rng(6)
+    _, _, r = h.random_axis_angle(rng, 2000)
+    noisy = r + 1e-3 * rng.normal(size=r.shape)
+    got = nearest_rotation(noisy)
+    assert got.shape == noisy.shape
+    assert np.all(is_rotation(got, tol=1e-14))
+    assert h.max_abs(got - h.polar_rotation(noisy)) <= 1e-14
+
+
+def test_nearest_rotation_of_a_six_digit_matrix():
+    r = rot_z(0.5) @ rot_y(-0.3) @ rot_x(2.0)
+    typed = np.array([[float(f'{x:.6g}') for x in row] for row in r])
+    assert not is_rotation(typed)
+    got = nearest_rotation(typed)
+    assert got.shape == (3, 3)
+    assert is_rotation(got, tol=1e-14)
+    assert h.max_abs(got - r) <= 1e-6
+
+
+def test_quaternion_to_matrix_matches_textbook_formula():
+    rng = np.random.default_rng(7)
+    q = rng.normal(size=(N, 4)) * 10.0 ** rng.uniform(-3, 3, size=(N, 1))
+    got = quaternion_to_matrix(q)
+    assert got.shape == (N, 3, 3)
+    assert h.max_abs(got - h.ref_quaternion_to_matrix(q)) <= 1e-14
+    assert np.all(is_rotation(got, tol=1e-14))
+
+
+@pytest.mark.parametrize('axis', 'xyz')
+def test_quaternion_order_is_x_y_z_w(axis):
+    # q = sin(t/2) e_axis in the first three slots, cos(t/2) last gives Rot_axis(t).
+    for t in (0.0, 0.3, -1.2, h.PI / 2, h.PI, 3.0):
+        q = np.zeros(4)
+        q['xyz'.index(axis)] = np.sin(t / 2)
+        q[3] = np.cos(t / 2)
+        assert h.max_abs(quaternion_to_matrix(q) - h.ref_elementary(axis, t)) <= 1e-15 * 4
+    assert np.array_equal(quaternion_to_matrix([0.0, 0.0, 0.0, 1.0]), np.eye(3))
+
+
+def test_quaternion_sign_and_scale_do_not_matter():
+    rng = np.random.default_rng(8)
+    q = rng.normal(size=(100, 4))
+    ref = quaternion_to_matrix(q)
+    assert h.max_abs(quaternion_to_matrix(-q) - ref) <= 1e-15 * 4
+    assert h.max_abs(quaternion_to_matrix(1e-3 * q) - ref) <= 1e-15 * 4
+    assert h.max_abs(quaternion_to_matrix(1e5 * q) - ref) <= 1e-15 * 4
+
+
+def test_quaternion_shapes():
+    assert quaternion_to_matrix([0.0, 0.0, 0.0, 1.0]).shape == (3, 3)
+    assert quaternion_to_matrix(np.ones((2, 3, 4))).shape == (2, 3, 3, 3)
+
+
+def test_single_items_match_the_batch():
+    rng = np.random.default_rng(9)
+    q = np.concatenate([rng.normal(size=(200, 4)), np.eye(4), -np.eye(4)])
+    batch = quaternion_to_matrix(q)
+    for i in range(len(q)):
+        assert h.max_abs(quaternion_to_matrix(q[i]) - batch[i]) <= 1e-15 * 4, i
+    angles = np.array([0.0, PI, -PI, PI / 2, 1e-300, 5e-324, 1e10])
+    for f in (rot_x, rot_y, rot_z):
+        batch = f(angles)
+        for i, a in enumerate(angles):
+            assert h.max_abs(f(a) - batch[i]) <= 1e-15, (f, a)
+    _, _, r = h.random_axis_angle(rng, 50)
+    r[3, 0, 0] += 1e-8
+    flags = is_rotation(r)
+    assert [bool(is_rotation(x)) for x in r] == flags.tolist()
+
+
+@pytest.mark.parametrize('scale', [1e-300, 1e-200, 1e-160, 1e-100, 1e100, 1e160, 1e200, 1e300])
+def test_quaternion_of_any_finite_scale_is_normalised_or_refused_never_nan(scale):
+    # SPEC §2: q is normalised; only a zero or non-finite q is an error; never a silent NaN.
+    q = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.5], [0.3, -0.2, 0.9, 0.1]])
+    ref = h.ref_quaternion_to_matrix(q)
+    for one, expected in zip(scale * q, ref):
+        try:
+            got = quaternion_to_matrix(one)
+        except RotationError:
+            continue
+        assert h.max_abs(got - expected) <= 1e-15 * 4, (scale, one)
+    try:
+        got = quaternion_to_matrix(scale * q)
+    except RotationError:
+        return
+    assert h.max_abs(got - ref) <= 1e-15 * 4
+
+
+@settings(**h.HYPOTHESIS_SETTINGS)
+@given(axis=h.unit_vectors(), angle=h.angles_in(-10.0, 10.0))
+def test_quaternion_property_is_rodrigues(axis, angle):
+    q = np.append(np.sin(angle / 2) * axis, np.cos(angle / 2))
+    assert h.max_abs(quaternion_to_matrix(q) - h.seed_rodrigues_eq7(axis, angle)) <= 1e-14
