@@ -114,10 +114,12 @@ def _exp_kernel(ops, twist):
     d = dot(axis, u)
     half = 0.5 * theta
     sh = ops.sin(half)
-    zero = theta == 0  # sin θ/θ → 1 and (1 − cos θ)/θ → 0; no cancellation elsewhere
-    inv = 1.0 / ops.where(zero, 1.0, theta)
-    sinc = ops.where(zero, 1.0, 2.0 * sh * ops.cos(half) * inv)
-    versinc = 2.0 * sh * sh * inv
+    # sin θ/θ and (1 − cos θ)/θ; below 1e-8 rad their series 1 − θ²/6 and θ/2 − θ³/24 are
+    # 1 and θ/2 to double precision (and sin(θ/2) would underflow for denormal θ).
+    small = theta < 1e-8
+    safe = ops.where(small, 1.0, theta)
+    sinc = ops.where(small, 1.0, 2.0 * sh * ops.cos(half) / safe)
+    versinc = ops.where(small, half, 2.0 * sh * sh / safe)
     swing = cross(axis, u)
     b = [sinc * (ui - d * li) + versinc * si + d * li for ui, li, si in zip(u, axis, swing)]
     return _rodrigues(ops, axis[0], axis[1], axis[2], theta), b

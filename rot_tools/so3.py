@@ -46,7 +46,7 @@ def rot_z(a):
 
 def skew(v):
     """[v]× = [[0, −v3, v2], [v3, 0, −v1], [−v2, v1, 0]], so skew(v) @ w == cross(v, w)."""
-    v = as_float_array(v, (3,), 'v')
+    v = finite_array(v, (3,), 'v')
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
     out = np.zeros(v.shape[:-1] + (3, 3))
     out[..., 0, 1], out[..., 0, 2] = -z, y
@@ -147,7 +147,10 @@ def quaternion_to_matrix(q):
 
 
 def _quaternion_kernel(ops, q):
-    x, y, z, w = q
+    big = ops.maximum(ops.maximum(ops.abs(q[0]), ops.abs(q[1])),
+                      ops.maximum(ops.abs(q[2]), ops.abs(q[3])))
+    safe = ops.where(big > 0, big, 1.0)  # q/max|q_i|: |q|² neither overflows nor underflows
+    x, y, z, w = q[0] / safe, q[1] / safe, q[2] / safe, q[3] / safe
     n2 = x * x + y * y + z * z + w * w
     s = 2.0 / ops.where(n2 > 0, n2, 1.0)
     return [[1.0 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
