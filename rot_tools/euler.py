@@ -163,6 +163,8 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
     """
     spec = parse_sequence(seq)
+    if not 0 <= lock_tol < math.pi / 4:
+        raise RotationError(f'lock_tol must be in [0, π/4) rad, got {lock_tol!r}')
     R = checked_rotation(R, check)
     kernel = partial(_angles_kernel, spec=spec, lock_tol=lock_tol)
     return apply(kernel, [(R, (3, 3))], [((3,), np.float64), ((), np.bool_)])

@@ -160,7 +160,8 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
     """The constant-screw motion from T0 = (R0, b0) to T1 = (R1, b1) at fractions s (...).
 
     T(s) = T0 · exp(s · log(T0⁻¹ T1)): every point moves along one helix about the relative
-    screw axis; T(0) = T0 and T(1) = T1. Returns (R(s) (..., 3, 3), b(s) (..., 3)).
+    screw axis; T(0) = T0 and T(1) = T1, and s outside [0, 1] continues the same motion.
+    Returns (R(s) (..., 3, 3), b(s) (..., 3)).
     """
     (R0, _), (b0, _) = _rigid(R0, b0, check)
     (R1, _), (b1, _) = _rigid(R1, b1, check)

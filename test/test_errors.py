@@ -340,3 +340,9 @@ def test_screw_interpolate_bad_end_transform():
         screw_interpolate(I3, Z3, 2.0 * I3, Z3, 0.5)
     with pytest.raises(RotationError, match=NON_FINITE):
         screw_interpolate(I3, Z3, I3, [np.inf, 0.0, 0.0], 0.5)
+
+
+@pytest.mark.parametrize('lock_tol', [-1e-9, float('nan'), float('inf'), 1.0])
+def test_bad_gimbal_lock_tolerance(lock_tol):
+    with pytest.raises(RotationError, match=r'lock_tol must be in \[0, π/4\) rad'):
+        matrix_to_euler(np.eye(3), 'ZYX', lock_tol=lock_tol)
