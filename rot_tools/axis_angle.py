@@ -34,7 +34,7 @@ def _rodrigues(ops, x, y, z, angle):
 
 def _axis_angle_kernel(ops, axis, angle):
     (x, y, z), norm = unit(ops, axis)
-    return _rodrigues(ops, x, y, z, angle), norm
+    return _rodrigues(ops, x, y, z, angle), (norm == 0) & (angle != 0)
 
 
 def axis_angle_to_matrix(axis, angle):
@@ -45,10 +45,9 @@ def axis_angle_to_matrix(axis, angle):
     """
     axis = finite_array(axis, (3,), 'axis')
     angle = finite_array(angle, (), 'angle')
-    matrix, norm = apply(_axis_angle_kernel, [(axis, (3,)), (angle, ())],
-                         [((3, 3), np.float64), ((), np.float64)])
-    bad = (norm == 0) & (angle != 0)
-    if np.any(bad):
+    matrix, bad = apply(_axis_angle_kernel, [(axis, (3,)), (angle, ())],
+                        [((3, 3), np.float64), ((), np.bool_)])
+    if bad.any() if bad.ndim else bad:
         first = float(np.broadcast_to(angle, bad.shape)[bad].flat[0])
         raise RotationError(f'axis is zero but the angle is {first:g} rad: a rotation needs '
                             'a direction (a zero axis is allowed only with angle 0)')

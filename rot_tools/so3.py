@@ -139,9 +139,8 @@ def quaternion_to_matrix(q):
     quaternion function in rot_tools: for message boundaries. Zero or non-finite q raises.
     """
     q = finite_array(q, (4,), 'quaternion (x, y, z, w)')
-    matrix, norm2 = apply(_quaternion_kernel, [(q, (4,))],
-                          [((3, 3), np.float64), ((), np.float64)])
-    if not (norm2 > 0).all():
+    matrix, zero = apply(_quaternion_kernel, [(q, (4,))], [((3, 3), np.float64), ((), np.bool_)])
+    if zero.any() if zero.ndim else zero:
         raise RotationError('quaternion (x, y, z, w) must be non-zero, got |q| = 0')
     return matrix
 
@@ -155,4 +154,4 @@ def _quaternion_kernel(ops, q):
     s = 2.0 / ops.where(n2 > 0, n2, 1.0)
     return [[1.0 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
             [s * (x * y + z * w), 1.0 - s * (x * x + z * z), s * (y * z - x * w)],
-            [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y)]], n2
+            [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y)]], big == 0
