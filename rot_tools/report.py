@@ -94,9 +94,6 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
     R = validate_rotation(R)
     if R.shape != (3, 3):
         raise RotationError(f'transform_report takes one rotation (3, 3), got {R.shape}')
-    if seq not in EULER_SEQUENCES:
-        raise RotationError(
-            f'unknown Euler sequence {seq!r}: use one of {" ".join(EULER_SEQUENCES)}')
     axis, angle = matrix_to_axis_angle(R)
     angle = float(angle)
     angles, degenerate = _euler(R, seq, degrees)
