@@ -1,0 +1,215 @@
+"""ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware helpers.
+
+Inbound, every input message becomes one rigid transform ``(header, R, b)``: R a (3, 3)
+rotation, b a (3,) translation (b = 0 for Euler input). A message that cannot be one — a
+NaN/Inf anywhere, a zero quaternion, a quaternion whose norm is further than the tolerance
+from 1 — raises :class:`RefusedInput`, whose ``reason`` is a short key for counting.
+
+Quaternions are (x, y, z, w), the ROS message order. Inbound they go through
+rot_tools.quaternion_to_matrix; outbound (path poses) the quaternion is written from the
+axis-angle of R, q = (sin(θ/2)·l̂, cos(θ/2)), so no other quaternion algebra is needed.
+
+Outbound helpers build the node's messages from NumPy values: Float64MultiArray (row-major
+3x3), Vector3Stamped, TwistStamped, the screw-axis Marker, poses and Path.
+"""
+
+import math
+
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, TwistStamped
+from geometry_msgs.msg import Vector3Stamped
+from nav_msgs.msg import Path
+import numpy as np
+from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
+from visualization_msgs.msg import Marker
+
+from rot_tools.axis_angle import matrix_to_axis_angle
+from rot_tools.euler import euler_to_matrix
+from rot_tools.so3 import quaternion_to_matrix
+
+NON_FINITE = 'non_finite'
+ZERO_QUATERNION = 'zero_quaternion'
+NON_UNIT_QUATERNION = 'non_unit_quaternion'
+REFUSAL_REASONS = (NON_FINITE, ZERO_QUATERNION, NON_UNIT_QUATERNION)
+"""Reasons this module refuses a message for; rotation_node adds its own."""
+
+
+class RefusedInput(ValueError):
+    """A message that is not a rigid transform; ``reason`` is a key of REFUSAL_REASONS."""
+
+    def __init__(self, reason, message):
+        super().__init__(message)
+        self.reason = reason
+
+
+# ---------------------------------------------------------------------------------------
+# Inbound: message -> (header, R, b)
+
+
+def _require_finite(names, values):
+    """Raise RefusedInput(NON_FINITE) naming the first field that is NaN or ±Inf."""
+    for name, value in zip(names, values):
+        if not math.isfinite(value):
+            raise RefusedInput(NON_FINITE, f'{name} is {value}')
+
+
+def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
+    """Rotation matrix of a geometry_msgs/Quaternion (x, y, z, w), refused unless near unit.
+
+    Refused (RefusedInput) when a component is NaN/Inf, when q = 0, or when
+    |‖q‖ − 1| > ``tolerance``; within the tolerance q is normalised (R is exactly orthogonal).
+    """
+    x, y, z, w = q.x, q.y, q.z, q.w
+    _require_finite((f'{name}.x', f'{name}.y', f'{name}.z', f'{name}.w'), (x, y, z, w))
+    norm = math.hypot(x, y, z, w)  # hypot: no overflow for huge components
+    if norm == 0.0:
+        raise RefusedInput(ZERO_QUATERNION, f'{name} is the zero quaternion')
+    if abs(norm - 1.0) > tolerance:
+        raise RefusedInput(
+            NON_UNIT_QUATERNION,
+            f'{name} has norm {norm:.9g}, off 1 by {abs(norm - 1.0):.3g} > '
+            f'quaternion_tolerance {tolerance:g}')
+    return quaternion_to_matrix((x / norm, y / norm, z / norm, w / norm))
+
+
+def pose_to_rt(pose, tolerance, name='pose'):
+    """(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
+    p = pose.position
+    _require_finite((f'{name}.position.x', f'{name}.position.y', f'{name}.position.z'),
+                    (p.x, p.y, p.z))
+    R = quaternion_msg_to_matrix(pose.orientation, tolerance, f'{name}.orientation')
+    return R, np.array((p.x, p.y, p.z))
+
+
+def pose_stamped_to_transform(msg, tolerance):
+    """(header, R, b) of a geometry_msgs/PoseStamped."""
+    R, b = pose_to_rt(msg.pose, tolerance)
+    return msg.header, R, b
+
+
+def transform_stamped_to_transform(msg, tolerance):
+    """(header, R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
+    t = msg.transform.translation
+    _require_finite(('transform.translation.x', 'transform.translation.y',
+                     'transform.translation.z'), (t.x, t.y, t.z))
+    R = quaternion_msg_to_matrix(msg.transform.rotation, tolerance, 'transform.rotation')
+    return msg.header, R, np.array((t.x, t.y, t.z))
+
+
+def euler_stamped_to_transform(msg, seq, degrees):
+    """(header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3) of ``seq``.
+
+    The angles are in degrees when ``degrees`` is true, else radians.
+    """
+    v = msg.vector
+    angles = (v.x, v.y, v.z)
+    _require_finite(('vector.x', 'vector.y', 'vector.z'), angles)
+    if degrees:
+        angles = tuple(math.radians(a) for a in angles)
+    return msg.header, euler_to_matrix(angles, seq), np.zeros(3)
+
+
+# ---------------------------------------------------------------------------------------
+# Outbound: NumPy -> message
+
+MATRIX_LAYOUT = MultiArrayLayout(
+    dim=[MultiArrayDimension(label='rows', size=3, stride=9),
+         MultiArrayDimension(label='cols', size=3, stride=3)],
+    data_offset=0)
+"""Layout of a row-major 3x3 matrix in a std_msgs/MultiArray (std_msgs' own convention)."""
+
+
+# Each builder below fills ``msg`` in place when one is given (the node keeps one message per
+# output and reuses it: publish() serialises at once, and building a Marker costs more than
+# all of the math of one input), else a new message.
+
+
+def rotation_matrix_msg(R, msg=None):
+    """std_msgs/Float64MultiArray of R (3, 3): 9 values row-major, dims rows and cols."""
+    msg = Float64MultiArray(layout=MATRIX_LAYOUT) if msg is None else msg
+    msg.data = np.asarray(R, dtype=np.float64).ravel().tolist()
+    return msg
+
+
+def _set_xyz(target, v):
+    target.x, target.y, target.z = float(v[0]), float(v[1]), float(v[2])
+
+
+def vector3_stamped_msg(header, v, msg=None):
+    """geometry_msgs/Vector3Stamped of a 3-vector, with the given header."""
+    msg = Vector3Stamped() if msg is None else msg
+    msg.header = header
+    _set_xyz(msg.vector, v)
+    return msg
+
+
+def twist_stamped_msg(header, twist, msg=None):
+    """geometry_msgs/TwistStamped of a 6-vector (angular (3), linear (3)) = screw_log order."""
+    msg = TwistStamped() if msg is None else msg
+    msg.header = header
+    _set_xyz(msg.twist.angular, twist[:3])
+    _set_xyz(msg.twist.linear, twist[3:])
+    return msg
+
+
+SCREW_AXIS_COLOR = ColorRGBA(r=1.0, g=0.5, b=0.0, a=1.0)
+
+
+def screw_axis_marker(header, point, direction, scale, msg=None, ns='screw_axis'):
+    """visualization_msgs/Marker: an ARROW from ``point`` to ``point + scale·direction``.
+
+    Points in ``header.frame_id``, identity pose (orientation.w = 1: RViz rejects q = 0),
+    id 0 so each new axis replaces the last. scale.x/y/z are shaft diameter, head diameter
+    and head length, proportional to the arrow's length.
+    """
+    if msg is None:
+        msg = Marker(ns=ns, id=0, type=Marker.ARROW, action=Marker.ADD,
+                     points=[Point(), Point()], color=SCREW_AXIS_COLOR)
+        msg.pose.orientation.w = 1.0
+    msg.header = header
+    px, py, pz = float(point[0]), float(point[1]), float(point[2])
+    tail, tip = msg.points
+    tail.x, tail.y, tail.z = px, py, pz
+    tip.x = px + scale * float(direction[0])
+    tip.y = py + scale * float(direction[1])
+    tip.z = pz + scale * float(direction[2])
+    _set_xyz(msg.scale, (0.05 * scale, 0.1 * scale, 0.2 * scale))
+    return msg
+
+
+def matrices_to_quaternions(R, first=None):
+    """Quaternions (n, 4) as (x, y, z, w) of rotations R (n, 3, 3), continuous in sign.
+
+    q = (sin(θ/2)·l̂, cos(θ/2)) from matrix_to_axis_angle. q and −q are the same rotation;
+    each q is signed so that its dot product with the previous one (with ``first`` (4,) for
+    the first, when given) is not negative, as interpolating consumers expect.
+    """
+    axis, angle = matrix_to_axis_angle(R, check=False)
+    half = 0.5 * np.asarray(angle)
+    q = np.concatenate([axis * np.sin(half)[..., None], np.cos(half)[..., None]], axis=-1)
+    prev = np.concatenate([[first if first is not None else q[0]], q[:-1]])
+    flips = np.einsum('ij,ij->i', q, prev) < 0
+    return q * np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)[:, None]
+
+
+def pose_msg(position, quaternion):
+    """geometry_msgs/Pose of a position (3,) and a quaternion (x, y, z, w)."""
+    return Pose(position=Point(x=float(position[0]), y=float(position[1]),
+                               z=float(position[2])),
+                orientation=Quaternion(x=float(quaternion[0]), y=float(quaternion[1]),
+                                       z=float(quaternion[2]), w=float(quaternion[3])))
+
+
+def path_msg(header, start, goal, R, b):
+    """nav_msgs/Path: ``start``, the poses (R[k], b[k]) in between, then ``goal``.
+
+    start and goal are PoseStamped copied as given; R (n, 3, 3) and b (n, 3) include both
+    ends (only the inner n − 2 are converted); every inner pose gets ``header``.
+    """
+    q0 = start.pose.orientation
+    first = np.array((q0.x, q0.y, q0.z, q0.w))
+    first /= np.linalg.norm(first)
+    inner = []
+    if len(R) > 2:
+        quats = matrices_to_quaternions(R[1:-1], first)
+        inner = [PoseStamped(header=header, pose=pose_msg(p, q)) for p, q in zip(b[1:-1], quats)]
+    return Path(header=header, poses=[start] + inner + [goal])

@@ -1,0 +1,212 @@
+"""Shared test fixtures: an isolated DDS domain for this run, rclpy contexts, a test node.
+
+Node tests use real DDS on the loopback. To keep test runs (and anything else on the
+machine) apart, this module sets, before rclpy is first initialised, a ROS_DOMAIN_ID of its
+own for this run (derived from the pid, in 1..101) and ROS_AUTOMATIC_DISCOVERY_RANGE=
+LOCALHOST. rclpy is imported lazily: the math tests must run without it.
+
+Nothing here sleeps for discovery: :class:`Tester` waits for the graph (matched publishers
+and subscriptions, available services) with bounded timeouts, and retries service calls,
+since Fast DDS sometimes drops the reply to a brand-new client.
+"""
+
+import itertools
+import os
+import time
+
+import pytest
+
+os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.pop('ROS_LOCALHOST_ONLY', None)  # deprecated; conflicts with the range above
+os.environ.pop('ROS_STATIC_PEERS', None)
+
+OUTPUTS = ('rotation_matrix', 'axis_angle', 'euler_angles', 'screw', 'screw_axis')
+"""Published topics of rotation_node, relative to its name."""
+
+TIMEOUT = 5.0
+"""Upper bound of every wait (discovery, message, service reply); never reached when well."""
+
+_namespaces = itertools.count(1)
+
+
+class Tester:
+    """A test-side rclpy node in ``context`` that an executor spins on demand.
+
+    Nodes under test may be added to the same executor (in-process tests) or live in another
+    process (end-to-end tests). Every wait is bounded by ``timeout`` and fails the test.
+    """
+
+    def __init__(self, context, name='tester'):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        self.context = context
+        self.node = rclpy.create_node(name, context=context)
+        self.executors = [SingleThreadedExecutor(context=context)]
+        self.executors[0].add_node(self.node)
+        self.received = {}
+        self._subscriptions = {}
+        self.logs = []
+
+    def close(self):
+        """Destroy the test node and the executors (not the nodes added under test)."""
+        for executor in self.executors:
+            executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+
+    def add_node(self, node):
+        """Spin ``node`` (a node under test, usually in another context) with the tester.
+
+        A node of another context (another DDS participant) gets an executor of its own;
+        both are spun in turn, in this thread.
+        """
+        from rclpy.executors import SingleThreadedExecutor
+        if node.context is self.context:
+            self.executors[0].add_node(node)
+        else:
+            executor = SingleThreadedExecutor(context=node.context)
+            executor.add_node(node)
+            self.executors.append(executor)
+
+    def remove_node(self, node):
+        """Stop spinning ``node``."""
+        for executor in self.executors:
+            if node in executor.get_nodes():
+                executor.remove_node(node)
+
+    def spin_once(self):
+        """Let every executor handle what is ready (waiting at most 10 ms in all)."""
+        timeout = 0.01 / len(self.executors)
+        for executor in self.executors:
+            executor.spin_once(timeout_sec=timeout)
+
+    def spin_until(self, predicate, timeout=TIMEOUT, what='condition'):
+        """Spin until predicate() is true; fail the test after ``timeout`` seconds."""
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                pytest.fail(f'timed out after {timeout} s waiting for {what}')
+            self.spin_once()
+
+    def spin_for(self, seconds):
+        """Spin for a fixed time (only to show that nothing *more* arrives)."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.spin_once()
+
+    # -- topics ------------------------------------------------------------------------
+
+    def subscribe(self, topic, msg_type, qos=10):
+        """Collect every message of ``topic`` in self.received[topic]."""
+        self.received[topic] = []
+        self._subscriptions[topic] = self.node.create_subscription(
+            msg_type, topic, self.received[topic].append, qos)
+
+    def subscribe_outputs(self, prefix):
+        """Subscribe (reliable, depth 10, like the node) to the node's five outputs."""
+        from geometry_msgs.msg import TwistStamped, Vector3Stamped
+        from std_msgs.msg import Float64MultiArray
+        from visualization_msgs.msg import Marker
+        types = (Float64MultiArray, Vector3Stamped, Vector3Stamped, TwistStamped, Marker)
+        for name, msg_type in zip(OUTPUTS, types):
+            self.subscribe(f'{prefix}/{name}', msg_type)
+
+    def subscribe_rosout(self):
+        """Collect /rosout (reliable, transient local, like the rosout publishers)."""
+        from rcl_interfaces.msg import Log
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.node.create_subscription(Log, '/rosout', self.logs.append, qos)
+
+    def wait_matched(self, topics=None):
+        """Wait until each collected topic (default: all) has a matched publisher."""
+        for topic in topics or self._subscriptions:
+            sub = self._subscriptions[topic]
+            self.spin_until(lambda sub=sub: sub.get_publisher_count() > 0,
+                            what=f'a publisher on {topic}')
+
+    def publisher(self, topic, msg_type, qos=10):
+        """Create a publisher on ``topic``; return it once a subscription has matched it."""
+        pub = self.node.create_publisher(msg_type, topic, qos)
+        self.spin_until(lambda: pub.get_subscription_count() > 0,
+                        what=f'a subscription on {topic}')
+        return pub
+
+    def wait_messages(self, topic, count=1, timeout=TIMEOUT):
+        """Wait until ``count`` messages of ``topic`` have arrived; return them all."""
+        self.spin_until(lambda: len(self.received[topic]) >= count, timeout,
+                        f'{count} message(s) on {topic}')
+        return self.received[topic]
+
+    # -- services ----------------------------------------------------------------------
+
+    def call(self, srv_type, name, request, timeout=2.0, attempts=5):
+        """Call a service with a bounded wait per attempt and retries; return the response.
+
+        A reply that does not come within ``timeout`` is abandoned (the pending request is
+        removed) and the request sent again: Fast DDS can drop the first reply to a new
+        client. Fails the test when every attempt times out.
+        """
+        client = self.node.create_client(srv_type, name)
+        try:
+            self.spin_until(lambda: client.service_is_ready(), what=f'service {name}')
+            for _ in range(attempts):
+                future = client.call_async(request)
+                deadline = time.monotonic() + timeout
+                while not future.done() and time.monotonic() < deadline:
+                    self.spin_once()
+                if future.done():
+                    return future.result()
+                client.remove_pending_request(future)
+            pytest.fail(f'no reply from {name} in {attempts} attempts of {timeout} s')
+        finally:
+            self.node.destroy_client(client)
+
+    def set_parameters(self, node_name, parameters):
+        """Set parameters of node ``node_name`` through its ~/set_parameters service.
+
+        ``parameters`` are rclpy.parameter.Parameter objects; returns the list of
+        rcl_interfaces/SetParametersResult, one per parameter.
+        """
+        from rcl_interfaces.srv import SetParameters
+        request = SetParameters.Request(
+            parameters=[p.to_parameter_msg() for p in parameters])
+        return self.call(SetParameters, f'{node_name}/set_parameters', request).results
+
+
+def _context():
+    import rclpy
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    return context
+
+
+@pytest.fixture(scope='session')
+def ros_context():
+    """Initialise an rclpy context (a DDS participant) for the nodes under test."""
+    context = _context()
+    yield context
+    context.try_shutdown()
+
+
+@pytest.fixture(scope='session')
+def tester_context():
+    """Initialise another context (DDS participant) for the test side: real DDS between."""
+    context = _context()
+    yield context
+    context.try_shutdown()
+
+
+@pytest.fixture
+def namespace():
+    """Give each test a namespace of its own: no message of one test reaches another."""
+    return f'/t{next(_namespaces)}'
+
+
+@pytest.fixture
+def tester(tester_context):
+    """Create a Tester in the test-side context; destroy it after the test."""
+    t = Tester(tester_context)
+    yield t
+    t.close()

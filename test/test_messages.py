@@ -1,0 +1,237 @@
+"""rot_tools.messages: the message <-> NumPy boundary of rotation_node (no DDS needed)."""
+
+import math
+
+from geometry_msgs.msg import PoseStamped, Quaternion, TransformStamped, Vector3Stamped
+import numpy as np
+import pytest
+from std_msgs.msg import Header
+from visualization_msgs.msg import Marker
+
+from rot_tools import (
+    euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
+from rot_tools import messages
+from rot_tools.messages import RefusedInput
+
+ATOL = 1e-12
+RNG = np.random.default_rng(7)
+
+
+def quaternion(q):
+    return Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def unit(v):
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+# ---------------------------------------------------------------------------------------
+# Inbound
+
+
+@pytest.mark.parametrize('q', [(0, 0, 0, 1), (1, 0, 0, 0), (0.5, 0.5, 0.5, 0.5),
+                               tuple(unit(RNG.normal(size=4)))])
+def test_unit_quaternion(q):
+    R = messages.quaternion_msg_to_matrix(quaternion(q), 1e-3)
+    np.testing.assert_allclose(R, quaternion_to_matrix(q), rtol=0, atol=ATOL)
+
+
+def test_quaternion_order_is_x_y_z_w():
+    half = math.sqrt(0.5)  # 90° about z: (x, y, z, w) = (0, 0, sin 45°, cos 45°)
+    R = messages.quaternion_msg_to_matrix(quaternion((0, 0, half, half)), 1e-3)
+    np.testing.assert_allclose(R, rot_z(math.pi / 2), rtol=0, atol=ATOL)
+
+
+def test_quaternion_within_tolerance_is_normalised():
+    q = unit((0.3, -0.2, 0.9, 0.1)) * (1 - 0.99e-3)
+    R = messages.quaternion_msg_to_matrix(quaternion(q), 1e-3)
+    assert is_rotation(R, tol=1e-15)
+    np.testing.assert_allclose(R, quaternion_to_matrix(unit(q)), rtol=0, atol=ATOL)
+
+
+@pytest.mark.parametrize('q, tol, reason, match', [
+    ((0, 0, 0, 0), 1e-3, 'zero_quaternion', 'orientation is the zero quaternion'),
+    ((0, 0, 0, 0), 10.0, 'zero_quaternion', 'zero quaternion'),
+    ((0, 0, 0, 2), 1e-3, 'non_unit_quaternion', r'norm 2, off 1 by 1 > quaternion_tolerance'),
+    ((0, 0, 0, 1.0011), 1e-3, 'non_unit_quaternion', 'off 1 by 0.0011'),
+    ((0, 0.5, 0, 0), 0.4, 'non_unit_quaternion', 'norm 0.5'),
+    ((1e300, -1e300, 1e300, 1e300), 1e-3, 'non_unit_quaternion', r'norm 2e\+300'),
+    ((math.nan, 0, 0, 1), 1e-3, 'non_finite', r'orientation\.x is nan'),
+    ((0, 0, 0, math.inf), 1e-3, 'non_finite', r'orientation\.w is inf'),
+    ((0, -math.inf, 0, 1), 1e3, 'non_finite', r'orientation\.y is -inf'),
+])
+def test_bad_quaternion_is_refused(q, tol, reason, match):
+    with pytest.raises(RefusedInput, match=match) as info:
+        messages.quaternion_msg_to_matrix(quaternion(q), tol)
+    assert info.value.reason == reason
+    assert reason in messages.REFUSAL_REASONS
+
+
+def test_zero_tolerance_accepts_an_exactly_unit_quaternion():
+    R = messages.quaternion_msg_to_matrix(quaternion((0, 1, 0, 0)), 0.0)
+    np.testing.assert_allclose(R, np.diag([-1.0, 1.0, -1.0]), rtol=0, atol=0)
+
+
+def test_pose_stamped():
+    msg = PoseStamped()
+    msg.header.frame_id = 'map'
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 1.0, -2.0, 3.5
+    msg.pose.orientation = quaternion(unit((1, 2, 3, 4)))
+    header, R, b = messages.pose_stamped_to_transform(msg, 1e-3)
+    assert header is msg.header
+    np.testing.assert_allclose(R, quaternion_to_matrix((1, 2, 3, 4)), rtol=0, atol=ATOL)
+    assert b.tolist() == [1.0, -2.0, 3.5]
+
+
+@pytest.mark.parametrize('field, value, match', [
+    ('x', math.nan, r'pose\.position\.x is nan'), ('z', -math.inf, r'pose\.position\.z is -inf')])
+def test_pose_with_non_finite_position_is_refused(field, value, match):
+    msg = PoseStamped()
+    setattr(msg.pose.position, field, value)
+    with pytest.raises(RefusedInput, match=match) as info:
+        messages.pose_stamped_to_transform(msg, 1e-3)
+    assert info.value.reason == 'non_finite'
+
+
+def test_transform_stamped():
+    msg = TransformStamped()
+    msg.header.frame_id = 'world'
+    msg.transform.translation.x = 4.0
+    msg.transform.rotation = quaternion((1, 0, 0, 0))
+    header, R, b = messages.transform_stamped_to_transform(msg, 1e-3)
+    assert header is msg.header
+    np.testing.assert_allclose(R, rot_x(math.pi), rtol=0, atol=ATOL)
+    assert b.tolist() == [4.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize('where, match', [
+    ('translation', r'transform\.translation\.y is nan'),
+    ('rotation', r'transform\.rotation\.y is nan')])
+def test_transform_with_nan_is_refused(where, match):
+    msg = TransformStamped()
+    getattr(msg.transform, where).y = math.nan
+    with pytest.raises(RefusedInput, match=match) as info:
+        messages.transform_stamped_to_transform(msg, 1e-3)
+    assert info.value.reason == 'non_finite'
+
+
+def test_transform_with_zero_rotation_is_refused():
+    msg = TransformStamped()
+    msg.transform.rotation.w = 0.0
+    with pytest.raises(RefusedInput, match='transform.rotation is the zero quaternion'):
+        messages.transform_stamped_to_transform(msg, 1e-3)
+
+
+@pytest.mark.parametrize('seq', ['ZYX', 'xyz', 'ZXZ', 'yxy'])
+@pytest.mark.parametrize('degrees', [False, True])
+def test_euler_stamped(seq, degrees):
+    angles = np.array([0.7, 0.4, -1.3])
+    msg = Vector3Stamped()
+    given = np.degrees(angles) if degrees else angles
+    msg.vector.x, msg.vector.y, msg.vector.z = map(float, given)
+    header, R, b = messages.euler_stamped_to_transform(msg, seq, degrees)
+    assert header is msg.header
+    np.testing.assert_allclose(R, euler_to_matrix(angles, seq), rtol=0, atol=ATOL)
+    assert b.tolist() == [0.0, 0.0, 0.0]
+
+
+def test_euler_stamped_with_inf_is_refused():
+    msg = Vector3Stamped()
+    msg.vector.z = math.inf
+    with pytest.raises(RefusedInput, match=r'vector\.z is inf') as info:
+        messages.euler_stamped_to_transform(msg, 'ZYX', False)
+    assert info.value.reason == 'non_finite'
+
+
+# ---------------------------------------------------------------------------------------
+# Outbound
+
+
+def test_rotation_matrix_msg_is_row_major_with_the_std_msgs_layout():
+    R = euler_to_matrix((0.1, 0.2, 0.3))
+    msg = messages.rotation_matrix_msg(R)
+    assert [(d.label, d.size, d.stride) for d in msg.layout.dim] == [
+        ('rows', 3, 9), ('cols', 3, 3)]
+    assert msg.layout.data_offset == 0
+    assert list(msg.data) == R.ravel().tolist()
+    assert msg.data[1] == R[0, 1]  # row-major: (row 0, col 1) is element 1
+
+
+def test_vector3_and_twist_messages():
+    header = Header(frame_id='odom')
+    v = messages.vector3_stamped_msg(header, np.array([1.0, 2.0, 3.0]))
+    assert v.header is header and (v.vector.x, v.vector.y, v.vector.z) == (1.0, 2.0, 3.0)
+    t = messages.twist_stamped_msg(header, np.arange(6.0))
+    assert (t.twist.angular.x, t.twist.angular.y, t.twist.angular.z) == (0.0, 1.0, 2.0)
+    assert (t.twist.linear.x, t.twist.linear.y, t.twist.linear.z) == (3.0, 4.0, 5.0)
+
+
+def test_screw_axis_marker():
+    header = Header(frame_id='map')
+    m = messages.screw_axis_marker(header, np.array([1.0, 2.0, 0.0]),
+                                   np.array([0.0, 0.6, 0.8]), 2.0)
+    assert m.header is header
+    assert (m.type, m.action, m.id) == (Marker.ARROW, Marker.ADD, 0)
+    assert [(p.x, p.y, p.z) for p in m.points] == [(1.0, 2.0, 0.0), (1.0, 3.2, 1.6)]
+    o = m.pose.orientation
+    assert (o.x, o.y, o.z, o.w) == (0.0, 0.0, 0.0, 1.0)
+    assert m.scale.x > 0 and m.scale.y > 0 and m.scale.z > 0 and m.color.a == 1.0
+
+
+def test_matrices_to_quaternions_round_trip_and_continuity():
+    # A full turn about one axis in small steps passes θ = π, where the axis-angle sign of
+    # the half-angle formula flips; the quaternions must stay continuous.
+    axis = unit((1.0, -2.0, 0.5))
+    angles = np.linspace(0.0, 2 * math.pi, 73)
+    R = rotvec_to_matrix(axis * angles[:, None])
+    q = messages.matrices_to_quaternions(R)
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(quaternion_to_matrix(q), R, rtol=0, atol=ATOL)
+    assert (np.einsum('ij,ij->i', q[1:], q[:-1]) > 0).all()
+    # Signed to follow the given first quaternion.
+    q = messages.matrices_to_quaternions(R[:3], first=np.array([0.0, 0.0, 0.0, -1.0]))
+    assert q[0][3] < 0
+
+
+def test_random_rotations_to_quaternions():
+    q = RNG.normal(size=(1000, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    R = quaternion_to_matrix(q)
+    np.testing.assert_allclose(quaternion_to_matrix(messages.matrices_to_quaternions(R)), R,
+                               rtol=0, atol=ATOL)
+
+
+def test_path_msg_keeps_start_and_goal_as_given():
+    header = Header(frame_id='map')
+    start, goal = PoseStamped(header=header), PoseStamped(header=header)
+    goal.pose.orientation = quaternion((0, 0, 1.0005, 0))
+    R = rotvec_to_matrix(np.array([[0, 0, 0], [0, 0, math.pi / 2], [0, 0, math.pi]]))
+    b = np.array([[0, 0, 0], [0.5, 0, 0], [1, 0, 0]], dtype=float)
+    path = messages.path_msg(header, start, goal, R, b)
+    assert path.header is header
+    assert path.poses[0] is start and path.poses[-1] is goal
+    middle = path.poses[1].pose
+    assert (middle.position.x, middle.position.y, middle.position.z) == (0.5, 0.0, 0.0)
+    o = middle.orientation
+    np.testing.assert_allclose([o.x, o.y, o.z, o.w], [0, 0, math.sqrt(0.5), math.sqrt(0.5)],
+                               rtol=0, atol=ATOL)
+    assert messages.path_msg(header, start, goal, R[[0, 2]], b[[0, 2]]).poses == [start, goal]
+
+
+def test_builders_refill_a_given_message():
+    header, other = Header(frame_id='a'), Header(frame_id='b')
+    v = messages.vector3_stamped_msg(header, (1.0, 2.0, 3.0))
+    assert messages.vector3_stamped_msg(other, (4.0, 5.0, 6.0), v) is v
+    assert v.header is other and (v.vector.x, v.vector.y, v.vector.z) == (4.0, 5.0, 6.0)
+    m = messages.rotation_matrix_msg(np.eye(3))
+    assert messages.rotation_matrix_msg(rot_x(0.5), m) is m
+    assert list(m.data) == rot_x(0.5).ravel().tolist() and len(m.layout.dim) == 2
+    t = messages.twist_stamped_msg(header, np.zeros(6))
+    assert messages.twist_stamped_msg(other, np.arange(6.0), t) is t
+    assert (t.twist.linear.x, t.twist.angular.z) == (3.0, 2.0)
+    marker = messages.screw_axis_marker(header, (0, 0, 0), (0, 0, 1), 1.0)
+    again = messages.screw_axis_marker(other, (1, 1, 1), (1, 0, 0), 0.5, marker)
+    assert again is marker and marker.header is other
+    assert [(p.x, p.y, p.z) for p in marker.points] == [(1, 1, 1), (1.5, 1, 1)]
+    assert marker.scale.x == 0.025 and marker.pose.orientation.w == 1.0

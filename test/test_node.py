@@ -1,0 +1,732 @@
+"""In-process tests of rotation_node over real DDS.
+
+The node under test lives in one rclpy context (one DDS participant), the test node in
+another, so every message crosses DDS as it would between processes; each test has a
+namespace of its own. Expected values come from the math module (rot_tools), compared to
+1e-12; ~/describe prints 12 significant digits, so its numbers are compared to that.
+"""
+
+import math
+import time
+
+from geometry_msgs.msg import PoseStamped, TransformStamped, Vector3Stamped
+from nav_msgs.srv import GetPlan
+import numpy as np
+import pytest
+from rcl_interfaces.msg import Log, ParameterType
+from rclpy.exceptions import InvalidParameterValueException
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, ReliabilityPolicy
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker
+import yaml
+
+from rot_tools import (
+    euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
+    rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
+from rot_tools.report import transform_report
+from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
+
+ATOL = 1e-12
+INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped}
+ALWAYS = ('rotation_matrix', 'axis_angle', 'euler_angles', 'screw')
+"""Outputs published for every accepted input (screw_axis only for a non-identity one)."""
+
+
+# ---------------------------------------------------------------------------------------
+# Messages and expected values
+
+
+def pose_stamped(q, p=(0.0, 0.0, 0.0), frame='map'):
+    """Build a PoseStamped with quaternion q = (x, y, z, w) and position p."""
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
+    o = msg.pose.orientation
+    o.x, o.y, o.z, o.w = map(float, q)
+    return msg
+
+
+def transform_stamped(q, t=(0.0, 0.0, 0.0), frame='map'):
+    """Build a TransformStamped with rotation q = (x, y, z, w) and translation t."""
+    msg = TransformStamped()
+    msg.header.frame_id = frame
+    msg.child_frame_id = 'body'
+    tr = msg.transform.translation
+    tr.x, tr.y, tr.z = map(float, t)
+    r = msg.transform.rotation
+    r.x, r.y, r.z, r.w = map(float, q)
+    return msg
+
+
+def euler_stamped(angles, frame='map'):
+    """Build a Vector3Stamped holding three Euler angles."""
+    msg = Vector3Stamped()
+    msg.header.frame_id = frame
+    msg.vector.x, msg.vector.y, msg.vector.z = map(float, angles)
+    return msg
+
+
+def xyz(v):
+    """Return a geometry_msgs Vector3 / Point as a NumPy array."""
+    return np.array([v.x, v.y, v.z])
+
+
+def quat(q):
+    """Return a geometry_msgs Quaternion as a NumPy array (x, y, z, w)."""
+    return np.array([q.x, q.y, q.z, q.w])
+
+
+def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
+                  marker=True):
+    """Every output of one input equals the math module's value for (R, b)."""
+    matrix = out['rotation_matrix']
+    assert [(d.label, d.size, d.stride) for d in matrix.layout.dim] == [
+        ('rows', 3, 9), ('cols', 3, 3)]
+    assert matrix.layout.data_offset == 0
+    np.testing.assert_allclose(np.reshape(matrix.data, (3, 3)), R, rtol=0, atol=ATOL)
+    for name in ALWAYS[1:] + (('screw_axis',) if marker else ()):
+        assert out[name].header.stamp.sec == stamp
+        assert out[name].header.frame_id == frame
+    np.testing.assert_allclose(xyz(out['axis_angle'].vector), matrix_to_rotvec(R),
+                               rtol=0, atol=ATOL)
+    angles, _ = matrix_to_euler(R, seq)
+    np.testing.assert_allclose(xyz(out['euler_angles'].vector),
+                               np.degrees(angles) if degrees else angles,
+                               rtol=0, atol=ATOL * (180 if degrees else 1))
+    twist = out['screw'].twist
+    np.testing.assert_allclose(np.concatenate([xyz(twist.angular), xyz(twist.linear)]),
+                               screw_log(R, b), rtol=0, atol=ATOL * (1 + np.linalg.norm(b)))
+    if marker:
+        screw = screw_from_transform(R, b)
+        m = out['screw_axis']
+        assert (m.type, m.action) == (Marker.ARROW, Marker.ADD)
+        assert quat(m.pose.orientation).tolist() == [0.0, 0.0, 0.0, 1.0]
+        assert m.color.a > 0 and m.scale.x > 0 and m.scale.y > 0
+        assert len(m.points) == 2
+        # The axis point is |b|/θ away for small θ: compare relative to its size.
+        size = 1.0 + np.linalg.norm(screw.point)
+        np.testing.assert_allclose(xyz(m.points[0]), screw.point, rtol=0, atol=ATOL * size)
+        np.testing.assert_allclose(xyz(m.points[1]) - xyz(m.points[0]),
+                                   scale * screw.direction, rtol=0, atol=ATOL * size * 10)
+
+
+# ---------------------------------------------------------------------------------------
+# The rig: node under test + tester
+
+
+class Rig:
+    """rotation_node under test (own context) and the tester, matched both ways."""
+
+    def __init__(self, tester, node):
+        self.tester = tester
+        self.node = node
+        self.prefix = node.get_fully_qualified_name()
+        tester.add_node(node)
+        tester.subscribe_outputs(self.prefix)
+        tester.subscribe_rosout()
+        self.pubs = {name: tester.node.create_publisher(msg_type, f'{self.prefix}/{name}', 10)
+                     for name, msg_type in INPUTS.items()}
+        tester.spin_until(self._matched, what=f'discovery of {self.prefix}')
+        self._stamp = 0
+
+    def _matched(self):
+        ours = self.prefix + '/'
+        return (all(p.get_subscription_count() > 0 for p in self.pubs.values())
+                and all(s.get_publisher_count() > 0 for s in self.tester._subscriptions.values())
+                and all(s.get_publisher_count() > 0 for s in self.node.subscriptions
+                        if s.topic_name.startswith(ours))
+                and all(p.get_subscription_count() > 0 for p in self.node.publishers
+                        if p.topic_name.startswith(ours)))
+
+    def topic(self, name):
+        return f'{self.prefix}/{name}'
+
+    def send(self, kind, msg):
+        """Publish msg on ~/kind with a fresh stamp (sec); return the stamp."""
+        self._stamp += 1
+        msg.header.stamp.sec = self._stamp
+        self.pubs[kind].publish(msg)
+        return self._stamp
+
+    def outputs(self, stamp, marker=True):
+        """Wait for the outputs of the input stamped ``stamp``; return {output: msg}."""
+        names = ALWAYS + (('screw_axis',) if marker else ())
+        for name in names:
+            self.tester.wait_messages(self.topic(name), 1)
+        self.tester.spin_until(
+            lambda: all(self.received(n)[-1].header.stamp.sec == stamp for n in names[1:]),
+            what=f'outputs of input {stamp}')
+        return {name: self.received(name)[-1] for name in names}
+
+    def roundtrip(self, kind, msg, marker=True):
+        """send() then outputs()."""
+        return self.outputs(self.send(kind, msg), marker)
+
+    def received(self, name):
+        return self.tester.received[self.topic(name)]
+
+    def clear(self):
+        for name in ALWAYS + ('screw_axis',):
+            self.received(name).clear()
+
+    def call(self, srv_type, name, request):
+        return self.tester.call(srv_type, self.topic(name), request)
+
+    def describe(self):
+        return self.call(Trigger, 'describe', Trigger.Request())
+
+    def report(self):
+        response = self.describe()
+        assert response.success, response.message
+        return yaml.safe_load(response.message)
+
+    def screw_path(self, start, goal, tolerance=0.0):
+        request = GetPlan.Request(start=start, goal=goal, tolerance=float(tolerance))
+        return self.call(GetPlan, 'screw_path', request).plan
+
+    def node_logs(self, level=None):
+        name = self.node.get_logger().name
+        return [log for log in self.tester.logs
+                if log.name == name and (level is None or log.level == level)]
+
+
+@pytest.fixture
+def make_rig(ros_context, tester, namespace):
+    """Make Rigs: each call starts a fresh RotationNode with the given parameter overrides."""
+    nodes = []
+
+    def make(**parameters):
+        node = RotationNode(
+            context=ros_context, namespace=namespace,
+            parameter_overrides=[Parameter(k, value=v) for k, v in parameters.items()])
+        nodes.append(node)
+        return Rig(tester, node)
+
+    yield make
+    for node in nodes:
+        tester.remove_node(node)
+        node.destroy_node()
+
+
+@pytest.fixture
+def rig(make_rig):
+    return make_rig()
+
+
+RNG = np.random.default_rng(20251121)
+
+
+def random_quaternion():
+    q = RNG.normal(size=4)
+    return q / np.linalg.norm(q)
+
+
+# ---------------------------------------------------------------------------------------
+# Topics
+
+POSE_CASES = {
+    'general': (random_quaternion(), RNG.normal(size=3) * 2.0),
+    'half_turn_x': ((1.0, 0.0, 0.0, 0.0), (0.3, -1.0, 2.0)),
+    'half_turn_oblique': ((0.6, 0.0, 0.8, 0.0), (1.0, 2.0, 3.0)),
+    'tiny_angle': ((math.sin(0.5e-9), 0.0, 0.0, math.cos(0.5e-9)), (0.0, 5.0, 1.0)),
+    'pure_rotation': ((0.0, math.sin(0.4), 0.0, math.cos(0.4)), (0.0, 0.0, 0.0)),
+    'pure_translation': ((0.0, 0.0, 0.0, 1.0), (1.0, -2.0, 0.5)),
+    'gimbal_lock': ((0.0, math.sin(math.pi / 4), 0.0, math.cos(math.pi / 4)), (1.0, 0, 0)),
+}
+
+
+@pytest.mark.parametrize('case', POSE_CASES)
+def test_pose_outputs(rig, case):
+    q, p = POSE_CASES[case]
+    stamp = rig.send('pose', pose_stamped(q, p, frame='odom'))
+    out = rig.outputs(stamp)
+    check_outputs(out, stamp, 'odom', quaternion_to_matrix(q), np.asarray(p, float))
+
+
+@pytest.mark.parametrize('case', ['general', 'half_turn_oblique', 'pure_translation'])
+def test_transform_outputs(rig, case):
+    q, t = POSE_CASES[case]
+    stamp = rig.send('transform', transform_stamped(q, t, frame='world'))
+    check_outputs(rig.outputs(stamp), stamp, 'world', quaternion_to_matrix(q),
+                  np.asarray(t, float))
+
+
+@pytest.mark.parametrize('angles', [(0.5, 0.2, 0.1), (-3.0, 1.2, 2.9), (1.0, math.pi / 2, 0.0)])
+def test_euler_outputs(rig, angles):
+    stamp = rig.send('euler', euler_stamped(angles, frame='base_link'))
+    out = rig.outputs(stamp)
+    R = euler_to_matrix(angles, 'ZYX')
+    check_outputs(out, stamp, 'base_link', R, np.zeros(3))
+    if angles[1] != math.pi / 2:  # away from gimbal lock the angles come back as sent
+        np.testing.assert_allclose(xyz(out['euler_angles'].vector), angles, rtol=0, atol=ATOL)
+
+
+def test_identity_has_no_marker(rig):
+    rig.send('pose', pose_stamped((0, 0, 0, 1)))
+    stamp = rig.send('euler', euler_stamped((0.0, 0.0, 0.0)))
+    out = rig.outputs(stamp, marker=False)
+    check_outputs(out, stamp, 'map', np.eye(3), np.zeros(3), marker=False)
+    later = rig.send('pose', pose_stamped((0, 0, 1, 0)))
+    rig.outputs(later)
+    markers = rig.received('screw_axis')
+    assert [m.header.stamp.sec for m in markers] == [later]
+
+
+@pytest.mark.parametrize('kind', ['pose', 'transform'])
+def test_half_turn_outputs_share_one_axis_sign(rig, kind):
+    """At θ = π the axis sign is free; every output of one input must use the same one."""
+    build = pose_stamped if kind == 'pose' else transform_stamped
+    for q, p in [((1, 0, 0, 0), (0, 1, 2)), ((0, -0.6, 0.8, 0), (1, 2, 3)),
+                 ((-0.48, 0.6, 0.64, 0), (-1, 0.5, 4)), ((0, 0, -1, 0), (0, 0, 2))]:
+        out = rig.roundtrip(kind, build(q, p))
+        R, b = quaternion_to_matrix(q), np.asarray(p, float)
+        rotvec = xyz(out['axis_angle'].vector)
+        twist = np.concatenate([xyz(out['screw'].twist.angular),
+                                xyz(out['screw'].twist.linear)])
+        arrow = xyz(out['screw_axis'].points[1]) - xyz(out['screw_axis'].points[0])
+        assert np.linalg.norm(rotvec) == pytest.approx(math.pi, abs=ATOL)
+        np.testing.assert_allclose(twist[:3], rotvec, rtol=0, atol=ATOL)
+        np.testing.assert_allclose(arrow * math.pi, rotvec, rtol=0, atol=10 * ATOL)
+        np.testing.assert_allclose(rotvec_to_matrix(rotvec), R, rtol=0, atol=ATOL)
+        R_twist, b_twist = screw_exp(twist)
+        np.testing.assert_allclose(R_twist, R, rtol=0, atol=ATOL)
+        np.testing.assert_allclose(b_twist, b, rtol=0, atol=10 * ATOL)
+
+
+def test_qos_of_inputs_and_outputs(rig):
+    graph = rig.tester.node
+    for name in INPUTS:
+        (info,) = graph.get_subscriptions_info_by_topic(rig.topic(name))
+        assert info.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+        assert info.qos_profile.durability == DurabilityPolicy.VOLATILE
+    for name in ALWAYS + ('screw_axis',):
+        (info,) = graph.get_publishers_info_by_topic(rig.topic(name))
+        assert info.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+        assert info.qos_profile.durability == DurabilityPolicy.VOLATILE
+
+
+def test_sensor_data_publisher_is_served(rig):
+    pub = rig.tester.node.create_publisher(PoseStamped, rig.topic('pose'),
+                                           qos_profile_sensor_data)
+    rig.tester.spin_until(lambda: pub.get_subscription_count() > 0, what='matching')
+    q, p = POSE_CASES['general']
+    msg = pose_stamped(q, p)
+    msg.header.stamp.sec = 4242
+    # Best effort both ways: resend until the node has seen one (a first sample may race
+    # the reader's side of the match).
+    deadline = time.monotonic() + 5.0
+    while not rig.received('screw') and time.monotonic() < deadline:
+        pub.publish(msg)
+        rig.tester.spin_for(0.1)
+    out = rig.outputs(4242)
+    check_outputs(out, 4242, 'map', quaternion_to_matrix(q), p)
+
+
+# ---------------------------------------------------------------------------------------
+# Bad input
+
+
+BAD_INPUTS = {
+    'pose_nan_position': ('pose', pose_stamped((0, 0, 0, 1), (math.nan, 0, 0)),
+                          'non_finite', 'pose.position.x is nan'),
+    'pose_inf_position': ('pose', pose_stamped((0, 0, 0, 1), (0, 0, -math.inf)),
+                          'non_finite', 'pose.position.z is -inf'),
+    'pose_nan_orientation': ('pose', pose_stamped((0, 0, 0, math.nan)),
+                             'non_finite', 'pose.orientation.w is nan'),
+    'pose_zero_quaternion': ('pose', pose_stamped((0, 0, 0, 0)),
+                             'zero_quaternion', 'zero quaternion'),
+    'pose_long_quaternion': ('pose', pose_stamped((0, 0, 0, 1.5)),
+                             'non_unit_quaternion', 'norm 1.5'),
+    'pose_just_beyond_tolerance': ('pose', pose_stamped(np.array([0, 0, 0.6, 0.8]) * 1.0011),
+                                   'non_unit_quaternion', 'quaternion_tolerance 0.001'),
+    'pose_huge_quaternion': ('pose', pose_stamped((1e300, 1e300, 0, 0)),
+                             'non_unit_quaternion', 'norm'),
+    'pose_overflowing_position': ('pose', pose_stamped((0, 0, math.sin(0.05), math.cos(0.05)),
+                                                       (1e308, -1e308, 0)),
+                                  'not_decomposable', 'too large'),
+    'transform_nan_translation': ('transform', transform_stamped((0, 0, 0, 1), (0, math.nan, 0)),
+                                  'non_finite', 'transform.translation.y is nan'),
+    'transform_inf_rotation': ('transform', transform_stamped((math.inf, 0, 0, 1)),
+                               'non_finite', 'transform.rotation.x is inf'),
+    'transform_zero_quaternion': ('transform', transform_stamped((0, 0, 0, 0)),
+                                  'zero_quaternion', 'zero quaternion'),
+    'transform_short_quaternion': ('transform', transform_stamped((0, 0.5, 0, 0)),
+                                   'non_unit_quaternion', 'norm 0.5'),
+    'euler_nan': ('euler', euler_stamped((0.1, math.nan, 0.3)),
+                  'non_finite', 'vector.y is nan'),
+    'euler_inf': ('euler', euler_stamped((math.inf, 0, 0)),
+                  'non_finite', 'vector.x is inf'),
+}
+
+
+@pytest.mark.parametrize('case', BAD_INPUTS)
+def test_bad_input_is_refused(rig, case):
+    kind, bad, reason, why = BAD_INPUTS[case]
+    rig.send(kind, bad)
+    # The next good message on the same topic is processed after the bad one.
+    good = {'pose': pose_stamped((0, 0, 1, 0), (1, 0, 0)),
+            'transform': transform_stamped((0, 0, 1, 0), (1, 0, 0)),
+            'euler': euler_stamped((1.0, 0.0, 0.0))}[kind]
+    stamp = rig.send(kind, good)
+    rig.outputs(stamp)
+    for name in ALWAYS + ('screw_axis',):
+        assert len(rig.received(name)) == 1, f'{name} published for refused input'
+    refused = rig.report()['refused']
+    assert refused['total'] == 1
+    assert refused[reason] == 1
+    assert set(refused) == {'total', *REFUSAL_REASONS}
+    rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='the warning on /rosout')
+    (warning,) = rig.node_logs(Log.WARN)
+    assert why in warning.msg and reason in warning.msg and rig.topic(kind) in warning.msg
+
+
+def test_quaternion_within_tolerance_is_normalised(rig):
+    q = np.array([0.6, 0.0, 0.0, 0.8]) * (1 + 0.9e-3)
+    out = rig.roundtrip('pose', pose_stamped(q, (1, 2, 3)))
+    R = quaternion_to_matrix(q / np.linalg.norm(q))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', R, np.array([1.0, 2.0, 3.0]))
+    assert rig.report()['refused']['total'] == 0
+
+
+def test_huge_finite_euler_angles_are_accepted(rig):
+    angles = (1e300, -1e299, 123456789.0)
+    out = rig.roundtrip('euler', euler_stamped(angles))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', euler_to_matrix(angles),
+                  np.zeros(3))
+
+
+def test_burst_of_bad_input_throttles_warnings_and_keeps_serving(rig):
+    bad = {'pose': BAD_INPUTS['pose_nan_position'][1], 'euler': BAD_INPUTS['euler_nan'][1],
+           'transform': BAD_INPUTS['transform_nan_translation'][1]}
+    begin = time.monotonic()
+    for _ in range(8):
+        for kind, msg in bad.items():
+            rig.send(kind, msg)
+    for kind, good in (('pose', pose_stamped((0, 0, 1, 0))), ('euler', euler_stamped((1, 2, 3))),
+                       ('transform', transform_stamped((0, 1, 0, 0), (1, 1, 1)))):
+        rig.roundtrip(kind, good)
+    elapsed = time.monotonic() - begin
+    refused = rig.report()['refused']
+    # Best-effort inputs: a burst may lose samples on the way, never gain any.
+    assert 0 < refused['total'] == refused['non_finite'] <= 24
+    rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='a warning')
+    # One call site, throttled to one warning per second.
+    assert 1 <= len(rig.node_logs(Log.WARN)) <= 1 + elapsed
+
+
+# ---------------------------------------------------------------------------------------
+# ~/describe
+
+
+def test_describe_before_any_input(rig):
+    response = rig.describe()
+    assert not response.success
+    assert response.message.startswith('Nothing has been received yet on')
+    assert rig.topic('pose') in response.message and '0 input(s) refused' in response.message
+
+
+def assert_report_close(actual, expected):
+    """Compare a parsed YAML report to transform_report's data (12 significant digits)."""
+    if isinstance(expected, dict):
+        assert list(actual) == list(expected)
+        for key in expected:
+            assert_report_close(actual[key], expected[key])
+    elif isinstance(expected, list):
+        assert len(actual) == len(expected)
+        for a, e in zip(actual, expected):
+            assert_report_close(a, e)
+    elif isinstance(expected, float):
+        assert actual == pytest.approx(expected, rel=1e-11, abs=1e-12)
+    else:
+        assert actual == expected
+
+
+def test_describe_reports_the_latest_input(rig):
+    rig.roundtrip('euler', euler_stamped((0.5, 0.2, 0.1)))
+    q, t = POSE_CASES['general']
+    msg = transform_stamped(q, t, frame='odom')
+    msg.header.stamp.nanosec = 250
+    out = rig.roundtrip('transform', msg)
+    report = rig.report()
+    assert report['source'] == rig.topic('transform')
+    assert report['stamp'] == {'sec': out['screw'].header.stamp.sec, 'nanosec': 250}
+    assert report['frame_id'] == 'odom'
+    expected = transform_report(quaternion_to_matrix(q), t, 'ZYX', False)
+    assert_report_close({k: report[k] for k in expected}, expected)
+    assert list(report) == ['source', 'stamp', 'frame_id', *expected, 'refused']
+    assert report['refused'] == {'total': 0, **dict.fromkeys(REFUSAL_REASONS, 0)}
+    assert set(report['screw']) >= {
+        'direction', 'point', 'moment', 'angle', 'translation', 'pitch'}
+    assert set(report['axis_angle']) >= {'axis', 'angle', 'angle_deg'}
+
+
+def test_describe_uses_the_settings_of_the_latest_input(make_rig):
+    rig = make_rig(euler_sequence='zxz', angle_unit='deg')
+    rig.roundtrip('euler', euler_stamped((30.0, 40.0, 50.0)))
+    report = rig.report()
+    R = euler_to_matrix(np.radians([30.0, 40.0, 50.0]), 'zxz')
+    expected = transform_report(R, np.zeros(3), 'zxz', True)
+    assert_report_close({k: report[k] for k in expected}, expected)
+    assert report['euler']['unit'] == 'deg' and report['euler']['sequence'] == 'zxz'
+    assert report['euler']['angles'] == pytest.approx([30.0, 40.0, 50.0], abs=1e-9)
+    assert report['source'] == rig.topic('euler')
+
+
+def test_describe_reports_gimbal_lock(rig):
+    rig.roundtrip('euler', euler_stamped((0.3, math.pi / 2, 0.2)))
+    report = rig.report()
+    angles, degenerate = matrix_to_euler(euler_to_matrix((0.3, math.pi / 2, 0.2)))
+    assert report['euler']['degenerate'] is True and bool(degenerate)
+    assert report['euler']['angles'] == pytest.approx(angles.tolist(), rel=1e-11, abs=1e-12)
+    assert report['euler']['angles'][2] == 0.0
+
+
+# ---------------------------------------------------------------------------------------
+# ~/screw_path
+
+
+def path_arrays(path):
+    """(positions (n, 3), quaternions (n, 4)) of a nav_msgs/Path."""
+    return (np.array([xyz(p.pose.position) for p in path.poses]),
+            np.array([quat(p.pose.orientation) for p in path.poses]))
+
+
+def test_screw_path_default_steps(rig):
+    start = pose_stamped((0, 0, 0, 1), (0, 0, 0), frame='map')
+    start.header.stamp.sec = 7
+    q1 = np.array([0.1, 0.7, 0.3, 0.5]) / math.sqrt(0.84)
+    goal = pose_stamped(q1 * (1 + 5e-4), (2, -1, 3), frame='map')  # as given: not normalised
+    path = rig.screw_path(start, goal, tolerance=0.0)
+    assert len(path.poses) == 21
+    assert path.header.frame_id == 'map' and path.header.stamp.sec == 7
+    assert all(p.header.frame_id == 'map' for p in path.poses)
+    assert path.poses[0] == start and path.poses[-1] == goal  # exactly as given
+    positions, quats = path_arrays(path)
+    R0, b0 = quaternion_to_matrix((0, 0, 0, 1)), np.zeros(3)
+    R1, b1 = quaternion_to_matrix(q1), np.array([2.0, -1.0, 3.0])
+    Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, 21))
+    np.testing.assert_allclose(positions[1:-1], bs[1:-1], rtol=0, atol=ATOL * 10)
+    np.testing.assert_allclose(quaternion_to_matrix(quats[1:-1]), Rs[1:-1], rtol=0, atol=ATOL)
+    np.testing.assert_allclose(np.linalg.norm(quats[1:-1], axis=1), 1.0, rtol=0, atol=ATOL)
+    assert (np.einsum('ij,ij->i', quats[1:], quats[:-1]) > 0).all()  # no sign jumps
+
+
+@pytest.mark.parametrize('tolerance', [0.05, 0.3, 2.0])
+def test_screw_path_respects_tolerance(rig, tolerance):
+    q0, q1 = random_quaternion(), random_quaternion()
+    start = pose_stamped(q0, (1, 0, -1), frame='odom')
+    goal = pose_stamped(q1, (0, 2, 1), frame='odom')
+    path = rig.screw_path(start, goal, tolerance)
+    positions, quats = path_arrays(path)
+    quats /= np.linalg.norm(quats, axis=1)[:, None]
+    R = quaternion_to_matrix(quats)
+    step_angles = np.linalg.norm(matrix_to_rotvec(np.swapaxes(R[:-1], -1, -2) @ R[1:]), axis=1)
+    step_lengths = np.linalg.norm(np.diff(positions, axis=0), axis=1)
+    assert step_angles.max() <= tolerance * (1 + 1e-9)
+    assert step_lengths.max() <= tolerance * (1 + 1e-9)
+    # Not needlessly many: at most the bound of the helix the start frame's origin follows.
+    R0, b0 = quaternion_to_matrix(q0), np.array([1.0, 0, -1])
+    R1, b1 = quaternion_to_matrix(q1), np.array([0.0, 2, 1])
+    rel = screw_from_transform(R0.T @ R1, R0.T @ (b1 - b0))
+    arc = math.hypot(np.linalg.norm(rel.point) * rel.angle, rel.translation)
+    n = len(path.poses) - 1
+    assert n <= max(1, math.ceil(max(rel.angle, arc) / tolerance))
+    Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, n + 1))
+    np.testing.assert_allclose(positions, bs, rtol=0, atol=10 * ATOL)
+    np.testing.assert_allclose(R, Rs, rtol=0, atol=ATOL)
+
+
+def test_screw_path_pure_translation_and_same_pose(rig):
+    start = pose_stamped((0, 0, 0, 1), (0, 0, 0))
+    goal = pose_stamped((0, 0, 0, 1), (1, 0, 0))
+    path = rig.screw_path(start, goal, 0.25)
+    positions, _ = path_arrays(path)
+    np.testing.assert_allclose(positions[:, 0], [0, 0.25, 0.5, 0.75, 1.0], rtol=0, atol=ATOL)
+    same = rig.screw_path(start, start, 0.1)
+    assert same.poses == [start, start]
+    assert len(rig.screw_path(start, start, -1.0).poses) == 21
+
+
+SCREW_PATH_REFUSALS = {
+    'frame_mismatch': (pose_stamped((0, 0, 0, 1), frame='map'),
+                       pose_stamped((0, 0, 1, 0), frame='odom'), 0.0, 'frame_mismatch',
+                       "start is in frame 'map', goal in 'odom'"),
+    'zero_quaternion': (pose_stamped((0, 0, 0, 0)), pose_stamped((0, 0, 1, 0)), 0.0,
+                        'zero_quaternion', 'start.pose.orientation is the zero quaternion'),
+    'non_unit_goal': (pose_stamped((0, 0, 0, 1)), pose_stamped((0, 0, 2, 0)), 0.0,
+                      'non_unit_quaternion', 'goal.pose.orientation has norm 2'),
+    'inf_position': (pose_stamped((0, 0, 0, 1)), pose_stamped((0, 0, 1, 0), (0, math.inf, 0)),
+                     0.0, 'non_finite', 'goal.pose.position.y is inf'),
+    'nan_tolerance': (pose_stamped((0, 0, 0, 1)), pose_stamped((0, 0, 1, 0)), math.nan,
+                      'bad_tolerance', 'tolerance is NaN'),
+    'tiny_tolerance': (pose_stamped((0, 0, 0, 1)), pose_stamped((0, 0, 1, 0)), 1e-6,
+                       'path_too_long', f'more than {MAX_PATH_STEPS}'),
+}
+
+
+@pytest.mark.parametrize('case', SCREW_PATH_REFUSALS)
+def test_screw_path_refusals(rig, case):
+    start, goal, tolerance, reason, why = SCREW_PATH_REFUSALS[case]
+    path = rig.screw_path(start, goal, tolerance)
+    assert path.poses == []
+    rig.tester.spin_until(lambda: rig.node_logs(Log.ERROR), what='the error on /rosout')
+    (error,) = rig.node_logs(Log.ERROR)
+    assert why in error.msg
+    # The node keeps serving; the refusal is counted.
+    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    refused = rig.report()['refused']
+    assert refused['total'] == 1 and refused[reason] == 1
+
+
+# ---------------------------------------------------------------------------------------
+# Parameters
+
+
+def test_parameter_descriptors(rig):
+    node = rig.node
+    expected = {'euler_sequence': (ParameterType.PARAMETER_STRING, 'ZYX'),
+                'angle_unit': (ParameterType.PARAMETER_STRING, 'rad'),
+                'quaternion_tolerance': (ParameterType.PARAMETER_DOUBLE, 1e-3),
+                'publish_markers': (ParameterType.PARAMETER_BOOL, True),
+                'marker_scale': (ParameterType.PARAMETER_DOUBLE, 1.0)}
+    for name, (kind, default) in expected.items():
+        descriptor = node.describe_parameter(name)
+        assert descriptor.type == kind and descriptor.description
+        assert node.get_parameter(name).value == default
+    for name in ('quaternion_tolerance', 'marker_scale'):
+        (fp_range,) = node.describe_parameter(name).floating_point_range
+        assert fp_range.from_value == 0.0
+    assert 'zyz' in node.describe_parameter('euler_sequence').additional_constraints
+
+
+def set_one(node, name, value):
+    """node.set_parameters for one parameter; returns its SetParametersResult."""
+    (result,) = node.set_parameters([Parameter(name, value=value)])
+    return result
+
+
+def test_euler_sequence_applies_from_the_next_message(rig):
+    angles = (0.4, 0.3, 1.1)  # θ2 in range for Tait–Bryan and proper sequences
+    before = rig.roundtrip('euler', euler_stamped(angles))
+    check_outputs(before, before['screw'].header.stamp.sec, 'map',
+                  euler_to_matrix(angles, 'ZYX'), np.zeros(3))
+    for seq in ('xyz', 'YXY', 'zyz'):
+        assert set_one(rig.node, 'euler_sequence', seq).successful
+        out = rig.roundtrip('euler', euler_stamped(angles))
+        R = euler_to_matrix(angles, seq)
+        check_outputs(out, out['screw'].header.stamp.sec, 'map', R, np.zeros(3), seq=seq)
+        np.testing.assert_allclose(xyz(out['euler_angles'].vector), angles, rtol=0, atol=ATOL)
+
+
+def test_angle_unit_deg(rig):
+    assert set_one(rig.node, 'angle_unit', 'deg').successful
+    out = rig.roundtrip('euler', euler_stamped((30.0, -20.0, 10.0)))
+    R = euler_to_matrix(np.radians([30.0, -20.0, 10.0]))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', R, np.zeros(3), degrees=True)
+    np.testing.assert_allclose(xyz(out['euler_angles'].vector), [30, -20, 10], atol=1e-10)
+    # Only the Euler angles switch unit: the rotation vector stays in radians.
+    out = rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    assert xyz(out['axis_angle'].vector)[2] == pytest.approx(math.pi, abs=ATOL)
+    assert xyz(out['euler_angles'].vector)[0] == pytest.approx(180.0, abs=1e-10)
+
+
+def test_quaternion_tolerance(rig):
+    q = np.array([0.0, 0.6, 0.0, 0.8]) * 1.01
+    rig.send('pose', pose_stamped(q))
+    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    assert rig.report()['refused']['non_unit_quaternion'] == 1
+    assert set_one(rig.node, 'quaternion_tolerance', 0.02).successful
+    out = rig.roundtrip('pose', pose_stamped(q))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', quaternion_to_matrix(q),
+                  np.zeros(3))
+    assert set_one(rig.node, 'quaternion_tolerance', 0.0).successful
+    rig.roundtrip('pose', pose_stamped((0.0, 1.0, 0.0, 0.0)))  # |q| = 1 exactly
+    rig.send('pose', pose_stamped(q))
+    rig.roundtrip('pose', pose_stamped((0, 0, 0, 1)), marker=False)
+    assert rig.report()['refused']['non_unit_quaternion'] == 2
+
+
+def test_publish_markers_false(rig):
+    assert set_one(rig.node, 'publish_markers', False).successful
+    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)), marker=False)
+    assert set_one(rig.node, 'publish_markers', True).successful
+    stamp = rig.send('pose', pose_stamped((0, 1, 0, 0)))
+    rig.outputs(stamp)
+    assert [m.header.stamp.sec for m in rig.received('screw_axis')] == [stamp]
+
+
+def test_marker_scale(make_rig):
+    rig = make_rig(marker_scale=0.25)
+    q, p = POSE_CASES['general']
+    out = rig.roundtrip('pose', pose_stamped(q, p))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', quaternion_to_matrix(q), p,
+                  scale=0.25)
+    assert set_one(rig.node, 'marker_scale', 2.5).successful
+    out = rig.roundtrip('pose', pose_stamped(q, p))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', quaternion_to_matrix(q), p,
+                  scale=2.5)
+
+
+REFUSED_PARAMETERS = [  # (name, value, why)
+    ('euler_sequence', 'ZZY', 'not a sequence'),
+    ('euler_sequence', 'zYx', 'not a sequence'),
+    ('euler_sequence', '', 'not a sequence'),
+    ('euler_sequence', 3, 'Wrong parameter type'),
+    ('angle_unit', 'grad', "not 'rad' or 'deg'"),
+    ('angle_unit', True, 'Wrong parameter type'),
+    ('quaternion_tolerance', -0.1, 'out of range'),
+    ('quaternion_tolerance', math.nan, 'out of range'),
+    ('quaternion_tolerance', math.inf, 'finite'),
+    ('quaternion_tolerance', 1, 'Wrong parameter type'),
+    ('quaternion_tolerance', 'small', 'Wrong parameter type'),
+    ('publish_markers', 'yes', 'Wrong parameter type'),
+    ('publish_markers', 1, 'Wrong parameter type'),
+    ('marker_scale', 0.0, '> 0'),
+    ('marker_scale', -2.0, 'out of range'),
+    ('marker_scale', math.inf, 'finite'),
+    ('marker_scale', [1.0, 2.0], 'Wrong parameter type'),
+]
+
+
+@pytest.mark.parametrize('name, value, why', REFUSED_PARAMETERS,
+                         ids=[f'{n}={v!r}' for n, v, _ in REFUSED_PARAMETERS])
+def test_invalid_parameter_is_refused(rig, name, value, why):
+    before = rig.node.get_parameter(name).value
+    result = set_one(rig.node, name, value)
+    assert not result.successful
+    assert why in result.reason
+    assert rig.node.get_parameter(name).value == before
+    # The old settings still apply.
+    q, p = POSE_CASES['general']
+    out = rig.roundtrip('pose', pose_stamped(q, p))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', quaternion_to_matrix(q), p)
+
+
+def test_parameters_through_the_parameter_service(rig):
+    name = rig.node.get_fully_qualified_name()
+    results = rig.tester.set_parameters(name, [
+        Parameter('angle_unit', value='deg'),
+        Parameter('marker_scale', value='long'),
+        Parameter('euler_sequence', value='QQQ'),
+        Parameter('marker_scale', value=3.0)])
+    assert [r.successful for r in results] == [True, False, False, True]
+    assert 'Wrong parameter type' in results[1].reason
+    assert 'not a sequence' in results[2].reason
+    assert rig.node.get_parameter('angle_unit').value == 'deg'
+    assert rig.node.get_parameter('euler_sequence').value == 'ZYX'
+    out = rig.roundtrip('euler', euler_stamped((90.0, 0.0, 0.0)))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', euler_to_matrix((math.pi / 2, 0, 0)),
+                  np.zeros(3), degrees=True, scale=3.0)
+
+
+def test_parameters_it_does_not_own_are_accepted(rig):
+    assert set_one(rig.node, 'use_sim_time', False).successful
+
+
+@pytest.mark.parametrize('name, value', [('euler_sequence', 'abc'), ('angle_unit', 'turns'),
+                                         ('marker_scale', 0.0)])
+def test_invalid_override_at_start_up(ros_context, name, value):
+    with pytest.raises(InvalidParameterValueException, match=name):
+        RotationNode(context=ros_context, namespace='/bad_start',
+                     parameter_overrides=[Parameter(name, value=value)])
