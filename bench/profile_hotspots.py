@@ -1,0 +1,116 @@
+"""Where the time goes: cProfile of rot_tools' single-call paths and of the node's callback.
+
+Not a ratio benchmark: a tool for whoever optimises rot_tools. It prints
+
+1. for each public conversion called on one item, the time per call and the functions with
+   the most own time (cProfile, tottime), so the Python overhead around the formula shows;
+2. the in-process cost of rotation_node's ``~/pose`` callback against the relay's (the same
+   message, called directly, no DDS transport; publishing to topics nobody subscribes), and
+   the callback's cProfile.
+
+Run: ``.venv/bin/python bench/profile_hotspots.py [--top N] [--skip-node]``.
+"""
+
+import argparse
+import cProfile
+import io
+import os
+import pstats
+import sys
+import timeit
+
+import numpy as np
+
+import rot_tools as rt
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def profile_calls(label, fn, number, top, sort='tottime'):
+    """Time fn() and print its cProfile (sorted by ``sort``), restricted to the top entries."""
+    fn()
+    per = min(timeit.repeat(fn, number=number, repeat=5)) / number
+    prof = cProfile.Profile()
+    prof.enable()
+    for _ in range(number):
+        fn()
+    prof.disable()
+    out = io.StringIO()
+    stats = pstats.Stats(prof, stream=out).strip_dirs().sort_stats(sort)
+    stats.print_stats(top)
+    body = out.getvalue()
+    body = body[body.find('   ncalls'):].rstrip()
+    print(f'\n== {label}: {per * 1e6:.2f} us per call (without the profiler); '
+          f'profile by {sort}')
+    print(body)
+
+
+def math_paths(top):
+    a = np.array([0.3, -0.4, 1.2])
+    R = rt.euler_to_matrix(a, 'ZYX')
+    v = rt.matrix_to_rotvec(R)
+    axis, angle = rt.matrix_to_axis_angle(R)
+    b = np.array([0.4, -1.0, 2.5])
+    cases = [
+        ("euler_to_matrix(a, 'ZYX')", lambda: rt.euler_to_matrix(a, 'ZYX')),
+        ("matrix_to_euler(R, 'ZYX')", lambda: rt.matrix_to_euler(R, 'ZYX')),
+        ('matrix_to_rotvec(R)', lambda: rt.matrix_to_rotvec(R)),
+        ('rotvec_to_matrix(v)', lambda: rt.rotvec_to_matrix(v)),
+        ('axis_angle_to_matrix(axis, angle)', lambda: rt.axis_angle_to_matrix(axis, angle)),
+        ('validate_rotation(R)', lambda: rt.validate_rotation(R)),
+        ('screw_log(R, b)', lambda: rt.screw_log(R, b)),
+        ('screw_from_transform(R, b, check=False)',
+         lambda: rt.screw_from_transform(R, b, check=False)),
+    ]
+    for label, fn in cases:
+        profile_calls(label, fn, 20000, top)
+
+
+def node_callback(top):
+    os.environ.setdefault('ROS_DOMAIN_ID', str(1 + (os.getpid() * 11 + 5) % 101))
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    import rclpy
+    from geometry_msgs.msg import PoseStamped
+    from rot_tools.rotation_node import RotationNode
+    sys.path.insert(0, HERE)
+    from relay_node import RelayNode
+
+    rclpy.init()
+    try:
+        node, relay = RotationNode('profile_rot_tools'), RelayNode('profile_relay')
+        msg = PoseStamped()
+        msg.header.frame_id = 'world'
+        q = np.array([0.2, -0.4, 0.5, 0.74])
+        q /= np.linalg.norm(q)
+        o = msg.pose.orientation
+        o.x, o.y, o.z, o.w = (float(c) for c in q)
+        msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 0.4, -1.0, 2.5
+        times = {}
+        for _ in range(5):  # interleaved
+            for name, cb in (('rot_tools', node._on_pose), ('relay', relay._on_pose)):
+                t = min(timeit.repeat(lambda cb=cb: cb(msg), number=2000, repeat=1)) / 2000
+                times.setdefault(name, []).append(t)
+        rt_us, relay_us = min(times['rot_tools']) * 1e6, min(times['relay']) * 1e6
+        print(f'\n== ~/pose callback in-process (no subscribers, no transport): rotation_node '
+              f'{rt_us:.1f} us, relay {relay_us:.1f} us, difference {rt_us - relay_us:.1f} us '
+              f'per message ({rt_us / relay_us:.2f}x)')
+        profile_calls('rotation_node._on_pose(msg)', lambda: node._on_pose(msg), 5000, 2 * top,
+                      sort='cumulative')
+        node.destroy_node()
+        relay.destroy_node()
+    finally:
+        rclpy.try_shutdown()
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--top', type=int, default=10, help='entries per profile (10)')
+    parser.add_argument('--skip-node', action='store_true', help='math paths only')
+    args = parser.parse_args(argv)
+    math_paths(args.top)
+    if not args.skip_node:
+        node_callback(args.top)
+
+
+if __name__ == '__main__':
+    main()

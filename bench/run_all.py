@@ -1,0 +1,106 @@
+"""Run every benchmark (``make bench``): the math, then the node, then one table of goals.
+
+Each script runs in its own process with this interpreter and prints its own tables; this
+script then collects their figures (JSON) and prints every goal of issue 5 with the ratio
+measured and whether it is met. The whole run takes about 3–4 minutes on 2 cores.
+
+Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|node] [--json-dir DIR]``.
+``--quick`` is a smoke run (smaller batch, fewer repetitions and rates): its figures are not
+the ones to quote.
+"""
+
+import argparse
+import json
+import os
+from pathlib import Path
+import subprocess
+import sys
+import tempfile
+import time
+
+import benchlib
+
+BENCH = Path(__file__).resolve().parent
+
+
+def run(script, args, json_path):
+    cmd = [sys.executable, str(BENCH / script)] + args + ['--json', str(json_path)]
+    print(f'\n$ {" ".join(cmd[1:])}', flush=True)
+    start = time.monotonic()
+    code = subprocess.call(cmd)
+    print(f'({script}: {time.monotonic() - start:.0f} s, exit {code})', flush=True)
+    if code != 0 or not json_path.exists():
+        return None
+    return json.loads(json_path.read_text())
+
+
+def goal_rows(math, node):
+    rows = []
+    if math:
+        for r in math.get('batch', []):
+            rows.append([f"batch {r['operation']}", f"vs {r['reference']}", f"{r['ratio']:.3f}",
+                         benchlib.fmt_goal(r['goal']), benchlib.verdict(r['ratio'], r['goal'])])
+        for r in math.get('batch', []):
+            if 'memory_ratio' in r:
+                rows.append([f"memory {r['operation']}", 'peak / (in + out)',
+                             f"{r['memory_ratio']:.2f}", '<= 3', benchlib.verdict(
+                                 r['memory_ratio'], 3.0)])
+        for r in math.get('batch', []):
+            ok = r['max_diff'] <= 1e-12
+            scipy = r['reference'].startswith('scipy')  # the equality goal is scipy's
+            rows.append([f"equal {r['operation']}", f"max |diff| vs {r['reference']}",
+                         f"{r['max_diff']:.1e}", '<= 1e-12' if scipy else '- (note)',
+                         ('yes' if ok else 'NO') if scipy else '-'])
+        for r in math.get('single', []):
+            rows.append([f"single {r['operation']}", f"vs {r['reference']}",
+                         f"{r['ratio']:.3f}", benchlib.fmt_goal(r['goal']),
+                         benchlib.verdict(r['ratio'], r['goal'])])
+    if node:
+        ev = node['evaluation']
+        rows.append(['node sustained throughput', 'vs relay', f"{ev['throughput_ratio']:.2f}",
+                     '>= 0.8', 'yes' if ev['throughput_ratio'] >= 0.8 else 'NO'])
+        rows.append(['node p99 latency', 'vs relay (worst rate both sustain)',
+                     f"{ev['p99_ratio_worst']:.2f}", '<= 1.5',
+                     benchlib.verdict(ev['p99_ratio_worst'], 1.5)])
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
+    parser.add_argument('--skip', choices=['math', 'node'], action='append', default=[])
+    parser.add_argument('--json-dir', help='keep the JSON figures here')
+    args = parser.parse_args(argv)
+
+    print(f'run_all: {benchlib.machine_line()}, {time.strftime("%Y-%m-%d %H:%M")}')
+    math_args = ['--n', '200000', '--repeats', '3', '--single-repeats', '5'] if args.quick \
+        else []
+    node_args = ['--rates', '500,2000,5000', '--repeats', '1', '--seconds', '1'] if args.quick \
+        else []
+    start = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as tmp:
+        out = Path(args.json_dir or tmp)
+        os.makedirs(out, exist_ok=True)
+        math = node = None
+        if 'math' not in args.skip:
+            math = run('bench_math.py', math_args, out / 'bench_math.json')
+        if 'node' not in args.skip:
+            node = run('bench_node.py', node_args, out / 'bench_node.json')
+        rows = goal_rows(math, node)
+    benchlib.print_table(f'Goals of issue 5 (all ratios rot_tools / reference; '
+                         f'{time.monotonic() - start:.0f} s in all)',
+                         ['figure', 'against', 'measured', 'goal', 'met?'], rows)
+    missed = [f'{r[0]} ({r[1]})' for r in rows if r[-1] == 'NO']
+    goals = [r for r in rows if r[-1] != '-']
+    tail = f'; missed: {", ".join(missed)}' if missed else ''
+    print(f'\n{len(goals) - len(missed)} of {len(goals)} goals met{tail}')
+    failed = [s for s, res in (('math', math), ('node', node))
+              if s not in args.skip and res is None]
+    if failed:
+        print(f'run_all: {", ".join(failed)} benchmark failed (see above)', file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
