@@ -34,6 +34,7 @@ class _FloatOps:
     any = staticmethod(bool)
     maximum = staticmethod(max)
     minimum = staticmethod(min)
+    max_of = staticmethod(max)
 
     @staticmethod
     def where(cond, a, b):
@@ -53,6 +54,12 @@ class _ArrayOps:
     maximum = staticmethod(np.maximum)
     minimum = staticmethod(np.minimum)
     where = staticmethod(np.where)
+
+    @staticmethod
+    def max_of(first, *rest):
+        for x in rest:
+            first = np.maximum(first, x)
+        return first
 
 
 FLOATS = _FloatOps()

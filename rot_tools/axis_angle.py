@@ -13,7 +13,7 @@ import numpy as np
 from rot_tools._arrays import finite_array
 from rot_tools._backend import apply, norm, unit
 from rot_tools.errors import RotationError
-from rot_tools.so3 import checked_rotation
+from rot_tools.so3 import apply_to_rotations
 
 
 def _rodrigues(ops, x, y, z, angle):
@@ -103,8 +103,8 @@ def matrix_to_axis_angle(R, *, check=True):
     with the largest diagonal entry, normalised, with the sign of w (at exactly π the sign is
     free: the largest component is made positive). At θ = 0 the axis is (0, 0, 1).
     """
-    R = checked_rotation(R, check)
-    return apply(axis_angle_kernel, [(R, (3, 3))], [((3,), np.float64), ((), np.float64)])
+    return apply_to_rotations(axis_angle_kernel, R, check,
+                              [((3,), np.float64), ((), np.float64)])
 
 
 def _rotvec_of_matrix_kernel(ops, m):
@@ -114,6 +114,5 @@ def _rotvec_of_matrix_kernel(ops, m):
 
 def matrix_to_rotvec(R, *, check=True):
     """Rotation vector θ·l̂ of R, θ ∈ [0, π]; (..., 3, 3) → (..., 3)."""
-    R = checked_rotation(R, check)
-    (rotvec,) = apply(_rotvec_of_matrix_kernel, [(R, (3, 3))], [((3,), np.float64)])
+    (rotvec,) = apply_to_rotations(_rotvec_of_matrix_kernel, R, check, [((3,), np.float64)])
     return rotvec

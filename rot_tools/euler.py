@@ -32,7 +32,7 @@ import numpy as np
 from rot_tools._arrays import finite_array
 from rot_tools._backend import apply
 from rot_tools.errors import RotationError
-from rot_tools.so3 import checked_rotation
+from rot_tools.so3 import apply_to_rotations
 
 _AXES = 'XYZ'
 EULER_SEQUENCES = tuple(
@@ -165,6 +165,5 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     spec = parse_sequence(seq)
     if not 0 <= lock_tol < math.pi / 4:
         raise RotationError(f'lock_tol must be in [0, π/4) rad, got {lock_tol!r}')
-    R = checked_rotation(R, check)
     kernel = partial(_angles_kernel, spec=spec, lock_tol=lock_tol)
-    return apply(kernel, [(R, (3, 3))], [((3,), np.float64), ((), np.bool_)])
+    return apply_to_rotations(kernel, R, check, [((3,), np.float64), ((), np.bool_)])

@@ -28,11 +28,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rot_tools._arrays import finite_array
+from rot_tools._arrays import as_float_array, finite_array
 from rot_tools._backend import apply, cross, dot, unit
 from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
 from rot_tools.errors import RotationError
-from rot_tools.so3 import checked_rotation
+from rot_tools.so3 import apply_to_rotations, checked_rotation
 
 PURE_TRANSLATION_ANGLE = 1e-12
 """Rotation angle (rad) below which screw_from_transform reports a pure translation.
@@ -58,9 +58,11 @@ class Screw(NamedTuple):
     pitch: np.ndarray
 
 
-def _rigid(R, b, check):
-    """Validate R and b: ((R, (3, 3)), (b, (3,))) inputs for apply."""
-    return [(checked_rotation(R, check), (3, 3)), (finite_array(b, (3,), 'translation b'), (3,))]
+def _apply_rigid(kernel, R, b, check, outputs):
+    """apply_to_rotations(kernel) to the motion p ↦ R·p + b, R validated unless not check."""
+    R = as_float_array(R, (3, 3), 'R')  # R's shape is reported before b's
+    b = finite_array(b, (3,), 'translation b')
+    return apply_to_rotations(kernel, R, check, outputs, [(b, (3,))])
 
 
 def _screw_kernel(ops, m, b):
@@ -89,7 +91,7 @@ def screw_from_transform(R, b, *, check=True):
     R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ as matrix_to_axis_angle gives them;
     then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
     """
-    return Screw(*apply(_screw_kernel, _rigid(R, b, check), [_VEC] * 3 + [_SCALAR] * 3))
+    return Screw(*_apply_rigid(_screw_kernel, R, b, check, [_VEC] * 3 + [_SCALAR] * 3))
 
 
 def _log_kernel(ops, m, b):
@@ -104,7 +106,7 @@ def screw_log(R, b, *, check=True):
 
     θ·v = −θ·l̂ × c + d·l̂; a pure translation gives (0, b). Inverse of screw_exp.
     """
-    (twist,) = apply(_log_kernel, _rigid(R, b, check), [((6,), np.float64)])
+    (twist,) = _apply_rigid(_log_kernel, R, b, check, [((6,), np.float64)])
     return twist
 
 
@@ -163,8 +165,8 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
     screw axis; T(0) = T0 and T(1) = T1, and s outside [0, 1] continues the same motion.
     Returns (R(s) (..., 3, 3), b(s) (..., 3)).
     """
-    (R0, _), (b0, _) = _rigid(R0, b0, check)
-    (R1, _), (b1, _) = _rigid(R1, b1, check)
+    R0, R1 = checked_rotation(R0, check), checked_rotation(R1, check)
+    b0, b1 = finite_array(b0, (3,), 'translation b0'), finite_array(b1, (3,), 'translation b1')
     R0t = np.swapaxes(R0, -1, -2)
     rel_R = R0t @ R1
     rel_b = np.einsum('...ij,...j->...i', R0t, b1 - b0)

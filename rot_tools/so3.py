@@ -58,19 +58,20 @@ def skew(v):
 def _defects_kernel(ops, m):
     """(max|RᵀR − I|, det R): the six distinct entries of the Gram matrix RᵀR, and the
     triple product of the rows. NaN entries propagate to NaN (never ≤ tol)."""
-    err = 0.0
-    for a, b in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)):
-        gram = m[0][a] * m[0][b] + m[1][a] * m[1][b] + m[2][a] * m[2][b]
-        err = ops.maximum(err, ops.abs(gram - 1.0 if a == b else gram))
-    det = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-           - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-           + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
-    return err, det
+    (a, b, c), (d, e, f), (g, h, i) = m
+    err = ops.max_of(
+        ops.abs(a * a + d * d + g * g - 1.0), ops.abs(b * b + e * e + h * h - 1.0),
+        ops.abs(c * c + f * f + i * i - 1.0), ops.abs(a * b + d * e + g * h),
+        ops.abs(a * c + d * f + g * i), ops.abs(b * c + e * f + h * i))
+    return err, a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+_F64 = ((), np.float64)
 
 
 def _defects(R):
     """Per item: (max|RᵀR − I|, det R)."""
-    return apply(_defects_kernel, [(R, (3, 3))], [((), np.float64), ((), np.float64)])
+    return apply(_defects_kernel, [(R, (3, 3))], [_F64, _F64])
 
 
 def is_rotation(R, tol=ROTATION_TOL):
@@ -94,10 +95,15 @@ def validate_rotation(R, tol=ROTATION_TOL):
     (the message gives the size), det R = +1 (det −1 is a reflection).
     """
     R = finite_array(R, (3, 3), 'R')
-    err, det = _defects(R)
-    if R.ndim == 2 and err <= tol and abs(det - 1.0) <= tol:
-        return R
-    where = '' if R.ndim == 2 else ' (worst at item {})'
+    _refuse_defects(*_defects(R), tol)
+    return R
+
+
+def _refuse_defects(err, det, tol):
+    """Raise RotationError for the worst item whose (max|RᵀR − I|, det R) is out of tol."""
+    if err.ndim == 0 and err <= tol and abs(det - 1.0) <= tol:
+        return  # one good item: no NumPy reductions
+    where = '' if err.ndim == 0 else ' (worst at item {})'
     if not (err <= tol).all():
         worst = np.unravel_index(np.argmax(err), err.shape)
         raise RotationError(
@@ -110,7 +116,24 @@ def validate_rotation(R, tol=ROTATION_TOL):
         raise RotationError(
             f'R is {kind}: det R = {float(det[worst]):.6g}, expected +1'
             + where.format(tuple(map(int, worst))))
-    return R
+
+
+def apply_to_rotations(kernel, R, check, outputs, extra=()):
+    """apply(kernel, [(R, (3, 3)), *extra], outputs), validating R in the same pass.
+
+    With check, R must pass validate_rotation (tol ROTATION_TOL): its defects are computed
+    beside the kernel's outputs, which are dropped if R is refused.
+    """
+    if not check:
+        return apply(kernel, [(as_float_array(R, (3, 3), 'R'), (3, 3)), *extra], outputs)
+
+    def checked(ops, m, *rest):
+        return (*kernel(ops, m, *rest), *_defects_kernel(ops, m))
+
+    R = finite_array(R, (3, 3), 'R')
+    *results, err, det = apply(checked, [(R, (3, 3)), *extra], [*outputs, _F64, _F64])
+    _refuse_defects(err, det, ROTATION_TOL)
+    return tuple(results)
 
 
 def checked_rotation(R, check):
