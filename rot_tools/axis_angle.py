@@ -73,6 +73,9 @@ def axis_angle_kernel(ops, m):
     cos = 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
     skew_axis, sin = unit(ops, w)
     angle = ops.atan2(sin, cos)
+    near_pi = cos < 0
+    if not ops.any(near_pi):
+        return skew_axis, angle
     # Near π the skew part vanishes with sin θ: take the axis from the symmetric part
     # (R + Rᵀ)/2 − cos θ·I = (1 − cos θ)·l̂l̂ᵀ, its column with the largest diagonal entry.
     d0, d1, d2 = m[0][0] - cos, m[1][1] - cos, m[2][2] - cos
@@ -87,7 +90,6 @@ def axis_angle_kernel(ops, m):
     # Its sign from the skew part (free at exactly π, where w = 0).
     flip = sym_axis[0] * w[0] + sym_axis[1] * w[1] + sym_axis[2] * w[2] < 0
     sign = ops.where(flip, -1.0, 1.0)
-    near_pi = cos < 0
     axis = [ops.where(near_pi, sign * a, b) + 0.0 for a, b in zip(sym_axis, skew_axis)]
     return axis, angle
 

@@ -115,7 +115,7 @@ def _wrap(ops, angle):
     return ops.where(angle == -math.pi, math.pi, angle) + 0.0
 
 
-def _angles_kernel(ops, m, spec, lock_tol):
+def angles_kernel(ops, m, spec, lock_tol):
     """Euler angles of m; see matrix_to_euler for the method."""
     i, j, k, sig, proper, extrinsic = spec
     if proper:  # R[i,i] = cos θ2, (R[j,i], −σR[k,i]) = sin θ2·(sin θ1, cos θ1)
@@ -165,5 +165,5 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     spec = parse_sequence(seq)
     if not 0 <= lock_tol < math.pi / 4:
         raise RotationError(f'lock_tol must be in [0, π/4) rad, got {lock_tol!r}')
-    kernel = partial(_angles_kernel, spec=spec, lock_tol=lock_tol)
+    kernel = partial(angles_kernel, spec=spec, lock_tol=lock_tol)
     return apply_to_rotations(kernel, R, check, [((3,), np.float64), ((), np.bool_)])

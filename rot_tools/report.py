@@ -58,15 +58,61 @@ import json
 import math
 import re
 
+from functools import partial
+from typing import NamedTuple
+
 import numpy as np
 
-from rot_tools import (
-    EULER_SEQUENCES, matrix_to_axis_angle, matrix_to_euler, screw_from_transform,
-    validate_rotation)
+from rot_tools._arrays import finite_array
+from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.errors import RotationError
+from rot_tools.euler import (
+    angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence)
+from rot_tools.screw import Screw, screw_of_axis_kernel, twist_kernel
+from rot_tools.so3 import apply_to_rotations
 
 DEFAULT_PRECISION = 12
 """Significant digits and decimal places of printed numbers."""
+
+
+class Decomposition(NamedTuple):
+    """Every representation of one rigid motion p ↦ R·p + b, from one pass over R and b.
+
+    axis, angle: as matrix_to_axis_angle; euler, degenerate: as matrix_to_euler for the
+    sequence asked; screw: as screw_from_transform; twist: as screw_log. At θ = π all of them
+    use the same axis sign.
+    """
+
+    axis: np.ndarray
+    angle: np.ndarray
+    euler: np.ndarray
+    degenerate: np.ndarray
+    screw: Screw
+    twist: np.ndarray
+
+
+def _decompose_kernel(ops, m, b, spec):
+    axis, angle = axis_angle_kernel(ops, m)
+    angles, lock = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
+    screw = screw_of_axis_kernel(ops, axis, angle, b)
+    return (axis, angle, angles, lock, *screw, twist_kernel(ops, *screw))
+
+
+_VEC, _NUM = ((3,), np.float64), ((), np.float64)
+
+
+def decompose(R, b, seq='ZYX', *, check=True):
+    """Decomposition of (R (..., 3, 3), b (..., 3)) with Euler angles of ``seq`` (radians).
+
+    One kernel run computes every representation, so the rot-tools report and each output of
+    rotation_node come from the same numbers.
+    """
+    kernel = partial(_decompose_kernel, spec=parse_sequence(seq))
+    b = finite_array(b, (3,), 'translation b')
+    out = apply_to_rotations(kernel, R, check, [
+        _VEC, _NUM, _VEC, ((), np.bool_), _VEC, _VEC, _VEC, _NUM, _NUM, _NUM,
+        ((6,), np.float64)], [(b, (3,))])
+    return Decomposition(*out[:4], Screw(*out[4:10]), out[10])
 
 
 def _floats(a):
@@ -78,10 +124,9 @@ def _deg(rad):
     return float(np.degrees(rad))
 
 
-def _euler(R, seq, degrees):
-    angles, degenerate = matrix_to_euler(R, seq)
+def _euler(angles, degenerate, degrees):
     angles = np.degrees(angles) if degrees else angles
-    return _floats(angles), bool(degenerate)
+    return {'angles': _floats(angles), 'degenerate': bool(degenerate)}
 
 
 def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
@@ -91,32 +136,28 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
     with few digits with rot_tools.nearest_rotation first. Returns the dict described in
     the module docstring. RotationError for a bad R, b, or sequence.
     """
-    R = validate_rotation(R)
+    R = np.asarray(R, dtype=np.float64)
     if R.shape != (3, 3):
         raise RotationError(f'transform_report takes one rotation (3, 3), got {R.shape}')
-    axis, angle = matrix_to_axis_angle(R)
-    angle = float(angle)
-    angles, degenerate = _euler(R, seq, degrees)
-    euler = {
-        'sequence': seq,
-        'unit': 'deg' if degrees else 'rad',
-        'angles': angles,
-        'degenerate': degenerate,
-    }
+    if b is not None and np.shape(b) != (3,):
+        raise RotationError(f'translation b must have shape (3,), got {np.shape(b)}')
+    d = decompose(R, np.zeros(3) if b is None else b, seq)
+    angle = float(d.angle)
+    euler = {'sequence': seq, 'unit': 'deg' if degrees else 'rad',
+             **_euler(d.euler, d.degenerate, degrees)}
     if all_sequences:
-        euler['all_sequences'] = {}
-        for name in EULER_SEQUENCES:
-            angles, degenerate = _euler(R, name, degrees)
-            euler['all_sequences'][name] = {'angles': angles, 'degenerate': degenerate}
+        euler['all_sequences'] = {
+            name: _euler(*matrix_to_euler(R, name, check=False), degrees)
+            for name in EULER_SEQUENCES}
     report = {
         'matrix': _floats(R),
         'axis_angle': {
-            'axis': _floats(axis),
+            'axis': _floats(d.axis),
             'angle': angle,
             'angle_deg': _deg(angle),
-            'rotation_vector': _floats(axis * angle),
+            'rotation_vector': _floats(d.axis * angle),
             'second_solution': {
-                'axis': _floats(-axis),
+                'axis': _floats(-d.axis),
                 'angle': 2.0 * math.pi - angle,
                 'angle_deg': 360.0 - _deg(angle),
             },
@@ -124,10 +165,7 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
         'euler': euler,
     }
     if b is not None:
-        b = np.asarray(b, dtype=np.float64)
-        if b.shape != (3,):
-            raise RotationError(f'translation b must have shape (3,), got {b.shape}')
-        screw = screw_from_transform(R, b)
+        screw = d.screw
         report['translation'] = _floats(b)
         report['screw'] = {
             'direction': _floats(screw.direction),

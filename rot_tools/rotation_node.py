@@ -27,8 +27,8 @@ from visualization_msgs.msg import Marker
 
 from rot_tools import messages
 from rot_tools.errors import RotationError
-from rot_tools.euler import EULER_SEQUENCES, matrix_to_euler
-from rot_tools.report import to_yaml, transform_report
+from rot_tools.euler import EULER_SEQUENCES
+from rot_tools.report import decompose, to_yaml, transform_report
 from rot_tools.screw import screw_from_transform, screw_interpolate
 
 FRAME_MISMATCH = 'frame_mismatch'
@@ -217,18 +217,10 @@ class RotationNode(Node):
         try:
             header, R, b = convert(*args)
             with np.errstate(all='ignore'):
-                screw = screw_from_transform(R, b, check=False)
-                angles, degenerate = matrix_to_euler(R, settings.euler_sequence, check=False)
-                theta = float(screw.angle)
-                direction = screw.direction
-                rotvec = theta * direction
-                # θ·v = −θ·l̂ × c + d·l̂ = θ·m + d·l̂: screw_log, from the same screw.
-                twist = np.concatenate((rotvec, theta * screw.moment
-                                        + float(screw.translation) * direction))
-                if settings.degrees:
-                    angles = np.degrees(angles)
-                values = np.concatenate((twist, angles, screw.point))
-            if not np.isfinite(values).all():
+                d = decompose(R, b, settings.euler_sequence, check=False)
+            rotvec = d.axis * d.angle
+            angles = np.degrees(d.euler) if settings.degrees else d.euler
+            if not (np.isfinite(d.twist).all() and np.isfinite(d.screw.point).all()):
                 raise messages.RefusedInput(
                     NOT_DECOMPOSABLE, 'values too large to decompose in float64')
         except messages.RefusedInput as exc:
@@ -241,10 +233,11 @@ class RotationNode(Node):
         self._matrix_pub.publish(messages.rotation_matrix_msg(R, out.matrix))
         self._axis_angle_pub.publish(messages.vector3_stamped_msg(header, rotvec, out.rotvec))
         self._euler_pub.publish(messages.vector3_stamped_msg(header, angles, out.euler))
-        self._screw_pub.publish(messages.twist_stamped_msg(header, twist, out.twist))
-        if settings.publish_markers and (theta != 0.0 or float(screw.translation) != 0.0):
+        self._screw_pub.publish(messages.twist_stamped_msg(header, d.twist, out.twist))
+        screw = d.screw
+        if settings.publish_markers and (screw.angle != 0.0 or screw.translation != 0.0):
             self._marker_pub.publish(messages.screw_axis_marker(
-                header, screw.point, direction, settings.marker_scale, out.marker))
+                header, screw.point, screw.direction, settings.marker_scale, out.marker))
         self._latest = Latest(topic, header, R, b, settings)
 
     # -- services ----------------------------------------------------------------------

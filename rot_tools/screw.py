@@ -65,9 +65,13 @@ def _apply_rigid(kernel, R, b, check, outputs):
     return apply_to_rotations(kernel, R, check, outputs, [(b, (3,))])
 
 
-def _screw_kernel(ops, m, b):
+def screw_kernel(ops, m, b):
     """The Screw of (m, b); see screw_from_transform."""
-    axis, angle = axis_angle_kernel(ops, m)
+    return screw_of_axis_kernel(ops, *axis_angle_kernel(ops, m), b)
+
+
+def screw_of_axis_kernel(ops, axis, angle, b):
+    """The Screw of (Rot_axis(angle), b), axis and angle as axis_angle_kernel gives them."""
     b_dir, b_norm = unit(ops, b)
     translating = angle < PURE_TRANSLATION_ANGLE
     direction = [ops.where(translating, p, q) for p, q in zip(b_dir, axis)]
@@ -91,14 +95,17 @@ def screw_from_transform(R, b, *, check=True):
     R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ as matrix_to_axis_angle gives them;
     then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
     """
-    return Screw(*_apply_rigid(_screw_kernel, R, b, check, [_VEC] * 3 + [_SCALAR] * 3))
+    return Screw(*_apply_rigid(screw_kernel, R, b, check, [_VEC] * 3 + [_SCALAR] * 3))
+
+
+def twist_kernel(ops, direction, point, moment, angle, translation, pitch):
+    """Exponential coordinates (θ·l̂, θ·v) of a Screw: θ·v = −θ·l̂ × c + d·l̂ = θ·m + d·l̂."""
+    return ([angle * li for li in direction]
+            + [angle * mi + translation * li for mi, li in zip(moment, direction)])
 
 
 def _log_kernel(ops, m, b):
-    direction, point, _, angle, d, _ = _screw_kernel(ops, m, b)
-    swing = cross(direction, point)
-    return ([angle * li for li in direction]
-            + [d * li - angle * si for li, si in zip(direction, swing)],)
+    return (twist_kernel(ops, *screw_kernel(ops, m, b)),)
 
 
 def screw_log(R, b, *, check=True):

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 import pytest
-
+import rot_tools as rt
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
     rot_z, RotationError, screw_from_transform)
@@ -269,3 +269,38 @@ def test_cli_and_report_need_neither_yaml_nor_ros():
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert out.strip() == '[]'
+
+
+def test_decompose_matches_the_separate_functions():
+    # One pass must give exactly what each public function gives, batch and single,
+    # including angle π (one axis sign for every field) and a pure translation.
+    rng = np.random.default_rng(7)
+    R = rt.rotvec_to_matrix(rng.normal(size=(200, 3)))
+    R = np.concatenate([R, rt.axis_angle_to_matrix(rng.normal(size=(20, 3)), np.pi),
+                        np.eye(3)[None], np.eye(3)[None]])
+    b = rng.normal(size=(len(R), 3))
+    b[-1] = 0.0
+    for seq in ('ZYX', 'zxz'):
+        d = rt.decompose(R, b, seq)
+        axis, angle = rt.matrix_to_axis_angle(R)
+        angles, lock = rt.matrix_to_euler(R, seq)
+        screw = rt.screw_from_transform(R, b)
+        assert np.array_equal(d.axis, axis) and np.array_equal(d.angle, angle)
+        assert np.array_equal(d.euler, angles) and np.array_equal(d.degenerate, lock)
+        for got, want in zip(d.screw, screw):
+            assert np.array_equal(got, want)
+        assert np.array_equal(d.twist, rt.screw_log(R, b))
+        for i in (0, 200, len(R) - 2, len(R) - 1):
+            one = rt.decompose(R[i], b[i], seq)
+            assert np.allclose(one.twist, d.twist[i], rtol=0, atol=1e-15)
+            assert np.allclose(one.screw.point, d.screw.point[i], rtol=0, atol=1e-15)
+            assert one.degenerate == d.degenerate[i]
+
+
+def test_decompose_refuses_bad_input():
+    with pytest.raises(rt.RotationError, match='reflection'):
+        rt.decompose(np.diag([1.0, 1.0, -1.0]), np.zeros(3))
+    with pytest.raises(rt.RotationError, match='translation b must be finite'):
+        rt.decompose(np.eye(3), [0.0, np.nan, 0.0])
+    with pytest.raises(rt.RotationError, match='unknown Euler sequence'):
+        rt.decompose(np.eye(3), np.zeros(3), 'ZYx')
