@@ -33,8 +33,10 @@ def _rodrigues(ops, x, y, z, angle):
 
 
 def _axis_angle_kernel(ops, axis, angle):
-    (x, y, z), norm = unit(ops, axis)
-    return _rodrigues(ops, x, y, z, angle), (norm == 0) & (angle != 0)
+    n = norm(ops, axis)
+    safe = ops.where(n > 0, n, 1.0)  # a zero axis is refused unless the angle is 0 too
+    x, y, z = axis[0] / safe, axis[1] / safe, axis[2] / safe
+    return _rodrigues(ops, x, y, z, angle), (n == 0) & (angle != 0)
 
 
 def axis_angle_to_matrix(axis, angle):
