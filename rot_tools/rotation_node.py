@@ -216,13 +216,12 @@ class RotationNode(Node):
         """Convert one message to (header, R, b) and publish every output, or refuse it."""
         try:
             header, R, b = convert(*args)
-            with np.errstate(all='ignore'):
-                d = decompose(R, b, settings.euler_sequence, check=False)
-            rotvec = d.axis * d.angle
-            angles = np.degrees(d.euler) if settings.degrees else d.euler
-            if not (np.isfinite(d.twist).all() and np.isfinite(d.screw.point).all()):
+            d = decompose(R, b, settings.euler_sequence, check=False)  # floats: no warnings
+            if not all(map(math.isfinite, d.twist.tolist() + d.screw.point.tolist())):
                 raise messages.RefusedInput(
                     NOT_DECOMPOSABLE, 'values too large to decompose in float64')
+            rotvec = d.axis * d.angle
+            angles = np.degrees(d.euler) if settings.degrees else d.euler
         except messages.RefusedInput as exc:
             self._refuse(topic, exc.reason, str(exc))
             return
