@@ -21,7 +21,7 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-            'rotation_node = rot_tools.rotation_node:main',
+            'rotation_node = rot_tools.entry:rotation_node',
             'rot-tools = rot_tools.cli:main',
         ],
     },

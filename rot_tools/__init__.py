@@ -2,26 +2,43 @@
 
 Plain NumPy (no ROS import anywhere in this package's math). Angles are radians, arrays
 float64, ``...`` any leading batch shape. Invalid input raises RotationError (a ValueError).
+
+The names below are imported from their modules on first use (PEP 562), so that
+``import rot_tools.<module>`` stays light: the rotation_node console script must install its
+signal handlers before NumPy and rclpy load (see rot_tools.entry).
 """
 
-from rot_tools.axis_angle import (
-    axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rotvec, rotvec_to_matrix)
-from rot_tools.errors import RotationError
-from rot_tools.euler import (
-    EULER_SEQUENCES, GIMBAL_LOCK_TOL, euler_to_matrix, matrix_to_euler)
-from rot_tools.report import Decomposition, decompose
-from rot_tools.screw import (
-    PURE_TRANSLATION_ANGLE, Screw, screw_exp, screw_from_transform, screw_interpolate,
-    screw_log, transform_from_screw)
-from rot_tools.so3 import (
-    ROTATION_TOL, is_rotation, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
-    skew, validate_rotation)
+import importlib
 
-__all__ = [
-    'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'PURE_TRANSLATION_ANGLE', 'ROTATION_TOL',
-    'Decomposition', 'RotationError', 'Screw', 'axis_angle_to_matrix', 'decompose',
-    'euler_to_matrix', 'is_rotation', 'matrix_to_axis_angle', 'matrix_to_euler',
-    'matrix_to_rotvec', 'nearest_rotation', 'quaternion_to_matrix', 'rot_x', 'rot_y', 'rot_z',
-    'rotvec_to_matrix', 'screw_exp', 'screw_from_transform', 'screw_interpolate', 'screw_log',
-    'skew', 'transform_from_screw', 'validate_rotation',
-]
+_HOME = {
+    'rot_tools.axis_angle': (
+        'axis_angle_to_matrix', 'matrix_to_axis_angle', 'matrix_to_rotvec', 'rotvec_to_matrix'),
+    'rot_tools.errors': ('RotationError',),
+    'rot_tools.euler': (
+        'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'euler_to_matrix', 'matrix_to_euler'),
+    'rot_tools.report': ('Decomposition', 'decompose'),
+    'rot_tools.screw': (
+        'PURE_TRANSLATION_ANGLE', 'Screw', 'screw_exp', 'screw_from_transform',
+        'screw_interpolate', 'screw_log', 'transform_from_screw'),
+    'rot_tools.so3': (
+        'ROTATION_TOL', 'is_rotation', 'nearest_rotation', 'quaternion_to_matrix', 'rot_x',
+        'rot_y', 'rot_z', 'skew', 'validate_rotation'),
+}
+_MODULE_OF = {name: module for module, names in _HOME.items() for name in names}
+
+__all__ = sorted(_MODULE_OF)
+
+
+def __getattr__(name):
+    """Import a public name from its module on first access."""
+    try:
+        module = _MODULE_OF[name]
+    except KeyError:
+        raise AttributeError(f'module {__name__!r} has no attribute {name!r}') from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -14,7 +14,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
 CONSOLE_SCRIPTS = {
-    'rotation_node': 'rot_tools.rotation_node:main',
+    'rotation_node': 'rot_tools.entry:rotation_node',
     'rot-tools': 'rot_tools.cli:main',
 }
 # exec_depends the contract (SPEC §3) needs whatever the code happens to import today.
