@@ -36,4 +36,3 @@ def require_finite(arr, name):
 def finite_array(x, tail, name):
     """as_float_array followed by require_finite."""
     return require_finite(as_float_array(x, tail, name), name)
-

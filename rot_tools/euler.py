@@ -24,8 +24,8 @@ defined; the result is flagged ``degenerate``, θ3 is set to 0 and θ1 carries t
 angle (for lower-case sequences too).
 """
 
-import math
 from functools import partial
+import math
 
 import numpy as np
 

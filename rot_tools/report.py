@@ -54,11 +54,10 @@ Text forms. Numbers are rounded to ``precision`` significant digits *and* decima
   ``float()`` reads them back).
 """
 
+from functools import partial
 import json
 import math
 import re
-
-from functools import partial
 from typing import NamedTuple
 
 import numpy as np

@@ -16,7 +16,7 @@ ROTATION_TOL = 1e-9
 
 
 def _elementary(angle, i):
-    """Rotation by ``angle`` about coordinate axis i: the (j, k) plane turns, j, k cyclic after i."""
+    """Rotation by ``angle`` about coordinate axis i: the (j, k) plane turns (i, j, k cyclic)."""
     a = finite_array(angle, (), 'angle')
     c, s = np.cos(a), np.sin(a)
     j, k = (i + 1) % 3, (i + 2) % 3
