@@ -13,10 +13,12 @@ Kernels select between branches with ``ops.where`` (both sides are evaluated), s
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
 """
 
+from itertools import chain
 import math
 
 import numpy as np
 
+from rot_tools._arrays import as_float_array, require_finite
 from rot_tools.errors import RotationError
 
 CHUNK = 32768
@@ -87,33 +89,59 @@ def _write(out, value, tail):
                 out[..., i, j] = value[i][j]
 
 
+def _all_finite(values, rank):
+    """True when every float of a nested list (rank 0, 1 or 2) is finite."""
+    if rank == 0:
+        return math.isfinite(values)
+    if rank == 1:
+        return all(map(math.isfinite, values))
+    return all(map(math.isfinite, chain.from_iterable(values)))
+
+
 def apply(kernel, inputs, outputs):
     """Run ``kernel(ops, *entries)`` on one item or on a batch.
 
-    inputs: sequence of (float64 array, trailing shape), already checked; their batch shapes
-    broadcast. outputs: sequence of (trailing shape, dtype). Returns a tuple of arrays of shape
-    batch + trailing shape (NumPy scalars for a single item).
+    inputs: sequence of (value, trailing shape, name, finite): each value is made a float64
+    array with that trailing shape (RotationError naming it otherwise) and, when ``finite``,
+    refused if it holds NaN/Inf; their batch shapes broadcast. outputs: sequence of
+    (trailing shape, dtype). Returns a tuple of arrays of shape batch + trailing shape
+    (NumPy scalars for a single item).
     """
-    for a, t in inputs:
-        if a.ndim != len(t):
-            break
-    else:  # a single item
-        result = kernel(FLOATS, *[a.tolist() for a, _ in inputs])
-        return tuple([np.array(r, dtype=dt) if t else dt(r)
-                      for r, (t, dt) in zip(result, outputs)])
-    batches = [a.shape[:a.ndim - len(t)] for a, t in inputs]
+    # Plain loops: on one item the Python overhead here is a good part of the call.
+    arrays, values = [], []
+    for x, t, name, finite in inputs:
+        a = as_float_array(x, t, name)
+        arrays.append(a)
+        if values is not None and a.ndim == len(t):
+            v = a.tolist()
+            if finite and not _all_finite(v, len(t)):
+                require_finite(a, name)
+            values.append(v)
+        else:
+            values = None
+    if values is not None:  # a single item: Python floats
+        result = kernel(FLOATS, *values)
+        out = []
+        for r, (t, dt) in zip(result, outputs):
+            out.append(np.array(r, dtype=dt) if t else dt(r))
+        return tuple(out)
+    for a, (_, _, name, finite) in zip(arrays, inputs):
+        if finite:
+            require_finite(a, name)
+    tails = [t for _, t, _, _ in inputs]
+    batches = [a.shape[:a.ndim - len(t)] for a, t in zip(arrays, tails)]
     try:
         shape = np.broadcast_shapes(*batches)
     except ValueError:
         raise RotationError(f'batch shapes {" and ".join(map(str, batches))} do not broadcast'
                             ) from None
-    flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in inputs]
+    flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in zip(arrays, tails)]
     n = flat[0].shape[0]
     outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
     with np.errstate(divide='ignore', invalid='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
-            result = kernel(ARRAYS, *(_entries(f[chunk], t) for f, (_, t) in zip(flat, inputs)))
+            result = kernel(ARRAYS, *(_entries(f[chunk], t) for f, t in zip(flat, tails)))
             for out, value, (t, _) in zip(outs, result, outputs):
                 _write(out[chunk], value, t)
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))

@@ -10,7 +10,6 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 
 import numpy as np
 
-from rot_tools._arrays import finite_array
 from rot_tools._backend import apply, norm, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
@@ -45,12 +44,11 @@ def axis_angle_to_matrix(axis, angle):
     The axis is normalised. A zero axis with a zero angle gives the identity; a zero axis with
     a non-zero angle raises RotationError.
     """
-    axis = finite_array(axis, (3,), 'axis')
-    angle = finite_array(angle, (), 'angle')
-    matrix, bad = apply(_axis_angle_kernel, [(axis, (3,)), (angle, ())],
+    matrix, bad = apply(_axis_angle_kernel, [(axis, (3,), 'axis', True),
+                                             (angle, (), 'angle', True)],
                         [((3, 3), np.float64), ((), np.bool_)])
     if bad.any() if bad.ndim else bad:
-        first = float(np.broadcast_to(angle, bad.shape)[bad].flat[0])
+        first = float(np.broadcast_to(np.asarray(angle, dtype=float), bad.shape)[bad].flat[0])
         raise RotationError(f'axis is zero but the angle is {first:g} rad: a rotation needs '
                             'a direction (a zero axis is allowed only with angle 0)')
     return matrix
@@ -64,8 +62,8 @@ def _rotvec_kernel(ops, v):
 
 def rotvec_to_matrix(rotvec):
     """Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity."""
-    rotvec = finite_array(rotvec, (3,), 'rotation vector')
-    (matrix,) = apply(_rotvec_kernel, [(rotvec, (3,))], [((3, 3), np.float64)])
+    (matrix,) = apply(_rotvec_kernel, [(rotvec, (3,), 'rotation vector', True)],
+                      [((3, 3), np.float64)])
     return matrix
 
 

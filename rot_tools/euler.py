@@ -29,7 +29,6 @@ import math
 
 import numpy as np
 
-from rot_tools._arrays import finite_array
 from rot_tools._backend import apply
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
@@ -82,7 +81,7 @@ def _matrix_kernel(ops, a, spec):
     t1, t2, t3 = (a[2], a[1], a[0]) if extrinsic else a
     c1, s1, c2, s2, c3, s3 = (
         ops.cos(t1), ops.sin(t1), ops.cos(t2), ops.sin(t2), ops.cos(t3), ops.sin(t3))
-    m = [[None] * 3 for _ in range(3)]
+    m = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]  # every entry is set below
     if proper:
         m[i][i], m[i][j], m[i][k] = c2, s2 * s3, sig * s2 * c3
         m[j][i], m[j][j], m[j][k] = (
@@ -104,10 +103,14 @@ def euler_to_matrix(angles, seq='ZYX'):
     Intrinsic 'ABC': R = Rot_a(θ1)·Rot_b(θ2)·Rot_c(θ3); extrinsic 'abc': R = Rot_c(θ3)·Rot_b(θ2)·
     Rot_a(θ1). Any of the 24 names of EULER_SEQUENCES; another string raises RotationError.
     """
-    spec = parse_sequence(seq)
-    a = finite_array(angles, (3,), 'Euler angles')
-    (matrix,) = apply(partial(_matrix_kernel, spec=spec), [(a, (3,))], [((3, 3), np.float64)])
+    kernel = _MATRIX_KERNELS.get(seq) if isinstance(seq, str) else None
+    if kernel is None:
+        parse_sequence(seq)  # raises the RotationError
+    (matrix,) = apply(kernel, [(angles, (3,), 'Euler angles', True)], [((3, 3), np.float64)])
     return matrix
+
+
+_MATRIX_KERNELS = {seq: partial(_matrix_kernel, spec=spec) for seq, spec in _PARSED.items()}
 
 
 def _wrap(ops, angle):

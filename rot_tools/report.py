@@ -62,7 +62,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rot_tools._arrays import finite_array
 from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.errors import RotationError
 from rot_tools.euler import (
@@ -107,10 +106,9 @@ def decompose(R, b, seq='ZYX', *, check=True):
     rotation_node come from the same numbers.
     """
     kernel = partial(_decompose_kernel, spec=parse_sequence(seq))
-    b = finite_array(b, (3,), 'translation b')
     out = apply_to_rotations(kernel, R, check, [
         _VEC, _NUM, _VEC, ((), np.bool_), _VEC, _VEC, _VEC, _NUM, _NUM, _NUM,
-        ((6,), np.float64)], [(b, (3,))])
+        ((6,), np.float64)], [(b, (3,), 'translation b', True)])
     return Decomposition(*out[:4], Screw(*out[4:10]), out[10])
 
 

@@ -28,7 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rot_tools._arrays import as_float_array, finite_array
+from rot_tools._arrays import finite_array
 from rot_tools._backend import apply, cross, dot, unit
 from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
 from rot_tools.errors import RotationError
@@ -60,9 +60,7 @@ class Screw(NamedTuple):
 
 def _apply_rigid(kernel, R, b, check, outputs):
     """apply_to_rotations(kernel) to the motion p ↦ R·p + b, R validated unless not check."""
-    R = as_float_array(R, (3, 3), 'R')  # R's shape is reported before b's
-    b = finite_array(b, (3,), 'translation b')
-    return apply_to_rotations(kernel, R, check, outputs, [(b, (3,))])
+    return apply_to_rotations(kernel, R, check, outputs, [(b, (3,), 'translation b', True)])
 
 
 def screw_kernel(ops, m, b):
@@ -140,8 +138,7 @@ def screw_exp(twist):
     R = Rot_l̂(θ) (Rodrigues) and b = (I − R)·c + d·l̂ with c = l̂ × u/θ, d = l̂·u, i.e.
     b = (sin θ/θ)·u⊥ + ((1 − cos θ)/θ)·l̂ × u + (l̂·u)·l̂, which is smooth at θ = 0 (b = u).
     """
-    twist = finite_array(twist, (6,), 'twist')
-    return apply(_exp_kernel, [(twist, (6,))], [((3, 3), np.float64), _VEC])
+    return apply(_exp_kernel, [(twist, (6,), 'twist', True)], [((3, 3), np.float64), _VEC])
 
 
 def transform_from_screw(direction, point, angle, translation):

@@ -71,7 +71,7 @@ _F64 = ((), np.float64)
 
 def _defects(R):
     """Per item: (max|RᵀR − I|, det R)."""
-    return apply(_defects_kernel, [(R, (3, 3))], [_F64, _F64])
+    return apply(_defects_kernel, [(R, (3, 3), 'R', False)], [_F64, _F64])
 
 
 def is_rotation(R, tol=ROTATION_TOL):
@@ -119,19 +119,19 @@ def _refuse_defects(err, det, tol):
 
 
 def apply_to_rotations(kernel, R, check, outputs, extra=()):
-    """apply(kernel, [(R, (3, 3)), *extra], outputs), validating R in the same pass.
+    """apply(kernel, [R, *extra], outputs) with R (..., 3, 3), validated in the same pass.
 
     With check, R must pass validate_rotation (tol ROTATION_TOL): its defects are computed
     beside the kernel's outputs, which are dropped if R is refused.
     """
     if not check:
-        return apply(kernel, [(as_float_array(R, (3, 3), 'R'), (3, 3)), *extra], outputs)
+        return apply(kernel, [(R, (3, 3), 'R', False), *extra], outputs)
 
     def checked(ops, m, *rest):
         return (*kernel(ops, m, *rest), *_defects_kernel(ops, m))
 
-    R = finite_array(R, (3, 3), 'R')
-    *results, err, det = apply(checked, [(R, (3, 3)), *extra], [*outputs, _F64, _F64])
+    *results, err, det = apply(checked, [(R, (3, 3), 'R', True), *extra],
+                               [*outputs, _F64, _F64])
     _refuse_defects(err, det, ROTATION_TOL)
     return tuple(results)
 
@@ -161,8 +161,8 @@ def quaternion_to_matrix(q):
     matrix scaled so that any non-zero q gives a rotation). (..., 4) → (..., 3, 3). The only
     quaternion function in rot_tools: for message boundaries. Zero or non-finite q raises.
     """
-    q = finite_array(q, (4,), 'quaternion (x, y, z, w)')
-    matrix, zero = apply(_quaternion_kernel, [(q, (4,))], [((3, 3), np.float64), ((), np.bool_)])
+    matrix, zero = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
+                         [((3, 3), np.float64), ((), np.bool_)])
     if zero.any() if zero.ndim else zero:
         raise RotationError('quaternion (x, y, z, w) must be non-zero, got |q| = 0')
     return matrix
