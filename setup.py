@@ -12,7 +12,10 @@ setup(
         ('share/' + package_name, ['package.xml']),
     ],
     install_requires=['setuptools', 'numpy'],
-    extras_require={'test': ['pytest', 'hypothesis']},
+    extras_require={
+        'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib'],
+        'plot': ['matplotlib'],
+    },
     zip_safe=True,
     maintainer='rot_tools maintainers',
     maintainer_email='maintainers@rot-tools.example.org',

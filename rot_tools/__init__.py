@@ -21,8 +21,8 @@ _HOME = {
         'PURE_TRANSLATION_ANGLE', 'Screw', 'screw_exp', 'screw_from_transform',
         'screw_interpolate', 'screw_log', 'transform_from_screw'),
     'rot_tools.so3': (
-        'ROTATION_TOL', 'is_rotation', 'nearest_rotation', 'quaternion_to_matrix', 'rot_x',
-        'rot_y', 'rot_z', 'skew', 'validate_rotation'),
+        'ROTATION_TOL', 'is_rotation', 'matrix_to_quaternion', 'nearest_rotation',
+        'quaternion_to_matrix', 'rot_x', 'rot_y', 'rot_z', 'skew', 'validate_rotation'),
 }
 _MODULE_OF = {name: module for module, names in _HOME.items() for name in names}
 

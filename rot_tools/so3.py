@@ -1,5 +1,9 @@
 """Rotation matrices: elementary rotations, the skew matrix, validity checks, quaternions.
 
+Quaternions appear only at the boundary (messages, people pasting them), always in the ROS
+message order (x, y, z, w): quaternion_to_matrix and its twin matrix_to_quaternion. The
+rest of rot_tools never uses them.
+
 Conventions used throughout rot_tools: column vectors, active rotations, ``p' = R p``;
 a rotation matrix R is 3x3 orthogonal with det R = +1 (seed 000, Theorem 1). Every function
 takes one item or a batch with any leading shape ``...``.
@@ -178,3 +182,42 @@ def _quaternion_kernel(ops, q):
     return [[1.0 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
             [s * (x * y + z * w), 1.0 - s * (x * x + z * z), s * (y * z - x * w)],
             [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y)]], big == 0
+
+
+def _quaternion_of_matrix_kernel(ops, m):
+    """Unit (x, y, z, w) of m, canonical sign; see matrix_to_quaternion."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = m
+    # M = 4·q·qᵀ in the order (x, y, z, w): its diagonal and off-diagonal entries.
+    dx, dy = 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22
+    dz, dw = 1.0 - r00 - r11 + r22, 1.0 + r00 + r11 + r22
+    xy, xz, yz = r01 + r10, r02 + r20, r12 + r21
+    xw, yw, zw = r21 - r12, r02 - r20, r10 - r01
+    # Row i of M divided by 2·sqrt(M_ii) is q·sign(q_i). Take the row with the largest
+    # diagonal: M_ii = 4·q_i² ≥ 1 there (the four sum to 4), so nothing small is divided by.
+    use_x = (dx >= dy) & (dx >= dz) & (dx >= dw)
+    use_y = (dy > dx) & (dy >= dz) & (dy >= dw)
+    use_z = (dz > dx) & (dz > dy) & (dz >= dw)
+    row = [ops.where(use_x, dx, ops.where(use_y, xy, ops.where(use_z, xz, xw))),
+           ops.where(use_x, xy, ops.where(use_y, dy, ops.where(use_z, yz, yw))),
+           ops.where(use_x, xz, ops.where(use_y, yz, ops.where(use_z, dz, zw))),
+           ops.where(use_x, xw, ops.where(use_y, yw, ops.where(use_z, zw, dw)))]
+    x, y, z, w = row
+    n = ops.sqrt(x * x + y * y + z * z + w * w)  # = 4·|q_i| ≥ 2 for a rotation
+    # Canonical sign: w > 0; at w = 0 the first non-zero of x, y, z positive.
+    lead = ops.where(w != 0, w, ops.where(x != 0, x, ops.where(y != 0, y, z)))
+    s = ops.where(lead < 0, -1.0, 1.0) / n
+    return [x * s + 0.0, y * s + 0.0, z * s + 0.0, w * s + 0.0],
+
+
+def matrix_to_quaternion(R, *, check=True):
+    """Unit quaternion (x, y, z, w) — the ROS message order — of R; (..., 3, 3) → (..., 4).
+
+    Canonical sign: w > 0, and at w = 0 (half turns) the first non-zero of x, y, z is
+    positive. From M = 4·q·qᵀ, whose entries are sums and differences of entries of R
+    (M_ww = 1 + tr R, M_xw = r32 − r23, M_xy = r12 + r21, ...): the row of M with the
+    largest diagonal entry (≥ 1), normalised, so no small number is divided by and the
+    result is accurate to rounding at every angle, 0 and π included. The boundary twin of
+    quaternion_to_matrix, for messages and for people; never used inside the math.
+    """
+    (q,) = apply_to_rotations(_quaternion_of_matrix_kernel, R, check, [((4,), np.float64)])
+    return q

@@ -5,8 +5,8 @@ import math_helpers as h
 import numpy as np
 import pytest
 from rot_tools import (
-    is_rotation, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z, RotationError,
-    skew, validate_rotation)
+    is_rotation, matrix_to_quaternion, nearest_rotation, quaternion_to_matrix, rot_x, rot_y,
+    rot_z, RotationError, skew, validate_rotation)
 
 N = 10_000
 PI = h.PI
@@ -230,3 +230,36 @@ def test_quaternion_of_any_finite_scale_is_normalised_or_refused_never_nan(scale
 def test_quaternion_property_is_rodrigues(axis, angle):
     q = np.append(np.sin(angle / 2) * axis, np.cos(angle / 2))
     assert h.max_abs(quaternion_to_matrix(q) - h.seed_rodrigues_eq7(axis, angle)) <= 1e-14
+
+
+def test_matrix_to_quaternion_matches_scipy_canonical():
+    from scipy.spatial.transform import Rotation
+    R = Rotation.random(N, rng=7).as_matrix()
+    q = matrix_to_quaternion(R)
+    assert q.shape == (N, 4)
+    assert h.max_abs(q - Rotation.from_matrix(R).as_quat(canonical=True)) <= 1e-15
+    assert h.max_abs(quaternion_to_matrix(q) - R) <= 1e-15
+
+
+@pytest.mark.parametrize('angle', [0.0, 1e-12, PI / 2, PI - 1e-9, PI])
+@pytest.mark.parametrize('axis', [(1, 0, 0), (0, 1, 0), (0, 0, 1), (0, -1, 1), (-1, 2, -3)])
+def test_matrix_to_quaternion_closed_form(axis, angle):
+    # q = (sin(θ/2)·l̂, cos(θ/2)), canonical as it stands: cos(θ/2) > 0 for θ ≤ fl(π) < π.
+    axis = np.array(axis, dtype=float) / np.linalg.norm(axis)
+    exact = np.append(np.sin(angle / 2) * axis, np.cos(angle / 2))
+    R = np.cos(angle) * np.eye(3) + (1 - np.cos(angle)) * np.outer(axis, axis) + np.sin(
+        angle) * h.ref_skew(axis)
+    q = matrix_to_quaternion(R)
+    assert h.max_abs(q - exact) <= 2e-16
+    assert q[3] > 0 or (q[3] == 0 and q[np.flatnonzero(q)[0]] > 0)
+
+
+@pytest.mark.parametrize('R, q', [
+    (np.diag([-1.0, -1.0, 1.0]), [0.0, 0.0, 1.0, 0.0]),
+    (np.diag([1.0, -1.0, -1.0]), [1.0, 0.0, 0.0, 0.0]),
+    ([[-1, 0, 0], [0, 0, -1], [0, -1, 0]], [0.0, 0.5 ** 0.5, -(0.5 ** 0.5), 0.0]),
+    ([[0, 1, 0], [1, 0, 0], [0, 0, -1]], [0.5 ** 0.5, 0.5 ** 0.5, 0.0, 0.0]),
+])
+def test_matrix_to_quaternion_half_turn_sign(R, q):
+    # Exactly π (w = 0): the first non-zero of x, y, z is positive.
+    assert h.max_abs(matrix_to_quaternion(R) - np.array(q)) <= 2e-16
