@@ -24,6 +24,9 @@ order::
       degenerate:      true at gimbal lock (then θ3 = 0 and θ1 carries the free angle)
       all_sequences:   only with ``all_sequences=True``: for each of the 24 sequences,
                        in rot_tools.EULER_SEQUENCES order, {angles: [...], degenerate: ...}
+    quaternion:        {x, y, z, w}: the unit quaternion of R in the ROS message order
+                       (geometry_msgs/Quaternion), canonical sign (w > 0; at w = 0 the first
+                       non-zero of x, y, z positive), from rot_tools.matrix_to_quaternion
     translation:       b = [x, y, z] (only when b is given)
     screw:             only when b is given (Chasles: rotation θ about the line through
                        ``point`` along ``direction``, then ``translation`` along it)
@@ -67,7 +70,7 @@ from rot_tools.errors import RotationError
 from rot_tools.euler import (
     angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence)
 from rot_tools.screw import Screw, screw_of_axis_kernel, twist_kernel
-from rot_tools.so3 import apply_to_rotations
+from rot_tools.so3 import apply_to_rotations, matrix_to_quaternion
 
 DEFAULT_PRECISION = 12
 """Significant digits and decimal places of printed numbers."""
@@ -160,6 +163,8 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
             },
         },
         'euler': euler,
+        # R was validated by decompose above.
+        'quaternion': dict(zip('xyzw', _floats(matrix_to_quaternion(R, check=False)))),
     }
     if b is not None:
         screw = d.screw

@@ -16,6 +16,7 @@ import sys
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 import rot_tools
 from rot_tools import (
@@ -97,6 +98,17 @@ def check_rotation(rep, R, seq='ZYX', deg=False):
     assert (eu['sequence'], eu['unit'], eu['degenerate']) == (
         seq, 'deg' if deg else 'rad', bool(degenerate))
     close(eu['angles'], np.degrees(angles) if deg else angles)
+    check_quaternion(rep['quaternion'], R)
+
+
+def check_quaternion(printed, R):
+    """The printed {x, y, z, w} is scipy's canonical quaternion of R (up to sign at π)."""
+    assert list(printed) == ['x', 'y', 'z', 'w']
+    q = np.array(list(printed.values()))
+    reference = Rotation.from_matrix(R).as_quat(canonical=True)  # (x, y, z, w)
+    if abs(reference[3]) < 1e-9:  # a half turn: rounding in R decides the sign
+        reference *= np.sign(np.dot(q, reference))
+    close(q, reference)
 
 
 # ---------------------------------------------------------------------------------------
@@ -110,7 +122,7 @@ def test_euler_negative_angle_and_options_after_the_arguments(script, fmt):
     R = rot_z(a) @ rot_y(b) @ rot_x(c)  # seed 000 eq. 1
     check_rotation(rep, R, deg=True)
     close(rep['euler']['angles'], [-30.0, 20.0, 10.0])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler']
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion']
 
 
 def test_euler_extrinsic_with_output_sequence_and_exponent_numbers(script):

@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 import rot_tools as rt
+from scipy.spatial.transform import Rotation
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
     rot_z, RotationError, screw_from_transform)
@@ -43,14 +44,15 @@ def _json_loads(text):
 
 def test_keys_in_order_and_plain_python_types():
     rep = transform_report(R0, B0)
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'translation', 'screw']
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'translation', 'screw']
     assert list(rep['axis_angle']) == [
         'axis', 'angle', 'angle_deg', 'rotation_vector', 'second_solution']
     assert list(rep['axis_angle']['second_solution']) == ['axis', 'angle', 'angle_deg']
     assert list(rep['euler']) == ['sequence', 'unit', 'angles', 'degenerate']
+    assert list(rep['quaternion']) == ['x', 'y', 'z', 'w']
     assert list(rep['screw']) == [
         'direction', 'point', 'moment', 'angle', 'angle_deg', 'translation', 'pitch']
-    assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler']
+    assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler', 'quaternion']
     for item in _walk(rep):
         assert type(item) in (dict, list, float, bool, str), (type(item), item)
 
@@ -88,6 +90,30 @@ def test_both_axis_angle_solutions_give_the_matrix(angle):
     np.testing.assert_allclose(axis_angle_to_matrix(two['axis'], two['angle']), R, atol=TOL)
 
 
+@pytest.mark.parametrize('axis, angle', [
+    ([0.0, 0.0, 1.0], 0.0), ([1.0, -2.0, 0.5], 1e-12), ([0.3, 0.4, -1.0], 2.0),
+    ([1.0, -2.0, 0.5], math.pi - 1e-9), ([1.0, -2.0, 0.5], math.pi),
+    ([0.0, -1.0, 0.0], math.pi), ([0.0, 0.0, -1.0], math.pi)])
+def test_quaternion_is_scipys_canonical_one_in_ros_order(axis, angle):
+    axis = np.divide(axis, np.linalg.norm(axis))
+    R = axis_angle_to_matrix(axis, angle)
+    rep = transform_report(R)['quaternion']
+    q = np.array([rep['x'], rep['y'], rep['z'], rep['w']])
+    # Independent of rot_tools: the closed form (sin(θ/2)·l̂, cos(θ/2)) and scipy. Away from
+    # π the sign is fixed (w > 0); at π rounding of R decides it, so compare up to sign and
+    # check the canonical rule: w > 0, or w = 0 and the first non-zero of x, y, z positive.
+    expected = np.append(math.sin(angle / 2) * axis, math.cos(angle / 2))
+    reference = Rotation.from_matrix(R).as_quat(canonical=True)
+    if angle < math.pi:
+        np.testing.assert_allclose(q, expected, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(q, reference, rtol=0, atol=1e-15)
+    else:
+        assert min(np.abs(q - s * expected).max() for s in (1, -1)) <= 1e-15
+        assert min(np.abs(q - s * reference).max() for s in (1, -1)) <= 1e-15
+    assert q[3] > 0 or (q[3] == 0 and q[:3][q[:3] != 0][0] > 0)
+    assert np.linalg.norm(q) == pytest.approx(1.0, abs=1e-15)
+
+
 def test_degrees_switch_the_euler_angles_only():
     rad = transform_report(R0, B0, seq='zxz')
     deg = transform_report(R0, B0, seq='zxz', degrees=True)
@@ -97,7 +123,7 @@ def test_degrees_switch_the_euler_angles_only():
                                atol=1e-12)
     np.testing.assert_allclose(euler_to_matrix(np.radians(deg['euler']['angles']), 'zxz'), R0,
                                atol=TOL)
-    for key in ('axis_angle', 'screw', 'matrix', 'translation'):
+    for key in ('axis_angle', 'screw', 'matrix', 'translation', 'quaternion'):
         assert deg[key] == rad[key]
 
 
@@ -207,6 +233,11 @@ euler:
   unit: deg
   angles: [90.0, 0.0, 0.0]
   degenerate: false
+quaternion:
+  x: 0.0
+  "y": 0.0
+  z: 0.707106781187
+  w: 0.707106781187
 translation: [1.0, 0.0, 0.5]
 screw:
   direction: [0.0, 0.0, 1.0]
