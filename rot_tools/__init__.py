@@ -17,6 +17,9 @@ _HOME = {
     'rot_tools.euler': (
         'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'euler_to_matrix', 'matrix_to_euler'),
     'rot_tools.report': ('Decomposition', 'decompose'),
+    'rot_tools.rigid': (
+        'compose_transforms', 'frame_to_matrix', 'homogeneous_to_transform', 'invert_transform',
+        'transform_points', 'transform_to_homogeneous'),
     'rot_tools.screw': (
         'PURE_TRANSLATION_ANGLE', 'Screw', 'screw_exp', 'screw_from_transform',
         'screw_interpolate', 'screw_log', 'transform_from_screw'),

@@ -36,3 +36,17 @@ def require_finite(arr, name):
 def finite_array(x, tail, name):
     """as_float_array followed by require_finite."""
     return require_finite(as_float_array(x, tail, name), name)
+
+
+def refuse_overflow(fits, what):
+    """Raise RotationError where the flag ``fits`` (bool or bool array) is false.
+
+    what: the quantity that left float64's range, e.g. 'R·p + b'; the message adds the
+    first offending item of a batch.
+    """
+    if fits.ndim == 0:
+        if not fits:
+            raise RotationError(f'{what} overflows float64 (beyond ±1.8e308)')
+    elif not fits.all():
+        first = tuple(int(i) for i in np.argwhere(~fits)[0])
+        raise RotationError(f'{what} overflows float64 (beyond ±1.8e308), first at item {first}')

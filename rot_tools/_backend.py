@@ -11,10 +11,14 @@ as itself), returning the entries of its outputs. ``apply`` runs a kernel
 
 Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
+Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
+flag beside it and the caller refuses the flagged items (floating-point warnings of the
+batch engine are silenced).
 """
 
 from itertools import chain
 import math
+import sys
 
 import numpy as np
 
@@ -138,7 +142,7 @@ def apply(kernel, inputs, outputs):
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in zip(arrays, tails)]
     n = flat[0].shape[0]
     outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
-    with np.errstate(divide='ignore', invalid='ignore'):
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
             result = kernel(ARRAYS, *(_entries(f[chunk], t) for f, t in zip(flat, tails)))
@@ -176,3 +180,18 @@ def unit(ops, v):
     safe = ops.where(zero, 1.0, n)
     return [ops.where(zero, 0.0, v[0] / safe) + 0.0, ops.where(zero, 0.0, v[1] / safe) + 0.0,
             ops.where(zero, 1.0, v[2] / safe)], n
+
+
+_LARGEST = sys.float_info.max
+
+
+def in_range(ops, values):
+    """True where every entry of the flat list ``values`` is finite (±inf and NaN fail).
+
+    Kernels return it beside results that can overflow float64 for finite inputs, and the
+    caller refuses the flagged items (see _arrays.refuse_overflow).
+    """
+    ok = ops.abs(values[0]) <= _LARGEST
+    for x in values[1:]:
+        ok = ok & (ops.abs(x) <= _LARGEST)
+    return ok

@@ -59,9 +59,9 @@ def skew(v):
     return out
 
 
-def _defects_kernel(ops, m):
-    """(max|RᵀR − I|, det R): the six distinct entries of the Gram matrix RᵀR, and the
-    triple product of the rows. NaN entries propagate to NaN (never ≤ tol)."""
+def defects_kernel(ops, m):
+    """(max|RᵀR − I|, det R) of the entries m: the six distinct entries of the Gram matrix
+    RᵀR, and the triple product of the rows. NaN entries propagate to NaN (never ≤ tol)."""
     (a, b, c), (d, e, f), (g, h, i) = m
     err = ops.max_of(
         ops.abs(a * a + d * d + g * g - 1.0), ops.abs(b * b + e * e + h * h - 1.0),
@@ -75,7 +75,7 @@ _F64 = ((), np.float64)
 
 def _defects(R):
     """Per item: (max|RᵀR − I|, det R)."""
-    return apply(_defects_kernel, [(R, (3, 3), 'R', False)], [_F64, _F64])
+    return apply(defects_kernel, [(R, (3, 3), 'R', False)], [_F64, _F64])
 
 
 def is_rotation(R, tol=ROTATION_TOL):
@@ -99,26 +99,29 @@ def validate_rotation(R, tol=ROTATION_TOL):
     (the message gives the size), det R = +1 (det −1 is a reflection).
     """
     R = finite_array(R, (3, 3), 'R')
-    _refuse_defects(*_defects(R), tol)
+    refuse_defects(*_defects(R), tol)
     return R
 
 
-def _refuse_defects(err, det, tol):
-    """Raise RotationError for the worst item whose (max|RᵀR − I|, det R) is out of tol."""
+def refuse_defects(err, det, tol, name='R'):
+    """Raise RotationError for the worst item whose (max|RᵀR − I|, det R) is out of tol.
+
+    name: how the message calls the matrix: 'R', 'R2', 'R (T[:3, :3])'.
+    """
     if err.ndim == 0 and err <= tol and abs(det - 1.0) <= tol:
         return  # one good item: no NumPy reductions
     where = '' if err.ndim == 0 else ' (worst at item {})'
     if not (err <= tol).all():
         worst = np.unravel_index(np.argmax(err), err.shape)
         raise RotationError(
-            f'R is not a rotation matrix: max|RᵀR − I| = {float(err[worst]):.3g} > tol {tol:g}'
-            + where.format(tuple(map(int, worst))))
+            f'{name} is not a rotation matrix: max|RᵀR − I| = {float(err[worst]):.3g} '
+            f'> tol {tol:g}' + where.format(tuple(map(int, worst))))
     dev = np.abs(det - 1.0)
     if not (dev <= tol).all():
         worst = np.unravel_index(np.argmax(dev), dev.shape)
         kind = 'a reflection' if det[worst] < 0 else 'not a rotation'
         raise RotationError(
-            f'R is {kind}: det R = {float(det[worst]):.6g}, expected +1'
+            f'{name} is {kind}: det R = {float(det[worst]):.6g}, expected +1'
             + where.format(tuple(map(int, worst))))
 
 
@@ -126,18 +129,41 @@ def apply_to_rotations(kernel, R, check, outputs, extra=()):
     """apply(kernel, [R, *extra], outputs) with R (..., 3, 3), validated in the same pass.
 
     With check, R must pass validate_rotation (tol ROTATION_TOL): its defects are computed
-    beside the kernel's outputs, which are dropped if R is refused.
+    beside the kernel's outputs, which are dropped if R is refused. (The one-rotation case
+    of apply_to_named_rotations, kept lean: it is on every conversion's single-item path.)
     """
     if not check:
         return apply(kernel, [(R, (3, 3), 'R', False), *extra], outputs)
 
     def checked(ops, m, *rest):
-        return (*kernel(ops, m, *rest), *_defects_kernel(ops, m))
+        return (*kernel(ops, m, *rest), *defects_kernel(ops, m))
 
     *results, err, det = apply(checked, [(R, (3, 3), 'R', True), *extra],
                                [*outputs, _F64, _F64])
-    _refuse_defects(err, det, ROTATION_TOL)
+    refuse_defects(err, det, ROTATION_TOL)
     return tuple(results)
+
+
+def apply_to_named_rotations(kernel, rotations, check, outputs, extra=()):
+    """apply_to_rotations for several rotations: rotations = [(R1, 'R1'), (R2, 'R2'), ...].
+
+    The kernel takes their entries first, then those of extra; with check each rotation is
+    validated under its name.
+    """
+    inputs = [(R, (3, 3), name, check) for R, name in rotations]
+    if not check:
+        return apply(kernel, [*inputs, *extra], outputs)
+    count = len(rotations)
+
+    def checked(ops, *entries):
+        defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
+        return (*kernel(ops, *entries), *defects)
+
+    results = apply(checked, [*inputs, *extra], [*outputs] + [_F64, _F64] * count)
+    for i, (_, name) in enumerate(rotations):
+        err, det = results[len(outputs) + 2 * i:len(outputs) + 2 * i + 2]
+        refuse_defects(err, det, ROTATION_TOL, name)
+    return tuple(results[:len(outputs)])
 
 
 def checked_rotation(R, check):
