@@ -92,6 +92,12 @@ def _precision(text):
     return value
 
 
+def _plot_file(text):
+    if not text.lower().endswith(('.png', '.svg')):
+        raise argparse.ArgumentTypeError(f'FILE must end in .png or .svg, got {text!r}')
+    return text
+
+
 def _tolerance(text):
     value = _number(text)
     if value < 0:
@@ -231,6 +237,10 @@ def _add_common(parser, suppress):
     out.add_argument('--precision', type=_precision, default=default(DEFAULT_PRECISION),
                      metavar='N', help='round numbers to N significant digits and N decimal '
                      f'places (default {DEFAULT_PRECISION}); -0.0 prints as 0.0')
+    out.add_argument('--plot', type=_plot_file, default=default(None), metavar='FILE',
+                     help='also draw the motion in FILE (.png or .svg): both frames, the '
+                     "rotation or screw axis, the path of the origin; needs matplotlib (pip "
+                     "install 'rot_tools[plot]')")
 
 
 def _add_tol(parser):
@@ -292,6 +302,21 @@ def build_parser():
     return parser
 
 
+def _write_plot(parser, path, R, b, degrees):
+    """Draw (R, b) into ``path`` with rot_tools.plot, imported only now (matplotlib)."""
+    try:
+        from rot_tools import plot
+    except ImportError as exc:
+        if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
+            raise
+        parser.error("--plot needs matplotlib, the 'plot' extra: "
+                     "pip install 'rot_tools[plot]'")
+    try:
+        plot.save(R, b, path, degrees)
+    except OSError as exc:
+        parser.error(f'--plot: cannot write {path}: {exc.strerror or exc}')
+
+
 def main(argv=None):
     """Run rot-tools on argv (default sys.argv[1:]); return the exit status."""
     parser = build_parser()
@@ -303,6 +328,8 @@ def main(argv=None):
                                       degrees=args.deg, all_sequences=args.all_sequences)
         except ValueError as exc:  # RotationError is a ValueError
             parser.error(f'{args.command}: {exc}')
+        if args.plot:
+            _write_plot(parser, args.plot, R, b, args.deg)
     except SystemExit as exc:  # argparse's --help (0) and errors (2)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     text = to_json if args.json else to_yaml

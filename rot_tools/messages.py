@@ -10,7 +10,8 @@ rot_tools.quaternion_to_matrix; outbound (path poses) the quaternion is written 
 axis-angle of R, q = (sin(θ/2)·l̂, cos(θ/2)), so no other quaternion algebra is needed.
 
 Outbound helpers build the node's messages from NumPy values: Float64MultiArray (row-major
-3x3), Vector3Stamped, TwistStamped, the screw-axis Marker, poses and Path.
+3x3), Vector3Stamped, TwistStamped, the screw-axis Marker, poses and Path, and the
+MarkerArray of a rot_tools.drawing.Picture.
 """
 
 import math
@@ -20,7 +21,7 @@ from geometry_msgs.msg import Vector3Stamped
 from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
-from visualization_msgs.msg import Marker
+from visualization_msgs.msg import Marker, MarkerArray
 
 from rot_tools.axis_angle import matrix_to_axis_angle
 from rot_tools.euler import euler_to_matrix
@@ -174,6 +175,72 @@ def screw_axis_marker(header, point, direction, scale, msg=None, ns='screw_axis'
     tip.z = pz + scale * float(direction[2])
     _set_xyz(msg.scale, (0.05 * scale, 0.1 * scale, 0.2 * scale))
     return msg
+
+
+def delete_marker(header, ns, marker_id):
+    """visualization_msgs/Marker that deletes marker (ns, marker_id) of ``header.frame_id``."""
+    msg = Marker(header=header, ns=ns, id=marker_id, action=Marker.DELETE)
+    msg.pose.orientation.w = 1.0
+    return msg
+
+
+MARKERS_NS = 'rot_tools'
+"""Namespace of the ~/markers MarkerArray."""
+
+TRIAD_IDS, AXIS_ID, PATH_ID, LABEL_ID = (0, 1, 2), 3, 4, 5
+"""Fixed ids of the ~/markers MarkerArray: the moved x, y, z axes, the screw axis, the path,
+the label. Each input sends every one of them (ADD or DELETE), so it replaces the last."""
+
+MARKER_IDS = TRIAD_IDS + (AXIS_ID, PATH_ID, LABEL_ID)
+
+TRIAD_COLORS = (ColorRGBA(r=1.0, g=0.0, b=0.0, a=1.0), ColorRGBA(r=0.0, g=1.0, b=0.0, a=1.0),
+                ColorRGBA(r=0.0, g=0.0, b=1.0, a=1.0))
+PATH_COLOR = ColorRGBA(r=1.0, g=0.0, b=1.0, a=1.0)
+LABEL_COLOR = ColorRGBA(r=1.0, g=1.0, b=1.0, a=1.0)
+
+
+def _points(points):
+    return [Point(x=x, y=y, z=z) for x, y, z in np.asarray(points, dtype=np.float64).tolist()]
+
+
+def _marker(header, marker_id, kind, color, size, points=None):
+    """An ADD Marker of ``kind`` in namespace MARKERS_NS with an identity pose."""
+    msg = Marker(header=header, ns=MARKERS_NS, id=marker_id, type=kind, action=Marker.ADD,
+                 color=color, points=_points(points) if points is not None else [])
+    _set_xyz(msg.scale, size)
+    msg.pose.orientation.w = 1.0
+    return msg
+
+
+def picture_markers(header, picture):
+    """visualization_msgs/MarkerArray of a rot_tools.drawing.Picture (see MARKER_IDS).
+
+    In ``header.frame_id``, namespace MARKERS_NS: the moved frame's x, y, z axes as red,
+    green and blue ARROWs from b (picture.scale long), the screw axis as an orange ARROW
+    along +l̂, the path as a magenta LINE_STRIP and the label as TEXT_VIEW_FACING text at
+    picture.label_at. What the picture does not hold (the axis of a pure translation,
+    everything of the identity) is a DELETE of its id. Every pose is the identity
+    (orientation.w = 1), the points carry the geometry; sizes are fractions of the scale.
+    """
+    s = picture.scale
+    if picture.path is None:
+        return MarkerArray(markers=[delete_marker(header, MARKERS_NS, i) for i in MARKER_IDS])
+    tail = picture.origin
+    markers = [_marker(header, i, Marker.ARROW, color, (0.05 * s, 0.1 * s, 0.2 * s),
+                       (tail, tail + s * picture.frame[:, k]))
+               for k, (i, color) in enumerate(zip(TRIAD_IDS, TRIAD_COLORS))]
+    if picture.axis is None:
+        markers.append(delete_marker(header, MARKERS_NS, AXIS_ID))
+    else:
+        markers.append(_marker(header, AXIS_ID, Marker.ARROW, SCREW_AXIS_COLOR,
+                               (0.02 * s, 0.06 * s, 0.15 * s), picture.axis))
+    markers.append(_marker(header, PATH_ID, Marker.LINE_STRIP, PATH_COLOR,
+                           (0.02 * s, 0.0, 0.0), picture.path))
+    label = _marker(header, LABEL_ID, Marker.TEXT_VIEW_FACING, LABEL_COLOR, (0.0, 0.0, 0.15 * s))
+    label.text = f'{picture.label}\npath: {picture.traced}'
+    _set_xyz(label.pose.position, picture.label_at)
+    markers.append(label)
+    return MarkerArray(markers=markers)
 
 
 def matrices_to_quaternions(R, first=None):

@@ -1,0 +1,150 @@
+"""The geometry of a picture of one rigid motion, for every renderer (plain NumPy).
+
+``rot-tools --plot`` (rot_tools.plot, matplotlib) and rotation_node's ``~/markers``
+(rot_tools.messages, RViz) draw the same :class:`Picture`, computed here once. The motion
+p ↦ R·p + b has the Chasles screw (l̂, c, θ, d) and the twist ξ = screw_log(R, b); a picture
+of it holds, in the reference frame:
+
+- the moved frame: its axes are the columns of R (seed 000 §4), drawn from b with length
+  ``scale``;
+- the screw axis: the line through c along l̂, as a segment from c + t_lo·l̂ to c + t_hi·l̂
+  (pointing along +l̂: θ turns right-handed about it) that covers the projections onto the
+  axis of the origin, the path and the moved frame, plus ``scale`` beyond each end;
+- the path: the constant-screw motion T(s) = exp(s·ξ), s ∈ [0, 1], applied to a point p0,
+  p(s) = R(s)·p0 + b(s) — a helix about the axis of radius dist(p0, axis) that turns s·θ and
+  rises s·d (seed 000 §5, Chasles). p0 is the frame origin, whose path ends at b;
+- a label: θ (in degrees or radians), d and the pitch h = d/θ.
+
+Special cases. A pure rotation (b = 0) leaves the origin where it is, so the path is the arc
+of the tip of a reference axis, p0 = scale·e_k, k the axis farthest from the rotation axis
+(smallest |l̂_k|, x first on ties; about z it is the x tip), ending at the tip of the moved
+axis k. A pure translation (θ = 0) has no axis to draw (its pitch is inf): the path is the
+straight segment from 0 to b. The identity has nothing to draw.
+
+The path is sampled with a step of at most MAX_STEP_ANGLE of turn and at most SAGITTA·scale
+between a chord and the helix (a chord of a turn Δ at radius r is r(1 − cos(Δ/2)) ≈ r·Δ²/8
+off the curve), and at most MAX_SEGMENTS segments; a straight path is one segment.
+"""
+
+import math
+from typing import NamedTuple, Optional
+
+import numpy as np
+
+from rot_tools.report import decompose
+from rot_tools.screw import Screw, screw_exp
+
+MAX_STEP_ANGLE = math.radians(3.0)
+"""Largest turn (rad) between two consecutive points of a path."""
+
+SAGITTA = 2e-3
+"""Largest distance between a chord of the path and the helix, as a fraction of ``scale``."""
+
+MAX_SEGMENTS = 720
+"""Most segments in a path, whatever the radius."""
+
+LABEL_OFFSET = 0.3
+"""The label sits this many ``scale`` beyond the far end of the axis segment."""
+
+IDENTITY, ROTATION, TRANSLATION, SCREW = 'identity', 'rotation', 'translation', 'screw'
+"""Picture.kind: nothing to draw; b = 0; θ = 0; a general screw motion."""
+
+
+class Picture(NamedTuple):
+    """What to draw of one rigid motion p ↦ R·p + b; see the module docstring.
+
+    kind: IDENTITY, ROTATION, TRANSLATION or SCREW. origin: b (3,), where the moved frame
+    is drawn; frame: R (3, 3), the moved axes x, y, z are its columns; scale: the length of
+    a frame axis. axis: (2, 3) start and end of the screw axis segment, None for a pure
+    translation or the identity. path: (n, 3) points from p0 to R·p0 + b, None for the
+    identity; traced: what the path carries ('origin', 'x-axis tip', ...), '' for the
+    identity. label: the text (ASCII, lines separated by newlines), label_at: where it goes
+    (3,). screw: the Screw of (R, b).
+    """
+
+    kind: str
+    origin: np.ndarray
+    frame: np.ndarray
+    scale: float
+    axis: Optional[np.ndarray]
+    path: Optional[np.ndarray]
+    traced: str
+    label: str
+    label_at: np.ndarray
+    screw: Screw
+
+
+def _number(x):
+    """x to 4 significant digits, 'inf' for infinity, never '-0'."""
+    return f'{x + 0.0:.4g}'
+
+
+def label_text(screw, degrees=False):
+    """The label of a Screw: 'theta = 90 deg, d = 0.5, pitch = 0.3183 /rad' (ASCII)."""
+    theta = math.degrees(screw.angle) if degrees else float(screw.angle)
+    unit = 'deg' if degrees else 'rad'
+    return (f'theta = {_number(theta)} {unit}, d = {_number(screw.translation)}, '
+            f'pitch = {_number(screw.pitch)}' + ('' if math.isinf(screw.pitch) else ' /rad'))
+
+
+def path_segments(angle, radius, scale):
+    """Segments that keep each step ≤ MAX_STEP_ANGLE and each chord ≤ SAGITTA·scale off.
+
+    r·Δ²/8 ≤ SAGITTA·scale gives Δ ≤ √(8·SAGITTA·scale/r); one segment for a straight path
+    (angle 0), at most MAX_SEGMENTS.
+    """
+    if angle == 0.0:
+        return 1
+    step = MAX_STEP_ANGLE
+    if radius > 0.0:
+        step = min(step, math.sqrt(8.0 * SAGITTA * scale / radius))
+    return min(MAX_SEGMENTS, max(1, math.ceil(angle / step)))
+
+
+def _traced_point(kind, direction, scale):
+    """(name, p0): the origin, or for a pure rotation the reference axis tip farthest off."""
+    if kind != ROTATION:
+        return 'origin', np.zeros(3)
+    k = int(np.argmin(np.abs(direction)))
+    return f"{'xyz'[k]}-axis tip", scale * np.eye(3)[k]
+
+
+def screw_path(R, b, twist, p0, segments):
+    """Points p(s) = R(s)·p0 + b(s) of exp(s·twist), s = 0, 1/n, ..., 1 ((n + 1, 3)).
+
+    The ends are set to p0 and R·p0 + b exactly (exp(twist) gives them to rounding).
+    """
+    s = np.linspace(0.0, 1.0, segments + 1)
+    Rs, bs = screw_exp(s[:, None] * np.asarray(twist, dtype=np.float64))
+    path = Rs @ p0 + bs
+    path[0], path[-1] = p0, R @ p0 + b
+    return path
+
+
+def picture(R, b, scale=1.0, degrees=False, decomposition=None):
+    """The Picture of p ↦ R·p + b, R (3, 3) and b (3,); frame axes ``scale`` long.
+
+    ``decomposition`` is rot_tools.decompose(R, b) when the caller has it already; the label
+    gives θ in degrees when ``degrees``. R is validated (by decompose) when it is not given.
+    """
+    R = np.asarray(R, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    d = decompose(R, b) if decomposition is None else decomposition
+    screw = Screw(*(np.asarray(f, dtype=np.float64) for f in d.screw))
+    angle, translation = float(screw.angle), float(screw.translation)
+    direction, point = screw.direction, screw.point
+    kind = (IDENTITY if angle == 0.0 and translation == 0.0 else TRANSLATION if angle == 0.0
+            else ROTATION if not b.any() else SCREW)
+    label = label_text(screw, degrees)
+    if kind == IDENTITY:
+        return Picture(kind, b, R, scale, None, None, '', label, b.copy(), screw)
+    traced, p0 = _traced_point(kind, direction, scale)
+    radius = float(np.linalg.norm(np.cross(p0 - point, direction)))
+    path = screw_path(R, b, d.twist, p0, path_segments(angle, radius, scale))
+    # Where the origin, the path and the moved frame fall along the axis: t = (p − c)·l̂.
+    drawn = np.concatenate([[np.zeros(3), b], path, b + scale * R.T])
+    t = (drawn - point) @ direction
+    lo, hi = t.min() - scale, t.max() + scale
+    axis = None if kind == TRANSLATION else point + np.outer((lo, hi), direction)
+    label_at = point + (hi + LABEL_OFFSET * scale) * direction
+    return Picture(kind, b, R, scale, axis, path, traced, label, label_at, screw)

@@ -1,0 +1,173 @@
+"""rot_tools.drawing: the geometry both renderers draw, against independent closed forms.
+
+Motions are built here from a screw chosen by the test (l̂, c, θ, d) with scipy's Rotation:
+R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the helix
+p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ of the constant-screw motion, point by point.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from rot_tools import drawing
+from rot_tools.drawing import picture
+
+RNG = np.random.default_rng(1010)
+
+
+def unit(v):
+    v = np.asarray(v, dtype=np.float64)
+    return v / np.linalg.norm(v)
+
+
+def motion(direction, point, angle, d):
+    """(R, b) of the screw (l̂, c, θ, d), computed with scipy (independent of rot_tools)."""
+    R = Rotation.from_rotvec(angle * unit(direction)).as_matrix()
+    return R, (np.eye(3) - R) @ point + d * unit(direction)
+
+
+def helix(direction, point, angle, d, p0, s):
+    """Points (len(s), 3) of p0 carried by the constant screw motion at fractions s."""
+    turns = Rotation.from_rotvec(np.outer(s, angle * unit(direction)))
+    return point + turns.apply(p0 - point) + np.outer(s * d, unit(direction))
+
+
+def perpendicular(direction, point):
+    """The component of point ⊥ direction (the axis point closest to the origin)."""
+    u = unit(direction)
+    return point - (point @ u) * u
+
+
+SCREWS = {
+    'quarter_turn_z': ((0, 0, 1), (0.5, 0.5, 0), math.pi / 2, 0.5),
+    'oblique': ((1, -2, 0.5), (0.3, 0.1, -0.7), 2.1, -1.3),
+    'small_angle': ((0, 1, 1), (2.0, 0.0, 0.0), 0.05, 0.2),
+    'near_half_turn': ((1, 1, 1), (0.0, 1.0, -1.0), math.pi - 1e-3, 0.4),
+    'far_axis': ((0, 0, 1), (40.0, 0.0, 0.0), 1.0, 0.0),
+    'random': (RNG.normal(size=3), RNG.normal(size=3), 2.7, 1.1),
+}
+
+
+@pytest.mark.parametrize('case', SCREWS)
+@pytest.mark.parametrize('scale', [1.0, 0.3])
+def test_screw_picture(case, scale):
+    direction, point, angle, d = SCREWS[case]
+    point = perpendicular(direction, np.asarray(point, dtype=np.float64))
+    R, b = motion(direction, point, angle, d)
+    pic = picture(R, b, scale=scale)
+    assert pic.kind == drawing.SCREW and pic.traced == 'origin'
+    size = 1.0 + np.linalg.norm(point) + abs(d)
+    # The moved frame: axes = columns of R, drawn at b.
+    np.testing.assert_allclose(pic.frame, R, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(pic.origin, b, rtol=0, atol=0)
+    assert pic.scale == scale
+    # The path: from the origin to b, on the helix at s = k/n.
+    path = pic.path
+    n = len(path) - 1
+    np.testing.assert_array_equal(path[0], np.zeros(3))
+    np.testing.assert_allclose(path[-1], b, rtol=0, atol=1e-15 * size)
+    s = np.linspace(0.0, 1.0, n + 1)
+    np.testing.assert_allclose(path, helix(direction, point, angle, d, np.zeros(3), s),
+                               rtol=0, atol=1e-12 * size)
+    # Smooth: each step turns at most 3° and no chord is further than SAGITTA·scale from
+    # the helix (checked at the middle of each step, where a chord is furthest off).
+    assert angle / n <= drawing.MAX_STEP_ANGLE * (1 + 1e-12)
+    mid = helix(direction, point, angle, d, np.zeros(3), (s[:-1] + s[1:]) / 2)
+    off = np.linalg.norm(mid - (path[:-1] + path[1:]) / 2, axis=1)
+    assert off.max() <= drawing.SAGITTA * scale * (1 + 1e-9)
+    # The axis: through c along +l̂, covering the origin, b, the path and the moved frame.
+    start, end = pic.axis
+    u = unit(direction)
+    for e in (start, end):
+        assert np.linalg.norm(np.cross(e - point, u)) <= 1e-12 * size
+    assert (end - start) @ u > 0
+    t = np.concatenate([[np.zeros(3), b], path, b + scale * R.T]) @ u  # c ⊥ l̂
+    assert (start @ u) == pytest.approx(t.min() - scale, abs=1e-12 * size)
+    assert (end @ u) == pytest.approx(t.max() + scale, abs=1e-12 * size)
+    np.testing.assert_allclose(pic.label_at, end + drawing.LABEL_OFFSET * scale * u,
+                               rtol=0, atol=1e-12 * size)
+
+
+def test_far_axis_is_sampled_by_the_sagitta():
+    pic = picture(*motion((0, 0, 1), (40.0, 0.0, 0.0), 1.0, 0.0))
+    # 40·Δ²/8 ≤ 2e-3 → Δ ≤ 0.02 rad: 50 steps for 1 rad, more than 1 rad / 3° = 20.
+    assert len(pic.path) - 1 == math.ceil(1.0 / math.sqrt(8 * drawing.SAGITTA / 40.0))
+
+
+def test_segments_are_capped():
+    pic = picture(*motion((0, 0, 1), (1e6, 0.0, 0.0), 3.0, 0.0))
+    assert len(pic.path) - 1 == drawing.MAX_SEGMENTS
+
+
+def test_half_turn_lies_on_the_helix_of_the_reported_axis_sign():
+    # At θ = π the sign of l̂ is the implementation's; the path follows the one it reports.
+    point = np.array([0.0, 1.0, 0.0])
+    R, b = motion((1, 0, 0), point, math.pi, 0.5)
+    pic = picture(R, b)
+    sign = np.sign(pic.screw.direction @ (1, 0, 0))
+    s = np.linspace(0.0, 1.0, len(pic.path))
+    np.testing.assert_allclose(
+        pic.path, helix(sign * np.array([1.0, 0, 0]), point, math.pi, sign * 0.5,
+                        np.zeros(3), s), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize('direction, traced, k', [
+    ((0, 0, 1), 'x-axis tip', 0), ((1, 0, 0), 'y-axis tip', 1), ((1, 0.2, 0), 'z-axis tip', 2),
+    ((0.1, 1, 1), 'x-axis tip', 0), ((1, 1, 1), 'x-axis tip', 0)])
+def test_pure_rotation_draws_the_arc_of_an_axis_tip(direction, traced, k):
+    scale = 0.8
+    R, _ = motion(direction, np.zeros(3), 1.2, 0.0)
+    pic = picture(R, np.zeros(3), scale=scale)
+    assert (pic.kind, pic.traced) == (drawing.ROTATION, traced)
+    tip = scale * np.eye(3)[k]
+    np.testing.assert_array_equal(pic.path[0], tip)
+    np.testing.assert_allclose(pic.path[-1], R @ tip, rtol=0, atol=1e-15)
+    s = np.linspace(0.0, 1.0, len(pic.path))
+    np.testing.assert_allclose(pic.path, helix(direction, np.zeros(3), 1.2, 0.0, tip, s),
+                               rtol=0, atol=1e-14)
+    start, end = pic.axis
+    assert np.linalg.norm(np.cross(start, unit(direction))) <= 1e-15
+    assert np.linalg.norm(np.cross(end, unit(direction))) <= 1e-15
+
+
+def test_pure_translation_is_a_straight_path_without_axis():
+    b = np.array([1.0, -2.0, 2.0])
+    pic = picture(np.eye(3), b, scale=0.5)
+    assert (pic.kind, pic.traced, pic.axis) == (drawing.TRANSLATION, 'origin', None)
+    np.testing.assert_array_equal(pic.path, [np.zeros(3), b])
+    # Beyond the furthest tip of the moved frame along b̂ (the z tip: 3 + 0.5·2/3), by
+    # scale (0.5) and the label offset.
+    far = 3 + 0.5 * 2 / 3 + 0.5 + drawing.LABEL_OFFSET * 0.5
+    np.testing.assert_allclose(pic.label_at, far * b / 3, rtol=0, atol=1e-15)
+    assert pic.label == 'theta = 0 rad, d = 3, pitch = inf'
+
+
+def test_identity_has_nothing_to_draw():
+    pic = picture(np.eye(3), np.zeros(3))
+    assert (pic.kind, pic.axis, pic.path, pic.traced) == (drawing.IDENTITY, None, None, '')
+
+
+def test_labels_of_the_worked_example():
+    # 90° about z through (0.5, 0.5, 0), rising 0.5: pitch 0.5/(π/2) = 0.3183.
+    R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, 0.5)
+    assert picture(R, b, degrees=True).label == 'theta = 90 deg, d = 0.5, pitch = 0.3183 /rad'
+    assert picture(R, b).label == 'theta = 1.571 rad, d = 0.5, pitch = 0.3183 /rad'
+    R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, -0.5)
+    assert picture(R, b, degrees=True).label == 'theta = 90 deg, d = -0.5, pitch = -0.3183 /rad'
+    assert picture(R, np.zeros(3), degrees=True).label == 'theta = 90 deg, d = 0, pitch = 0 /rad'
+
+
+def test_a_given_decomposition_is_used():
+    from rot_tools import decompose
+    R, b = motion((0, 1, 0), np.array([1.0, 0.0, 0.0]), 0.7, 0.1)
+    a, c = picture(R, b), picture(R, b, decomposition=decompose(R, b))
+    np.testing.assert_array_equal(a.path, c.path)
+    np.testing.assert_array_equal(a.axis, c.axis)
+
+
+def test_path_segments():
+    assert drawing.path_segments(0.0, 5.0, 1.0) == 1
+    assert drawing.path_segments(math.pi, 0.0, 1.0) == 60
+    assert drawing.path_segments(1e-9, 1e9, 1.0) == 1

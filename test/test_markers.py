@@ -1,0 +1,107 @@
+"""rot_tools.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
+
+Expected values are computed here from (R, b) and a screw chosen by the test (scipy's
+Rotation for R), never read back from rot_tools.drawing.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from std_msgs.msg import Header
+from visualization_msgs.msg import Marker
+
+from rot_tools import messages
+from rot_tools.drawing import picture
+
+HEADER = Header(frame_id='odom')
+HEADER.stamp.sec = 42
+
+
+def xyz(v):
+    return np.array([v.x, v.y, v.z])
+
+
+def by_id(array):
+    return {m.id: m for m in array.markers}
+
+
+def check_common(array):
+    """Unique (ns, id), the input's header and unit quaternions on every marker."""
+    keys = [(m.ns, m.id) for m in array.markers]
+    assert len(set(keys)) == len(keys) == 6
+    assert {m.ns for m in array.markers} == {'rot_tools'}
+    for m in array.markers:
+        assert (m.header.frame_id, m.header.stamp.sec) == ('odom', 42)
+        q = m.pose.orientation
+        assert (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 1.0)
+
+
+def test_screw_markers():
+    axis, c, theta, d = np.array([0.0, 0.6, 0.8]), np.array([1.0, 0.0, 0.0]), 2.0, 0.7
+    R = Rotation.from_rotvec(theta * axis).as_matrix()
+    b = (np.eye(3) - R) @ c + d * axis
+    scale = 0.4
+    array = messages.picture_markers(HEADER, picture(R, b, scale=scale))
+    check_common(array)
+    m = by_id(array)
+    assert all(x.action == Marker.ADD for x in array.markers)
+    for k, color in enumerate(((1, 0, 0), (0, 1, 0), (0, 0, 1))):  # x red, y green, z blue
+        arrow = m[messages.TRIAD_IDS[k]]
+        assert arrow.type == Marker.ARROW
+        assert (arrow.color.r, arrow.color.g, arrow.color.b, arrow.color.a) == (*color, 1.0)
+        np.testing.assert_allclose(xyz(arrow.points[0]), b, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(xyz(arrow.points[1]) - b, scale * R[:, k], rtol=0,
+                                   atol=1e-15)
+        assert arrow.scale.x == pytest.approx(0.05 * scale)
+    screw_axis = m[messages.AXIS_ID]
+    assert screw_axis.type == Marker.ARROW and len(screw_axis.points) == 2
+    start, end = xyz(screw_axis.points[0]), xyz(screw_axis.points[1])
+    for e in (start, end):
+        assert np.linalg.norm(np.cross(e - c, axis)) < 1e-12
+    np.testing.assert_allclose((end - start) / np.linalg.norm(end - start), axis,
+                               rtol=0, atol=1e-12)  # along +l̂
+    path = m[messages.PATH_ID]
+    assert path.type == Marker.LINE_STRIP and path.scale.x > 0
+    points = np.array([xyz(p) for p in path.points])
+    s = np.linspace(0.0, 1.0, len(points))
+    turns = Rotation.from_rotvec(np.outer(s, theta * axis))
+    np.testing.assert_allclose(points, c + turns.apply(-c) + np.outer(s * d, axis),
+                               rtol=0, atol=1e-12)
+    label = m[messages.LABEL_ID]
+    assert label.type == Marker.TEXT_VIEW_FACING and label.scale.z > 0
+    assert label.text == (f'theta = 2 rad, d = 0.7, pitch = {0.7 / 2:.4g} /rad\n'
+                          'path: origin')
+
+
+def test_pure_translation_deletes_the_axis():
+    array = messages.picture_markers(HEADER, picture(np.eye(3), (0.0, 3.0, 4.0)))
+    check_common(array)
+    m = by_id(array)
+    assert m[messages.AXIS_ID].action == Marker.DELETE
+    assert all(m[i].action == Marker.ADD for i in messages.MARKER_IDS
+               if i != messages.AXIS_ID)
+    assert [xyz(p).tolist() for p in m[messages.PATH_ID].points] == [[0, 0, 0], [0, 3, 4]]
+    assert 'pitch = inf' in m[messages.LABEL_ID].text
+
+
+def test_pure_rotation_labels_the_traced_tip():
+    R = Rotation.from_rotvec([0.0, 0.0, math.pi / 2]).as_matrix()
+    array = messages.picture_markers(HEADER, picture(R, np.zeros(3), degrees=True))
+    m = by_id(array)
+    assert m[messages.LABEL_ID].text == ('theta = 90 deg, d = 0, pitch = 0 /rad\n'
+                                         'path: x-axis tip')
+    np.testing.assert_allclose(xyz(m[messages.PATH_ID].points[-1]), (0, 1, 0), atol=1e-15)
+
+
+def test_identity_deletes_every_marker():
+    array = messages.picture_markers(HEADER, picture(np.eye(3), np.zeros(3)))
+    check_common(array)
+    assert [m.action for m in array.markers] == [Marker.DELETE] * 6
+
+
+def test_delete_marker():
+    m = messages.delete_marker(HEADER, 'screw_axis', 0)
+    assert (m.ns, m.id, m.action, m.header.frame_id) == ('screw_axis', 0, Marker.DELETE, 'odom')
+    assert m.pose.orientation.w == 1.0
