@@ -18,7 +18,6 @@ which SVG keeps as the element id.
 import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-import mpl_toolkits.mplot3d  # noqa: F401  (registers the '3d' projection)
 import numpy as np
 
 from rot_tools import drawing
@@ -73,7 +72,7 @@ def figure(R, b=None, degrees=False, scale=None):
         pic = drawing.picture(R, b, scale, degrees)
     fig = Figure(figsize=(6.4, 6.4), layout='constrained')
     FigureCanvasAgg(fig)
-    ax = fig.add_subplot(projection='3d')
+    ax = fig.add_subplot(projection='3d')  # matplotlib.projections registers mplot3d
     drawn = _draw_frame(ax, np.zeros(3), scale * np.eye(3), REFERENCE_GIDS,
                         dict(linestyle='--', linewidth=1.2, alpha=0.7), ('x', 'y', 'z'))
     drawn += _draw_frame(ax, pic.origin, scale * pic.frame, MOVED_GIDS,

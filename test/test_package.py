@@ -23,7 +23,8 @@ REQUIRED_EXEC_DEPENDS = {
     'rcl_interfaces', 'builtin_interfaces', 'python3-numpy',
 }
 # rosdep keys of the non-ROS third-party modules rot_tools may import.
-ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml'}
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
+               'matplotlib': 'python3-matplotlib'}
 # Packages the ROS wheels registered in this environment's ament index (sys.prefix/share).
 AMENT_INDEX = Path(sys.prefix, 'share', 'ament_index', 'resource_index', 'packages')
 COLCON_TIMEOUT = 300  # seconds; the build itself takes about 1 s
