@@ -8,15 +8,23 @@ rot_tools.report) as YAML, or JSON with ``--json``::
     rot-tools matrix 0 -1 0  1 0 0  0 0 1
     rot-tools axis-angle 0 0 1 90 --deg
     rot-tools rotvec 0 0 1.5707963267949
+    rot-tools quaternion 0 0 0.7071 0.7071
     rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg
 
-Typed matrices are validated with a tolerance (``--tol``, default 1e-5, on max|RᵀR − I|
-and |det R − 1|) so that six significant digits are enough, then replaced by the nearest
-rotation (rot_tools.nearest_rotation) before the math, which checks at 1e-9.
+Every option is accepted before the command and after its arguments (``_add_common``).
+
+Typed inputs are validated with a tolerance ``--tol``, then made exact before the math,
+which checks at 1e-9. A matrix: max|RᵀR − I| and |det R − 1| ≤ tol (default
+``MATRIX_TOL`` = 1e-5, so six significant digits are enough), then the nearest rotation
+(rot_tools.nearest_rotation). A quaternion, (x, y, z, w) — the ROS order — or (w, x, y, z)
+with ``--wxyz``: ||q| − 1| ≤ tol (default ``QUATERNION_TOL`` = 1e-3, the node's
+quaternion_tolerance, so four significant digits are enough), then normalised.
 
 Bad input — a wrong count, a non-number, NaN/Inf, a matrix that is not a rotation or is a
-reflection, an unknown sequence, a zero axis with a non-zero angle — prints exactly one
-line ``rot-tools: error: ...`` on stderr and exits with status 2.
+reflection, a zero quaternion or one too far from unit length, an unknown sequence, a zero
+axis with a non-zero angle — prints exactly one line ``rot-tools: error: ...`` on stderr
+and exits with status 2. An angle typed without ``--deg`` that is larger than 2π only gets a
+one-line ``rot-tools: hint: ...`` on stderr (after the report; status 0).
 """
 
 import argparse
@@ -28,13 +36,15 @@ import numpy as np
 
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, nearest_rotation,
-    rotvec_to_matrix, validate_rotation)
+    quaternion_to_matrix, rotvec_to_matrix, validate_rotation)
 from rot_tools.errors import RotationError
 from rot_tools.report import DEFAULT_PRECISION, to_json, to_yaml, transform_report
 
 PROG = 'rot-tools'
-DEFAULT_TOL = 1e-5
+MATRIX_TOL = 1e-5
 """Default tolerance on max|RᵀR − I| and |det R − 1| of a typed matrix (six digits pass)."""
+QUATERNION_TOL = 1e-3
+"""Default tolerance on ||q| − 1| of a typed quaternion (four digits pass; as the node's)."""
 
 # argparse (3.11) reads '-30' and '-.5' as values but '-1e-3' or '-inf' as an unknown
 # option. Its (private, long-standing) _negative_number_matcher is set to this pattern, so
@@ -59,6 +69,23 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         """Print ``rot-tools: error: message`` on one line and exit 2."""
         self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
+
+
+class _Version(argparse.Action):
+    """--version: the installed distribution's version (setup.py's), looked up when asked."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from importlib.metadata import PackageNotFoundError, version  # ~40 ms: when asked
+        try:
+            text = f'{PROG} {version("rot_tools")}'
+        except PackageNotFoundError:
+            parser.error('--version: rot_tools is not installed (no distribution metadata)')
+        print(text)
+        parser.exit(0)
 
 
 # ---------------------------------------------------------------------------------------
@@ -115,61 +142,105 @@ def _count(parser, values, n, what):
     return np.array(values)
 
 
-def _angle_in(values, deg):
-    return np.radians(values) if deg else np.asarray(values, dtype=np.float64)
+def _tol(args, default):
+    return default if args.tol is None else args.tol
 
 
-def _typed_matrix(parser, values, tol, what):
-    """Validate a typed 3x3 matrix at tol, then project it onto the nearest rotation."""
+def _angle_in(args, values, size=None):
+    """Angles in radians; a hint when radians typed without --deg look like degrees.
+
+    ``size`` is the angle the hint is about (default the largest |value|; a rotation
+    vector's is its norm). The hint is printed after the report (see main).
+    """
+    if args.deg:
+        return np.radians(values)
+    values = np.asarray(values, dtype=np.float64)
+    size = float(np.max(np.abs(values))) if size is None else size
+    if size > 2.0 * math.pi:
+        args.hints.append(f'an angle of {size:g} rad is more than 2π: if it is in degrees, '
+                          'add --deg')
+    return values
+
+
+def _typed_matrix(parser, args, values, what):
+    """Validate a typed 3x3 matrix at --tol, then project it onto the nearest rotation."""
     R = _count(parser, values, 9, what).reshape(3, 3)
     try:
-        validate_rotation(R, tol=tol)
+        validate_rotation(R, tol=_tol(args, MATRIX_TOL))
     except RotationError as exc:
         hint = ' (the tolerance is --tol)' if np.linalg.det(R) > 0 else ''
         parser.error(f'{what}: {exc}{hint}')
     return nearest_rotation(R)
 
 
+def _typed_quaternion(parser, args, values, what):
+    """R of a typed quaternion: x y z w (w x y z with --wxyz), ||q| − 1| ≤ --tol."""
+    q = _count(parser, values, 4, what)
+    if args.wxyz:
+        q = np.roll(q, -1)  # (w, x, y, z) → (x, y, z, w)
+    try:
+        R = quaternion_to_matrix(q)  # refuses the zero quaternion; normalises q
+    except RotationError as exc:
+        parser.error(f'{what}: {exc}')
+    size, tol = math.hypot(*q), _tol(args, QUATERNION_TOL)  # hypot: no overflow
+    if not abs(size - 1.0) <= tol:
+        parser.error(f'{what}: not a unit quaternion: ||q| − 1| = {abs(size - 1.0):.3g} > tol '
+                     f'{tol:g} (|q| = {size:.6g}; the tolerance is --tol)')
+    return R
+
+
 def _from_euler(args, parser):
     angles = _count(parser, args.angles, 3, f'euler {args.sequence} angles')
-    return euler_to_matrix(_angle_in(angles, args.deg), args.sequence), None, args.sequence
+    return euler_to_matrix(_angle_in(args, angles), args.sequence), None, args.sequence
 
 
 def _from_matrix(args, parser):
-    return _typed_matrix(parser, args.entries, args.tol, 'matrix'), None, None
+    return _typed_matrix(parser, args, args.entries, 'matrix'), None, None
 
 
 def _from_axis_angle(args, parser):
     v = _count(parser, args.values, 4, 'axis-angle X Y Z ANGLE')
-    return axis_angle_to_matrix(v[:3], _angle_in(v[3], args.deg)), None, None
+    return axis_angle_to_matrix(v[:3], _angle_in(args, v[3])), None, None
 
 
 def _from_rotvec(args, parser):
     v = _count(parser, args.vector, 3, 'rotvec X Y Z')
-    return rotvec_to_matrix(_angle_in(v, args.deg)), None, None
+    return rotvec_to_matrix(_angle_in(args, v, size=np.linalg.norm(v))), None, None
+
+
+def _from_quaternion(args, parser):
+    what = 'quaternion W X Y Z' if args.wxyz else 'quaternion X Y Z W'
+    return _typed_quaternion(parser, args, args.components, what), None, None
 
 
 def _from_screw(args, parser):
     if args.rotation is not None:
-        R = _typed_matrix(parser, args.rotation, args.tol, 'argument --rotation')
+        R = _typed_matrix(parser, args, args.rotation, 'argument --rotation')
+    elif args.quaternion is not None:
+        R = _typed_quaternion(parser, args, args.quaternion, 'argument --quaternion')
     elif args.euler is not None:
         seq, *angles = args.euler
         try:
             seq, angles = _sequence(seq), [_number(a) for a in angles]
         except argparse.ArgumentTypeError as exc:
             parser.error(f'argument --euler: {exc}')
-        R = euler_to_matrix(_angle_in(angles, args.deg), seq)
+        R = euler_to_matrix(_angle_in(args, angles), seq)
     elif args.axis_angle is not None:
         v = np.array(args.axis_angle)
         try:
-            R = axis_angle_to_matrix(v[:3], _angle_in(v[3], args.deg))
+            R = axis_angle_to_matrix(v[:3], _angle_in(args, v[3]))
         except RotationError as exc:
             parser.error(f'argument --axis-angle: {exc}')
     elif args.rotvec is not None:
-        R = rotvec_to_matrix(_angle_in(args.rotvec, args.deg))
+        v = np.array(args.rotvec)
+        R = rotvec_to_matrix(_angle_in(args, v, size=np.linalg.norm(v)))
     else:
         R = np.eye(3)
     return R, np.array(args.translation), None
+
+
+def _reads_quaternion(args):
+    return args.command == 'quaternion' or getattr(args, 'quaternion', None) is not None
 
 
 # ---------------------------------------------------------------------------------------
@@ -204,25 +275,41 @@ _COMMANDS = {
         "With --deg the vector's norm is in degrees.",
         'rot-tools rotvec 0 0 1.5707963267949\n'
         'rot-tools rotvec 0 90 0 --deg'),
+    'quaternion': (
+        _from_quaternion, 'a quaternion, x y z w (the ROS message order)',
+        'quaternion X Y Z W [options]    (W X Y Z with --wxyz)',
+        'The order of geometry_msgs/Quaternion, as `ros2 topic echo` prints it;\n'
+        '--wxyz reads w first (Eigen, transforms3d). |q| must be 1 within --tol\n'
+        f'(default {QUATERNION_TOL:g}, so four significant digits suffice); q is then\n'
+        'normalised. q and −q are the same rotation; the report prints the one with w > 0.',
+        'rot-tools quaternion 0 0 0.7071 0.7071\n'
+        'rot-tools quaternion 0.7071 0 0 0.7071 --wxyz --deg\n'
+        'rot-tools quaternion 0.1 -0.2 0.3 0.927 --tol 1e-2 --json'),
     'screw': (
         _from_screw, 'a rigid transform (R, b) and its screw (Chasles) decomposition',
-        'screw [--rotation R11 .. R33 | --euler SEQ A1 A2 A3 | --axis-angle X Y Z ANGLE |\n'
-        '       --rotvec X Y Z] --translation X Y Z [options]',
+        'screw [--rotation R11 .. R33 | --quaternion X Y Z W | --euler SEQ A1 A2 A3 |\n'
+        '       --axis-angle X Y Z ANGLE | --rotvec X Y Z] --translation X Y Z [options]',
         'p ↦ R·p + b is a rotation by `angle` about the line through `point` along\n'
         '`direction`, then a translation `translation` along it; pitch = translation/angle\n'
         '(.inf in YAML and "inf" in JSON for a pure translation). The rotation defaults to\n'
-        'the identity.',
+        'the identity. A ROS pose is --quaternion (its orientation) --translation (its\n'
+        'position).',
         'rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg\n'
         'rot-tools screw --rotation 0 -1 0  1 0 0  0 0 1 --translation 0 0 1 --json\n'
+        'rot-tools screw --quaternion 0 0 1 0 --translation 1 0 0.5\n'
         'rot-tools screw --translation 1 2 3'),
 }
 
 
 def _add_common(parser, suppress):
-    """Output options, accepted before the subcommand and after its arguments."""
+    """Options accepted before the command and after its arguments (one line each).
+
+    They are added to the main parser (with their defaults) and to every command's parser
+    (with SUPPRESS defaults, so a value given before the command is not overwritten).
+    """
     def default(value):
         return argparse.SUPPRESS if suppress else value
-    out = parser.add_argument_group('output') if suppress else parser
+    out = parser.add_argument_group('common options') if suppress else parser
     out.add_argument('--deg', action='store_true', default=default(False),
                      help='angles in degrees, in and out (axis-angle and screw angles are '
                      'printed in both units anyway)')
@@ -237,17 +324,21 @@ def _add_common(parser, suppress):
     out.add_argument('--precision', type=_precision, default=default(DEFAULT_PRECISION),
                      metavar='N', help='round numbers to N significant digits and N decimal '
                      f'places (default {DEFAULT_PRECISION}); -0.0 prints as 0.0')
+    out.add_argument('--tol', type=_tolerance, default=default(None), metavar='TOL',
+                     help='how far a typed input may be from exact before it is refused; '
+                     'within it, it is made exact. A matrix (matrix, screw --rotation): '
+                     f'max|RᵀR − I| and |det R − 1| ≤ TOL, default {MATRIX_TOL:g} (six '
+                     'significant digits pass), then the nearest rotation. A quaternion '
+                     '(quaternion, screw --quaternion): ||q| − 1| ≤ TOL, default '
+                     f'{QUATERNION_TOL:g} (four digits pass), then normalised')
+    out.add_argument('--wxyz', action='store_true', default=default(False),
+                     help='a typed quaternion is W X Y Z (w first) instead of the ROS order '
+                     'X Y Z W')
     out.add_argument('--plot', type=_plot_file, default=default(None), metavar='FILE',
                      help='also draw the motion in FILE (.png or .svg): both frames, the '
                      "rotation or screw axis, the path of the origin; needs matplotlib (pip "
                      "install 'rot_tools[plot]')")
-
-
-def _add_tol(parser):
-    parser.add_argument(
-        '--tol', type=_tolerance, default=DEFAULT_TOL, metavar='TOL',
-        help='a typed matrix may deviate from a rotation by this much in max|RᵀR − I| and '
-        f'|det R − 1| (default {DEFAULT_TOL:g}); it is then projected onto the nearest one')
+    out.add_argument('--version', action=_Version, help='print the version and exit')
 
 
 def build_parser():
@@ -255,9 +346,9 @@ def build_parser():
     parser = _Parser(
         prog=PROG,
         description='Print every representation of a rotation or rigid transform: matrix,\n'
-        'axis-angle (both solutions), rotation vector, Euler angles, and for a transform\n'
-        'its screw. YAML by default, JSON with --json. Angles in radians unless --deg.\n'
-        'Output options may come before COMMAND or after its arguments.',
+        'axis-angle (both solutions), rotation vector, Euler angles, quaternion, and for a\n'
+        'transform its screw. YAML by default, JSON with --json. Angles in radians unless\n'
+        '--deg. Options may come before COMMAND or after its arguments.',
         epilog='examples:\n  ' + '\n  '.join(
             spec[4].splitlines()[0] for spec in _COMMANDS.values())
         + '\n\n"rot-tools COMMAND --help" explains each command.')
@@ -277,18 +368,23 @@ def build_parser():
         elif name == 'matrix':
             p.add_argument('entries', type=_number, nargs='*', metavar='ENTRY',
                            help='the 9 entries R11 R12 R13 R21 R22 R23 R31 R32 R33')
-            _add_tol(p)
         elif name == 'axis-angle':
             p.add_argument('values', type=_number, nargs='*', metavar='NUMBER',
                            help='X Y Z ANGLE: the axis (any length > 0) and the angle')
         elif name == 'rotvec':
             p.add_argument('vector', type=_number, nargs='*', metavar='COMPONENT',
                            help='X Y Z: θ·l̂ (rad, or deg with --deg)')
+        elif name == 'quaternion':
+            p.add_argument('components', type=_number, nargs='*', metavar='COMPONENT',
+                           help='X Y Z W (W X Y Z with --wxyz)')
         else:
             rotation = p.add_mutually_exclusive_group()
             rotation.add_argument('--rotation', type=_number, nargs=9,
                                   metavar=tuple(f'R{i}{j}' for i in '123' for j in '123'),
                                   help='the 9 entries of R, row by row')
+            rotation.add_argument('--quaternion', type=_number, nargs=4,
+                                  metavar=('X', 'Y', 'Z', 'W'),
+                                  help='R from a quaternion (W X Y Z with --wxyz)')
             rotation.add_argument('--euler', nargs=4, metavar=('SEQ', 'A1', 'A2', 'A3'),
                                   help='R from Euler angles')
             rotation.add_argument('--axis-angle', type=_number, nargs=4,
@@ -297,7 +393,6 @@ def build_parser():
                                   help='R from a rotation vector')
             p.add_argument('--translation', type=_number, nargs=3, required=True,
                            metavar=('X', 'Y', 'Z'), help='the translation b')
-            _add_tol(p)
         _add_common(p, suppress=True)
     return parser
 
@@ -317,23 +412,34 @@ def _write_plot(parser, path, R, b, degrees):
         parser.error(f'--plot: cannot write {path}: {exc.strerror or exc}')
 
 
+def _report(args, parser):
+    """(R, b, report) of the parsed input; one ``rot-tools: error:`` line for bad input."""
+    if args.wxyz and not _reads_quaternion(args):
+        parser.error('--wxyz: there is no quaternion to read (it applies to quaternion and '
+                     'screw --quaternion)')
+    try:
+        R, b, input_seq = args.handler(args, parser)
+        return R, b, transform_report(R, b, seq=args.seq or input_seq or 'ZYX',
+                                      degrees=args.deg, all_sequences=args.all_sequences)
+    except ValueError as exc:  # RotationError is a ValueError
+        parser.error(f'{args.command}: {exc}')
+
+
 def main(argv=None):
     """Run rot-tools on argv (default sys.argv[1:]); return the exit status."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-        try:
-            R, b, input_seq = args.handler(args, parser)
-            report = transform_report(R, b, seq=args.seq or input_seq or 'ZYX',
-                                      degrees=args.deg, all_sequences=args.all_sequences)
-        except ValueError as exc:  # RotationError is a ValueError
-            parser.error(f'{args.command}: {exc}')
+        args.hints = []
+        R, b, report = _report(args, parser)
         if args.plot:
             _write_plot(parser, args.plot, R, b, args.deg)
     except SystemExit as exc:  # argparse's --help (0) and errors (2)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     text = to_json if args.json else to_yaml
     sys.stdout.write(text(report, precision=args.precision))
+    for hint in args.hints:
+        sys.stderr.write(f'{PROG}: hint: {hint}\n')
     return 0
 
 

@@ -263,10 +263,161 @@ def test_yaml_and_json_carry_the_same_report(script):
 
 
 # ---------------------------------------------------------------------------------------
+# Quaternions (x, y, z, w: the ROS message order; --wxyz reads w first)
+
+
+def _four_digits(q):
+    """q typed with four significant digits, as a person copies it."""
+    return [float(f'{x:.4g}') for x in q]
+
+
+@pytest.mark.parametrize('q', [
+    [0.0, 0.0, 0.7071, 0.7071],                        # Rot_z(90°), as typed from a message
+    [0.1826, 0.3651, 0.5477, 0.7303],                  # (1, 2, 3, 4)/√30 to four digits
+    [0.5, -0.5, 0.5, -0.5],                            # w < 0: printed as −q (w > 0)
+    [1.0, 0.0, 0.0, 0.0],                              # half turn about x (w = 0)
+    *(_four_digits(Rotation.random(random_state=seed).as_quat()) for seed in range(4)),
+])
+def test_quaternion_typed_to_four_digits(script, q):
+    rep = ok(script, 'quaternion', *q, '--json')
+    R = Rotation.from_quat(q).as_matrix()  # scipy normalises q
+    check_rotation(rep, R)
+    n = np.linalg.norm(q)
+    sign = -1.0 if q[3] < 0 or (q[3] == 0 and q[0] < 0) else 1.0
+    close(list(rep['quaternion'].values()), sign * np.divide(q, n))  # normalised
+
+
+def test_quaternion_order_is_ros_and_wxyz_reads_w_first(script):
+    c = math.sqrt(0.5)
+    xyzw = ok(script, 'quaternion', 0, 0, c, c, '--json')  # z = w = √½: Rot_z(90°)
+    close(xyzw['matrix'], [[0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    close(list(xyzw['quaternion'].values()), [0, 0, c, c])
+    wxyz = ok(script, 'quaternion', c, c, 0, 0, '--wxyz', '--json')  # w = x = √½: Rot_x(90°)
+    close(wxyz['matrix'], [[1, 0, 0], [0, 0, -1], [0, 1, 0]])
+    close(list(wxyz['quaternion'].values()), [c, 0, 0, c])  # printed in ROS order
+    assert ok(script, '--wxyz', 'quaternion', c, c, 0, 0, '--json') == wxyz
+    q = Rotation.random(random_state=11).as_quat()  # (x, y, z, w)
+    rep = ok(script, 'quaternion', q[3], *q[:3], '--wxyz', '--precision', '17', '--json')
+    check_rotation(rep, Rotation.from_quat(q[[3, 0, 1, 2]], scalar_first=True).as_matrix())
+
+
+def test_quaternion_tolerance_default_and_adjustable(script):
+    # |(0, 0, 0.7, 0.7)| = 0.98995: 0.0101 from unit length, refused at the default 1e-3,
+    proc = run(script, 'quaternion', 0, 0, 0.7, 0.7)
+    assert (proc.returncode, proc.stdout) == (2, '')
+    assert proc.stderr == ('rot-tools: error: quaternion X Y Z W: not a unit quaternion: '
+                           '||q| − 1| = 0.0101 > tol 0.001 (|q| = 0.989949; the tolerance '
+                           'is --tol)\n')
+    # ... accepted and normalised with --tol, given before the command or after.
+    for args in (['--tol', '0.02', 'quaternion', 0, 0, 0.7, 0.7],
+                 ['quaternion', 0, 0, 0.7, 0.7, '--tol', '0.02']):
+        rep = ok(script, *args, '--json')
+        close(rep['matrix'], rot_z(math.pi / 2))
+    # Just inside and just outside the default: |q| = 1 ± 9e-4 passes, 1 + 1.1e-3 does not.
+    assert run(script, 'quaternion', 0, 0, 0, 1.0009).returncode == 0
+    assert run(script, 'quaternion', 0, 0, 0, 0.9991).returncode == 0
+    assert run(script, 'quaternion', 0, 0, 0, 1.0011).returncode == 2
+    # --tol 0 needs an exactly unit quaternion.
+    assert run(script, 'quaternion', 0, 0, 0.6, 0.8, '--tol', '0').returncode == 0
+    assert run(script, '--tol', '0', 'quaternion', 0, 0, 0.6, 0.8001).returncode == 2
+
+
+def test_tol_before_the_command_applies_to_a_matrix(script):
+    typed = [0.866025, -0.5, 0, 0.5, 0.866025, 0, 0, 0, 1]  # typing error ~6e-7
+    proc = run(script, '--tol', '1e-7', 'matrix', *typed)
+    assert proc.returncode == 2 and '> tol 1e-07 (the tolerance is --tol)' in proc.stderr
+    assert run(script, '--tol', '1e-6', 'matrix', *typed).returncode == 0
+    proc = run(script, '--tol', '1e-7', 'screw', '--rotation', *typed, '--translation', 0, 0, 0)
+    assert proc.returncode == 2 and '> tol 1e-07 (the tolerance is --tol)' in proc.stderr
+
+
+def test_screw_from_a_ros_pose(script):
+    q, b = _four_digits(Rotation.random(random_state=5).as_quat()), [0.5, -1.25, 2.0]
+    rep = ok(script, 'screw', '--quaternion', *q, '--translation', *b, '--json')
+    R = Rotation.from_quat(q).as_matrix()
+    check_rotation(rep, R)
+    _check_screw(rep, R, b)
+    wxyz = ok(script, 'screw', '--quaternion', q[3], *q[:3], '--wxyz', '--translation', *b,
+              '--json')
+    assert wxyz == rep
+
+
+# ---------------------------------------------------------------------------------------
+# Options anywhere, --version, hints
+
+COMMON_OPTIONS = {  # option → its arguments, for a quaternion input
+    '--deg': [], '--seq': ['xzx'], '--all-sequences': [], '--json': [],
+    '--precision': ['5'], '--tol': ['1e-2'], '--wxyz': []}
+
+
+@pytest.mark.parametrize('option', sorted(COMMON_OPTIONS))
+def test_every_option_before_the_command_and_after_its_arguments(script, option):
+    value = COMMON_OPTIONS[option]
+    q = ['0.927', '0.1', '-0.2', '0.3'] if option == '--wxyz' else ['0.1', '-0.2', '0.3', '0.927']
+    before = run(script, option, *value, 'quaternion', *q)
+    after = run(script, 'quaternion', *q, option, *value)
+    plain = run(script, 'quaternion', '0.1', '-0.2', '0.3', '0.927')
+    assert before.returncode == after.returncode == 0, (before.stderr, after.stderr)
+    assert before.stdout == after.stdout
+    assert (before.stdout == plain.stdout) is (option in ('--tol', '--wxyz'))  # it acted
+
+
+def test_help_lists_every_option(script):
+    options = [*COMMON_OPTIONS, '--plot', '--version']
+    for args in ([], ['quaternion'], ['screw']):
+        text = run(script, *args, '--help').stdout
+        for option in options:
+            assert re.search(rf'^  {option}\b', text, re.MULTILINE), (args, option)
+    text = run(script, '--help').stdout
+    assert 'default 1e-05' in text and 'default 0.001' in text  # which default for which
+
+
+def test_version_is_the_installed_distribution_and_package_xml_version(script):
+    from importlib.metadata import version
+    xml = (Path(__file__).resolve().parents[1] / 'package.xml').read_text()
+    (in_xml,) = re.findall(r'<version>([^<]+)</version>', xml)
+    assert version('rot_tools') == in_xml
+    for args in (['--version'], ['euler', 'ZYX', '1', '2', '3', '--version'],
+                 ['--json', '--version']):
+        proc = run(script, *args)
+        assert (proc.returncode, proc.stdout, proc.stderr) == (0, f'rot-tools {in_xml}\n', '')
+
+
+@pytest.mark.parametrize('args, size', [
+    (['euler', 'ZYX', '90', '0', '0'], '90'),
+    (['euler', 'zyx', '0', '-30', '6.3'], '30'),
+    (['axis-angle', '0', '0', '1', '180'], '180'),
+    (['rotvec', '4', '4', '4'], '6.9282'),             # each component < 2π, the norm > 2π
+    (['screw', '--euler', 'ZYX', '0', '0', '45', '--translation', '1', '0', '0'], '45'),
+    (['screw', '--rotvec', '0', '7', '0', '--translation', '1', '0', '0'], '7'),
+])
+def test_radians_that_look_like_degrees_get_a_hint(script, args, size):
+    proc = run(script, *args)
+    assert proc.returncode == 0
+    assert proc.stderr == (f'rot-tools: hint: an angle of {size} rad is more than 2π: if it '
+                           'is in degrees, add --deg\n')
+    assert proc.stdout == run(script, *args, '--precision', '12').stdout  # still radians
+    assert run(script, *args, '--deg').stderr == ''
+
+
+@pytest.mark.parametrize('args', [
+    'euler ZYX 6.28 -6.28 3', 'rotvec 3.6 3.6 3.6', 'axis-angle 1 0 0 -6.2831'])
+def test_angles_up_to_2pi_get_no_hint(script, args):
+    proc = run(script, *args.split())
+    assert (proc.returncode, proc.stderr) == (0, '')
+
+
+def test_radians_value_is_kept_when_hinting(script):
+    rep = json.loads(run(script, 'axis-angle', 0, 0, 1, 90, '--json').stdout)
+    check_rotation(rep, rot_z(90.0))  # 90 rad, as typed
+
+
+# ---------------------------------------------------------------------------------------
 # Help
 
 
-@pytest.mark.parametrize('command', ['euler', 'matrix', 'axis-angle', 'rotvec', 'screw'])
+@pytest.mark.parametrize('command', ['euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion',
+                                     'screw'])
 def test_help_has_usage_and_examples_that_run(script, command):
     proc = run(script, command, '--help')
     assert proc.returncode == 0 and proc.stderr == ''
@@ -280,7 +431,7 @@ def test_help_has_usage_and_examples_that_run(script, command):
 def test_main_help(script):
     proc = run(script, '--help')
     assert proc.returncode == 0 and proc.stdout.startswith('usage: rot-tools ')
-    for command in ('euler', 'matrix', 'axis-angle', 'rotvec', 'screw'):
+    for command in ('euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion', 'screw'):
         assert f'\n    {command} ' in proc.stdout
 
 
@@ -328,10 +479,40 @@ def test_main_help(script):
     ('axis-angle 0 0 0 1', 'axis-angle: axis is zero but the angle is 1 rad'),
     ('screw --axis-angle 0 0 0 -2 --translation 1 2 3',
      'argument --axis-angle: axis is zero but the angle is -2 rad'),
+    # quaternions
+    ('quaternion 0 0 1', 'quaternion X Y Z W: expected 4 numbers, got 3'),
+    ('quaternion 0 0 0 1 0', 'quaternion X Y Z W: expected 4 numbers, got 5'),
+    ('quaternion 1 0 0 --wxyz', 'quaternion W X Y Z: expected 4 numbers, got 3'),
+    ('quaternion 0 0 0 0', 'quaternion X Y Z W: quaternion (x, y, z, w) must be non-zero, '
+     'got |q| = 0'),
+    ('quaternion 0 0 0 0 --tol 2', 'quaternion X Y Z W: quaternion (x, y, z, w) must be '
+     'non-zero'),
+    ('quaternion 0 nan 0 1', "argument COMPONENT: not a finite number: 'nan'"),
+    ('quaternion 0 0 0 -inf', "argument COMPONENT: not a finite number: '-inf'"),
+    ('quaternion 0 0 1 1', 'quaternion X Y Z W: not a unit quaternion: ||q| − 1| = 0.414 > '
+     'tol 0.001 (|q| = 1.41421; the tolerance is --tol)'),
+    ('quaternion 1e200 1e200 0 0', 'quaternion X Y Z W: not a unit quaternion: ||q| − 1| = '
+     '1.41e+200 > tol 0.001 (|q| = 1.41421e+200;'),
+    ('--wxyz quaternion 2 0 0 0', 'quaternion W X Y Z: not a unit quaternion: ||q| − 1| = 1 '),
+    ('screw --quaternion 0 0 0 2 --translation 0 0 0', 'argument --quaternion: not a unit '
+     'quaternion: ||q| − 1| = 1 > tol 0.001 (|q| = 2;'),
+    ('screw --quaternion 0 0 0 0 --translation 0 0 0', 'argument --quaternion: quaternion '
+     '(x, y, z, w) must be non-zero'),
+    ('screw --quaternion 0 0 1 --translation 0 0 0', 'argument --quaternion: expected 4 '
+     'arguments'),
+    ('quaternion 0 0 0 1 --tol x', "argument --tol: not a number: 'x'"),
+    ('--tol -1e-3 quaternion 0 0 0 1', "argument --tol: must be >= 0, got '-1e-3'"),
+    # --wxyz without a quaternion
+    ('euler ZYX 1 2 3 --wxyz', '--wxyz: there is no quaternion to read (it applies to '
+     'quaternion and screw --quaternion)'),
+    ('--wxyz screw --rotvec 1 2 3 --translation 0 0 0', '--wxyz: there is no quaternion'),
+    # a hint never comes with an error: the error is the one line
+    ('axis-angle 0 0 0 90', 'axis-angle: axis is zero but the angle is 90 rad'),
+    ('euler ZYX 90 0', 'euler ZYX angles: expected 3 numbers, got 2'),
     # options
     ('euler ZYX 1 2 3 --precision 0', "argument --precision: expected an integer 1..17, got '0'"),
     ('euler ZYX 1 2 3 --bogus', 'unrecognized arguments: --bogus'),
-    ('quaternion 0 0 0 1', "argument COMMAND: invalid choice: 'quaternion'"),
+    ('quat 0 0 0 1', "argument COMMAND: invalid choice: 'quat'"),
     ('screw --rotvec 1 2 3 --euler ZYX 1 2 3 --translation 0 0 0',
      'argument --euler: not allowed with argument --rotvec'),
 ])
