@@ -10,7 +10,8 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 
 import numpy as np
 
-from rot_tools._backend import apply, norm, unit
+from rot_tools._arrays import refuse_overflow
+from rot_tools._backend import apply, in_range, norm, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
 
@@ -56,14 +57,20 @@ def axis_angle_to_matrix(axis, angle):
 
 def _rotvec_kernel(ops, v):
     angle = norm(ops, v)
+    turns = in_range(ops, [angle])  # |v| overflows beyond 1.8e308: refused, sin(inf) avoided
+    angle = ops.where(turns, angle, 0.0)
     safe = ops.where(angle > 0, angle, 1.0)  # any axis will do at angle 0
-    return (_rodrigues(ops, v[0] / safe, v[1] / safe, v[2] / safe, angle),)
+    return _rodrigues(ops, v[0] / safe, v[1] / safe, v[2] / safe, angle), turns
 
 
 def rotvec_to_matrix(rotvec):
-    """Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity."""
-    (matrix,) = apply(_rotvec_kernel, [(rotvec, (3,), 'rotation vector', True)],
-                      [((3, 3), np.float64)])
+    """Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity.
+
+    RotationError where the angle |θ·l̂| itself overflows float64.
+    """
+    matrix, turns = apply(_rotvec_kernel, [(rotvec, (3,), 'rotation vector', True)],
+                          [((3, 3), np.float64), ((), np.bool_)])
+    refuse_overflow(turns, 'the angle |θ·l̂| of the rotation vector')
     return matrix
 
 

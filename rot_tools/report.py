@@ -69,7 +69,7 @@ from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.errors import RotationError
 from rot_tools.euler import (
     angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence)
-from rot_tools.screw import Screw, screw_of_axis_kernel, twist_kernel
+from rot_tools.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
 from rot_tools.so3 import apply_to_rotations, matrix_to_quaternion
 
 DEFAULT_PRECISION = 12
@@ -95,8 +95,9 @@ class Decomposition(NamedTuple):
 def _decompose_kernel(ops, m, b, spec):
     axis, angle = axis_angle_kernel(ops, m)
     angles, lock = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
-    screw = screw_of_axis_kernel(ops, axis, angle, b)
-    return (axis, angle, angles, lock, *screw, twist_kernel(ops, *screw))
+    screw, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
+    twist, twist_fits = twist_kernel(ops, axis, angle, b)
+    return (axis, angle, angles, lock, *screw, twist, screw_fits & twist_fits)
 
 
 _VEC, _NUM = ((3,), np.float64), ((), np.float64)
@@ -106,12 +107,14 @@ def decompose(R, b, seq='ZYX', *, check=True):
     """Decomposition of (R (..., 3, 3), b (..., 3)) with Euler angles of ``seq`` (radians).
 
     One kernel run computes every representation, so the rot-tools report and each output of
-    rotation_node come from the same numbers.
+    rotation_node come from the same numbers. RotationError where the screw overflows
+    float64 (as screw_from_transform).
     """
     kernel = partial(_decompose_kernel, spec=parse_sequence(seq))
     out = apply_to_rotations(kernel, R, check, [
         _VEC, _NUM, _VEC, ((), np.bool_), _VEC, _VEC, _VEC, _NUM, _NUM, _NUM,
-        ((6,), np.float64)], [(b, (3,), 'translation b', True)])
+        ((6,), np.float64), ((), np.bool_)], [(b, (3,), 'translation b', True)])
+    refuse_far_axis(out[11], out[1], b)
     return Decomposition(*out[:4], Screw(*out[4:10]), out[10])
 
 

@@ -15,12 +15,18 @@ along l̂; c is instead solved in the plane ⊥ l̂, where the 2-D rotation by �
 (seed 000's moment −(Rᵀ + I)·b⊥ of eqs. 17–18 is −2 sin θ times this m: its l is −2 sin θ·l̂).
 
 Exponential coordinates (a twist, screw_log / screw_exp) are the 6-vector (θ·l̂, θ·v) with
-v = −l̂ × c + h·l̂, so that T = exp(θ·[l̂, v]); a pure translation is (0, b).
+v = −l̂ × c + h·l̂, so that T = exp(θ·[l̂, v]). Written with b instead of c they need no
+division by θ and are smooth at θ = 0, where θ·v → b::
 
-Special cases: θ below PURE_TRANSLATION_ANGLE is a pure translation (direction b/|b|, point 0,
-angle 0, translation |b|, pitch inf); the identity has direction (0, 0, 1) and all else 0.
-At θ = π the direction's sign is the one matrix_to_axis_angle picks, and translation, moment
-and twist follow it.
+    θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂
+
+so they have no threshold: θ·l̂ keeps its digits for every θ > 0 (1e-15 rad included).
+
+Special cases of the Screw: θ below PURE_TRANSLATION_ANGLE is a pure translation (direction
+b/|b|, point 0, angle 0, translation |b|, pitch inf); the identity has direction (0, 0, 1) and
+all else 0. At θ = π the direction's sign is the one matrix_to_axis_angle picks, and
+translation, moment and twist follow it. The axis point and the pitch grow like |b|/θ: where
+they leave float64's range (|b| = 1e300 at θ = 1e-11) a RotationError says so.
 """
 
 import math
@@ -28,8 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rot_tools._arrays import finite_array
-from rot_tools._backend import apply, cross, dot, unit
+from rot_tools._arrays import finite_array, refuse_overflow
+from rot_tools._backend import apply, cross, dot, in_range, unit
 from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations, checked_rotation
@@ -63,13 +69,9 @@ def _apply_rigid(kernel, R, b, check, outputs):
     return apply_to_rotations(kernel, R, check, outputs, [(b, (3,), 'translation b', True)])
 
 
-def screw_kernel(ops, m, b):
-    """The Screw of (m, b); see screw_from_transform."""
-    return screw_of_axis_kernel(ops, *axis_angle_kernel(ops, m), b)
-
-
 def screw_of_axis_kernel(ops, axis, angle, b):
-    """The Screw of (Rot_axis(angle), b), axis and angle as axis_angle_kernel gives them."""
+    """The Screw of (Rot_axis(angle), b), axis and angle as axis_angle_kernel gives them,
+    and a flag: false where its point, moment, translation or pitch overflowed float64."""
     b_dir, b_norm = unit(ops, b)
     translating = angle < PURE_TRANSLATION_ANGLE
     direction = [ops.where(translating, p, q) for p, q in zip(b_dir, axis)]
@@ -79,12 +81,39 @@ def screw_of_axis_kernel(ops, axis, angle, b):
     cot_half = ops.where(translating, 0.0, 1.0 / ops.tan(0.5 * turning))
     swing = cross(direction, b_perp)
     point = [ops.where(translating, 0.0, 0.5 * (p + cot_half * q)) for p, q in zip(b_perp, swing)]
-    pitch = ops.where(translating, ops.where(b_norm > 0, math.inf, 0.0), d / turning)
-    return (direction, point, cross(point, direction), ops.where(translating, 0.0, angle),
-            d + 0.0, pitch + 0.0)
+    moment = cross(point, direction)
+    slope = d / turning
+    pitch = ops.where(translating, ops.where(b_norm > 0, math.inf, 0.0), slope)
+    fits = in_range(ops, [*point, *moment, d, ops.where(translating, 0.0, slope)])
+    return (direction, point, moment, ops.where(translating, 0.0, angle), d + 0.0,
+            pitch + 0.0), fits
 
 
-_VEC, _SCALAR = ((3,), np.float64), ((), np.float64)
+def refuse_far_axis(fits, angle, b):
+    """RotationError where fits is false: the screw's point, moment or pitch (~|b|/θ)
+    overflowed float64, or the translation |b| did."""
+    if fits.ndim == 0 and fits or fits.all():
+        return
+    index = tuple(int(i) for i in np.argwhere(~fits)[0]) if fits.ndim else ()
+    size = float(np.abs(np.broadcast_to(np.asarray(b, dtype=float), fits.shape + (3,))[index]
+                        ).max())
+    theta = float(angle[index])
+    where = f', first at item {index}' if fits.ndim else ''
+    if theta == 0:
+        raise RotationError(f'the screw translation |b| overflows float64: max|b_i| = '
+                            f'{size:.3g}{where}')
+    raise RotationError(
+        'the screw overflows float64: its axis point and pitch grow like |b|/θ, and here '
+        f'max|b_i| = {size:.3g} at θ = {theta:.3g} rad{where}')
+
+
+_VEC, _SCALAR, _OK = ((3,), np.float64), ((), np.float64), ((), np.bool_)
+_SCREW = [_VEC] * 3 + [_SCALAR] * 3
+
+
+def _screw_kernel(ops, m, b):
+    screw, fits = screw_of_axis_kernel(ops, *axis_angle_kernel(ops, m), b)
+    return (*screw, fits)
 
 
 def screw_from_transform(R, b, *, check=True):
@@ -92,31 +121,49 @@ def screw_from_transform(R, b, *, check=True):
 
     R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ as matrix_to_axis_angle gives them;
     then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
+    RotationError where c or h overflow float64 (|b|/θ beyond ~1e308).
     """
-    return Screw(*_apply_rigid(screw_kernel, R, b, check, [_VEC] * 3 + [_SCALAR] * 3))
+    *screw, fits = _apply_rigid(_screw_kernel, R, b, check, _SCREW + [_OK])
+    refuse_far_axis(fits, screw[3], b)
+    return Screw(*screw)
 
 
-def twist_kernel(ops, direction, point, moment, angle, translation, pitch):
-    """Exponential coordinates (θ·l̂, θ·v) of a Screw: θ·v = −θ·l̂ × c + d·l̂ = θ·m + d·l̂."""
-    return ([angle * li for li in direction]
-            + [angle * mi + translation * li for mi, li in zip(moment, direction)])
+def twist_kernel(ops, axis, angle, b):
+    """Exponential coordinates (θ·l̂, θ·v) of (Rot_axis(angle), b) and an in_range flag.
+
+    θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂ (= −θ·l̂ × c + d·l̂ of the Screw), with
+    (θ/2)·cot(θ/2) → 1 at θ = 0: no threshold, no division by a small θ.
+    """
+    half = 0.5 * angle
+    tangent = ops.tan(half)
+    flat = tangent == 0  # θ = 0, or so small that θ/2 underflows
+    k = ops.where(flat, 1.0, half / ops.where(flat, 1.0, tangent))
+    d = dot(b, axis)
+    swing = cross(axis, b)
+    u = [k * (bi - d * li) - half * si + d * li for bi, li, si in zip(b, axis, swing)]
+    return [angle * li for li in axis] + u, in_range(ops, u)
 
 
 def _log_kernel(ops, m, b):
-    return (twist_kernel(ops, *screw_kernel(ops, m, b)),)
+    return twist_kernel(ops, *axis_angle_kernel(ops, m), b)
 
 
 def screw_log(R, b, *, check=True):
     """Exponential coordinates (θ·l̂, θ·v), v = −l̂ × c + h·l̂, of p ↦ R·p + b; (..., 6).
 
-    θ·v = −θ·l̂ × c + d·l̂; a pure translation gives (0, b). Inverse of screw_exp.
+    θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂; θ·l̂ is the rotation vector for every θ
+    (no pure-translation threshold: the identity rotation gives (0, b)). Inverse of
+    screw_exp.
     """
-    (twist,) = _apply_rigid(_log_kernel, R, b, check, [((6,), np.float64)])
+    twist, fits = _apply_rigid(_log_kernel, R, b, check, [((6,), np.float64), _OK])
+    refuse_overflow(fits, 'θ·v of screw_log (|θ·v| ≤ π/2·|b|)')
     return twist
 
 
 def _exp_kernel(ops, twist):
     axis, theta = unit(ops, twist[:3])
+    turns = in_range(ops, [theta])  # |ω| itself may overflow: then refused, sin(inf) avoided
+    theta = ops.where(turns, theta, 0.0)
     u = twist[3:]
     d = dot(axis, u)
     half = 0.5 * theta
@@ -129,7 +176,7 @@ def _exp_kernel(ops, twist):
     versinc = ops.where(small, half, 2.0 * sh * sh / safe)
     swing = cross(axis, u)
     b = [sinc * (ui - d * li) + versinc * si + d * li for ui, li, si in zip(u, axis, swing)]
-    return _rodrigues(ops, axis[0], axis[1], axis[2], theta), b
+    return _rodrigues(ops, axis[0], axis[1], axis[2], theta), b, turns, in_range(ops, b)
 
 
 def screw_exp(twist):
@@ -137,29 +184,42 @@ def screw_exp(twist):
 
     R = Rot_l̂(θ) (Rodrigues) and b = (I − R)·c + d·l̂ with c = l̂ × u/θ, d = l̂·u, i.e.
     b = (sin θ/θ)·u⊥ + ((1 − cos θ)/θ)·l̂ × u + (l̂·u)·l̂, which is smooth at θ = 0 (b = u).
+    RotationError where |ω| or b overflow float64.
     """
-    return apply(_exp_kernel, [(twist, (6,), 'twist', True)], [((3, 3), np.float64), _VEC])
+    R, b, turns, fits = apply(_exp_kernel, [(twist, (6,), 'twist', True)],
+                              [((3, 3), np.float64), _VEC, _OK, _OK])
+    refuse_overflow(turns, 'the rotation angle |ω| of the twist')
+    refuse_overflow(fits, 'b of screw_exp')
+    return R, b
+
+
+def _transform_of_screw_kernel(ops, direction, point, angle, translation):
+    axis, size = unit(ops, direction)
+    sh, ch = ops.sin(0.5 * angle), ops.cos(0.5 * angle)
+    sin, versin = 2.0 * sh * ch, 2.0 * sh * sh
+    along = dot(point, axis)
+    swing = cross(axis, point)
+    b = [versin * (ci - along * li) - sin * si + translation * li
+         for ci, li, si in zip(point, axis, swing)]
+    return _rodrigues(ops, axis[0], axis[1], axis[2], angle), b, size == 0, in_range(ops, b)
 
 
 def transform_from_screw(direction, point, angle, translation):
     """Rigid motion (R, b) of a screw: R = Rot_l̂(θ), b = (I − R)·point + d·l̂.
 
     direction (..., 3) is normalised (zero raises RotationError); point (..., 3) may be any
-    point of the axis; angle, translation (...). Inverse of screw_from_transform; computed
-    as screw_exp of the twist (θ·l̂, −θ·l̂ × point + d·l̂).
+    point of the axis; angle, translation (...); broadcasting. Inverse of
+    screw_from_transform. (I − R)·c = 2 sin²(θ/2)·c⊥ − sin θ·l̂ × c with c⊥ = c − (c·l̂)·l̂,
+    so tiny angles with far-away axes keep their digits.
     """
-    direction = finite_array(direction, (3,), 'direction')
-    point = finite_array(point, (3,), 'point')
-    angle = finite_array(angle, (), 'angle')
-    translation = finite_array(translation, (), 'translation')
-    if not np.any(direction, axis=-1).all():
+    R, b, zero, fits = apply(_transform_of_screw_kernel, [
+        (direction, (3,), 'direction', True), (point, (3,), 'point', True),
+        (angle, (), 'angle', True), (translation, (), 'translation', True)],
+        [((3, 3), np.float64), _VEC, _OK, _OK])
+    if zero.any():
         raise RotationError('screw direction must be non-zero, got |direction| = 0')
-    axis = direction / np.abs(direction).max(axis=-1, keepdims=True)
-    axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
-    theta = angle[..., None]
-    moving = -theta * np.cross(axis, point) + translation[..., None] * axis
-    shape = np.broadcast_shapes(axis.shape, moving.shape)
-    return screw_exp(np.concatenate([np.broadcast_to(theta * axis, shape), moving], axis=-1))
+    refuse_overflow(fits, 'b = (I − R)·point + d·l̂ of transform_from_screw')
+    return R, b
 
 
 def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
@@ -167,14 +227,19 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
 
     T(s) = T0 · exp(s · log(T0⁻¹ T1)): every point moves along one helix about the relative
     screw axis; T(0) = T0 and T(1) = T1, and s outside [0, 1] continues the same motion.
-    Returns (R(s) (..., 3, 3), b(s) (..., 3)).
+    Returns (R(s) (..., 3, 3), b(s) (..., 3)); RotationError where a step overflows float64.
     """
     R0, R1 = checked_rotation(R0, check), checked_rotation(R1, check)
     b0, b1 = finite_array(b0, (3,), 'translation b0'), finite_array(b1, (3,), 'translation b1')
+    s = finite_array(s, (), 'fraction s')
     R0t = np.swapaxes(R0, -1, -2)
     rel_R = R0t @ R1
-    rel_b = np.einsum('...ij,...j->...i', R0t, b1 - b0)
-    twist = screw_log(rel_R, rel_b, check=False)
-    s = finite_array(s, (), 'fraction s')
-    step_R, step_b = screw_exp(s[..., None] * twist)
-    return R0 @ step_R, np.einsum('...ij,...j->...i', R0, step_b) + b0
+    with np.errstate(over='ignore', invalid='ignore'):
+        rel_b = np.einsum('...ij,...j->...i', R0t, b1 - b0)
+        refuse_overflow(np.isfinite(rel_b).all(-1), 'R0ᵀ·(b1 − b0) of screw_interpolate')
+        step = s[..., None] * screw_log(rel_R, rel_b, check=False)
+        refuse_overflow(np.isfinite(step).all(-1), 's·log(T0⁻¹·T1) of screw_interpolate')
+        step_R, step_b = screw_exp(step)
+        b = np.einsum('...ij,...j->...i', R0, step_b) + b0
+        refuse_overflow(np.isfinite(b).all(-1), 'b(s) of screw_interpolate')
+    return R0 @ step_R, b

@@ -114,7 +114,7 @@ def refuse_defects(err, det, tol, name='R'):
     if not (err <= tol).all():
         worst = np.unravel_index(np.argmax(err), err.shape)
         raise RotationError(
-            f'{name} is not a rotation matrix: max|RᵀR − I| = {float(err[worst]):.3g} '
+            f'{name} is not orthogonal: max|RᵀR − I| = {float(err[worst]):.3g} '
             f'> tol {tol:g}' + where.format(tuple(map(int, worst))))
     dev = np.abs(det - 1.0)
     if not (dev <= tol).all():
@@ -178,6 +178,8 @@ def nearest_rotation(R):
     since its nearest rotation is not what anyone meant.
     """
     R = finite_array(R, (3, 3), 'R')
+    scale = np.abs(R).max(axis=(-2, -1), keepdims=True)
+    R = R / np.where(scale > 0, scale, 1.0)  # the polar factor is scale-free; det can't overflow
     if (np.linalg.det(R) <= 0).any():
         raise RotationError('R has det R ≤ 0 (a reflection or singular), not near a rotation')
     u, _, vt = np.linalg.svd(R)

@@ -162,7 +162,7 @@ def test_matrix_typed_with_six_digits(script):
     # The same matrix is refused at a tolerance tighter than its typing error (~6e-7).
     proc = run(script, 'matrix', *typed, '--tol', '1e-7')
     assert proc.returncode == 2
-    assert re.fullmatch(r'rot-tools: error: matrix: R is not a rotation matrix: '
+    assert re.fullmatch(r'rot-tools: error: matrix: R is not orthogonal: '
                         r'max\|RᵀR − I\| = \S+ > tol 1e-07 \(the tolerance is --tol\)\n',
                         proc.stderr)
 
@@ -462,9 +462,9 @@ def test_main_help(script):
     ('matrix 1 0 0 0 1 0 0 0 Infinity', "argument ENTRY: not a finite number: 'Infinity'"),
     # not a rotation
     ('matrix 1 0.2 0 0 1 0 0 0 1',
-     r'matrix: R is not a rotation matrix: max|RᵀR − I| = 0.2 > tol 1e-05 '
+     r'matrix: R is not orthogonal: max|RᵀR − I| = 0.2 > tol 1e-05 '
      '(the tolerance is --tol)'),
-    ('matrix 0 0 0 0 0 0 0 0 0', 'matrix: R is not a rotation matrix: max|RᵀR − I| = 1 '),
+    ('matrix 0 0 0 0 0 0 0 0 0', 'matrix: R is not orthogonal: max|RᵀR − I| = 1 '),
     ('matrix 1 0 0 0 1 0 0 0 -1', 'matrix: R is a reflection: det R = -1, expected +1'),
     ('screw --rotation -1 0 0 0 -1 0 0 0 -1 --translation 0 0 0',
      'argument --rotation: R is a reflection: det R = -1, expected +1'),

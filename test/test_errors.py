@@ -6,14 +6,16 @@ import math_helpers as h
 import numpy as np
 import pytest
 from rot_tools import (
-    axis_angle_to_matrix, euler_to_matrix, is_rotation, matrix_to_axis_angle, matrix_to_euler,
-    matrix_to_rotvec, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
-    RotationError, rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate,
-    screw_log, skew, transform_from_screw, validate_rotation)
+    axis_angle_to_matrix, compose_transforms, decompose, euler_to_matrix, invert_transform,
+    is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion, matrix_to_rotvec,
+    nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z, RotationError,
+    rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log, skew,
+    transform_from_screw, transform_points, transform_to_homogeneous, validate_rotation)
 
 I3 = np.eye(3)
 Z3 = np.zeros(3)
 NON_FINITE = r'(?i)finite|nan|inf'
+NOT_ORTHOGONAL = r'R1? is not orthogonal: max\|RᵀR − I\| = '
 
 
 def shape_pattern(got):
@@ -47,6 +49,12 @@ TAKES_R = {
     'screw_from_transform': lambda r: screw_from_transform(r, np.zeros(np.shape(r)[:-1])),
     'screw_log': lambda r: screw_log(r, np.zeros(np.shape(r)[:-1])),
     'screw_interpolate': lambda r: screw_interpolate(r, Z3, I3, Z3, 0.5),
+    'decompose': lambda r: decompose(r, Z3),
+    'matrix_to_quaternion': matrix_to_quaternion,
+    'transform_points': lambda r: transform_points(r, Z3, Z3),
+    'compose_transforms': lambda r: compose_transforms(r, Z3, I3, Z3),
+    'invert_transform': lambda r: invert_transform(r, Z3),
+    'transform_to_homogeneous': lambda r: transform_to_homogeneous(r, Z3),
 }
 
 
@@ -70,14 +78,14 @@ def test_non_finite_matrix(name, bad):
 @pytest.mark.parametrize('name', TAKES_R)
 @pytest.mark.parametrize('eps', [1e-8, 1e-3, 0.5])
 def test_non_orthogonal_matrix_names_the_error_size(name, eps):
-    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation') as info:
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL) as info:
         TAKES_R[name](non_orthogonal(eps))
     assert h.mentions_magnitude(str(info.value), eps), str(info.value)
 
 
 @pytest.mark.parametrize('name', TAKES_R)
 def test_scaled_matrix_names_the_error_size(name):
-    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation') as info:
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL) as info:
         TAKES_R[name](1.01 * rot_z(0.3))
     assert h.mentions_magnitude(str(info.value), 1.01 ** 2 - 1), str(info.value)
 
@@ -93,14 +101,14 @@ def test_reflection(name, reflection):
 def test_non_orthogonal_item_inside_a_batch():
     batch = rot_z(np.linspace(0, 3, 6))
     batch[4] = non_orthogonal(1e-4)
-    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation') as info:
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL) as info:
         matrix_to_axis_angle(batch)
     assert h.mentions_magnitude(str(info.value), 1e-4)
 
 
 def test_within_tolerance_is_accepted_beyond_is_refused():
     validate_rotation(non_orthogonal(5e-10))
-    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation'):
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL):
         validate_rotation(non_orthogonal(5e-9))
     validate_rotation(non_orthogonal(5e-9), tol=1e-8)
 
@@ -336,7 +344,7 @@ def test_screw_interpolate_non_finite_fraction():
 
 
 def test_screw_interpolate_bad_end_transform():
-    with pytest.raises(RotationError, match=r'(?i)orthogonal|not a rotation'):
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL):
         screw_interpolate(I3, Z3, 2.0 * I3, Z3, 0.5)
     with pytest.raises(RotationError, match=NON_FINITE):
         screw_interpolate(I3, Z3, I3, [np.inf, 0.0, 0.0], 0.5)
@@ -346,3 +354,135 @@ def test_screw_interpolate_bad_end_transform():
 def test_bad_gimbal_lock_tolerance(lock_tol):
     with pytest.raises(RotationError, match=r'lock_tol must be in \[0, π/4\) rad'):
         matrix_to_euler(np.eye(3), 'ZYX', lock_tol=lock_tol)
+
+
+# ---- finite input never gives inf or NaN: overflow is a RotationError -----------------------
+
+OVERFLOW = r'overflows float64'
+
+
+@pytest.mark.parametrize('b', [[1e300, 1e300, 0.0], [-3e299, 0.0, 1e300]])
+@pytest.mark.parametrize('f', [screw_from_transform, decompose])
+def test_screw_of_a_huge_translation_at_a_tiny_angle(f, b):
+    # The axis point is ~|b|/θ = 1e311 away: refused, saying |b| and θ.
+    with pytest.raises(RotationError, match=OVERFLOW) as info:
+        f(rot_z(1e-11), b)
+    message = str(info.value)
+    assert h.mentions_magnitude(message, 1e300, 1.01) and h.mentions_magnitude(message, 1e-11)
+    with pytest.raises(RotationError, match=OVERFLOW + r'.*first at item \(1,\)'):
+        f(rot_z([0.5, 1e-11]), b)
+
+
+def test_screw_pitch_overflow_along_the_axis():
+    # b along the axis: the point stays 0, the pitch d/θ = 1e300/1e-11 overflows.
+    with pytest.raises(RotationError, match=OVERFLOW):
+        screw_from_transform(rot_z(1e-11), [0.0, 0.0, 1e300])
+
+
+def test_pure_translation_beyond_float64():
+    with pytest.raises(RotationError, match=r'screw translation \|b\| ' + OVERFLOW) as info:
+        screw_from_transform(I3, [1.5e308, 1.5e308, 0.0])
+    assert h.mentions_magnitude(str(info.value), 1.5e308, 1.01)
+
+
+def test_screw_log_overflow():
+    with pytest.raises(RotationError, match=r'θ·v of screw_log .*' + OVERFLOW):
+        screw_log(rot_z(1.0), [1.7e308, 1.7e308, 0.0])
+    # representable: a 1e300 translation at a tiny angle has θ·v ≈ b
+    tw = screw_log(rot_z(1e-11), [1e300, 1e300, 0.0])
+    assert np.all(np.isfinite(tw)) and h.max_abs(tw[3:] / 1e300 - [1, 1, 0]) <= 1e-11
+
+
+def test_screw_exp_overflow():
+    with pytest.raises(RotationError, match=r'rotation angle \|ω\| of the twist ' + OVERFLOW):
+        screw_exp([1.5e308, 1.5e308, 0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(RotationError, match=r'b of screw_exp ' + OVERFLOW):
+        screw_exp([0.0, 0.0, np.pi / 2, 1.7e308, 1.7e308, 0.0])
+    with pytest.raises(RotationError, match=OVERFLOW + r'.*first at item \(1,\)'):
+        screw_exp([[0.0] * 6, [0.0, 0.0, np.pi / 2, 1.7e308, 1.7e308, 0.0]])
+
+
+def test_transform_from_screw_overflow():
+    with pytest.raises(RotationError, match=r'\(I − R\)·point \+ d·l̂ .*' + OVERFLOW):
+        transform_from_screw([0.0, 0.0, 1.0], [1.7e308, 0.0, 0.0], np.pi, 0.0)
+    # a far point with a huge angle is fine when b itself is representable
+    r, b = transform_from_screw([0.0, 0.0, 1.0], [1e300, 0.0, 0.0], 1e10, 0.0)
+    assert np.all(np.isfinite(r)) and np.all(np.isfinite(b))
+
+
+def test_rotation_vector_overflow():
+    with pytest.raises(RotationError, match=r'angle \|θ·l̂\| of the rotation vector ' + OVERFLOW):
+        rotvec_to_matrix([1.5e308, 1.5e308, 0.0])
+    with pytest.raises(RotationError, match=OVERFLOW + r'.*first at item \(0,\)'):
+        rotvec_to_matrix([[1.5e308, 1.5e308, 0.0], [0.0, 0.0, 1.0]])
+
+
+@pytest.mark.parametrize('b0, b1, s, what', [
+    ([-1e308, 0, 0], [1e308, 0, 0], 0.5, r'R0ᵀ·\(b1 − b0\)'),
+    (Z3, [1e308, 0, 0], 10.0, r's·log\(T0⁻¹·T1\)'),
+    ([1e308, 0, 0], [1.5e308, 0, 0], 3.0, r'b\(s\)'),
+])
+def test_screw_interpolate_overflow(b0, b1, s, what):
+    with pytest.raises(RotationError, match=what + ' of screw_interpolate ' + OVERFLOW):
+        screw_interpolate(I3, b0, I3, b1, s)
+
+
+HUGE = (1.7e308, -1.7e308, 1e300, 1e-300, 5e-324, 0.0, 1.0)
+
+
+def huge_vectors():
+    rng = np.random.default_rng(90)
+    return np.array([rng.choice(HUGE, 3) for _ in range(200)] + [[1.5e308, 1.5e308, 0.0]])
+
+
+def assert_finite_or_refused(call, *args):
+    try:
+        out = call(*args)
+    except RotationError:
+        return
+    leaves = out if isinstance(out, tuple) else (out,)
+    for leaf in leaves:
+        assert np.all(np.isfinite(leaf)), (call, args, out)
+
+
+def test_no_function_returns_inf_or_nan_for_finite_input():
+    # SPEC §2.1: every function either answers with finite numbers or raises RotationError
+    # (never a plain ValueError/OverflowError from math, never inf or NaN) — on single items
+    # and on batches, for vectors of huge, tiny and subnormal entries.
+    vectors = huge_vectors()
+    rotations = np.concatenate([h.cube_rotations(), rot_z([1e-11, 1e-13, 0.5, np.pi])])
+    rng = np.random.default_rng(91)
+    for batch in (False, True):
+        for v in vectors:
+            w = np.stack([v, v]) if batch else v
+            r = rotations[rng.integers(len(rotations))]
+            r = np.stack([r, r]) if batch else r
+            assert_finite_or_refused(rotvec_to_matrix, w)
+            assert_finite_or_refused(axis_angle_to_matrix, w, 1.0)
+            assert_finite_or_refused(euler_to_matrix, w, 'ZYX')
+            assert_finite_or_refused(quaternion_to_matrix, np.append(v, 1e300))
+            assert_finite_or_refused(skew, w)
+            assert_finite_or_refused(screw_exp, np.concatenate([w, w[..., ::-1]], -1))
+            assert_finite_or_refused(transform_from_screw, w, w[..., ::-1], 2.0, v[0])
+            assert_finite_or_refused(screw_log, r, w)
+            assert_finite_or_refused(transform_points, r, w, w[..., ::-1])
+            assert_finite_or_refused(compose_transforms, r, w, r, w)
+            assert_finite_or_refused(invert_transform, r, w)
+            assert_finite_or_refused(transform_to_homogeneous, r, w)
+            assert_finite_or_refused(screw_interpolate, r, w, I3, -w, 3.0)
+            try:
+                scr = screw_from_transform(r, w)
+            except RotationError:
+                scr = None
+            if scr is not None:
+                for name in ('direction', 'point', 'moment', 'angle', 'translation'):
+                    assert np.all(np.isfinite(getattr(scr, name))), (r, w, name)
+                # the pitch is inf only for a pure translation (angle 0, b ≠ 0)
+                assert np.all(np.isfinite(scr.pitch) | (scr.angle == 0)), (r, w)
+
+
+@pytest.mark.parametrize('scale', [1.7e308, 1e300, 1e-300])
+def test_nearest_rotation_of_any_finite_scale(scale):
+    r = rot_z(0.3) @ rot_x(-1.2)
+    assert h.max_abs(nearest_rotation(scale * r) - r) <= 1e-15 * 4
+    assert np.array_equal(nearest_rotation(5e-324 * I3), I3)

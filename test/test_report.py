@@ -171,7 +171,7 @@ def test_identity_screw():
 
 @pytest.mark.parametrize('args, match', [
     ((np.diag([1.0, 1.0, -1.0]),), 'reflection'),
-    ((np.eye(3) * 1.1,), r'not a rotation matrix: max\|RᵀR − I\| = 0\.21'),
+    ((np.eye(3) * 1.1,), r'not orthogonal: max\|RᵀR − I\| = 0\.21'),
     ((np.stack([np.eye(3)] * 2),), r'one rotation \(3, 3\), got \(2, 3, 3\)'),
     ((np.eye(3), [1.0, 2.0]), r'translation b must have shape \(3,\)'),
     ((np.eye(3), None, 'ZyX'), "unknown Euler sequence 'ZyX'"),

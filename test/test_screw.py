@@ -474,3 +474,50 @@ def test_tiny_angle_with_large_translation(angle):
     assert h.max_abs(r2 - r) <= 1e-12 and h.max_abs(b2 - b) <= 1e-12 * scale
     r3, b3 = screw_exp(screw_log(r, b))
     assert h.max_abs(r3 - r) <= 1e-12 and h.max_abs(b3 - b) <= 1e-12 * scale
+
+
+# ---- exponential coordinates have no threshold (SPEC §2.1 corrections) ----------------------
+
+TINY_ANGLES = (5e-324, 1e-300, 1e-15, 1e-14, 1e-13, 5e-13, PURE_TRANSLATION_ANGLE, 2e-12, 1e-10)
+
+
+@pytest.mark.parametrize('angle', TINY_ANGLES)
+def test_screw_log_keeps_the_rotation_vector_at_tiny_angles(angle):
+    # θ·l̂ keeps its digits for every θ > 0; θ·v is the matrix logarithm's translation part,
+    # checked by the exponential series of the twist (math_helpers.expm_twist).
+    axis = np.array([0.36, -0.48, 0.8])
+    r = h.seed_rodrigues_eq7(axis, angle)
+    b = np.array([3.0, -1.0, 2.0])
+    for tw in (screw_log(r, b), screw_log(np.stack([r, r]), b)[1]):
+        assert np.all(np.abs(tw[:3] - angle * axis) <= 1e-15 * angle), tw
+        assert h.max_abs(tw[3:] - b) <= 1e-15 * 4 + 2 * angle * 4
+        r_exp, b_exp = h.expm_twist(tw)
+        assert h.max_abs(r_exp - r) <= 1e-16 + 2 * angle
+        assert h.max_abs(b_exp - b) <= 1e-15 * 4
+        r2, b2 = screw_exp(tw)
+        assert h.max_abs(r2 - r) <= 1e-16 and h.max_abs(b2 - b) <= 1e-15 * 4
+    # the Screw alone calls θ below PURE_TRANSLATION_ANGLE a pure translation
+    scr = screw_from_transform(r, b)
+    if angle < PURE_TRANSLATION_ANGLE:
+        assert scr.angle == 0.0 and np.isinf(scr.pitch)
+    else:
+        assert abs(scr.angle - angle) <= 1e-15 * angle
+
+
+def test_screw_log_of_a_tiny_pure_rotation_is_its_rotation_vector():
+    # b = 0: the twist is (θ·l̂, 0) for every θ, down to the smallest subnormal.
+    rng = np.random.default_rng(53)
+    axis = h.random_unit_vectors(rng, 200)
+    angle = 10.0 ** rng.uniform(-320, -2, 200)
+    r = h.seed_rodrigues_eq7(axis, angle)
+    tw = screw_log(r, np.zeros(3))
+    assert np.all(np.abs(tw[:, :3] - angle[:, None] * axis).max(-1) <= 1e-15 * angle + 1e-323)
+    assert h.max_abs(tw[:, 3:]) == 0.0
+
+
+def test_decompose_twist_is_screw_log_at_tiny_angles():
+    from rot_tools import decompose
+    for angle in TINY_ANGLES:
+        r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], angle)
+        b = np.array([1.0, 2.0, -4.0])
+        assert np.array_equal(decompose(r, b).twist, screw_log(r, b))
