@@ -344,7 +344,7 @@ BAD_INPUTS = {
                              'non_unit_quaternion', 'norm'),
     'pose_overflowing_position': ('pose', pose_stamped((0, 0, math.sin(0.05), math.cos(0.05)),
                                                        (1e308, -1e308, 0)),
-                                  'not_decomposable', 'too large'),
+                                  'not_decomposable', 'overflows float64'),
     'transform_nan_translation': ('transform', transform_stamped((0, 0, 0, 1), (0, math.nan, 0)),
                                   'non_finite', 'transform.translation.y is nan'),
     'transform_inf_rotation': ('transform', transform_stamped((math.inf, 0, 0, 1)),
