@@ -10,6 +10,7 @@ setup(
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', ['config/rot_tools.yaml']),
     ],
     install_requires=['setuptools', 'numpy'],
     extras_require={

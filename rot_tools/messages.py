@@ -1,23 +1,28 @@
 """ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware helpers.
 
 Inbound, every input message becomes one rigid transform ``(header, R, b)``: R a (3, 3)
-rotation, b a (3,) translation (b = 0 for Euler input). A message that cannot be one — a
-NaN/Inf anywhere, a zero quaternion, a quaternion whose norm is further than the tolerance
-from 1 — raises :class:`RefusedInput`, whose ``reason`` is a short key for counting.
+rotation, b a (3,) translation (b = 0 for an input that carries only an orientation). Every
+converter has the form ``convert(msg, settings)``, where ``settings`` is rotation_node's
+Settings: the converters read ``quaternion_tolerance``, and the Euler one
+``euler_sequence`` and ``degrees``. A message that cannot be one transform — a NaN/Inf in a
+field that is used, a zero quaternion, a quaternion whose norm is further than the tolerance
+from 1, an Imu that says it has no orientation — raises :class:`RefusedInput`, whose
+``reason`` is a short key for counting.
 
 Quaternions are (x, y, z, w), the ROS message order. Inbound they go through
-rot_tools.quaternion_to_matrix; outbound (path poses) the quaternion is written from the
-axis-angle of R, q = (sin(θ/2)·l̂, cos(θ/2)), so no other quaternion algebra is needed.
+rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_quaternion of R
+(canonical sign), and path poses write q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R,
+signed for continuity along the path.
 
 Outbound helpers build the node's messages from NumPy values: Float64MultiArray (row-major
-3x3), Vector3Stamped, TwistStamped, the screw-axis Marker, poses and Path, and the
-MarkerArray of a rot_tools.drawing.Picture.
+3x3), Vector3Stamped, QuaternionStamped, TwistStamped, the screw-axis Marker, poses and Path,
+and the MarkerArray of a rot_tools.drawing.Picture.
 """
 
 import math
 
-from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, TwistStamped
-from geometry_msgs.msg import Vector3Stamped
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, QuaternionStamped
+from geometry_msgs.msg import TwistStamped, Vector3Stamped
 from nav_msgs.msg import Path
 import numpy as np
 from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
@@ -30,7 +35,8 @@ from rot_tools.so3 import quaternion_to_matrix
 NON_FINITE = 'non_finite'
 ZERO_QUATERNION = 'zero_quaternion'
 NON_UNIT_QUATERNION = 'non_unit_quaternion'
-REFUSAL_REASONS = (NON_FINITE, ZERO_QUATERNION, NON_UNIT_QUATERNION)
+NO_ORIENTATION = 'no_orientation'
+REFUSAL_REASONS = (NON_FINITE, ZERO_QUATERNION, NON_UNIT_QUATERNION, NO_ORIENTATION)
 """Reasons this module refuses a message for; rotation_node adds its own."""
 
 
@@ -81,32 +87,72 @@ def pose_to_rt(pose, tolerance, name='pose'):
     return R, np.array((p.x, p.y, p.z))
 
 
-def pose_stamped_to_transform(msg, tolerance):
+def pose_stamped_to_transform(msg, settings):
     """(header, R, b) of a geometry_msgs/PoseStamped."""
-    R, b = pose_to_rt(msg.pose, tolerance)
+    R, b = pose_to_rt(msg.pose, settings.quaternion_tolerance)
     return msg.header, R, b
 
 
-def transform_stamped_to_transform(msg, tolerance):
+def pose_with_covariance_stamped_to_transform(msg, settings):
+    """(header, R, b) of a geometry_msgs/PoseWithCovarianceStamped: ``pose.pose``.
+
+    The covariance is not used (a NaN there does not refuse the message).
+    """
+    R, b = pose_to_rt(msg.pose.pose, settings.quaternion_tolerance, 'pose.pose')
+    return msg.header, R, b
+
+
+def odometry_to_transform(msg, settings):
+    """(header, R, b) of a nav_msgs/Odometry: ``pose.pose``, the body in header.frame_id.
+
+    The body is ``child_frame_id``; the twist and the covariances are not used.
+    """
+    R, b = pose_to_rt(msg.pose.pose, settings.quaternion_tolerance, 'pose.pose')
+    return msg.header, R, b
+
+
+def imu_to_transform(msg, settings):
+    """(header, R, 0) of a sensor_msgs/Imu's ``orientation``.
+
+    sensor_msgs/Imu marks "no orientation estimate" with orientation_covariance[0] = -1:
+    such a message is refused (NO_ORIENTATION). Angular velocity, linear acceleration and
+    the covariances are not used.
+    """
+    if msg.orientation_covariance[0] == -1.0:
+        raise RefusedInput(NO_ORIENTATION, 'orientation_covariance[0] is -1: the IMU gives '
+                           'no orientation estimate')
+    R = quaternion_msg_to_matrix(msg.orientation, settings.quaternion_tolerance)
+    return msg.header, R, np.zeros(3)
+
+
+def quaternion_stamped_to_transform(msg, settings):
+    """(header, R, 0) of a geometry_msgs/QuaternionStamped."""
+    R = quaternion_msg_to_matrix(msg.quaternion, settings.quaternion_tolerance, 'quaternion')
+    return msg.header, R, np.zeros(3)
+
+
+def transform_stamped_to_transform(msg, settings):
     """(header, R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
     t = msg.transform.translation
     _require_finite(('transform.translation.x', 'transform.translation.y',
                      'transform.translation.z'), (t.x, t.y, t.z))
-    R = quaternion_msg_to_matrix(msg.transform.rotation, tolerance, 'transform.rotation')
+    R = quaternion_msg_to_matrix(msg.transform.rotation, settings.quaternion_tolerance,
+                                 'transform.rotation')
     return msg.header, R, np.array((t.x, t.y, t.z))
 
 
-def euler_stamped_to_transform(msg, seq, degrees):
-    """(header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3) of ``seq``.
+def euler_stamped_to_transform(msg, settings):
+    """(header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3).
 
-    The angles are in degrees when ``degrees`` is true, else radians.
+    The angles are of ``settings.euler_sequence``, in degrees when ``settings.degrees``,
+    else radians.
     """
     v = msg.vector
     angles = (v.x, v.y, v.z)
     _require_finite(('vector.x', 'vector.y', 'vector.z'), angles)
-    if degrees:
+    if settings.degrees:
         angles = tuple(math.radians(a) for a in angles)
-    return msg.header, euler_to_matrix(angles, seq), np.zeros(3)
+    return msg.header, euler_to_matrix(angles, settings.euler_sequence), np.zeros(3)
 
 
 # ---------------------------------------------------------------------------------------
@@ -140,6 +186,15 @@ def vector3_stamped_msg(header, v, msg=None):
     msg = Vector3Stamped() if msg is None else msg
     msg.header = header
     _set_xyz(msg.vector, v)
+    return msg
+
+
+def quaternion_stamped_msg(header, q, msg=None):
+    """geometry_msgs/QuaternionStamped of q = (x, y, z, w), with the given header."""
+    msg = QuaternionStamped() if msg is None else msg
+    msg.header = header
+    o = msg.quaternion
+    o.x, o.y, o.z, o.w = float(q[0]), float(q[1]), float(q[2]), float(q[3])
     return msg
 
 

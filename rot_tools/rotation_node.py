@@ -1,17 +1,23 @@
-"""rotation_node: republish poses, Euler angles and transforms as matrix, axis-angle, screw.
+"""rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
 
-Every input message becomes one rigid transform (header, R, b) at the boundary
-(rot_tools.messages); its screw (Chasles) decomposition is computed once and every output —
-rotation vector θ·l̂, twist (θ·l̂, θ·m + d·l̂) = screw_log, marker along the axis — is read
-off it, so at θ = π all outputs of one input share the axis sign. Outputs carry the input's
-header. Topics, services and parameters: SPEC §3 and README "Using it in ROS 2".
+Every input kind is one row of :data:`INPUTS` — topic, message type, converter — and every
+message becomes one rigid transform (header, R, b) at the boundary (rot_tools.messages).
+From there one path serves them all: its screw (Chasles) decomposition is computed once and
+every output — rotation vector θ·l̂, Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, marker
+along the axis — is read off it, so at θ = π all outputs of one input share the axis sign;
+the quaternion is matrix_to_quaternion of R. Outputs carry the input's header. Topics,
+services and parameters: SPEC §3, §3.1 and README "Using it in ROS 2".
 """
 
+import difflib
+from functools import partial
 import math
 import sys
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
-from geometry_msgs.msg import PoseStamped, TransformStamped, TwistStamped, Vector3Stamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
+from geometry_msgs.msg import TransformStamped, TwistStamped, Vector3Stamped
+from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
@@ -21,6 +27,7 @@ from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValu
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker
@@ -30,6 +37,7 @@ from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
 from rot_tools.report import decompose, to_yaml, transform_report
 from rot_tools.screw import screw_from_transform, screw_interpolate
+from rot_tools.so3 import matrix_to_quaternion
 
 FRAME_MISMATCH = 'frame_mismatch'
 BAD_TOLERANCE = 'bad_tolerance'
@@ -46,6 +54,41 @@ MAX_PATH_STEPS = 10_000
 """A tolerance that needs more steps than this is refused (the reply would be huge)."""
 
 
+class InputKind(NamedTuple):
+    """One kind of input: where it arrives, its type, and how it becomes (header, R, b)."""
+
+    topic: str
+    msg_type: type
+    convert: Callable
+    """convert(msg, settings) -> (header, R, b); raises messages.RefusedInput."""
+
+
+INPUTS = (
+    InputKind('~/pose', PoseStamped, messages.pose_stamped_to_transform),
+    InputKind('~/euler', Vector3Stamped, messages.euler_stamped_to_transform),
+    InputKind('~/transform', TransformStamped, messages.transform_stamped_to_transform),
+    InputKind('~/pose_with_covariance', PoseWithCovarianceStamped,
+              messages.pose_with_covariance_stamped_to_transform),
+    InputKind('~/odometry', Odometry, messages.odometry_to_transform),
+    InputKind('~/imu', Imu, messages.imu_to_transform),
+    InputKind('~/orientation', QuaternionStamped, messages.quaternion_stamped_to_transform),
+)
+"""Every input of the node (SPEC §3, §3.1); each joins the one path (header, R, b) → outputs."""
+
+
+def type_name(msg_type):
+    """'nav_msgs/msg/Odometry' for the class nav_msgs.msg.Odometry."""
+    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
+
+
+class Source(NamedTuple):
+    """An input subscription as the callbacks see it: resolved topic, type name, converter."""
+
+    topic: str
+    type_name: str
+    convert: Callable
+
+
 class Settings(NamedTuple):
     """The parameters as the callbacks use them; replaced whole when a parameter changes."""
 
@@ -60,6 +103,7 @@ class Outputs(NamedTuple):
     """The output messages, reused from one input to the next."""
 
     matrix: Float64MultiArray
+    quaternion: QuaternionStamped
     rotvec: Vector3Stamped
     euler: Vector3Stamped
     twist: TwistStamped
@@ -69,7 +113,7 @@ class Outputs(NamedTuple):
 class Latest(NamedTuple):
     """The latest accepted input, kept for ~/describe (the report is built on request)."""
 
-    topic: str
+    source: Source
     header: object
     R: np.ndarray
     b: np.ndarray
@@ -120,7 +164,7 @@ def _check_parameter(name, value):
 
 
 class RotationNode(Node):
-    """Subscribes to pose / Euler / transform topics and republishes their decompositions."""
+    """Subscribes to every input of INPUTS and republishes their decompositions."""
 
     def __init__(self, node_name='rot_tools', **kwargs):
         super().__init__(node_name, **kwargs)
@@ -132,6 +176,7 @@ class RotationNode(Node):
             if reason:
                 self.destroy_node()
                 raise InvalidParameterValueException(name, value, reason)
+        self._warn_about_unknown_overrides()
         self._settings = self._read_settings()
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
@@ -140,31 +185,38 @@ class RotationNode(Node):
         self._latest = None
 
         # One message per output, refilled for each input (see rot_tools.messages).
-        self._out = Outputs(messages.rotation_matrix_msg(np.eye(3)), Vector3Stamped(),
-                            Vector3Stamped(), TwistStamped(),
+        self._out = Outputs(messages.rotation_matrix_msg(np.eye(3)), QuaternionStamped(),
+                            Vector3Stamped(), Vector3Stamped(), TwistStamped(),
                             messages.screw_axis_marker(None, (0, 0, 0), (0, 0, 1), 1.0))
         qos = QoSProfile(depth=10)
         self._matrix_pub = self.create_publisher(Float64MultiArray, '~/rotation_matrix', qos)
+        self._quaternion_pub = self.create_publisher(QuaternionStamped, '~/quaternion', qos)
         self._axis_angle_pub = self.create_publisher(Vector3Stamped, '~/axis_angle', qos)
         self._euler_pub = self.create_publisher(Vector3Stamped, '~/euler_angles', qos)
         self._screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
         self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
 
-        self._pose_sub = self.create_subscription(
-            PoseStamped, '~/pose', self._on_pose, qos_profile_sensor_data)
-        self._euler_sub = self.create_subscription(
-            Vector3Stamped, '~/euler', self._on_euler, qos_profile_sensor_data)
-        self._transform_sub = self.create_subscription(
-            TransformStamped, '~/transform', self._on_transform, qos_profile_sensor_data)
+        self._sources = []
+        for kind in INPUTS:
+            source = Source(self.resolve_topic_name(kind.topic), type_name(kind.msg_type),
+                            kind.convert)
+            self.create_subscription(kind.msg_type, kind.topic,
+                                     partial(self._on_input, source), qos_profile_sensor_data)
+            self._sources.append(source)
 
         self._describe_srv = self.create_service(Trigger, '~/describe', self._on_describe)
         self._screw_path_srv = self.create_service(
             GetPlan, '~/screw_path', self._on_screw_path)
         self._screw_path_name = self.resolve_service_name('~/screw_path')
         self.get_logger().info(
-            f'decomposing {self._pose_sub.topic_name}, {self._euler_sub.topic_name} and '
-            f'{self._transform_sub.topic_name} (euler_sequence {self._settings.euler_sequence}'
-            f", angle_unit {'deg' if self._settings.degrees else 'rad'})")
+            f'decomposing {self._input_topics()} (euler_sequence '
+            f"{self._settings.euler_sequence}, angle_unit "
+            f"{'deg' if self._settings.degrees else 'rad'})")
+
+    def _input_topics(self):
+        """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
+        topics = [source.topic for source in self._sources]
+        return ', '.join(topics[:-1]) + ' or ' + topics[-1]
 
     # -- parameters --------------------------------------------------------------------
 
@@ -188,48 +240,47 @@ class RotationNode(Node):
         if any(parameter.name in PARAMETERS for parameter in parameters):
             self._settings = self._read_settings()
 
-    # -- inputs ------------------------------------------------------------------------
+    def _warn_about_unknown_overrides(self):
+        """Warn about each start-up override (-p, --params-file) that names no parameter.
 
-    def _on_pose(self, msg):
-        settings = self._settings
-        self._process(self._pose_sub.topic_name, settings, messages.pose_stamped_to_transform,
-                      msg, settings.quaternion_tolerance)
+        rclpy keeps the overrides it was given (command line, parameter files, the
+        parameter_overrides argument) in Node._parameter_overrides and has no public
+        accessor for them; without this a misspelt ``-p euler_sequnce:=xyz`` is silently
+        ignored.
+        """
+        for name in sorted(getattr(self, '_parameter_overrides', {})):
+            if self.has_parameter(name):
+                continue
+            close = difflib.get_close_matches(name, PARAMETERS, n=1)
+            hint = f": did you mean '{close[0]}'?" if close else (
+                ': its parameters are ' + ', '.join(PARAMETERS))
+            self.get_logger().warning(
+                f"parameter override '{name}' is not a parameter of this node and is "
+                f'ignored{hint}')
 
-    def _on_euler(self, msg):
-        settings = self._settings
-        self._process(self._euler_sub.topic_name, settings,
-                      messages.euler_stamped_to_transform,
-                      msg, settings.euler_sequence, settings.degrees)
+    # -- inputs ----------------------------------------------------------------------------
 
-    def _on_transform(self, msg):
-        settings = self._settings
-        self._process(self._transform_sub.topic_name, settings,
-                      messages.transform_stamped_to_transform,
-                      msg, settings.quaternion_tolerance)
-
-    def _refuse(self, topic, reason, text):
-        self._refused[reason] += 1
-        self.get_logger().warning(f'refused input on {topic} ({reason}): {text}',
-                                  throttle_duration_sec=1.0)
-
-    def _process(self, topic, settings, convert, *args):
+    def _on_input(self, source, msg):
         """Convert one message to (header, R, b) and publish every output, or refuse it."""
+        settings = self._settings
         try:
-            header, R, b = convert(*args)
+            header, R, b = source.convert(msg, settings)
             d = decompose(R, b, settings.euler_sequence, check=False)  # floats: no warnings
             if not all(map(math.isfinite, d.twist.tolist() + d.screw.point.tolist())):
                 raise messages.RefusedInput(
                     NOT_DECOMPOSABLE, 'values too large to decompose in float64')
             rotvec = d.axis * d.angle
             angles = np.degrees(d.euler) if settings.degrees else d.euler
+            q = matrix_to_quaternion(R, check=False)
         except messages.RefusedInput as exc:
-            self._refuse(topic, exc.reason, str(exc))
+            self._refuse(source.topic, exc.reason, str(exc))
             return
         except RotationError as exc:
-            self._refuse(topic, NOT_DECOMPOSABLE, str(exc))
+            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc))
             return
         out = self._out
         self._matrix_pub.publish(messages.rotation_matrix_msg(R, out.matrix))
+        self._quaternion_pub.publish(messages.quaternion_stamped_msg(header, q, out.quaternion))
         self._axis_angle_pub.publish(messages.vector3_stamped_msg(header, rotvec, out.rotvec))
         self._euler_pub.publish(messages.vector3_stamped_msg(header, angles, out.euler))
         self._screw_pub.publish(messages.twist_stamped_msg(header, d.twist, out.twist))
@@ -237,7 +288,12 @@ class RotationNode(Node):
         if settings.publish_markers and (screw.angle != 0.0 or screw.translation != 0.0):
             self._marker_pub.publish(messages.screw_axis_marker(
                 header, screw.point, screw.direction, settings.marker_scale, out.marker))
-        self._latest = Latest(topic, header, R, b, settings)
+        self._latest = Latest(source, header, R, b, settings)
+
+    def _refuse(self, topic, reason, text):
+        self._refused[reason] += 1
+        self.get_logger().warning(f'refused input on {topic} ({reason}): {text}',
+                                  throttle_duration_sec=1.0)
 
     # -- services ----------------------------------------------------------------------
 
@@ -250,14 +306,16 @@ class RotationNode(Node):
         refused = self.refused_counts()
         latest = self._latest
         if latest is None:
+            counts = ', '.join(f'{reason} {n}' for reason, n in refused.items()
+                               if n and reason != 'total')
             response.success = False
             response.message = (
-                'Nothing has been received yet on {}, {} or {} ({} input(s) refused).'.format(
-                    self._pose_sub.topic_name, self._euler_sub.topic_name,
-                    self._transform_sub.topic_name, refused['total']))
+                f'Nothing has been accepted yet on {self._input_topics()} '
+                f"({refused['total']} input(s) refused{': ' + counts if counts else ''}).")
             return response
         stamp = latest.header.stamp
-        data = {'source': latest.topic,
+        data = {'source': latest.source.topic,
+                'source_type': latest.source.type_name,
                 'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
                 'frame_id': latest.header.frame_id}
         data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,

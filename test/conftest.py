@@ -1,9 +1,13 @@
-"""Shared test fixtures: an isolated DDS domain for this run, rclpy contexts, a test node.
+"""Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
 
 Node tests use real DDS on the loopback. To keep test runs (and anything else on the
 machine) apart, this module sets, before rclpy is first initialised, a ROS_DOMAIN_ID of its
 own for this run (derived from the pid, in 1..101) and ROS_AUTOMATIC_DISCOVERY_RANGE=
-LOCALHOST. rclpy is imported lazily: the math tests must run without it.
+LOCALHOST. A domain alone is not enough — another program may use the same ID (a stray
+rotation_node answered a test once) — so every node under test and every tester also lives
+in a namespace unique to this run (:data:`RUN`, from the pid and a random token), and each
+test gets a namespace of its own below it. rclpy is imported lazily: the math tests must
+run without it.
 
 Nothing here sleeps for discovery: :class:`Tester` waits for the graph (matched publishers
 and subscriptions, available services) with bounded timeouts, and retries service calls,
@@ -12,6 +16,12 @@ since Fast DDS sometimes drops the reply to a brand-new client.
 
 import itertools
 import os
+from pathlib import Path
+import secrets
+import shutil
+import signal
+import subprocess
+import sys
 import time
 
 import pytest
@@ -21,13 +31,81 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.pop('ROS_LOCALHOST_ONLY', None)  # deprecated; conflicts with the range above
 os.environ.pop('ROS_STATIC_PEERS', None)
 
-OUTPUTS = ('rotation_matrix', 'axis_angle', 'euler_angles', 'screw', 'screw_axis')
+RUN = f'rt{os.getpid()}_{secrets.token_hex(4)}'
+"""This test run's token: the namespaces of its nodes start with /RUN."""
+
+OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw',
+           'screw_axis')
 """Published topics of rotation_node, relative to its name."""
 
 TIMEOUT = 5.0
 """Upper bound of every wait (discovery, message, service reply); never reached when well."""
 
+REPO = Path(__file__).resolve().parents[1]
+
 _namespaces = itertools.count(1)
+
+
+def console_script(name, module):
+    """Return the command of console script ``name``: next to this Python, on PATH, or -m.
+
+    Without an installed package it is ``python -m module``, run from this checkout.
+    """
+    here = Path(sys.executable).parent / name
+    script = str(here) if here.exists() else shutil.which(name)
+    return [script] if script else [sys.executable, '-m', module]
+
+
+def script_env(command):
+    """Return os.environ for ``command``: unbuffered; this checkout importable for -m."""
+    env = dict(os.environ, PYTHONUNBUFFERED='1')
+    if command[0] == sys.executable:
+        env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(REPO), env.get('PYTHONPATH')]))
+    return env
+
+
+class NodeProcess:
+    """rotation_node in a child process, in a namespace of this run; stdout / stderr in files.
+
+    ``name`` is the node's fully qualified name (/RUN/pN/rot_tools).
+    """
+
+    def __init__(self, tmp_path, *ros_args):
+        namespace = f'/{RUN}/p{next(_namespaces)}'
+        self.name = f'{namespace}/rot_tools'
+        self.out_path = tmp_path / f'{namespace[1:].replace("/", "_")}.out'
+        self.err_path = tmp_path / f'{namespace[1:].replace("/", "_")}.err'
+        args = console_script('rotation_node', 'rot_tools.rotation_node') + [
+            '--ros-args', '-r', f'__ns:={namespace}', *ros_args]
+        with open(self.out_path, 'w') as out, open(self.err_path, 'w') as err:
+            self.process = subprocess.Popen(args, stdout=out, stderr=err, env=script_env(args))
+
+    def stop(self, signum=signal.SIGTERM):
+        """Send ``signum``; return (exit status, seconds to exit, stderr)."""
+        begin = time.monotonic()
+        self.process.send_signal(signum)
+        try:
+            status = self.process.wait(timeout=10.0)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+            pytest.fail(f'rotation_node ignored signal {signum} for 10 s')
+        return status, time.monotonic() - begin, self.err_path.read_text()
+
+    def kill(self):
+        if self.process.poll() is None:
+            self.process.kill()
+            self.process.wait()
+
+    def wait_for_stderr(self, text, timeout=TIMEOUT * 4):
+        """Wait until ``text`` appears in the process's stderr; return all of it."""
+        deadline = time.monotonic() + timeout
+        while text not in self.err_path.read_text():
+            if time.monotonic() > deadline or self.process.poll() is not None:
+                pytest.fail(f'{text!r} not in stderr of rotation_node:\n'
+                            + self.err_path.read_text())
+            time.sleep(0.05)
+        return self.err_path.read_text()
 
 
 class Tester:
@@ -41,7 +119,7 @@ class Tester:
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         self.context = context
-        self.node = rclpy.create_node(name, context=context)
+        self.node = rclpy.create_node(name, namespace=f'/{RUN}', context=context)
         self.executors = [SingleThreadedExecutor(context=context)]
         self.executors[0].add_node(self.node)
         self.received = {}
@@ -103,11 +181,12 @@ class Tester:
             msg_type, topic, self.received[topic].append, qos)
 
     def subscribe_outputs(self, prefix):
-        """Subscribe (reliable, depth 10, like the node) to the node's five outputs."""
-        from geometry_msgs.msg import TwistStamped, Vector3Stamped
+        """Subscribe (reliable, depth 10, like the node) to the node's outputs."""
+        from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
         from std_msgs.msg import Float64MultiArray
         from visualization_msgs.msg import Marker
-        types = (Float64MultiArray, Vector3Stamped, Vector3Stamped, TwistStamped, Marker)
+        types = (Float64MultiArray, QuaternionStamped, Vector3Stamped, Vector3Stamped,
+                 TwistStamped, Marker)
         for name, msg_type in zip(OUTPUTS, types):
             self.subscribe(f'{prefix}/{name}', msg_type)
 
@@ -200,8 +279,25 @@ def tester_context():
 
 @pytest.fixture
 def namespace():
-    """Give each test a namespace of its own: no message of one test reaches another."""
-    return f'/t{next(_namespaces)}'
+    """Give each test a namespace of its own, below this run's: /RUN/tN."""
+    return f'/{RUN}/t{next(_namespaces)}'
+
+
+@pytest.fixture
+def node_process(tmp_path):
+    """Start rotation_node processes, each in a namespace of its own; kill them after the test.
+
+    start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args.
+    """
+    started = []
+
+    def start(*ros_args):
+        started.append(NodeProcess(tmp_path, *ros_args))
+        return started[-1]
+
+    yield start
+    for process in started:
+        process.kill()
 
 
 @pytest.fixture

@@ -1,10 +1,14 @@
 """rot_tools.messages: the message <-> NumPy boundary of rotation_node (no DDS needed)."""
 
 import math
+from types import SimpleNamespace
 
-from geometry_msgs.msg import PoseStamped, Quaternion, TransformStamped, Vector3Stamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Quaternion
+from geometry_msgs.msg import QuaternionStamped, TransformStamped, Vector3Stamped
+from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
+from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 
@@ -15,6 +19,12 @@ from rot_tools.messages import RefusedInput
 
 ATOL = 1e-12
 RNG = np.random.default_rng(7)
+
+
+def settings(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False):
+    """What the converters read of rotation_node's Settings."""
+    return SimpleNamespace(quaternion_tolerance=quaternion_tolerance,
+                           euler_sequence=euler_sequence, degrees=degrees)
 
 
 def quaternion(q):
@@ -78,7 +88,7 @@ def test_pose_stamped():
     msg.header.frame_id = 'map'
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 1.0, -2.0, 3.5
     msg.pose.orientation = quaternion(unit((1, 2, 3, 4)))
-    header, R, b = messages.pose_stamped_to_transform(msg, 1e-3)
+    header, R, b = messages.pose_stamped_to_transform(msg, settings())
     assert header is msg.header
     np.testing.assert_allclose(R, quaternion_to_matrix((1, 2, 3, 4)), rtol=0, atol=ATOL)
     assert b.tolist() == [1.0, -2.0, 3.5]
@@ -90,7 +100,7 @@ def test_pose_with_non_finite_position_is_refused(field, value, match):
     msg = PoseStamped()
     setattr(msg.pose.position, field, value)
     with pytest.raises(RefusedInput, match=match) as info:
-        messages.pose_stamped_to_transform(msg, 1e-3)
+        messages.pose_stamped_to_transform(msg, settings())
     assert info.value.reason == 'non_finite'
 
 
@@ -99,7 +109,7 @@ def test_transform_stamped():
     msg.header.frame_id = 'world'
     msg.transform.translation.x = 4.0
     msg.transform.rotation = quaternion((1, 0, 0, 0))
-    header, R, b = messages.transform_stamped_to_transform(msg, 1e-3)
+    header, R, b = messages.transform_stamped_to_transform(msg, settings())
     assert header is msg.header
     np.testing.assert_allclose(R, rot_x(math.pi), rtol=0, atol=ATOL)
     assert b.tolist() == [4.0, 0.0, 0.0]
@@ -112,7 +122,7 @@ def test_transform_with_nan_is_refused(where, match):
     msg = TransformStamped()
     getattr(msg.transform, where).y = math.nan
     with pytest.raises(RefusedInput, match=match) as info:
-        messages.transform_stamped_to_transform(msg, 1e-3)
+        messages.transform_stamped_to_transform(msg, settings())
     assert info.value.reason == 'non_finite'
 
 
@@ -120,7 +130,7 @@ def test_transform_with_zero_rotation_is_refused():
     msg = TransformStamped()
     msg.transform.rotation.w = 0.0
     with pytest.raises(RefusedInput, match='transform.rotation is the zero quaternion'):
-        messages.transform_stamped_to_transform(msg, 1e-3)
+        messages.transform_stamped_to_transform(msg, settings())
 
 
 @pytest.mark.parametrize('seq', ['ZYX', 'xyz', 'ZXZ', 'yxy'])
@@ -130,7 +140,8 @@ def test_euler_stamped(seq, degrees):
     msg = Vector3Stamped()
     given = np.degrees(angles) if degrees else angles
     msg.vector.x, msg.vector.y, msg.vector.z = map(float, given)
-    header, R, b = messages.euler_stamped_to_transform(msg, seq, degrees)
+    header, R, b = messages.euler_stamped_to_transform(
+        msg, settings(euler_sequence=seq, degrees=degrees))
     assert header is msg.header
     np.testing.assert_allclose(R, euler_to_matrix(angles, seq), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
@@ -140,8 +151,82 @@ def test_euler_stamped_with_inf_is_refused():
     msg = Vector3Stamped()
     msg.vector.z = math.inf
     with pytest.raises(RefusedInput, match=r'vector\.z is inf') as info:
-        messages.euler_stamped_to_transform(msg, 'ZYX', False)
+        messages.euler_stamped_to_transform(msg, settings())
     assert info.value.reason == 'non_finite'
+
+
+def test_pose_with_covariance_stamped_ignores_the_covariance():
+    msg = PoseWithCovarianceStamped()
+    msg.header.frame_id = 'map'
+    msg.pose.pose.position.y = -1.5
+    msg.pose.pose.orientation = quaternion((0, 1, 0, 0))
+    msg.pose.covariance = [math.nan] * 36
+    header, R, b = messages.pose_with_covariance_stamped_to_transform(msg, settings())
+    assert header is msg.header
+    np.testing.assert_allclose(R, np.diag([-1.0, 1.0, -1.0]), rtol=0, atol=0)
+    assert b.tolist() == [0.0, -1.5, 0.0]
+    msg.pose.pose.orientation.w = 2.0
+    with pytest.raises(RefusedInput, match=r'pose\.pose\.orientation has norm 2\.23606') as info:
+        messages.pose_with_covariance_stamped_to_transform(msg, settings())
+    assert info.value.reason == 'non_unit_quaternion'
+
+
+def test_odometry_is_its_pose_and_ignores_the_twist():
+    msg = Odometry()
+    msg.header.frame_id, msg.child_frame_id = 'odom', 'base_link'
+    msg.pose.pose.position.x = 3.0
+    msg.pose.pose.orientation = quaternion((0, 0, math.sin(0.25), math.cos(0.25)))
+    msg.twist.twist.angular.z = math.nan
+    header, R, b = messages.odometry_to_transform(msg, settings())
+    assert header is msg.header
+    np.testing.assert_allclose(R, rot_z(0.5), rtol=0, atol=ATOL)
+    assert b.tolist() == [3.0, 0.0, 0.0]
+    msg.pose.pose.position.z = math.inf
+    with pytest.raises(RefusedInput, match=r'pose\.pose\.position\.z is inf'):
+        messages.odometry_to_transform(msg, settings())
+
+
+def test_imu_orientation():
+    msg = Imu()
+    msg.orientation = quaternion((math.sin(0.5), 0, 0, math.cos(0.5)))
+    msg.linear_acceleration.x = math.inf  # not used
+    header, R, b = messages.imu_to_transform(msg, settings())
+    assert header is msg.header
+    np.testing.assert_allclose(R, rot_x(1.0), rtol=0, atol=ATOL)
+    assert b.tolist() == [0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize('q', [(0, 0, 0, 0), (0, 0, 0, 1), (math.nan, 0, 0, 0)])
+def test_imu_without_orientation_is_refused(q):
+    msg = Imu()
+    msg.orientation = quaternion(q)
+    msg.orientation_covariance[0] = -1.0
+    with pytest.raises(RefusedInput, match=r'orientation_covariance\[0\] is -1') as info:
+        messages.imu_to_transform(msg, settings())
+    assert info.value.reason == 'no_orientation'
+    assert 'no_orientation' in messages.REFUSAL_REASONS
+
+
+def test_imu_with_a_covariance_is_used():
+    msg = Imu()
+    msg.orientation = quaternion((0, 0, 0, 1))
+    msg.orientation_covariance = [0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01]
+    np.testing.assert_array_equal(messages.imu_to_transform(msg, settings())[1], np.eye(3))
+    msg.orientation.w = 0.0
+    with pytest.raises(RefusedInput, match='orientation is the zero quaternion'):
+        messages.imu_to_transform(msg, settings())
+
+
+def test_quaternion_stamped():
+    msg = QuaternionStamped()
+    msg.quaternion = quaternion(np.array([0.0, 0.0, 1.0, 1.0]) * math.sqrt(0.5) * (1 + 5e-4))
+    header, R, b = messages.quaternion_stamped_to_transform(msg, settings())
+    assert header is msg.header
+    np.testing.assert_allclose(R, rot_z(math.pi / 2), rtol=0, atol=ATOL)
+    assert b.tolist() == [0.0, 0.0, 0.0]
+    with pytest.raises(RefusedInput, match='quaternion has norm') as info:
+        messages.quaternion_stamped_to_transform(msg, settings(quaternion_tolerance=1e-4))
+    assert info.value.reason == 'non_unit_quaternion'
 
 
 # ---------------------------------------------------------------------------------------
@@ -165,6 +250,14 @@ def test_vector3_and_twist_messages():
     t = messages.twist_stamped_msg(header, np.arange(6.0))
     assert (t.twist.angular.x, t.twist.angular.y, t.twist.angular.z) == (0.0, 1.0, 2.0)
     assert (t.twist.linear.x, t.twist.linear.y, t.twist.linear.z) == (3.0, 4.0, 5.0)
+
+
+def test_quaternion_stamped_msg():
+    header = Header(frame_id='map')
+    msg = messages.quaternion_stamped_msg(header, np.array([0.0, 0.6, 0.0, 0.8]))
+    assert msg.header is header
+    q = msg.quaternion
+    assert (q.x, q.y, q.z, q.w) == (0.0, 0.6, 0.0, 0.8)
 
 
 def test_screw_axis_marker():

@@ -2,14 +2,18 @@
 
 The node under test lives in one rclpy context (one DDS participant), the test node in
 another, so every message crosses DDS as it would between processes; each test has a
-namespace of its own. Expected values come from the math module (rot_tools), compared to
-1e-12; ~/describe prints 12 significant digits, so its numbers are compared to that.
+namespace of its own (below this run's, see conftest). Expected values come from the math
+module (rot_tools) and, for the robot inputs and the quaternion output, independently from
+scipy.spatial.transform.Rotation and closed forms; compared to 1e-12. ~/describe prints 12
+significant digits, so its numbers are compared to that.
 """
 
 import math
 import time
 
-from geometry_msgs.msg import PoseStamped, TransformStamped, Vector3Stamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
+from geometry_msgs.msg import TransformStamped, Vector3Stamped
+from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
 import numpy as np
 import pytest
@@ -17,6 +21,8 @@ from rcl_interfaces.msg import Log, ParameterType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, ReliabilityPolicy
+from scipy.spatial.transform import Rotation
+from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker
 import yaml
@@ -28,8 +34,10 @@ from rot_tools.report import transform_report
 from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 
 ATOL = 1e-12
-INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped}
-ALWAYS = ('rotation_matrix', 'axis_angle', 'euler_angles', 'screw')
+INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped,
+          'pose_with_covariance': PoseWithCovarianceStamped, 'odometry': Odometry, 'imu': Imu,
+          'orientation': QuaternionStamped}
+ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw')
 """Outputs published for every accepted input (screw_axis only for a non-identity one)."""
 
 
@@ -67,6 +75,52 @@ def euler_stamped(angles, frame='map'):
     return msg
 
 
+def set_pose(pose, q, p):
+    """Fill a geometry_msgs/Pose with position p and orientation q = (x, y, z, w)."""
+    pose.position.x, pose.position.y, pose.position.z = map(float, p)
+    o = pose.orientation
+    o.x, o.y, o.z, o.w = map(float, q)
+
+
+def pose_with_covariance(q, p=(0.0, 0.0, 0.0), frame='map'):
+    """Build a PoseWithCovarianceStamped; its covariance is NaN (unused by the node)."""
+    msg = PoseWithCovarianceStamped()
+    msg.header.frame_id = frame
+    set_pose(msg.pose.pose, q, p)
+    msg.pose.covariance = [math.nan] * 36
+    return msg
+
+
+def odometry(q, p=(0.0, 0.0, 0.0), frame='odom'):
+    """Build an Odometry of base_link in ``frame``; its twist is Inf (unused by the node)."""
+    msg = Odometry()
+    msg.header.frame_id = frame
+    msg.child_frame_id = 'base_link'
+    set_pose(msg.pose.pose, q, p)
+    msg.twist.twist.linear.x = math.inf
+    return msg
+
+
+def imu(q, frame='imu_link', orientation_covariance0=0.0):
+    """Build an Imu with orientation q; angular velocity NaN (unused by the node)."""
+    msg = Imu()
+    msg.header.frame_id = frame
+    o = msg.orientation
+    o.x, o.y, o.z, o.w = map(float, q)
+    msg.orientation_covariance[0] = orientation_covariance0
+    msg.angular_velocity.z = math.nan
+    return msg
+
+
+def quaternion_stamped(q, frame='map'):
+    """Build a QuaternionStamped."""
+    msg = QuaternionStamped()
+    msg.header.frame_id = frame
+    o = msg.quaternion
+    o.x, o.y, o.z, o.w = map(float, q)
+    return msg
+
+
 def xyz(v):
     """Return a geometry_msgs Vector3 / Point as a NumPy array."""
     return np.array([v.x, v.y, v.z])
@@ -88,6 +142,10 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
     for name in ALWAYS[1:] + (('screw_axis',) if marker else ()):
         assert out[name].header.stamp.sec == stamp
         assert out[name].header.frame_id == frame
+    # scipy's canonical quaternion has SPEC §3.1's sign rule (w > 0, else first non-zero > 0)
+    np.testing.assert_allclose(quat(out['quaternion'].quaternion),
+                               Rotation.from_matrix(R).as_quat(canonical=True),
+                               rtol=0, atol=ATOL)
     np.testing.assert_allclose(xyz(out['axis_angle'].vector), matrix_to_rotvec(R),
                                rtol=0, atol=ATOL)
     angles, _ = matrix_to_euler(R, seq)
@@ -262,6 +320,93 @@ def test_euler_outputs(rig, angles):
         np.testing.assert_allclose(xyz(out['euler_angles'].vector), angles, rtol=0, atol=ATOL)
 
 
+ROBOT_INPUTS = {  # kind: (build(q, p), carries a position)
+    'pose_with_covariance': (lambda q, p: pose_with_covariance(q, p, frame='map'), True),
+    'odometry': (lambda q, p: odometry(q, p, frame='map'), True),
+    'imu': (lambda q, p: imu(q, frame='map'), False),
+    'orientation': (lambda q, p: quaternion_stamped(q, frame='map'), False),
+}
+
+
+def check_against_scipy(out, q, b):
+    """The outputs of an input with orientation q and position b, against scipy."""
+    rotation = Rotation.from_quat(q)  # normalises q; (x, y, z, w) order, as ROS
+    np.testing.assert_allclose(np.reshape(out['rotation_matrix'].data, (3, 3)),
+                               rotation.as_matrix(), rtol=0, atol=ATOL)
+    np.testing.assert_allclose(quat(out['quaternion'].quaternion),
+                               rotation.as_quat(canonical=True), rtol=0, atol=ATOL)
+    np.testing.assert_allclose(xyz(out['axis_angle'].vector), rotation.as_rotvec(),
+                               rtol=0, atol=ATOL)
+    if abs(rotation.as_matrix()[2, 0]) < 0.99:  # away from gimbal lock, one answer
+        np.testing.assert_allclose(xyz(out['euler_angles'].vector), rotation.as_euler('ZYX'),
+                                   rtol=0, atol=ATOL)
+    if not b.any():  # a pure rotation about an axis through the origin: twist = (θ·l̂, 0)
+        np.testing.assert_allclose(xyz(out['screw'].twist.angular), rotation.as_rotvec(),
+                                   rtol=0, atol=ATOL)
+        assert xyz(out['screw'].twist.linear).tolist() == [0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize('case', ['general', 'half_turn_oblique', 'tiny_angle', 'gimbal_lock'])
+@pytest.mark.parametrize('kind', ROBOT_INPUTS)
+def test_robot_input_outputs(rig, kind, case):
+    build, positioned = ROBOT_INPUTS[kind]
+    q, p = POSE_CASES[case]
+    b = np.asarray(p, float) if positioned else np.zeros(3)
+    stamp = rig.send(kind, build(q, p))
+    out = rig.outputs(stamp)
+    check_outputs(out, stamp, 'map', quaternion_to_matrix(q), b)
+    check_against_scipy(out, q, b)
+    report = rig.report()
+    assert report['source'] == rig.topic(kind)
+    assert report['source_type'] == {
+        'pose_with_covariance': 'geometry_msgs/msg/PoseWithCovarianceStamped',
+        'odometry': 'nav_msgs/msg/Odometry', 'imu': 'sensor_msgs/msg/Imu',
+        'orientation': 'geometry_msgs/msg/QuaternionStamped'}[kind]
+    assert report['translation'] == pytest.approx(b.tolist(), rel=1e-11, abs=1e-12)
+
+
+def test_odometry_yaw_in_degrees(make_rig):
+    """The question users ask most: a robot's roll, pitch, yaw from its odometry."""
+    rig = make_rig(angle_unit='deg')
+    yaw, pitch, roll = math.radians(30.0), math.radians(-10.0), math.radians(5.0)
+    # q of Rot_z(yaw) Rot_y(pitch) Rot_x(roll), the product of the three half-angle forms
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    q = (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
+         cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
+    out = rig.roundtrip('odometry', odometry(q, (2.0, 1.0, 0.0)))
+    np.testing.assert_allclose(xyz(out['euler_angles'].vector), [30.0, -10.0, 5.0],
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(quat(out['quaternion'].quaternion), q, rtol=0, atol=ATOL)
+    assert out['euler_angles'].header.frame_id == 'odom'
+
+
+@pytest.mark.parametrize('seq, angles, degrees', [
+    ('ZYX', (30.0, 20.0, 10.0), True), ('xyz', (0.3, -1.2, 2.5), False),
+    ('ZXZ', (-2.0, 0.4, 3.0), False), ('yxy', (100.0, 170.0, -45.0), True)])
+def test_quaternion_of_euler_input(make_rig, seq, angles, degrees):
+    """~/quaternion of Euler input is the quaternion to paste into a Pose (vs scipy)."""
+    rig = make_rig(euler_sequence=seq, angle_unit='deg' if degrees else 'rad')
+    out = rig.roundtrip('euler', euler_stamped(angles))
+    expected = Rotation.from_euler(seq, angles, degrees=degrees).as_quat(canonical=True)
+    np.testing.assert_allclose(quat(out['quaternion'].quaternion), expected, rtol=0, atol=ATOL)
+
+
+@pytest.mark.parametrize('q, expected', [
+    ((0.0, 0.0, -1.0, 0.0), (0.0, 0.0, 1.0, 0.0)),  # half turn: first non-zero made positive
+    ((0.0, -0.6, 0.8, 0.0), (0.0, 0.6, -0.8, 0.0)),
+    ((0.1, 0.2, -0.3, -0.9), (-0.1, -0.2, 0.3, 0.9)),  # w < 0: the whole q flips
+    ((0.0, 0.0, 0.0, -1.0), (0.0, 0.0, 0.0, 1.0)),
+])
+def test_quaternion_output_has_the_canonical_sign(rig, q, expected):
+    q = np.array(q) / np.linalg.norm(q)
+    expected = np.array(expected) / np.linalg.norm(expected)
+    stamp = rig.send('orientation', quaternion_stamped(q))
+    out = rig.outputs(stamp, marker=not np.allclose(np.abs(q), [0, 0, 0, 1]))
+    np.testing.assert_allclose(quat(out['quaternion'].quaternion), expected, rtol=0, atol=ATOL)
+
+
 def test_identity_has_no_marker(rig):
     rig.send('pose', pose_stamped((0, 0, 0, 1)))
     stamp = rig.send('euler', euler_stamped((0.0, 0.0, 0.0)))
@@ -357,7 +502,53 @@ BAD_INPUTS = {
                   'non_finite', 'vector.y is nan'),
     'euler_inf': ('euler', euler_stamped((math.inf, 0, 0)),
                   'non_finite', 'vector.x is inf'),
+    'pose_with_covariance_nan_position': (
+        'pose_with_covariance', pose_with_covariance((0, 0, 0, 1), (0, math.nan, 0)),
+        'non_finite', 'pose.pose.position.y is nan'),
+    'pose_with_covariance_inf_orientation': (
+        'pose_with_covariance', pose_with_covariance((0, -math.inf, 0, 1)),
+        'non_finite', 'pose.pose.orientation.y is -inf'),
+    'pose_with_covariance_zero_quaternion': (
+        'pose_with_covariance', pose_with_covariance((0, 0, 0, 0)),
+        'zero_quaternion', 'pose.pose.orientation is the zero quaternion'),
+    'pose_with_covariance_long_quaternion': (
+        'pose_with_covariance', pose_with_covariance((0, 1, 0, 1)),
+        'non_unit_quaternion', 'norm 1.41421356'),
+    'odometry_inf_position': ('odometry', odometry((0, 0, 0, 1), (math.inf, 0, 0)),
+                              'non_finite', 'pose.pose.position.x is inf'),
+    'odometry_nan_orientation': ('odometry', odometry((0, 0, math.nan, 1)),
+                                 'non_finite', 'pose.pose.orientation.z is nan'),
+    'odometry_zero_quaternion': ('odometry', odometry((0, 0, 0, 0), (1, 2, 3)),
+                                 'zero_quaternion', 'zero quaternion'),
+    'odometry_short_quaternion': ('odometry', odometry((0, 0, 0.3, 0.3)),
+                                  'non_unit_quaternion', 'norm 0.424264069'),
+    'imu_no_orientation': ('imu', imu((0, 0, 0, 0), orientation_covariance0=-1.0),
+                           'no_orientation', 'orientation_covariance[0] is -1'),
+    'imu_no_orientation_with_unit_q': ('imu', imu((0, 0, 0, 1), orientation_covariance0=-1.0),
+                                       'no_orientation', 'no orientation estimate'),
+    'imu_nan_orientation': ('imu', imu((math.nan, 0, 0, 1)),
+                            'non_finite', 'orientation.x is nan'),
+    'imu_zero_quaternion': ('imu', imu((0, 0, 0, 0)),
+                            'zero_quaternion', 'orientation is the zero quaternion'),
+    'imu_long_quaternion': ('imu', imu((0, 0, 0, 1.01)),
+                            'non_unit_quaternion', 'norm 1.01'),
+    'orientation_inf': ('orientation', quaternion_stamped((0, 0, 0, math.inf)),
+                        'non_finite', 'quaternion.w is inf'),
+    'orientation_zero_quaternion': ('orientation', quaternion_stamped((0, 0, 0, 0)),
+                                    'zero_quaternion', 'quaternion is the zero quaternion'),
+    'orientation_far_from_unit': ('orientation', quaternion_stamped((3, 0, 0, 4)),
+                                  'non_unit_quaternion', 'norm 5'),
 }
+GOOD_INPUTS = {
+    'pose': pose_stamped((0, 0, 1, 0), (1, 0, 0)),
+    'transform': transform_stamped((0, 0, 1, 0), (1, 0, 0)),
+    'euler': euler_stamped((1.0, 0.0, 0.0)),
+    'pose_with_covariance': pose_with_covariance((0, 1, 0, 0), (0, 0, 1)),
+    'odometry': odometry((1, 0, 0, 0), (0, 1, 0)),
+    'imu': imu((0, 0, math.sqrt(0.5), math.sqrt(0.5))),
+    'orientation': quaternion_stamped((0.5, 0.5, 0.5, 0.5)),
+}
+"""A message of each kind that has outputs, screw axis included."""
 
 
 @pytest.mark.parametrize('case', BAD_INPUTS)
@@ -365,10 +556,7 @@ def test_bad_input_is_refused(rig, case):
     kind, bad, reason, why = BAD_INPUTS[case]
     rig.send(kind, bad)
     # The next good message on the same topic is processed after the bad one.
-    good = {'pose': pose_stamped((0, 0, 1, 0), (1, 0, 0)),
-            'transform': transform_stamped((0, 0, 1, 0), (1, 0, 0)),
-            'euler': euler_stamped((1.0, 0.0, 0.0))}[kind]
-    stamp = rig.send(kind, good)
+    stamp = rig.send(kind, GOOD_INPUTS[kind])
     rig.outputs(stamp)
     for name in ALWAYS + ('screw_axis',):
         assert len(rig.received(name)) == 1, f'{name} published for refused input'
@@ -422,8 +610,19 @@ def test_burst_of_bad_input_throttles_warnings_and_keeps_serving(rig):
 def test_describe_before_any_input(rig):
     response = rig.describe()
     assert not response.success
-    assert response.message.startswith('Nothing has been received yet on')
-    assert rig.topic('pose') in response.message and '0 input(s) refused' in response.message
+    assert response.message.startswith('Nothing has been accepted yet on')
+    for kind in INPUTS:
+        assert rig.topic(kind) in response.message
+    assert response.message.endswith('(0 input(s) refused).')
+
+
+def test_describe_before_any_accepted_input_counts_refusals(rig):
+    rig.send('imu', imu((0, 0, 0, 0), orientation_covariance0=-1.0))
+    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1,
+                          what='the refusal')
+    response = rig.describe()
+    assert not response.success
+    assert response.message.endswith('(1 input(s) refused: no_orientation 1).')
 
 
 def assert_report_close(actual, expected):
@@ -454,7 +653,8 @@ def test_describe_reports_the_latest_input(rig):
     assert report['frame_id'] == 'odom'
     expected = transform_report(quaternion_to_matrix(q), t, 'ZYX', False)
     assert_report_close({k: report[k] for k in expected}, expected)
-    assert list(report) == ['source', 'stamp', 'frame_id', *expected, 'refused']
+    assert list(report) == ['source', 'source_type', 'stamp', 'frame_id', *expected, 'refused']
+    assert report['source_type'] == 'geometry_msgs/msg/TransformStamped'
     assert report['refused'] == {'total': 0, **dict.fromkeys(REFUSAL_REASONS, 0)}
     assert set(report['screw']) >= {
         'direction', 'point', 'moment', 'angle', 'translation', 'pitch'}

@@ -1,88 +1,39 @@
 """End-to-end: rotation_node as a separate process, driven over DDS from this one.
 
 Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
-installed package, ``python -m rot_tools.rotation_node``), publishes to every input,
-receives every output, calls both services and a parameter service, then stops it with
-SIGTERM or SIGINT: exit status 0 within a second, and no traceback.
+installed package, ``python -m rot_tools.rotation_node``) in a namespace unique to this test
+run, publishes to its inputs, receives every output, calls both services and a parameter
+service, then stops it with SIGTERM or SIGINT: exit status 0 within a second, and no
+traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
+shipped parameter file.
 """
 
 import math
-import os
 from pathlib import Path
-import shutil
 import signal
-import subprocess
-import sys
 import time
 
 from geometry_msgs.msg import PoseStamped, TransformStamped, Vector3Stamped
+from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
 import numpy as np
 import pytest
-from rclpy.parameter import Parameter
+from rcl_interfaces.srv import GetParameters
+from rclpy.parameter import Parameter, parameter_value_to_python
+from scipy.spatial.transform import Rotation
 from std_srvs.srv import Trigger
 import yaml
 
+from conftest import OUTPUTS, REPO, RUN
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix, screw_from_transform,
     screw_log)
+from rot_tools.rotation_node import PARAMETERS
 
 ATOL = 1e-12
-NODE = '/rot_tools'
 STOP_WITHIN = 1.0
 """Seconds from the signal to the exit (SPEC §3: within a second)."""
-
-
-def node_command():
-    """Return the rotation_node console script of this environment, else python -m."""
-    here = Path(sys.executable).parent / 'rotation_node'
-    script = str(here) if here.exists() else shutil.which('rotation_node')
-    return [script] if script else [sys.executable, '-m', 'rot_tools.rotation_node']
-
-
-class NodeProcess:
-    """rotation_node in a child process, its stdout / stderr in files."""
-
-    def __init__(self, tmp_path, *ros_args):
-        self.out_path, self.err_path = tmp_path / 'stdout.txt', tmp_path / 'stderr.txt'
-        args = node_command() + (['--ros-args', *ros_args] if ros_args else [])
-        env = dict(os.environ, PYTHONUNBUFFERED='1')
-        if args[0] == sys.executable:  # not installed: run from this checkout
-            root = str(Path(__file__).resolve().parents[1])
-            env['PYTHONPATH'] = os.pathsep.join(filter(None, [root, env.get('PYTHONPATH')]))
-        with open(self.out_path, 'w') as out, open(self.err_path, 'w') as err:
-            self.process = subprocess.Popen(args, stdout=out, stderr=err, env=env)
-
-    def stop(self, signum, within=STOP_WITHIN):
-        """Send ``signum``; return (exit status, seconds to exit, stderr)."""
-        begin = time.monotonic()
-        self.process.send_signal(signum)
-        try:
-            status = self.process.wait(timeout=10.0)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
-            pytest.fail(f'rotation_node ignored signal {signum} for 10 s')
-        return status, time.monotonic() - begin, self.err_path.read_text()
-
-    def kill(self):
-        if self.process.poll() is None:
-            self.process.kill()
-            self.process.wait()
-
-
-@pytest.fixture
-def node_process(tmp_path):
-    """Start rotation_node (default name, default parameters); kill it if a test fails."""
-    started = []
-
-    def start(*ros_args):
-        started.append(NodeProcess(tmp_path, *ros_args))
-        return started[-1]
-
-    yield start
-    for process in started:
-        process.kill()
+PARAMETER_FILE = REPO / 'config' / 'rot_tools.yaml'
 
 
 def pose_stamped(q, p, stamp):
@@ -102,25 +53,39 @@ def xyz(v):
 class Remote:
     """The tester's view of the node process: publishers, output subscriptions, services."""
 
-    def __init__(self, tester):
+    def __init__(self, tester, node, inputs=None):
         self.tester = tester
-        tester.subscribe_outputs(NODE)
-        self.pubs = {name: tester.publisher(f'{NODE}/{name}', msg_type) for name, msg_type in
-                     (('pose', PoseStamped), ('euler', Vector3Stamped),
-                      ('transform', TransformStamped))}
-        tester.wait_matched()
+        self.node = node
+        tester.subscribe_outputs(node)
+        inputs = inputs or {f'{node}/{name}': msg_type for name, msg_type in (
+            ('pose', PoseStamped), ('euler', Vector3Stamped), ('transform', TransformStamped))}
+        self.pubs = {topic.rsplit('/', 1)[1]: tester.publisher(topic, msg_type)
+                     for topic, msg_type in inputs.items()}
+        tester.wait_matched([f'{node}/{name}' for name in OUTPUTS])
         self.stamp = 0
 
     def latest(self, name):
-        received = self.tester.received[f'{NODE}/{name}']
+        received = self.tester.received[f'{self.node}/{name}']
         return received[-1] if received else None
+
+    def describe(self):
+        response = self.tester.call(Trigger, f'{self.node}/describe', Trigger.Request())
+        assert response.success, response.message
+        return yaml.safe_load(response.message)
+
+    def parameters(self, names):
+        """{name: value} of the node's parameters, through its ~/get_parameters service."""
+        response = self.tester.call(GetParameters, f'{self.node}/get_parameters',
+                                    GetParameters.Request(names=list(names)))
+        return dict(zip(names, map(parameter_value_to_python, response.values)))
 
     def send(self, kind, msg, marker=True):
         """Publish msg until its outputs come back; return {output: message}.
 
         Inputs are best effort: a first sample can race the node's side of discovery.
         """
-        names = ('axis_angle', 'euler_angles', 'screw') + (('screw_axis',) if marker else ())
+        names = ('quaternion', 'axis_angle', 'euler_angles', 'screw') + (
+            ('screw_axis',) if marker else ())
 
         def arrived():
             return all(self.latest(n) is not None and self.latest(n).header.stamp.sec ==
@@ -133,7 +98,7 @@ class Remote:
             while not arrived() and time.monotonic() < deadline:
                 self.tester.spin_once()
             if arrived():
-                self.tester.wait_messages(f'{NODE}/rotation_matrix')
+                self.tester.wait_messages(f'{self.node}/rotation_matrix')
                 return {n: self.latest(n) for n in names + ('rotation_matrix',)}
         pytest.fail(f'no outputs for {kind} from the node process')
 
@@ -141,6 +106,9 @@ class Remote:
 def check_outputs(out, R, b, seq='ZYX', degrees=False):
     np.testing.assert_allclose(np.reshape(out['rotation_matrix'].data, (3, 3)), R,
                                rtol=0, atol=ATOL)
+    o = out['quaternion'].quaternion
+    np.testing.assert_allclose([o.x, o.y, o.z, o.w],
+                               Rotation.from_matrix(R).as_quat(canonical=True), atol=ATOL)
     assert [(d.label, d.size, d.stride) for d in out['rotation_matrix'].layout.dim] == [
         ('rows', 3, 9), ('cols', 3, 3)]
     np.testing.assert_allclose(xyz(out['axis_angle'].vector), matrix_to_rotvec(R), atol=ATOL)
@@ -167,7 +135,8 @@ def assert_clean_exit(status, seconds, stderr):
 
 def test_node_process_end_to_end(tester, node_process):
     process = node_process()
-    remote = Remote(tester)
+    node = process.name
+    remote = Remote(tester, node)
 
     # Every input, every output.
     q, p = np.array([0.1, -0.5, 0.3, 0.8]), (1.0, 2.0, -0.5)
@@ -187,10 +156,10 @@ def test_node_process_end_to_end(tester, node_process):
     assert out['screw'].header.frame_id == 'map'
 
     # ~/describe reports the transform.
-    response = tester.call(Trigger, f'{NODE}/describe', Trigger.Request())
+    response = tester.call(Trigger, f'{node}/describe', Trigger.Request())
     assert response.success
     report = yaml.safe_load(response.message)
-    assert report['source'] == f'{NODE}/transform' and report['frame_id'] == 'map'
+    assert report['source'] == f'{node}/transform' and report['frame_id'] == 'map'
     assert report['screw']['point'] == pytest.approx([1.0, 0.0, 0.0], abs=1e-12)
     assert report['axis_angle']['angle'] == pytest.approx(math.pi, rel=1e-11)
     assert report['refused']['total'] == 0
@@ -198,25 +167,31 @@ def test_node_process_end_to_end(tester, node_process):
     # ~/screw_path.
     request = GetPlan.Request(start=pose_stamped((0, 0, 0, 1), (0, 0, 0), 1),
                               goal=pose_stamped((0, 0, 1, 0), (0, 0, 2), 2), tolerance=0.0)
-    plan = tester.call(GetPlan, f'{NODE}/screw_path', request).plan
+    plan = tester.call(GetPlan, f'{node}/screw_path', request).plan
     assert len(plan.poses) == 21 and plan.header.frame_id == 'map'
     assert plan.poses[0] == request.start and plan.poses[-1] == request.goal
     assert xyz(plan.poses[10].pose.position) == pytest.approx([0, 0, 1.0], abs=1e-12)
 
     # A parameter through the parameter service; it applies from the next message.
-    results = tester.set_parameters(NODE, [Parameter('angle_unit', value='deg'),
+    results = tester.set_parameters(node, [Parameter('angle_unit', value='deg'),
                                            Parameter('marker_scale', value='big')])
     assert [r.successful for r in results] == [True, False]
     euler.vector.x, euler.vector.y, euler.vector.z = 90.0, 0.0, 0.0
     out = remote.send('euler', euler)
     check_outputs(out, euler_to_matrix((math.pi / 2, 0.0, 0.0)), np.zeros(3), degrees=True)
 
-    # Bad input is refused and counted; the node keeps serving.
-    remote.pubs['pose'].publish(pose_stamped((0, 0, 0, 0), (0, 0, 0), 999))
-    remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
-    response = tester.call(Trigger, f'{NODE}/describe', Trigger.Request())
-    refused = yaml.safe_load(response.message)['refused']
-    assert refused['total'] == refused['zero_quaternion'] <= 1  # best effort: 0 or 1
+    # Bad input is refused and counted; the node keeps serving. Inputs are best effort: a
+    # sample can be lost, so the bad one is sent until the node has counted it.
+    deadline = time.monotonic() + 10.0
+    while remote.describe()['refused']['total'] == 0:
+        assert time.monotonic() < deadline, 'the zero quaternion was never refused'
+        remote.pubs['pose'].publish(pose_stamped((0, 0, 0, 0), (0, 0, 0), 999))
+        tester.spin_for(0.2)
+    out = remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
+    check_outputs(out, np.diag([-1.0, -1.0, 1.0]), np.array([1.0, 0.0, 0.0]), degrees=True)
+    refused = remote.describe()['refused']
+    assert refused['total'] == refused['zero_quaternion'] >= 1
+    assert f'refused input on {node}/pose (zero_quaternion)' in process.err_path.read_text()
 
     assert process.process.poll() is None
     assert_clean_exit(*process.stop(signal.SIGTERM))
@@ -225,7 +200,7 @@ def test_node_process_end_to_end(tester, node_process):
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
 def test_signal_ends_the_node_cleanly(tester, node_process, signum):
     process = node_process()
-    remote = Remote(tester)
+    remote = Remote(tester, process.name)
     remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
     assert_clean_exit(*process.stop(signum))
 
@@ -239,3 +214,79 @@ def test_invalid_start_up_parameter(node_process, override):
     assert status == 2, stderr
     assert 'Traceback' not in stderr, stderr
     assert stderr.startswith('rotation_node: ') and override.split(':=')[0] in stderr
+
+
+def test_remapped_odometry_in_degrees(tester, node_process):
+    """The README's "from a robot" line: -r '~/odometry:=/odom' -p angle_unit:=deg."""
+    odom = f'/{RUN}/odom'  # this run's /odom
+    process = node_process('-r', f'~/odometry:={odom}', '-p', 'angle_unit:=deg')
+    remote = Remote(tester, process.name, {odom: Odometry})
+    msg = Odometry()
+    msg.header.frame_id, msg.child_frame_id = 'odom', 'base_link'
+    q = Rotation.from_euler('ZYX', [135.0, -5.0, 2.5], degrees=True).as_quat()
+    o = msg.pose.pose.orientation
+    o.x, o.y, o.z, o.w = map(float, q)
+    msg.pose.pose.position.x = 1.5
+    out = remote.send('odom', msg)
+    np.testing.assert_allclose(xyz(out['euler_angles'].vector), [135.0, -5.0, 2.5],
+                               rtol=0, atol=1e-12)
+    report = remote.describe()
+    assert report['source'] == odom and report['source_type'] == 'nav_msgs/msg/Odometry'
+    assert f'{process.name}/odometry' not in process.err_path.read_text()  # remapped away
+    assert_clean_exit(*process.stop(signal.SIGTERM))
+
+
+def test_misspelt_parameter_is_warned_about(tester, node_process):
+    process = node_process('-p', 'euler_sequnce:=xyz', '-p', 'use_sim_time:=false')
+    stderr = process.wait_for_stderr('decomposing')
+    (warning,) = [line for line in stderr.splitlines() if 'WARN' in line]
+    assert ("parameter override 'euler_sequnce' is not a parameter of this node and is "
+            "ignored: did you mean 'euler_sequence'?") in warning
+    # It runs, with the default sequence.
+    assert Remote(tester, process.name).parameters(['euler_sequence']) == {
+        'euler_sequence': 'ZYX'}
+    assert_clean_exit(*process.stop(signal.SIGINT))
+
+
+def test_shipped_parameter_file_holds_every_default():
+    document = yaml.safe_load(PARAMETER_FILE.read_text())
+    assert list(document) == ['/**']
+    values = document['/**']['ros__parameters']
+    assert values == {name: default for name, (default, _) in PARAMETERS.items()}
+    for name, (default, _) in PARAMETERS.items():
+        assert type(values[name]) is type(default), name  # 1.0 stays a double, not 1
+
+
+def test_parameter_file_is_applied(tester, node_process, tmp_path):
+    shipped = node_process('--params-file', str(PARAMETER_FILE))
+    stderr = shipped.wait_for_stderr('decomposing')
+    assert 'WARN' not in stderr
+    names = list(PARAMETERS)
+    assert Remote(tester, shipped.name).parameters(names) == {
+        name: default for name, (default, _) in PARAMETERS.items()}
+    assert_clean_exit(*shipped.stop(signal.SIGTERM))
+
+    changed = {'euler_sequence': 'xyz', 'angle_unit': 'deg', 'quaternion_tolerance': 0.01,
+               'publish_markers': False, 'marker_scale': 2.5}
+    edited = tmp_path / 'edited.yaml'
+    text = PARAMETER_FILE.read_text()
+    for name, value in changed.items():
+        default = yaml.safe_dump(PARAMETERS[name][0]).split('\n')[0]
+        new = yaml.safe_dump(value).split('\n')[0]
+        assert f'    {name}: {default}\n' in text
+        text = text.replace(f'    {name}: {default}\n', f'    {name}: {new}\n')
+    edited.write_text(text)
+    process = node_process('--params-file', str(edited))
+    remote = Remote(tester, process.name)
+    assert remote.parameters(names) == changed
+    euler = Vector3Stamped()
+    euler.header.frame_id = 'map'
+    euler.vector.x, euler.vector.y, euler.vector.z = 10.0, 20.0, 30.0
+    out = remote.send('euler', euler, marker=False)
+    R = Rotation.from_euler('xyz', [10.0, 20.0, 30.0], degrees=True).as_matrix()
+    np.testing.assert_allclose(np.reshape(out['rotation_matrix'].data, (3, 3)), R,
+                               rtol=0, atol=ATOL)
+    np.testing.assert_allclose(xyz(out['euler_angles'].vector), [10.0, 20.0, 30.0],
+                               rtol=0, atol=1e-12)
+    assert tester.received[f'{process.name}/screw_axis'] == []  # publish_markers: false
+    assert_clean_exit(*process.stop(signal.SIGTERM))

@@ -19,8 +19,8 @@ CONSOLE_SCRIPTS = {
 }
 # exec_depends the contract (SPEC §3) needs whatever the code happens to import today.
 REQUIRED_EXEC_DEPENDS = {
-    'rclpy', 'geometry_msgs', 'std_msgs', 'std_srvs', 'nav_msgs', 'visualization_msgs',
-    'rcl_interfaces', 'builtin_interfaces', 'python3-numpy',
+    'rclpy', 'geometry_msgs', 'std_msgs', 'std_srvs', 'nav_msgs', 'sensor_msgs',
+    'visualization_msgs', 'rcl_interfaces', 'builtin_interfaces', 'python3-numpy',
 }
 # rosdep keys of the non-ROS third-party modules rot_tools may import.
 ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
@@ -132,6 +132,11 @@ def test_colcon_installs_manifest_and_ament_index_marker(colcon_install):
     share = colcon_install / 'share'
     assert (share / PACKAGE / 'package.xml').read_text() == (REPO / 'package.xml').read_text()
     assert (share / 'ament_index' / 'resource_index' / 'packages' / PACKAGE).is_file()
+
+
+def test_colcon_installs_the_parameter_file(colcon_install):
+    installed = colcon_install / 'share' / PACKAGE / 'config' / 'rot_tools.yaml'
+    assert installed.read_text() == (REPO / 'config' / 'rot_tools.yaml').read_text()
 
 
 def test_installed_package_is_imported_from_the_install_space(colcon_install):
