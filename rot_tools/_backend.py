@@ -5,7 +5,9 @@ and of the entries of its inputs (a matrix as ``m[row][col]``, a vector as ``v[i
 as itself), returning the entries of its outputs. ``apply`` runs a kernel
 
 - on a single item with Python floats and the ``math`` module (a chain of small NumPy calls
-  costs ~10× more per item than plain floats), or
+  costs ~10× more per item than plain floats) — and, once the same kernel has run on single
+  items HOT_AFTER times, as straight-line code generated from it (rot_tools._trace: the
+  same operations without the bookkeeping around them, results equal bit for bit), or
 - on a batch, in chunks of CHUNK items whose entries are NumPy views, so the temporaries stay
   in cache and the memory used beyond the inputs and outputs stays small.
 
@@ -14,6 +16,8 @@ not divide by zero on the branch that is thrown away: guard divisors with ``ops.
 Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
 flag beside it and the caller refuses the flagged items (floating-point warnings of the
 batch engine are silenced).
+``ops.any`` is the only data-dependent control flow a kernel may use (Python ``if`` on a
+value works on floats but keeps the kernel from being compiled).
 """
 
 from itertools import chain
@@ -23,6 +27,7 @@ import sys
 import numpy as np
 
 from rot_tools._arrays import as_float_array, require_finite
+from rot_tools._trace import compile_single
 from rot_tools.errors import RotationError
 
 CHUNK = 32768
@@ -110,7 +115,17 @@ def apply(kernel, inputs, outputs):
     refused if it holds NaN/Inf; their batch shapes broadcast. outputs: sequence of
     (trailing shape, dtype). Returns a tuple of arrays of shape batch + trailing shape
     (NumPy scalars for a single item).
+
+    A kernel object that runs on one item often (HOT_AFTER calls) is compiled to
+    straight-line code (rot_tools._trace) and runs that way from then on, with the same
+    results bit for bit. It must then always be applied with the same input tails and
+    outputs, as every kernel of rot_tools is.
     """
+    fast = getattr(kernel, '__dict__', _NO_CODE).get(_COMPILED)
+    if fast is not None:
+        result = fast(inputs)
+        if result is not None:  # else not one plain item, or a NaN/Inf may be in it
+            return result
     # Plain loops: on one item the Python overhead here is a good part of the call.
     arrays, values = [], []
     for x, t, name, finite in inputs:
@@ -124,6 +139,7 @@ def apply(kernel, inputs, outputs):
         else:
             values = None
     if values is not None:  # a single item: Python floats
+        _count_call(kernel, inputs, outputs)
         result = kernel(FLOATS, *values)
         out = []
         for r, (t, dt) in zip(result, outputs):
@@ -149,6 +165,37 @@ def apply(kernel, inputs, outputs):
             for out, value, (t, _) in zip(outs, result, outputs):
                 _write(out[chunk], value, t)
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
+
+
+HOT_AFTER = 16
+"""One-item calls of a kernel object on Python floats before it is compiled (rot_tools._trace).
+
+A kernel used once or twice (a command-line run) is not worth the few milliseconds of
+tracing and compiling; one used per message or in a loop is.
+"""
+
+_COMPILED = '_rot_tools_compiled'  # attributes of a kernel: its compiled one-item code,
+_CALLS = '_rot_tools_calls'  # and how often it ran on one item (False: no more counting)
+_NO_CODE = {}
+
+
+def _count_call(kernel, inputs, outputs):
+    """Count a one-item call of kernel on Python floats; compile it when it becomes hot."""
+    state = getattr(kernel, '__dict__', None)
+    if state is None:  # a kernel that cannot carry attributes runs on Python floats
+        return
+    calls = state.get(_CALLS, 0)
+    if calls is False:
+        return
+    if calls < HOT_AFTER:
+        state[_CALLS] = calls + 1
+        return
+    state[_CALLS] = False
+    try:
+        state[_COMPILED] = compile_single(kernel, FLOATS, [t for _, t, _, _ in inputs],
+                                          list(outputs))
+    except Exception:  # noqa: BLE001 - whatever the tracer cannot follow runs on floats
+        pass
 
 
 def dot(u, v):

@@ -168,5 +168,10 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     spec = parse_sequence(seq)
     if not 0 <= lock_tol < math.pi / 4:
         raise RotationError(f'lock_tol must be in [0, π/4) rad, got {lock_tol!r}')
-    kernel = partial(angles_kernel, spec=spec, lock_tol=lock_tol)
+    kernel = _ANGLES_KERNELS[seq] if lock_tol == GIMBAL_LOCK_TOL else partial(
+        angles_kernel, spec=spec, lock_tol=lock_tol)
     return apply_to_rotations(kernel, R, check, [((3,), np.float64), ((), np.bool_)])
+
+
+_ANGLES_KERNELS = {seq: partial(angles_kernel, spec=spec, lock_tol=GIMBAL_LOCK_TOL)
+                   for seq, spec in _PARSED.items()}

@@ -101,6 +101,8 @@ def _decompose_kernel(ops, m, b, spec):
 
 
 _VEC, _NUM = ((3,), np.float64), ((), np.float64)
+_DECOMPOSE_KERNELS = {seq: partial(_decompose_kernel, spec=parse_sequence(seq))
+                      for seq in EULER_SEQUENCES}
 
 
 def decompose(R, b, seq='ZYX', *, check=True):
@@ -110,8 +112,8 @@ def decompose(R, b, seq='ZYX', *, check=True):
     rotation_node come from the same numbers. RotationError where the screw overflows
     float64 (as screw_from_transform).
     """
-    kernel = partial(_decompose_kernel, spec=parse_sequence(seq))
-    out = apply_to_rotations(kernel, R, check, [
+    parse_sequence(seq)  # raises the RotationError of an unknown sequence
+    out = apply_to_rotations(_DECOMPOSE_KERNELS[seq], R, check, [
         _VEC, _NUM, _VEC, ((), np.bool_), _VEC, _VEC, _VEC, _NUM, _NUM, _NUM,
         ((6,), np.float64), ((), np.bool_)], [(b, (3,), 'translation b', True)])
     refuse_far_axis(out[11], out[1], b)

@@ -9,6 +9,8 @@ a rotation matrix R is 3x3 orthogonal with det R = +1 (seed 000, Theorem 1). Eve
 takes one item or a batch with any leading shape ``...``.
 """
 
+from functools import lru_cache
+
 import numpy as np
 
 from rot_tools._arrays import as_float_array, finite_array
@@ -125,6 +127,16 @@ def refuse_defects(err, det, tol, name='R'):
             + where.format(tuple(map(int, worst))))
 
 
+@lru_cache(maxsize=256)
+def _checking(kernel, count=1):
+    """kernel with the defects of its first ``count`` inputs (rotations) appended to its
+    outputs; one object per (kernel, count), so that apply can compile it once."""
+    def checked(ops, *entries):
+        defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
+        return (*kernel(ops, *entries), *defects)
+    return checked
+
+
 def apply_to_rotations(kernel, R, check, outputs, extra=()):
     """apply(kernel, [R, *extra], outputs) with R (..., 3, 3), validated in the same pass.
 
@@ -134,11 +146,7 @@ def apply_to_rotations(kernel, R, check, outputs, extra=()):
     """
     if not check:
         return apply(kernel, [(R, (3, 3), 'R', False), *extra], outputs)
-
-    def checked(ops, m, *rest):
-        return (*kernel(ops, m, *rest), *defects_kernel(ops, m))
-
-    *results, err, det = apply(checked, [(R, (3, 3), 'R', True), *extra],
+    *results, err, det = apply(_checking(kernel), [(R, (3, 3), 'R', True), *extra],
                                [*outputs, _F64, _F64])
     refuse_defects(err, det, ROTATION_TOL)
     return tuple(results)
@@ -154,12 +162,8 @@ def apply_to_named_rotations(kernel, rotations, check, outputs, extra=()):
     if not check:
         return apply(kernel, [*inputs, *extra], outputs)
     count = len(rotations)
-
-    def checked(ops, *entries):
-        defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
-        return (*kernel(ops, *entries), *defects)
-
-    results = apply(checked, [*inputs, *extra], [*outputs] + [_F64, _F64] * count)
+    results = apply(_checking(kernel, count), [*inputs, *extra],
+                    [*outputs] + [_F64, _F64] * count)
     for i, (_, name) in enumerate(rotations):
         err, det = results[len(outputs) + 2 * i:len(outputs) + 2 * i + 2]
         refuse_defects(err, det, ROTATION_TOL, name)
