@@ -55,7 +55,13 @@ def _calls():
             (f'is_rotation {i}', lambda R=R: rt.is_rotation(R)),
             (f'screw {i}', lambda R=R, b=b: rt.screw_from_transform(R, b)),
             (f'screw_log {i}', lambda R=R, b=b: rt.screw_log(R, b)),
-            (f'unchecked screw {i}', lambda R=R, b=b: rt.screw_log(R, b, check=False))]
+            (f'unchecked screw {i}', lambda R=R, b=b: rt.screw_log(R, b, check=False)),
+            (f'points {i}', lambda R=R, b=b: rt.transform_points(R, b, b[::-1])),
+            (f'compose {i}', lambda R=R, b=b: rt.compose_transforms(R, b, R.T, -b)),
+            (f'invert {i}', lambda R=R, b=b: rt.invert_transform(R, b)),
+            (f'homogeneous {i}', lambda R=R, b=b: rt.homogeneous_to_transform(
+                rt.transform_to_homogeneous(R, b))),
+            (f'frame {i}', lambda R=R: rt.frame_to_matrix(R[:, 0], R[:, 1], R[:, 2]))]
         calls += [(f'{seq} {i}', lambda R=R, seq=seq: rt.matrix_to_euler(R, seq))
                   for seq in SEQUENCES]
         calls += [(f'decompose {seq} {i}', lambda R=R, b=b, seq=seq: rt.decompose(R, b, seq))
@@ -67,7 +73,9 @@ def _calls():
             (f'zero angle {i}', lambda v=v: rt.axis_angle_to_matrix(v, 0.0)),
             (f'quaternion_to_matrix {i}', lambda v=v: rt.quaternion_to_matrix([*v, 0.5])),
             (f'screw_exp {i}', lambda v=v: rt.screw_exp(np.concatenate([v, v[::-1]]))),
-            (f'screw_exp pure {i}', lambda v=v: rt.screw_exp(np.concatenate([np.zeros(3), v])))]
+            (f'screw_exp pure {i}', lambda v=v: rt.screw_exp(np.concatenate([np.zeros(3), v]))),
+            (f'transform_from_screw {i}',
+             lambda v=v: rt.transform_from_screw([0.0, 0.6, 0.8], v, 1.3, -0.4))]
         calls += [(f'euler {seq} {i}', lambda v=v, seq=seq: rt.euler_to_matrix(v, seq))
                   for seq in SEQUENCES]
     for i, R in enumerate(ROTATIONS[:3]):  # NaN/Inf in R: refused, or NaN out unchecked
