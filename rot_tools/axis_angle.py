@@ -74,10 +74,16 @@ def rotvec_to_matrix(rotvec):
     return matrix
 
 
+def skew_and_cos(m):
+    """(w, cos θ) of the rotation m: w = ½(r32 − r23, r13 − r31, r21 − r12) = sin θ·l̂ and
+    cos θ = (tr R − 1)/2, so that θ = atan2(|w|, cos θ) ∈ [0, π] (accurate at every angle)."""
+    w = [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
+    return w, 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
+
+
 def axis_angle_kernel(ops, m):
     """(unit axis, angle ∈ [0, π]) of the rotation m; see matrix_to_axis_angle."""
-    w = [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
-    cos = 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
+    w, cos = skew_and_cos(m)
     skew_axis, sin = unit(ops, w)
     angle = ops.atan2(sin, cos)
     near_pi = cos < 0

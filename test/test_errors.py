@@ -6,11 +6,12 @@ import math_helpers as h
 import numpy as np
 import pytest
 from rot_tools import (
-    axis_angle_to_matrix, compose_transforms, decompose, euler_to_matrix, invert_transform,
-    is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion, matrix_to_rotvec,
-    nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z, RotationError,
-    rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log, skew,
-    transform_from_screw, transform_points, transform_to_homogeneous, validate_rotation)
+    align_vectors, axis_angle_to_matrix, compose_transforms, decompose, euler_to_matrix,
+    invert_transform, is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion,
+    matrix_to_rotvec, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
+    rotation_distance, RotationError, rotvec_to_matrix, screw_exp, screw_from_transform,
+    screw_interpolate, screw_log, skew, transform_from_screw, transform_points,
+    transform_to_homogeneous, validate_rotation)
 
 I3 = np.eye(3)
 Z3 = np.zeros(3)
@@ -55,6 +56,7 @@ TAKES_R = {
     'compose_transforms': lambda r: compose_transforms(r, Z3, I3, Z3),
     'invert_transform': lambda r: invert_transform(r, Z3),
     'transform_to_homogeneous': lambda r: transform_to_homogeneous(r, Z3),
+    'rotation_distance': lambda r: rotation_distance(r, I3),
 }
 
 
@@ -470,6 +472,8 @@ def test_no_function_returns_inf_or_nan_for_finite_input():
             assert_finite_or_refused(invert_transform, r, w)
             assert_finite_or_refused(transform_to_homogeneous, r, w)
             assert_finite_or_refused(screw_interpolate, r, w, I3, -w, 3.0)
+            assert_finite_or_refused(align_vectors, np.stack([w, w[..., ::-1]], -2),
+                                     np.stack([w[..., ::-1], w], -2))
             try:
                 scr = screw_from_transform(r, w)
             except RotationError:

@@ -1,0 +1,240 @@
+"""Comparing, averaging, fitting and sampling rotations — quaternion-free.
+
+- **Distance.** The geodesic distance of R1 and R2 is the angle of the rotation R1ᵀR2 that
+  takes one to the other: θ ∈ [0, π], from atan2(|w|, (tr − 1)/2) as in matrix_to_axis_angle,
+  so it is accurate to rounding at 0 and at π (acos of the trace loses half the digits).
+- **Mean.** The chordal L2 mean of R1 … RN with weights wᵢ ≥ 0 minimises Σ wᵢ‖M − Rᵢ‖²
+  (Frobenius) over rotations M, i.e. maximises tr(Mᵀ·S) with S = Σ wᵢRᵢ: from the SVD
+  S = U·diag(σ1, σ2, σ3)·Vᵀ, M = U·diag(1, 1, s)·Vᵀ with s = det(U·Vᵀ) = ±1. It is unique
+  unless σ2 + s·σ3 = 0 (two rotations π apart with equal weights give S of rank 1).
+- **Fit (Wahba's problem, Kabsch).** The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² maximises
+  tr(Rᵀ·H) with H = Σ wᵢ·aᵢbᵢᵀ, so it is the same SVD construction on H. When H has rank 1
+  (a single pair, or all pairs parallel) every rotation about â does as well; the smallest
+  rotation taking b̂ onto â is returned.
+- **Sampling.** Haar-uniform rotations: Gram–Schmidt on two Gaussian vectors (their
+  distribution is invariant under every rotation, and so is the frame built from them). The
+  rotation angle of a uniform rotation has density (1 − cos θ)/π on [0, π].
+
+The SVD functions use NumPy's batched linalg directly; any leading batch shape works.
+"""
+
+import numbers
+
+import numpy as np
+
+from rot_tools._arrays import finite_array, refuse_overflow
+from rot_tools._backend import norm
+from rot_tools.axis_angle import axis_angle_to_matrix, skew_and_cos
+from rot_tools.errors import RotationError
+from rot_tools.so3 import apply_to_named_rotations, checked_rotation
+
+UNIQUE_TOL = 1e-9
+"""Relative size σ2 + s·σ3 ≤ UNIQUE_TOL·σ1 below which a mean or a fit is not unique.
+
+At that size rounding in S (or H) moves the answer by ~1e-7 rad; beyond it the answer is
+determined by the data.
+"""
+
+
+def _distance_kernel(ops, m1, m2):
+    # R1ᵀ·R2, entry (i, j) = Σ_k R1[k][i]·R2[k][j]
+    m = [[m1[0][i] * m2[0][j] + m1[1][i] * m2[1][j] + m1[2][i] * m2[2][j] for j in range(3)]
+         for i in range(3)]
+    w, cos = skew_and_cos(m)
+    return (ops.atan2(norm(ops, w), cos),)
+
+
+def rotation_distance(R1, R2, *, check=True):
+    """Geodesic angle between rotations: the angle θ ∈ [0, π] of R1ᵀ·R2.
+
+    R1, R2 (..., 3, 3), broadcasting → (...). θ = atan2(|w|, (tr R1ᵀR2 − 1)/2) with w the
+    skew part of R1ᵀR2: accurate to rounding at 0 and π. Symmetric, and θ(R1, R2) =
+    θ(Q·R1, Q·R2) for every rotation Q.
+    """
+    (theta,) = apply_to_named_rotations(_distance_kernel, [(R1, 'R1'), (R2, 'R2')], check,
+                                        [((), np.float64)])
+    return theta
+
+
+def _weights(weights, count, name):
+    """Weights (..., N) ≥ 0, not all 0, scaled to max 1 (Σ wᵢRᵢ then cannot overflow)."""
+    if weights is None:
+        return np.ones(count)
+    w = finite_array(weights, (), 'weights')
+    if w.ndim == 0 or w.shape[-1] != count:
+        got = 'a scalar' if w.ndim == 0 else f'{w.shape[-1]} entries'
+        raise RotationError(f'weights must have one entry per {name} ({count}), got {got}')
+    negative = w < 0
+    if negative.any():
+        where = tuple(int(i) for i in np.argwhere(negative)[0])
+        index = where[0] if len(where) == 1 else where
+        raise RotationError(f'weights must be ≥ 0, got {w[where]:g} at index {index}')
+    top = w.max(axis=-1, keepdims=True)
+    if (top == 0).any():
+        raise RotationError(f'weights are all 0: at least one {name} needs a positive weight')
+    return w / top
+
+
+def _nearest_rotations(s, what, matrix):
+    """U·diag(1, 1, det UVᵀ)·Vᵀ maximising tr(Mᵀ·s) per item, and the rank-1 flags.
+
+    RotationError when the maximiser is not unique (σ2 + det·σ3 ≤ UNIQUE_TOL·σ1) and s has
+    rank 2 or more; rank-1 items (σ2 ≤ UNIQUE_TOL·σ1) are only flagged.
+    """
+    u, sigma, vt = np.linalg.svd(s)
+    sign = np.where(np.linalg.det(u) * np.linalg.det(vt) < 0, -1.0, 1.0)
+    gap = sigma[..., 1] + sign * sigma[..., 2]
+    rank_one = sigma[..., 1] <= UNIQUE_TOL * sigma[..., 0]
+    ambiguous = (gap <= UNIQUE_TOL * sigma[..., 0]) & ~rank_one
+    if ambiguous.any():
+        index = tuple(int(i) for i in np.argwhere(ambiguous)[0])
+        where = f' (item {index})' if index else ''
+        raise RotationError(
+            f'{what} is not unique: the singular values of {matrix} are '
+            f'{np.array2string(sigma[index], precision=3)} with det {sign[index]:+.0f}, and '
+            f'σ2 {"+" if sign[index] > 0 else "−"} σ3 = {gap[index]:.3g} ≤ '
+            f'{UNIQUE_TOL:g}·σ1{where}')
+    u = u * np.stack([np.ones_like(sign), np.ones_like(sign), sign], -1)[..., None, :]
+    return u @ vt, sigma, u, vt, rank_one
+
+
+def mean_rotation(R, weights=None, *, check=True):
+    """Chordal L2 mean of rotations: the rotation nearest to Σ wᵢRᵢ (module docstring).
+
+    R (..., N, 3, 3) → (..., 3, 3); weights (N,) or (..., N), ≥ 0, not all 0 (default
+    equal). RotationError when the mean is not unique (Σ wᵢRᵢ rank-deficient, e.g. two
+    rotations π apart with equal weights), for negative or all-zero weights, and for a
+    weights count other than N.
+    """
+    R = checked_rotation(R, check)
+    if R.ndim < 3 or not R.shape[-3]:
+        raise RotationError(f'R must have shape (..., N, 3, 3) with N ≥ 1, got {R.shape}')
+    w = _weights(weights, R.shape[-3], 'rotation')
+    try:
+        total = np.einsum('...n,...nij->...ij', w, R)
+    except ValueError:
+        raise RotationError(f'weights {w.shape} and R {R.shape} do not broadcast') from None
+    mean, sigma, *_, rank_one = _nearest_rotations(total, 'the mean rotation', 'Σ wᵢRᵢ')
+    if rank_one.any():
+        index = tuple(int(i) for i in np.argwhere(rank_one)[0])
+        raise RotationError(
+            'the mean rotation is not unique: Σ wᵢRᵢ is rank-deficient (singular values '
+            f'{np.array2string(sigma[index], precision=3)}; e.g. rotations π apart with '
+            'equal weights)' + (f' (item {index})' if index else ''))
+    return mean
+
+
+def _vectors(x, name):
+    x = finite_array(x, (3,), name)
+    if x.ndim < 2:
+        raise RotationError(f'{name} must have shape (..., N, 3), got {x.shape}')
+    zero = ~np.any(x, axis=-1)
+    if zero.any():
+        index = tuple(int(i) for i in np.argwhere(zero)[0])
+        raise RotationError(f'{name}[{", ".join(map(str, index))}] is the zero vector: it has '
+                            'no direction to align')
+    return x
+
+
+def _unit_rows(x):
+    """Rows of x scaled to unit length (rescaled first, so huge or tiny rows are fine)."""
+    x = x / np.abs(x).max(axis=-1, keepdims=True)
+    return x / np.linalg.norm(x, axis=-1, keepdims=True)
+
+
+def _smallest_rotation(b, a):
+    """The smallest rotation taking the unit vector b onto the unit vector a (..., 3).
+
+    Axis b × a, angle atan2(|b × a|, b·a); for opposite vectors (angle π) the axis is
+    b × e_k normalised, e_k the coordinate axis least aligned with b.
+    """
+    axis = np.cross(b, a)
+    sin = np.linalg.norm(axis, axis=-1)
+    angle = np.arctan2(sin, np.sum(b * a, axis=-1))
+    least = np.eye(3)[np.argmin(np.abs(b), axis=-1)]
+    axis = np.where((sin == 0)[..., None], np.cross(b, least), axis)
+    return axis_angle_to_matrix(axis, angle)
+
+
+def _rmsd(a, b, R, w):
+    """sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item, computed on a and b scaled by a common factor
+    so that nothing overflows; RotationError if the rmsd itself does."""
+    big = np.maximum(np.abs(a).max(axis=(-2, -1)), np.abs(b).max(axis=(-2, -1)))[..., None, None]
+    residual = a / big - np.einsum('...ij,...nj->...ni', R, b / big)
+    mean = np.sum(w * np.sum(residual * residual, axis=-1), axis=-1) / np.sum(w, axis=-1)
+    with np.errstate(over='ignore'):
+        rmsd = big[..., 0, 0] * np.sqrt(mean)
+    refuse_overflow(np.isfinite(rmsd), 'the rmsd of align_vectors')
+    return rmsd
+
+
+def align_vectors(a, b, weights=None):
+    """The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
+
+    a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
+    the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
+    from the SVD of H = Σ wᵢ·aᵢbᵢᵀ (module docstring). A single pair, or pairs that are all
+    parallel, give the smallest rotation taking b̂ onto â. RotationError for zero vectors,
+    counts that differ, negative or all-zero weights, and a best rotation that is not unique.
+    """
+    a, b = _vectors(a, 'a'), _vectors(b, 'b')
+    if not a.shape[-2]:
+        raise RotationError('no vector pairs to align (N = 0)')
+    if a.shape[-2] != b.shape[-2]:
+        raise RotationError(f'a has {a.shape[-2]} vectors but b has {b.shape[-2]}: align '
+                            'needs pairs')
+    w = _weights(weights, a.shape[-2], 'vector pair')
+    try:
+        shape = np.broadcast_shapes(a.shape, b.shape, w.shape + (3,))
+    except ValueError:
+        raise RotationError(f'a {a.shape}, b {b.shape} and weights {w.shape} do not '
+                            'broadcast') from None
+    # scale a and b separately: H/(|a|max·|b|max) has the same SVD directions
+    a_dir = a / np.abs(a).max(axis=(-2, -1), keepdims=True)
+    b_dir = b / np.abs(b).max(axis=(-2, -1), keepdims=True)
+    h = np.einsum('...n,...ni,...nj->...ij', w, a_dir, b_dir)
+    scale = np.einsum('...n,...n,...n->...', w, np.linalg.norm(a_dir, axis=-1),
+                      np.linalg.norm(b_dir, axis=-1))
+    R, sigma, u, vt, rank_one = _nearest_rotations(h, 'the best rotation', 'H = Σ wᵢ·aᵢbᵢᵀ')
+    vanishing = sigma[..., 0] <= UNIQUE_TOL * scale
+    if vanishing.any():
+        index = tuple(int(i) for i in np.argwhere(vanishing)[0])
+        raise RotationError(
+            'the best rotation is not unique: H = Σ wᵢ·aᵢbᵢᵀ vanishes (|H| = '
+            f'{sigma[index][0]:.3g} for Σ wᵢ|aᵢ||bᵢ| = {scale[index]:.3g}, with a and b '
+            'scaled to max 1): every rotation fits as well' + (f' (item {index})' if index
+                                                              else ''))
+    if rank_one.any():
+        # all pairs parallel: every rotation about â fits as well; take the smallest one
+        smallest = _smallest_rotation(vt[..., 0, :], u[..., :, 0])
+        R = np.where(rank_one[..., None, None], smallest, R)
+    return R, _rmsd(a, b, R, np.broadcast_to(w, shape[:-1]))
+
+
+def random_rotations(n=None, rng=None):
+    """Haar-uniform random rotations: (3, 3) for n=None, else (n, 3, 3).
+
+    rng: a numpy.random.Generator, or a seed for numpy.random.default_rng (None: fresh
+    entropy). Columns u = g1/|g1|, v = the unit part of g2 ⊥ u, w = u × v for Gaussian
+    g1, g2 — a distribution invariant under every rotation, hence Haar; the angle has density
+    (1 − cos θ)/π, i.e. P(angle ≤ θ) = (θ − sin θ)/π.
+    """
+    if n is not None and (not isinstance(n, numbers.Integral) or isinstance(n, bool) or n < 0):
+        raise RotationError(f'n must be None or an integer ≥ 0, got {n!r}')
+    try:
+        gen = np.random.default_rng(rng)
+    except (TypeError, ValueError) as exc:
+        raise RotationError(f'rng must be a numpy.random.Generator or a seed: {exc}') from None
+    g = gen.standard_normal((1 if n is None else int(n), 2, 3))
+    while True:  # a zero or parallel pair has probability 0; redraw it all the same
+        u = g[:, 0] / np.linalg.norm(g[:, 0], axis=-1, keepdims=True)
+        v = g[:, 1] - np.sum(g[:, 1] * u, axis=-1, keepdims=True) * u
+        size = np.linalg.norm(v, axis=-1, keepdims=True)
+        bad = (size[:, 0] <= 1e-6 * np.linalg.norm(g[:, 1], axis=-1)) | ~np.isfinite(u[:, 0])
+        if not bad.any():
+            break
+        g[bad] = gen.standard_normal((int(bad.sum()), 2, 3))
+    v = v - np.sum(v * u, axis=-1, keepdims=True) * u  # twice is enough: ⊥ u to rounding
+    v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    out = np.stack([u, v, np.cross(u, v)], axis=-1)
+    return out[0] if n is None else out

@@ -1,0 +1,498 @@
+"""Comparing, averaging, fitting and sampling rotations, against scipy and closed forms.
+
+References: scipy.spatial.transform.Rotation (magnitude of R1⁻¹R2, mean, align_vectors —
+quaternion-based, computed independently of rot_tools), scipy.stats.kstest for the Haar angle
+law, and closed forms (rotations about one axis, exact a = R0·b data, the smallest rotation
+between two vectors).
+"""
+
+import re
+
+import math_helpers as h
+import numpy as np
+import pytest
+from rot_tools import (
+    align_vectors, euler_to_matrix, is_rotation, matrix_to_axis_angle, mean_rotation,
+    random_rotations, rotation_distance, RotationError, UNIQUE_TOL)
+from scipy import stats
+from scipy.spatial.transform import Rotation
+
+N = 10_000
+PI = h.PI
+EPS = np.finfo(float).eps
+
+
+def scipy_rotations(n, seed):
+    return Rotation.random(n, rng=seed).as_matrix()
+
+
+def rodrigues(axis, angle):
+    axis = np.asarray(axis, dtype=float)
+    return h.seed_rodrigues_eq7(axis / np.linalg.norm(axis, axis=-1, keepdims=True), angle)
+
+
+# ---- rotation_distance ---------------------------------------------------------------------
+
+
+def test_distance_matches_scipy():
+    r1, r2 = scipy_rotations(N, 1), scipy_rotations(N, 2)
+    got = rotation_distance(r1, r2)
+    assert got.shape == (N,)
+    ref = (Rotation.from_matrix(r1).inv() * Rotation.from_matrix(r2)).magnitude()
+    assert h.max_abs(got - ref) <= 1e-14
+    assert np.all((got >= 0) & (got <= PI))
+
+
+@pytest.mark.parametrize('angle', [0.0, 1e-300, 1e-15, 1e-12, 1e-8, 1e-4, 1.0, 3.0,
+                                   PI - 1e-4, PI - 1e-8, PI - 1e-9, PI - 1e-12, PI])
+def test_distance_is_accurate_to_rounding_at_0_and_pi(angle):
+    # R2 = R1·Rot_l̂(θ): the distance is θ, to a few ulps of 1 (the rounding of R1·Rot).
+    rng = np.random.default_rng(100)
+    r1 = scipy_rotations(200, 3)
+    axis = h.random_unit_vectors(rng, 200)
+    r2 = r1 @ h.seed_rodrigues_eq7(axis, np.full(200, angle))
+    got = rotation_distance(r1, r2)
+    assert h.max_abs(got - angle) <= 8 * EPS
+    # acos((tr R1ᵀR2 − 1)/2) loses half the digits here; the atan2 form does not
+    if 0 < angle <= 1e-8 or PI - 1e-8 <= angle < PI:
+        cos = (np.einsum('nij,nij->n', r1, r2) - 1) / 2
+        assert h.max_abs(np.arccos(np.clip(cos, -1, 1)) - angle) > 100 * 8 * EPS
+
+
+def test_distance_of_equal_rotations_is_exactly_zero():
+    r = scipy_rotations(1000, 4)
+    assert np.array_equal(rotation_distance(r, r), np.zeros(1000))
+
+
+def test_distance_symmetry_and_invariance():
+    r1, r2, q = scipy_rotations(1000, 5), scipy_rotations(1000, 6), scipy_rotations(1000, 7)
+    d = rotation_distance(r1, r2)
+    assert h.max_abs(rotation_distance(r2, r1) - d) <= 4 * EPS
+    assert h.max_abs(rotation_distance(q @ r1, q @ r2) - d) <= 16 * EPS
+    # not right-invariant in general, but the distance of R·Q and R is |angle of Q|
+    _, angle = matrix_to_axis_angle(q)
+    assert h.max_abs(rotation_distance(r1 @ q, r1) - angle) <= 16 * EPS
+
+
+def test_distance_broadcasting_and_single_items():
+    r = scipy_rotations(12, 8).reshape(3, 4, 3, 3)
+    got = rotation_distance(r, r[0, 0])
+    assert got.shape == (3, 4) and got[0, 0] == 0.0
+    assert np.ndim(rotation_distance(r[1, 2], r[2, 1])) == 0
+    for i in range(3):
+        for j in range(4):
+            assert abs(rotation_distance(r[i, j], r[0, 0]) - got[i, j]) <= 2 * EPS
+
+
+def test_distance_validates_both_rotations():
+    bad = np.eye(3)
+    bad[0, 1] = 1e-6
+    with pytest.raises(RotationError, match=r'R1 is not orthogonal'):
+        rotation_distance(bad, np.eye(3))
+    with pytest.raises(RotationError, match=r'R2 is a reflection'):
+        rotation_distance(np.eye(3), np.diag([1.0, 1.0, -1.0]))
+    with pytest.raises(RotationError, match=r'R2 must have shape'):
+        rotation_distance(np.eye(3), np.eye(2))
+
+
+def test_distance_check_false_uses_the_matrices_as_given():
+    # without the check, θ = atan2(|skew(M)|, (tr M − 1)/2) of M = R1ᵀR2 as given
+    m1 = h.ref_elementary('z', 0.3) * 1.001
+    m2 = h.ref_elementary('z', 1.0)
+    m = m1.T @ m2
+    w = 0.5 * np.array([m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1]])
+    ref = np.arctan2(np.linalg.norm(w), (np.trace(m) - 1) / 2)
+    assert abs(rotation_distance(m1, m2, check=False) - ref) <= 4 * EPS
+    assert abs(ref - 0.7) > 1e-4
+
+
+# ---- mean_rotation -------------------------------------------------------------------------
+
+
+def clusters(n_sets, size, spread, seed):
+    """n_sets clusters of `size` rotations spread around a random centre."""
+    rng = np.random.default_rng(seed)
+    centre = scipy_rotations(n_sets, seed)
+    axis = h.random_unit_vectors(rng, n_sets * size).reshape(n_sets, size, 3)
+    angle = rng.uniform(0, spread, (n_sets, size))
+    return centre[:, None] @ h.seed_rodrigues_eq7(axis, angle)
+
+
+@pytest.mark.parametrize('spread', [0.1, 1.0, 2.5])
+def test_mean_matches_scipy(spread):
+    r = clusters(300, 7, spread, 9)
+    rng = np.random.default_rng(10)
+    weights = rng.uniform(0, 2, 7)
+    for w in (None, weights):
+        got = mean_rotation(r, w)
+        assert got.shape == (300, 3, 3)
+        ref = np.array([Rotation.from_matrix(x).mean(weights=w).as_matrix() for x in r])
+        assert h.max_abs(got - ref) <= 1e-13
+        assert np.all(is_rotation(got, tol=1e-14))
+
+
+def test_mean_maximises_the_trace_against_random_rotations():
+    # The chordal mean M maximises tr(Mᵀ·Σ wᵢRᵢ): no other rotation does better.
+    r = clusters(50, 5, 2.0, 11)
+    w = np.array([1.0, 0.5, 2.0, 0.0, 1.0])
+    s = np.einsum('n,knij->kij', w, r)
+    best = np.einsum('kij,kij->k', mean_rotation(r, w), s)
+    others = scipy_rotations(2000, 12)
+    assert np.all(best[:, None] >= np.einsum('qij,kij->kq', others, s) - 1e-12)
+
+
+def test_mean_of_rotations_about_one_axis_is_the_circular_mean():
+    # Σ wᵢ Rot_z(θᵢ) = [[C, −S, 0], [S, C, 0], [0, 0, Σw]]: the nearest rotation is
+    # Rot_z(atan2(S, C)) with S = Σ wᵢ sin θᵢ, C = Σ wᵢ cos θᵢ.
+    rng = np.random.default_rng(13)
+    for _ in range(200):
+        theta = rng.uniform(-PI, PI, 5)
+        w = rng.uniform(0, 1, 5)
+        got = mean_rotation(h.ref_elementary('z', theta), w)
+        ref = h.ref_elementary('z', np.arctan2(w @ np.sin(theta), w @ np.cos(theta)))
+        assert h.max_abs(got - ref) <= 1e-14
+
+
+def test_mean_closed_forms():
+    a = 0.4
+    r = h.ref_elementary('x', np.array([a, -a]))
+    assert h.max_abs(mean_rotation(r) - np.eye(3)) <= 2 * EPS
+    one = scipy_rotations(1, 14)
+    assert h.max_abs(mean_rotation(one) - one[0]) <= 4 * EPS
+    # nearly π apart is still unique: the geodesic midpoint
+    r = h.ref_elementary('y', np.array([0.0, PI - 1e-6]))
+    assert h.max_abs(mean_rotation(r) - h.ref_elementary('y', (PI - 1e-6) / 2)) <= 1e-9
+
+
+def test_mean_invariances_and_weights():
+    r = clusters(1, 6, 1.5, 15)[0]
+    q = scipy_rotations(1, 16)[0]
+    m = mean_rotation(r)
+    assert h.max_abs(mean_rotation(q @ r) - q @ m) <= 1e-14
+    assert h.max_abs(mean_rotation(r @ q) - m @ q) <= 1e-14
+    w = np.array([1.0, 2.0, 0.0, 3.0, 0.5, 1.0])
+    assert h.max_abs(mean_rotation(r, 1e-200 * w) - mean_rotation(r, w)) <= 1e-15 * 4
+    assert h.max_abs(mean_rotation(r, 1e300 * w) - mean_rotation(r, w)) <= 1e-15 * 4
+    # a zero weight drops the rotation
+    assert h.max_abs(mean_rotation(r, w) - mean_rotation(np.delete(r, 2, 0), np.delete(w, 2))
+                     ) <= 1e-14
+
+
+def test_mean_batch_shapes_and_per_set_weights():
+    r = clusters(6, 4, 1.0, 17).reshape(2, 3, 4, 3, 3)
+    w = np.random.default_rng(18).uniform(0.1, 1, (2, 3, 4))
+    got = mean_rotation(r, w)
+    assert got.shape == (2, 3, 3, 3)
+    for i in range(2):
+        for j in range(3):
+            assert h.max_abs(got[i, j] - mean_rotation(r[i, j], w[i, j])) <= 4 * EPS
+    assert mean_rotation(r, w[0, 0]).shape == (2, 3, 3, 3)
+
+
+def test_mean_of_rotations_pi_apart_with_equal_weights_is_refused():
+    for r in (np.stack([np.eye(3), h.ref_elementary('z', PI)]),
+              np.stack([h.ref_elementary('x', 0.3), h.ref_elementary('x', 0.3 + PI)]),
+              rodrigues([[1, 2, 3]] * 2, [0.0, PI])):
+        with pytest.raises(RotationError, match=r'mean rotation is not unique: Σ wᵢRᵢ is '
+                                                r'rank-deficient .*π apart'):
+            mean_rotation(r)
+    # with unequal weights the heavier one wins
+    r = np.stack([np.eye(3), h.ref_elementary('z', PI)])
+    assert h.max_abs(mean_rotation(r, [1.0, 2.0]) - r[1]) <= 4 * EPS
+
+
+def test_mean_of_a_symmetric_set_is_refused():
+    # The four half-turn group {I, Rx(π), Ry(π), Rz(π)} with equal weights sums to 0.
+    r = np.stack([np.diag(d) for d in ([1., 1, 1], [1., -1, -1], [-1., 1, -1], [-1., -1, 1])])
+    with pytest.raises(RotationError, match=r'not unique.*singular values \[0\. 0\. 0\.\]'):
+        mean_rotation(r)
+    # weights 3, 3, 2, 1 sum to diag(3, 1, −1): det < 0 and σ2 = σ3, a circle of means
+    with pytest.raises(RotationError, match=r'not unique: the singular values of Σ wᵢRᵢ are '
+                                            r'\[1\. +0\.333 +0\.333\] with det -1, and '
+                                            r'σ2 − σ3 = 0'):
+        mean_rotation(r, [3.0, 3.0, 2.0, 1.0])
+
+
+@pytest.mark.parametrize('weights', [[1.0, -0.5, 1.0], [-1e-300, 1.0, 1.0]])
+def test_mean_negative_weights(weights):
+    r = clusters(1, 3, 1.0, 19)[0]
+    bad = min(weights)
+    with pytest.raises(RotationError, match=re.escape(f'weights must be ≥ 0, got {bad:g}')):
+        mean_rotation(r, weights)
+
+
+def test_mean_all_zero_weights():
+    with pytest.raises(RotationError, match=r'weights are all 0'):
+        mean_rotation(clusters(1, 3, 1.0, 20)[0], [0.0, 0.0, 0.0])
+    with pytest.raises(RotationError, match=r'weights are all 0'):
+        mean_rotation(clusters(2, 3, 1.0, 20), [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+
+
+@pytest.mark.parametrize('weights', [[1.0, 1.0], [1.0] * 4, 1.0])
+def test_mean_mismatched_weight_count(weights):
+    with pytest.raises(RotationError, match=r'weights must have one entry per rotation \(3\)'):
+        mean_rotation(clusters(1, 3, 1.0, 21)[0], weights)
+
+
+def test_mean_needs_a_set_of_rotations():
+    with pytest.raises(RotationError, match=r'\(\.\.\., N, 3, 3\) with N ≥ 1, got \(3, 3\)'):
+        mean_rotation(np.eye(3))
+    with pytest.raises(RotationError, match=r'N ≥ 1, got \(0, 3, 3\)'):
+        mean_rotation(np.zeros((0, 3, 3)))
+
+
+def test_mean_validates_rotations_and_weights():
+    r = clusters(1, 3, 1.0, 22)[0]
+    r[1, 0, 0] += 1e-6
+    with pytest.raises(RotationError, match=r'R is not orthogonal.*item \(1,\)'):
+        mean_rotation(r)
+    with pytest.raises(RotationError, match=r'weights must be finite'):
+        mean_rotation(clusters(1, 3, 1.0, 22)[0], [1.0, np.nan, 1.0])
+
+
+def test_mean_check_false_projects_the_weighted_sum():
+    # check=False: the nearest rotation to Σ wᵢ·Mᵢ of the matrices as given (polar factor).
+    m = clusters(1, 3, 1.0, 23)[0] * np.array([1.0, 1.001, 0.999])[:, None, None]
+    got = mean_rotation(m, check=False)
+    assert h.max_abs(got - h.polar_rotation(m.sum(0))) <= 1e-14
+    with pytest.raises(RotationError):
+        mean_rotation(m)
+
+
+# ---- align_vectors -------------------------------------------------------------------------
+
+
+def pairs(rng, n, noise):
+    b = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-1, 1, (n, 1))
+    r0 = scipy_rotations(1, int(rng.integers(1 << 30)))[0]
+    a = b @ r0.T + noise * rng.normal(size=(n, 3))
+    return a, b, r0
+
+
+@pytest.mark.parametrize('noise', [0.0, 1e-6, 0.1, 3.0])
+def test_align_matches_scipy(noise):
+    rng = np.random.default_rng(30)
+    for _ in range(100):
+        a, b, _ = pairs(rng, 8, noise)
+        w = rng.uniform(0.1, 2, 8)
+        for weights in (None, w):
+            R, rmsd = align_vectors(a, b, weights)
+            ref, rssd = Rotation.align_vectors(a, b, weights)
+            assert h.max_abs(R - ref.as_matrix()) <= 1e-13
+            # scipy's rssd comes from Σw(|a|² + |b|²) − 2·Σσ, which cancels for small
+            # residuals: the reference rmsd is the residual of scipy's rotation, summed here.
+            ww = np.ones(8) if weights is None else w
+            resid = a - b @ ref.as_matrix().T
+            ref_rmsd = np.sqrt(np.sum(ww * np.sum(resid ** 2, -1)) / ww.sum())
+            assert abs(rmsd - ref_rmsd) <= 1e-13 * (1 + rmsd)
+            if noise >= 0.1:
+                assert abs(rmsd - rssd / np.sqrt(ww.sum())) <= 1e-11 * (1 + rmsd)
+
+
+def test_align_exact_data_recovers_the_rotation():
+    rng = np.random.default_rng(31)
+    for _ in range(200):
+        a, b, r0 = pairs(rng, 5, 0.0)
+        R, rmsd = align_vectors(a, b)
+        assert h.max_abs(R - r0) <= 1e-13
+        assert rmsd <= 1e-15 * 8 * np.abs(a).max()
+
+
+def test_align_minimises_the_weighted_residual():
+    # Perturbing the answer by any small rotation never lowers Σ wᵢ‖aᵢ − R·bᵢ‖².
+    rng = np.random.default_rng(32)
+    a, b, _ = pairs(rng, 20, 0.5)
+    w = rng.uniform(0, 1, 20)
+    R, rmsd = align_vectors(a, b, w)
+    cost = np.sum(w * np.sum((a - b @ R.T) ** 2, -1))
+    assert abs(np.sqrt(cost / w.sum()) - rmsd) <= 1e-14 * rmsd
+    bumps = h.seed_rodrigues_eq7(h.random_unit_vectors(rng, 500), rng.uniform(0, 1e-3, 500))
+    costs = np.sum(w * np.sum((a - np.einsum('kij,nj->kni', R @ bumps, b)) ** 2, -1), -1)
+    assert np.all(costs >= cost - 1e-12 * cost)
+
+
+def smallest_rotation_ok(R, a, b):
+    """R takes b̂ onto â by the angle between them, about an axis ⊥ both (closed form)."""
+    a_hat, b_hat = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    axis, angle = matrix_to_axis_angle(R)
+    between = np.arctan2(np.linalg.norm(np.cross(a_hat, b_hat)), a_hat @ b_hat)
+    perpendicular = angle == 0 or (abs(axis @ a_hat) <= 1e-15 * 8
+                                   and abs(axis @ b_hat) <= 1e-15 * 8)
+    return (h.max_abs(R @ b_hat - a_hat) <= 1e-15 * 8 and abs(angle - between) <= 1e-15 * 8
+            and perpendicular)
+
+
+@pytest.mark.parametrize('a, b', [
+    ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+    ([1.0, 2.0, 3.0], [-3.0, 0.5, 2.0]),
+    ([0.0, 0.0, 5.0], [0.0, 0.0, 2.0]),
+    ([1.0, 1.0, 0.0], [1.0, 1.0 + 1e-9, 0.0]),
+    ([0.0, 1.0, 0.0], [0.0, -3.0, 0.0]),
+    ([1.0, 2.0, 3.0], [-1.0, -2.0, -3.0]),
+])
+def test_align_a_single_pair_is_the_smallest_rotation(a, b):
+    R, rmsd = align_vectors([a], [b])
+    assert is_rotation(R, tol=1e-14)
+    assert smallest_rotation_ok(R, np.array(a), np.array(b))
+    assert abs(rmsd - abs(np.linalg.norm(a) - np.linalg.norm(b))) <= 1e-14 * np.linalg.norm(a)
+    if abs(np.dot(a, b) / np.linalg.norm(a) / np.linalg.norm(b)) < 0.999:
+        ref, _ = Rotation.align_vectors([a], [b])
+        assert h.max_abs(R - ref.as_matrix()) <= 1e-14
+
+
+def test_align_parallel_pairs_is_the_smallest_rotation():
+    a_dir, b_dir = np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.3, -1.0])
+    lengths = np.array([[1.0, 2.0], [0.5, 0.1], [3.0, 7.0]])
+    a = lengths[:, :1] * a_dir
+    b = lengths[:, 1:] * b_dir
+    R, _ = align_vectors(a, b)
+    assert smallest_rotation_ok(R, a_dir, b_dir)
+    # anti-parallel members weigh against: the same line, so still the smallest rotation
+    R2, _ = align_vectors(np.concatenate([a, -a[:1]]), np.concatenate([b, -b[:1]]))
+    assert h.max_abs(R2 - R) <= 1e-15 * 8
+
+
+def test_align_batches_and_broadcasting():
+    rng = np.random.default_rng(33)
+    a = rng.normal(size=(2, 3, 5, 3))
+    b = rng.normal(size=(5, 3))
+    R, rmsd = align_vectors(a, b, np.arange(1.0, 6.0))
+    assert R.shape == (2, 3, 3, 3) and rmsd.shape == (2, 3)
+    for i in range(2):
+        for j in range(3):
+            r1, d1 = align_vectors(a[i, j], b, np.arange(1.0, 6.0))
+            assert h.max_abs(r1 - R[i, j]) <= 1e-15 * 8 and abs(d1 - rmsd[i, j]) <= 1e-15 * 8
+
+
+@pytest.mark.parametrize('scale_a, scale_b', [(1e300, 1.0), (1e-300, 1e300), (1.7e308, 1.7e308)])
+def test_align_any_finite_scale(scale_a, scale_b):
+    rng = np.random.default_rng(34)
+    a, b, r0 = pairs(rng, 6, 0.0)
+    R, rmsd = align_vectors(scale_a * (a / np.abs(a).max()), scale_b * (b / np.abs(b).max()))
+    assert h.max_abs(R - r0) <= 1e-14
+    assert np.isfinite(rmsd)
+
+
+@pytest.mark.parametrize('which', ['a', 'b'])
+def test_align_zero_vectors(which):
+    v = {'a': np.eye(3), 'b': np.eye(3)}
+    v[which] = v[which].copy()
+    v[which][1] = 0.0
+    with pytest.raises(RotationError, match=re.escape(f'{which}[1] is the zero vector')):
+        align_vectors(v['a'], v['b'])
+
+
+@pytest.mark.parametrize('n_a, n_b', [(3, 2), (1, 4)])
+def test_align_mismatched_counts(n_a, n_b):
+    with pytest.raises(RotationError, match=f'a has {n_a} vectors but b has {n_b}'):
+        align_vectors(np.ones((n_a, 3)), np.ones((n_b, 3)))
+
+
+def test_align_mismatched_weight_count():
+    with pytest.raises(RotationError, match=r'one entry per vector pair \(3\), got 2 entries'):
+        align_vectors(np.eye(3), np.eye(3), [1.0, 1.0])
+
+
+def test_align_negative_weights():
+    with pytest.raises(RotationError, match=r'weights must be ≥ 0, got -1 at index 2'):
+        align_vectors(np.eye(3), np.eye(3), [1.0, 1.0, -1.0])
+
+
+def test_align_all_zero_weights():
+    with pytest.raises(RotationError, match=r'weights are all 0: at least one vector pair'):
+        align_vectors(np.eye(3), np.eye(3), [0.0, 0.0, 0.0])
+
+
+def test_align_without_a_best_rotation():
+    # H = x xᵀ − x xᵀ = 0: every rotation fits equally badly
+    with pytest.raises(RotationError, match=r'not unique: H = Σ wᵢ·aᵢbᵢᵀ vanishes'):
+        align_vectors([[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]], [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
+    # b is a mirror image of a: H = diag(1, 1, −1), a circle of best rotations
+    with pytest.raises(RotationError, match=r'best rotation is not unique: the singular values'
+                                            r' of H = Σ wᵢ·aᵢbᵢᵀ are .* det -1'):
+        align_vectors(np.eye(3), np.diag([1.0, 1.0, -1.0]))
+
+
+def test_align_shapes_refused():
+    with pytest.raises(RotationError, match=r'a must have shape \(\.\.\., N, 3\)'):
+        align_vectors([1.0, 0.0, 0.0], [[1.0, 0.0, 0.0]])
+    with pytest.raises(RotationError, match=r'no vector pairs'):
+        align_vectors(np.zeros((0, 3)), np.zeros((0, 3)))
+    with pytest.raises(RotationError, match=r'do not broadcast'):
+        align_vectors(np.ones((2, 4, 3)), np.ones((3, 4, 3)))
+    with pytest.raises(RotationError, match=r'b must be finite'):
+        align_vectors(np.eye(3), [[1.0, 0, 0], [0, np.inf, 0], [0, 0, 1]])
+
+
+# ---- random_rotations ----------------------------------------------------------------------
+
+
+def haar_angle_cdf(theta):
+    """P(angle ≤ θ) of a uniform rotation: ∫ (1 − cos t)/π dt = (θ − sin θ)/π."""
+    return (theta - np.sin(theta)) / PI
+
+
+KS_N = 20_000
+KS_LIMIT = 1.95 / np.sqrt(KS_N)  # the Kolmogorov–Smirnov critical value at α = 0.001
+
+
+def ks_statistic(angles):
+    return stats.kstest(angles, haar_angle_cdf).statistic
+
+
+def test_random_rotations_follow_the_haar_angle_law():
+    r = random_rotations(KS_N, rng=2026)
+    assert r.shape == (KS_N, 3, 3) and np.all(is_rotation(r, tol=1e-14))
+    _, angle = matrix_to_axis_angle(r)
+    assert ks_statistic(angle) < KS_LIMIT
+    # left invariance: the distance to any fixed rotation follows the same law
+    fixed = scipy_rotations(1, 5)[0]
+    assert ks_statistic(rotation_distance(fixed, r)) < KS_LIMIT
+    # each column is uniform on the sphere: its z component is uniform on [−1, 1]
+    for col in range(3):
+        assert stats.kstest(r[:, 2, col], stats.uniform(-1, 2).cdf).statistic < KS_LIMIT
+    assert h.max_abs(r.mean(axis=0)) < 5 / np.sqrt(KS_N)  # E[R] = 0 for Haar
+
+
+def test_the_haar_test_rejects_non_uniform_samplers():
+    # The same statistic and limit fail samplers that are not uniform, and pass an
+    # independent uniform one (Euler ZYX with pitch density cos θ2 / 2).
+    rng = np.random.default_rng(7)
+    axis = rng.normal(size=(KS_N, 3))
+    uniform_angle = matrix_to_axis_angle(rodrigues(axis, rng.uniform(0, PI, KS_N)))[1]
+    assert ks_statistic(uniform_angle) > 10 * KS_LIMIT            # D ≈ 0.31
+    euler = np.stack([rng.uniform(-PI, PI, KS_N), rng.uniform(-PI / 2, PI / 2, KS_N),
+                      rng.uniform(-PI, PI, KS_N)], -1)
+    assert ks_statistic(matrix_to_axis_angle(euler_to_matrix(euler, 'ZYX'))[1]) > KS_LIMIT
+    euler[:, 1] = np.arcsin(rng.uniform(-1, 1, KS_N))
+    assert ks_statistic(matrix_to_axis_angle(euler_to_matrix(euler, 'ZYX'))[1]) < KS_LIMIT
+
+
+def test_random_rotations_shapes_and_seeds():
+    one = random_rotations(rng=3)
+    assert one.shape == (3, 3) and is_rotation(one, tol=1e-14)
+    assert random_rotations(0).shape == (0, 3, 3)
+    assert np.array_equal(random_rotations(5, rng=3), random_rotations(5, rng=3))
+    assert not np.array_equal(random_rotations(5, rng=3), random_rotations(5, rng=4))
+    gen = np.random.default_rng(9)
+    first, second = random_rotations(4, rng=gen), random_rotations(4, rng=gen)
+    assert not np.array_equal(first, second)  # a Generator is used, not copied
+    again = np.random.default_rng(9)
+    assert np.array_equal(random_rotations(4, rng=again), first)
+    assert np.array_equal(random_rotations(4, rng=again), second)
+    assert random_rotations(np.int64(2)).shape == (2, 3, 3)
+
+
+@pytest.mark.parametrize('n', [-1, 2.5, '3', True])
+def test_random_rotations_bad_count(n):
+    with pytest.raises(RotationError, match=r'n must be None or an integer ≥ 0'):
+        random_rotations(n)
+
+
+def test_random_rotations_bad_rng():
+    with pytest.raises(RotationError, match=r'rng must be a numpy.random.Generator or a seed'):
+        random_rotations(2, rng='seed')
+
+
+def test_unique_tolerance_is_documented_and_small():
+    assert 0 < UNIQUE_TOL <= 1e-9
