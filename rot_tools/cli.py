@@ -9,21 +9,27 @@ rot_tools.report) as YAML, or JSON with ``--json``::
     rot-tools axis-angle 0 0 1 90 --deg
     rot-tools rotvec 0 0 1.5707963267949
     rot-tools quaternion 0 0 0.7071 0.7071
-    rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg
+    rot-tools frame 0 1 0  -1 0 0  0 0 1
+    rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1
+    rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
 
 Every option is accepted before the command and after its arguments (``_add_common``).
 
 Typed inputs are validated with a tolerance ``--tol``, then made exact before the math,
-which checks at 1e-9. A matrix: max|RᵀR − I| and |det R − 1| ≤ tol (default
-``MATRIX_TOL`` = 1e-5, so six significant digits are enough), then the nearest rotation
-(rot_tools.nearest_rotation). A quaternion, (x, y, z, w) — the ROS order — or (w, x, y, z)
-with ``--wxyz``: ||q| − 1| ≤ tol (default ``QUATERNION_TOL`` = 1e-3, the node's
-quaternion_tolerance, so four significant digits are enough), then normalised.
+which checks at 1e-9. A matrix (9 numbers, or the rotation block of a homogeneous 4×4):
+max|RᵀR − I| and |det R − 1| ≤ tol (default ``MATRIX_TOL`` = 1e-5, so six significant
+digits are enough), then the nearest rotation (rot_tools.nearest_rotation). A frame: its
+axes normalised, |cos| between any two ≤ tol (same default), then the nearest rotation. A
+quaternion, (x, y, z, w) — the ROS order — or (w, x, y, z) with ``--wxyz``: ||q| − 1| ≤ tol
+(default ``QUATERNION_TOL`` = 1e-3, the node's quaternion_tolerance, so four significant
+digits are enough), then normalised. A homogeneous matrix's last row must be (0, 0, 0, 1)
+to 1e-9 (rot_tools.homogeneous_to_transform; --tol does not apply).
 
 Bad input — a wrong count, a non-number, NaN/Inf, a matrix that is not a rotation or is a
-reflection, a zero quaternion or one too far from unit length, an unknown sequence, a zero
-axis with a non-zero angle — prints exactly one line ``rot-tools: error: ...`` on stderr
-and exits with status 2. An angle typed without ``--deg`` that is larger than 2π only gets a
+reflection, a homogeneous matrix whose last row is not 0 0 0 1, a zero, non-orthogonal or
+left-handed frame, a zero quaternion or one too far from unit length, an unknown sequence,
+a zero axis with a non-zero angle — prints exactly one line ``rot-tools: error: ...`` on
+stderr and exits with status 2. An angle typed without ``--deg`` that is larger than 2π only gets a
 one-line ``rot-tools: hint: ...`` on stderr (after the report; status 0).
 """
 
@@ -35,8 +41,9 @@ import sys
 import numpy as np
 
 from rot_tools import (
-    axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, nearest_rotation,
-    quaternion_to_matrix, rotvec_to_matrix, validate_rotation)
+    axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, frame_to_matrix,
+    homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
+    validate_rotation)
 from rot_tools.errors import RotationError
 from rot_tools.report import DEFAULT_PRECISION, to_json, to_yaml, transform_report
 
@@ -173,6 +180,17 @@ def _typed_matrix(parser, args, values, what):
     return nearest_rotation(R)
 
 
+def _typed_frame(parser, args, values, what):
+    """R = (û v̂ ŵ) of typed axes U V W, |cos| between axes ≤ --tol, then made exact."""
+    u, v, w = _count(parser, values, 9, what).reshape(3, 3)
+    try:
+        R = frame_to_matrix(u, v, w, tol=_tol(args, MATRIX_TOL))
+    except RotationError as exc:
+        hint = ' (the tolerance is --tol)' if 'not orthogonal' in str(exc) else ''
+        parser.error(f'{what}: {exc}{hint}')
+    return nearest_rotation(R)
+
+
 def _typed_quaternion(parser, args, values, what):
     """R of a typed quaternion: x y z w (w x y z with --wxyz), ||q| − 1| ≤ --tol."""
     q = _count(parser, values, 4, what)
@@ -195,7 +213,20 @@ def _from_euler(args, parser):
 
 
 def _from_matrix(args, parser):
-    return _typed_matrix(parser, args, args.entries, 'matrix'), None, None
+    if len(args.entries) == 9:
+        return _typed_matrix(parser, args, args.entries, 'matrix'), None, None
+    if len(args.entries) != 16:
+        parser.error(f'matrix: expected 9 numbers (R) or 16 (a homogeneous 4×4 matrix), got '
+                     f'{len(args.entries)}')
+    try:  # the last row is checked here (at 1e-9), the rotation block below (at --tol)
+        R, b = homogeneous_to_transform(np.reshape(args.entries, (4, 4)), check=False)
+    except RotationError as exc:
+        parser.error(f'matrix: {exc}')
+    return _typed_matrix(parser, args, R.ravel(), 'matrix T[:3, :3]'), b, None
+
+
+def _from_frame(args, parser):
+    return _typed_frame(parser, args, args.axes, 'frame U V W'), None, None
 
 
 def _from_axis_angle(args, parser):
@@ -218,6 +249,8 @@ def _from_screw(args, parser):
         R = _typed_matrix(parser, args, args.rotation, 'argument --rotation')
     elif args.quaternion is not None:
         R = _typed_quaternion(parser, args, args.quaternion, 'argument --quaternion')
+    elif args.frame is not None:
+        R = _typed_frame(parser, args, args.frame, 'argument --frame')
     elif args.euler is not None:
         seq, *angles = args.euler
         try:
@@ -257,12 +290,17 @@ _COMMANDS = {
         'rot-tools euler zyx -30 20 10 --deg --seq XYZ --json\n'
         'rot-tools euler ZYX 0 90 0 --deg --all-sequences'),
     'matrix': (
-        _from_matrix, 'a rotation matrix, 9 numbers row by row',
-        'matrix R11 R12 R13 R21 R22 R23 R31 R32 R33 [options]',
-        'The matrix must be a rotation within --tol (max|RᵀR − I| and |det R − 1|);\n'
-        'it is then replaced by the nearest rotation, so six significant digits suffice.',
+        _from_matrix, 'a rotation matrix (9 numbers) or a homogeneous 4×4 (16), row by row',
+        'matrix R11 R12 R13 R21 R22 R23 R31 R32 R33 [options]\n'
+        '       rot-tools matrix R11 R12 R13 X  R21 R22 R23 Y  R31 R32 R33 Z  0 0 0 1 [options]',
+        'The rotation (R, or the block T[:3, :3] of the 4×4 T = [[R, b], [0, 0, 0, 1]])\n'
+        'must be a rotation within --tol (max|RᵀR − I| and |det R − 1|, default\n'
+        f'{MATRIX_TOL:g}); it is then replaced by the nearest rotation, so six significant\n'
+        "digits suffice. A 4×4's last row must be 0 0 0 1 (to 1e-9); its last column is\n"
+        'the translation b of p ↦ R·p + b, and the report adds the screw.',
         'rot-tools matrix 0 -1 0  1 0 0  0 0 1\n'
-        'rot-tools matrix 0.866025 -0.5 0  0.5 0.866025 0  0 0 1 --deg'),
+        'rot-tools matrix 0.866025 -0.5 0  0.5 0.866025 0  0 0 1 --deg\n'
+        'rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1 --point 1 2 3'),
     'axis-angle': (
         _from_axis_angle, 'a rotation axis and angle (Rodrigues)',
         'axis-angle X Y Z ANGLE [options]',
@@ -285,10 +323,22 @@ _COMMANDS = {
         'rot-tools quaternion 0 0 0.7071 0.7071\n'
         'rot-tools quaternion 0.7071 0 0 0.7071 --wxyz --deg\n'
         'rot-tools quaternion 0.1 -0.2 0.3 0.927 --tol 1e-2 --json'),
+    'frame': (
+        _from_frame, "a frame's axes u, v, w written in the reference frame (seed 000 §4)",
+        'frame UX UY UZ VX VY VZ WX WY WZ [options]',
+        'R = (û v̂ ŵ): the axes are the columns of R, each normalised. They must be\n'
+        f'orthogonal within --tol (|cos| between any two, default {MATRIX_TOL:g}) and\n'
+        'right-handed ((û × v̂)·ŵ = +1); the frame is then made exactly orthonormal\n'
+        '(nearest rotation). With --point P the report gives the coordinates Rᵀ·P of P in\n'
+        'this frame.',
+        'rot-tools frame 0 1 0  -1 0 0  0 0 1\n'
+        'rot-tools frame 1 1 0  -1 1 0  0 0 1 --deg\n'
+        'rot-tools frame 0 0 1  1 0 0  0 1 0 --point 1 2 3'),
     'screw': (
         _from_screw, 'a rigid transform (R, b) and its screw (Chasles) decomposition',
-        'screw [--rotation R11 .. R33 | --quaternion X Y Z W | --euler SEQ A1 A2 A3 |\n'
-        '       --axis-angle X Y Z ANGLE | --rotvec X Y Z] --translation X Y Z [options]',
+        'screw [--rotation R11 .. R33 | --quaternion X Y Z W | --frame U V W |\n'
+        '       --euler SEQ A1 A2 A3 | --axis-angle X Y Z ANGLE | --rotvec X Y Z]\n'
+        '       --translation X Y Z [options]',
         'p ↦ R·p + b is a rotation by `angle` about the line through `point` along\n'
         '`direction`, then a translation `translation` along it; pitch = translation/angle\n'
         '(.inf in YAML and "inf" in JSON for a pure translation). The rotation defaults to\n'
@@ -328,12 +378,18 @@ def _add_common(parser, suppress):
                      help='how far a typed input may be from exact before it is refused; '
                      'within it, it is made exact. A matrix (matrix, screw --rotation): '
                      f'max|RᵀR − I| and |det R − 1| ≤ TOL, default {MATRIX_TOL:g} (six '
-                     'significant digits pass), then the nearest rotation. A quaternion '
-                     '(quaternion, screw --quaternion): ||q| − 1| ≤ TOL, default '
-                     f'{QUATERNION_TOL:g} (four digits pass), then normalised')
+                     'significant digits pass), then the nearest rotation. A frame (frame, '
+                     'screw --frame): |cos| between two axes ≤ TOL, default '
+                     f'{MATRIX_TOL:g}. A quaternion (quaternion, screw --quaternion): '
+                     f'||q| − 1| ≤ TOL, default {QUATERNION_TOL:g} (four digits pass), then '
+                     'normalised')
     out.add_argument('--wxyz', action='store_true', default=default(False),
                      help='a typed quaternion is W X Y Z (w first) instead of the ROS order '
                      'X Y Z W')
+    out.add_argument('--point', type=_number, nargs=3, default=default(None),
+                     metavar=('X', 'Y', 'Z'), help='also print where the motion takes the point '
+                     'p = (X, Y, Z), R·p + b, and its coordinates in the moved frame, '
+                     'Rᵀ·(p − b)')
     out.add_argument('--plot', type=_plot_file, default=default(None), metavar='FILE',
                      help='also draw the motion in FILE (.png or .svg): both frames, the '
                      "rotation or screw axis, the path of the origin; needs matplotlib (pip "
@@ -367,7 +423,7 @@ def build_parser():
                            help='the three angles A1 A2 A3 (rad, or deg with --deg)')
         elif name == 'matrix':
             p.add_argument('entries', type=_number, nargs='*', metavar='ENTRY',
-                           help='the 9 entries R11 R12 R13 R21 R22 R23 R31 R32 R33')
+                           help='the 9 entries of R, or the 16 of T, row by row')
         elif name == 'axis-angle':
             p.add_argument('values', type=_number, nargs='*', metavar='NUMBER',
                            help='X Y Z ANGLE: the axis (any length > 0) and the angle')
@@ -377,6 +433,9 @@ def build_parser():
         elif name == 'quaternion':
             p.add_argument('components', type=_number, nargs='*', metavar='COMPONENT',
                            help='X Y Z W (W X Y Z with --wxyz)')
+        elif name == 'frame':
+            p.add_argument('axes', type=_number, nargs='*', metavar='COMPONENT',
+                           help='UX UY UZ VX VY VZ WX WY WZ: the axes u, v, w (any length > 0)')
         else:
             rotation = p.add_mutually_exclusive_group()
             rotation.add_argument('--rotation', type=_number, nargs=9,
@@ -385,6 +444,9 @@ def build_parser():
             rotation.add_argument('--quaternion', type=_number, nargs=4,
                                   metavar=('X', 'Y', 'Z', 'W'),
                                   help='R from a quaternion (W X Y Z with --wxyz)')
+            rotation.add_argument('--frame', type=_number, nargs=9,
+                                  metavar=('UX', 'UY', 'UZ', 'VX', 'VY', 'VZ', 'WX', 'WY', 'WZ'),
+                                  help="R from a frame's axes (its columns)")
             rotation.add_argument('--euler', nargs=4, metavar=('SEQ', 'A1', 'A2', 'A3'),
                                   help='R from Euler angles')
             rotation.add_argument('--axis-angle', type=_number, nargs=4,
@@ -420,7 +482,8 @@ def _report(args, parser):
     try:
         R, b, input_seq = args.handler(args, parser)
         return R, b, transform_report(R, b, seq=args.seq or input_seq or 'ZYX',
-                                      degrees=args.deg, all_sequences=args.all_sequences)
+                                      degrees=args.deg, all_sequences=args.all_sequences,
+                                      point=args.point)
     except ValueError as exc:  # RotationError is a ValueError
         parser.error(f'{args.command}: {exc}')
 

@@ -5,9 +5,9 @@ The data takes one path: (R, b) → :func:`transform_report` → :func:`to_yaml`
 the same report, so the key names below are part of the contract; they never depend on
 options. Radians unless a key or ``unit`` says otherwise; lengths in the unit of b.
 
-``transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False)`` returns a
-dict of plain Python data (float, bool, str, list, dict; no NumPy types), keys in this
-order::
+``transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, point=None)``
+returns a dict of plain Python data (float, bool, str, list, dict; no NumPy types), keys in
+this order::
 
     matrix:            [[r11, r12, r13], [r21, r22, r23], [r31, r32, r33]]   (list of rows)
     axis_angle:
@@ -28,6 +28,8 @@ order::
                        (geometry_msgs/Quaternion), canonical sign (w > 0; at w = 0 the first
                        non-zero of x, y, z positive), from rot_tools.matrix_to_quaternion
     translation:       b = [x, y, z] (only when b is given)
+    homogeneous:       only when b is given: the 4×4 matrix [[R, b], [0, 0, 0, 1]] of
+                       p ↦ R·p + b, list of rows (rot_tools.transform_to_homogeneous)
     screw:             only when b is given (Chasles: rotation θ about the line through
                        ``point`` along ``direction``, then ``translation`` along it)
       direction:       unit l̂
@@ -37,6 +39,11 @@ order::
       angle_deg:       θ in degrees
       translation:     d, signed, along l̂
       pitch:           d/θ (length per rad); inf for a pure translation, 0 for the identity
+    point:             only when ``point`` p (3,) is given (b = 0 when b is not)
+      p:               the point as given, in the reference frame
+      image:           R·p + b, where the motion takes it (rot_tools.transform_points)
+      in_moved_frame:  Rᵀ·(p − b), its coordinates in the moved frame (seed 000 §4: q' = Rᵀq;
+                       transform_points of invert_transform)
 
 ``degrees`` only switches the Euler angles (``euler.unit``); axis-angle and screw angles
 always come in both ``angle`` (rad) and ``angle_deg``.
@@ -69,6 +76,7 @@ from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.errors import RotationError
 from rot_tools.euler import (
     angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence)
+from rot_tools.rigid import invert_transform, transform_points, transform_to_homogeneous
 from rot_tools.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
 from rot_tools.so3 import apply_to_rotations, matrix_to_quaternion
 
@@ -134,19 +142,23 @@ def _euler(angles, degenerate, degrees):
     return {'angles': _floats(angles), 'degenerate': bool(degenerate)}
 
 
-def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
+def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, point=None):
     """Every representation of the rotation R (3, 3), and of (R, b) when b (3,) is given.
 
     R is validated as rot_tools.validate_rotation does (tol 1e-9); project a matrix typed
-    with few digits with rot_tools.nearest_rotation first. Returns the dict described in
-    the module docstring. RotationError for a bad R, b, or sequence.
+    with few digits with rot_tools.nearest_rotation first. ``point`` (3,) adds where the
+    motion takes it and its coordinates in the moved frame. Returns the dict described in
+    the module docstring. RotationError for a bad R, b, point, or sequence.
     """
     R = np.asarray(R, dtype=np.float64)
     if R.shape != (3, 3):
         raise RotationError(f'transform_report takes one rotation (3, 3), got {R.shape}')
     if b is not None and np.shape(b) != (3,):
         raise RotationError(f'translation b must have shape (3,), got {np.shape(b)}')
-    d = decompose(R, np.zeros(3) if b is None else b, seq)
+    if point is not None and np.shape(point) != (3,):
+        raise RotationError(f'point p must have shape (3,), got {np.shape(point)}')
+    motion = (R, np.zeros(3) if b is None else b)
+    d = decompose(*motion, seq)
     angle = float(d.angle)
     euler = {'sequence': seq, 'unit': 'deg' if degrees else 'rad',
              **_euler(d.euler, d.degenerate, degrees)}
@@ -174,6 +186,7 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
     if b is not None:
         screw = d.screw
         report['translation'] = _floats(b)
+        report['homogeneous'] = _floats(transform_to_homogeneous(*motion, check=False))
         report['screw'] = {
             'direction': _floats(screw.direction),
             'point': _floats(screw.point),
@@ -182,6 +195,13 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False):
             'angle_deg': _deg(screw.angle),
             'translation': float(screw.translation),
             'pitch': float(screw.pitch),
+        }
+    if point is not None:
+        report['point'] = {
+            'p': _floats(point),
+            'image': _floats(transform_points(*motion, point, check=False)),
+            'in_moved_frame': _floats(transform_points(
+                *invert_transform(*motion, check=False), point, check=False)),
         }
     return report
 

@@ -343,11 +343,137 @@ def test_screw_from_a_ros_pose(script):
 
 
 # ---------------------------------------------------------------------------------------
+# Frames (seed 000 §4), homogeneous matrices, points (seed 000 §5)
+
+
+def _typed(values, digits=17):
+    return [f'{x:.{digits}g}' for x in np.ravel(values)]
+
+
+def test_frame_of_the_tracking_example(script):
+    # Seed 000 example 3: the tracking frame's axes are the columns of
+    # Rot_z(α)·Rot_y(β), written out in closed form; a point q of the station's frame has
+    # coordinates q' = Rᵀ·q in the tracking frame (§4).
+    a, b = math.radians(30.0), math.radians(-20.0)
+    ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
+    u, v, w = [ca * cb, sa * cb, -sb], [-sa, ca, 0.0], [ca * sb, sa * sb, cb]
+    R = np.array([[ca * cb, -sa, ca * sb], [sa * cb, ca, sa * sb], [-sb, 0.0, cb]])
+    q = np.array([1.0, -2.0, 0.5])
+    rep = ok(script, 'frame', *_typed([u, v, w]), '--point', *q, '--json')
+    check_rotation(rep, R)
+    close(rep['point']['p'], q)
+    close(rep['point']['image'], R @ q)
+    close(rep['point']['in_moved_frame'], [np.dot(u, q), np.dot(v, q), np.dot(w, q)])
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'point']
+
+
+def test_frame_axes_of_any_length_typed_with_six_digits(script):
+    R = Rotation.random(random_state=3).as_matrix()
+    axes = (R * [2.0, 0.5, 30.0]).T  # the columns, scaled: u, v, w
+    rep = ok(script, 'frame', *_typed(axes, 6), '--json')
+    M = np.array(rep['matrix'])
+    close(M.T @ M, np.eye(3))  # made exactly orthonormal
+    np.testing.assert_allclose(M, R, rtol=0, atol=3e-6)  # within the typing error
+    check_rotation(rep, M)
+    # The same frame is refused at a tolerance tighter than its typing error.
+    proc = run(script, '--tol', '1e-9', 'frame', *_typed(axes, 6))
+    assert proc.returncode == 2
+    assert re.fullmatch(r'rot-tools: error: frame U V W: frame axes . and . are not orthogonal: '
+                        r'\|cos\| = \S+ > tol 1e-09 .*\(the tolerance is --tol\)\n', proc.stderr)
+
+
+def test_frame_tolerance_is_adjustable(script):
+    skew = [1, 0.002, 0, 0, 1, 0, 0, 0, 1]  # u and v 0.11° from orthogonal: |cos| = 0.002
+    proc = run(script, 'frame', *skew)
+    assert proc.returncode == 2 and '|cos| = 0.002 > tol 1e-05' in proc.stderr
+    rep = ok(script, 'frame', *skew, '--tol', '3e-3', '--json')
+    M = np.array(rep['matrix'])
+    close(M.T @ M, np.eye(3))
+    np.testing.assert_allclose(M, np.eye(3), rtol=0, atol=2e-3)
+
+
+def test_screw_from_a_frame(script):
+    rep = ok(script, 'screw', '--frame', 0, 1, 0, -1, 0, 0, 0, 0, 1, '--translation', 1, 0, 0.5,
+             '--json')
+    _check_screw(rep, rot_z(math.pi / 2), [1.0, 0.0, 0.5])
+
+
+def _homogeneous(R, b):
+    """[[R, b], [0, 0, 0, 1]] with NumPy only."""
+    return np.block([[R, np.reshape(b, (3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]])
+
+
+@pytest.mark.parametrize('seed', [0, 1])
+def test_matrix_of_sixteen_numbers_is_a_homogeneous_transform(script, seed):
+    R = Rotation.random(random_state=seed).as_matrix()
+    b = np.random.default_rng(seed).normal(size=3) * 4
+    T = _homogeneous(R, b)
+    p = np.array([0.25, -3.0, 2.0])
+    rep = ok(script, 'matrix', *_typed(T), '--point', *p, '--json')
+    check_rotation(rep, R)
+    _check_screw(rep, R, b)
+    close(rep['homogeneous'], T)
+    close(rep['point']['image'], (T @ np.append(p, 1.0))[:3])          # 4×4 product
+    close(rep['point']['in_moved_frame'], (np.linalg.inv(T) @ np.append(p, 1.0))[:3])
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'translation',
+                         'homogeneous', 'screw', 'point']
+
+
+def test_homogeneous_matrix_typed_with_six_digits(script):
+    T = _homogeneous(rot_x(0.3) @ rot_z(-1.1), [1.5, -2.0, 0.125])
+    rep = ok(script, 'matrix', *_typed(T, 6), '--json')
+    M = np.array(rep['matrix'])
+    close(M.T @ M, np.eye(3))
+    np.testing.assert_allclose(M, T[:3, :3], rtol=0, atol=2e-6)
+    close(rep['translation'], [1.5, -2.0, 0.125])
+    proc = run(script, 'matrix', *_typed(T, 6), '--tol', '1e-8')
+    assert proc.returncode == 2
+    assert proc.stderr.startswith('rot-tools: error: matrix T[:3, :3]: R is not orthogonal: '
+                                  'max|RᵀR − I| = ')
+    assert proc.stderr.endswith(' > tol 1e-08 (the tolerance is --tol)\n')
+
+
+def test_every_report_with_a_translation_has_the_homogeneous_matrix(script):
+    R, b = rot_z(math.pi / 2), [1.0, 0.0, 0.5]
+    for args in (['screw', '--euler', 'ZYX', '90', '0', '0', '--deg', '--translation', *b],
+                 ['screw', '--quaternion', '0', '0', '0.7071', '0.7071', '--translation', *b],
+                 ['matrix', *_typed(_homogeneous(R, b))]):
+        rep = ok(script, *args, '--json')
+        close(rep['homogeneous'], [[0, -1, 0, 1], [1, 0, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1]])
+    rep = ok(script, 'screw', '--translation', '0', '-3', '4', '--json')
+    close(rep['homogeneous'], _homogeneous(np.eye(3), [0, -3, 4]))
+    for args in (['euler', 'ZYX', '1', '2', '3'], ['matrix', *_typed(R)],
+                 ['quaternion', '0', '0', '0', '1'], ['frame', *_typed(R.T)]):
+        assert 'homogeneous' not in ok(script, *args, '--json')
+
+
+@pytest.mark.parametrize('args', [
+    ['euler', 'ZYX', '30', '-20', '10', '--deg'],
+    ['axis-angle', '1', '-2', '0.5', '2.5'],
+    ['screw', '--rotvec', '0.3', '-1', '2', '--translation', '-1', '2', '0.25'],
+    ['screw', '--translation', '1', '2', '3'],
+])
+def test_point_image_and_coordinates_in_the_moved_frame(script, args):
+    p = [-1e-3, 2.5, -3.0]
+    for where in ('after', 'before'):
+        argv = [*args, '--point', *p] if where == 'after' else ['--point', *p, *args]
+        rep = ok(script, *argv, '--json')
+        R = np.array(rep['matrix'])
+        b = np.array(rep.get('translation', [0.0, 0.0, 0.0]))
+        pt = rep['point']
+        assert list(pt) == ['p', 'image', 'in_moved_frame']
+        close(pt['p'], p)
+        close(pt['image'], R @ p + b)
+        close(pt['in_moved_frame'], R.T @ (p - b))
+        close(R @ pt['in_moved_frame'] + b, p)  # back to the reference frame
+
+
+# ---------------------------------------------------------------------------------------
 # Options anywhere, --version, hints
 
 COMMON_OPTIONS = {  # option → its arguments, for a quaternion input
     '--deg': [], '--seq': ['xzx'], '--all-sequences': [], '--json': [],
-    '--precision': ['5'], '--tol': ['1e-2'], '--wxyz': []}
+    '--precision': ['5'], '--tol': ['1e-2'], '--wxyz': [], '--point': ['-1', '2e-1', '3']}
 
 
 @pytest.mark.parametrize('option', sorted(COMMON_OPTIONS))
@@ -364,12 +490,15 @@ def test_every_option_before_the_command_and_after_its_arguments(script, option)
 
 def test_help_lists_every_option(script):
     options = [*COMMON_OPTIONS, '--plot', '--version']
-    for args in ([], ['quaternion'], ['screw']):
+    for args in ([], ['quaternion'], ['frame'], ['screw']):
         text = run(script, *args, '--help').stdout
         for option in options:
             assert re.search(rf'^  {option}\b', text, re.MULTILINE), (args, option)
     text = run(script, '--help').stdout
-    assert 'default 1e-05' in text and 'default 0.001' in text  # which default for which
+    for default in ('max|RᵀR − I| and |det R − 1| ≤ TOL, default 1e-05',
+                    '|cos| between two axes ≤ TOL, default 1e-05',
+                    '||q| − 1| ≤ TOL, default 0.001'):  # which default for which input
+        assert default in ' '.join(text.split())
 
 
 def test_version_is_the_installed_distribution_and_package_xml_version(script):
@@ -417,7 +546,7 @@ def test_radians_value_is_kept_when_hinting(script):
 
 
 @pytest.mark.parametrize('command', ['euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion',
-                                     'screw'])
+                                     'frame', 'screw'])
 def test_help_has_usage_and_examples_that_run(script, command):
     proc = run(script, command, '--help')
     assert proc.returncode == 0 and proc.stderr == ''
@@ -431,7 +560,7 @@ def test_help_has_usage_and_examples_that_run(script, command):
 def test_main_help(script):
     proc = run(script, '--help')
     assert proc.returncode == 0 and proc.stdout.startswith('usage: rot-tools ')
-    for command in ('euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion', 'screw'):
+    for command in ('euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion', 'frame', 'screw'):
         assert f'\n    {command} ' in proc.stdout
 
 
@@ -443,7 +572,11 @@ def test_main_help(script):
     # wrong count
     ('euler ZYX 1 2', 'euler ZYX angles: expected 3 numbers, got 2'),
     ('euler ZYX 1 2 3 4', 'euler ZYX angles: expected 3 numbers, got 4'),
-    ('matrix 1 0 0 0 1 0 0 0', 'matrix: expected 9 numbers, got 8'),
+    ('matrix 1 0 0 0 1 0 0 0', 'matrix: expected 9 numbers (R) or 16 (a homogeneous 4×4 '
+     'matrix), got 8'),
+    ('matrix 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0', 'matrix: expected 9 numbers (R) or 16'),
+    ('matrix 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 0', 'matrix: expected 9 numbers (R) or 16 (a '
+     'homogeneous 4×4 matrix), got 17'),
     ('axis-angle 0 0 1', 'axis-angle X Y Z ANGLE: expected 4 numbers, got 3'),
     ('rotvec 1 2 3 4', 'rotvec X Y Z: expected 3 numbers, got 4'),
     ('screw --translation 1 2', 'argument --translation: expected 3 arguments'),
@@ -502,6 +635,45 @@ def test_main_help(script):
      'arguments'),
     ('quaternion 0 0 0 1 --tol x', "argument --tol: not a number: 'x'"),
     ('--tol -1e-3 quaternion 0 0 0 1', "argument --tol: must be >= 0, got '-1e-3'"),
+    # frames
+    ('frame 1 0 0 0 1 0 0 0', 'frame U V W: expected 9 numbers, got 8'),
+    ('frame 1 0 0 0 1 0 0 0 1 1', 'frame U V W: expected 9 numbers, got 10'),
+    ('frame 1 0 0 0 1 0 nan 0 1', "argument COMPONENT: not a finite number: 'nan'"),
+    ('frame 1 0 0 0 1 0 0 0 -1', 'frame U V W: the frame (u, v, w) is left-handed: '
+     '(û × v̂)·ŵ = -1, expected +1'),
+    ('frame 0 1 0 1 0 0 0 0 1', 'frame U V W: the frame (u, v, w) is left-handed'),
+    ('frame 1 0.1 0 0 1 0 0 0 1', 'frame U V W: frame axes u and v are not orthogonal: '
+     '|cos| = 0.0995 > tol 1e-05'),
+    ('frame 1 0 0 0 1 0 0 1 1', 'frame U V W: frame axes v and w are not orthogonal: '
+     '|cos| = 0.707 > tol 1e-05'),
+    ('frame 1 0 0 0 1 0 1 1 1 --tol 0.5', 'frame U V W: frame axes u and w are not '
+     'orthogonal: |cos| = 0.577 > tol 0.5'),
+    ('frame 1 0 0 0 0 0 0 0 1', 'frame U V W: frame axis v is zero (|v| = 0)'),
+    ('frame 1 0 0 0 1 0 0 0 1 --tol 1', 'frame U V W: tol must be in [0, 1), got 1.0'),
+    ('screw --frame 1 0 0 0 -1 0 0 0 1 --translation 0 0 0', 'argument --frame: the frame '
+     '(u, v, w) is left-handed'),
+    ('screw --frame 1 0 0 0 1 0 --translation 0 0 0', 'argument --frame: expected 9 arguments'),
+    # homogeneous 4×4
+    ('matrix 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0.1 1', 'matrix: T is not a rigid motion: its last '
+     'row is [0.0, 0.0, 0.1, 1.0], not [0, 0, 0, 1] (off by 0.1 > 1e-09)'),
+    ('matrix 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 2', 'matrix: T is not a rigid motion: its last '
+     'row is [0.0, 0.0, 0.0, 2.0], not [0, 0, 0, 1] (off by 1 > 1e-09)'),
+    ('matrix 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1.000001 --tol 0.1', 'matrix: T is not a rigid '
+     'motion: its last row is [0.0, 0.0, 0.0, 1.000001], not [0, 0, 0, 1] (off by 1e-06 > '
+     '1e-09)'),
+    ('matrix 1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 1', 'matrix T[:3, :3]: R is not orthogonal: '
+     'max|RᵀR − I| = 1 > tol 1e-05'),
+    ('matrix 1 0.2 0 0 0 1 0 0 0 0 1 0 0 0 0 1', 'matrix T[:3, :3]: R is not orthogonal: '
+     'max|RᵀR − I| = 0.2 > tol 1e-05 (the tolerance is --tol)'),
+    ('matrix 1 0 0 5 0 1 0 6 0 0 -1 7 0 0 0 1', 'matrix T[:3, :3]: R is a reflection: '
+     'det R = -1, expected +1'),
+    ('matrix 1 0 0 0 0 1 0 0 0 0 1 inf 0 0 0 1', "argument ENTRY: not a finite number: 'inf'"),
+    # --point
+    ('euler ZYX 1 2 3 --point 1 2', 'argument --point: expected 3 arguments'),
+    ('--point 1 nan 3 euler ZYX 1 2 3', "argument --point: not a finite number: 'nan'"),
+    ('quaternion 0 0 0 1 --point 1 2 x', "argument --point: not a number: 'x'"),
+    ('euler ZYX 0.785398 0 0 --point 1.5e308 1.5e308 0', 'euler: R·p + b overflows float64'),
+    ('screw --translation 1e308 0 0 --point 1e308 0 0', 'screw: R·p + b overflows float64'),
     # --wxyz without a quaternion
     ('euler ZYX 1 2 3 --wxyz', '--wxyz: there is no quaternion to read (it applies to '
      'quaternion and screw --quaternion)'),

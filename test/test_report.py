@@ -43,8 +43,9 @@ def _json_loads(text):
 
 
 def test_keys_in_order_and_plain_python_types():
-    rep = transform_report(R0, B0)
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'translation', 'screw']
+    rep = transform_report(R0, B0, point=[1.0, -2.0, 0.5])
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'translation',
+                         'homogeneous', 'screw', 'point']
     assert list(rep['axis_angle']) == [
         'axis', 'angle', 'angle_deg', 'rotation_vector', 'second_solution']
     assert list(rep['axis_angle']['second_solution']) == ['axis', 'angle', 'angle_deg']
@@ -52,6 +53,7 @@ def test_keys_in_order_and_plain_python_types():
     assert list(rep['quaternion']) == ['x', 'y', 'z', 'w']
     assert list(rep['screw']) == [
         'direction', 'point', 'moment', 'angle', 'angle_deg', 'translation', 'pitch']
+    assert list(rep['point']) == ['p', 'image', 'in_moved_frame']
     assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler', 'quaternion']
     for item in _walk(rep):
         assert type(item) in (dict, list, float, bool, str), (type(item), item)
@@ -114,6 +116,32 @@ def test_quaternion_is_scipys_canonical_one_in_ros_order(axis, angle):
     assert np.linalg.norm(q) == pytest.approx(1.0, abs=1e-15)
 
 
+def test_homogeneous_matrix_only_with_a_translation():
+    rep = transform_report(R0, B0)
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R0, B0
+    assert rep['homogeneous'] == T.tolist()  # exact: it only places the entries
+    assert 'homogeneous' not in transform_report(R0)
+    assert transform_report(R0, np.zeros(3))['homogeneous'][3] == [0.0, 0.0, 0.0, 1.0]
+
+
+@pytest.mark.parametrize('b', [None, B0])
+def test_point_image_and_coordinates_in_the_moved_frame(b):
+    rng = np.random.default_rng(4)
+    for p in [np.zeros(3), *rng.normal(size=(5, 3)) * 10]:
+        t = np.zeros(3) if b is None else b
+        pt = transform_report(R0, b, point=p)['point']
+        np.testing.assert_array_equal(pt['p'], p)
+        # Independent closed forms (seed 000 §5 and §4): R·p + b and Rᵀ·(p − b).
+        np.testing.assert_allclose(pt['image'], R0 @ p + t, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(pt['in_moved_frame'], R0.T @ (p - t), rtol=0, atol=1e-14)
+        # The 4×4 product agrees.
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R0, t
+        np.testing.assert_allclose(pt['image'], (T @ np.append(p, 1))[:3], rtol=0, atol=1e-14)
+    assert 'point' not in transform_report(R0, b)
+
+
 def test_degrees_switch_the_euler_angles_only():
     rad = transform_report(R0, B0, seq='zxz')
     deg = transform_report(R0, B0, seq='zxz', degrees=True)
@@ -123,7 +151,7 @@ def test_degrees_switch_the_euler_angles_only():
                                atol=1e-12)
     np.testing.assert_allclose(euler_to_matrix(np.radians(deg['euler']['angles']), 'zxz'), R0,
                                atol=TOL)
-    for key in ('axis_angle', 'screw', 'matrix', 'translation', 'quaternion'):
+    for key in ('axis_angle', 'screw', 'matrix', 'translation', 'quaternion', 'homogeneous'):
         assert deg[key] == rad[key]
 
 
@@ -175,6 +203,10 @@ def test_identity_screw():
     ((np.stack([np.eye(3)] * 2),), r'one rotation \(3, 3\), got \(2, 3, 3\)'),
     ((np.eye(3), [1.0, 2.0]), r'translation b must have shape \(3,\)'),
     ((np.eye(3), None, 'ZyX'), "unknown Euler sequence 'ZyX'"),
+    ((np.eye(3), None, 'ZYX', False, False, [1.0, 2.0]), r'point p must have shape \(3,\)'),
+    ((np.eye(3), None, 'ZYX', False, False, np.zeros((2, 3))),
+     r'point p must have shape \(3,\), got \(2, 3\)'),
+    ((np.eye(3), None, 'ZYX', False, False, [1.0, np.nan, 0.0]), 'point p must be finite'),
 ])
 def test_bad_input_raises(args, match):
     with pytest.raises(RotationError, match=match):
@@ -213,7 +245,8 @@ def test_round_number():
 
 
 def test_yaml_layout_is_fixed():
-    rep = transform_report(rot_z(math.pi / 2), [1.0, 0.0, 0.5], degrees=True)
+    rep = transform_report(rot_z(math.pi / 2), [1.0, 0.0, 0.5], degrees=True,
+                           point=[1.0, 2.0, 3.0])
     assert to_yaml(rep) == """\
 matrix:
   - [0.0, -1.0, 0.0]
@@ -239,6 +272,11 @@ quaternion:
   z: 0.707106781187
   w: 0.707106781187
 translation: [1.0, 0.0, 0.5]
+homogeneous:
+  - [0.0, -1.0, 0.0, 1.0]
+  - [1.0, 0.0, 0.0, 0.0]
+  - [0.0, 0.0, 1.0, 0.5]
+  - [0.0, 0.0, 0.0, 1.0]
 screw:
   direction: [0.0, 0.0, 1.0]
   point: [0.5, 0.5, 0.0]
@@ -247,6 +285,10 @@ screw:
   angle_deg: 90.0
   translation: 0.5
   pitch: 0.318309886184
+point:
+  p: [1.0, 2.0, 3.0]
+  image: [-1.0, 1.0, 3.5]
+  in_moved_frame: [2.0, 0.0, 2.5]
 """
 
 
