@@ -45,14 +45,22 @@ LOSS_OK = 0.01  # a rate is sustained when at most 1 % of the inputs are lost
 OUTPUTS = ('rotation_matrix', 'axis_angle', 'euler_angles', 'screw', 'screw_axis')
 NAMES = {'relay': 'bench_relay', 'rot_tools': 'bench_rot_tools'}
 """Target → node name; main() adds relay_full (bench_relay_full) with --full-relay."""
+NO_MARKERS = 'rot_tools_no_markers'
+"""Target of --markers-off: rotation_node with publish_markers:=false (bench_rot_tools_nm)."""
 
 
 def target_command(python, target):
     ros_args = ['--ros-args', '-r', f'__node:={NAMES[target]}']
-    if target == 'rot_tools':
-        return [python, '-m', 'rot_tools.rotation_node'] + ros_args
+    if target in ('rot_tools', NO_MARKERS):
+        off = ['-p', 'publish_markers:=false'] if target == NO_MARKERS else []
+        return [python, '-m', 'rot_tools.rotation_node'] + ros_args + off
     extra = ['--full-interface'] if target == 'relay_full' else []
     return [python, str(BENCH / 'relay_node.py')] + extra + ros_args
+
+
+def expected_outputs(target):
+    """The outputs the warm-up waits for: all but the marker for the no-markers node."""
+    return tuple(o for o in OUTPUTS if o != 'screw_axis') if target == NO_MARKERS else OUTPUTS
 
 
 def cpu_seconds(pid):
@@ -195,9 +203,10 @@ class Harness:
         """Flood slowly until every output of both nodes has arrived here."""
         deadline = time.monotonic() + timeout
         for target, name in NAMES.items():
-            while not all(self.measurer.seen[(target, o)] for o in OUTPUTS):
+            outputs = expected_outputs(target)
+            while not all(self.measurer.seen[(target, o)] for o in outputs):
                 if time.monotonic() > deadline:
-                    missing = [o for o in OUTPUTS if not self.measurer.seen[(target, o)]]
+                    missing = [o for o in outputs if not self.measurer.seen[(target, o)]]
                     self.fail(f'{target}: no message on {", ".join(missing)} after '
                               f'{timeout:.0f} s')
                 self.command(f'flood /{name}/pose 100 0.2')
@@ -337,6 +346,19 @@ def print_results(summary, ev, rates, seconds, repeats):
             'and services; no math)',
             ['offered msg/s', 'delivered/s (lost)', 'vs relay', 'p50/p99 ms', 'CPU us/msg'],
             rows)
+    if NO_MARKERS in NAMES:
+        rows = []
+        for r in rates:
+            on, off = summary[('rot_tools', r)], summary[(NO_MARKERS, r)]
+            rows.append([f'{r}', f"{on['delivered']:.0f} ({on['loss']:.0%})",
+                         f"{off['delivered']:.0f} ({off['loss']:.0%})",
+                         f"{on['delivered'] / off['delivered']:.2f}",
+                         f"{on['p99']:.2f} / {off['p99']:.2f}",
+                         f"{on['cpu_us']:.0f} / {off['cpu_us']:.0f}"])
+        benchlib.print_table(
+            'rotation_node with markers (publish_markers true, the default) and without',
+            ['offered msg/s', 'markers on: delivered/s (lost)', 'off: delivered/s (lost)',
+             'on / off', 'p99 ms on / off', 'CPU us/msg on / off'], rows)
 
 
 def main(argv=None):
@@ -352,10 +374,14 @@ def main(argv=None):
     parser.add_argument('--full-relay', action='store_true',
                         help='also measure relay_node.py --full-interface (the relay with '
                         "rotation_node's other entities, idle)")
+    parser.add_argument('--markers-off', action='store_true',
+                        help='also measure rotation_node with publish_markers:=false')
     parser.add_argument('--json', metavar='PATH', help='also write the figures as JSON')
     args = parser.parse_args(argv)
     if args.full_relay:
         NAMES['relay_full'] = 'bench_relay_full'
+    if args.markers_off:
+        NAMES[NO_MARKERS] = 'bench_rot_tools_nm'
 
     domain = os.environ.get('BENCH_ROS_DOMAIN_ID') or str(1 + (os.getpid() * 7 + 13) % 101)
     os.environ['ROS_DOMAIN_ID'] = domain

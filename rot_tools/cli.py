@@ -472,6 +472,8 @@ def _write_plot(parser, path, R, b, degrees):
         plot.save(R, b, path, degrees)
     except OSError as exc:
         parser.error(f'--plot: cannot write {path}: {exc.strerror or exc}')
+    except ValueError as exc:  # RotationError: a picture too large for float64
+        parser.error(f'--plot: {exc}')
 
 
 def _report(args, parser):

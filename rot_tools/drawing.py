@@ -24,6 +24,8 @@ straight segment from 0 to b. The identity has nothing to draw.
 The path is sampled with a step of at most MAX_STEP_ANGLE of turn and at most SAGITTA·scale
 between a chord and the helix (a chord of a turn Δ at radius r is r(1 − cos(Δ/2)) ≈ r·Δ²/8
 off the curve), and at most MAX_SEGMENTS segments; a straight path is one segment.
+
+A motion whose picture overflows float64 (an axis 1e300 away) raises RotationError.
 """
 
 import math
@@ -31,6 +33,7 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 
+from rot_tools.errors import RotationError
 from rot_tools.report import decompose
 from rot_tools.screw import Screw, screw_exp
 
@@ -98,7 +101,9 @@ def path_segments(angle, radius, scale):
     step = MAX_STEP_ANGLE
     if radius > 0.0:
         step = min(step, math.sqrt(8.0 * SAGITTA * scale / radius))
-    return min(MAX_SEGMENTS, max(1, math.ceil(angle / step)))
+    if not angle < MAX_SEGMENTS * step:  # also for a step of 0 (an infinite radius)
+        return MAX_SEGMENTS
+    return max(1, math.ceil(angle / step))
 
 
 def _traced_point(kind, direction, scale):
@@ -139,12 +144,18 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
     if kind == IDENTITY:
         return Picture(kind, b, R, scale, None, None, '', label, b.copy(), screw)
     traced, p0 = _traced_point(kind, direction, scale)
-    radius = float(np.linalg.norm(np.cross(p0 - point, direction)))
-    path = screw_path(R, b, d.twist, p0, path_segments(angle, radius, scale))
-    # Where the origin, the path and the moved frame fall along the axis: t = (p − c)·l̂.
-    drawn = np.concatenate([[np.zeros(3), b], path, b + scale * R.T])
-    t = (drawn - point) @ direction
-    lo, hi = t.min() - scale, t.max() + scale
-    axis = None if kind == TRANSLATION else point + np.outer((lo, hi), direction)
-    label_at = point + (hi + LABEL_OFFSET * scale) * direction
+    with np.errstate(over='ignore', invalid='ignore'):  # checked below
+        radius = float(np.linalg.norm(np.cross(p0 - point, direction)))
+        path = screw_path(R, b, d.twist, p0, path_segments(angle, radius, scale))
+        # Where the origin, the path and the moved frame fall along the axis: t = (p − c)·l̂.
+        drawn = np.concatenate([[np.zeros(3), b], path, b + scale * R.T])
+        t = (drawn - point) @ direction
+        lo, hi = t.min() - scale, t.max() + scale
+        axis = None if kind == TRANSLATION else point + np.outer((lo, hi), direction)
+        label_at = point + (hi + LABEL_OFFSET * scale) * direction
+    if not (np.isfinite(path).all() and np.isfinite(label_at).all()
+            and (axis is None or np.isfinite(axis).all())):
+        raise RotationError(
+            f'the picture of this motion overflows float64 (scale {scale:.3g}, max|b_i| = '
+            f'{np.abs(b).max():.3g}, screw axis point max|c_i| = {np.abs(point).max():.3g})')
     return Picture(kind, b, R, scale, axis, path, traced, label, label_at, screw)

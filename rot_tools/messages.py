@@ -208,9 +208,11 @@ def twist_stamped_msg(header, twist, msg=None):
 
 
 SCREW_AXIS_COLOR = ColorRGBA(r=1.0, g=0.5, b=0.0, a=1.0)
+SCREW_AXIS_NS = 'screw_axis'
+"""Namespace of the ~/screw_axis Marker (id 0)."""
 
 
-def screw_axis_marker(header, point, direction, scale, msg=None, ns='screw_axis'):
+def screw_axis_marker(header, point, direction, scale, msg=None, ns=SCREW_AXIS_NS):
     """visualization_msgs/Marker: an ARROW from ``point`` to ``point + scale·direction``.
 
     Points in ``header.frame_id``, identity pose (orientation.w = 1: RViz rejects q = 0),
@@ -267,6 +269,11 @@ def _marker(header, marker_id, kind, color, size, points=None):
     return msg
 
 
+def delete_picture_markers(header):
+    """visualization_msgs/MarkerArray that deletes every marker of picture_markers."""
+    return MarkerArray(markers=[delete_marker(header, MARKERS_NS, i) for i in MARKER_IDS])
+
+
 def picture_markers(header, picture):
     """visualization_msgs/MarkerArray of a rot_tools.drawing.Picture (see MARKER_IDS).
 
@@ -279,7 +286,7 @@ def picture_markers(header, picture):
     """
     s = picture.scale
     if picture.path is None:
-        return MarkerArray(markers=[delete_marker(header, MARKERS_NS, i) for i in MARKER_IDS])
+        return delete_picture_markers(header)
     tail = picture.origin
     markers = [_marker(header, i, Marker.ARROW, color, (0.05 * s, 0.1 * s, 0.2 * s),
                        (tail, tail + s * picture.frame[:, k]))

@@ -15,6 +15,8 @@ the pitch. Every drawn line has a gid (REFERENCE_GIDS, MOVED_GIDS, 'screw_axis',
 which SVG keeps as the element id.
 """
 
+import math
+
 import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -32,7 +34,7 @@ _TITLES = {drawing.IDENTITY: 'identity: nothing moves', drawing.ROTATION: 'rotat
 
 def default_scale(b, point):
     """Frame axes 1 long, or a quarter of the motion's extent max(|b|, |c|) if larger."""
-    return max(1.0, 0.25 * max(float(np.linalg.norm(b)), float(np.linalg.norm(point))))
+    return max(1.0, 0.25 * max(math.hypot(*b), math.hypot(*point)))  # hypot: no overflow
 
 
 def _vector_text(v):

@@ -7,12 +7,17 @@ every output — rotation vector θ·l̂, Euler angles, twist (θ·l̂, θ·m + 
 along the axis — is read off it, so at θ = π all outputs of one input share the axis sign;
 the quaternion is matrix_to_quaternion of R. Outputs carry the input's header. Topics,
 services and parameters: SPEC §3, §3.1 and README "Using it in ROS 2".
+
+The pictures (~/markers and ~/screw_axis, rot_tools.drawing) cost several times the rest of
+an input's work, so they are throttled: at most MARKER_RATE a second, the latest input wins,
+and the last input is always drawn (a timer publishes it when its turn comes).
 """
 
 import difflib
 from functools import partial
 import math
 import sys
+import time
 from typing import Callable, NamedTuple
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -23,6 +28,7 @@ import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
@@ -30,9 +36,9 @@ from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
-from visualization_msgs.msg import Marker
+from visualization_msgs.msg import Marker, MarkerArray
 
-from rot_tools import messages
+from rot_tools import drawing, messages
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
 from rot_tools.report import decompose, to_yaml, transform_report
@@ -52,6 +58,9 @@ DEFAULT_PATH_STEPS = 20
 
 MAX_PATH_STEPS = 10_000
 """A tolerance that needs more steps than this is refused (the reply would be huge)."""
+
+MARKER_RATE = 30.0
+"""Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
 
 
 class InputKind(NamedTuple):
@@ -141,9 +150,14 @@ PARAMETERS = {
         'message is refused', '>= 0, finite',
         FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0))),
     'publish_markers': (True, _descriptor(
-        ParameterType.PARAMETER_BOOL, 'publish the screw axis as a Marker on ~/screw_axis')),
+        ParameterType.PARAMETER_BOOL,
+        f'publish the picture of each input (at most {MARKER_RATE:g} a second, the latest '
+        'wins): the moved frame, screw axis, helical path and label on ~/markers '
+        '(MarkerArray) and the screw axis arrow on ~/screw_axis (Marker)')),
     'marker_scale': (1.0, _descriptor(
-        ParameterType.PARAMETER_DOUBLE, 'length of the ~/screw_axis arrow (m)', '> 0, finite',
+        ParameterType.PARAMETER_DOUBLE,
+        'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
+        '> 0, finite',
         FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0))),
 }
 """name: (default, descriptor)."""
@@ -195,6 +209,12 @@ class RotationNode(Node):
         self._euler_pub = self.create_publisher(Vector3Stamped, '~/euler_angles', qos)
         self._screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
         self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
+        self._markers_pub = self.create_publisher(MarkerArray, '~/markers', qos)
+        self._picture_due = None  # the arguments of the latest drawing not yet published
+        self._picture_sent = -math.inf  # time.monotonic() of the last one published
+        self._picture_timer = self.create_timer(
+            1.0 / MARKER_RATE, self._publish_picture,
+            clock=Clock(clock_type=ClockType.STEADY_TIME), autostart=False)
 
         self._sources = []
         for kind in INPUTS:
@@ -284,16 +304,52 @@ class RotationNode(Node):
         self._axis_angle_pub.publish(messages.vector3_stamped_msg(header, rotvec, out.rotvec))
         self._euler_pub.publish(messages.vector3_stamped_msg(header, angles, out.euler))
         self._screw_pub.publish(messages.twist_stamped_msg(header, d.twist, out.twist))
-        screw = d.screw
-        if settings.publish_markers and (screw.angle != 0.0 or screw.translation != 0.0):
-            self._marker_pub.publish(messages.screw_axis_marker(
-                header, screw.point, screw.direction, settings.marker_scale, out.marker))
+        if settings.publish_markers:
+            self._offer_picture(header, R, b, d, settings)
         self._latest = Latest(source, header, R, b, settings)
 
     def _refuse(self, topic, reason, text):
         self._refused[reason] += 1
         self.get_logger().warning(f'refused input on {topic} ({reason}): {text}',
                                   throttle_duration_sec=1.0)
+
+    # -- markers -----------------------------------------------------------------------
+
+    def _offer_picture(self, header, R, b, d, settings):
+        """Publish the picture of this input now, or when MARKER_RATE next allows it.
+
+        An input that arrives while the timer runs replaces the one waiting: the latest
+        wins, and the last input is always drawn.
+        """
+        self._picture_due = (header, R, b, d, settings)
+        if not self._picture_timer.is_canceled():
+            return
+        if time.monotonic() - self._picture_sent >= 1.0 / MARKER_RATE:
+            self._publish_picture()
+        else:
+            self._picture_timer.reset()  # fires one period from now
+
+    def _publish_picture(self):
+        """~/markers and ~/screw_axis of the input waiting (DELETEs for the identity)."""
+        self._picture_timer.cancel()
+        due, self._picture_due = self._picture_due, None
+        if due is None or not self._settings.publish_markers:  # switched off since
+            return
+        header, R, b, d, settings = due
+        self._picture_sent = time.monotonic()
+        try:
+            picture = drawing.picture(R, b, settings.marker_scale, settings.degrees, d)
+        except RotationError as exc:  # e.g. a huge marker_scale: the old picture goes
+            self.get_logger().warning(f'no picture: {exc}', throttle_duration_sec=1.0)
+            picture = None
+        if picture is None or picture.kind == drawing.IDENTITY:
+            self._markers_pub.publish(messages.delete_picture_markers(header))
+            self._marker_pub.publish(
+                messages.delete_marker(header, messages.SCREW_AXIS_NS, 0))
+            return
+        self._markers_pub.publish(messages.picture_markers(header, picture))
+        self._marker_pub.publish(messages.screw_axis_marker(
+            header, d.screw.point, d.screw.direction, settings.marker_scale, self._out.marker))
 
     # -- services ----------------------------------------------------------------------
 

@@ -35,7 +35,7 @@ RUN = f'rt{os.getpid()}_{secrets.token_hex(4)}'
 """This test run's token: the namespaces of its nodes start with /RUN."""
 
 OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw',
-           'screw_axis')
+           'screw_axis', 'markers')
 """Published topics of rotation_node, relative to its name."""
 
 TIMEOUT = 5.0
@@ -184,9 +184,9 @@ class Tester:
         """Subscribe (reliable, depth 10, like the node) to the node's outputs."""
         from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
         from std_msgs.msg import Float64MultiArray
-        from visualization_msgs.msg import Marker
+        from visualization_msgs.msg import Marker, MarkerArray
         types = (Float64MultiArray, QuaternionStamped, Vector3Stamped, Vector3Stamped,
-                 TwistStamped, Marker)
+                 TwistStamped, Marker, MarkerArray)
         for name, msg_type in zip(OUTPUTS, types):
             self.subscribe(f'{prefix}/{name}', msg_type)
 

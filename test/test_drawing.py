@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rot_tools import drawing
+from rot_tools import drawing, RotationError
 from rot_tools.drawing import picture
 
 RNG = np.random.default_rng(1010)
@@ -171,3 +171,12 @@ def test_path_segments():
     assert drawing.path_segments(0.0, 5.0, 1.0) == 1
     assert drawing.path_segments(math.pi, 0.0, 1.0) == 60
     assert drawing.path_segments(1e-9, 1e9, 1.0) == 1
+
+
+def test_a_picture_that_overflows_float64_is_refused():
+    R, b = motion((0, 0, 1), np.zeros(3), 1.0, 1.0)
+    with pytest.raises(RotationError, match=r'overflows float64 \(scale 1e\+308, max\|b_i\| = 1,'):
+        picture(R, b, scale=1e308)
+    # The largest finite motions still draw (their axis 1e211 away; capped segments).
+    pic = picture(*motion((0, 0, 1), np.zeros(3), 1e-11, 0.0)[:1], (0.0, 1e200, 0.0))
+    assert len(pic.path) == drawing.MAX_SEGMENTS + 1 and np.isfinite(pic.path).all()

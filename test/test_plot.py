@@ -175,6 +175,17 @@ def test_unwritable_file_is_one_line(tmp_path, capsys):
     assert captured.err.startswith('rot-tools: error: --plot: cannot write')
 
 
+def test_a_picture_too_large_for_float64_is_one_line(tmp_path, capsys):
+    from rot_tools.cli import main
+    out = tmp_path / 'huge.png'
+    assert main(['screw', '--translation', '1.7e308', '0', '0', '--plot', str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == '' and len(captured.err.splitlines()) == 1
+    assert captured.err.startswith('rot-tools: error: --plot: the picture of this motion '
+                                   'overflows float64')
+    assert not out.exists()
+
+
 def test_missing_matplotlib_is_one_line_and_exit_2(tmp_path):
     out = tmp_path / 'picture.png'
     done = rot_tools_cli(CASES['screw'] + ['--plot', str(out)],

@@ -1,0 +1,232 @@
+"""rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
+
+The node lives in its own rclpy context and namespace (test_node's Rig). Every expected
+value is computed here from the input alone, without rot_tools: R with scipy's Rotation,
+the screw from its rotation vector θ·l̂, d = b·l̂ and the axis point c as the least-norm
+solution of (I − R)·c = b − d·l̂ (it is ⊥ l̂), and the path as the closed form of the
+constant-screw motion, p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂.
+"""
+
+import math
+import time
+
+import numpy as np
+import pytest
+from rcl_interfaces.msg import Log
+from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+from scipy.spatial.transform import Rotation
+from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
+    euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)
+from visualization_msgs.msg import Marker
+
+from rot_tools.rotation_node import MARKER_RATE
+
+TRIAD, AXIS, PATH, LABEL = (0, 1, 2), 3, 4, 5
+COLORS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))  # x red, y green, z blue
+
+
+def expected_screw(q, b):
+    """(R, l̂, c, θ, d) of the pose (q, b), independently of rot_tools (θ < π)."""
+    rotation = Rotation.from_quat(q)
+    R, rotvec = rotation.as_matrix(), rotation.as_rotvec()
+    theta = np.linalg.norm(rotvec)
+    u = rotvec / theta
+    d = float(np.dot(b, u))
+    c = np.linalg.lstsq(np.eye(3) - R, b - d * u, rcond=None)[0]
+    return R, u, c, theta, d
+
+
+def helix(u, c, theta, d, p0, n):
+    """p0 carried by the constant-screw motion, at s = 0, 1/n, ..., 1."""
+    s = np.linspace(0.0, 1.0, n + 1)
+    return c + Rotation.from_rotvec(np.outer(s, theta * u)).apply(p0 - c) + np.outer(s * d, u)
+
+
+def markers_of(rig, stamp):
+    """Wait for the ~/markers array of the input stamped ``stamp``; return it."""
+    def arrays():
+        return [a for a in rig.received('markers') if a.markers[0].header.stamp.sec == stamp]
+    rig.tester.spin_until(arrays, what=f'~/markers of input {stamp}')
+    (array,) = arrays()
+    return array
+
+
+def screw_axis_of(rig, stamp):
+    """Wait for the ~/screw_axis Marker of the input stamped ``stamp``; return it."""
+    def markers():
+        return [m for m in rig.received('screw_axis') if m.header.stamp.sec == stamp]
+    rig.tester.spin_until(markers, what=f'~/screw_axis of input {stamp}')
+    (marker,) = markers()
+    return marker
+
+
+def check_array(array, stamp, frame):
+    """Unique (ns, id) 0..5 in namespace rot_tools, the input's header, unit quaternions."""
+    keys = [(m.ns, m.id) for m in array.markers]
+    assert sorted(keys) == [('rot_tools', i) for i in range(6)]
+    for m in array.markers:
+        assert (m.header.stamp.sec, m.header.frame_id) == (stamp, frame)
+        assert quat(m.pose.orientation).tolist() == [0.0, 0.0, 0.0, 1.0]
+    return {m.id: m for m in array.markers}
+
+
+def check_triad(m, R, b, scale):
+    for k in TRIAD:
+        arrow = m[k]
+        assert (arrow.type, arrow.action) == (Marker.ARROW, Marker.ADD)
+        assert (arrow.color.r, arrow.color.g, arrow.color.b) == COLORS[k]
+        assert arrow.color.a == 1.0 and arrow.scale.x > 0 and arrow.scale.y > 0
+        np.testing.assert_allclose(xyz(arrow.points[0]), b, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(xyz(arrow.points[1]) - b, scale * R[:, k], rtol=0,
+                                   atol=1e-12)
+
+
+POSES = {
+    'general': ((0.2, -0.4, 0.5, 0.74162), (1.0, -0.5, 2.0), 1.0),
+    'quarter_turn_z': ((0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)), (1.0, 0.0, 0.5), 1.0),
+    'small_scale': ((0.6, 0.0, 0.0, 0.8), (0.0, 2.0, -1.0), 0.25),
+}
+
+
+@pytest.mark.parametrize('case', POSES)
+@pytest.mark.parametrize('kind', ['pose', 'transform'])
+def test_markers_of_a_screw_motion(make_rig, case, kind):
+    q, b, scale = POSES[case]
+    q, b = np.array(q) / np.linalg.norm(q), np.array(b)
+    rig = make_rig(marker_scale=scale)
+    build = pose_stamped if kind == 'pose' else transform_stamped
+    stamp = rig.send(kind, build(q, b, frame='odom'))
+    m = check_array(markers_of(rig, stamp), stamp, 'odom')
+    R, u, c, theta, d = expected_screw(q, b)
+    check_triad(m, R, b, scale)
+    size = 1 + np.linalg.norm(c) + abs(d)
+    # The path: a LINE_STRIP from the origin to b on the constant-screw motion.
+    path = m[PATH]
+    assert (path.type, path.action) == (Marker.LINE_STRIP, Marker.ADD) and path.scale.x > 0
+    points = np.array([xyz(p) for p in path.points])
+    assert theta / (len(points) - 1) <= math.radians(3.0) + 1e-15  # steps of at most 3°
+    np.testing.assert_array_equal(points[0], np.zeros(3))
+    np.testing.assert_allclose(points[-1], b, rtol=0, atol=1e-12 * size)
+    np.testing.assert_allclose(points, helix(u, c, theta, d, np.zeros(3), len(points) - 1),
+                               rtol=0, atol=1e-12 * size)
+    # The axis: an ARROW whose ends lie on the line through c along +l̂, at least
+    # marker_scale beyond the origin's and b's feet on it.
+    axis = m[AXIS]
+    assert (axis.type, axis.action) == (Marker.ARROW, Marker.ADD)
+    start, end = xyz(axis.points[0]), xyz(axis.points[1])
+    for e in (start, end):
+        assert np.linalg.norm(np.cross(e - c, u)) <= 1e-12 * size
+    np.testing.assert_allclose((end - start) / np.linalg.norm(end - start), u, atol=1e-12)
+    assert (start - c) @ u <= min(0.0, d) - scale + 1e-12
+    assert (end - c) @ u >= max(0.0, d) + scale - 1e-12
+    label = m[LABEL]
+    assert (label.type, label.action) == (Marker.TEXT_VIEW_FACING, Marker.ADD)
+    assert label.scale.z > 0
+    assert label.text == (f'theta = {theta:.4g} rad, d = {d + 0.0:.4g}, '
+                          f'pitch = {d / theta + 0.0:.4g} /rad\npath: origin')
+    # ~/screw_axis of the same input: the arrow from c along l̂, marker_scale long.
+    arrow = screw_axis_of(rig, stamp)
+    assert (arrow.ns, arrow.id, arrow.action) == ('screw_axis', 0, Marker.ADD)
+    np.testing.assert_allclose(xyz(arrow.points[0]), c, rtol=0, atol=1e-12 * size)
+    np.testing.assert_allclose(xyz(arrow.points[1]) - c, scale * u, rtol=0, atol=1e-12 * size)
+
+
+def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):
+    rig = make_rig(angle_unit='deg', marker_scale=2.0)
+    stamp = rig.send('euler', euler_stamped((90.0, 0.0, 0.0)))  # ZYX: 90° about z
+    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    R = Rotation.from_rotvec([0.0, 0.0, math.pi / 2]).as_matrix()
+    check_triad(m, R, np.zeros(3), 2.0)
+    arc = np.array([xyz(p) for p in m[PATH].points])
+    np.testing.assert_allclose(arc, helix(np.array([0.0, 0, 1]), np.zeros(3), math.pi / 2, 0.0,
+                                          np.array([2.0, 0, 0]), len(arc) - 1),
+                               rtol=0, atol=1e-12)
+    start, end = xyz(m[AXIS].points[0]), xyz(m[AXIS].points[1])
+    np.testing.assert_allclose([start[:2], end[:2]], 0.0, atol=1e-15)
+    assert end[2] - start[2] >= 4.0  # marker_scale beyond both ends of the drawing
+    assert m[LABEL].text == 'theta = 90 deg, d = 0, pitch = 0 /rad\npath: x-axis tip'
+
+
+def test_identity_deletes_what_was_drawn_on_both_topics(rig):
+    before = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
+    markers_of(rig, before)
+    screw_axis_of(rig, before)
+    stamp = rig.send('pose', pose_stamped((0, 0, 0, 1)))
+    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    assert [m[i].action for i in range(6)] == [Marker.DELETE] * 6
+    arrow = screw_axis_of(rig, stamp)
+    assert (arrow.ns, arrow.id, arrow.action) == ('screw_axis', 0, Marker.DELETE)
+    assert quat(arrow.pose.orientation).tolist() == [0.0, 0.0, 0.0, 1.0]
+    # Drawing again after the identity: ADD on both.
+    after = rig.send('euler', euler_stamped((0.5, 0.0, 0.0)))
+    assert all(x.action == Marker.ADD for x in markers_of(rig, after).markers)
+    assert screw_axis_of(rig, after).action == Marker.ADD
+
+
+def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):
+    before = rig.send('pose', pose_stamped((0.6, 0, 0, 0.8), (0, 1, 0)))
+    markers_of(rig, before)
+    b = np.array([1.0, -2.0, 2.0])
+    stamp = rig.send('transform', transform_stamped((0, 0, 0, 1), b))
+    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    assert m[AXIS].action == Marker.DELETE
+    check_triad(m, np.eye(3), b, 1.0)
+    assert [xyz(p).tolist() for p in m[PATH].points] == [[0, 0, 0], b.tolist()]
+    assert m[LABEL].text == 'theta = 0 rad, d = 3, pitch = inf\npath: origin'
+
+
+def test_publish_markers_false_silences_both(make_rig):
+    rig = make_rig(publish_markers=False)
+    for msg in (pose_stamped((0, 0, 1, 0), (1, 0, 0)), pose_stamped((0, 0, 0, 1))):
+        rig.roundtrip('pose', msg, marker=False)
+    assert set_one(rig.node, 'publish_markers', True).successful
+    stamp = rig.send('pose', pose_stamped((0, 1, 0, 0), (0, 0, 1)))
+    markers_of(rig, stamp)
+    screw_axis_of(rig, stamp)
+    assert set_one(rig.node, 'publish_markers', False).successful
+    rig.roundtrip('pose', pose_stamped((0, 0, 0, 1)), marker=False)
+    rig.roundtrip('pose', pose_stamped((1, 0, 0, 0), (1, 1, 1)), marker=False)
+    rig.tester.spin_for(3.0 / MARKER_RATE)  # a throttled picture would have come by now
+    assert [a.markers[0].header.stamp.sec for a in rig.received('markers')] == [stamp]
+    assert [m.header.stamp.sec for m in rig.received('screw_axis')] == [stamp]
+
+
+def test_markers_are_throttled_and_the_last_input_is_drawn(rig):
+    n = 60
+    start = time.monotonic()
+    for k in range(n):
+        angle = 0.02 * (k + 1)
+        last = rig.send('pose', pose_stamped((0, 0, math.sin(angle), math.cos(angle)),
+                                             (0.01 * k, 0, 0)))
+    markers_of(rig, last)  # the last input is always drawn
+    screw_axis_of(rig, last)
+    elapsed = time.monotonic() - start
+    rig.tester.spin_for(2.0 / MARKER_RATE)
+    arrays = rig.received('markers')
+    # At most one picture per 1/MARKER_RATE s of the node's clock, inside this window.
+    assert len(arrays) <= 1 + elapsed * MARKER_RATE
+    assert len(rig.received('screw_axis')) == len(arrays)
+    stamps = [a.markers[0].header.stamp.sec for a in arrays]
+    assert stamps == sorted(stamps) and stamps[-1] == last
+    assert len(rig.received('screw')) > len(arrays)  # the other outputs are not throttled
+
+
+def test_a_picture_too_large_for_float64_deletes_and_warns(make_rig):
+    rig = make_rig(marker_scale=1e308)
+    stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
+    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    assert [m[i].action for i in range(6)] == [Marker.DELETE] * 6
+    assert screw_axis_of(rig, stamp).action == Marker.DELETE
+    rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='the warning on /rosout')
+    (warning,) = rig.node_logs(Log.WARN)
+    assert 'no picture: the picture of this motion overflows float64' in warning.msg
+    assert set_one(rig.node, 'marker_scale', 1.0).successful  # and the node keeps drawing
+    stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
+    assert all(x.action == Marker.ADD for x in markers_of(rig, stamp).markers)
+
+
+def test_markers_qos(rig):
+    (info,) = rig.tester.node.get_publishers_info_by_topic(rig.topic('markers'))
+    assert info.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+    assert info.qos_profile.durability == DurabilityPolicy.VOLATILE
+    assert info.topic_type == 'visualization_msgs/msg/MarkerArray'
