@@ -47,7 +47,7 @@ def _draw_frame(ax, origin, axes, gids, style, names):
         tip = origin + axes[:, k]
         ax.plot(*np.transpose([origin, tip]), color=color, gid=gid, **style)
         ax.text(*tip, name, color=color)
-    return [origin, origin + axes.T[0], origin + axes.T[1], origin + axes.T[2]]
+    return [origin, *(origin + axes.T)]
 
 
 def _set_equal_limits(ax, points):
