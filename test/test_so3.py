@@ -263,3 +263,115 @@ def test_matrix_to_quaternion_closed_form(axis, angle):
 def test_matrix_to_quaternion_half_turn_sign(R, q):
     # Exactly π (w = 0): the first non-zero of x, y, z is positive.
     assert h.max_abs(matrix_to_quaternion(R) - np.array(q)) <= 2e-16
+
+
+def scipy_rotations(n, seed):
+    from scipy.spatial.transform import Rotation
+    return Rotation.random(n, rng=seed).as_matrix()
+
+
+def adversarial_rotations():
+    """Angles 0, 1e-300 … 1e-8, π − 1e-6 … π about special and random axes, the 24 cube
+    rotations with +0.0 and −0.0 entries, and gimbal-lock Euler matrices."""
+    rng = np.random.default_rng(80)
+    axes = np.concatenate([np.eye(3), -np.eye(3), [[0.6, 0.8, 0.0], [1, 1, 1], [1, -2, 3e-12]],
+                           rng.normal(size=(20, 3))])
+    axes /= np.linalg.norm(axes, axis=-1, keepdims=True)
+    angles = np.array([0.0, 1e-300, 1e-15, 1e-12, 1e-8, 1.0, PI / 2, PI - 1e-6, PI - 1e-9,
+                       PI - 1e-12, PI])
+    axis = np.repeat(axes, len(angles), axis=0)
+    angle = np.tile(angles, len(axes))
+    cube = h.cube_rotations()
+    lock = h.ref_euler(np.stack([rng.uniform(-PI, PI, 20), np.full(20, PI / 2),
+                                 rng.uniform(-PI, PI, 20)], -1), 'ZYX')
+    return np.concatenate([h.seed_rodrigues_eq7(axis, angle), cube,
+                           np.where(cube == 0, -0.0, cube), lock]), axis, angle
+
+
+def exact_quaternion(axis, angle):
+    """(sin(θ/2)·l̂, cos(θ/2)): canonical as it stands for θ ∈ [0, fl(π)] (cos(θ/2) > 0)."""
+    half = np.asarray(angle)[..., None] / 2
+    return np.concatenate([np.sin(half) * axis, np.cos(half)], -1)
+
+
+def test_matrix_to_quaternion_adversarial_closed_forms():
+    # ~1e-15 at 0, 1e-12, π − 1e-9 and π against (sin(θ/2)·l̂, cos(θ/2)); the input matrix
+    # is itself rounded, so a few ulps is the floor.
+    r, axis, angle = adversarial_rotations()
+    n = len(angle)
+    q = matrix_to_quaternion(r[:n])
+    assert h.max_abs(q - exact_quaternion(axis, angle)) <= 1e-15
+    for i in range(0, n, 7):
+        assert h.max_abs(matrix_to_quaternion(r[i]) - q[i]) == 0.0, i
+
+
+def test_quaternion_round_trip_random_and_adversarial():
+    r_adv, _, _ = adversarial_rotations()
+    for r in (scipy_rotations(N, 81), r_adv):
+        q = matrix_to_quaternion(r)
+        assert h.max_abs(np.linalg.norm(q, axis=-1) - 1.0) <= 2e-16 * 2
+        assert h.max_abs(quaternion_to_matrix(q) - r) <= 1e-15
+        assert h.max_abs(h.ref_quaternion_to_matrix(q) - r) <= 2e-15  # (its own rounding)
+
+
+def test_quaternion_round_trip_from_quaternions():
+    # matrix_to_quaternion(quaternion_to_matrix(q)) is q/|q| with the canonical sign, for any
+    # non-zero q, including w = 0 and the tiny-angle w ≈ 1.
+    rng = np.random.default_rng(82)
+    q = rng.normal(size=(N, 4))
+    q[:100, 3] = 0.0
+    q[100:200, :3] *= 1e-10
+    unit_q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    got = matrix_to_quaternion(quaternion_to_matrix(q))
+    canonical = np.where(unit_q[:, 3:] < 0, -unit_q, unit_q)
+    first = np.take_along_axis(canonical, np.argmax(canonical[:, :3] != 0, axis=1)[:, None], 1)
+    canonical = np.where((canonical[:, 3:] == 0) & (first < 0), -canonical, canonical)
+    assert h.max_abs(got - canonical) <= 1e-15
+
+
+def test_matrix_to_quaternion_canonical_sign_everywhere():
+    r_adv, _, _ = adversarial_rotations()
+    for r in (scipy_rotations(N, 83), r_adv):
+        q = matrix_to_quaternion(r)
+        w = q[:, 3]
+        assert np.all(w >= 0)
+        half = q[w == 0, :3]
+        first = half[np.arange(len(half)), np.argmax(half != 0, axis=1)]
+        assert np.all(first > 0)
+        assert not np.signbit(q[q == 0]).any()  # no −0.0
+
+
+def scipy_canonical(r):
+    from scipy.spatial.transform import Rotation
+    return Rotation.from_matrix(r).as_quat(canonical=True)
+
+
+def test_matrix_to_quaternion_matches_scipy_on_adversarial_sets():
+    r, _, _ = adversarial_rotations()
+    q, ref = matrix_to_quaternion(r), scipy_canonical(r)
+    # at exactly π scipy's w may come out as ±1e-17 and flip its sign choice: compare ±q there
+    close = np.minimum(np.abs(q - ref).max(-1), np.abs(q + ref).max(-1))
+    assert np.all(np.where(np.abs(ref[:, 3]) > 1e-8, np.abs(q - ref).max(-1), close) <= 1e-15)
+
+
+def test_matrix_to_quaternion_check_false_uses_the_matrix_as_given():
+    # Without the check a slightly non-orthogonal matrix still gives a unit quaternion, within
+    # the perturbation of the rotation's own.
+    r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 2.0)
+    bad = r.copy()
+    bad[0, 1] += 1e-6
+    with pytest.raises(RotationError, match='not orthogonal'):
+        matrix_to_quaternion(bad)
+    q = matrix_to_quaternion(bad, check=False)
+    assert abs(np.linalg.norm(q) - 1.0) <= 2e-16 * 2
+    assert h.max_abs(q - exact_quaternion(np.array([0.0, 0.6, 0.8]), 2.0)) <= 1e-6
+    assert h.max_abs(q - matrix_to_quaternion(r)) > 1e-9
+
+
+def test_matrix_to_quaternion_shapes():
+    r = scipy_rotations(24, 84).reshape(2, 3, 4, 3, 3)
+    q = matrix_to_quaternion(r)
+    assert q.shape == (2, 3, 4, 4)
+    assert matrix_to_quaternion(np.eye(3)).shape == (4,)
+    assert np.array_equal(matrix_to_quaternion(np.eye(3)), [0.0, 0.0, 0.0, 1.0])
+    assert matrix_to_quaternion(np.zeros((0, 3, 3))).shape == (0, 4)
