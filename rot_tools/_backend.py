@@ -208,28 +208,50 @@ def cross(u, v):
     return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
 
 
+def _rare(v, n2):
+    """Where |v|² = n2 has overflowed or lost digits to underflow (v ≠ 0)."""
+    nonzero = (v[0] != 0) | (v[1] != 0) | (v[2] != 0)
+    return ((n2 < 1e-290) & nonzero) | (n2 > 1e290)
+
+
+def _scaled(ops, v):
+    """(max |v_i|, v / max |v_i|): the second has |·|² in [1, 3], safe to square."""
+    big = ops.maximum(ops.maximum(ops.abs(v[0]), ops.abs(v[1])), ops.abs(v[2]))
+    safe = ops.where(big > 0, big, 1.0)
+    return big, [vi / safe for vi in v]  # (not vi * (1 / big): 1 / big overflows if tiny)
+
+
 def norm(ops, v):
     """|v| of a 3-vector entry list, without overflow or underflow of |v|² for any finite v."""
     n2 = dot(v, v)
-    nonzero = (v[0] != 0) | (v[1] != 0) | (v[2] != 0)
-    if ops.any(((n2 < 1e-290) & nonzero) | (n2 > 1e290)):  # rare: rescale by max |v_i|
-        big = ops.maximum(ops.maximum(ops.abs(v[0]), ops.abs(v[1])), ops.abs(v[2]))
-        safe = ops.where(big > 0, big, 1.0)
-        scaled = [vi / safe for vi in v]  # (not vi * (1 / big): 1 / big overflows if tiny)
+    if ops.any(_rare(v, n2)):  # rare: rescale by max |v_i|
+        big, scaled = _scaled(ops, v)
         return big * ops.sqrt(dot(scaled, scaled))
     return ops.sqrt(n2)
 
 
+_LARGEST = sys.float_info.max
+
+
 def unit(ops, v):
-    """(v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector."""
-    n = norm(ops, v)
+    """(v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector.
+
+    Where |v|² overflows or underflows, v/|v| is taken from v scaled by max |v_i|: |v| itself
+    may be inf (beyond 1.8e308) or a subnormal with few digits, the direction is exact.
+    """
+    n2 = dot(v, v)
+    rare = _rare(v, n2)
+    n = size = ops.sqrt(n2)
+    if ops.any(rare):
+        big, scaled = _scaled(ops, v)
+        m = ops.sqrt(dot(scaled, scaled))
+        n = big * m
+        v = [ops.where(rare, s, vi) for s, vi in zip(scaled, v)]
+        size = ops.where(rare, m, n)
     zero = n == 0
-    safe = ops.where(zero, 1.0, n)
+    safe = ops.where(zero, 1.0, size)
     return [ops.where(zero, 0.0, v[0] / safe) + 0.0, ops.where(zero, 0.0, v[1] / safe) + 0.0,
             ops.where(zero, 1.0, v[2] / safe)], n
-
-
-_LARGEST = sys.float_info.max
 
 
 def in_range(ops, values):

@@ -33,9 +33,7 @@ def _rodrigues(ops, x, y, z, angle):
 
 
 def _axis_angle_kernel(ops, axis, angle):
-    n = norm(ops, axis)
-    safe = ops.where(n > 0, n, 1.0)  # a zero axis is refused unless the angle is 0 too
-    x, y, z = axis[0] / safe, axis[1] / safe, axis[2] / safe
+    (x, y, z), n = unit(ops, axis)  # a zero axis is refused unless the angle is 0 too
     return _rodrigues(ops, x, y, z, angle), (n == 0) & (angle != 0)
 
 

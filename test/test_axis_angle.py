@@ -209,12 +209,20 @@ def test_single_and_batch_shapes():
     assert matrix_to_rotvec(r).shape == (3, 4, 3)
 
 
-def test_check_false_skips_validation():
-    r = h.seed_rodrigues_eq7([0.0, 0.0, 1.0], 0.5)
+def test_check_false_uses_the_matrix_as_given():
+    # θ = atan2(|w|, (tr R − 1)/2), axis w/|w| with w = ½(r32 − r23, r13 − r31, r21 − r12),
+    # read from the perturbed matrix as given (no projection onto a rotation).
+    r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
+    with pytest.raises(RotationError, match='not orthogonal'):
+        matrix_to_axis_angle(r)
+    w = 0.5 * np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    angle_ref = np.arctan2(np.linalg.norm(w), (np.trace(r) - 1) / 2)
     axis, angle = matrix_to_axis_angle(r, check=False)
-    assert np.all(np.isfinite(axis)) and np.isfinite(angle)
-    assert np.all(np.isfinite(matrix_to_rotvec(r, check=False)))
+    assert abs(angle - angle_ref) <= 1e-16 and abs(angle - 0.5) > 1e-7
+    assert h.max_abs(axis - w / np.linalg.norm(w)) <= 1e-16
+    assert h.max_abs(matrix_to_rotvec(r, check=False) - angle_ref * w / np.linalg.norm(w)
+                     ) <= 1e-16
 
 
 def test_outputs_are_rotations():
@@ -268,15 +276,16 @@ def test_subnormal_and_tiny_angles(tiny):
     assert np.all(np.isfinite(got)) and h.max_abs(got - np.eye(3)) <= 2 * tiny
 
 
-@pytest.mark.parametrize('tiny', [5e-324, 1e-310, 1e-200])
-def test_tiny_axis_is_normalised_or_refused_never_nan(tiny):
-    # A non-zero axis is normalised (SPEC §2); however small it is, the result is never NaN.
-    for axis in ([tiny, 0.0, 0.0], [[tiny, 0.0, 0.0]] * 2):
-        try:
-            got = axis_angle_to_matrix(axis, 1.0)
-        except RotationError:
-            continue
+@pytest.mark.parametrize('size', [5e-324, 1e-310, 1e-200, 1e200, 1.7e308])
+def test_any_non_zero_axis_is_normalised_never_refused(size):
+    # A non-zero axis is normalised (SPEC §2): however small or large it is, the result is
+    # its rotation, one by one and as a batch (no refusal, no NaN).
+    for axis in ([size, 0.0, 0.0], [[size, 0.0, 0.0]] * 2):
+        got = axis_angle_to_matrix(axis, 1.0)
         assert h.max_abs(got - h.ref_elementary('x', 1.0)) <= 1e-15 * 4
+    both = axis_angle_to_matrix([size, -size, 0.0], 0.5)
+    assert h.max_abs(both - h.seed_rodrigues_eq7(np.array([1.0, -1.0, 0.0]) / np.sqrt(2), 0.5)
+                     ) <= 1e-15 * 4
 
 
 @settings(**h.HYPOTHESIS_SETTINGS)
@@ -287,3 +296,25 @@ def test_round_trip_property(axis, angle):
     assert abs(got_angle - angle) <= 1e-14
     assert h.max_abs(rotvec_error(got_axis, got_angle, axis, angle)) <= 1e-14
     assert h.max_abs(axis_angle_to_matrix(got_axis, got_angle) - r) <= 1e-12
+
+
+SMALL_ANGLES = np.logspace(-8, -4, 9)
+
+
+def off_diagonal(m):
+    return m[..., [0, 0, 1, 1, 2, 2], [1, 2, 0, 2, 0, 1]]
+
+
+@pytest.mark.parametrize('angle', SMALL_ANGLES)
+def test_small_angles_keep_their_digits_against_the_exponential(angle):
+    # 1 − cos θ rounds to a multiple of 1.1e-16 (to 0 below 1.5e-8); 2 sin²(θ/2) keeps the
+    # relative precision of the θ² terms. The off-diagonal entries (size ~θ) must match the
+    # exponential series of [θl̂]× to a few ulps of θ.
+    rng = np.random.default_rng(32)
+    axis = np.concatenate([h.random_unit_vectors(rng, 200), [[1, 1, 1]] / np.sqrt(3)])
+    ref = off_diagonal(h.expm(h.ref_skew(axis * angle)))
+    tol = 4 * np.finfo(float).eps * angle
+    for got in (axis_angle_to_matrix(axis, angle), rotvec_to_matrix(axis * angle),
+                axis_angle_to_matrix(axis[-1], angle), rotvec_to_matrix(axis[-1] * angle)):
+        err = np.abs(off_diagonal(got) - ref[-1 if got.ndim == 2 else slice(None)])
+        assert err.max() <= tol, (angle, err.max() / angle)

@@ -132,17 +132,47 @@ def test_nearest_rotation_refuses_what_cannot_be_projected():
 # ---- check=False skips validation ------------------------------------------------------
 
 
-@pytest.mark.parametrize('name', ['matrix_to_euler', 'matrix_to_axis_angle',
-                                  'matrix_to_rotvec', 'screw_from_transform', 'screw_log'])
+WITH_CHECK = {
+    'matrix_to_euler': lambda m, c: matrix_to_euler(m, check=c),
+    'matrix_to_axis_angle': lambda m, c: matrix_to_axis_angle(m, check=c),
+    'matrix_to_rotvec': lambda m, c: matrix_to_rotvec(m, check=c),
+    'matrix_to_quaternion': lambda m, c: matrix_to_quaternion(m, check=c),
+    'screw_from_transform': lambda m, c: screw_from_transform(m, Z3, check=c),
+    'screw_log': lambda m, c: screw_log(m, Z3, check=c),
+    'screw_interpolate': lambda m, c: screw_interpolate(m, Z3, I3, Z3, 0.5, check=c),
+    'decompose': lambda m, c: decompose(m, Z3, check=c),
+    'transform_points': lambda m, c: transform_points(m, Z3, [1.0, 2.0, 3.0], check=c),
+    'compose_transforms': lambda m, c: compose_transforms(m, Z3, I3, Z3, check=c),
+    'invert_transform': lambda m, c: invert_transform(m, Z3, check=c),
+    'transform_to_homogeneous': lambda m, c: transform_to_homogeneous(m, Z3, check=c),
+    'rotation_distance': lambda m, c: rotation_distance(m, I3, check=c),
+}
+
+
+@pytest.mark.parametrize('name', WITH_CHECK)
 def test_check_false_skips_validation(name):
-    f = {'matrix_to_euler': matrix_to_euler, 'matrix_to_axis_angle': matrix_to_axis_angle,
-         'matrix_to_rotvec': matrix_to_rotvec,
-         'screw_from_transform': lambda r, check: screw_from_transform(r, Z3, check=check),
-         'screw_log': lambda r, check: screw_log(r, Z3, check=check)}[name]
-    r = non_orthogonal(1e-6) @ rot_y(0.4)
-    with pytest.raises(RotationError):
-        f(r, check=True)
-    f(r, check=False)
+    # Refused with the check; without it the function computes from the matrix as given:
+    # the answer moves by about the size of the perturbation (1e-6) — no error, no NaN, no
+    # projection onto a rotation first. (The modules' own tests pin the exact formulas.)
+    call = WITH_CHECK[name]
+    r = rot_z(0.4) @ rot_y(0.3)
+    bad = non_orthogonal(1e-6) @ r
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL):
+        call(bad, True)
+    clean, loose = flatten(call(r, True)), flatten(call(bad, False))
+    assert np.all(np.isfinite(loose))
+    assert 1e-9 < h.max_abs(loose - clean) <= 1e-5, h.max_abs(loose - clean)
+
+
+def test_every_function_taking_r_has_a_check_switch():
+    assert set(WITH_CHECK) == set(TAKES_R) - {'validate_rotation'}
+
+
+def flatten(result):
+    """Every number of a function's result, as one flat float array."""
+    if isinstance(result, tuple):
+        return np.concatenate([flatten(x) for x in result])
+    return np.ravel(np.asarray(result, dtype=float))
 
 
 # ---- is_rotation -----------------------------------------------------------------------

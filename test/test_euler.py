@@ -4,7 +4,8 @@ from hypothesis import given, settings, strategies as st
 import math_helpers as h
 import numpy as np
 import pytest
-from rot_tools import EULER_SEQUENCES, euler_to_matrix, GIMBAL_LOCK_TOL, matrix_to_euler
+from rot_tools import (
+    EULER_SEQUENCES, euler_to_matrix, GIMBAL_LOCK_TOL, matrix_to_euler, RotationError)
 
 N = 10_000
 PI = h.PI
@@ -233,11 +234,37 @@ def test_single_and_batch_shapes():
     assert euler_to_matrix(np.zeros((0, 3))).shape == (0, 3, 3)
 
 
-def test_check_false_skips_validation():
+def test_check_false_uses_the_matrix_as_given():
+    # ZYX (i, j, k) = (z, y, x): θ1 = atan2(r21, r11) and θ2 = atan2(−r31, hypot(r11, r21))
+    # read the matrix as given (entries as printed in seed 000 eq. 1); θ3 is peeled from
+    # Rot_z(θ1)ᵀ·R and stays within the perturbation of the true roll.
     r = h.ref_euler([0.1, 0.2, 0.3], 'ZYX')
     r[0, 0] += 1e-6
-    angles, _ = matrix_to_euler(r, 'ZYX', check=False)
-    assert np.all(np.isfinite(angles))
+    with pytest.raises(RotationError, match='not orthogonal'):
+        matrix_to_euler(r, 'ZYX')
+    angles, degenerate = matrix_to_euler(r, 'ZYX', check=False)
+    assert not degenerate
+    assert abs(angles[0] - np.arctan2(r[1, 0], r[0, 0])) <= 1e-16
+    assert abs(angles[1] - np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))) <= 1e-16
+    assert abs(angles[2] - 0.3) <= 2e-6
+    assert h.max_abs(angles - [0.1, 0.2, 0.3]) > 1e-8  # the perturbation was not projected
+
+
+@pytest.mark.parametrize('seq', h.ALL_SEQUENCES)
+def test_lock_tolerance_zero(seq):
+    # lock_tol = 0 is allowed and flags only an exact lock (distance 0 ≤ 0): the cube
+    # rotations at lock are flagged, and 1e-9 rad away nothing is.
+    cube = h.cube_rotations()
+    expected = expected_cube_lock(cube, seq)
+    angles, degenerate = matrix_to_euler(cube, seq, lock_tol=0.0)
+    assert expected.any() and np.array_equal(degenerate, expected)
+    assert np.all(angles[degenerate, 2] == 0.0)
+    for value in h.singular_values(seq):
+        near = h.ref_euler([[0.3, value + 1e-9, -0.2], [0.3, value - 1e-9, -0.2]], seq)
+        _, flags = matrix_to_euler(near, seq, lock_tol=0.0)
+        assert not flags.any()
+        _, flags = matrix_to_euler(near, seq, lock_tol=2e-9)
+        assert flags.all()
 
 
 @settings(**h.HYPOTHESIS_SETTINGS)

@@ -11,8 +11,8 @@ import math_helpers as h
 import numpy as np
 import pytest
 from rot_tools import (
-    PURE_TRANSLATION_ANGLE, Screw, screw_exp, screw_from_transform, screw_interpolate,
-    screw_log, transform_from_screw)
+    PURE_TRANSLATION_ANGLE, RotationError, Screw, screw_exp, screw_from_transform,
+    screw_interpolate, screw_log, transform_from_screw)
 
 N = 10_000
 PI = h.PI
@@ -238,10 +238,9 @@ def test_screw_log_matches_the_construction():
     sign = np.where(np.sum(scr.direction * axis, -1) < 0, -1.0, 1.0)   # only at angle pi
     assert np.all((sign > 0) | (PI - angle <= 1e-12))
     u, dd = sign[:, None] * axis, sign * d
-    pure = angle < PURE_TRANSLATION_ANGLE
+    # (θ·l̂, θ·c × l̂ + d·l̂) at every angle: exponential coordinates have no threshold
     expected = np.concatenate([angle[:, None] * u,
                                angle[:, None] * np.cross(point, u) + dd[:, None] * u], -1)
-    expected[pure] = np.concatenate([np.zeros((pure.sum(), 3)), b[pure]], -1)
     scale = transform_scale(b)
     assert np.all(np.abs(tw[:, :3] - expected[:, :3]).max(-1) <= 1e-14)
     assert np.all(np.abs(tw[:, 3:] - expected[:, 3:]).max(-1) <= 1e-12 * scale)
@@ -389,12 +388,30 @@ def test_batches_larger_than_one_chunk():
     assert np.all(np.abs(b2 - b).max(-1) <= 1e-12 * transform_scale(b))
 
 
-def test_check_false_skips_validation():
-    r = h.seed_rodrigues_eq7([0.0, 0.0, 1.0], 0.5)
+def test_check_false_uses_the_matrix_as_given():
+    # θ and l̂ read from the perturbed matrix as given (skew part and trace), then the
+    # formulas of SPEC §2 with them: d = b·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), h = d/θ, and the
+    # twist (θ·l̂, −(θ/2)·l̂ × b + (θ/2)cot(θ/2)·b⊥ + d·l̂).
+    r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
-    scr = screw_from_transform(r, [1.0, 0.0, 0.0], check=False)
-    assert np.isfinite(scr.angle)
-    assert np.all(np.isfinite(screw_log(r, [1.0, 0.0, 0.0], check=False)))
+    b = np.array([1.0, -2.0, 0.5])
+    with pytest.raises(RotationError, match='not orthogonal'):
+        screw_from_transform(r, b)
+    w = 0.5 * np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+    theta = np.arctan2(np.linalg.norm(w), (np.trace(r) - 1) / 2)
+    axis = w / np.linalg.norm(w)
+    d = b @ axis
+    bperp = b - d * axis
+    cot = 1 / np.tan(theta / 2)
+    point = 0.5 * (bperp + cot * np.cross(axis, bperp))
+    scr = screw_from_transform(r, b, check=False)
+    assert abs(scr.angle - theta) <= 1e-16 and abs(theta - 0.5) > 1e-7
+    assert h.max_abs(scr.direction - axis) <= 1e-16
+    assert abs(scr.translation - d) <= 1e-15 and abs(scr.pitch - d / theta) <= 1e-14
+    assert h.max_abs(scr.point - point) <= 1e-14
+    twist = np.concatenate([theta * axis, -theta / 2 * np.cross(axis, b)
+                            + theta / 2 * cot * bperp + d * axis])
+    assert h.max_abs(screw_log(r, b, check=False) - twist) <= 1e-15
 
 
 def compose(r0, b0, r1, b1):
@@ -521,3 +538,20 @@ def test_decompose_twist_is_screw_log_at_tiny_angles():
         r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], angle)
         b = np.array([1.0, 2.0, -4.0])
         assert np.array_equal(decompose(r, b).twist, screw_log(r, b))
+
+
+@pytest.mark.parametrize('angle', [1e-8, 2e-8, 1e-7, 1e-6, 3e-6, 1e-5])
+def test_screw_exp_between_series_and_closed_form(angle):
+    # Below a cut-off screw_exp uses sin θ/θ ≈ 1 and (1 − cos θ)/θ ≈ θ/2, exact to double
+    # precision only below ~1e-8 (the dropped θ²/6 is 1.7e-11 at 1e-5): b must match the
+    # exponential of the twist to 1e-14 relative here.
+    rng = np.random.default_rng(54)
+    w = h.random_unit_vectors(rng, 100) * angle
+    v = rng.normal(size=(100, 3)) * 10.0 ** rng.uniform(-2, 2, size=(100, 1))
+    twist = np.concatenate([w, v], -1)
+    r_ref, b_ref = h.expm_twist(twist)
+    scale = np.linalg.norm(v, axis=-1)
+    for r, b in (screw_exp(twist), screw_exp(twist[7])):
+        assert np.all(np.abs(b - b_ref[7 if b.ndim == 1 else slice(None)]).max(-1)
+                      <= 1e-14 * scale[7 if b.ndim == 1 else slice(None)])
+        assert h.max_abs(r - r_ref[7 if r.ndim == 2 else slice(None)]) <= 1e-16 * 4

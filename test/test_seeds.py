@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from rot_tools import (
     axis_angle_to_matrix, euler_to_matrix, matrix_to_axis_angle, matrix_to_euler,
-    rot_x, rot_y, rot_z, screw_from_transform)
+    rot_x, rot_y, rot_z, screw_from_transform, skew)
 
 N = 10_000
 PI = h.PI
@@ -186,6 +186,13 @@ def test_000_eq10_sign_of_the_cross_product():
     lhs = np.einsum('nij,nj->ni', r - np.swapaxes(r, -1, -2), v)
     assert h.max_abs(lhs + np.cross(q, v)) <= 1e-14           # = -q x v
     assert h.max_abs(lhs - np.cross(q, v)) > 1.0              # the printed claim fails
+    # The code: the printed matrix is -skew(q), and R - R^T = 2 sin(theta) [l]x with the axis
+    # and angle matrix_to_axis_angle returns, so (R - R^T) v = 2 sin(theta) l x v.
+    assert h.max_abs(printed + skew(q)) == 0.0
+    got_axis, got_angle = matrix_to_axis_angle(r)
+    two_sin_l = 2 * np.sin(got_angle)[:, None] * got_axis
+    assert h.max_abs(r - np.swapaxes(r, -1, -2) - skew(two_sin_l)) <= 1e-14
+    assert h.max_abs(lhs - np.cross(two_sin_l, v)) <= 1e-14
 
 
 def test_000_eq11_axis_is_minus_two_sin_theta_times_the_axis():
@@ -223,6 +230,20 @@ def test_000_eq13_sin_squared_typo():
     assert h.max_abs(np.sin(theta) ** 2 - (3 - tr ** 2 + 2 * tr) / 4) <= 1e-15 * 4
     literal = 1 - np.sin(np.cos(theta)) ** 2
     assert h.max_abs(np.sin(theta) ** 2 - literal) > 0.1
+    # The code: for R = axis_angle_to_matrix(axis, theta), the angle matrix_to_axis_angle
+    # returns has sin = +sqrt((3 - Tr^2 + 2 Tr) / 4) (theta in [0, pi]: the + root), and the
+    # literal reading of eq. 13 does not give it.
+    rng = np.random.default_rng(72)
+    axis = h.random_unit_vectors(rng, len(theta))
+    r = axis_angle_to_matrix(axis, theta)
+    tr = np.trace(r, axis1=-2, axis2=-1)
+    _, got = matrix_to_axis_angle(r)
+    eq13 = np.sqrt(np.clip(3 - tr ** 2 + 2 * tr, 0, None) / 4)
+    far = (theta > 0.01) & (theta < PI - 0.01)  # near 0 and pi eq. 13 keeps only half the digits
+    assert h.max_abs((np.sin(got) - eq13)[far]) <= 1e-13
+    assert h.max_abs(np.sin(got) - eq13) <= 3e-8
+    assert h.max_abs(got - theta) <= 1e-15 * 4
+    assert h.max_abs(np.sin(got) - np.sqrt(1 - np.sin(np.cos(got)) ** 2)) > 0.1
 
 
 def test_000_eq15_divides_by_lz():
@@ -354,3 +375,11 @@ def test_001_eq16_should_read_u_u_transpose():
     right = np.einsum('ni,nj,nj->ni', u, u, p)
     assert h.max_abs(lhs - right) <= 1e-14
     assert np.median(np.linalg.norm(lhs - printed, axis=-1)) > 0.1
+    # The code: Rodrigues' vector form (eq. 14/15) with (u u^T) p is what
+    # axis_angle_to_matrix(u, phi) does to p; with the printed (u^T u) p = p it is not.
+    phi = rng.uniform(-PI, PI, N)[:, None]
+    moved = np.einsum('nij,nj->ni', axis_angle_to_matrix(u, phi[:, 0]), p)
+    with_right = np.cos(phi) * p + (1 - np.cos(phi)) * right + np.sin(phi) * np.cross(u, p)
+    with_printed = np.cos(phi) * p + (1 - np.cos(phi)) * printed + np.sin(phi) * np.cross(u, p)
+    assert h.max_abs(moved - with_right) <= 1e-14
+    assert np.median(np.linalg.norm(moved - with_printed, axis=-1)) > 0.1
