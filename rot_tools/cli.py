@@ -13,7 +13,8 @@ rot_tools.report) as YAML, or JSON with ``--json``::
     rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1
     rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
 
-Every option is accepted before the command and after its arguments (``_add_common``).
+Every option is accepted before the command, after its arguments (``_add_common``) and
+between them (``_CommandParser``).
 
 Typed inputs are validated with a tolerance ``--tol``, then made exact before the math,
 which checks at 1e-9. A matrix (9 numbers, or the rotation block of a homogeneous 4×4):
@@ -29,8 +30,8 @@ Bad input — a wrong count, a non-number, NaN/Inf, a matrix that is not a rotat
 reflection, a homogeneous matrix whose last row is not 0 0 0 1, a zero, non-orthogonal or
 left-handed frame, a zero quaternion or one too far from unit length, an unknown sequence,
 a zero axis with a non-zero angle — prints exactly one line ``rot-tools: error: ...`` on
-stderr and exits with status 2. An angle typed without ``--deg`` that is larger than 2π only gets a
-one-line ``rot-tools: hint: ...`` on stderr (after the report; status 0).
+stderr and exits with status 2. An angle typed without ``--deg`` that is larger than 2π
+only gets a one-line ``rot-tools: hint: ...`` on stderr (after the report; status 0).
 """
 
 import argparse
@@ -49,7 +50,8 @@ from rot_tools.report import DEFAULT_PRECISION, to_json, to_yaml, transform_repo
 
 PROG = 'rot-tools'
 MATRIX_TOL = 1e-5
-"""Default tolerance on max|RᵀR − I| and |det R − 1| of a typed matrix (six digits pass)."""
+"""Default tolerance of a typed matrix (max|RᵀR − I|, |det R − 1|) or frame (|cos| between
+two axes): six significant digits pass."""
 QUATERNION_TOL = 1e-3
 """Default tolerance on ||q| − 1| of a typed quaternion (four digits pass; as the node's)."""
 
@@ -76,6 +78,24 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         """Print ``rot-tools: error: message`` on one line and exit 2."""
         self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
+
+
+class _CommandParser(_Parser):
+    """A command's parser: options may also come between its arguments (``euler ZYX --deg 30
+    20 10``), which plain argparse refuses once a ``nargs='*'`` argument has matched nothing.
+    """
+
+    _intermixing = False
+
+    def parse_known_args(self, args=None, namespace=None):
+        """parse_known_intermixed_args, which calls this method again for its two passes."""
+        if self._intermixing:
+            return super().parse_known_args(args, namespace)
+        self._intermixing = True
+        try:
+            return self.parse_known_intermixed_args(args, namespace)
+        finally:
+            self._intermixing = False
 
 
 class _Version(argparse.Action):
@@ -236,7 +256,7 @@ def _from_axis_angle(args, parser):
 
 def _from_rotvec(args, parser):
     v = _count(parser, args.vector, 3, 'rotvec X Y Z')
-    return rotvec_to_matrix(_angle_in(args, v, size=np.linalg.norm(v))), None, None
+    return rotvec_to_matrix(_angle_in(args, v, size=math.hypot(*v))), None, None
 
 
 def _from_quaternion(args, parser):
@@ -266,7 +286,7 @@ def _from_screw(args, parser):
             parser.error(f'argument --axis-angle: {exc}')
     elif args.rotvec is not None:
         v = np.array(args.rotvec)
-        R = rotvec_to_matrix(_angle_in(args, v, size=np.linalg.norm(v)))
+        R = rotvec_to_matrix(_angle_in(args, v, size=math.hypot(*v)))
     else:
         R = np.eye(3)
     return R, np.array(args.translation), None
@@ -403,14 +423,15 @@ def build_parser():
         prog=PROG,
         description='Print every representation of a rotation or rigid transform: matrix,\n'
         'axis-angle (both solutions), rotation vector, Euler angles, quaternion, and for a\n'
-        'transform its screw. YAML by default, JSON with --json. Angles in radians unless\n'
-        '--deg. Options may come before COMMAND or after its arguments.',
+        'transform its homogeneous matrix and screw; with --point, where a point goes.\n'
+        'YAML by default, JSON with --json. Angles in radians unless --deg.\n'
+        'Options may come before COMMAND, after its arguments or between them.',
         epilog='examples:\n  ' + '\n  '.join(
             spec[4].splitlines()[0] for spec in _COMMANDS.values())
         + '\n\n"rot-tools COMMAND --help" explains each command.')
     _add_common(parser, suppress=False)
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True,
-                                parser_class=_Parser)
+                                parser_class=_CommandParser)
     for name, (handler, summary, usage, text, examples) in _COMMANDS.items():
         p = sub.add_parser(
             name, help=summary, usage=f'{PROG} {usage}',

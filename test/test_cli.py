@@ -488,6 +488,19 @@ def test_every_option_before_the_command_and_after_its_arguments(script, option)
     assert (before.stdout == plain.stdout) is (option in ('--tol', '--wxyz'))  # it acted
 
 
+@pytest.mark.parametrize('between, canonical', [
+    ('euler ZYX --deg -30 20 10', 'euler ZYX -30 20 10 --deg'),
+    ('euler --seq xyz ZYX 0.1 0.2 0.3', 'euler ZYX 0.1 0.2 0.3 --seq xyz'),
+    ('matrix 1 0 0 --tol 1e-3 0 1 0 0 0 1.0004', 'matrix 1 0 0 0 1 0 0 0 1.0004 --tol 1e-3'),
+    ('frame 0 1 0 --point 1 2 3 -1 0 0 0 0 1', 'frame 0 1 0 -1 0 0 0 0 1 --point 1 2 3'),
+    ('screw --translation 1 2 3 --deg --euler ZYX 90 0 0',
+     'screw --euler ZYX 90 0 0 --translation 1 2 3 --deg'),
+])
+def test_options_between_the_arguments(script, between, canonical):
+    mixed, plain = run(script, *between.split()), run(script, *canonical.split())
+    assert (mixed.returncode, mixed.stderr) == (0, '') and mixed.stdout == plain.stdout
+
+
 def test_help_lists_every_option(script):
     options = [*COMMON_OPTIONS, '--plot', '--version']
     for args in ([], ['quaternion'], ['frame'], ['screw']):
@@ -519,6 +532,7 @@ def test_version_is_the_installed_distribution_and_package_xml_version(script):
     (['rotvec', '4', '4', '4'], '6.9282'),             # each component < 2π, the norm > 2π
     (['screw', '--euler', 'ZYX', '0', '0', '45', '--translation', '1', '0', '0'], '45'),
     (['screw', '--rotvec', '0', '7', '0', '--translation', '1', '0', '0'], '7'),
+    (['rotvec', '1e300', '-1e300', '0'], '1.41421e+300'),  # its norm, without overflow
 ])
 def test_radians_that_look_like_degrees_get_a_hint(script, args, size):
     proc = run(script, *args)
