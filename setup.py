@@ -26,6 +26,7 @@ setup(
     entry_points={
         'console_scripts': [
             'rotation_node = rot_tools.entry:rotation_node',
+            'rotation_client = rot_tools.entry:rotation_client',
             'rot-tools = rot_tools.cli:main',
         ],
     },

@@ -40,6 +40,11 @@ REFUSAL_REASONS = (NON_FINITE, ZERO_QUATERNION, NON_UNIT_QUATERNION, NO_ORIENTAT
 """Reasons this module refuses a message for; rotation_node adds its own."""
 
 
+def type_name(msg_type):
+    """'nav_msgs/msg/Odometry' for the message class nav_msgs.msg.Odometry."""
+    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
+
+
 class RefusedInput(ValueError):
     """A message that is not a rigid transform; ``reason`` is a key of REFUSAL_REASONS."""
 

@@ -85,11 +85,6 @@ INPUTS = (
 """Every input of the node (SPEC §3, §3.1); each joins the one path (header, R, b) → outputs."""
 
 
-def type_name(msg_type):
-    """'nav_msgs/msg/Odometry' for the class nav_msgs.msg.Odometry."""
-    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
-
-
 class Source(NamedTuple):
     """An input subscription as the callbacks see it: resolved topic, type name, converter."""
 
@@ -218,7 +213,8 @@ class RotationNode(Node):
 
         self._sources = []
         for kind in INPUTS:
-            source = Source(self.resolve_topic_name(kind.topic), type_name(kind.msg_type),
+            source = Source(self.resolve_topic_name(kind.topic),
+                            messages.type_name(kind.msg_type),
                             kind.convert)
             self.create_subscription(kind.msg_type, kind.topic,
                                      partial(self._on_input, source), qos_profile_sensor_data)

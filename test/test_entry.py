@@ -1,4 +1,4 @@
-"""The rotation_node console-script entry stops cleanly on a signal even during start-up."""
+"""The console-script entries stop cleanly on a signal even during start-up."""
 
 import subprocess
 import sys
@@ -19,12 +19,12 @@ import builtins, os, signal, sys
 import rot_tools.entry as entry
 real_import = builtins.__import__
 def import_and_signal(name, *args, **kwargs):
-    if name == 'rot_tools.rotation_node':
+    if name == 'rot_tools.{script}':
         os.kill(os.getpid(), signal.{sig})
     return real_import(name, *args, **kwargs)
 builtins.__import__ = import_and_signal
-sys.argv = ['rotation_node']
-sys.exit(entry.rotation_node())
+sys.argv = ['{script}', 'describe']
+sys.exit(entry.{script}())
 print('not reached')
 """
 
@@ -35,11 +35,14 @@ def test_entry_module_imports_nothing_heavy():
     assert out.stdout.strip() == 'light'
 
 
-@pytest.mark.parametrize('sig', ['SIGTERM', 'SIGINT'])
-def test_signal_during_start_up_exits_cleanly(sig):
-    proc = subprocess.run([sys.executable, '-c', SIGNAL_DURING_IMPORT.format(sig=sig)],
-                          capture_output=True, text=True, timeout=60)
-    assert proc.returncode == 0, proc.stderr
+@pytest.mark.parametrize('script, sig, status', [
+    ('rotation_node', 'SIGTERM', 0), ('rotation_node', 'SIGINT', 0),
+    ('rotation_client', 'SIGINT', 130)])
+def test_signal_during_start_up_exits_cleanly(script, sig, status):
+    code = SIGNAL_DURING_IMPORT.format(script=script, sig=sig)
+    proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == status, proc.stderr
     assert 'Traceback' not in proc.stderr
     assert 'not reached' not in proc.stdout
 
@@ -48,3 +51,4 @@ def test_console_script_uses_the_light_entry():
     from importlib.metadata import entry_points
     scripts = {ep.name: ep.value for ep in entry_points(group='console_scripts')}
     assert scripts['rotation_node'] == 'rot_tools.entry:rotation_node'
+    assert scripts['rotation_client'] == 'rot_tools.entry:rotation_client'

@@ -363,6 +363,9 @@ def test_robot_input_outputs(rig, kind, case):
         'odometry': 'nav_msgs/msg/Odometry', 'imu': 'sensor_msgs/msg/Imu',
         'orientation': 'geometry_msgs/msg/QuaternionStamped'}[kind]
     assert report['translation'] == pytest.approx(b.tolist(), rel=1e-11, abs=1e-12)
+    q_report = report['quaternion']
+    assert [q_report[k] for k in 'xyzw'] == pytest.approx(
+        Rotation.from_quat(q).as_quat(canonical=True).tolist(), rel=1e-11, abs=1e-12)
 
 
 def test_odometry_yaw_in_degrees(make_rig):

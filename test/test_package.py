@@ -11,10 +11,13 @@ import sys
 from catkin_pkg.package import parse_package
 import pytest
 
+from conftest import RUN
+
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
 CONSOLE_SCRIPTS = {
     'rotation_node': 'rot_tools.entry:rotation_node',
+    'rotation_client': 'rot_tools.entry:rotation_client',
     'rot-tools': 'rot_tools.cli:main',
 }
 # exec_depends the contract (SPEC §3) needs whatever the code happens to import today.
@@ -144,6 +147,20 @@ def test_installed_package_is_imported_from_the_install_space(colcon_install):
         colcon_install, sys.executable, '-c', 'import rot_tools; print(rot_tools.__file__)')
     assert result.returncode == 0, result.stderr
     assert Path(result.stdout.strip()).is_relative_to(colcon_install)
+
+
+def test_installed_client_runs(colcon_install):
+    """`ros2 run rot_tools rotation_client` runs lib/rot_tools/rotation_client: with rclpy."""
+    client = colcon_install / 'lib' / PACKAGE / 'rotation_client'
+    result = _run_in_workspace(colcon_install, client, '--help')
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith('usage: rotation_client')
+    # It starts rclpy and looks for the node (none in this run's domain by that name).
+    result = _run_in_workspace(colcon_install, client, 'describe', '--timeout', '0.5',
+                               '--node', f'/{RUN}/colcon/rot_tools')
+    assert result.returncode == 1, result.stderr
+    assert result.stderr.startswith(
+        f'rotation_client: cannot reach node /{RUN}/colcon/rot_tools: not found'), result.stderr
 
 
 def test_installed_cli_runs(colcon_install):

@@ -1,0 +1,545 @@
+"""rotation_client: send one input to a running rotation_node and print what it answered.
+
+ros2cli (``ros2 topic pub``/``echo``, ``ros2 service call``) is not on PyPI, so the pip-only
+quick start has this instead::
+
+    rotation_client euler ZYX 30 20 10 --deg
+    rotation_client pose X Y Z QX QY QZ QW
+    rotation_client orientation QX QY QZ QW
+    rotation_client describe
+    rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
+
+An input command publishes one message, stamped with the current time, on the node's
+``~/euler``, ``~/pose`` or ``~/orientation`` and prints the node's answer on its output
+topics for that message — matched by header stamp; ``~/rotation_matrix``, which has no
+header, is matched by its content against the answer's quaternion — as YAML, or JSON with
+``--json`` (rot_tools.report's writers). The node draws pictures (``~/screw_axis``,
+``~/markers``) at a limited rate, the latest input winning, so they are printed when the
+node drew this input: the client waits for them at most ``PICTURE_WAIT`` seconds. ``describe`` prints ~/describe's report;
+``screw-path`` calls ~/screw_path and prints the path.
+
+The node's inputs are best effort, so a first message can be lost while discovery settles:
+the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
+When none comes, ~/describe's refusal counts tell whether the node refused it. Fast DDS can
+drop the reply to a brand-new service client, so a call is repeated after ``RESEND``
+seconds. Every wait is bounded by ``--timeout``.
+
+Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
+be reached within ``--timeout``, or ~/describe has nothing to report (one line on stderr
+naming what); 2 bad arguments, or the node refused the input (one line on stderr with the
+reason from ~/describe). rclpy is used here only: ``rot-tools`` stays ROS-free.
+"""
+
+import argparse
+from collections import deque
+import math
+import os
+import re
+import sys
+import time
+
+from geometry_msgs.msg import PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped
+from nav_msgs.srv import GetPlan
+import numpy as np
+from rcl_interfaces.srv import GetParameters
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import parameter_value_to_python
+from rclpy.qos import QoSProfile
+from rclpy.signals import SignalHandlerOptions
+from rclpy.utilities import remove_ros_args
+from std_msgs.msg import Float64MultiArray
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker, MarkerArray
+import yaml
+
+from rot_tools.euler import EULER_SEQUENCES
+from rot_tools.messages import type_name
+from rot_tools.report import to_json, to_yaml
+from rot_tools.so3 import quaternion_to_matrix
+
+PROG = 'rotation_client'
+DEFAULT_NODE = '/rot_tools'
+DEFAULT_TIMEOUT = 5.0
+RESEND = 0.5
+"""Seconds to wait for an answer before an input is sent again or a call repeated."""
+
+STAMPED_OUTPUTS = {'quaternion': QuaternionStamped, 'axis_angle': Vector3Stamped,
+                   'euler_angles': Vector3Stamped, 'screw': TwistStamped}
+"""The node's outputs that carry the input's header, published for every input."""
+
+PICTURES = {'screw_axis': Marker, 'markers': MarkerArray}
+"""The node's pictures of an input, when publish_markers: at a limited rate, latest wins."""
+
+PICTURE_WAIT = 1.0
+"""Seconds to wait for the pictures of an answer (when the node drew that input)."""
+
+MARKER_TYPES = {getattr(Marker, name): name for name in (
+    'ARROW', 'CUBE', 'SPHERE', 'CYLINDER', 'LINE_STRIP', 'LINE_LIST', 'CUBE_LIST',
+    'SPHERE_LIST', 'POINTS', 'TEXT_VIEW_FACING', 'MESH_RESOURCE', 'TRIANGLE_LIST')}
+MARKER_ACTIONS = {Marker.ADD: 'ADD', Marker.DELETE: 'DELETE', Marker.DELETEALL: 'DELETEALL'}
+
+MATRIX_MATCH = 1e-9
+"""Largest |entry difference| between ~/rotation_matrix and R of the answer's quaternion."""
+
+
+class Unreachable(Exception):
+    """The node, a topic, a service or an answer could not be reached in time (exit 1)."""
+
+
+class Refused(Exception):
+    """The node refused the input (exit 2)."""
+
+
+# ---------------------------------------------------------------------------------------
+# Command line
+
+
+class _Parser(argparse.ArgumentParser):
+    """Errors are one line on stderr (no usage block), exit status 2."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, formatter_class=argparse.RawDescriptionHelpFormatter,
+                         **kwargs)
+        # '-0.5', '-1e-3', '-inf' and '-nan' are values, not options.
+        self._negative_number_matcher = re.compile(r'^-(\d|\.\d|inf|nan)', re.IGNORECASE)
+
+    def error(self, message):
+        self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
+
+
+def _number(text):
+    """Any float, NaN and Inf included: the node, not the client, decides what it refuses."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+
+
+def _positive(text):
+    value = _number(text)
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f'must be a number > 0, got {text!r}')
+    return value
+
+
+def _node_name(text):
+    name = text if text.startswith('/') else '/' + text
+    if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
+        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text!r}')
+    return name
+
+
+def _options(parser, suppress):
+    """--node, --frame, --timeout, --json: before the command or after its arguments.
+
+    The command parsers get them with SUPPRESS defaults, so a value given before the
+    command is not overwritten by the default.
+    """
+    def default(value):
+        return argparse.SUPPRESS if suppress else value
+    parser.add_argument('--node', type=_node_name, default=default(DEFAULT_NODE),
+                        help=f'the rotation_node to talk to (default {DEFAULT_NODE})')
+    parser.add_argument('--frame', default=default('map'),
+                        help='frame_id of the message sent (default map)')
+    parser.add_argument('--timeout', type=_positive, default=default(DEFAULT_TIMEOUT),
+                        metavar='SECONDS', help='bound of every wait: discovery, an answer '
+                        f'(default {DEFAULT_TIMEOUT:g})')
+    parser.add_argument('--json', action='store_true', default=default(False),
+                        help='print JSON instead of YAML')
+
+
+_COMMANDS = {  # name: (summary, the numbers it takes, more help)
+    'euler': ('send Euler angles to ~/euler', 'A1 A2 A3',
+              "SEQ must be the node's euler_sequence; the angles are converted to its "
+              'angle_unit.'),
+    'pose': ('send a PoseStamped to ~/pose', 'X Y Z QX QY QZ QW',
+             'Position X Y Z, orientation QX QY QZ QW (the ROS order, w last).'),
+    'orientation': ('send a QuaternionStamped to ~/orientation', 'QX QY QZ QW', ''),
+    'describe': ("print ~/describe's report of the latest input", '', ''),
+    'screw-path': ('call ~/screw_path from one pose to another',
+                   'X Y Z QX QY QZ QW X Y Z QX QY QZ QW',
+                   'The start pose, then the goal pose, each X Y Z QX QY QZ QW; --tolerance '
+                   'bounds the step between poses (rad and m; <= 0: 20 steps).'),
+}
+
+
+def build_parser():
+    """Build the rotation_client ArgumentParser (one subparser per command)."""
+    parser = _Parser(
+        prog=PROG, description='Send one input to a running rotation_node and print its '
+        'answer (YAML, or JSON with --json).\nOptions may come before COMMAND or after its '
+        'arguments.',
+        epilog='examples:\n  rotation_client euler ZYX 30 20 10 --deg\n'
+        '  rotation_client pose 1 0 0.5  0 0 1 0\n'
+        '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
+        '  rotation_client describe --json\n'
+        '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n\n'
+        'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
+        'within --timeout,\nor nothing to describe; 2 bad arguments or an input the node '
+        'refused.')
+    _options(parser, suppress=False)
+    sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True,
+                                parser_class=_Parser)
+    for name, (summary, numbers, text) in _COMMANDS.items():
+        usage = ' '.join(filter(None, [PROG, name, 'SEQ' if name == 'euler' else '',
+                                       numbers, '[options]']))
+        p = sub.add_parser(name, help=summary, usage=usage,
+                           description=f'{summary[0].upper()}{summary[1:]}.\n{text}'.strip())
+        if name == 'euler':
+            p.add_argument('sequence', choices=EULER_SEQUENCES, metavar='SEQ',
+                           help='one of the 24 sequences, upper case intrinsic')
+            p.add_argument('--deg', action='store_true', help='the angles are in degrees')
+        elif name == 'screw-path':
+            p.add_argument('--tolerance', type=_number, default=0.0,
+                           help='largest step between poses, rad and m (default 0: 20 steps)')
+        if numbers:
+            p.add_argument('numbers', type=_number, nargs='*', metavar='NUMBER', help=numbers)
+        p.set_defaults(parser=p, expected=len(numbers.split()))
+        _options(p, suppress=True)
+    return parser
+
+
+def parse_args(argv):
+    """Parse the command line (without ROS arguments); one error line and exit 2 if bad."""
+    args = build_parser().parse_args(argv)
+    if args.expected and len(args.numbers) != args.expected:
+        args.parser.error(f'{args.command} takes {args.expected} numbers '
+                          f'({_COMMANDS[args.command][1]}), got {len(args.numbers)}')
+    return args
+
+
+# ---------------------------------------------------------------------------------------
+# Messages and plain data
+
+
+def _xyz(v):
+    return [v.x, v.y, v.z]
+
+
+def _quaternion(q):
+    return {'x': q.x, 'y': q.y, 'z': q.z, 'w': q.w}
+
+
+def _set_pose(pose, values):
+    """Fill a geometry_msgs/Pose from X Y Z QX QY QZ QW."""
+    p, q = pose.position, pose.orientation
+    p.x, p.y, p.z, q.x, q.y, q.z, q.w = values
+
+
+def _pose_data(pose):
+    return {'position': _xyz(pose.position), 'orientation': _quaternion(pose.orientation)}
+
+
+def _refusal_counts(response):
+    """{reason: n} of the refusals counted in a ~/describe response.
+
+    From its YAML ``refused`` block or, before any accepted input, from its sentence
+    '... (3 input(s) refused: non_finite 3).'
+    """
+    if response.success:
+        counts = yaml.safe_load(response.message)['refused']
+    else:
+        tail = response.message.rpartition('refused')[2]
+        counts = {reason: int(n) for reason, n in re.findall(r'([a-z_]+) (\d+)', tail)}
+    counts.pop('total', None)
+    return counts
+
+
+# ---------------------------------------------------------------------------------------
+# Talking to the node
+
+
+class Client:
+    """A short-lived rclpy node that talks to one rotation_node, every wait bounded."""
+
+    def __init__(self, target, timeout):
+        self.target = target
+        self.timeout = timeout
+        self.node = rclpy.create_node(f'rotation_client_{os.getpid()}',
+                                      start_parameter_services=False)
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(self.node)
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+
+    def topic(self, name):
+        return f'{self.target}/{name}'
+
+    def spin_until(self, done, seconds):
+        """Spin until done() or ``seconds`` have passed; return done()."""
+        deadline = time.monotonic() + seconds
+        while not done() and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+        return done()
+
+    def missing(self, what):
+        """One line for a ``what`` (topic, service) that did not appear in time."""
+        names = {f"{namespace.rstrip('/')}/{name}"
+                 for name, namespace in self.node.get_node_names_and_namespaces()}
+        if self.target not in names:
+            domain = os.environ.get('ROS_DOMAIN_ID') or '0'
+            return (f'cannot reach node {self.target}: not found within {self.timeout:g} s '
+                    f'(is rotation_node running, with ROS_DOMAIN_ID {domain}?)')
+        return f'node {self.target} has no {what} (waited {self.timeout:g} s)'
+
+    def call(self, srv_type, name, request):
+        """Call the node's service ``name``; the response, or Unreachable."""
+        service = self.topic(name)
+        client = self.node.create_client(srv_type, service)
+        try:
+            if not self.spin_until(client.service_is_ready, self.timeout):
+                raise Unreachable(self.missing(f'service {service}'))
+            deadline = time.monotonic() + self.timeout
+            while time.monotonic() < deadline:
+                future = client.call_async(request)
+                if self.spin_until(future.done, min(RESEND, deadline - time.monotonic())):
+                    return future.result()
+                client.remove_pending_request(future)  # the reply may have been dropped
+            raise Unreachable(f'no reply from service {service} within {self.timeout:g} s')
+        finally:
+            self.node.destroy_client(client)
+
+    def describe(self):
+        return self.call(Trigger, 'describe', Trigger.Request())
+
+    def parameters(self, names):
+        """{name: value} of the node's parameters (its ~/get_parameters service)."""
+        response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
+        return dict(zip(names, map(parameter_value_to_python, response.values)))
+
+    def refused_since(self, before):
+        """{reason: n} of the refusals counted since ``before`` (a _refusal_counts)."""
+        now = _refusal_counts(self.describe())
+        return {reason: n - before.get(reason, 0) for reason, n in now.items()
+                if n > before.get(reason, 0)}
+
+    def wait_for_match(self, pub, subs):
+        """Wait until the node subscribes to ``pub`` and publishes on every one of ``subs``."""
+        if not self.spin_until(lambda: pub.get_subscription_count() > 0, self.timeout):
+            raise Unreachable(self.missing(f'subscription on {pub.topic_name}'))
+        for sub in subs:
+            if not self.spin_until(lambda: sub.get_publisher_count() > 0, self.timeout):
+                raise Unreachable(self.missing(f'publisher on {sub.topic_name}'))
+
+    def send(self, name, msg, pictures):
+        """Publish ``msg`` on the node's ~/name until it answers; return (stamp, answer).
+
+        The answer is {output: message}: the outputs stamped as one sent message, the
+        ~/rotation_matrix whose content matches, and, when ``pictures``, the pictures of that
+        message if the node draws them within PICTURE_WAIT. Refused when the node's refusal
+        counts rise instead.
+        """
+        answers = Answers(msg.header.frame_id)
+        outputs = dict(STAMPED_OUTPUTS, **(PICTURES if pictures else {}))
+        qos = QoSProfile(depth=100)
+        subs = [self.node.create_subscription(msg_type, self.topic(output),
+                                              answers.collector(output), qos)
+                for output, msg_type in outputs.items()]
+        subs.append(self.node.create_subscription(
+            Float64MultiArray, self.topic('rotation_matrix'),
+            lambda m: answers.matrices.append(m), qos))
+        topic = self.topic(name)
+        pub = self.node.create_publisher(type(msg), topic, 10)
+        self.wait_for_match(pub, subs)
+        before = _refusal_counts(self.describe())
+        deadline = time.monotonic() + self.timeout
+        while True:
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            answers.sent.add(_key(msg.header.stamp))
+            pub.publish(msg)
+            if self.spin_until(answers.complete, min(RESEND, deadline - time.monotonic())):
+                break
+            refused = self.refused_since(before)
+            if refused:
+                raise Refused(f'node {self.target} refused the input on {topic}: '
+                              + ', '.join(refused))
+            if time.monotonic() >= deadline:
+                raise Unreachable(f'no answer from node {self.target} to the input on {topic} '
+                                  f'within {self.timeout:g} s')
+        stamp = answers.complete()
+        answer = answers.by_stamp[stamp]
+        R = quaternion_to_matrix(list(_quaternion(answer['quaternion'].quaternion).values()))
+        if not self.spin_until(lambda: answers.matrix(R), self.timeout):
+            raise Unreachable(f'no matching message on {self.topic("rotation_matrix")} '
+                              f'within {self.timeout:g} s')
+        if pictures:
+            self.spin_until(lambda: set(PICTURES) <= set(answer),
+                            min(PICTURE_WAIT, self.timeout))
+        return stamp, dict(answer, rotation_matrix=answers.matrix(R))
+
+
+def _key(stamp):
+    return stamp.sec, stamp.nanosec
+
+
+class Answers:
+    """What the node published for the messages sent: stamped outputs by stamp, matrices."""
+
+    def __init__(self, frame_id):
+        self.frame_id = frame_id
+        self.sent = set()
+        """(sec, nanosec) of every message sent."""
+        self.by_stamp = {}
+        """(sec, nanosec): {output: message} of the stamped outputs."""
+        self.matrices = deque(maxlen=100)
+        """The latest ~/rotation_matrix messages (they carry no header)."""
+
+    def collector(self, output):
+        """Subscription callback keeping the ``output`` messages stamped as a sent one."""
+        def collect(msg):
+            if isinstance(msg, MarkerArray):  # no header of its own: its markers carry it
+                if not msg.markers:
+                    return
+                header = msg.markers[0].header
+            else:
+                header = msg.header
+            key = _key(header.stamp)
+            if key in self.sent and header.frame_id == self.frame_id:
+                self.by_stamp.setdefault(key, {})[output] = msg
+        return collect
+
+    def complete(self):
+        """The stamp of a sent message with every one of STAMPED_OUTPUTS, or None."""
+        for stamp, answer in self.by_stamp.items():
+            if set(STAMPED_OUTPUTS) <= set(answer):
+                return stamp
+        return None
+
+    def matrix(self, R):
+        """The latest ~/rotation_matrix equal to R (within MATRIX_MATCH), or None."""
+        for m in reversed(self.matrices):
+            if np.max(np.abs(np.reshape(m.data, (3, 3)) - R)) <= MATRIX_MATCH:
+                return m
+        return None
+
+
+# ---------------------------------------------------------------------------------------
+# Commands
+
+
+def _marker_data(marker):
+    """{id, action} of a Marker, and for an ADD its type and points."""
+    data = {'id': marker.id, 'action': MARKER_ACTIONS.get(marker.action, marker.action)}
+    if marker.action == Marker.ADD:
+        data['type'] = MARKER_TYPES.get(marker.type, marker.type)
+        if marker.points:
+            data['points'] = [_xyz(p) for p in marker.points]
+    return data
+
+
+def _answer_data(answer, parameters):
+    """The node's answer as plain data, keyed by output topic (relative to the node)."""
+    twist = answer['screw'].twist
+    data = {
+        'rotation_matrix': np.reshape(answer['rotation_matrix'].data, (3, 3)).tolist(),
+        'quaternion': _quaternion(answer['quaternion'].quaternion),
+        'axis_angle': _xyz(answer['axis_angle'].vector),
+        'euler_angles': {'sequence': parameters['euler_sequence'],
+                         'unit': parameters['angle_unit'],
+                         'angles': _xyz(answer['euler_angles'].vector)},
+        'screw': {'angular': _xyz(twist.angular), 'linear': _xyz(twist.linear)},
+    }
+    if 'screw_axis' in answer:
+        data['screw_axis'] = _marker_data(answer['screw_axis'])
+    if 'markers' in answer:
+        data['markers'] = [{k: v for k, v in _marker_data(m).items() if k != 'points'}
+                           for m in answer['markers'].markers]
+    return data
+
+
+def _input_command(client, args):
+    """euler, pose, orientation: send one message, return the report of the answer."""
+    parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
+    if args.command == 'euler':
+        if args.sequence != parameters['euler_sequence']:
+            raise Refused(f"node {client.target} reads ~/euler as {parameters['euler_sequence']}"
+                          f' (its euler_sequence parameter), not {args.sequence}: send '
+                          f"{parameters['euler_sequence']} angles, or start it with -p "
+                          f'euler_sequence:={args.sequence}')
+        angles = np.asarray(args.numbers)
+        if args.deg != (parameters['angle_unit'] == 'deg'):
+            angles = np.radians(angles) if args.deg else np.degrees(angles)
+        msg, name = Vector3Stamped(), 'euler'
+        msg.vector.x, msg.vector.y, msg.vector.z = angles.tolist()
+        sent = {'sequence': args.sequence, 'unit': parameters['angle_unit'],
+                'angles': angles.tolist()}
+    elif args.command == 'pose':
+        msg, name = PoseStamped(), 'pose'
+        _set_pose(msg.pose, args.numbers)
+        sent = _pose_data(msg.pose)
+    else:
+        msg, name = QuaternionStamped(), 'orientation'
+        o = msg.quaternion
+        o.x, o.y, o.z, o.w = args.numbers
+        sent = {'quaternion': _quaternion(o)}
+    msg.header.frame_id = args.frame
+    (sec, nanosec), answer = client.send(name, msg, parameters['publish_markers'])
+    return {'node': client.target,
+            'input': {'topic': client.topic(name), 'type': type_name(type(msg)),
+                      'frame_id': args.frame, 'stamp': {'sec': sec, 'nanosec': nanosec},
+                      **sent},
+            'answer': _answer_data(answer, parameters)}
+
+
+def _describe_command(client, args):
+    response = client.describe()
+    if not response.success:
+        raise Unreachable(f'{client.topic("describe")}: {response.message}')
+    return yaml.safe_load(response.message) if args.json else response.message
+
+
+def _screw_path_command(client, args):
+    request = GetPlan.Request(tolerance=args.tolerance)
+    for pose, values in ((request.start, args.numbers[:7]), (request.goal, args.numbers[7:])):
+        pose.header.frame_id = args.frame
+        pose.header.stamp = client.node.get_clock().now().to_msg()
+        _set_pose(pose.pose, values)
+    before = _refusal_counts(client.describe())
+    plan = client.call(GetPlan, 'screw_path', request).plan
+    if not plan.poses:
+        refused = client.refused_since(before)
+        raise Refused(f'node {client.target} refused the screw_path request: '
+                      + (', '.join(refused) or 'an empty path'))
+    return {'node': client.target, 'service': client.topic('screw_path'),
+            'frame_id': plan.header.frame_id,
+            'poses': [_pose_data(p.pose) for p in plan.poses]}
+
+
+COMMANDS = {'euler': _input_command, 'pose': _input_command, 'orientation': _input_command,
+            'describe': _describe_command, 'screw-path': _screw_path_command}
+
+
+def main(argv=None):
+    """Run one command; return the exit status (0, 1 unreachable, 2 bad input or refused)."""
+    argv = sys.argv if argv is None else [PROG, *argv]
+    args = parse_args(remove_ros_args(argv)[1:])
+    client = None
+    try:
+        # Without rclpy's signal handlers Ctrl-C is a plain KeyboardInterrupt.
+        rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+        client = Client(args.node, args.timeout)
+        result = COMMANDS[args.command](client, args)
+    except Unreachable as exc:
+        print(f'{PROG}: {exc}', file=sys.stderr)
+        return 1
+    except Refused as exc:
+        print(f'{PROG}: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        if client is not None:
+            client.close()
+        rclpy.try_shutdown()
+    if isinstance(result, str):  # describe's YAML, as the node wrote it
+        print(result, end='')
+    else:
+        print(to_json(result) if args.json else to_yaml(result), end='')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
