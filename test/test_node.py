@@ -588,19 +588,22 @@ def test_huge_finite_euler_angles_are_accepted(rig):
 
 
 def test_burst_of_bad_input_throttles_warnings_and_keeps_serving(rig):
-    bad = {'pose': BAD_INPUTS['pose_nan_position'][1], 'euler': BAD_INPUTS['euler_nan'][1],
-           'transform': BAD_INPUTS['transform_nan_translation'][1]}
+    bad = {'pose': 'pose_nan_position', 'euler': 'euler_nan',
+           'transform': 'transform_nan_translation',
+           'pose_with_covariance': 'pose_with_covariance_zero_quaternion',
+           'odometry': 'odometry_short_quaternion', 'imu': 'imu_no_orientation',
+           'orientation': 'orientation_far_from_unit'}
     begin = time.monotonic()
     for _ in range(8):
-        for kind, msg in bad.items():
-            rig.send(kind, msg)
-    for kind, good in (('pose', pose_stamped((0, 0, 1, 0))), ('euler', euler_stamped((1, 2, 3))),
-                       ('transform', transform_stamped((0, 1, 0, 0), (1, 1, 1)))):
+        for kind, case in bad.items():
+            rig.send(kind, BAD_INPUTS[case][1])
+    for kind, good in GOOD_INPUTS.items():
         rig.roundtrip(kind, good)
     elapsed = time.monotonic() - begin
     refused = rig.report()['refused']
     # Best-effort inputs: a burst may lose samples on the way, never gain any.
-    assert 0 < refused['total'] == refused['non_finite'] <= 24
+    reasons = {BAD_INPUTS[case][2] for case in bad.values()}
+    assert 0 < refused['total'] == sum(refused[r] for r in reasons) <= 8 * len(bad)
     rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='a warning')
     # One call site, throttled to one warning per second.
     assert 1 <= len(rig.node_logs(Log.WARN)) <= 1 + elapsed
@@ -929,7 +932,7 @@ def test_parameters_it_does_not_own_are_accepted(rig):
 
 @pytest.mark.parametrize('name, value', [('euler_sequence', 'abc'), ('angle_unit', 'turns'),
                                          ('marker_scale', 0.0)])
-def test_invalid_override_at_start_up(ros_context, name, value):
+def test_invalid_override_at_start_up(ros_context, namespace, name, value):
     with pytest.raises(InvalidParameterValueException, match=name):
-        RotationNode(context=ros_context, namespace='/bad_start',
+        RotationNode(context=ros_context, namespace=namespace,
                      parameter_overrides=[Parameter(name, value=value)])
