@@ -135,14 +135,15 @@ class Tester:
     def add_node(self, node):
         """Spin ``node`` (a node under test, usually in another context) with the tester.
 
-        A node of another context (another DDS participant) gets an executor of its own;
-        both are spun in turn, in this thread.
+        A node of another context (another DDS participant) gets an executor of its own —
+        the kind rotation_node runs on (rotation_node.make_executor), so that every node
+        test holds on it; both are spun in turn, in this thread.
         """
-        from rclpy.executors import SingleThreadedExecutor
+        from rot_tools.rotation_node import make_executor
         if node.context is self.context:
             self.executors[0].add_node(node)
         else:
-            executor = SingleThreadedExecutor(context=node.context)
+            executor = make_executor(context=node.context)
             executor.add_node(node)
             self.executors.append(executor)
 
