@@ -35,8 +35,10 @@ class TraceError(Exception):
 
 
 class _Sym:
-    """A value known only at run time: the variable that will hold it, and whether it is
-    surely a float (``real``: an input entry, or arithmetic on floats) rather than a bool."""
+    """A value known only at run time: the variable that will hold it.
+
+    ``real``: it is surely a float (an input entry, or arithmetic on floats), not a bool.
+    """
 
     __slots__ = ('trace', 'name', 'real')
     __hash__ = None  # == builds an expression
@@ -122,8 +124,7 @@ class _Trace:
         raise TraceError(f'the kernel mixes a {type(x).__name__} into its arithmetic')
 
     def emit(self, template, *args, real=None):
-        """A new variable holding template filled with args; real (a float) by default
-        when every arg is."""
+        """Return a new variable holding template filled with args (real if all args are)."""
         text = template.format(*map(self.source, args))
         if text in self.seen:  # every operation is pure: reuse the earlier result
             return self.seen[text]
@@ -285,8 +286,11 @@ def _block(paths, depth, start, outputs, names, indent):
 
 
 def _input_lines(index, tail, first):
-    """Statements that read input ``index`` into a<first>, ...: one item of ``tail``, or
-    return None (the caller's generic path then deals with the input)."""
+    """Return the statements that read input ``index`` into a<first>, a<first + 1>, ...
+
+    They take one item of ``tail``, or return None from the function (the caller's generic
+    path then deals with the input).
+    """
     x, n = f'x{index}', math.prod(tail)
     names = [f'a{first + i}' for i in range(n)]
     if not tail:
