@@ -20,6 +20,16 @@ import sys
 
 
 def _exit_cleanly(signum, frame):
+    """Exit 0 at once, unless rclpy's own signal handlers are installed.
+
+    rclpy.init installs handlers that shut the context down (the node's loop then ends and
+    main returns) and then call this one. From then on raising SystemExit here would land
+    in whatever runs at that moment — inside a callback, through the executor's C++.
+    """
+    rclpy_signals = sys.modules.get('rclpy.signals')
+    if rclpy_signals is not None and (rclpy_signals.get_current_signal_handlers_options()
+                                      != rclpy_signals.SignalHandlerOptions.NO):
+        return
     sys.exit(0)
 
 

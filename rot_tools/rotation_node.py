@@ -449,12 +449,13 @@ def make_executor(context=None):
     return EventsExecutor(context=context)
 
 
-def _guarded(callback, logger, what, service=False):
+def _guarded(callback, node, what, service=False):
     """callback(*args), but an exception it raises is logged (with its traceback) instead.
 
     A subscription or timer callback then returns None; a service callback (``service``)
-    returns the
-    response it was given, unfilled, so that the client gets a reply. The wrapper has the
+    returns the response it was given, unfilled, so that the client gets a reply. Once the
+    context is shut down (a signal: rclpy shuts it down from its handler, while a callback
+    may be publishing) a failure is the shutdown's and is not logged. The wrapper has the
     callback's signature (rclpy inspects it).
     """
     @wraps(callback)
@@ -462,8 +463,9 @@ def _guarded(callback, logger, what, service=False):
         try:
             return callback(*args)
         except Exception:  # noqa: BLE001 - any bug: log it, keep serving
-            logger.error(f'{what} callback raised; the node keeps serving:\n'
-                         + traceback.format_exc(), throttle_duration_sec=1.0)
+            if node.context.ok():
+                node.get_logger().error(f'{what} callback raised; the node keeps serving:\n'
+                                        + traceback.format_exc(), throttle_duration_sec=1.0)
             return args[-1] if service else None
     return guarded
 
@@ -475,46 +477,28 @@ def guard_callbacks(node):
     (the EventsExecutor would lose the subscription's other queued messages, the default
     one would end the spin).
     """
-    logger = node.get_logger()
     for sub in node.subscriptions:
-        sub.callback = _guarded(sub.callback, logger, f'subscription {sub.topic_name}')
+        sub.callback = _guarded(sub.callback, node, f'subscription {sub.topic_name}')
     for timer in node.timers:
-        timer.callback = _guarded(timer.callback, logger, 'timer')
+        timer.callback = _guarded(timer.callback, node, 'timer')
     for srv in node.services:
-        srv.callback = _guarded(srv.callback, logger, f'service {srv.srv_name}', service=True)
-
-
-SPIN_FAILURES = 3
-"""spin_once errors in a row (the executor's own, not a callback's) after which spin gives up."""
+        srv.callback = _guarded(srv.callback, node, f'service {srv.srv_name}', service=True)
 
 
 def spin(node, executor):
     """Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
 
     The node's callbacks are guarded first (guard_callbacks). rclpy.init installs handlers
-    that shut the context down on SIGINT and SIGTERM (the EventsExecutor installs its own,
-    to the same effect); the loop then ends within one SPIN_TIMEOUT (rclpy.spin could hang
-    on a signal). An error of the executor itself is logged and spinning goes on: the
-    EventsExecutor of rclpy 7.1.6 can raise a RuntimeError from spin_once when a signal
-    lands while it hands out a batch, before it shuts the context down on the next call.
-    SPIN_FAILURES errors in a row are raised.
+    that shut the context down on SIGINT and SIGTERM; the loop then ends within one
+    SPIN_TIMEOUT (rclpy.spin could hang on a signal).
     """
     guard_callbacks(node)
     executor.add_node(node)
-    failures = 0
     try:
         while rclpy.ok(context=executor.context):
-            try:
-                executor.spin_once(timeout_sec=SPIN_TIMEOUT)
-                failures = 0
-            except ExternalShutdownException:
-                break  # the context shut down during spin_once: the normal end
-            except Exception as exc:
-                failures += 1
-                if failures >= SPIN_FAILURES:
-                    raise
-                node.get_logger().warning(f'the executor raised {exc!r}; spinning on',
-                                          throttle_duration_sec=1.0)
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT)
+    except ExternalShutdownException:
+        pass  # the context shut down during spin_once: the normal end
     finally:
         executor.shutdown()
 

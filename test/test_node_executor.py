@@ -13,9 +13,7 @@ signal or the process matters) on the real console script:
 - a callback that raises is logged and costs nothing else (the inputs sent with it are all
   answered; unguarded, the EventsExecutor drops the rest of the batch it was in); the node
   creates nothing the executor cannot serve safely (no clients, guard conditions or
-  tasks), and the QoS events it does watch are served;
-- spin rides out a transient error of the executor itself (the EventsExecutor raised one
-  now and then when a signal landed mid-batch) and raises a persistent one.
+  tasks), and the QoS events it does watch are served.
 
 The in-process node tests (test_node.py) run on the same executor: conftest's Tester spins
 nodes under test with rotation_node.make_executor.
@@ -313,40 +311,3 @@ def test_spin_returns_when_the_context_shuts_down(own_context, namespace):
     assert time.monotonic() - begin < rotation_node.SPIN_TIMEOUT + 0.5
     node.destroy_node()
 
-
-class _FlakyExecutor:
-    """An executor whose spin_once raises the first ``errors`` times, then shuts down."""
-
-    def __init__(self, context, errors):
-        self.context, self.errors, self.calls, self.stopped = context, errors, 0, False
-
-    def add_node(self, node):
-        pass
-
-    def spin_once(self, timeout_sec=None):
-        self.calls += 1
-        if self.calls <= self.errors:
-            raise RuntimeError('Unable to convert call argument')
-        self.context.try_shutdown()
-
-    def shutdown(self):
-        self.stopped = True
-
-
-def test_spin_rides_out_a_transient_executor_error(own_context, namespace, capfd):
-    node = RotationNode(context=own_context, namespace=namespace)
-    executor = _FlakyExecutor(own_context, errors=rotation_node.SPIN_FAILURES - 1)
-    spin(node, executor)
-    assert executor.stopped and executor.calls == rotation_node.SPIN_FAILURES
-    assert "the executor raised RuntimeError('Unable to convert call argument')" in \
-        capfd.readouterr().err
-    node.destroy_node()
-
-
-def test_spin_raises_a_persistent_executor_error(own_context, namespace):
-    node = RotationNode(context=own_context, namespace=namespace)
-    executor = _FlakyExecutor(own_context, errors=100)
-    with pytest.raises(RuntimeError, match='Unable to convert'):
-        spin(node, executor)
-    assert executor.stopped and executor.calls == rotation_node.SPIN_FAILURES
-    node.destroy_node()
