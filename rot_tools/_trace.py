@@ -20,8 +20,10 @@ on Python floats. The generated source is kept on the function (``__source__``) 
 tracebacks.
 """
 
+from collections import Counter
 import linecache
 import math
+import re
 import struct
 
 import numpy as np
@@ -179,7 +181,7 @@ class _TraceOps:
 
 
 def _symbols(trace, prefix, tail, start):
-    """Symbols named prefix0, prefix1, ... nested like _backend._entries: scalar, list, rows."""
+    """Symbols named prefix0, prefix1, ... nested like _backend._columns: scalar, list, rows."""
     flat = [_Sym(trace, f'{prefix}{start + i}', True) for i in range(math.prod(tail))]
     if not tail:
         return flat[0]
@@ -241,11 +243,11 @@ def _live(trace, flat):
 _PACK_CODES = {np.dtype(np.float64): 'd', np.dtype(np.bool_): '?'}
 
 
-def _result_lines(trace, flat, outputs, names):
-    """Statements that build the output arrays / scalars and return them."""
+def _result_lines(values, outputs, names):
+    """Statements that build the output arrays / scalars from their entries' source texts
+    (``values``, one list per output) and return them."""
     lines, results = [], []
-    for k, (values, (tail, dtype)) in enumerate(zip(flat, outputs)):
-        text = [trace.source(x) for x in values]
+    for k, (text, (tail, dtype)) in enumerate(zip(values, outputs)):
         if not tail:
             results.append(f'_dt{k}({text[0]})')
             names[f'_dt{k}'] = dtype
@@ -253,7 +255,7 @@ def _result_lines(trace, flat, outputs, names):
         code = _PACK_CODES.get(np.dtype(dtype))
         if code is None:
             raise TraceError(f'no packed output for dtype {dtype}')
-        names[f'_pack{k}'] = struct.Struct(f'{len(values)}{code}').pack_into
+        names[f'_pack{k}'] = struct.Struct(f'{len(text)}{code}').pack_into
         names[f'_shape{k}'] = tail
         names[f'_odt{k}'] = np.dtype(dtype)
         lines.append(f'o{k} = _empty(_shape{k}, _odt{k})')
@@ -263,18 +265,56 @@ def _result_lines(trace, flat, outputs, names):
     return lines
 
 
+_TEMPORARY = re.compile(r'\bt\d+\b')
+
+
+def _fold(statements, tails, keep):
+    """Fold each temporary read once in its block into the expression that reads it.
+
+    statements: [(name, text)] of one straight-line block, in order; tails: the texts after
+    them that read names (the branch condition, or the output entries); keep: names read
+    below the block, which stay variables. Returns both rewritten. Every operation is pure,
+    so computing a value where it is used instead of where it was defined changes no result;
+    it only saves storing and loading a local.
+    """
+    uses = Counter(_TEMPORARY.findall(' '.join([t for _, t in statements] + tails)))
+    folded, kept = {}, []
+
+    def expand(text):
+        return _TEMPORARY.sub(lambda m: folded.pop(m.group(), m.group()), text)
+
+    for name, text in statements:
+        text = expand(text)
+        if uses[name] == 1 and name not in keep:
+            folded[name] = f'({text})'
+        else:
+            kept.append((name, text))
+    return kept, [expand(t) for t in tails]
+
+
 def _block(paths, depth, start, outputs, names, indent):
     """Source lines of the paths that agree on their first ``depth`` decisions."""
     trace, flat = paths[0]
     live = set().union(*(_live(t, f) for t, f in paths))
     pad = '    ' * indent
-    end = trace.branches[depth][0] if len(trace.branches) > depth else len(trace.statements)
-    lines = [f'{pad}{name} = {text}' for name, text, _ in trace.statements[start:end]
-             if name in live]
-    if len(trace.branches) == depth:
+    leaf = len(trace.branches) == depth
+    end = len(trace.statements) if leaf else trace.branches[depth][0]
+    statements = [(name, text) for name, text, _ in trace.statements[start:end] if name in live]
+    if leaf:
         names.update(trace.constants)
-        return lines + [pad + line for line in _result_lines(trace, flat, outputs, names)]
-    cond = trace.branches[depth][1]
+        values = [[trace.source(x) for x in out] for out in flat]
+        sizes = [len(v) for v in values]
+        statements, texts = _fold(statements, [t for v in values for t in v], set())
+        values = [texts[sum(sizes[:k]):sum(sizes[:k + 1])] for k in range(len(sizes))]
+        return [f'{pad}{name} = {text}' for name, text in statements] + [
+            pad + line for line in _result_lines(values, outputs, names)]
+    below = set()
+    for t, f in paths:
+        below.update(*(reads for _, _, reads in t.statements[end:]))
+        below.update(x.name for out in f for x in out if type(x) is _Sym)
+        below.update(cond for _, cond, _ in t.branches[depth + 1:])
+    statements, (cond,) = _fold(statements, [trace.branches[depth][1]], below)
+    lines = [f'{pad}{name} = {text}' for name, text in statements]
     ways = {True: [], False: []}
     for path in paths:
         ways[path[0].branches[depth][2]].append(path)
