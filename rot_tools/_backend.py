@@ -8,8 +8,9 @@ as itself), returning the entries of its outputs. ``apply`` runs a kernel
   costs ~10× more per item than plain floats) — and, once the same kernel has run on single
   items HOT_AFTER times, as straight-line code generated from it (rot_tools._trace: the
   same operations without the bookkeeping around them, results equal bit for bit), or
-- on a batch, in chunks of CHUNK items whose entries are NumPy views, so the temporaries stay
-  in cache and the memory used beyond the inputs and outputs stays small.
+- on a batch, in chunks of CHUNK items whose entries are contiguous NumPy arrays (each chunk
+  transposed once on the way in and once on the way out), so the temporaries stay in cache
+  and the memory used beyond the inputs and outputs stays small.
 
 Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
@@ -77,25 +78,38 @@ FLOATS = _FloatOps()
 ARRAYS = _ArrayOps()
 
 
-def _entries(arr, tail):
-    """Nested entries of the trailing dims: scalar → arr, (n,) → list, (r, c) → list of rows."""
+def _columns(arr, tail):
+    """Return the entries of a chunk (m,) + tail as contiguous arrays of m.
+
+    The chunk itself for a scalar, a list for a vector, a list of rows for a matrix. One
+    transposing copy: an entry read straight from (m, 3, 3) is strided (one float in
+    every 72 bytes), and a kernel reads each entry several times.
+    """
     if not tail:
         return arr
+    cols = np.ascontiguousarray(np.moveaxis(arr, 0, -1))
     if len(tail) == 1:
-        return [arr[..., i] for i in range(tail[0])]
-    return [[arr[..., i, j] for j in range(tail[1])] for i in range(tail[0])]
+        return list(cols)
+    return [list(row) for row in cols]
 
 
-def _write(out, value, tail):
+def _write_columns(out, value, tail, dtype):
+    """Write a kernel's entries of one output into its chunk out (m,) + tail.
+
+    Through a contiguous tail + (m,) buffer and one transposing copy.
+    """
     if not tail:
         out[...] = value
-    elif len(tail) == 1:
+        return
+    cols = np.empty(tail + out.shape[:1], dtype=dtype)
+    if len(tail) == 1:
         for i in range(tail[0]):
-            out[..., i] = value[i]
+            cols[i] = value[i]
     else:
         for i in range(tail[0]):
             for j in range(tail[1]):
-                out[..., i, j] = value[i][j]
+                cols[i, j] = value[i][j]
+    out[...] = np.moveaxis(cols, -1, 0)
 
 
 def _all_finite(values, rank):
@@ -161,9 +175,9 @@ def apply(kernel, inputs, outputs):
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
-            result = kernel(ARRAYS, *(_entries(f[chunk], t) for f, t in zip(flat, tails)))
-            for out, value, (t, _) in zip(outs, result, outputs):
-                _write(out[chunk], value, t)
+            result = kernel(ARRAYS, *(_columns(f[chunk], t) for f, t in zip(flat, tails)))
+            for out, value, (t, dt) in zip(outs, result, outputs):
+                _write_columns(out[chunk], value, t, dt)
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
 
 
