@@ -57,11 +57,15 @@ class RefusedInput(ValueError):
 # Inbound: message -> (header, R, b)
 
 
-def _require_finite(names, values):
-    """Raise RefusedInput(NON_FINITE) naming the first field that is NaN or ±Inf."""
-    for name, value in zip(names, values):
-        if not math.isfinite(value):
-            raise RefusedInput(NON_FINITE, f'{name} is {value}')
+def _require_finite(prefix, fields, values):
+    """Raise RefusedInput(NON_FINITE) naming the first field (prefix.field) that is NaN or ±Inf.
+
+    (The names are built only for the refusal: this runs for every message.)
+    """
+    if not all(map(math.isfinite, values)):
+        for field, value in zip(fields, values):
+            if not math.isfinite(value):
+                raise RefusedInput(NON_FINITE, f'{prefix}.{field} is {value}')
 
 
 def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
@@ -71,7 +75,7 @@ def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
     |‖q‖ − 1| > ``tolerance``; within the tolerance q is normalised (R is exactly orthogonal).
     """
     x, y, z, w = q.x, q.y, q.z, q.w
-    _require_finite((f'{name}.x', f'{name}.y', f'{name}.z', f'{name}.w'), (x, y, z, w))
+    _require_finite(name, 'xyzw', (x, y, z, w))
     norm = math.hypot(x, y, z, w)  # hypot: no overflow for huge components
     if norm == 0.0:
         raise RefusedInput(ZERO_QUATERNION, f'{name} is the zero quaternion')
@@ -86,8 +90,7 @@ def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
 def pose_to_rt(pose, tolerance, name='pose'):
     """(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
     p = pose.position
-    _require_finite((f'{name}.position.x', f'{name}.position.y', f'{name}.position.z'),
-                    (p.x, p.y, p.z))
+    _require_finite(f'{name}.position', 'xyz', (p.x, p.y, p.z))
     R = quaternion_msg_to_matrix(pose.orientation, tolerance, f'{name}.orientation')
     return R, np.array((p.x, p.y, p.z))
 
@@ -139,8 +142,7 @@ def quaternion_stamped_to_transform(msg, settings):
 def transform_stamped_to_transform(msg, settings):
     """(header, R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
     t = msg.transform.translation
-    _require_finite(('transform.translation.x', 'transform.translation.y',
-                     'transform.translation.z'), (t.x, t.y, t.z))
+    _require_finite('transform.translation', 'xyz', (t.x, t.y, t.z))
     R = quaternion_msg_to_matrix(msg.transform.rotation, settings.quaternion_tolerance,
                                  'transform.rotation')
     return msg.header, R, np.array((t.x, t.y, t.z))
@@ -154,7 +156,7 @@ def euler_stamped_to_transform(msg, settings):
     """
     v = msg.vector
     angles = (v.x, v.y, v.z)
-    _require_finite(('vector.x', 'vector.y', 'vector.z'), angles)
+    _require_finite('vector', 'xyz', angles)
     if settings.degrees:
         angles = tuple(math.radians(a) for a in angles)
     return msg.header, euler_to_matrix(angles, settings.euler_sequence), np.zeros(3)
