@@ -30,14 +30,15 @@ import pytransform3d.transformations as pt_transformations
 from scipy.spatial.transform import Rotation
 import transforms3d.axangles as t3d_axangles
 import transforms3d.euler as t3d_euler
+import transforms3d.quaternions as t3d_quaternions
 
 import benchlib
 import rot_tools as rt
 
 BATCH_GOAL_QUATERNION_ROUTE = 0.25  # scipy routes Euler / matrix conversions via quaternions
-BATCH_GOAL_RODRIGUES = 1.0  # rotvec → matrix: scipy is already near memory speed
-SINGLE_GOAL_SCIPY = 0.2
-SINGLE_GOAL_T3D = 1.0
+BATCH_GOAL_DIRECT = 1.0  # rotvec, axis-angle, quaternion → matrix: scipy's one direct formula
+SINGLE_GOAL_SCIPY = 0.2  # every single conversion
+SINGLE_GOAL_T3D = 1.0  # Euler → matrix only (transforms3d checks nothing; the others: no goal)
 MEMORY_GOAL = 3.0
 TOL = 1e-12
 
@@ -65,7 +66,7 @@ def make_inputs(n, seed=20261121):
     T[:, :3, 3] = b
     T[:, 3, 3] = 1.0
     return dict(R=R, e_tb=e_tb, e_proper=e_proper, axis=axis, angle=angle, rotvec=rotvec,
-                b=b, T=T)
+                b=b, T=T, q=q)
 
 
 # -- result comparisons (max difference to the reference) ---------------------------------
@@ -111,6 +112,12 @@ def screw_note(twist, ref, R, b):
             "difference is pytransform3d's error near π (its axis from the symmetric part).")
 
 
+def diff_quaternion(a, b):
+    """Quaternions: both canonical (w > 0, at w = 0 the first non-zero positive), but at
+    w ≈ 0 rounding may pick opposite signs, so ±q count as equal."""
+    return float(np.minimum(np.abs(a - b).max(axis=-1), np.abs(a + b).max(axis=-1)).max())
+
+
 def diff_rotvec(a, b):
     """Rotation vectors; at θ = π the sign is free, so ±v count as equal there."""
     d = np.abs(a - b).max(axis=-1)
@@ -144,12 +151,18 @@ def batch_cases(x):
         ('matrix -> Euler ZXZ', lambda: rt.matrix_to_euler(R, 'ZXZ'),
          'scipy', lambda: Rotation.from_matrix(R).as_euler('ZXZ'),
          BATCH_GOAL_QUATERNION_ROUTE, lambda a, b: diff_euler(a, b, 'ZXZ', R), [R], None),
+        ('matrix -> quaternion', lambda: rt.matrix_to_quaternion(R),
+         'scipy', lambda: Rotation.from_matrix(R).as_quat(canonical=True),
+         BATCH_GOAL_QUATERNION_ROUTE, diff_quaternion, [R], None),
         ('rotvec -> matrix', lambda: rt.rotvec_to_matrix(x['rotvec']),
          'scipy', lambda: Rotation.from_rotvec(x['rotvec']).as_matrix(),
-         BATCH_GOAL_RODRIGUES, diff_plain, [x['rotvec']], None),
+         BATCH_GOAL_DIRECT, diff_plain, [x['rotvec']], None),
         ('axis, angle -> matrix', lambda: rt.axis_angle_to_matrix(x['axis'], x['angle']),
          'scipy (rotvec)', lambda: Rotation.from_rotvec(x['rotvec']).as_matrix(),
-         BATCH_GOAL_RODRIGUES, diff_plain, [x['axis'], x['angle']], None),
+         BATCH_GOAL_DIRECT, diff_plain, [x['axis'], x['angle']], None),
+        ('quaternion -> matrix', lambda: rt.quaternion_to_matrix(x['q']),
+         'scipy', lambda: Rotation.from_quat(x['q']).as_matrix(),
+         BATCH_GOAL_DIRECT, diff_plain, [x['q']], None),
         ('screw_log (R, b) -> twist', lambda: rt.screw_log(R, x['b']),
          'pytransform3d', lambda: pt_trajectories.exponential_coordinates_from_transforms(T),
          None, diff_plain, [R, x['b']], lambda a, p: screw_note(a, p, R, x['b'])),
@@ -256,21 +269,23 @@ def print_memory(results):
 # -- 3. single-call latency ---------------------------------------------------------------
 
 def single_cases():
-    """(operation, {candidate: (statement, globals)}, [(reference, goal)], compare pairs)."""
+    """(operation, {candidate: statement}, [(reference, goal)]) and the globals they use."""
     a_tb = np.array([0.3, -0.4, 1.2])
     a_pr = np.array([0.3, 1.1, -2.0])
     R = rt.euler_to_matrix(a_tb, 'ZYX')
     axis, angle = rt.matrix_to_axis_angle(R)
     axis, angle = np.array(axis), float(angle)
     rotvec = rt.matrix_to_rotvec(R)
+    q = rt.matrix_to_quaternion(R)
     b = np.array([0.4, -1.0, 2.5])
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = R, b
-    g = dict(rt=rt, Rotation=Rotation, e=t3d_euler, aa=t3d_axangles,
+    g = dict(rt=rt, Rotation=Rotation, e=t3d_euler, aa=t3d_axangles, tq=t3d_quaternions,
              pt=pt_transformations, a_tb=a_tb, a_pr=a_pr, f_tb=[float(v) for v in a_tb],
              f_pr=[float(v) for v in a_pr], R=R, axis=axis, angle=angle, rotvec=rotvec, b=b,
-             T=T)
+             T=T, q=q, q_wxyz=np.roll(q, 1))
     sc, t3 = ('scipy', SINGLE_GOAL_SCIPY), ('transforms3d', SINGLE_GOAL_T3D)
+    sc_rotvec, t3_shown = ('scipy (rotvec)', SINGLE_GOAL_SCIPY), ('transforms3d', None)
     return g, [
         ('Euler ZYX -> matrix', {
             'rot_tools': "rt.euler_to_matrix(a_tb, 'ZYX')",
@@ -283,19 +298,29 @@ def single_cases():
         ('matrix -> Euler ZYX', {
             'rot_tools': "rt.matrix_to_euler(R, 'ZYX')[0]",
             'scipy': "Rotation.from_matrix(R).as_euler('ZYX')",
-            'transforms3d': "e.mat2euler(R, axes='rzyx')"}, [sc, t3]),
+            'transforms3d': "e.mat2euler(R, axes='rzyx')"}, [sc, t3_shown]),
         ('matrix -> rotvec', {
             'rot_tools': 'rt.matrix_to_rotvec(R)',
             'scipy': 'Rotation.from_matrix(R).as_rotvec()'}, [sc]),
         ('matrix -> axis, angle', {
             'rot_tools': 'rt.matrix_to_axis_angle(R)',
-            'transforms3d': 'aa.mat2axangle(R)'}, [t3]),
+            'scipy (rotvec)': 'Rotation.from_matrix(R).as_rotvec()',
+            'transforms3d': 'aa.mat2axangle(R)'}, [sc_rotvec, t3_shown]),
         ('rotvec -> matrix', {
             'rot_tools': 'rt.rotvec_to_matrix(rotvec)',
             'scipy': 'Rotation.from_rotvec(rotvec).as_matrix()'}, [sc]),
         ('axis, angle -> matrix', {
             'rot_tools': 'rt.axis_angle_to_matrix(axis, angle)',
-            'transforms3d': 'aa.axangle2mat(axis, angle)'}, [t3]),
+            'scipy (rotvec)': 'Rotation.from_rotvec(rotvec).as_matrix()',
+            'transforms3d': 'aa.axangle2mat(axis, angle)'}, [sc_rotvec, t3_shown]),
+        ('quaternion -> matrix', {
+            'rot_tools': 'rt.quaternion_to_matrix(q)',
+            'scipy': 'Rotation.from_quat(q).as_matrix()',
+            'transforms3d': 'tq.quat2mat(q_wxyz)'}, [sc, t3_shown]),
+        ('matrix -> quaternion', {
+            'rot_tools': 'rt.matrix_to_quaternion(R)',
+            'scipy': 'Rotation.from_matrix(R).as_quat(canonical=True)',
+            'transforms3d': 'tq.mat2quat(R)'}, [sc, t3_shown]),
         ('screw_log (R, b) -> twist', {
             'rot_tools': 'rt.screw_log(R, b)',
             'pytransform3d': 'pt.exponential_coordinates_from_transform(T)'},
@@ -303,14 +328,16 @@ def single_cases():
     ]
 
 
-def _single_diff(name, out):
+def _single_diff(operation, name, out):
     """Flatten one single-call result, so each reference can be compared with rot_tools."""
-    if name == 'transforms3d' and isinstance(out, tuple):  # mat2euler / mat2axangle
-        if len(out) == 2:  # (axis, angle)
-            return np.concatenate([np.ravel(out[0]), [out[1]]])
-        return np.array(out)
-    if name == 'rot_tools' and isinstance(out, tuple):  # matrix_to_axis_angle
+    if operation == 'matrix -> axis, angle':
+        if name == 'scipy (rotvec)':  # θ·l̂ → (l̂, θ)
+            return np.concatenate([out / np.linalg.norm(out), [np.linalg.norm(out)]])
         return np.concatenate([np.ravel(out[0]), [out[1]]])
+    if name == 'transforms3d' and operation.endswith('-> quaternion'):
+        return np.roll(out, -1) * np.sign(out[0])  # (w, x, y, z) → (x, y, z, w), w > 0
+    if name == 'transforms3d' and isinstance(out, tuple):  # mat2euler
+        return np.array(out)
     return np.ravel(out)
 
 
@@ -318,7 +345,8 @@ def run_single(repeats, target_s=0.02):
     g, cases = single_cases()
     results = []
     for operation, stmts, refs in cases:
-        outs = {k: _single_diff(k, eval(s, g)) for k, s in stmts.items()}  # noqa: S307
+        outs = {k: _single_diff(operation, k, eval(s, g))  # noqa: S307
+                for k, s in stmts.items()}
         timers = {k: timeit.Timer(s, globals=g) for k, s in stmts.items()}
         number = {}
         for k, t in timers.items():  # calibrate: about target_s per sample

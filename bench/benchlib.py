@@ -12,6 +12,7 @@ import os
 import platform
 import statistics
 import sys
+import threading
 import time
 
 
@@ -75,3 +76,16 @@ def write_json(path, payload):
     if path:
         with open(path, 'w', encoding='utf-8') as f:
             json.dump(payload, f, indent=1)
+
+
+def spin_in_thread(rclpy, executor, timeout=0.05):
+    """Spin an rclpy executor in a daemon thread until rclpy shuts down; return the thread."""
+    def spin():
+        try:
+            while rclpy.ok():
+                executor.spin_once(timeout_sec=timeout)
+        except Exception:  # noqa: BLE001 - shut down while spinning: the end
+            pass
+    thread = threading.Thread(target=spin, daemon=True)
+    thread.start()
+    return thread

@@ -13,6 +13,7 @@ Run: ``.venv/bin/python bench/profile_hotspots.py [--top N] [--skip-node]``.
 
 import argparse
 import cProfile
+from functools import partial
 import io
 import os
 import pstats
@@ -71,13 +72,19 @@ def node_callback(top):
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
     from geometry_msgs.msg import PoseStamped
+    from rclpy.parameter import Parameter
     from rot_tools.rotation_node import RotationNode
     sys.path.insert(0, HERE)
     from relay_node import RelayNode
 
     rclpy.init()
     try:
-        node, relay = RotationNode('profile_rot_tools'), RelayNode('profile_relay')
+        relay = RelayNode('profile_relay')
+        nodes = {markers: RotationNode(f'profile_rot_tools_{markers}', parameter_overrides=[
+            Parameter('publish_markers', value=markers)]) for markers in (False, True)}
+        # ~/pose's callback as the executor calls it: _on_input bound to the ~/pose source
+        on_pose = {markers: partial(node._on_input, node._sources[0])
+                   for markers, node in nodes.items()}
         msg = PoseStamped()
         msg.header.frame_id = 'world'
         q = np.array([0.2, -0.4, 0.5, 0.74])
@@ -85,18 +92,27 @@ def node_callback(top):
         o = msg.pose.orientation
         o.x, o.y, o.z, o.w = (float(c) for c in q)
         msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 0.4, -1.0, 2.5
+        candidates = {'rot_tools, markers off': on_pose[False],
+                      'rot_tools, markers on': on_pose[True], 'relay': relay._on_pose}
+        for cb in candidates.values():
+            for _ in range(100):  # warm: the one-item kernels compile after a few calls
+                cb(msg)
         times = {}
         for _ in range(5):  # interleaved
-            for name, cb in (('rot_tools', node._on_pose), ('relay', relay._on_pose)):
+            for name, cb in candidates.items():
                 t = min(timeit.repeat(lambda cb=cb: cb(msg), number=2000, repeat=1)) / 2000
                 times.setdefault(name, []).append(t)
-        rt_us, relay_us = min(times['rot_tools']) * 1e6, min(times['relay']) * 1e6
-        print(f'\n== ~/pose callback in-process (no subscribers, no transport): rotation_node '
-              f'{rt_us:.1f} us, relay {relay_us:.1f} us, difference {rt_us - relay_us:.1f} us '
-              f'per message ({rt_us / relay_us:.2f}x)')
-        profile_calls('rotation_node._on_pose(msg)', lambda: node._on_pose(msg), 5000, 2 * top,
-                      sort='cumulative')
-        node.destroy_node()
+        relay_us = min(times['relay']) * 1e6
+        print('\n== ~/pose callback in-process (no subscribers, no transport; markers are '
+              'throttled to 30 pictures/s, so in a tight loop almost every call skips them)')
+        for name in candidates:
+            us = min(times[name]) * 1e6
+            print(f'   {name:24s} {us:6.1f} us ({us / relay_us:.2f}x the relay, '
+                  f'{us - relay_us:+.1f} us)')
+        profile_calls('rotation_node ~/pose callback, markers off', lambda: on_pose[False](msg),
+                      5000, 2 * top, sort='cumulative')
+        for node in nodes.values():
+            node.destroy_node()
         relay.destroy_node()
     finally:
         rclpy.try_shutdown()

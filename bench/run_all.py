@@ -1,12 +1,12 @@
-"""Run every benchmark (``make bench``): the math, then the node, then one table of goals.
+"""Run every benchmark (``make bench``): the math, the node, its memory, one table of goals.
 
 Each script runs in its own process with this interpreter and prints its own tables; this
-script then collects their figures (JSON) and prints every goal of issue 5 with the ratio
-measured and whether it is met. The whole run takes about 3–4 minutes on 2 cores.
+script then collects their figures (JSON) and prints every goal of issue 11 with the ratio
+measured and whether it is met. The whole run takes about 7 minutes on 2 cores.
 
-Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|node] [--json-dir DIR]``.
-``--quick`` is a smoke run (smaller batch, fewer repetitions and rates): its figures are not
-the ones to quote.
+Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|node|memory]
+[--json-dir DIR]``. ``--quick`` is a smoke run (smaller batch, fewer repetitions and rates,
+a short flood): its figures are not the ones to quote.
 """
 
 import argparse
@@ -34,7 +34,7 @@ def run(script, args, json_path):
     return json.loads(json_path.read_text())
 
 
-def goal_rows(math, node):
+def goal_rows(math, node, memory):
     rows = []
     if math:
         for r in math.get('batch', []):
@@ -56,19 +56,25 @@ def goal_rows(math, node):
                          f"{r['ratio']:.3f}", benchlib.fmt_goal(r['goal']),
                          benchlib.verdict(r['ratio'], r['goal'])])
     if node:
+        for g in node['goals']:
+            rows.append([g['figure'], 'markers off', f"{g['measured']:.2f}", g['goal'],
+                         'yes' if g['met'] else 'NO'])
         ev = node['evaluation']
-        rows.append(['node sustained throughput', 'vs relay', f"{ev['throughput_ratio']:.2f}",
-                     '>= 0.8', 'yes' if ev['throughput_ratio'] >= 0.8 else 'NO'])
-        rows.append(['node p99 latency', 'vs relay (worst rate both sustain)',
-                     f"{ev['p99_ratio_worst']:.2f}", '<= 1.5',
-                     benchlib.verdict(ev['p99_ratio_worst'], 1.5)])
+        for key in ('rot_tools_markers vs relay_default', 'rot_tools_markers vs relay_node'):
+            rows.append([f'node throughput, markers on ({key.split(" vs ")[1]})', 'no goal',
+                         f"{ev[key]['throughput_ratio']:.2f}", '-', '-'])
+    if memory:
+        rows.append(['node RSS growth under a 5 kHz flood', f"{memory['seconds']:.0f} s",
+                     f"{memory['rss_end_mb'] - memory['rss_start_mb']:+.1f} MB",
+                     'bounded', 'yes' if memory['bounded'] else 'NO'])
     return rows
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
-    parser.add_argument('--skip', choices=['math', 'node'], action='append', default=[])
+    parser.add_argument('--skip', choices=['math', 'node', 'memory'], action='append',
+                        default=[])
     parser.add_argument('--json-dir', help='keep the JSON figures here')
     args = parser.parse_args(argv)
 
@@ -77,24 +83,27 @@ def main(argv=None):
         else []
     node_args = ['--rates', '500,2000,5000', '--repeats', '1', '--seconds', '1'] if args.quick \
         else []
+    memory_args = ['--seconds', '5'] if args.quick else []
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as tmp:
         out = Path(args.json_dir or tmp)
         os.makedirs(out, exist_ok=True)
-        math = node = None
+        math = node = memory = None
         if 'math' not in args.skip:
             math = run('bench_math.py', math_args, out / 'bench_math.json')
         if 'node' not in args.skip:
             node = run('bench_node.py', node_args, out / 'bench_node.json')
-        rows = goal_rows(math, node)
-    benchlib.print_table(f'Goals of issue 5 (all ratios rot_tools / reference; '
+        if 'memory' not in args.skip:
+            memory = run('bench_memory.py', memory_args, out / 'bench_memory.json')
+        rows = goal_rows(math, node, memory)
+    benchlib.print_table(f'Goals of issue 11 (ratios rot_tools / reference; '
                          f'{time.monotonic() - start:.0f} s in all)',
                          ['figure', 'against', 'measured', 'goal', 'met?'], rows)
     missed = [f'{r[0]} ({r[1]})' for r in rows if r[-1] == 'NO']
     goals = [r for r in rows if r[-1] != '-']
     tail = f'; missed: {", ".join(missed)}' if missed else ''
     print(f'\n{len(goals) - len(missed)} of {len(goals)} goals met{tail}')
-    failed = [s for s, res in (('math', math), ('node', node))
+    failed = [s for s, res in (('math', math), ('node', node), ('memory', memory))
               if s not in args.skip and res is None]
     if failed:
         print(f'run_all: {", ".join(failed)} benchmark failed (see above)', file=sys.stderr)
