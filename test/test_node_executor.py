@@ -20,8 +20,11 @@ nodes under test with rotation_node.make_executor.
 """
 
 import inspect
+import json
 import math
 import signal
+import subprocess
+import sys
 import threading
 import time
 
@@ -63,45 +66,78 @@ BAD = [pose((math.nan, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 0.0, 0.0)),
 """Refused as non_finite, zero_quaternion, non_unit_quaternion, non_finite."""
 
 
-class Flood:
-    """Publishes ``messages`` in turn on ``topic`` from a thread at about ``rate`` msg/s.
+FLOODER = """
+import json, sys, time
+import rclpy
+from geometry_msgs.msg import PoseStamped
+from rclpy.qos import qos_profile_sensor_data
+topic, rate = sys.argv[1], float(sys.argv[2])
+poses = json.loads(sys.argv[3])  # (NaN and Infinity included)
+rclpy.init()
+node = rclpy.create_node('flooder', namespace=sys.argv[4])
+pub = node.create_publisher(PoseStamped, topic, qos_profile_sensor_data)
+while pub.get_subscription_count() < 1:
+    time.sleep(0.01)
+messages = []
+for (q, p, frame) in poses:
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    o = msg.pose.orientation
+    o.x, o.y, o.z, o.w = q
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = p
+    messages.append(msg)
+print('ready', flush=True)
+sent, start = 0, time.monotonic()
+try:
+    while True:
+        due = int((time.monotonic() - start) * rate) + 1
+        while sent < due:
+            msg = messages[sent % len(messages)]
+            msg.header.stamp.sec = 1_000_000 + sent
+            pub.publish(msg)
+            sent += 1
+        time.sleep(0.002)
+except KeyboardInterrupt:
+    print(sent, flush=True)
+"""
 
-    Its own node (not spun: a publisher needs no executor) in the tester's context. Each
-    message's header.stamp.sec counts up from 1_000_000, so a flooded output is told apart.
+
+class Flood:
+    """Publishes ``poses`` in turn on ``topic`` at about ``rate`` msg/s, from a process.
+
+    A process of its own, so that the flood keeps its pace whatever this one does. Each
+    message's header.stamp.sec counts up from 1_000_000, so a flooded output is told apart;
+    ``sent`` is how many were published, once the flood has ended.
     """
 
-    def __init__(self, tester, topic, messages, rate=2000.0):
-        self.node = rclpy.create_node(f'flood{next(_floods)}', namespace=f'/{RUN}',
-                                      context=tester.context)
-        self.pub = self.node.create_publisher(PoseStamped, topic, qos_profile_sensor_data)
-        tester.spin_until(lambda: self.pub.get_subscription_count() > 0,
-                          what=f'a subscription on {topic}')
-        self.messages, self.rate, self.sent = messages, rate, 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def _run(self):
-        start = time.monotonic()
-        while not self._stop.is_set():
-            due = int((time.monotonic() - start) * self.rate) + 1
-            while self.sent < due:
-                msg = self.messages[self.sent % len(self.messages)]
-                msg.header.stamp.sec = 1_000_000 + self.sent
-                self.pub.publish(msg)
-                self.sent += 1
-            time.sleep(0.002)
+    def __init__(self, topic, poses, rate=2000.0):
+        data = json.dumps([(_quaternion(m), _position(m), m.header.frame_id) for m in poses])
+        self.process = subprocess.Popen(
+            [sys.executable, '-c', FLOODER, topic, str(rate), data, f'/{RUN}'],
+            stdout=subprocess.PIPE, text=True)
+        self.sent = None
 
     def __enter__(self):
-        self._thread.start()
+        line = self.process.stdout.readline().strip()
+        assert line == 'ready', f'the flooder said {line!r}'
         return self
 
     def __exit__(self, *exc):
-        self._stop.set()
-        self._thread.join(timeout=5.0)
-        self.node.destroy_node()
+        self.process.send_signal(signal.SIGINT)
+        out, _ = self.process.communicate(timeout=4 * TIMEOUT)
+        self.sent = int(out.split()[-1])
 
 
-_floods = iter(range(1, 10**6))
+def _quaternion(msg):
+    o = msg.pose.orientation
+    return (o.x, o.y, o.z, o.w)
+
+
+def _position(msg):
+    p = msg.pose.position
+    return (p.x, p.y, p.z)
+
+
 
 
 def wait_until_serving(tester, process):
@@ -135,7 +171,7 @@ def test_every_signal_ends_the_node_cleanly_within_a_second(tester, node_process
             wait_until_serving(tester, process)
         for k, process in enumerate(processes):
             if (first + k) % 2:  # every other one while it is flooded with poses
-                with Flood(tester, f'{process.name}/pose', GOOD + BAD, rate=3000.0):
+                with Flood(f'{process.name}/pose', GOOD + BAD, rate=3000.0):
                     time.sleep(0.2)
                     stops.append(process.stop(signum))
             else:
@@ -150,7 +186,7 @@ def test_services_and_parameters_answer_correctly_under_a_flood(tester, node_pro
     name = process.name
     wait_until_serving(tester, process)
     goal = pose((0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 2.0))
-    with Flood(tester, f'{name}/pose', GOOD, rate=3000.0) as flood:
+    with Flood(f'{name}/pose', GOOD, rate=3000.0) as flood:
         for i in range(5):
             response = tester.call(Trigger, f'{name}/describe', Trigger.Request())
             assert response.success, response.message
@@ -167,7 +203,7 @@ def test_services_and_parameters_answer_correctly_under_a_flood(tester, node_pro
             values = tester.call(GetParameters, f'{name}/get_parameters',
                                  GetParameters.Request(names=['angle_unit'])).values
             assert parameter_value_to_python(values[0]) == unit
-        assert flood.sent > 1000
+    assert flood.sent > 1000
     assert process.process.poll() is None
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
@@ -176,7 +212,7 @@ def test_a_flood_of_bad_input_is_refused_and_the_node_keeps_serving(tester, node
     process = node_process()
     name = process.name
     wait_until_serving(tester, process)
-    with Flood(tester, f'{name}/pose', BAD, rate=3000.0) as flood:
+    with Flood(f'{name}/pose', BAD, rate=3000.0) as flood:
         time.sleep(2.0)
     # Inputs are best effort and a flood beyond the node's pace loses some: every reason
     # must be counted, never more than were sent.
