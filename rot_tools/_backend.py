@@ -128,7 +128,9 @@ def apply(kernel, inputs, outputs):
     array with that trailing shape (RotationError naming it otherwise) and, when ``finite``,
     refused if it holds NaN/Inf; their batch shapes broadcast. outputs: sequence of
     (trailing shape, dtype). Returns a tuple of arrays of shape batch + trailing shape
-    (NumPy scalars for a single item).
+    (NumPy scalars for a single item). dtype ``float`` (Python's) asks for plain Python
+    floats for a single item — a float, or a flat tuple of the entries, row-major — and
+    float64 arrays for a batch.
 
     A kernel object that runs on one item often (HOT_AFTER calls) is compiled to
     straight-line code (rot_tools._trace) and runs that way from then on, with the same
@@ -157,7 +159,12 @@ def apply(kernel, inputs, outputs):
         result = kernel(FLOATS, *values)
         out = []
         for r, (t, dt) in zip(result, outputs):
-            out.append(np.array(r, dtype=dt) if t else dt(r))
+            if not t:
+                out.append(dt(r))
+            elif dt is float:  # plain floats: a flat tuple, row-major
+                out.append(tuple(r) if len(t) == 1 else tuple(x for row in r for x in row))
+            else:
+                out.append(np.array(r, dtype=dt))
         return tuple(out)
     for a, (_, _, name, finite) in zip(arrays, inputs):
         if finite:

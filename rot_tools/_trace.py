@@ -252,6 +252,9 @@ def _result_lines(values, outputs, names):
             results.append(f'_dt{k}({text[0]})')
             names[f'_dt{k}'] = dtype
             continue
+        if dtype is float:  # plain Python floats: a flat tuple of the entries
+            results.append(f'({", ".join(text)},)')
+            continue
         code = _PACK_CODES.get(np.dtype(dtype))
         if code is None:
             raise TraceError(f'no packed output for dtype {dtype}')

@@ -2,11 +2,12 @@
 
 Every input kind is one row of :data:`INPUTS` — topic, message type, converter — and every
 message becomes one rigid transform (header, R, b) at the boundary (rot_tools.messages).
-From there one path serves them all: its screw (Chasles) decomposition is computed once and
-every output — rotation vector θ·l̂, Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, marker
-along the axis — is read off it, so at θ = π all outputs of one input share the axis sign;
-the quaternion is matrix_to_quaternion of R. Outputs carry the input's header. Topics,
-services and parameters: SPEC §3, §3.1 and README "Using it in ROS 2".
+From there one path serves them all: one pass of the decomposition kernels
+(rot_tools.report.decompose_values) gives every number published — rotation vector θ·l̂,
+Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, and the quaternion (matrix_to_quaternion
+of R) — and the picture's decomposition runs the same kernels, so at θ = π all outputs of
+one input share the axis sign. Outputs carry the input's header. Topics, services and
+parameters: SPEC §3, §3.1 and README "Using it in ROS 2".
 
 The pictures (~/markers and ~/screw_axis, rot_tools.drawing) cost several times the rest of
 an input's work, so they are throttled: at most MARKER_RATE a second, the latest input wins,
@@ -42,9 +43,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 from rot_tools import drawing, messages
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
-from rot_tools.report import decompose, to_yaml, transform_report
+from rot_tools.report import decompose_values, to_yaml, transform_report
 from rot_tools.screw import screw_from_transform, screw_interpolate
-from rot_tools.so3 import matrix_to_quaternion
 
 FRAME_MISMATCH = 'frame_mismatch'
 BAD_TOLERANCE = 'bad_tolerance'
@@ -282,13 +282,11 @@ class RotationNode(Node):
         settings = self._settings
         try:
             header, R, b = source.convert(msg, settings)
-            d = decompose(R, b, settings.euler_sequence, check=False)  # floats: no warnings
-            if not all(map(math.isfinite, d.twist.tolist() + d.screw.point.tolist())):
-                raise messages.RefusedInput(
-                    NOT_DECOMPOSABLE, 'values too large to decompose in float64')
-            rotvec = d.axis * d.angle
-            angles = np.degrees(d.euler) if settings.degrees else d.euler
-            q = matrix_to_quaternion(R, check=False)
+            # Every number published, as plain floats from one compiled kernel pass (the
+            # hot path: decompose's arrays cost more than the math); the picture's
+            # decomposition is left to the drawing, at most MARKER_RATE times a second.
+            v = decompose_values(R, b, settings.euler_sequence)
+            angles = tuple(map(math.degrees, v.euler)) if settings.degrees else v.euler
         except messages.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc))
             return
@@ -297,12 +295,13 @@ class RotationNode(Node):
             return
         out = self._out
         self._matrix_pub.publish(messages.rotation_matrix_msg(R, out.matrix))
-        self._quaternion_pub.publish(messages.quaternion_stamped_msg(header, q, out.quaternion))
-        self._axis_angle_pub.publish(messages.vector3_stamped_msg(header, rotvec, out.rotvec))
+        self._quaternion_pub.publish(
+            messages.quaternion_stamped_msg(header, v.quaternion, out.quaternion))
+        self._axis_angle_pub.publish(messages.vector3_stamped_msg(header, v.rotvec, out.rotvec))
         self._euler_pub.publish(messages.vector3_stamped_msg(header, angles, out.euler))
-        self._screw_pub.publish(messages.twist_stamped_msg(header, d.twist, out.twist))
+        self._screw_pub.publish(messages.twist_stamped_msg(header, v.twist, out.twist))
         if settings.publish_markers:
-            self._offer_picture(header, R, b, d, settings)
+            self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
     def _refuse(self, topic, reason, text):
@@ -312,13 +311,13 @@ class RotationNode(Node):
 
     # -- markers -----------------------------------------------------------------------
 
-    def _offer_picture(self, header, R, b, d, settings):
+    def _offer_picture(self, header, R, b, settings):
         """Publish the picture of this input now, or when MARKER_RATE next allows it.
 
         An input that arrives while the timer runs replaces the one waiting: the latest
         wins, and the last input is always drawn.
         """
-        self._picture_due = (header, R, b, d, settings)
+        self._picture_due = (header, R, b, settings)
         if not self._picture_timer.is_canceled():
             return
         if time.monotonic() - self._picture_sent >= 1.0 / MARKER_RATE:
@@ -332,10 +331,10 @@ class RotationNode(Node):
         due, self._picture_due = self._picture_due, None
         if due is None or not self._settings.publish_markers:  # switched off since
             return
-        header, R, b, d, settings = due
+        header, R, b, settings = due
         self._picture_sent = time.monotonic()
         try:
-            picture = drawing.picture(R, b, settings.marker_scale, settings.degrees, d)
+            picture = drawing.picture(R, b, settings.marker_scale, settings.degrees)
         except RotationError as exc:  # e.g. a huge marker_scale: the old picture goes
             self.get_logger().warning(f'no picture: {exc}', throttle_duration_sec=1.0)
             picture = None
@@ -346,7 +345,8 @@ class RotationNode(Node):
             return
         self._markers_pub.publish(messages.picture_markers(header, picture))
         self._marker_pub.publish(messages.screw_axis_marker(
-            header, d.screw.point, d.screw.direction, settings.marker_scale, self._out.marker))
+            header, picture.screw.point, picture.screw.direction, settings.marker_scale,
+            self._out.marker))
 
     # -- services ----------------------------------------------------------------------
 

@@ -216,7 +216,7 @@ def _quaternion_kernel(ops, q):
             [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y)]], big == 0
 
 
-def _quaternion_of_matrix_kernel(ops, m):
+def quaternion_of_matrix_kernel(ops, m):
     """Unit (x, y, z, w) of m, canonical sign; see matrix_to_quaternion."""
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = m
     # M = 4·q·qᵀ in the order (x, y, z, w): its diagonal and off-diagonal entries.
@@ -251,5 +251,5 @@ def matrix_to_quaternion(R, *, check=True):
     result is accurate to rounding at every angle, 0 and π included. The boundary twin of
     quaternion_to_matrix, for messages and for people; never used inside the math.
     """
-    (q,) = apply_to_rotations(_quaternion_of_matrix_kernel, R, check, [((4,), np.float64)])
+    (q,) = apply_to_rotations(quaternion_of_matrix_kernel, R, check, [((4,), np.float64)])
     return q

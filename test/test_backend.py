@@ -335,3 +335,21 @@ def test_values_read_once_are_folded_into_their_reader():
     assert any('(a0 * a1) + ' in line for line in assignments)  # folded into its reader
     for v in ([0.3, -2.0, 1.0], [0.3, -2.0, -1.0], [1e154, -3.0, 1.0]):
         assert f(*v) == kernel(_backend.FLOATS, v)
+
+
+def test_float_outputs_are_plain_floats_for_one_item_and_arrays_for_a_batch():
+    def kernel(ops, m, a):
+        return [[m[0][0] * a, m[0][1]], [m[1][0], m[1][1] + a]], [a, -a], a * a
+    outputs = [((2, 2), float), ((2,), float), ((), float)]
+    m = np.array([[1.0, 2.0], [3.0, 4.0]])
+
+    def run(m, a):
+        return _backend.apply(kernel, [(m, (2, 2), 'm', True), (a, (), 'a', True)], outputs)
+    expected = ((2.0, 2.0, 3.0, 6.0), (2.0, -2.0), 4.0)
+    for _ in range(_backend.HOT_AFTER + 2):  # on floats, then compiled
+        got = run(m, 2.0)
+        assert got == expected and all(type(x) is float for x in got[0] + got[1] + got[2:])
+    assert callable(kernel.__dict__[_backend._COMPILED])
+    batch = run(np.stack([m, m]), np.array([2.0, 3.0]))
+    assert batch[0].shape == (2, 2, 2) and batch[0].dtype == np.float64
+    assert batch[0][1].tolist() == [[3.0, 2.0], [3.0, 7.0]] and batch[2].tolist() == [4.0, 9.0]

@@ -12,7 +12,8 @@ from scipy.spatial.transform import Rotation
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
     rot_z, RotationError, screw_from_transform)
-from rot_tools.report import round_number, to_json, to_yaml, transform_report
+from rot_tools.report import (
+    decompose_values, round_number, to_json, to_yaml, transform_report)
 
 TOL = 1e-12
 R0 = rot_z(0.3) @ rot_y(-0.7) @ rot_x(2.1)
@@ -368,6 +369,42 @@ def test_decompose_matches_the_separate_functions():
             assert np.allclose(one.twist, d.twist[i], rtol=0, atol=1e-15)
             assert np.allclose(one.screw.point, d.screw.point[i], rtol=0, atol=1e-15)
             assert one.degenerate == d.degenerate[i]
+
+
+def test_decompose_values_are_decompose_and_matrix_to_quaternion_as_floats():
+    # The node's one-pass values: the same numbers as the public functions, bit for bit,
+    # as Python floats, single items on every path (π, identity, pure translation) and
+    # before and after the kernel is compiled (HOT_AFTER calls).
+    rng = np.random.default_rng(8)
+    R = np.concatenate([rt.rotvec_to_matrix(rng.normal(size=(20, 3))),
+                        rt.axis_angle_to_matrix(rng.normal(size=(5, 3)), np.pi),
+                        np.eye(3)[None], np.eye(3)[None]])
+    b = rng.normal(size=(len(R), 3))
+    b[-1] = 0.0
+    for seq in ('ZYX', 'xzx'):
+        for _ in range(2):  # (the second round runs compiled)
+            for Ri, bi in zip(R, b):
+                v = decompose_values(Ri, bi, seq)
+                d = rt.decompose(Ri, bi, seq, check=False)
+                assert all(type(x) is float for part in v for x in part)
+                assert list(v.rotvec) == (d.axis * d.angle).tolist()
+                assert list(v.euler) == d.euler.tolist()
+                assert list(v.twist) == d.twist.tolist()
+                assert list(v.quaternion) == rt.matrix_to_quaternion(Ri).tolist()
+    batch = decompose_values(R, b, 'ZYX')
+    assert batch.twist.shape == (len(R), 6)
+    assert np.array_equal(batch.twist, rt.decompose(R, b).twist)
+
+
+def test_decompose_values_refuse_what_decompose_refuses():
+    far = (rt.rot_z(1e-10), [1e300, 0.0, 0.0])
+    for call in (rt.decompose, decompose_values):
+        with pytest.raises(rt.RotationError, match='the screw overflows float64'):
+            call(*far)
+        with pytest.raises(rt.RotationError, match='translation b must be finite'):
+            call(np.eye(3), [0.0, np.inf, 0.0])
+        with pytest.raises(rt.RotationError, match='unknown Euler sequence'):
+            call(np.eye(3), np.zeros(3), 'ZYx')
 
 
 def test_decompose_refuses_bad_input():
