@@ -143,12 +143,14 @@ def angles_kernel(ops, m, spec, lock_tol):
     if extrinsic:
         # Solved as the reversed intrinsic sequence: its first angle is the extrinsic θ3,
         # the one to zero at lock; its last then comes from the peel with θ1 = 0.
-        free = ops.atan2(sign3 * m[j][other], m[j][j])
-        t1, t3 = ops.where(lock, free, t3), ops.where(lock, 0.0, t1)
-    else:
-        # At lock R·e_j = Rot_i(θ1)·e_j = cos θ1·e_j + σ sin θ1·e_k carries the free angle.
-        t1 = ops.where(lock, ops.atan2(sig * m[k][j], m[j][j]), t1)
-        t3 = ops.where(lock, 0.0, t3)
+        t1, t3 = t3, t1
+    if ops.any(lock):  # (an item, or a batch chunk, without lock skips the extra atan2)
+        if extrinsic:
+            free = ops.atan2(sign3 * m[j][other], m[j][j])
+        else:
+            # At lock R·e_j = Rot_i(θ1)·e_j = cos θ1·e_j + σ sin θ1·e_k carries the free angle.
+            free = ops.atan2(sig * m[k][j], m[j][j])
+        t1, t3 = ops.where(lock, free, t1), ops.where(lock, 0.0, t3)
     return [_wrap(ops, t1), t2 + 0.0, _wrap(ops, t3)], lock
 
 
