@@ -28,7 +28,7 @@ import sys
 import numpy as np
 
 from rot_tools._arrays import as_float_array, require_finite
-from rot_tools._trace import compile_single
+from rot_tools._trace import compile_batch, compile_single
 from rot_tools.errors import RotationError
 
 CHUNK = 32768
@@ -79,37 +79,47 @@ ARRAYS = _ArrayOps()
 
 
 def _columns(arr, tail):
-    """Return the entries of a chunk (m,) + tail as contiguous arrays of m.
+    """Return the entries of a chunk (m,) + tail as a flat list of contiguous arrays of m.
 
-    The chunk itself for a scalar, a list for a vector, a list of rows for a matrix. One
-    transposing copy: an entry read straight from (m, 3, 3) is strided (one float in
-    every 72 bytes), and a kernel reads each entry several times.
+    A matrix's entries row-major. One transposing copy: an entry read straight from
+    (m, 3, 3) is strided (one float in every 72 bytes), and a kernel reads each entry
+    several times.
     """
     if not tail:
-        return arr
-    cols = np.ascontiguousarray(np.moveaxis(arr, 0, -1))
+        return [arr]
+    return list(np.ascontiguousarray(np.moveaxis(arr, 0, -1)).reshape(-1, arr.shape[0]))
+
+
+def _nest(entries, tail):
+    """Flat entries → a kernel's argument: the scalar, a list (vector) or a list of rows."""
+    if not tail:
+        return entries[0]
     if len(tail) == 1:
-        return list(cols)
-    return [list(row) for row in cols]
+        return entries
+    return [entries[r * tail[1]:(r + 1) * tail[1]] for r in range(tail[0])]
 
 
-def _write_columns(out, value, tail, dtype):
-    """Write a kernel's entries of one output into its chunk out (m,) + tail.
+def _flat(value, tail):
+    """A kernel's output → its entries as a flat list (a matrix row-major)."""
+    if not tail:
+        return [value]
+    if len(tail) == 1:
+        return list(value)
+    return [x for row in value for x in row]
 
-    Through a contiguous tail + (m,) buffer and one transposing copy.
+
+def _write_columns(out, entries, tail, dtype):
+    """Write the flat entries of one output into its chunk out (m,) + tail.
+
+    Through a contiguous buffer of the entries and one transposing copy.
     """
     if not tail:
-        out[...] = value
+        out[...] = entries[0]
         return
-    cols = np.empty(tail + out.shape[:1], dtype=dtype)
-    if len(tail) == 1:
-        for i in range(tail[0]):
-            cols[i] = value[i]
-    else:
-        for i in range(tail[0]):
-            for j in range(tail[1]):
-                cols[i, j] = value[i][j]
-    out[...] = np.moveaxis(cols, -1, 0)
+    cols = np.empty((len(entries), out.shape[0]), dtype=dtype)
+    for k, entry in enumerate(entries):
+        cols[k] = entry
+    out[...] = np.moveaxis(cols.reshape(tail + out.shape[:1]), -1, 0)
 
 
 def _all_finite(values, rank):
@@ -179,12 +189,21 @@ def apply(kernel, inputs, outputs):
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in zip(arrays, tails)]
     n = flat[0].shape[0]
     outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
+    sizes = [math.prod(t) for t, _ in outputs]
+    code = _batch_code(kernel, tails, outputs, n)
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
-            result = kernel(ARRAYS, *(_columns(f[chunk], t) for f, t in zip(flat, tails)))
-            for out, value, (t, dt) in zip(outs, result, outputs):
-                _write_columns(out[chunk], value, t, dt)
+            entries = [_columns(f[chunk], t) for f, t in zip(flat, tails)]
+            if code is not None:
+                values = code(*(x for e in entries for x in e))
+            else:
+                result = kernel(ARRAYS, *(_nest(e, t) for e, t in zip(entries, tails)))
+                values = [x for r, (t, _) in zip(result, outputs) for x in _flat(r, t)]
+            k = 0
+            for out, size, (t, dt) in zip(outs, sizes, outputs):
+                _write_columns(out[chunk], values[k:k + size], t, dt)
+                k += size
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
 
 
@@ -195,8 +214,14 @@ A kernel used once or twice (a command-line run) is not worth the few millisecon
 tracing and compiling; one used per message or in a loop is.
 """
 
+BATCH_AFTER = 4 * CHUNK
+"""Items a kernel has run on in batches before its batch code is compiled (a 1e6 batch:
+at once; a test's few hundred items: not worth the milliseconds)."""
+
 _COMPILED = '_rot_tools_compiled'  # attributes of a kernel: its compiled one-item code,
 _CALLS = '_rot_tools_calls'  # and how often it ran on one item (False: no more counting)
+_BATCH = '_rot_tools_batch'  # its compiled batch code (False: it cannot be compiled)
+_BATCH_ITEMS = '_rot_tools_batch_items'  # and how many items it has run on in batches
 _NO_CODE = {}
 
 
@@ -217,6 +242,25 @@ def _count_call(kernel, inputs, outputs):
                                           list(outputs))
     except Exception:  # noqa: BLE001 - whatever the tracer cannot follow runs on floats
         pass
+
+
+def _batch_code(kernel, tails, outputs, n):
+    """The compiled batch code of kernel once it has run on BATCH_AFTER items, else None."""
+    state = getattr(kernel, '__dict__', None)
+    if state is None:
+        return None
+    code = state.get(_BATCH)
+    if code is not None:
+        return code or None
+    items = state.get(_BATCH_ITEMS, 0) + n
+    state[_BATCH_ITEMS] = items
+    if items < BATCH_AFTER:
+        return None
+    try:
+        state[_BATCH] = compile_batch(kernel, ARRAYS, tails, list(outputs))
+    except Exception:  # noqa: BLE001 - whatever the tracer cannot follow runs as it is
+        state[_BATCH] = False
+    return state[_BATCH] or None
 
 
 def dot(u, v):

@@ -73,7 +73,9 @@ class _Sym:
 
 def _real(x):
     """True for a float (or int) that arithmetic keeps a float: a real symbol or a number."""
-    return x.real if type(x) is _Sym else type(x) in (float, int)
+    if type(x) is _Sym:
+        return x.real
+    return type(x) is int or isinstance(x, float)
 
 
 def _operator(template, reflected=False, logical=False):
@@ -102,8 +104,9 @@ _Sym.__abs__ = lambda self: self.trace.emit('abs({})', self)
 class _Trace:
     """One run of a kernel on symbols, following ``decisions`` at its ops.any branches."""
 
-    def __init__(self, decisions):
+    def __init__(self, decisions, single=True):
         self.decisions = decisions
+        self.single = single  # one item (ops.any is bool), else a batch (np.any)
         self.statements = []  # (name, source text, names it reads)
         self.branches = []  # (statement index, condition name, decision taken)
         self.constants = {}  # global name -> value, for what repr cannot write
@@ -115,12 +118,13 @@ class _Trace:
             if x.trace is not self:
                 raise TraceError('a symbol from another trace')
             return x.name
-        if type(x) is bool:
-            return repr(x)
-        if type(x) in (int, float) and math.isfinite(x):
-            return repr(x)
-        if type(x) is float:  # inf, nan
-            name = f'_c{len(self.constants)}'
+        if isinstance(x, (bool, np.bool_)):
+            return repr(bool(x))
+        if type(x) is int or isinstance(x, float):  # (np.float64 from the batch engine)
+            x = x if type(x) is int else float(x)
+            if math.isfinite(x):
+                return repr(x)
+            name = f'_c{len(self.constants)}'  # inf, nan
             self.constants[name] = x
             return name
         raise TraceError(f'the kernel mixes a {type(x).__name__} into its arithmetic')
@@ -136,33 +140,41 @@ class _Trace:
         return sym
 
     def branch(self, condition):
-        """ops.any on one item is bool(condition): take the next decision of this path."""
+        """Take the next decision of this path at an ops.any.
+
+        On one item ops.any is bool(condition), so a branch taken on a condition also
+        settles every later where on it (``known``); on a batch it is np.any and does not.
+        """
         name = self.source(condition)
         if name in self.known:
             return self.known[name]
         k = len(self.branches)
         taken = self.decisions[k] if k < len(self.decisions) else False
         self.branches.append((len(self.statements), name, taken))
-        self.known[name] = taken
+        if self.single:
+            self.known[name] = taken
         return taken
 
 
 class _TraceOps:
-    """The ops namespace of a trace: FLOATS' functions, recorded instead of called."""
+    """The ops namespace of a trace: an engine's functions, recorded instead of called."""
 
-    def __init__(self, trace, floats):
+    def __init__(self, trace, engine):
         self._trace = trace
-        self._floats = floats
+        self._engine = engine
 
     def where(self, cond, a, b):
         if type(cond) is not _Sym:
-            return a if cond else b  # known now: as the float engine does it
+            return a if cond else b  # known now: as the engines do it
         known = self._trace.known.get(cond.name)
         if known is not None:  # inside a branch taken on cond
             return a if known else b
         if a is b:
             return a
-        return self._trace.emit('{} if {} else {}', a, cond, b, real=_real(a) and _real(b))
+        real = _real(a) and _real(b)
+        if self._trace.single:
+            return self._trace.emit('{} if {} else {}', a, cond, b, real=real)
+        return self._trace.emit('_op_where({}, {}, {})', cond, a, b, real=real)
 
     def any(self, cond):
         if type(cond) is not _Sym:
@@ -170,12 +182,12 @@ class _TraceOps:
         return self._trace.branch(cond)
 
     def __getattr__(self, name):
-        fn = getattr(self._floats, name)
+        fn = getattr(self._engine, name)
         trace = self._trace
 
         def recorded(*args):
             if not any(type(a) is _Sym for a in args):
-                return fn(*args)  # every argument known: the float engine's own result
+                return fn(*args)  # every argument known: the engine's own result
             return trace.emit(f'_op_{name}(' + ', '.join(['{}'] * len(args)) + ')', *args)
         return recorded
 
@@ -202,25 +214,25 @@ def _flatten(value, tail):
     return [x for row in value for x in row]
 
 
-def _run(kernel, floats, tails, outputs, decisions):
+def _run(kernel, engine, single, tails, outputs, decisions):
     """Trace kernel along decisions: (trace, flat symbolic outputs per output)."""
-    trace = _Trace(decisions)
+    trace = _Trace(decisions, single)
     args, start = [], 0
     for tail in tails:
         args.append(_symbols(trace, 'a', tail, start))
         start += math.prod(tail)
-    result = kernel(_TraceOps(trace, floats), *args)
+    result = kernel(_TraceOps(trace, engine), *args)
     if len(result) != len(outputs):
         raise TraceError(f'the kernel returns {len(result)} outputs, expected {len(outputs)}')
     flat = [_flatten(r, t) for r, (t, _) in zip(result, outputs)]
     return trace, flat
 
 
-def _all_paths(kernel, floats, tails, outputs):
+def _all_paths(kernel, engine, single, tails, outputs):
     """Every way through the kernel's ops.any: a list of (trace, outputs)."""
     done, todo = [], [[]]
     while todo:
-        trace, flat = _run(kernel, floats, tails, outputs, todo.pop())
+        trace, flat = _run(kernel, engine, single, tails, outputs, todo.pop())
         done.append((trace, flat))
         if len(done) > MAX_PATHS:
             raise TraceError(f'more than {MAX_PATHS} ways through the kernel')
@@ -308,9 +320,11 @@ def _block(paths, depth, start, outputs, names, indent):
         values = [[trace.source(x) for x in out] for out in flat]
         sizes = [len(v) for v in values]
         statements, texts = _fold(statements, [t for v in values for t in v], set())
+        lines = [f'{pad}{name} = {text}' for name, text in statements]
+        if not trace.single:  # a batch: every entry, flat, for apply to write
+            return lines + [f'{pad}return ({", ".join(texts)},)']
         values = [texts[sum(sizes[:k]):sum(sizes[:k + 1])] for k in range(len(sizes))]
-        return [f'{pad}{name} = {text}' for name, text in statements] + [
-            pad + line for line in _result_lines(values, outputs, names)]
+        return lines + [pad + line for line in _result_lines(values, outputs, names)]
     below = set()
     for t, f in paths:
         below.update(*(reads for _, _, reads in t.statements[end:]))
@@ -321,7 +335,7 @@ def _block(paths, depth, start, outputs, names, indent):
     ways = {True: [], False: []}
     for path in paths:
         ways[path[0].branches[depth][2]].append(path)
-    lines.append(f'{pad}if {cond}:')
+    lines.append(f'{pad}if {cond}:' if trace.single else f'{pad}if _op_any({cond}):')
     lines += _block(ways[True], depth + 1, end, outputs, names, indent + 1)
     lines.append(f'{pad}else:')
     lines += _block(ways[False], depth + 1, end, outputs, names, indent + 1)
@@ -364,14 +378,9 @@ def compile_single(kernel, floats, tails, outputs):
     which coerces and checks (the NaN/Inf test is a quick sum that can also fire when the
     sum overflows, and never misses one). Raises TraceError when the kernel cannot be traced.
     """
-    paths = _all_paths(kernel, floats, tails, outputs)
+    paths = _all_paths(kernel, floats, True, tails, outputs)
     names = {'_empty': np.empty, '_ndarray': np.ndarray, '_f64': np.dtype(np.float64),
              '_float64': np.float64, '_float': float}
-    for attr in dir(floats):
-        if not attr.startswith('_'):
-            names[f'_op_{attr}'] = getattr(floats, attr)
-    label = getattr(kernel, '__qualname__', None) or getattr(
-        getattr(kernel, 'func', None), '__qualname__', 'kernel')
     xs = ''.join(f'(x{i}, _, _, _), ' for i in range(len(tails)))
     body = [f'if len(inputs) != {len(tails)}:', '    return None', f'{xs}= inputs']
     count = 0
@@ -381,12 +390,37 @@ def compile_single(kernel, floats, tails, outputs):
     if count:
         body += [f'if ({" + ".join(f"a{i}" for i in range(count))}) * 0.0 != 0.0:',
                  '    return None']
-    lines = ['def single(inputs):', f'    """{label}, traced: one item, straight-line."""']
+    return _function('single', 'inputs', body, paths, kernel, floats, outputs, names,
+                     'one item')
+
+
+def compile_batch(kernel, arrays, tails, outputs):
+    """Compile ``kernel`` for a chunk of items: f(*entries) → every output entry, flat.
+
+    f takes the entries of the inputs (contiguous arrays of the chunk's items, a matrix's
+    row-major) and returns those of the outputs, each an array or a constant, as
+    kernel(arrays, ...) computes them (the same NumPy operations, less the ones whose result
+    nothing uses, and x·1, x·(−1), repeated expressions: exact). Raises TraceError when the
+    kernel cannot be traced.
+    """
+    paths = _all_paths(kernel, arrays, False, tails, outputs)
+    params = ', '.join(f'a{i}' for i in range(sum(math.prod(t) for t in tails)))
+    return _function('batch', params, [], paths, kernel, arrays, outputs, {}, 'a batch')
+
+
+def _function(name, params, body, paths, kernel, engine, outputs, names, what):
+    """Compile ``def name(params): body + the paths' code`` with the engine's functions."""
+    for attr in dir(engine):
+        if not attr.startswith('_'):
+            names[f'_op_{attr}'] = getattr(engine, attr)
+    label = getattr(kernel, '__qualname__', None) or getattr(
+        getattr(kernel, 'func', None), '__qualname__', 'kernel')
+    lines = [f'def {name}({params}):', f'    """{label}, traced: {what}, straight-line."""']
     lines += ['    ' + line for line in body] + _block(paths, 0, 0, outputs, names, 1)
     source = '\n'.join(lines) + '\n'
-    filename = f'<rot_tools traced {label} {id(kernel):x}>'
+    filename = f'<rot_tools traced {label} {what} {id(kernel):x}>'
     exec(compile(source, filename, 'exec'), names)  # noqa: S102 - our own generated code
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    single = names['single']
-    single.__source__ = source
-    return single
+    function = names[name]
+    function.__source__ = source
+    return function

@@ -353,3 +353,67 @@ def test_float_outputs_are_plain_floats_for_one_item_and_arrays_for_a_batch():
     batch = run(np.stack([m, m]), np.array([2.0, 3.0]))
     assert batch[0].shape == (2, 2, 2) and batch[0].dtype == np.float64
     assert batch[0][1].tolist() == [[3.0, 2.0], [3.0, 7.0]] and batch[2].tolist() == [4.0, 9.0]
+
+
+def _batch_calls():
+    """(label, call) of every public batch conversion on the adversarial items at once."""
+    R = np.stack(ROTATIONS)
+    b = np.stack([VECTORS[i % len(VECTORS)] for i in range(len(R))])
+    v = np.stack(VECTORS)
+    calls = [('axis_angle', lambda: rt.matrix_to_axis_angle(R)),
+             ('rotvec', lambda: rt.matrix_to_rotvec(R)),
+             ('quaternion', lambda: rt.matrix_to_quaternion(R)),
+             ('validate', lambda: rt.validate_rotation(R)),
+             ('is_rotation', lambda: rt.is_rotation(R)),
+             ('screw', lambda: rt.screw_from_transform(R, b)),
+             ('screw_log', lambda: rt.screw_log(R, b)),
+             ('points', lambda: rt.transform_points(R, b, b[::-1])),
+             ('compose', lambda: rt.compose_transforms(R, b, R[::-1], b)),
+             ('invert', lambda: rt.invert_transform(R, b)),
+             ('values', lambda: rt.report.decompose_values(R, b, 'zyx')),
+             ('rotvec_to_matrix', lambda: rt.rotvec_to_matrix(v)),
+             ('axis_angle_to_matrix', lambda: rt.axis_angle_to_matrix(v[1:], 0.7)),
+             ('quaternion_to_matrix', lambda: rt.quaternion_to_matrix(
+                 np.concatenate([v[1:], np.full((len(v) - 1, 1), 0.5)], axis=1))),
+             ('screw_exp', lambda: rt.screw_exp(np.concatenate([v, v[::-1]], axis=1)))]
+    calls += [(f'{seq}', lambda seq=seq: rt.matrix_to_euler(R, seq)) for seq in SEQUENCES]
+    calls += [(f'decompose {seq}', lambda seq=seq: rt.decompose(R, b, seq))
+              for seq in SEQUENCES[:2]]
+    calls += [(f'euler {seq}', lambda seq=seq: rt.euler_to_matrix(v, seq)) for seq in SEQUENCES]
+    return calls
+
+
+def _tree_bits(x):
+    if isinstance(x, tuple):
+        return tuple(_tree_bits(v) for v in x)
+    return _bits(x)
+
+
+def test_compiled_batch_code_matches_the_array_engine_bit_for_bit(monkeypatch):
+    calls = _batch_calls()
+    monkeypatch.setattr(_backend, '_batch_code', lambda *args: None)
+    arrays = [_tree_bits(_run(call)) for _, call in calls]
+    monkeypatch.undo()
+    monkeypatch.setattr(_backend, 'BATCH_AFTER', 0)
+    compiled = [_tree_bits(_run(call)) for _, call in calls]
+    differ = [label for (label, _), a, c in zip(calls, arrays, compiled) if a != c]
+    assert not differ, differ
+    kernel = rt.so3._checking(rt.euler._ANGLES_KERNELS['ZYX'])
+    code = kernel.__dict__[_backend._BATCH]
+    assert callable(code) and 'a batch' in code.__doc__
+
+
+def test_batch_code_takes_both_ways_of_an_any(monkeypatch):
+    monkeypatch.setattr(_backend, 'BATCH_AFTER', 0)
+
+    def kernel(ops, v):
+        out = v[0] * 2.0
+        if ops.any(v[1] > 0):
+            out = ops.where(v[1] > 0, out + 1.0, out)  # not settled by the branch: a batch
+        return (out,)
+    spec = [((), np.float64)]
+    x = np.array([[1.0, -1.0], [2.0, 1.0], [3.0, -5.0]])
+    assert _backend.apply(kernel, [(x, (2,), 'v', True)], spec)[0].tolist() == [2.0, 5.0, 6.0]
+    assert _backend.apply(kernel, [(x[[0, 2]], (2,), 'v', True)], spec)[0].tolist() == [
+        2.0, 6.0]
+    assert '_op_any(' in kernel.__dict__[_backend._BATCH].__source__
