@@ -28,7 +28,7 @@ import sys
 import numpy as np
 
 from rot_tools._arrays import as_float_array, require_finite
-from rot_tools._trace import compile_batch, compile_single
+from rot_tools._trace import compile_batch, compile_single, flatten, nest
 from rot_tools.errors import RotationError
 
 CHUNK = 32768
@@ -88,24 +88,6 @@ def _columns(arr, tail):
     if not tail:
         return [arr]
     return list(np.ascontiguousarray(np.moveaxis(arr, 0, -1)).reshape(-1, arr.shape[0]))
-
-
-def _nest(entries, tail):
-    """Flat entries → a kernel's argument: the scalar, a list (vector) or a list of rows."""
-    if not tail:
-        return entries[0]
-    if len(tail) == 1:
-        return entries
-    return [entries[r * tail[1]:(r + 1) * tail[1]] for r in range(tail[0])]
-
-
-def _flat(value, tail):
-    """A kernel's output → its entries as a flat list (a matrix row-major)."""
-    if not tail:
-        return [value]
-    if len(tail) == 1:
-        return list(value)
-    return [x for row in value for x in row]
 
 
 def _write_columns(out, entries, tail, dtype):
@@ -172,7 +154,7 @@ def apply(kernel, inputs, outputs):
             if not t:
                 out.append(dt(r))
             elif dt is float:  # plain floats: a flat tuple, row-major
-                out.append(tuple(r) if len(t) == 1 else tuple(x for row in r for x in row))
+                out.append(tuple(flatten(r, t)))
             else:
                 out.append(np.array(r, dtype=dt))
         return tuple(out)
@@ -198,8 +180,8 @@ def apply(kernel, inputs, outputs):
             if code is not None:
                 values = code(*(x for e in entries for x in e))
             else:
-                result = kernel(ARRAYS, *(_nest(e, t) for e, t in zip(entries, tails)))
-                values = [x for r, (t, _) in zip(result, outputs) for x in _flat(r, t)]
+                result = kernel(ARRAYS, *(nest(e, t) for e, t in zip(entries, tails)))
+                values = [x for r, (t, _) in zip(result, outputs) for x in flatten(r, t)]
             k = 0
             for out, size, (t, dt) in zip(outs, sizes, outputs):
                 _write_columns(out[chunk], values[k:k + size], t, dt)

@@ -192,26 +192,36 @@ class _TraceOps:
         return recorded
 
 
-def _symbols(trace, prefix, tail, start):
-    """Symbols named prefix0, prefix1, ... nested like _backend._columns: scalar, list, rows."""
-    flat = [_Sym(trace, f'{prefix}{start + i}', True) for i in range(math.prod(tail))]
+def nest(entries, tail):
+    """Flat entries → a kernel's argument: the scalar, a list (vector) or a list of rows."""
     if not tail:
-        return flat[0]
+        return entries[0]
     if len(tail) == 1:
-        return flat
-    return [flat[r * tail[1]:(r + 1) * tail[1]] for r in range(tail[0])]
+        return list(entries)
+    return [list(entries[r * tail[1]:(r + 1) * tail[1]]) for r in range(tail[0])]
 
 
-def _flatten(value, tail):
+def flatten(value, tail):
+    """A kernel's output → its entries as a flat list (a matrix row-major)."""
     if not tail:
         return [value]
     if len(tail) == 1:
-        if len(value) != tail[0]:
-            raise TraceError(f'an output has {len(value)} entries, expected {tail[0]}')
         return list(value)
-    if len(value) != tail[0] or any(len(row) != tail[1] for row in value):
-        raise TraceError(f'an output is not {tail[0]}x{tail[1]}')
     return [x for row in value for x in row]
+
+
+def _symbols(trace, prefix, tail, start):
+    """Symbols prefix<start>, prefix<start + 1>, ... nested as a kernel takes them."""
+    return nest([_Sym(trace, f'{prefix}{start + i}', True) for i in range(math.prod(tail))],
+                tail)
+
+
+def _entries_of(value, tail):
+    """flatten(value, tail), refusing an output of another shape."""
+    rows = [value] if len(tail) == 2 else []
+    if (tail and len(value) != tail[0]) or any(len(row) != tail[1] for r in rows for row in r):
+        raise TraceError(f'an output is not of shape {tail}')
+    return flatten(value, tail)
 
 
 def _run(kernel, engine, single, tails, outputs, decisions):
@@ -224,7 +234,7 @@ def _run(kernel, engine, single, tails, outputs, decisions):
     result = kernel(_TraceOps(trace, engine), *args)
     if len(result) != len(outputs):
         raise TraceError(f'the kernel returns {len(result)} outputs, expected {len(outputs)}')
-    flat = [_flatten(r, t) for r, (t, _) in zip(result, outputs)]
+    flat = [_entries_of(r, t) for r, (t, _) in zip(result, outputs)]
     return trace, flat
 
 
