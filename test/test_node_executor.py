@@ -156,6 +156,12 @@ def wait_until_serving(tester, process):
     tester.node.destroy_publisher(pub)
 
 
+def describe_stamp(tester, name):
+    """header.stamp.sec of the node's latest input, from ~/describe (-1 before any)."""
+    response = tester.call(Trigger, f'{name}/describe', Trigger.Request())
+    return yaml.safe_load(response.message)['stamp']['sec'] if response.success else -1
+
+
 def assert_clean_exit(status, seconds, stderr):
     assert status == 0, stderr
     assert 'Traceback' not in stderr and 'KeyboardInterrupt' not in stderr, stderr
@@ -187,6 +193,9 @@ def test_services_and_parameters_answer_correctly_under_a_flood(tester, node_pro
     wait_until_serving(tester, process)
     goal = pose((0.0, 0.0, 1.0, 0.0), (0.0, 0.0, 2.0))
     with Flood(f'{name}/pose', GOOD, rate=3000.0) as flood:
+        deadline = time.monotonic() + 4 * TIMEOUT
+        while describe_stamp(tester, name) < 1_000_000:  # until flooded inputs arrive
+            assert time.monotonic() < deadline, 'no flooded input reached the node'
         for i in range(5):
             response = tester.call(Trigger, f'{name}/describe', Trigger.Request())
             assert response.success, response.message
