@@ -361,10 +361,10 @@ def print_results(summary, ev, rates, seconds, repeats):
                          ['offered msg/s'] + [TARGETS[t].label for t in names], rows)
     rows = []
     for r in rates:
-        rows.append([f'{r}'] + [f"{summary[(t, r)]['cpu_us']:.0f} ({summary[(t, r)]['node_load']:.2f})"
-                                for t in names]
-                    + [f"{summary[(names[-1], r)]['flooder_load']:.2f}",
-                       f"{summary[(names[-1], r)]['measurer_load']:.2f}"])
+        cpu = [f"{summary[(t, r)]['cpu_us']:.0f} ({summary[(t, r)]['node_load']:.2f})"
+               for t in names]
+        rows.append([f'{r}', *cpu, f"{summary[(names[-1], r)]['flooder_load']:.2f}",
+                     f"{summary[(names[-1], r)]['measurer_load']:.2f}"])
     benchlib.print_table(
         'CPU us per delivered message (node process CPU s/s); flooder and measurer CPU s/s '
         f'during the {TARGETS[names[-1]].label} trial',

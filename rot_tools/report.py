@@ -157,10 +157,11 @@ _VALUES_KERNELS = {seq: partial(_values_kernel, spec=parse_sequence(seq))
 def decompose_values(R, b, seq='ZYX'):
     """Return the Values of one rigid motion (R (3, 3), b (3,)), from one kernel pass.
 
-    Rotation vector, Euler angles of ``seq`` (rad), twist and quaternion. The same kernels as decompose and matrix_to_quaternion (so the same numbers, the same
-    axis sign at θ = π), without building an array for each: rotation_node calls it for
-    every message. R is not validated (check=False: the node builds R itself); RotationError
-    where the screw overflows float64, as decompose.
+    Rotation vector, Euler angles of ``seq`` (rad), twist and quaternion. The same kernels
+    as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
+    θ = π), without building an array for each: rotation_node calls it for every message.
+    R is not validated (check=False: the node builds R itself); RotationError where the
+    screw overflows float64, as decompose.
     """
     parse_sequence(seq)  # raises the RotationError of an unknown sequence
     rotvec, euler, twist, q, angle, fits = apply(
