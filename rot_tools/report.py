@@ -276,8 +276,10 @@ def _float_text(x):
 # YAML
 
 _PLAIN = re.compile(r'[A-Za-z_/][A-Za-z0-9_./ -]*\Z')
-_YAML_WORDS = frozenset(
-    'y n yes no true false on off null ~'.split())
+# Words YAML parsers read as booleans or null. A bare y or n stays a string for PyYAML
+# (which ros2cli uses) and is how `ros2 topic echo` writes a quaternion's y, so a report's
+# quaternion block pastes into `ros2 topic pub`.
+_YAML_WORDS = frozenset('yes no true false on off null ~'.split())
 
 
 def _yaml_scalar(x, precision):

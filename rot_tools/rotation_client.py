@@ -15,8 +15,9 @@ topics for that message — matched by header stamp; ``~/rotation_matrix``, whic
 header, is matched by its content against the answer's quaternion — as YAML, or JSON with
 ``--json`` (rot_tools.report's writers). The node draws pictures (``~/screw_axis``,
 ``~/markers``) at a limited rate, the latest input winning, so they are printed when the
-node drew this input: the client waits for them at most ``PICTURE_WAIT`` seconds. ``describe`` prints ~/describe's report;
-``screw-path`` calls ~/screw_path and prints the path.
+node drew this input: the client waits for them at most ``PICTURE_WAIT`` seconds.
+``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and prints the
+path.
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -321,7 +322,8 @@ class Client:
         if not self.spin_until(lambda: pub.get_subscription_count() > 0, self.timeout):
             raise Unreachable(self.missing(f'subscription on {pub.topic_name}'))
         for sub in subs:
-            if not self.spin_until(lambda: sub.get_publisher_count() > 0, self.timeout):
+            if not self.spin_until(lambda sub=sub: sub.get_publisher_count() > 0,
+                                   self.timeout):
                 raise Unreachable(self.missing(f'publisher on {sub.topic_name}'))
 
     def send(self, name, msg, pictures):

@@ -9,7 +9,6 @@ shipped parameter file.
 """
 
 import math
-from pathlib import Path
 import signal
 import time
 

@@ -269,7 +269,7 @@ euler:
   degenerate: false
 quaternion:
   x: 0.0
-  "y": 0.0
+  y: 0.0
   z: 0.707106781187
   w: 0.707106781187
 translation: [1.0, 0.0, 0.5]
