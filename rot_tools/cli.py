@@ -417,6 +417,18 @@ def _add_common(parser, suppress):
     out.add_argument('--version', action=_Version, help='print the version and exit')
 
 
+# The numbers each command takes as arguments: (dest, metavar, help).
+_NUMBERS = {
+    'euler': ('angles', 'ANGLE', 'the three angles A1 A2 A3 (rad, or deg with --deg)'),
+    'matrix': ('entries', 'ENTRY', 'the 9 entries of R, or the 16 of T, row by row'),
+    'axis-angle': ('values', 'NUMBER', 'X Y Z ANGLE: the axis (any length > 0) and the angle'),
+    'rotvec': ('vector', 'COMPONENT', 'X Y Z: θ·l̂ (rad, or deg with --deg)'),
+    'quaternion': ('components', 'COMPONENT', 'X Y Z W (W X Y Z with --wxyz)'),
+    'frame': ('axes', 'COMPONENT',
+              'UX UY UZ VX VY VZ WX WY WZ: the axes u, v, w (any length > 0)'),
+}
+
+
 def build_parser():
     """Build the rot-tools ArgumentParser (one subparser per input kind)."""
     parser = _Parser(
@@ -440,24 +452,10 @@ def build_parser():
         p.set_defaults(handler=handler)
         if name == 'euler':
             p.add_argument('sequence', type=_sequence, metavar='SEQ', help=_SEQUENCE_HELP)
-            p.add_argument('angles', type=_number, nargs='*', metavar='ANGLE',
-                           help='the three angles A1 A2 A3 (rad, or deg with --deg)')
-        elif name == 'matrix':
-            p.add_argument('entries', type=_number, nargs='*', metavar='ENTRY',
-                           help='the 9 entries of R, or the 16 of T, row by row')
-        elif name == 'axis-angle':
-            p.add_argument('values', type=_number, nargs='*', metavar='NUMBER',
-                           help='X Y Z ANGLE: the axis (any length > 0) and the angle')
-        elif name == 'rotvec':
-            p.add_argument('vector', type=_number, nargs='*', metavar='COMPONENT',
-                           help='X Y Z: θ·l̂ (rad, or deg with --deg)')
-        elif name == 'quaternion':
-            p.add_argument('components', type=_number, nargs='*', metavar='COMPONENT',
-                           help='X Y Z W (W X Y Z with --wxyz)')
-        elif name == 'frame':
-            p.add_argument('axes', type=_number, nargs='*', metavar='COMPONENT',
-                           help='UX UY UZ VX VY VZ WX WY WZ: the axes u, v, w (any length > 0)')
-        else:
+        if name in _NUMBERS:
+            dest, metavar, help_text = _NUMBERS[name]
+            p.add_argument(dest, type=_number, nargs='*', metavar=metavar, help=help_text)
+        if name == 'screw':
             rotation = p.add_mutually_exclusive_group()
             rotation.add_argument('--rotation', type=_number, nargs=9,
                                   metavar=tuple(f'R{i}{j}' for i in '123' for j in '123'),
