@@ -71,12 +71,19 @@ import json, sys, time
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.signals import SignalHandlerOptions
 topic, rate = sys.argv[1], float(sys.argv[2])
 poses = json.loads(sys.argv[3])  # (NaN and Infinity included)
-rclpy.init()
+# No rclpy signal handler: it would shut the context down on SIGINT before Python raises
+# KeyboardInterrupt, and a publish in between would fail.
+rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
 node = rclpy.create_node('flooder', namespace=sys.argv[4])
 pub = node.create_publisher(PoseStamped, topic, qos_profile_sensor_data)
+deadline = time.monotonic() + float(sys.argv[5])
 while pub.get_subscription_count() < 1:
+    if time.monotonic() > deadline:
+        print(f'no subscription on {pub.topic_name}', flush=True)
+        sys.exit(1)
     time.sleep(0.01)
 messages = []
 for (q, p, frame) in poses:
@@ -113,7 +120,7 @@ class Flood:
     def __init__(self, topic, poses, rate=2000.0):
         data = json.dumps([(_quaternion(m), _position(m), m.header.frame_id) for m in poses])
         self.process = subprocess.Popen(
-            [sys.executable, '-c', FLOODER, topic, str(rate), data, f'/{RUN}'],
+            [sys.executable, '-c', FLOODER, topic, str(rate), data, f'/{RUN}', str(4 * TIMEOUT)],
             stdout=subprocess.PIPE, text=True)
         self.sent = None
 
@@ -125,6 +132,7 @@ class Flood:
     def __exit__(self, *exc):
         self.process.send_signal(signal.SIGINT)
         out, _ = self.process.communicate(timeout=4 * TIMEOUT)
+        assert out.split(), f'the flooder ended without a count (exit {self.process.returncode})'
         self.sent = int(out.split()[-1])
 
 
@@ -196,12 +204,14 @@ def test_services_and_parameters_answer_correctly_under_a_flood(tester, node_pro
         deadline = time.monotonic() + 4 * TIMEOUT
         while describe_stamp(tester, name) < 1_000_000:  # until flooded inputs arrive
             assert time.monotonic() < deadline, 'no flooded input reached the node'
+        stamps = []
         for i in range(5):
             response = tester.call(Trigger, f'{name}/describe', Trigger.Request())
             assert response.success, response.message
             report = yaml.safe_load(response.message)
             assert report['source'] == f'{name}/pose' and report['frame_id'] == 'map'
-            assert report['stamp']['sec'] >= 1_000_000  # a flooded input
+            stamps.append(report['stamp']['sec'])
+            assert stamps[-1] >= 1_000_000  # a flooded input
             plan = tester.call(GetPlan, f'{name}/screw_path',
                                GetPlan.Request(start=pose(p=(0, 0, 0)), goal=goal)).plan
             assert len(plan.poses) == 21
@@ -212,7 +222,8 @@ def test_services_and_parameters_answer_correctly_under_a_flood(tester, node_pro
             values = tester.call(GetParameters, f'{name}/get_parameters',
                                  GetParameters.Request(names=['angle_unit'])).values
             assert parameter_value_to_python(values[0]) == unit
-    assert flood.sent > 1000
+    assert stamps[-1] > stamps[0]  # the flood went on reaching the node between the calls
+    assert stamps[-1] - 1_000_000 < flood.sent
     assert process.process.poll() is None
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
