@@ -13,7 +13,9 @@ of it holds, in the reference frame:
 - the path: the constant-screw motion T(s) = exp(s·ξ), s ∈ [0, 1], applied to a point p0,
   p(s) = R(s)·p0 + b(s) — a helix about the axis of radius dist(p0, axis) that turns s·θ and
   rises s·d (seed 000 §5, Chasles). p0 is the frame origin, whose path ends at b;
-- a label: θ (in degrees or radians), d and the pitch h = d/θ.
+- a label: θ (in degrees or radians), d and the pitch h = d/θ, placed LABEL_OFFSET·scale off
+  the middle of the path, across its chord (towards +z, or +x when the chord is within 60° of
+  z) — beside the motion, however far away its axis is (|c| grows like |b|/θ as θ → 0).
 
 Special cases. A pure rotation (b = 0) leaves the origin where it is, so the path is the arc
 of the tip of a reference axis, p0 = scale·e_k, k the axis farthest from the rotation axis
@@ -47,7 +49,7 @@ MAX_SEGMENTS = 720
 """Most segments in a path, whatever the radius."""
 
 LABEL_OFFSET = 0.3
-"""The label sits this many ``scale`` beyond the far end of the axis segment."""
+"""The label sits this many ``scale`` off the middle of the path."""
 
 IDENTITY, ROTATION, TRANSLATION, SCREW = 'identity', 'rotation', 'translation', 'screw'
 """Picture.kind: nothing to draw; b = 0; θ = 0; a general screw motion."""
@@ -114,6 +116,24 @@ def _traced_point(kind, direction, scale):
     return f"{'xyz'[k]}-axis tip", scale * np.eye(3)[k]
 
 
+def label_point(path, scale):
+    """Where the label goes: m + LABEL_OFFSET·scale·n̂, m the middle of the path.
+
+    m is the path's middle point (of its middle chord for an even count of points); n̂ is the
+    unit vector across the chord k = p_last − p_0 towards +z, ẑ − (ẑ·k̂)k̂ normalised, or towards
+    +x when that is shorter than 1/2 (k within 60° of z). The chord of a path is never 0.
+    """
+    middle = (path[(len(path) - 1) // 2] + path[len(path) // 2]) / 2
+    chord = path[-1] - path[0]
+    chord = chord / np.abs(chord).max()  # no overflow in the norm
+    chord /= np.linalg.norm(chord)
+    for up in np.eye(3)[[2, 0]]:
+        side = up - (up @ chord) * chord
+        if np.linalg.norm(side) >= 0.5:
+            break
+    return middle + LABEL_OFFSET * scale * side / np.linalg.norm(side)
+
+
 def screw_path(R, b, twist, p0, segments):
     """Points p(s) = R(s)·p0 + b(s) of exp(s·twist), s = 0, 1/n, ..., 1 ((n + 1, 3)).
 
@@ -152,8 +172,8 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
         t = (drawn - point) @ direction
         lo, hi = t.min() - scale, t.max() + scale
         axis = None if kind == TRANSLATION else point + np.outer((lo, hi), direction)
-        label_at = point + (hi + LABEL_OFFSET * scale) * direction
-    if not (np.isfinite(path).all() and np.isfinite(label_at).all()
+        label_at = label_point(path, scale)
+    if not (np.isfinite(drawn).all() and np.isfinite(label_at).all()
             and (axis is None or np.isfinite(axis).all())):
         raise RotationError(
             f'the picture of this motion overflows float64 (scale {scale:.3g}, max|b_i| = '

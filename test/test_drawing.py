@@ -86,8 +86,49 @@ def test_screw_picture(case, scale):
     t = np.concatenate([[np.zeros(3), b], path, b + scale * R.T]) @ u  # c ⊥ l̂
     assert (start @ u) == pytest.approx(t.min() - scale, abs=1e-12 * size)
     assert (end @ u) == pytest.approx(t.max() + scale, abs=1e-12 * size)
-    np.testing.assert_allclose(pic.label_at, end + drawing.LABEL_OFFSET * scale * u,
-                               rtol=0, atol=1e-12 * size)
+
+
+BESIDE_THE_PATH = {  # (direction, point, angle, d) and the traced p0 (the origin if None)
+    'odometry_turn': ((0, 0, 1), (0.5, 0.5 / math.tan(0.005), 0), 0.01, 0.0, None),
+    'tiny_turn': ((0, 0, 1), (0.5, 0.5 / math.tan(0.5e-8), 0), 1e-8, 0.0, None),
+    'tiny_oblique_screw': ((1, 1, 1), (30.0, -10.0, -20.0), 1e-6, 0.3, None),
+    'large_turn': ((1, -2, 0.5), (0.3, 0.1, -0.7), 2.1, -1.3, None),
+    'half_turn_screw': ((1, 0, 0), (0.0, 1.0, -1.0), math.pi, 0.5, None),
+    'half_turn_rotation': ((0, 0, 1), (0.0, 0.0, 0.0), math.pi, 0.0, (1, 0, 0)),
+    'translation': ((1, -2, 2), (0.0, 0.0, 0.0), 0.0, 3.0, None),
+    'translation_along_z': ((0, 0, 1), (0.0, 0.0, 0.0), 0.0, 3.0, None),
+}
+
+
+@pytest.mark.parametrize('case', BESIDE_THE_PATH)
+@pytest.mark.parametrize('scale', [1.0, 0.2])
+def test_the_label_sits_beside_the_path(case, scale):
+    """LABEL_OFFSET·scale from the helix, never out at the axis (|c| ~ |b|/θ for a small θ)."""
+    direction, point, angle, d, p0 = BESIDE_THE_PATH[case]
+    p0 = np.zeros(3) if p0 is None else scale * np.asarray(p0, dtype=np.float64)
+    R, b = motion(direction, np.asarray(point, dtype=np.float64), angle, d)
+    pic = picture(R, b, scale=scale)
+    sign = np.sign(pic.screw.direction @ unit(direction)) if angle else 1.0  # ± at θ = π
+    curve = helix(sign * unit(direction), np.asarray(point, dtype=np.float64), angle,
+                  sign * d, p0, np.linspace(0.0, 1.0, 20001))
+    off = np.linalg.norm(curve - pic.label_at, axis=1).min()
+    assert 0.5 * drawing.LABEL_OFFSET * scale <= off
+    assert off <= (drawing.LABEL_OFFSET + drawing.SAGITTA + 1e-4) * scale
+
+
+@pytest.mark.parametrize('angle', [0.01, 1e-5, 1e-9])
+@pytest.mark.parametrize('scale', [1.0, 0.25, 4.0])
+def test_a_far_axis_is_drawn_at_a_visible_length(angle, scale):
+    # A small turn with a translation: the axis is |b|/θ away, its segment still spans the
+    # rise along it (0 to d, the frame tips up to scale further) and scale beyond each end.
+    direction, d = unit((1, 2, 2)), 0.4
+    point = perpendicular(direction, np.array([3.0, 0.0, -1.0]) / angle)
+    R, b = motion(direction, point, angle, d)
+    start, end = picture(R, b, scale=scale).axis
+    length = (end - start) @ direction
+    assert np.linalg.norm(end - start) == pytest.approx(length, rel=1e-9)
+    assert 2 * scale + d <= length * (1 + 1e-9)
+    assert length <= (4 * scale + d) * (1 + 1e-9)
 
 
 def test_far_axis_is_sampled_by_the_sagitta():
@@ -137,10 +178,6 @@ def test_pure_translation_is_a_straight_path_without_axis():
     pic = picture(np.eye(3), b, scale=0.5)
     assert (pic.kind, pic.traced, pic.axis) == (drawing.TRANSLATION, 'origin', None)
     np.testing.assert_array_equal(pic.path, [np.zeros(3), b])
-    # Beyond the furthest tip of the moved frame along b̂ (the z tip: 3 + 0.5·2/3), by
-    # scale (0.5) and the label offset.
-    far = 3 + 0.5 * 2 / 3 + 0.5 + drawing.LABEL_OFFSET * 0.5
-    np.testing.assert_allclose(pic.label_at, far * b / 3, rtol=0, atol=1e-15)
     assert pic.label == 'theta = 0 rad, d = 3, pitch = inf'
 
 

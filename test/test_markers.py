@@ -75,6 +75,25 @@ def test_screw_markers():
                           'path: origin')
 
 
+@pytest.mark.parametrize('theta', [0.01, 1e-8])
+def test_a_small_turn_is_labelled_beside_the_motion(theta):
+    # Odometry's usual pose: a small turn about z and b = (1, 0, 0). Its axis is the vertical
+    # line through (0.5, 0.5·cot(θ/2)), 100 or 1e8 away; the label stays by the path, which is
+    # the chord from 0 to b within SAGITTA·scale, and the axis is a few marker_scale long.
+    R = Rotation.from_rotvec([0.0, 0.0, theta]).as_matrix()
+    b, scale = np.array([1.0, 0.0, 0.0]), 0.5
+    m = by_id(messages.picture_markers(HEADER, picture(R, b, scale=scale)))
+    at = xyz(m[messages.LABEL_ID].pose.position)
+    on_chord = np.clip(at @ b, 0.0, 1.0) * b
+    assert np.linalg.norm(at - on_chord) <= 0.35 * scale
+    start, end = (xyz(p) for p in m[messages.AXIS_ID].points)
+    np.testing.assert_allclose(start[:2], (0.5, 0.5 / math.tan(theta / 2)), rtol=1e-9)
+    assert end - start == pytest.approx((0, 0, 3 * scale))  # the frame's z tip ± scale
+    for k in range(3):
+        arrow = m[messages.TRIAD_IDS[k]]
+        np.testing.assert_allclose(xyz(arrow.points[1]) - b, scale * R[:, k], atol=1e-15)
+
+
 def test_pure_translation_deletes_the_axis():
     array = messages.picture_markers(HEADER, picture(np.eye(3), (0.0, 3.0, 4.0)))
     check_common(array)

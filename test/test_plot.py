@@ -96,6 +96,60 @@ def test_large_motion_scales_the_frames():
     np.testing.assert_allclose(points(lines['moved_x']), [b, b + (5, 0, 0)])
 
 
+@pytest.mark.parametrize('angle', [math.radians(2.0), 1e-9])
+def test_a_far_axis_does_not_shrink_the_motion(angle):
+    # A small turn about z with b = (1, 0, 0): the axis is the vertical line through
+    # (0.5, 0.5·cot(θ/2)), 28.6 away for 2°, 5e8 for 1e-9 rad; the motion is 1 across.
+    R = Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()
+    far = 0.5 / math.tan(angle / 2)
+    fig = plot.figure(R, (1.0, 0.0, 0.0))
+    lines = lines_by_gid(fig)
+    assert 'screw_axis' not in lines
+    np.testing.assert_allclose(points(lines['moved_x']), [(1, 0, 0), (1 + R[0, 0], R[1, 0], 0)],
+                               atol=1e-15)  # frames 1 long
+    (ax,) = fig.axes
+    limits = np.array([ax.get_xlim(), ax.get_ylim(), ax.get_zlim()])
+    # x spans the most, from 0 to the moved x tip 1 + cos θ; a margin of 10 % on each side.
+    assert np.ptp(limits, axis=1) == pytest.approx([1.1 * (1 + math.cos(angle))] * 3,
+                                                   rel=1e-12)
+    # The dotted pointer: from the view's centre to its face, toward the axis's nearest point.
+    start, end = points(lines['toward_axis'])
+    np.testing.assert_allclose(start, limits.mean(axis=1), atol=1e-12)
+    toward = np.array([0.5, far, start[2]]) - start
+    np.testing.assert_allclose(np.cross(end - start, toward), 0.0, atol=1e-9 * far)
+    assert (end - start) @ toward > 0
+    assert np.abs(end - start).max() == pytest.approx(np.ptp(limits[0]) / 2)
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert (f'screw axis along (0, 0, 1) through (0.5, {far:.3g}, 0),\n{far:.3g} from the '
+            'origin: off the view, dotted toward it') in legend
+
+
+def svg_text(path):
+    root = ET.parse(path).getroot()
+    return [''.join(element.itertext()) for element in root.iter(f'{SVG}text')]
+
+
+@pytest.mark.parametrize('args, title', [
+    (['axis-angle', '0', '0', '1', '90', '--deg'], 'θ = 90 deg, d = 0, pitch = 0 /rad'),
+    (['axis-angle', '0', '0', '1', '1.5'], 'θ = 1.5 rad, d = 0, pitch = 0 /rad'),
+    (['screw', '--axis-angle', '0', '0', '1', '2', '--translation', '1', '0', '0', '--deg'],
+     'θ = 2 deg, d = 0, pitch = 0 /rad')], ids=['deg', 'rad', 'screw_deg'])
+def test_plot_option_draws_theta_in_the_unit_asked(tmp_path, args, title):
+    from rot_tools.cli import main
+    out = tmp_path / 'picture.svg'
+    assert main(args + ['--plot', str(out)]) == 0
+    assert title in svg_text(out)
+    assert (' deg' in title) == any(' deg,' in text for text in svg_text(out))
+
+
+def test_plot_option_says_where_a_far_axis_is(tmp_path):
+    from rot_tools.cli import main
+    out = tmp_path / 'picture.svg'
+    assert main(CASES['small_angle_screw'] + ['--plot', str(out)]) == 0
+    check_svg(out, COMMON_GIDS + ('toward_axis',))
+    assert '28.6 from the origin: off the view, dotted toward it' in svg_text(out)
+
+
 def check_png(path):
     data = Path(path).read_bytes()
     assert data[:8] == PNG_SIGNATURE
@@ -116,6 +170,9 @@ CASES = {
     'screw': ['screw', '--axis-angle', '0', '0', '1', '90', '--translation', '1', '0', '0.5',
               '--deg'],
     'translation': ['screw', '--translation', '1', '2', '2'],
+    'small_angle_screw': ['screw', '--axis-angle', '0', '0', '1', '2', '--translation', '1',
+                          '0', '0', '--deg'],
+    'half_turn': ['axis-angle', '1', '1', '1', '180', '--deg'],
 }
 COMMON_GIDS = ('path', *plot.MOVED_GIDS, *plot.REFERENCE_GIDS)
 
@@ -136,7 +193,8 @@ def test_plot_option_writes_the_file(tmp_path, case, ext):
     if ext == 'png':
         check_png(out)
     else:
-        check_svg(out, COMMON_GIDS + (() if case == 'translation' else ('screw_axis',)))
+        check_svg(out, COMMON_GIDS + {'translation': (), 'small_angle_screw': ('toward_axis',)}
+                  .get(case, ('screw_axis',)))
 
 
 def test_plot_option_before_the_command_and_upper_case_extension(tmp_path, capsys):
