@@ -10,12 +10,14 @@ quick start has this instead::
     rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
 
 An input command publishes one message, stamped with the current time, on the node's
-``~/euler``, ``~/pose`` or ``~/orientation`` and prints the node's answer on its output
-topics for that message — matched by header stamp; ``~/rotation_matrix``, which has no
-header, is matched by its content against the answer's quaternion — as YAML, or JSON with
-``--json`` (rot_tools.report's writers). The node draws pictures (``~/screw_axis``,
-``~/markers``) at a limited rate, the latest input winning, so they are printed when the
-node drew this input: the client waits for them at most ``PICTURE_WAIT`` seconds.
+``~/euler``, ``~/pose`` or ``~/orientation`` (Euler angles of any sequence and unit are sent
+as the same rotation in the node's euler_sequence and angle_unit: :func:`node_angles`) and
+prints the node's answer on its output topics for that message — matched by header stamp;
+``~/rotation_matrix``, which has no header, is matched by its content against the answer's
+quaternion — as YAML, or JSON with ``--json`` (rot_tools.report's writers). The node draws
+pictures (``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so
+they are printed when the node drew this input: the client waits for them at most
+``PICTURE_WAIT`` seconds.
 ``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and prints the
 path.
 
@@ -54,7 +56,7 @@ from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 import yaml
 
-from rot_tools.euler import EULER_SEQUENCES
+from rot_tools.euler import EULER_SEQUENCES, euler_to_matrix, matrix_to_euler
 from rot_tools.messages import type_name
 from rot_tools.report import to_json, to_yaml
 from rot_tools.so3 import quaternion_to_matrix
@@ -152,8 +154,9 @@ def _options(parser, suppress):
 
 _COMMANDS = {  # name: (summary, the numbers it takes, more help)
     'euler': ('send Euler angles to ~/euler', 'A1 A2 A3',
-              "SEQ must be the node's euler_sequence; the angles are converted to its "
-              'angle_unit.'),
+              "A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n"
+              "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, "
+              'SEQ),\nthen matrix_to_euler(R, node sequence).'),
     'pose': ('send a PoseStamped to ~/pose', 'X Y Z QX QY QZ QW',
              'Position X Y Z, orientation QX QY QZ QW (the ROS order, w last).'),
     'orientation': ('send a QuaternionStamped to ~/orientation', 'QX QY QZ QW', ''),
@@ -172,6 +175,7 @@ def build_parser():
         'answer (YAML, or JSON with --json).\nOptions may come before COMMAND or after its '
         'arguments.',
         epilog='examples:\n  rotation_client euler ZYX 30 20 10 --deg\n'
+        "  rotation_client euler xyz 0.1 0.2 0.3     (sent as the node's euler_sequence)\n"
         '  rotation_client pose 1 0 0.5  0 0 1 0\n'
         '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
         '  rotation_client describe --json\n'
@@ -452,22 +456,32 @@ def _answer_data(answer, parameters):
     return data
 
 
+def node_angles(angles, sequence, degrees, node_sequence, node_degrees):
+    """Euler angles of ``sequence`` (degrees when ``degrees``) as the node reads ~/euler.
+
+    The same rotation R = euler_to_matrix(angles, sequence), as the angles of the node's
+    euler_sequence (matrix_to_euler of R; at gimbal lock its choice of the pair) in its
+    angle_unit. Angles already of the node's sequence are only converted in unit; so are
+    NaN and Inf, which have no rotation: the node refuses them.
+    """
+    values = np.asarray(angles, dtype=np.float64)
+    if sequence != node_sequence and np.isfinite(values).all():
+        R = euler_to_matrix(np.radians(values) if degrees else values, sequence)
+        values, degrees = matrix_to_euler(R, node_sequence)[0], False
+    if degrees != node_degrees:
+        values = np.degrees(values) if node_degrees else np.radians(values)
+    return tuple(values.tolist())
+
+
 def _input_command(client, args):
     """euler, pose, orientation: send one message, return the report of the answer."""
     parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
     if args.command == 'euler':
-        if args.sequence != parameters['euler_sequence']:
-            raise Refused(f"node {client.target} reads ~/euler as {parameters['euler_sequence']}"
-                          f' (its euler_sequence parameter), not {args.sequence}: send '
-                          f"{parameters['euler_sequence']} angles, or start it with -p "
-                          f'euler_sequence:={args.sequence}')
-        angles = np.asarray(args.numbers)
-        if args.deg != (parameters['angle_unit'] == 'deg'):
-            angles = np.radians(angles) if args.deg else np.degrees(angles)
+        sequence, unit = parameters['euler_sequence'], parameters['angle_unit']
+        angles = node_angles(args.numbers, args.sequence, args.deg, sequence, unit == 'deg')
         msg, name = Vector3Stamped(), 'euler'
-        msg.vector.x, msg.vector.y, msg.vector.z = angles.tolist()
-        sent = {'sequence': args.sequence, 'unit': parameters['angle_unit'],
-                'angles': angles.tolist()}
+        msg.vector.x, msg.vector.y, msg.vector.z = angles
+        sent = {'sequence': sequence, 'unit': unit, 'angles': list(angles)}
     elif args.command == 'pose':
         msg, name = PoseStamped(), 'pose'
         _set_pose(msg.pose, args.numbers)

@@ -64,6 +64,9 @@ MAX_PATH_STEPS = 10_000
 MARKER_RATE = 30.0
 """Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
 
+REFUSAL_WARNING_PERIOD = 1.0
+"""Seconds between two warnings about refused inputs of one topic for one reason."""
+
 
 class InputKind(NamedTuple):
     """One kind of input: where it arrives, its type, and how it becomes (header, R, b)."""
@@ -149,8 +152,9 @@ PARAMETERS = {
     'publish_markers': (True, _descriptor(
         ParameterType.PARAMETER_BOOL,
         f'publish the picture of each input (at most {MARKER_RATE:g} a second, the latest '
-        'wins): the moved frame, screw axis, helical path and label on ~/markers '
-        '(MarkerArray) and the screw axis arrow on ~/screw_axis (Marker)')),
+        "wins): the moved frame's axes, screw axis, helical path and label on ~/markers "
+        '(MarkerArray) and the screw axis arrow on ~/screw_axis (Marker); switching it off '
+        'deletes both')),
     'marker_scale': (1.0, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
         'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
@@ -193,6 +197,7 @@ class RotationNode(Node):
         self.add_post_set_parameters_callback(self._on_parameters_set)
 
         self._refused = dict.fromkeys(REFUSAL_REASONS, 0)
+        self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
         # One message per output, refilled for each input (see rot_tools.messages).
@@ -208,6 +213,7 @@ class RotationNode(Node):
         self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
         self._markers_pub = self.create_publisher(MarkerArray, '~/markers', qos)
         self._picture_due = None  # the arguments of the latest drawing not yet published
+        self._picture_shown = None  # the header of the picture on show (ADDs), or None
         self._picture_sent = -math.inf  # time.monotonic() of the last one published
         self._picture_timer = self.create_timer(
             1.0 / MARKER_RATE, self._publish_picture,
@@ -254,9 +260,12 @@ class RotationNode(Node):
         return SetParametersResult(successful=True)
 
     def _on_parameters_set(self, parameters):
-        """Take the new values into use from the next message."""
+        """Take the new values into use from the next message; publish_markers off clears."""
         if any(parameter.name in PARAMETERS for parameter in parameters):
+            was_drawing = self._settings.publish_markers
             self._settings = self._read_settings()
+            if was_drawing and not self._settings.publish_markers:
+                self._clear_picture()
 
     def _warn_about_unknown_overrides(self):
         """Warn about each start-up override (-p, --params-file) that names no parameter.
@@ -306,9 +315,16 @@ class RotationNode(Node):
         self._latest = Latest(source, header, R, b, settings)
 
     def _refuse(self, topic, reason, text):
+        """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
+
+        Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
+        stream (a raw IMU without orientation at 50 Hz) would silence every other one.
+        """
         self._refused[reason] += 1
-        self.get_logger().warning(f'refused input on {topic} ({reason}): {text}',
-                                  throttle_duration_sec=1.0)
+        now = time.monotonic()
+        if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
+            self._warned[topic, reason] = now
+            self.get_logger().warning(f'refused input on {topic} ({reason}): {text}')
 
     # -- markers -----------------------------------------------------------------------
 
@@ -330,7 +346,7 @@ class RotationNode(Node):
         """~/markers and ~/screw_axis of the input waiting (DELETEs for the identity)."""
         self._picture_timer.cancel()
         due, self._picture_due = self._picture_due, None
-        if due is None or not self._settings.publish_markers:  # switched off since
+        if due is None:  # dropped: publish_markers was switched off (_clear_picture)
             return
         header, R, b, settings = due
         self._picture_sent = time.monotonic()
@@ -340,14 +356,30 @@ class RotationNode(Node):
             self.get_logger().warning(f'no picture: {exc}', throttle_duration_sec=1.0)
             picture = None
         if picture is None or picture.kind == drawing.IDENTITY:
-            self._markers_pub.publish(messages.delete_picture_markers(header))
-            self._marker_pub.publish(
-                messages.delete_marker(header, messages.SCREW_AXIS_NS, 0))
+            self._delete_picture(header)
             return
+        self._picture_shown = header
         self._markers_pub.publish(messages.picture_markers(header, picture))
         self._marker_pub.publish(messages.screw_axis_marker(
             header, picture.screw.point, picture.screw.direction, settings.marker_scale,
             self._out.marker))
+
+    def _delete_picture(self, header):
+        """DELETE every marker of ~/markers and ~/screw_axis, in ``header``'s frame."""
+        self._picture_shown = None
+        self._markers_pub.publish(messages.delete_picture_markers(header))
+        self._marker_pub.publish(messages.delete_marker(header, messages.SCREW_AXIS_NS, 0))
+
+    def _clear_picture(self):
+        """publish_markers was switched off: drop the picture waiting, delete the one shown.
+
+        The DELETEs go once, in the frame of the last picture drawn; nothing is sent when
+        nothing is shown (none drawn yet, or the last input was the identity).
+        """
+        self._picture_timer.cancel()
+        self._picture_due = None
+        if self._picture_shown is not None:
+            self._delete_picture(self._picture_shown)
 
     # -- services ----------------------------------------------------------------------
 

@@ -240,9 +240,27 @@ def test_refused_input_before_any_accepted_one(node_process):
     assert line.endswith('(1 input(s) refused: zero_quaternion 1).')
 
 
-def test_euler_sequence_must_be_the_nodes(node):
-    line = one_line_error(run('euler', 'xyz', 1, 2, 3, '--node', node), 2)
-    assert f'node {node} reads ~/euler as ZYX' in line and 'euler_sequence:=xyz' in line
+@pytest.mark.parametrize('sequence, angles, unit', [
+    ('xyz', (30.0, 20.0, 10.0), '--deg'),
+    ('ZXZ', (0.4, -1.1, 2.9), None),
+    ('yxz', (-170.0, 89.9, 45.0), '--deg'),
+])
+def test_euler_of_another_sequence_is_converted(node, sequence, angles, unit):
+    """The node reads ~/euler as ZYX (radians): the same rotation arrives as ZYX angles."""
+    out = answered('euler', sequence, *angles, *filter(None, [unit]), '--node', node)
+    rotation = Rotation.from_euler(sequence, angles, degrees=unit == '--deg')
+    zyx = rotation.as_euler('ZYX')
+    assert (out['input']['sequence'], out['input']['unit']) == ('ZYX', 'rad')
+    assert out['input']['angles'] == approx(zyx)
+    check_answer(out['answer'], rotation)
+    assert out['answer']['euler_angles'] == {'sequence': 'ZYX', 'unit': 'rad',
+                                             'angles': approx(zyx)}
+
+
+def test_euler_of_another_sequence_refused_when_not_finite(node):
+    line = one_line_error(run('euler', 'xyz', 0, 'nan', 0, '--node', node), 2)
+    assert line == (f'rotation_client: node {node} refused the input on {node}/euler: '
+                    'non_finite')
 
 
 def test_unreachable_node(node):
@@ -284,6 +302,9 @@ def test_help():
     assert result.returncode == 0 and result.stdout.startswith('usage: rotation_client')
     for command in ('euler', 'pose', 'orientation', 'describe', 'screw-path'):
         assert command in result.stdout
+    euler = run('euler', '--help')
+    assert euler.returncode == 0
+    assert "same\nrotation in the node's euler_sequence and angle_unit" in euler.stdout
 
 
 def test_interrupt_exits_promptly_and_quietly(tester):

@@ -9,6 +9,7 @@ significant digits, so its numbers are compared to that.
 """
 
 import math
+import re
 import time
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -605,8 +606,48 @@ def test_burst_of_bad_input_throttles_warnings_and_keeps_serving(rig):
     reasons = {BAD_INPUTS[case][2] for case in bad.values()}
     assert 0 < refused['total'] == sum(refused[r] for r in reasons) <= 8 * len(bad)
     rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='a warning')
-    # One call site, throttled to one warning per second.
-    assert 1 <= len(rig.node_logs(Log.WARN)) <= 1 + elapsed
+    # Throttled to one warning per second for each topic and reason.
+    warnings = [log.msg.partition(':')[0] for log in rig.node_logs(Log.WARN)]
+    for key in set(warnings):
+        assert warnings.count(key) <= 1 + elapsed, key
+
+
+def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
+    """A fast stream of bad IMU messages does not silence a slow bad odometry stream.
+
+    The odometry is refused while the IMU's warning of this second has just been logged:
+    a throttle shared by every input (rclpy's, per call site) would swallow its warning.
+    """
+    bad_imu = imu((0, 0, 0, 1), orientation_covariance0=-1.0)
+    bad_odometry = odometry((0, 0, 0, 1), (math.nan, 0, 0))
+    imu_warning = f"refused input on {rig.topic('imu')} (no_orientation): "
+    odometry_warning = (f"refused input on {rig.topic('odometry')} (non_finite): "
+                        'pose.pose.position.x is nan')
+
+    def warnings(text):
+        return [log for log in rig.node_logs(Log.WARN) if log.msg.startswith(text)]
+
+    begin = time.monotonic()
+    end = math.inf
+    sent = 0
+    while time.monotonic() < end:  # the IMU at 50 Hz, until 1.5 s after its first warning
+        rig.send('imu', bad_imu)
+        sent += 1
+        if sent == 5:
+            rig.tester.spin_until(lambda: warnings(imu_warning), what="the IMU's warning")
+            end = time.monotonic() + 1.5
+            for _ in range(3):  # within the IMU's throttled second
+                rig.send('odometry', bad_odometry)
+        rig.tester.spin_for(0.02)
+    rig.tester.spin_until(lambda: warnings(odometry_warning), what="the odometry's warning")
+    elapsed = time.monotonic() - begin
+    rig.tester.spin_for(0.2)
+    assert len(warnings(odometry_warning)) == 1  # three refused in one second: one warning
+    assert 2 <= len(warnings(imu_warning)) <= 1 + elapsed  # throttled, per second
+    assert len(rig.node_logs(Log.WARN)) == len(warnings(imu_warning)) + 1
+    counts = re.search(r'\((\d+) input\(s\) refused: non_finite 3, no_orientation (\d+)\)',
+                       rig.describe().message)
+    assert counts and int(counts[1]) == 3 + int(counts[2]) and 0 < int(counts[2]) <= sent
 
 
 # ---------------------------------------------------------------------------------------

@@ -9,6 +9,7 @@ shipped parameter file.
 """
 
 import math
+import re
 import signal
 import time
 
@@ -254,6 +255,22 @@ def test_shipped_parameter_file_holds_every_default():
     assert values == {name: default for name, (default, _) in PARAMETERS.items()}
     for name, (default, _) in PARAMETERS.items():
         assert type(values[name]) is type(default), name  # 1.0 stays a double, not 1
+
+
+def test_shipped_parameter_file_names_the_topics_of_each_descriptor():
+    """Each parameter's comment in the file and its descriptor name the same ~/topics."""
+    comments, lines = {}, []
+    for line in PARAMETER_FILE.read_text().splitlines():
+        if line.startswith('    #'):
+            lines.append(line)
+        elif line.startswith('    '):
+            comments[line.split(':')[0].strip()] = ' '.join(lines)
+            lines = []
+    assert list(comments) == list(PARAMETERS)
+    for name, (_, descriptor) in PARAMETERS.items():
+        topics = set(re.findall(r'~/\w+', descriptor.description))
+        assert topics == set(re.findall(r'~/\w+', comments[name])), name
+    assert {'~/markers', '~/screw_axis'} <= set(re.findall(r'~/\w+', comments['marker_scale']))
 
 
 def test_parameter_file_is_applied(tester, node_process, tmp_path):

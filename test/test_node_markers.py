@@ -19,6 +19,7 @@ from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
     euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)
 from visualization_msgs.msg import Marker
 
+from rot_tools import rotation_node
 from rot_tools.rotation_node import MARKER_RATE
 
 TRIAD, AXIS, PATH, LABEL = (0, 1, 2), 3, 4, 5
@@ -175,20 +176,65 @@ def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):
     assert m[LABEL].text == 'theta = 0 rad, d = 3, pitch = inf\npath: origin'
 
 
+def actions(rig):
+    """[(stamp, frame, actions)] of every ~/markers array and ~/screw_axis Marker received."""
+    def of(markers):
+        return (markers[0].header.stamp.sec, markers[0].header.frame_id,
+                [m.action for m in markers])
+    return ([of(a.markers) for a in rig.received('markers')],
+            [of([m]) for m in rig.received('screw_axis')])
+
+
 def test_publish_markers_false_silences_both(make_rig):
     rig = make_rig(publish_markers=False)
     for msg in (pose_stamped((0, 0, 1, 0), (1, 0, 0)), pose_stamped((0, 0, 0, 1))):
         rig.roundtrip('pose', msg, marker=False)
     assert set_one(rig.node, 'publish_markers', True).successful
-    stamp = rig.send('pose', pose_stamped((0, 1, 0, 0), (0, 0, 1)))
+    stamp = rig.send('pose', pose_stamped((0, 1, 0, 0), (0, 0, 1), frame='odom'))
     markers_of(rig, stamp)
     screw_axis_of(rig, stamp)
     assert set_one(rig.node, 'publish_markers', False).successful
     rig.roundtrip('pose', pose_stamped((0, 0, 0, 1)), marker=False)
     rig.roundtrip('pose', pose_stamped((1, 0, 0, 0), (1, 1, 1)), marker=False)
     rig.tester.spin_for(3.0 / MARKER_RATE)  # a throttled picture would have come by now
-    assert [a.markers[0].header.stamp.sec for a in rig.received('markers')] == [stamp]
-    assert [m.header.stamp.sec for m in rig.received('screw_axis')] == [stamp]
+    # The picture drawn, then its DELETEs (switched off) in its frame, once; nothing more.
+    assert actions(rig) == ([(stamp, 'odom', [Marker.ADD] * 6),
+                             (stamp, 'odom', [Marker.DELETE] * 6)],
+                            [(stamp, 'odom', [Marker.ADD]), (stamp, 'odom', [Marker.DELETE])])
+
+
+def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
+        make_rig, monkeypatch):
+    """A picture waits for its turn (a 2 s throttle here); switching off deletes, once.
+
+    The DELETEs come in the frame of the picture shown, not of the one waiting, and the one
+    waiting is not drawn, not even when the markers are switched on again.
+    """
+    monkeypatch.setattr(rotation_node, 'MARKER_RATE', 0.5)
+    rig = make_rig()
+    shown = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), frame='odom'))
+    markers_of(rig, shown)
+    screw_axis_of(rig, shown)
+    waiting = rig.roundtrip('euler', euler_stamped((0.5, 0.0, 0.0), frame='base_link'),
+                            marker=False)['screw'].header.stamp.sec
+    drawn = ([(shown, 'odom', [Marker.ADD] * 6)], [(shown, 'odom', [Marker.ADD])])
+    assert actions(rig) == drawn  # the second input's picture waits for its turn
+    assert set_one(rig.node, 'publish_markers', False).successful
+    deleted = ([(shown, 'odom', [Marker.ADD] * 6), (shown, 'odom', [Marker.DELETE] * 6)],
+               [(shown, 'odom', [Marker.ADD]), (shown, 'odom', [Marker.DELETE])])
+    rig.tester.spin_until(lambda: actions(rig) == deleted, what='the DELETEs')
+    for name, value in (('publish_markers', False), ('marker_scale', 2.0),
+                        ('publish_markers', True)):
+        assert set_one(rig.node, name, value).successful
+    rig.tester.spin_for(2.5)  # the throttle's turn (2 s) has come and gone
+    assert actions(rig) == deleted, f'the picture of input {waiting} was drawn'
+    # Switched on again, the next input is drawn; off after an identity: nothing to delete.
+    after = rig.send('pose', pose_stamped((0, 0, 0, 1)))
+    markers_of(rig, after)
+    assert set_one(rig.node, 'publish_markers', False).successful
+    rig.tester.spin_for(0.5)
+    assert [a[1:] for a in actions(rig)[0][2:]] == [('map', [Marker.DELETE] * 6)]
+    assert [m[1:] for m in actions(rig)[1][2:]] == [('map', [Marker.DELETE])]
 
 
 def test_markers_are_throttled_and_the_last_input_is_drawn(rig):

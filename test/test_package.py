@@ -60,7 +60,10 @@ def test_package_xml_parses_with_catkin_pkg(manifest):
     assert manifest.version == importlib.metadata.version(PACKAGE)
     assert manifest.licenses == ['Apache-2.0']
     assert manifest.get_build_type() == 'ament_python'
-    assert manifest.description.strip()
+    description = ' '.join(manifest.description.split())
+    for part in ('odometry', 'IMU', 'PoseWithCovarianceStamped', 'QuaternionStamped',
+                 'quaternion', 'markers', 'rotation_client'):
+        assert part in description, part
     assert REQUIRED_EXEC_DEPENDS <= {dep.name for dep in manifest.exec_depends}
     assert {'python3-pytest', 'python3-hypothesis'} <= {dep.name for dep in manifest.test_depends}
 
