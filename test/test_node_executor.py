@@ -67,7 +67,10 @@ BAD = [pose((math.nan, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 0.0, 0.0)),
 
 
 FLOODER = """
-import json, sys, time
+import json, signal, sys, time
+# SIGINT ends the flood with KeyboardInterrupt even where this process was started with
+# SIGINT ignored (a background job of a non-interactive shell).
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from rclpy.qos import qos_profile_sensor_data
