@@ -329,6 +329,8 @@ def smallest_rotation_ok(R, a, b):
     ([1.0, 1.0, 0.0], [1.0, 1.0 + 1e-9, 0.0]),
     ([0.0, 1.0, 0.0], [0.0, -3.0, 0.0]),
     ([1.0, 2.0, 3.0], [-1.0, -2.0, -3.0]),
+    ([-1.0, -2.0, -3.1], [1.0, 2.0, 3.1]),  # opposite only to rounding in the SVD
+    ([0.3, -7.0, 1e-3], [-0.6, 14.0, -2e-3]),
 ])
 def test_align_a_single_pair_is_the_smallest_rotation(a, b):
     R, rmsd = align_vectors([a], [b])
@@ -350,6 +352,50 @@ def test_align_parallel_pairs_is_the_smallest_rotation():
     # anti-parallel members weigh against: the same line, so still the smallest rotation
     R2, _ = align_vectors(np.concatenate([a, -a[:1]]), np.concatenate([b, -b[:1]]))
     assert h.max_abs(R2 - R) <= 1e-15 * 8
+
+
+def test_align_opposite_parallel_pairs_is_a_half_turn_about_an_axis_perpendicular_to_b():
+    d = np.array([1.0, 2.0, 3.1])
+    R, _ = align_vectors([-d, -2 * d], [d, 3 * d])
+    assert smallest_rotation_ok(R, -d, d)
+
+
+def scipy_rotvec(R):
+    return Rotation.from_matrix(R).as_rotvec()
+
+
+@pytest.mark.parametrize('delta', [0.0, 1e-6, 1e-9, 1e-12, 1e-14, 1e-15, 3e-16])
+def test_align_nearly_opposite_pairs_is_the_smallest_rotation(delta):
+    # a = b̂ turned by π − δ about a random axis ⊥ b̂ (closed form), scaled; checked against
+    # scipy's rotation vector of R: |θ| = the angle between â and b̂, θ̂ ⊥ â and b̂.
+    rng = np.random.default_rng(37)
+    b = h.random_unit_vectors(rng, 2000)
+    n = np.cross(b, h.random_unit_vectors(rng, 2000))
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    a = np.cos(PI - delta) * b + np.sin(PI - delta) * np.cross(n, b)
+    scale = 10.0 ** rng.uniform(-3, 3, (2, 2000, 1))
+    R, _ = align_vectors((scale[0] * a)[:, None], (scale[1] * b)[:, None])
+    a_hat = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    assert h.max_abs(np.einsum('kij,kj->ki', R, b) - a_hat) <= 1e-15 * 8
+    rotvec = scipy_rotvec(R)
+    angle = np.linalg.norm(rotvec, axis=-1)
+    axis = rotvec / angle[:, None]
+    between = np.arctan2(np.linalg.norm(np.cross(a_hat, b), axis=-1), np.sum(a_hat * b, -1))
+    assert h.max_abs(angle - between) <= 1e-15 * 8
+    assert h.max_abs(np.sum(axis * b, -1)) <= 1e-15 * 8
+    assert h.max_abs(np.sum(axis * a_hat, -1)) <= 1e-15 * 8
+
+
+def test_align_opposite_pairs_of_any_length_is_a_half_turn():
+    rng = np.random.default_rng(38)
+    b = rng.normal(size=(2000, 3)) * 10.0 ** rng.uniform(-3, 3, (2000, 1))
+    a = -10.0 ** rng.uniform(-3, 3, (2000, 1)) * b
+    R, _ = align_vectors(a[:, None], b[:, None])
+    b_hat = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    assert h.max_abs(np.einsum('kij,kj->ki', R, b_hat) + b_hat) <= 1e-15 * 8
+    rotvec = scipy_rotvec(R)
+    assert h.max_abs(np.linalg.norm(rotvec, axis=-1) - PI) <= 1e-15 * 8
+    assert h.max_abs(np.sum(rotvec * b_hat, -1)) <= 1e-15 * 8
 
 
 def test_align_batches_and_broadcasting():
