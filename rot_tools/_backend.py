@@ -311,3 +311,20 @@ def in_range(ops, values):
     for x in values[1:]:
         ok = ok & (ops.abs(x) <= _LARGEST)
     return ok
+
+
+def linear_in_range(ops, linear, *vectors):
+    """(linear(*vectors), in_range flag) of a function linear in its 3-vector entry lists.
+
+    Its partial sums may overflow float64 where the result fits (R·b beyond 1.8e308 with a
+    translation bringing it back): such items are computed again on the inputs scaled by 1/4
+    and scaled back by 4 — exact in binary, and room enough for the few terms bounded by
+    max|v_i| that a rigid motion sums. Items that fit at once keep their bits.
+    """
+    out = linear(*vectors)
+    fits = in_range(ops, out)
+    if ops.any(ops.where(fits, False, True)):
+        quarter = linear(*([0.25 * x for x in v] for v in vectors))
+        out = [ops.where(fits, x, 4.0 * y) for x, y in zip(out, quarter)]
+        fits = in_range(ops, out)
+    return out, fits

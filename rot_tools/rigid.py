@@ -27,7 +27,7 @@ RotationError instead of returning inf.
 import numpy as np
 
 from rot_tools._arrays import as_float_array, refuse_overflow
-from rot_tools._backend import apply, cross, dot, in_range, unit
+from rot_tools._backend import apply, cross, dot, linear_in_range, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import (
     apply_to_named_rotations, apply_to_rotations, defects_kernel, refuse_defects, ROTATION_TOL)
@@ -101,8 +101,7 @@ def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
 
 
 def _points_kernel(ops, m, b, p):
-    q = [x + y for x, y in zip(_rotate(m, p), b)]
-    return q, in_range(ops, q)
+    return linear_in_range(ops, lambda p, b: [x + y for x, y in zip(_rotate(m, p), b)], p, b)
 
 
 def transform_points(R, b, p, *, check=True):
@@ -119,8 +118,9 @@ def transform_points(R, b, p, *, check=True):
 
 def _compose_kernel(ops, m1, m2, b1, b2):
     columns = [_rotate(m1, [m2[0][j], m2[1][j], m2[2][j]]) for j in range(3)]
-    b = [x + y for x, y in zip(_rotate(m1, b2), b1)]
-    return [[col[i] for col in columns] for i in range(3)], b, in_range(ops, b)
+    b, fits = linear_in_range(ops, lambda b1, b2: [x + y for x, y in zip(_rotate(m1, b2), b1)],
+                              b1, b2)
+    return [[col[i] for col in columns] for i in range(3)], b, fits
 
 
 def compose_transforms(R1, b1, R2, b2, *, check=True):
@@ -138,8 +138,8 @@ def compose_transforms(R1, b1, R2, b2, *, check=True):
 
 def _invert_kernel(ops, m, b):
     mt = [[m[j][i] for j in range(3)] for i in range(3)]
-    back = [0.0 - x for x in _rotate(mt, b)]  # 0 − x: no −0.0 for b = 0
-    return mt, back, in_range(ops, back)
+    back, fits = linear_in_range(ops, lambda b: [0.0 - x for x in _rotate(mt, b)], b)
+    return mt, back, fits  # (0 − x: no −0.0 for b = 0)
 
 
 def invert_transform(R, b, *, check=True):

@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rot_tools._arrays import finite_array, refuse_overflow
-from rot_tools._backend import apply, cross, dot, in_range, unit
+from rot_tools._backend import apply, cross, dot, in_range, linear_in_range, unit
 from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations, checked_rotation
@@ -80,7 +80,10 @@ def screw_of_axis_kernel(ops, axis, angle, b):
     turning = ops.where(translating, 1.0, angle)  # no division by a zero angle below
     cot_half = ops.where(translating, 0.0, 1.0 / ops.tan(0.5 * turning))
     swing = cross(direction, b_perp)
-    point = [ops.where(translating, 0.0, 0.5 * (p + cot_half * q)) for p, q in zip(b_perp, swing)]
+    # ½·b⊥ + (½·cot(θ/2))·l̂ × b⊥: halved first, so that a point that fits float64 does not
+    # overflow on the way (½(b⊥ + …) did for |b| near 1.8e308); halving is exact.
+    half_cot = 0.5 * cot_half
+    point = [ops.where(translating, 0.0, 0.5 * p + half_cot * q) for p, q in zip(b_perp, swing)]
     moment = cross(point, direction)
     slope = d / turning
     pitch = ops.where(translating, ops.where(b_norm > 0, math.inf, 0.0), slope)
@@ -138,10 +141,13 @@ def twist_kernel(ops, axis, angle, b):
     tangent = ops.tan(half)
     flat = tangent == 0  # θ = 0, or so small that θ/2 underflows
     k = ops.where(flat, 1.0, half / ops.where(flat, 1.0, tangent))
-    d = dot(b, axis)
-    swing = cross(axis, b)
-    u = [k * (bi - d * li) - half * si + d * li for bi, li, si in zip(b, axis, swing)]
-    return [angle * li for li in axis] + u, in_range(ops, u)
+
+    def twist_of(b):
+        d = dot(b, axis)
+        swing = cross(axis, b)
+        return [k * (bi - d * li) - half * si + d * li for bi, li, si in zip(b, axis, swing)]
+    u, fits = linear_in_range(ops, twist_of, b)
+    return [angle * li for li in axis] + u, fits
 
 
 def _log_kernel(ops, m, b):

@@ -425,6 +425,30 @@ def test_screw_log_overflow():
     assert np.all(np.isfinite(tw)) and h.max_abs(tw[3:] / 1e300 - [1, 1, 0]) <= 1e-11
 
 
+def test_a_screw_point_that_fits_is_returned_near_the_largest_float():
+    # θ = 3 about z, b = 1.7e308·(1, −1, 0): the point c = ½(b + cot 1.5·ẑ × b) ≈
+    # (9.1, −7.9, 0)e308 fits, though b + cot 1.5·ẑ × b does not. Checked by its defining
+    # property in units of 1e308 (d = 0: the axis point stays put, R·c + b = c).
+    R = h.ref_elementary('z', 3.0)
+    b = np.array([1.7e308, -1.7e308, 0.0])
+    screw = screw_from_transform(R, b)
+    c = screw.point / 1e308
+    assert h.max_abs(R @ c + b / 1e308 - c) <= 1e-15 * 8 and c[2] == 0
+    assert screw.translation == 0 and screw.pitch == 0 and np.isfinite(screw.moment).all()
+    batch = screw_from_transform(np.stack([R, R]), b)
+    assert batch.point.tobytes() == np.stack([screw.point] * 2).tobytes()
+
+
+def test_screw_log_that_fits_is_returned_though_b_dot_the_axis_overflows():
+    # b = 1.7e308·(1, 1, 0) along the axis l̂ = (1, 1, 0)/√2: d = b·l̂ = 2.4e308 leaves float64
+    # on the way, but the twist (θ·l̂, d·l̂) = (θ·l̂, b) fits.
+    axis = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
+    b = np.array([1.7e308, 1.7e308, 0.0])
+    twist = screw_log(h.seed_rodrigues_eq7(axis, 0.5), b)
+    assert h.max_abs(twist[:3] - 0.5 * axis) <= 1e-15 * 8
+    assert h.max_abs(twist[3:] / 1e308 - b / 1e308) <= 1e-15 * 8
+
+
 def test_screw_exp_overflow():
     with pytest.raises(RotationError, match=r'rotation angle \|ω\| of the twist ' + OVERFLOW):
         screw_exp([1.5e308, 1.5e308, 0.0, 0.0, 0.0, 0.0])

@@ -480,6 +480,38 @@ def test_overflow_inside_a_batch_names_the_item():
         transform_points(np.eye(3), [1e308, 0, 0], [[0, 0, 0], [1e308, 0, 0]])
 
 
+def _scaled_reference(R, v, b):
+    """R·v + b computed by numpy in units of 1e308, where nothing overflows."""
+    return (np.einsum('...ij,...j->...i', R, v / 1e308) + b / 1e308) * 1e308
+
+
+def _overflow_case_frame():
+    # Columns u = (2, 2, 1)/3 and v, w at 45° to the part of (1, 1, −1) ⊥ u: for
+    # b = 1.7e308·(1, 1, −1), Rᵀ·b = 1.7e308·(1, 1, ±1) fits, but the first two terms of
+    # u·b, (2/3 + 2/3)·1.7e308, overflow.
+    u = np.array([2.0, 2.0, 1.0]) / 3
+    e = np.array([1.0, 1.0, -4.0]) / np.sqrt(18)
+    v = (e + np.cross(u, e)) / np.sqrt(2)
+    return np.stack([u, v, np.cross(u, v)], axis=-1)
+
+
+@pytest.mark.parametrize('angle', [3.0, 2.6, -2.6])
+def test_results_that_fit_are_returned_though_a_partial_sum_overflows(angle):
+    R = h.ref_elementary('z', angle)
+    b = np.array([-1.7e308, -1.7e308, 0.0])
+    with np.errstate(over='ignore'):
+        assert not np.isfinite(R @ b).all()  # R·b alone leaves float64; R·b + b does not
+    ref = _scaled_reference(R, b, b)
+    tol = 1e-15 * 8 * 1.7e308
+    assert h.max_abs(compose_transforms(R, b, R, b)[1] - ref) <= tol
+    assert h.max_abs(transform_points(R, b, b) - ref) <= tol
+    many = transform_points(R, b, [b, np.zeros(3), b])  # the batch engine, item by item
+    assert h.max_abs(many[[0, 2]] - ref) <= tol and np.array_equal(many[1], b)
+    F = _overflow_case_frame()
+    back = np.array([1.7e308, 1.7e308, -1.7e308])
+    assert h.max_abs(invert_transform(F, back)[1] + _scaled_reference(F.T, back, 0.0)) <= tol
+
+
 def test_large_but_representable_values_pass():
     R, b = compose_transforms(np.eye(3), [1e307, 0, 0], np.diag([1.0, -1.0, -1.0]),
                               [1e307, 0, 0])
