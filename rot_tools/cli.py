@@ -217,14 +217,10 @@ def _typed_quaternion(parser, args, values, what):
     if args.wxyz:
         q = np.roll(q, -1)  # (w, x, y, z) → (x, y, z, w)
     try:
-        R = quaternion_to_matrix(q)  # refuses the zero quaternion; normalises q
+        return quaternion_to_matrix(q, tol=_tol(args, QUATERNION_TOL))  # normalises q
     except RotationError as exc:
-        parser.error(f'{what}: {exc}')
-    size, tol = math.hypot(*q), _tol(args, QUATERNION_TOL)  # hypot: no overflow
-    if not abs(size - 1.0) <= tol:
-        parser.error(f'{what}: not a unit quaternion: ||q| − 1| = {abs(size - 1.0):.3g} > tol '
-                     f'{tol:g} (|q| = {size:.6g}; the tolerance is --tol)')
-    return R
+        hint = ' (the tolerance is --tol)' if 'unit length' in str(exc) else ''
+        parser.error(f'{what}: {exc}{hint}')
 
 
 def _from_euler(args, parser):

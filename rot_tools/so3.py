@@ -10,6 +10,8 @@ takes one item or a batch with any leading shape ``...``.
 """
 
 from functools import lru_cache
+import math
+import numbers
 
 import numpy as np
 
@@ -190,18 +192,49 @@ def nearest_rotation(R):
     return u @ vt  # det U·det Vᵀ = sign(det R) = +1
 
 
-def quaternion_to_matrix(q):
+def quaternion_to_matrix(q, *, tol=None):
     """Rotation matrix of q = (x, y, z, w) — the ROS message order; q is normalised first.
 
     With s = 2/|q|²: R = I − s·[[y²+z², −(xy−zw), −(xz+yw)], ...] (the unit-quaternion
     matrix scaled so that any non-zero q gives a rotation). (..., 4) → (..., 3, 3). The only
-    quaternion function in rot_tools: for message boundaries. Zero or non-finite q raises.
+    quaternion function in rot_tools: for message boundaries. Zero or non-finite q raises
+    RotationError (naming the item of a batch). tol: None accepts any non-zero q; a number
+    ≥ 0 also refuses q with ||q| − 1| > tol (a quaternion typed or sent as unit that is not),
+    saying |q| and by how much (the worst item of a batch).
     """
     matrix, zero = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
                          [((3, 3), np.float64), ((), np.bool_)])
     if zero.any() if zero.ndim else zero:
-        raise RotationError('quaternion (x, y, z, w) must be non-zero, got |q| = 0')
+        where = f' (item {tuple(int(i) for i in np.argwhere(zero)[0])})' if zero.ndim else ''
+        raise RotationError(f'quaternion (x, y, z, w) must be non-zero, got |q| = 0{where}')
+    if tol is not None:
+        _refuse_non_unit(np.asarray(q, dtype=np.float64), tol)  # a valid q: apply took it
     return matrix
+
+
+def _refuse_non_unit(q, tol):
+    """RotationError for the worst q (..., 4) with ||q| − 1| > tol."""
+    if not (isinstance(tol, numbers.Real) and tol >= 0):
+        raise RotationError(f'tol must be a number ≥ 0, got {tol!r}')
+    big = np.abs(q).max(axis=-1)  # |q| = big·|q/big|: |q|² cannot overflow
+    scaled = np.linalg.norm(q / np.where(big > 0, big, 1.0)[..., None], axis=-1)
+    with np.errstate(over='ignore'):
+        sizes = big * scaled
+    offs = np.abs(sizes - 1.0)
+    if (offs <= tol).all():
+        return
+    worst = np.unravel_index(np.argmax(offs), offs.shape)
+    where = f' (worst at item {tuple(map(int, worst))})' if offs.ndim else ''
+    size, off = float(sizes[worst]), float(offs[worst])
+    if math.isinf(size):  # beyond float64: |q| (and its distance from 1) from logarithms
+        power = math.log10(big[worst]) + math.log10(scaled[worst])
+        exponent = math.floor(power)
+        size_text = f'{10 ** (power - exponent):.9g}e+{exponent}'
+        off_text = f'{10 ** (power - exponent):.3g}e+{exponent}'
+    else:
+        size_text, off_text = f'{size:.9g}', f'{off:.3g}'
+    raise RotationError(f'quaternion (x, y, z, w) is not of unit length: |q| = {size_text}, '
+                        f'off 1 by {off_text} > tol {tol:g}{where}')
 
 
 def _quaternion_kernel(ops, q):

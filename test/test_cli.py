@@ -305,9 +305,9 @@ def test_quaternion_tolerance_default_and_adjustable(script):
     # |(0, 0, 0.7, 0.7)| = 0.98995: 0.0101 from unit length, refused at the default 1e-3,
     proc = run(script, 'quaternion', 0, 0, 0.7, 0.7)
     assert (proc.returncode, proc.stdout) == (2, '')
-    assert proc.stderr == ('rot-tools: error: quaternion X Y Z W: not a unit quaternion: '
-                           '||q| − 1| = 0.0101 > tol 0.001 (|q| = 0.989949; the tolerance '
-                           'is --tol)\n')
+    assert proc.stderr == ('rot-tools: error: quaternion X Y Z W: quaternion (x, y, z, w) is '
+                           'not of unit length: |q| = 0.989949494, off 1 by 0.0101 > tol '
+                           '0.001 (the tolerance is --tol)\n')
     # ... accepted and normalised with --tol, given before the command or after.
     for args in (['--tol', '0.02', 'quaternion', 0, 0, 0.7, 0.7],
                  ['quaternion', 0, 0, 0.7, 0.7, '--tol', '0.02']):
@@ -636,13 +636,14 @@ def test_main_help(script):
      'non-zero'),
     ('quaternion 0 nan 0 1', "argument COMPONENT: not a finite number: 'nan'"),
     ('quaternion 0 0 0 -inf', "argument COMPONENT: not a finite number: '-inf'"),
-    ('quaternion 0 0 1 1', 'quaternion X Y Z W: not a unit quaternion: ||q| − 1| = 0.414 > '
-     'tol 0.001 (|q| = 1.41421; the tolerance is --tol)'),
-    ('quaternion 1e200 1e200 0 0', 'quaternion X Y Z W: not a unit quaternion: ||q| − 1| = '
-     '1.41e+200 > tol 0.001 (|q| = 1.41421e+200;'),
-    ('--wxyz quaternion 2 0 0 0', 'quaternion W X Y Z: not a unit quaternion: ||q| − 1| = 1 '),
-    ('screw --quaternion 0 0 0 2 --translation 0 0 0', 'argument --quaternion: not a unit '
-     'quaternion: ||q| − 1| = 1 > tol 0.001 (|q| = 2;'),
+    ('quaternion 0 0 1 1', 'quaternion X Y Z W: quaternion (x, y, z, w) is not of unit length: '
+     '|q| = 1.41421356, off 1 by 0.414 > tol 0.001 (the tolerance is --tol)'),
+    ('quaternion 1e200 1e200 0 0', 'quaternion X Y Z W: quaternion (x, y, z, w) is not of unit '
+     'length: |q| = 1.41421356e+200, off 1 by 1.41e+200 > tol 0.001'),
+    ('--wxyz quaternion 2 0 0 0', 'quaternion W X Y Z: quaternion (x, y, z, w) is not of unit '
+     'length: |q| = 2, off 1 by 1 '),
+    ('screw --quaternion 0 0 0 2 --translation 0 0 0', 'argument --quaternion: quaternion '
+     '(x, y, z, w) is not of unit length: |q| = 2, off 1 by 1 > tol 0.001'),
     ('screw --quaternion 0 0 0 0 --translation 0 0 0', 'argument --quaternion: quaternion '
      '(x, y, z, w) must be non-zero'),
     ('screw --quaternion 0 0 1 --translation 0 0 0', 'argument --quaternion: expected 4 '

@@ -1,5 +1,6 @@
 """Every invalid input raises RotationError (a ValueError) saying what was wrong and how much."""
 
+import math
 import re
 
 import math_helpers as h
@@ -297,10 +298,59 @@ def test_wrong_rotation_vector_shape(shape):
 
 
 def test_zero_quaternion():
-    with pytest.raises(RotationError, match=r'(?i)zero|norm'):
+    with pytest.raises(RotationError, match=r'non-zero, got \|q\| = 0$'):
         quaternion_to_matrix([0.0, 0.0, 0.0, 0.0])
-    with pytest.raises(RotationError, match=r'(?i)zero|norm'):
+    with pytest.raises(RotationError, match=r'non-zero, got \|q\| = 0 \(item \(1,\)\)$'):
         quaternion_to_matrix([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]])
+    q = np.ones((2, 3, 4))
+    q[1, 2] = 0.0
+    with pytest.raises(RotationError, match=r'\|q\| = 0 \(item \(1, 2\)\)$'):
+        quaternion_to_matrix(q, tol=10.0)
+
+
+def test_quaternion_tolerance_refuses_a_quaternion_too_far_from_unit_length():
+    # |q| from math.hypot; within tol the matrix is the normalised textbook one.
+    rng = np.random.default_rng(41)
+    q = rng.normal(size=(50, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    q *= 1.0 + rng.uniform(-9e-4, 9e-4, (50, 1))
+    ref = h.ref_quaternion_to_matrix(q)
+    assert h.max_abs(quaternion_to_matrix(q, tol=1e-3) - ref) <= 1e-15 * 8
+    assert h.max_abs(quaternion_to_matrix(q[7], tol=1e-3) - ref[7]) <= 1e-15 * 8
+    assert h.max_abs(quaternion_to_matrix(3 * q) - ref) <= 1e-15 * 8  # tol=None: any size
+    sizes = np.array([math.hypot(*x) for x in q])
+    worst = int(np.argmax(np.abs(sizes - 1)))
+    off = abs(sizes[worst] - 1)
+    with pytest.raises(RotationError) as info:
+        quaternion_to_matrix(q, tol=0.99 * off)
+    message = str(info.value)
+    assert message.startswith('quaternion (x, y, z, w) is not of unit length: |q| = ')
+    assert message.endswith(f'(worst at item ({worst},))')
+    assert h.mentions_magnitude(message, sizes[worst], 1 + 1e-9)
+    assert h.mentions_magnitude(message, off, 1.01)
+    quaternion_to_matrix(q, tol=1.01 * off)
+
+
+@pytest.mark.parametrize('q, tol, size, off', [
+    ([0.0, 0.0, 0.7, 0.7], 1e-3, '0.989949494', '0.0101'),
+    ([0.0, 0.0, 0.0, 1.0011], 1e-3, '1.0011', '0.0011'),
+    ([1e200, 1e200, 0.0, 0.0], 1.0, '1.41421356e+200', '1.41e+200'),
+    ([1.5e308, 1.5e308, 0.0, 0.0], 1.0, '2.12132034e+308', '2.12e+308'),
+    ([0.0, 0.0, 0.6, 0.8 + 2e-16], 0.0, '1', '2.22e-16'),
+])
+def test_quaternion_tolerance_message(q, tol, size, off):
+    with pytest.raises(RotationError, match=re.escape(
+            f'is not of unit length: |q| = {size}, off 1 by {off} > tol {tol:g}') + '$'):
+        quaternion_to_matrix(q, tol=tol)
+
+
+def test_quaternion_tolerance_edges():
+    assert np.array_equal(quaternion_to_matrix([0.0, 0.0, 0.6, 0.8], tol=0.0),
+                          quaternion_to_matrix([0.0, 0.0, 0.6, 0.8]))
+    quaternion_to_matrix([0.0, 0.0, 0.0, 0.9991], tol=1e-3)
+    for bad in (-1e-3, float('nan'), '1e-3'):
+        with pytest.raises(RotationError, match=r'tol must be a number ≥ 0'):
+            quaternion_to_matrix([0.0, 0.0, 0.0, 1.0], tol=bad)
 
 
 @pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
