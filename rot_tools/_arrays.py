@@ -50,3 +50,15 @@ def refuse_overflow(fits, what):
     elif not fits.all():
         first = tuple(int(i) for i in np.argwhere(~fits)[0])
         raise RotationError(f'{what} overflows float64 (beyond ±1.8e308), first at item {first}')
+
+
+
+def apart(big, small, digits=(3, 6)):
+    """(big, small) as text with digits[0] and digits[1] significant digits (3 for a measured
+    size, 6 = :g for a tolerance), more where fewer would not show big > small: not
+    '|cos| = 1 > tol 1' for 1 > 0.99999999. Equal numbers (or NaN) keep the given digits."""
+    for extra in range(15):
+        shown, bound = f'{big:.{digits[0] + extra}g}', f'{small:.{digits[1] + extra}g}'
+        if float(shown) > float(bound) or not big > small:
+            return shown, bound
+    return repr(float(big)), repr(float(small))

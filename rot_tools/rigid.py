@@ -26,7 +26,7 @@ RotationError instead of returning inf.
 
 import numpy as np
 
-from rot_tools._arrays import as_float_array, refuse_overflow
+from rot_tools._arrays import apart, as_float_array, refuse_overflow
 from rot_tools._backend import apply, cross, dot, linear_in_range, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import (
@@ -87,11 +87,12 @@ def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
         size = np.abs(cos)
         if not (size <= tol).all():
             worst, where = _worst(size)
-            off = np.degrees(np.arcsin(min(size[worst], 1.0)))
+            shown, bound = apart(size[worst], tol)
+            off = apart(90.0, np.degrees(np.arcsin(min(size[worst], 1.0))), (3, 3))[1]
             sign = '−' if cos[worst] > 0 else '+'
             raise RotationError(
-                f'frame axes {pair} are not orthogonal: |cos| = {size[worst]:.3g} > tol {tol:g}'
-                f' (the angle between them is 90° {sign} {off:.3g}°){where}')
+                f'frame axes {pair} are not orthogonal: |cos| = {shown} > tol {bound}'
+                f' (the angle between them is 90° {sign} {off}°){where}')
     left = handed < 0
     if left.any():
         raise RotationError('the frame (u, v, w) is left-handed: (û × v̂)·ŵ = '
@@ -185,7 +186,7 @@ def homogeneous_to_transform(T, *, check=True):
         row = as_float_array(T, (4, 4), 'T')[worst][3].tolist()
         raise RotationError(
             f'T is not a rigid motion: its last row is {row}, not [0, 0, 0, 1] '
-            f'(off by {float(off[worst]):.3g} > {HOMOGENEOUS_ROW_TOL:g}){where}')
+            '(off by {} > {}){}'.format(*apart(off[worst], HOMOGENEOUS_ROW_TOL), where))
     if check:
         refuse_defects(err, det, ROTATION_TOL, 'R (T[:3, :3])')
     return R, b

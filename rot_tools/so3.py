@@ -15,7 +15,7 @@ import numbers
 
 import numpy as np
 
-from rot_tools._arrays import as_float_array, finite_array
+from rot_tools._arrays import apart, as_float_array, finite_array
 from rot_tools._backend import apply
 from rot_tools.errors import RotationError
 
@@ -117,9 +117,9 @@ def refuse_defects(err, det, tol, name='R'):
     where = '' if err.ndim == 0 else ' (worst at item {})'
     if not (err <= tol).all():
         worst = np.unravel_index(np.argmax(err), err.shape)
-        raise RotationError(
-            f'{name} is not orthogonal: max|RᵀR − I| = {float(err[worst]):.3g} '
-            f'> tol {tol:g}' + where.format(tuple(map(int, worst))))
+        shown, bound = apart(err[worst], tol)
+        raise RotationError(f'{name} is not orthogonal: max|RᵀR − I| = {shown} > tol {bound}'
+                            + where.format(tuple(map(int, worst))))
     dev = np.abs(det - 1.0)
     if not (dev <= tol).all():
         worst = np.unravel_index(np.argmax(dev), dev.shape)
@@ -231,10 +231,11 @@ def _refuse_non_unit(q, tol):
         exponent = math.floor(power)
         size_text = f'{10 ** (power - exponent):.9g}e+{exponent}'
         off_text = f'{10 ** (power - exponent):.3g}e+{exponent}'
+        tol_text = f'{tol:g}'
     else:
-        size_text, off_text = f'{size:.9g}', f'{off:.3g}'
+        size_text, (off_text, tol_text) = f'{size:.9g}', apart(off, tol)
     raise RotationError(f'quaternion (x, y, z, w) is not of unit length: |q| = {size_text}, '
-                        f'off 1 by {off_text} > tol {tol:g}{where}')
+                        f'off 1 by {off_text} > tol {tol_text}{where}')
 
 
 def _quaternion_kernel(ops, q):

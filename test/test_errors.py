@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from rot_tools import (
     align_vectors, axis_angle_to_matrix, compose_transforms, decompose, euler_to_matrix,
+    frame_to_matrix, homogeneous_to_transform,
     invert_transform, is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion,
     matrix_to_rotvec, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
     rotation_distance, RotationError, rotvec_to_matrix, screw_exp, screw_from_transform,
@@ -594,3 +595,29 @@ def test_nearest_rotation_of_any_finite_scale(scale):
     r = rot_z(0.3) @ rot_x(-1.2)
     assert h.max_abs(nearest_rotation(scale * r) - r) <= 1e-15 * 4
     assert np.array_equal(nearest_rotation(5e-324 * I3), I3)
+
+
+# ---- a size printed beside its tolerance reads as bigger --------------------------------------
+
+
+@pytest.mark.parametrize('call', [
+    lambda: frame_to_matrix([1.0, 0.0, 0.0], [1.0, 1e-300, 0.0], [0.0, 0.0, 1.0], 0.99999999),
+    lambda: frame_to_matrix([1.0, 0.0, 0.0], [1.0, 1e-4, 0.0], [0.0, 0.0, 1.0], 0.99999999),
+    lambda: validate_rotation(np.diag([1.0, 1.0, 1.0 + 1.0000001e-5]), tol=2e-5),
+    lambda: quaternion_to_matrix([0.0, 0.0, 0.0, 1.0010001], tol=1e-3),
+    lambda: homogeneous_to_transform(np.diag([1.0, 1.0, 1.0, 1.0 + 1.0000002e-9])),
+])
+def test_a_size_beyond_its_tolerance_is_printed_with_the_digits_that_show_it(call):
+    with pytest.raises(RotationError) as info:
+        call()
+    shown, bound = re.search(r'(\S+) > (?:tol )?([^\s)]+)', str(info.value)).groups()
+    assert float(shown) > float(bound)
+
+
+def test_sizes_far_from_their_tolerance_keep_three_digits():
+    with pytest.raises(RotationError, match=re.escape(
+            '|cos| = 0.0995 > tol 1e-05 (the angle between them is 90° − 5.71°)')):
+        frame_to_matrix([1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], 1e-5)
+    with pytest.raises(RotationError, match=re.escape(
+            '|cos| = 1 > tol 0.99999999 (the angle between them is 90° − 90°)')):
+        frame_to_matrix([1.0, 0.0, 0.0], [1.0, 1e-300, 0.0], [0.0, 0.0, 1.0], 0.99999999)
