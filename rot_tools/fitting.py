@@ -22,7 +22,7 @@ import numbers
 
 import numpy as np
 
-from rot_tools._arrays import finite_array, refuse_overflow
+from rot_tools._arrays import finite_array, refuse_overflow, require_finite
 from rot_tools._backend import norm
 from rot_tools.axis_angle import axis_angle_to_matrix, skew_and_cos
 from rot_tools.errors import RotationError
@@ -56,7 +56,8 @@ def rotation_distance(R1, R2, *, check=True):
 
     R1, R2 (..., 3, 3), broadcasting → (...). θ = atan2(|w|, (tr R1ᵀR2 − 1)/2) with w the
     skew part of R1ᵀR2: accurate to rounding at 0 and π. Symmetric, and θ(R1, R2) =
-    θ(Q·R1, Q·R2) for every rotation Q.
+    θ(Q·R1, Q·R2) for every rotation Q. check=False trusts R1, R2: for matrices that are
+    not rotations the angle means nothing and may be NaN (rot_tools.so3).
     """
     (theta,) = apply_to_named_rotations(_distance_kernel, [(R1, 'R1'), (R2, 'R2')], check,
                                         [((), np.float64)])
@@ -111,11 +112,16 @@ def mean_rotation(R, weights=None, *, check=True):
     R (..., N, 3, 3) → (..., 3, 3); weights (N,) or (..., N), ≥ 0, not all 0 (default
     equal). RotationError when the mean is not unique (Σ wᵢRᵢ rank-deficient, e.g. two
     rotations π apart with equal weights), for negative or all-zero weights, and for a
-    weights count other than N.
+    weights count other than N. check=False: the nearest rotation to Σ wᵢMᵢ of the matrices
+    as given (scaled by their largest entry first, so any finite ones are fine; NaN/Inf
+    refused).
     """
     R = checked_rotation(R, check)
     if R.ndim < 3 or not R.shape[-3]:
         raise RotationError(f'R must have shape (..., N, 3, 3) with N ≥ 1, got {R.shape}')
+    if not check:  # matrices as given: no NaN/Inf or overflow into the SVD (it may loop on Inf)
+        scale = np.abs(require_finite(R, 'R')).max(axis=(-3, -2, -1), keepdims=True)
+        R = R / np.where(scale > 0, scale, 1.0)  # the nearest rotation is scale-free
     w = _weights(weights, R.shape[-3], 'rotation')
     try:
         total = np.einsum('...n,...nij->...ij', w, R)

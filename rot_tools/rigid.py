@@ -20,7 +20,8 @@ transform_points(*invert_transform(R, b), p). In homogeneous coordinates T is th
 matrix [[R, b], [0, 0, 0, 1]], and composition is the matrix product.
 
 Functions that take R validate it (tol 1e-9) unless called with check=False, which trusts R
-to be a rotation. Results that leave float64's range (translations near 1.8e308) raise
+to be a rotation (a matrix that is not one gives a meaningless result, NaN or inf included:
+see rot_tools.so3). Results that leave float64's range (translations near 1.8e308) raise
 RotationError instead of returning inf.
 """
 

@@ -7,6 +7,13 @@ rest of rot_tools never uses them.
 Conventions used throughout rot_tools: column vectors, active rotations, ``p' = R p``;
 a rotation matrix R is 3x3 orthogonal with det R = +1 (seed 000, Theorem 1). Every function
 takes one item or a batch with any leading shape ``...``.
+
+Functions that take R validate it as validate_rotation does, unless called with
+``check=False``: for callers that built R as a rotation themselves (the node, the report),
+the formula is then applied to the matrix as given. A matrix that is not a rotation gives a
+result that means nothing — NaN or ±inf included (rotation_distance of two matrices full of
+1e200 is NaN) — and no exception but RotationError; mean_rotation refuses NaN/Inf, which
+its SVD cannot take.
 """
 
 from functools import lru_cache

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from rot_tools import (
     align_vectors, axis_angle_to_matrix, compose_transforms, decompose, euler_to_matrix,
-    frame_to_matrix, homogeneous_to_transform,
-    invert_transform, is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion,
+    frame_to_matrix, homogeneous_to_transform, invert_transform, is_rotation,
+    matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion, mean_rotation,
     matrix_to_rotvec, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
     rotation_distance, RotationError, rotvec_to_matrix, screw_exp, screw_from_transform,
     screw_interpolate, screw_log, skew, transform_from_screw, transform_points,
@@ -621,3 +621,51 @@ def test_sizes_far_from_their_tolerance_keep_three_digits():
     with pytest.raises(RotationError, match=re.escape(
             '|cos| = 1 > tol 0.99999999 (the angle between them is 90° − 90°)')):
         frame_to_matrix([1.0, 0.0, 0.0], [1.0, 1e-300, 0.0], [0.0, 0.0, 1.0], 0.99999999)
+
+
+# ---- check=False on matrices that are not rotations: no exception but RotationError ----------
+
+GARBAGE = [np.full((3, 3), v) for v in (1e308, -1e308, 1e200, 1e-320, 0.0, np.nan, np.inf)] + [
+    np.diag([1e308, -1e308, 1.0]), np.diag([-1.0, 1.0, 1.0]),
+    np.random.default_rng(43).normal(size=(3, 3)) * 1e300]
+B = np.array([1.0, -2.0, 3.0])
+UNCHECKED = [
+    lambda R: matrix_to_axis_angle(R, check=False),
+    lambda R: matrix_to_rotvec(R, check=False),
+    lambda R: matrix_to_quaternion(R, check=False),
+    lambda R: matrix_to_euler(R, 'ZYX', check=False),
+    lambda R: matrix_to_euler(R, 'zxz', check=False),
+    lambda R: screw_from_transform(R, B, check=False),
+    lambda R: screw_log(R, B, check=False),
+    lambda R: decompose(R, B, check=False),
+    lambda R: transform_points(R, B, B, check=False),
+    lambda R: compose_transforms(R, B, R, B, check=False),
+    lambda R: invert_transform(R, B, check=False),
+    lambda R: transform_to_homogeneous(R, B, check=False),
+    lambda R: rotation_distance(R, R, check=False),
+    lambda R: screw_interpolate(R, B, np.swapaxes(R, -1, -2), B, 0.3, check=False),
+    lambda R: mean_rotation(np.stack([R, R, np.broadcast_to(np.eye(3), R.shape)], -3),
+                            check=False),
+]
+
+
+@pytest.mark.parametrize('call', UNCHECKED)
+@pytest.mark.parametrize('batch', [False, True])
+def test_unchecked_garbage_gives_a_result_or_a_rotation_error(call, batch):
+    for R in GARBAGE:
+        try:
+            with np.errstate(all='ignore'):
+                call(np.stack([R, np.eye(3)]) if batch else R)
+        except RotationError:
+            pass
+
+
+def test_unchecked_mean_of_huge_or_non_finite_matrices():
+    with pytest.raises(RotationError, match='not unique'):  # was NumPy's LinAlgError
+        mean_rotation(np.full((3, 3, 3), 1e308), check=False)
+    for bad in (np.nan, np.inf):  # the SVD raised on NaN and looped forever on Inf
+        with pytest.raises(RotationError, match=r'R must be finite'):
+            mean_rotation(np.stack([np.eye(3), np.diag([1.0, bad, 1.0])]), check=False)
+    # finite matrices of any size: the polar factor of their sum (Newton's iteration)
+    m = np.stack([rot_z(0.3), rot_x(0.2), np.diag([1.0, 1.1, 0.9])]) * 1e306
+    assert h.max_abs(mean_rotation(m, check=False) - h.polar_rotation(m.sum(0) / 1e306)) <= 1e-14
