@@ -157,6 +157,18 @@ def frames_and_fitting(R, b, axes, angles, Ra):
     report('align_vectors on exact data a = R0·b (vs R0)', np.abs(Rf - R0).max())
     report('align_vectors rmsd on exact data, per max|a|',
            (rmsd / np.abs(va).max(axis=(1, 2))).max())
+    # one pair b, a = b turned by π − δ (δ = 0, 1e-15 … 1e-6) about an axis ⊥ b: R·b̂ = â
+    ub = RNG.normal(size=(20000, 3))
+    ub /= np.linalg.norm(ub, axis=1, keepdims=True)
+    perp = np.cross(ub, RNG.normal(size=(20000, 3)))
+    perp /= np.linalg.norm(perp, axis=1, keepdims=True)
+    delta = np.array([0.0, 1e-15, 1e-12, 1e-9, 1e-6])[RNG.integers(0, 5, 20000)][:, None]
+    ua = np.cos(np.pi - delta) * ub + np.sin(np.pi - delta) * np.cross(perp, ub)
+    Rp, _ = rt.align_vectors(ua[:, None] * 10.0 ** RNG.uniform(-3, 3, (20000, 1, 1)),
+                             ub[:, None] * 10.0 ** RNG.uniform(-3, 3, (20000, 1, 1)))
+    ua /= np.linalg.norm(ua, axis=1, keepdims=True)
+    report('align_vectors, one (nearly) opposite pair: R·b̂ vs â',
+           np.abs(np.einsum('nij,nj->ni', Rp, ub) - ua).max())
 
     # quaternions: closed form (sin(θ/2)·l̂, cos(θ/2)) at the adversarial angles, round trip
     exact = np.c_[np.sin(angles / 2)[:, None] * axes, np.cos(angles / 2)]
