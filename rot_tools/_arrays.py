@@ -1,6 +1,7 @@
 """Coerce and check array inputs: float64, the expected trailing shape, finite values."""
 
 import math
+import numbers
 
 import numpy as np
 
@@ -36,6 +37,19 @@ def require_finite(arr, name):
 def finite_array(x, tail, name):
     """as_float_array followed by require_finite."""
     return require_finite(as_float_array(x, tail, name), name)
+
+
+def require_tolerance(value, name, below=math.inf, interval=''):
+    """Return ``value`` if it is a real number in [0, below), else raise RotationError.
+
+    The message says '<name> must be a number ≥ 0', or with a bound '<name> must be in
+    <interval>' (the interval as written for people, e.g. '[0, π/4) rad').
+    """
+    if (isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+            and 0 <= value < below):
+        return value
+    bound = 'a number ≥ 0' if below == math.inf else f'in {interval}'
+    raise RotationError(f'{name} must be {bound}, got {value!r}')
 
 
 def refuse_overflow(fits, what):

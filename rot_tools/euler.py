@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from rot_tools._arrays import require_tolerance
 from rot_tools._backend import apply
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
@@ -168,8 +169,7 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
     """
     spec = parse_sequence(seq)
-    if not 0 <= lock_tol < math.pi / 4:
-        raise RotationError(f'lock_tol must be in [0, π/4) rad, got {lock_tol!r}')
+    require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
     kernel = _ANGLES_KERNELS[seq] if lock_tol == GIMBAL_LOCK_TOL else partial(
         angles_kernel, spec=spec, lock_tol=lock_tol)
     return apply_to_rotations(kernel, R, check, [((3,), np.float64), ((), np.bool_)])

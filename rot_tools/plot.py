@@ -90,8 +90,9 @@ def _draw_axis(ax, pic, drawn):
     """Draw the screw axis of ``pic``; return the view's (centre, half-width).
 
     The view is _cube(drawn), grown to hold the axis segment when the axis is near: within
-    AXIS_REACH·half of the centre m (distance |(m − c) × l̂|). Far: a dotted line from m to the cube's face toward f, the axis point nearest m
-    (f = c + ((m − c)·l̂)·l̂), and the axis's distance |c| from the origin in the legend.
+    AXIS_REACH·half of the centre m (distance |(m − c) × l̂|). Far: a dotted line from m to
+    the cube's face toward f, the axis point nearest m (f = c + ((m − c)·l̂)·l̂), and the
+    axis's distance |c| from the origin in the legend.
     """
     center, half = _cube(drawn)
     c, u = pic.screw.point, pic.screw.direction

@@ -27,7 +27,7 @@ RotationError instead of returning inf.
 
 import numpy as np
 
-from rot_tools._arrays import apart, as_float_array, refuse_overflow
+from rot_tools._arrays import apart, as_float_array, refuse_overflow, require_tolerance
 from rot_tools._backend import apply, cross, dot, linear_in_range, unit
 from rot_tools.errors import RotationError
 from rot_tools.so3 import (
@@ -74,8 +74,7 @@ def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
     With a tol above 1e-9 the result may miss validate_rotation's 1e-9: project it with
     nearest_rotation before handing it on.
     """
-    if not 0 <= tol < 1:
-        raise RotationError(f'tol must be in [0, 1), got {tol!r}')
+    require_tolerance(tol, 'tol', 1.0, '[0, 1)')
     matrix, *norms, uv, uw, vw, handed = apply(
         _frame_kernel, [(u, (3,), 'frame axis u', True), (v, (3,), 'frame axis v', True),
                         (w, (3,), 'frame axis w', True)], [_MAT] + [_F64] * 7)

@@ -433,10 +433,21 @@ def test_screw_interpolate_bad_end_transform():
         screw_interpolate(I3, Z3, I3, [np.inf, 0.0, 0.0], 0.5)
 
 
-@pytest.mark.parametrize('lock_tol', [-1e-9, float('nan'), float('inf'), 1.0])
+@pytest.mark.parametrize('lock_tol', [-1e-9, float('nan'), float('inf'), 1.0, '1e-6', None,
+                                      True])
 def test_bad_gimbal_lock_tolerance(lock_tol):
     with pytest.raises(RotationError, match=r'lock_tol must be in \[0, π/4\) rad'):
         matrix_to_euler(np.eye(3), 'ZYX', lock_tol=lock_tol)
+
+
+@pytest.mark.parametrize('tol', [-1e-9, float('nan'), '1e-9', None, True, [1e-9]])
+def test_bad_rotation_tolerance(tol):
+    """A tolerance of another type is refused like a negative one (not a TypeError)."""
+    for check in (is_rotation, validate_rotation):
+        with pytest.raises(RotationError, match=r'^tol must be a number ≥ 0, got '):
+            check(np.eye(3), tol=tol)
+    with pytest.raises(RotationError, match=r'^tol must be in \[0, 1\), got '):
+        frame_to_matrix([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], tol=tol)
 
 
 # ---- finite input never gives inf or NaN: overflow is a RotationError -----------------------
