@@ -66,7 +66,6 @@ def refuse_overflow(fits, what):
         raise RotationError(f'{what} overflows float64 (beyond ±1.8e308), first at item {first}')
 
 
-
 def apart(big, small, digits=(3, 6)):
     """(big, small) as text with digits[0] and digits[1] significant digits (3 for a measured
     size, 6 = :g for a tolerance), more where fewer would not show big > small: not

@@ -149,8 +149,6 @@ def _position(msg):
     return (p.x, p.y, p.z)
 
 
-
-
 def wait_until_serving(tester, process):
     """Publish a pose to the node process until its ~/screw answers (the loop is spinning)."""
     process.wait_for_stderr('decomposing')  # started (several may be starting at once)
@@ -371,4 +369,3 @@ def test_spin_returns_when_the_context_shuts_down(own_context, namespace):
     assert not thread.is_alive()
     assert time.monotonic() - begin < rotation_node.SPIN_TIMEOUT + 0.5
     node.destroy_node()
-

@@ -262,4 +262,3 @@ def test_without_plot_matplotlib_is_not_imported():
     done = rot_tools_cli(CASES['screw'], 'import atexit, sys\natexit.register(lambda: print('
                          "'matplotlib' in sys.modules, file=sys.stderr))")
     assert done.stderr == 'False\n'
-
