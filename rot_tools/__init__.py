@@ -18,7 +18,7 @@ _HOME = {
         'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'euler_to_matrix', 'matrix_to_euler'),
     'rot_tools.fitting': (
         'align_vectors', 'mean_rotation', 'random_rotations', 'rotation_distance', 'UNIQUE_TOL'),
-    'rot_tools.report': ('Decomposition', 'decompose'),
+    'rot_tools.decomposition': ('Decomposition', 'decompose'),
     'rot_tools.rigid': (
         'compose_transforms', 'frame_to_matrix', 'homogeneous_to_transform', 'invert_transform',
         'transform_points', 'transform_to_homogeneous'),

@@ -36,7 +36,7 @@ from typing import NamedTuple, Optional
 import numpy as np
 
 from rot_tools.errors import RotationError
-from rot_tools.report import decompose
+from rot_tools.decomposition import decompose
 from rot_tools.screw import Screw, screw_exp
 
 MAX_STEP_ANGLE = math.radians(3.0)

@@ -3,7 +3,7 @@
 Every input kind is one row of :data:`INPUTS` — topic, message type, converter — and every
 message becomes one rigid transform (header, R, b) at the boundary (rot_tools.messages).
 From there one path serves them all: one pass of the decomposition kernels
-(rot_tools.report.decompose_values) gives every number published — rotation vector θ·l̂,
+(rot_tools.decomposition.decompose_values) gives every number published — rotation vector θ·l̂,
 Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, and the quaternion (matrix_to_quaternion
 of R) — and the picture's decomposition runs the same kernels, so at θ = π all outputs of
 one input share the axis sign. Outputs carry the input's header. Topics, services and
@@ -44,7 +44,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 from rot_tools import drawing, messages
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
-from rot_tools.report import decompose_values, to_yaml, transform_report
+from rot_tools.decomposition import decompose_values
+from rot_tools.report import to_yaml, transform_report
 from rot_tools.screw import screw_from_transform, screw_interpolate
 
 FRAME_MISMATCH = 'frame_mismatch'

@@ -151,7 +151,7 @@ def test_every_call_above_really_ran_compiled(engine):
     kernels = [rt.euler.euler_to_matrix.__globals__['_MATRIX_KERNELS']['ZYX'],
                rt.axis_angle._rotvec_kernel, rt.so3._quaternion_kernel,
                rt.so3._checking(rt.axis_angle.axis_angle_kernel),
-               rt.so3._checking(rt.report._DECOMPOSE_KERNELS['xyz'])]
+               rt.so3._checking(rt.decomposition._DECOMPOSE_KERNELS['xyz'])]
     for kernel in kernels:
         code = kernel.__dict__.get(_backend._COMPILED)
         assert callable(code) and 'traced' in code.__doc__, kernel
@@ -370,7 +370,7 @@ def _batch_calls():
              ('points', lambda: rt.transform_points(R, b, b[::-1])),
              ('compose', lambda: rt.compose_transforms(R, b, R[::-1], b)),
              ('invert', lambda: rt.invert_transform(R, b)),
-             ('values', lambda: rt.report.decompose_values(R, b, 'zyx')),
+             ('values', lambda: rt.decomposition.decompose_values(R, b, 'zyx')),
              ('rotvec_to_matrix', lambda: rt.rotvec_to_matrix(v)),
              ('axis_angle_to_matrix', lambda: rt.axis_angle_to_matrix(v[1:], 0.7)),
              ('quaternion_to_matrix', lambda: rt.quaternion_to_matrix(

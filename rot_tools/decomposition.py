@@ -1,0 +1,104 @@
+"""Every representation of one rigid motion (R, b) from one pass of the kernels.
+
+:func:`decompose` gives arrays (one item or a batch) for the report, the drawing and people;
+:func:`decompose_values` gives the numbers rotation_node publishes for one input, as plain
+Python floats. Both run the same kernels (axis-angle, Euler, screw, twist, quaternion), so
+at θ = π every representation of one input uses the same axis sign.
+"""
+
+from functools import partial
+from typing import NamedTuple
+
+import numpy as np
+
+from rot_tools._backend import apply
+from rot_tools.axis_angle import axis_angle_kernel
+from rot_tools.euler import angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, parse_sequence
+from rot_tools.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
+from rot_tools.so3 import apply_to_rotations, quaternion_of_matrix_kernel
+
+
+class Decomposition(NamedTuple):
+    """Every representation of one rigid motion p ↦ R·p + b, from one pass over R and b.
+
+    axis, angle: as matrix_to_axis_angle; euler, degenerate: as matrix_to_euler for the
+    sequence asked; screw: as screw_from_transform; twist: as screw_log. At θ = π all of them
+    use the same axis sign.
+    """
+
+    axis: np.ndarray
+    angle: np.ndarray
+    euler: np.ndarray
+    degenerate: np.ndarray
+    screw: Screw
+    twist: np.ndarray
+
+
+def _decompose_kernel(ops, m, b, spec):
+    axis, angle = axis_angle_kernel(ops, m)
+    angles, lock = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
+    screw, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
+    twist, twist_fits = twist_kernel(ops, axis, angle, b)
+    return (axis, angle, angles, lock, *screw, twist, screw_fits & twist_fits)
+
+
+_VEC, _NUM = ((3,), np.float64), ((), np.float64)
+_DECOMPOSE_KERNELS = {seq: partial(_decompose_kernel, spec=parse_sequence(seq))
+                      for seq in EULER_SEQUENCES}
+
+
+def decompose(R, b, seq='ZYX', *, check=True):
+    """Decomposition of (R (..., 3, 3), b (..., 3)) with Euler angles of ``seq`` (radians).
+
+    One kernel run computes every representation, so the rot-tools report and each output of
+    rotation_node come from the same numbers. RotationError where the screw overflows
+    float64 (as screw_from_transform).
+    """
+    parse_sequence(seq)  # raises the RotationError of an unknown sequence
+    out = apply_to_rotations(_DECOMPOSE_KERNELS[seq], R, check, [
+        _VEC, _NUM, _VEC, ((), np.bool_), _VEC, _VEC, _VEC, _NUM, _NUM, _NUM,
+        ((6,), np.float64), ((), np.bool_)], [(b, (3,), 'translation b', True)])
+    refuse_far_axis(out[11], out[1], b)
+    return Decomposition(*out[:4], Screw(*out[4:10]), out[10])
+
+
+class Values(NamedTuple):
+    """The numbers rotation_node publishes for one input, as plain Python floats.
+
+    rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked, rad (3); twist: screw_log
+    (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives it (4).
+    """
+
+    rotvec: tuple
+    euler: tuple
+    twist: tuple
+    quaternion: tuple
+
+
+def _values_kernel(ops, m, b, spec):
+    axis, angle, angles, _, *_, twist, fits = _decompose_kernel(ops, m, b, spec)
+    (q,) = quaternion_of_matrix_kernel(ops, m)
+    return [a * angle for a in axis], angles, twist, q, angle, fits
+
+
+_FLOATS3 = ((3,), float)
+_VALUES_OUTPUTS = [_FLOATS3, _FLOATS3, ((6,), float), ((4,), float), _NUM, ((), np.bool_)]
+_VALUES_KERNELS = {seq: partial(_values_kernel, spec=parse_sequence(seq))
+                   for seq in EULER_SEQUENCES}
+
+
+def decompose_values(R, b, seq='ZYX'):
+    """Return the Values of one rigid motion (R (3, 3), b (3,)), from one kernel pass.
+
+    Rotation vector, Euler angles of ``seq`` (rad), twist and quaternion. The same kernels
+    as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
+    θ = π), without building an array for each: rotation_node calls it for every message.
+    R is not validated (check=False: the node builds R itself); RotationError where the
+    screw overflows float64, as decompose.
+    """
+    parse_sequence(seq)  # raises the RotationError of an unknown sequence
+    rotvec, euler, twist, q, angle, fits = apply(
+        _VALUES_KERNELS[seq], [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)],
+        _VALUES_OUTPUTS)
+    refuse_far_axis(fits, angle, b)
+    return Values(rotvec, euler, twist, q)
