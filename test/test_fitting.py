@@ -542,3 +542,12 @@ def test_random_rotations_bad_rng():
 
 def test_unique_tolerance_is_documented_and_small():
     assert 0 < UNIQUE_TOL <= 1e-9
+
+
+@pytest.mark.parametrize('n', [2 ** 62, 2 ** 64, 10 ** 400, np.uint64(2 ** 63), 10 ** 13],
+                         ids=['2**62', '2**64', '10**400', 'uint64 2**63', '10**13'])
+def test_random_rotations_too_many_to_allocate(n):
+    # 2**62 raised NumPy's ValueError ('array is too big'), a large n a MemoryError
+    with pytest.raises(RotationError,
+                       match=r'^n = [0-9.e+]+ rotations are too many to allocate'):
+        random_rotations(n)
