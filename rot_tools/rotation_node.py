@@ -14,14 +14,17 @@ an input's work, so they are throttled: at most MARKER_RATE a second, the latest
 and the last input is always drawn (a timer publishes it when its turn comes).
 """
 
-from contextlib import ExitStack
+if __name__ == '__main__':
+    # ``python -m rot_tools.rotation_node`` starts like the console script: the signal
+    # handlers first, then this module imported by its name (NumPy and rclpy load then),
+    # then main (rot_tools.runtime.start, which never returns).
+    from rot_tools.runtime import start
+    start('rot_tools.rotation_node')
+
 import difflib
-import gc
-from functools import partial, wraps
+from functools import partial
 import math
-import sys
 import time
-import traceback
 from typing import Callable, NamedTuple
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -31,26 +34,24 @@ from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
-import rclpy
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidHandle
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import Executor, ExternalShutdownException
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
-from rclpy.subscription import Subscription
-from rclpy.utilities import timeout_sec_to_nsec
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rot_tools import drawing, messages
+from rot_tools import drawing, messages, runtime
+from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
-from rot_tools.decomposition import decompose_values
 from rot_tools.report import to_yaml, transform_report
+# The process runtime's names, for callers written before rot_tools.runtime existed (the
+# benchmarks, test_node_executor.py): import them from rot_tools.runtime.
+from rot_tools.runtime import guard_callbacks, make_executor, serve, spin  # noqa: F401
+from rot_tools.runtime import SPIN_TIMEOUT  # noqa: F401
 from rot_tools.screw import screw_from_transform, screw_interpolate
 
 FRAME_MISMATCH = 'frame_mismatch'
@@ -67,8 +68,19 @@ DEFAULT_PATH_STEPS = 20
 MAX_PATH_STEPS = 10_000
 """A tolerance that needs more steps than this is refused (the reply would be huge)."""
 
+MAX_REPLY_BYTES = 16_000_000
+"""Largest ~/screw_path reply (serialised bytes); beyond it the request is path_too_long."""
+
+REPLY_BYTES_PER_POSE = 80
+"""Serialised bytes of one PoseStamped of a reply, besides its frame_id: stamp 8, string
+length 4 and terminating NUL 1, alignment of the pose at most 7, pose 7 × 8 = 56 (76; the
+Path's header, sequence length and encapsulation fit in one more)."""
+
 MARKER_RATE = 30.0
 """Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
+
+PROG = 'rotation_node'
+"""The program's name in its messages."""
 
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
@@ -320,17 +332,19 @@ class RotationNode(Node):
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
-    def _refuse(self, topic, reason, text):
+    def _refuse(self, topic, reason, text, error=False):
         """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
 
         Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
         stream (a raw IMU without orientation at 50 Hz) would silence every other one.
+        ``error``: log at error level (a refused service request).
         """
         self._refused[reason] += 1
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
             self._warned[topic, reason] = now
-            self.get_logger().warning(f'refused input on {topic} ({reason}): {text}')
+            log = self.get_logger().error if error else self.get_logger().warning
+            log(f'refused input on {topic} ({reason}): {text}')
 
     # -- markers -----------------------------------------------------------------------
 
@@ -418,7 +432,11 @@ class RotationNode(Node):
         return response
 
     def _on_screw_path(self, request, response):
-        """Constant-screw motion start → goal, poses at most ``tolerance`` apart."""
+        """Constant-screw motion start → goal, poses at most ``tolerance`` apart.
+
+        Every failure is a refusal: counted by reason, logged (throttled per reason), and
+        answered with an empty path. The reply is bounded in bytes before it is built.
+        """
         start, goal = request.start, request.goal
         response.plan.header = start.header
         try:
@@ -430,17 +448,25 @@ class RotationNode(Node):
             R0, b0 = messages.pose_to_rt(start.pose, q_tol, 'start.pose')
             R1, b1 = messages.pose_to_rt(goal.pose, q_tol, 'goal.pose')
             with np.errstate(all='ignore'):
+                if not np.isfinite(R0.T @ (b1 - b0)).all():
+                    raise messages.RefusedInput(
+                        NOT_DECOMPOSABLE, 'start and goal are too far apart: goal.position '
+                        '− start.position overflows float64 (beyond ±1.8e308)')
                 steps = self._path_steps(R0, b0, R1, b1, request.tolerance)
+                self._check_reply_bytes(start.header.frame_id, steps + 1)
                 Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, steps + 1),
                                            check=False)
             if not (np.isfinite(Rs).all() and np.isfinite(bs).all()):
                 raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
+            plan = messages.path_msg(start.header, start, goal, Rs, bs)
         except messages.RefusedInput as exc:
-            self._refused[exc.reason] += 1
-            self.get_logger().error(f'refused request on {self._screw_path_name} '
-                                    f'({exc.reason}): {exc}', throttle_duration_sec=1.0)
+            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True)
             return response
-        response.plan = messages.path_msg(start.header, start, goal, Rs, bs)
+        except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
+            self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
+                         f'no screw motion from start to goal: {exc}', error=True)
+            return response
+        response.plan = plan
         return response
 
     @staticmethod
@@ -467,264 +493,45 @@ class RotationNode(Node):
                 f'{MAX_PATH_STEPS}')
         return max(1, math.ceil(need - 1e-9))  # 4 + rounding noise is 4 steps, not 5
 
+    @staticmethod
+    def _reply_bytes(frame_id, poses):
+        """Return an upper bound of the serialised size of a GetPlan reply (CDR bytes).
 
-SPIN_TIMEOUT = 0.1
-"""Seconds one spin_once waits at most: the longest a shutdown waits for the loop to notice."""
+        The path's header and each of its ``poses`` carries a copy of ``frame_id``:
+        REPLY_BYTES_PER_POSE plus the frame_id's UTF-8 bytes each (the Path's own header
+        and sequence length counted as one more pose).
+        """
+        size = len(frame_id.encode('utf-8', 'surrogatepass'))
+        return (poses + 1) * (size + REPLY_BYTES_PER_POSE)
 
-BURST = 10
-"""Messages taken from one subscription per wake-up at most (the inputs keep the last 10)."""
+    @classmethod
+    def _check_reply_bytes(cls, frame_id, poses):
+        """Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
 
-
-class WaitSetExecutor(Executor):
-    """A lean single-threaded executor: one wait set, services first, bounded bursts.
-
-    Each spin_once waits on every entity of its nodes (subscriptions, services, timers, QoS
-    events, its own guard conditions) and then serves what is ready: timers, every waiting
-    service request, QoS events, and at most BURST messages of each ready subscription —
-    taken one at a time from the middleware's queue and handed straight to the callback.
-
-    Why not rclpy's executors (bench/README.md has the figures):
-
-    - ``rclpy.experimental.EventsExecutor`` queues one event per arriving message with no
-      bound. Under a flood beyond the node's pace the queue grew by ~160 MB a minute, stayed
-      at its size afterwards, and a service request waited behind the whole queue (up to
-      16 s; some never answered).
-    - The default SingleThreadedExecutor is fair and bounded — nothing waits outside the
-      middleware's keep-last queues — but wraps every callback in a Task and rebuilds its
-      wait set in ~60 lines of Python per message: about 2.4 × the CPU per message.
-
-    This one keeps the middleware's bound (keep-last 10 per input: a flood costs lost
-    messages, never memory), answers a service within one burst per subscription, and
-    costs about what the EventsExecutor does per message. Single-threaded, synchronous
-    callbacks only: a node with clients, guard conditions or coroutine callbacks is refused
-    (rotation_node has none), and so is create_task.
-    """
-
-    def __init__(self, *, context=None, burst=BURST):
-        super().__init__(context=context)
-        self._burst = burst
-        self._wait_set = None
-        self._wait_set_size = None
-
-    def create_task(self, callback, *args, **kwargs):
-        raise NotImplementedError(f'{type(self).__name__} runs no tasks')
-
-    def spin_once(self, timeout_sec=None):
-        """Wait at most ``timeout_sec`` for work; serve everything ready once."""
-        if self._is_shutdown:
-            return
-        subscriptions, services, timers, waitables = [], [], [], []
-        for node in self.get_nodes():
-            if list(node.clients) or list(node.guards):
-                raise RuntimeError(f'{type(self).__name__} serves no clients or guard '
-                                   f'conditions ({node.get_fully_qualified_name()} has some)')
-            subscriptions.extend(node.subscriptions)
-            services.extend(node.services)
-            timers.extend(node.timers)
-            waitables.extend(node.waitables)
-        guards = [self._guard, self._sigint_gc]
-        with ExitStack() as in_use:  # nothing is destroyed while the wait set holds it
-            subscriptions = _in_use(in_use, subscriptions)
-            services = _in_use(in_use, services)
-            timers = _in_use(in_use, timers)
-            guards = _in_use(in_use, guards)
-            events = 0
-            for waitable in list(waitables):
-                try:
-                    in_use.enter_context(waitable)
-                except InvalidHandle:
-                    waitables.remove(waitable)
-                else:
-                    events += waitable.get_num_entities().num_events
-            in_use.enter_context(self._context.handle)
-            wait_set = self._prepare_wait_set(
-                len(subscriptions), len(guards), len(timers), len(services), events)
-            for sub in subscriptions:
-                wait_set.add_subscription(sub.handle)
-            for srv in services:
-                wait_set.add_service(srv.handle)
-            for timer in timers:
-                wait_set.add_timer(timer.handle)
-            for guard in guards:
-                wait_set.add_guard_condition(guard.handle)
-            for waitable in waitables:
-                waitable.add_to_wait_set(wait_set)
-
-            wait_set.wait(timeout_sec_to_nsec(timeout_sec))
-            if self._is_shutdown:
-                return
-            if not self._context.ok():
-                raise ExternalShutdownException()
-
-            ready = set(wait_set.get_ready_entities('timer'))
-            for timer in timers:
-                if timer.handle.pointer in ready and timer.handle.is_timer_ready():
-                    timer.handle.call_timer()
-                    timer.callback()
-            ready = set(wait_set.get_ready_entities('service'))
-            for srv in services:
-                if srv.handle.pointer in ready:
-                    _serve_requests(srv)
-            for waitable in waitables:
-                if waitable.is_ready(wait_set):
-                    _run_now(waitable.execute(waitable.take_data()))
-            ready = set(wait_set.get_ready_entities('subscription'))
-            for sub in subscriptions:
-                if sub.handle.pointer in ready:
-                    self._take_messages(sub)
-
-    def _prepare_wait_set(self, subscriptions, guards, timers, services, events):
-        """Return the wait set for these counts of entities, cleared (reused while they stay)."""
-        size = (subscriptions, guards, timers, 0, services, events)
-        if size != self._wait_set_size:
-            self._wait_set = _rclpy.WaitSet(*size, self._context.handle)
-            self._wait_set_size = size
-        self._wait_set.clear_entities()
-        return self._wait_set
-
-    def _take_messages(self, sub):
-        """Hand at most BURST queued messages of ``sub`` to its callback, one at a time."""
-        take, msg_type, raw, callback = sub.handle.take_message, sub.msg_type, sub.raw, \
-            sub.callback
-        message_only = sub._callback_type is Subscription.CallbackType.MessageOnly
-        for _ in range(self._burst):
-            taken = take(msg_type, raw)
-            if taken is None:
-                return
-            if message_only:
-                callback(taken[0])
-            else:
-                callback(*taken)
-
-
-def _in_use(stack, entities):
-    """Return the entities whose handle could be entered on ``stack`` (not the destroyed)."""
-    usable = []
-    for entity in entities:
-        try:
-            stack.enter_context(entity.handle)
-        except InvalidHandle:
-            continue
-        usable.append(entity)
-    return usable
-
-
-def _serve_requests(srv):
-    """Answer every request waiting on service ``srv``."""
-    while True:
-        request, header = srv.handle.service_take_request(srv.srv_type.Request)
-        if header is None:
-            return
-        srv.send_response(srv.callback(request, srv.srv_type.Response()), header)
-
-
-def _run_now(coroutine):
-    """Run a coroutine that never suspends (a waitable's execute of a plain callback)."""
-    try:
-        coroutine.send(None)
-    except StopIteration:
-        return
-    coroutine.close()
-    raise RuntimeError('a waitable awaited something; WaitSetExecutor runs no tasks')
-
-
-def make_executor(context=None):
-    """Return the executor rotation_node runs on: a WaitSetExecutor (its docstring says why)."""
-    return WaitSetExecutor(context=context)
-
-
-def _guarded(callback, node, what, service=False):
-    """callback(*args), but an exception it raises is logged (with its traceback) instead.
-
-    A subscription or timer callback then returns None; a service callback (``service``)
-    returns the response it was given, unfilled, so that the client gets a reply. Once the
-    context is shut down (a signal: rclpy shuts it down from its handler, while a callback
-    may be publishing) a failure is the shutdown's and is not logged. The wrapper has the
-    callback's signature (rclpy inspects it).
-    """
-    @wraps(callback)
-    def guarded(*args):
-        try:
-            return callback(*args)
-        except Exception:  # noqa: BLE001 - any bug: log it, keep serving
-            if node.context.ok():
-                node.get_logger().error(f'{what} callback raised; the node keeps serving:\n'
-                                        + traceback.format_exc(), throttle_duration_sec=1.0)
-            return args[-1] if service else None
-    return guarded
-
-
-def guard_callbacks(node):
-    """Wrap every subscription, timer and service callback of ``node`` in _guarded.
-
-    A callback that raises is then logged and the node keeps serving, on either executor
-    (the EventsExecutor would lose the subscription's other queued messages, the default
-    one would end the spin).
-    """
-    for sub in node.subscriptions:
-        sub.callback = _guarded(sub.callback, node, f'subscription {sub.topic_name}')
-    for timer in node.timers:
-        timer.callback = _guarded(timer.callback, node, 'timer')
-    for srv in node.services:
-        srv.callback = _guarded(srv.callback, node, f'service {srv.srv_name}', service=True)
-
-
-def spin(node, executor):
-    """Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
-
-    The node's callbacks are guarded first (guard_callbacks). rclpy.init installs handlers
-    that shut the context down on SIGINT and SIGTERM; the loop then ends within one
-    SPIN_TIMEOUT (rclpy.spin could hang on a signal).
-    """
-    guard_callbacks(node)
-    executor.add_node(node)
-    try:
-        while rclpy.ok(context=executor.context):
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT)
-    except ExternalShutdownException:
-        pass  # the context shut down during spin_once: the normal end
-    finally:
-        executor.shutdown()
-
-
-def serve(make_node, executor_factory=make_executor):
-    """Build a node, spin it until a signal, destroy it and shut rclpy down.
-
-    The node is make_node(), the executor executor_factory(); rclpy.init is the caller's.
-    A signal during the build is a normal stop; any other exception of the build (an
-    invalid parameter) is raised after the clean-up.
-    """
-    node = None
-    try:
-        node = make_node()
-        # What exists now (modules, the node) lives as long as the process: left out of
-        # the collector's full passes, which otherwise stall a message by ~15 ms every few
-        # seconds under load (the tail of the latency).
-        gc.freeze()
-        spin(node, executor_factory())
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:
-        if rclpy.ok():
-            raise
-        # A signal shut the context down while the node was being built: a normal stop.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        Checked before anything is built: a 100 kB frame_id × 10,001 poses is a 1 GB
+        reply, and the node would hold it twice (messages and their serialisation).
+        """
+        size = cls._reply_bytes(frame_id, poses)
+        if size > MAX_REPLY_BYTES:
+            frame_bytes = len(frame_id.encode('utf-8', 'surrogatepass'))
+            raise messages.RefusedInput(
+                PATH_TOO_LONG, f'a reply of {poses} poses with a frame_id of {frame_bytes} '
+                f'bytes would take {size / 1e6:.3g} MB, more than {MAX_REPLY_BYTES / 1e6:g} MB')
 
 
 def main(args=None):
-    """Run the node until SIGINT / SIGTERM; exit status 0, or 2 for an invalid parameter."""
-    rclpy.init(args=args)
+    """Run the node until SIGINT / SIGTERM; exit status 0, or 2 for bad arguments.
+
+    ``args``: the command line as rclpy.init takes it (sys.argv when None). Started by
+    rot_tools.runtime.start (the console script, ``python -m rot_tools.rotation_node``),
+    which handles an early signal and ends the process.
+    """
+    runtime.init_ros(PROG, args)
     try:
-        serve(RotationNode)
-    except (InvalidParameterTypeException, InvalidParameterValueException) as exc:
-        print(f'rotation_node: {exc}', file=sys.stderr)
-        return 2
+        runtime.serve(RotationNode)
+    except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2
+        text = runtime.ros_argument_error(exc)
+        if text is None:
+            raise
+        runtime.fail(PROG, text)
     return 0
-
-
-if __name__ == '__main__':
-    from rot_tools.entry import exit_now
-    exit_now(main())
