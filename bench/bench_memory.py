@@ -3,9 +3,10 @@
 Starts ``rotation_node`` by its console script (defaults: markers on) in an isolated DDS
 domain, a subscriber to its outputs in this process (so every output is really sent), and
 bench/pose_flooder.py; after a warm-up floods ``~/pose`` at 5000 msg/s for 60 s and samples
-the node's RSS (/proc/PID/status VmRSS) every second. Memory is *bounded* when the RSS grows by less than
-BOUND_MB over the second half of the flood (a leak of a few hundred bytes per message would
-show as tens of MB there). Not a test: a script that prints what it measured.
+the node's RSS (/proc/PID/status VmRSS) every second. Memory is *bounded* when the RSS
+grows by less than BOUND_MB over the second half of the flood (a leak of a few hundred
+bytes per message would show as tens of MB there). Not a test: a script that prints what it
+measured.
 
 Run: ``.venv/bin/python bench/bench_memory.py [--rate 5000] [--seconds 60] [--json PATH]``.
 """

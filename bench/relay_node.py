@@ -11,11 +11,11 @@ machine, the baseline bench_node.py measures rotation_node against.
 ``--executor default`` spins it on rclpy's default SingleThreadedExecutor; ``--executor
 node`` on the executor rotation_node itself uses (make_executor); ``--executor events`` on
 rclpy's EventsExecutor. Either way the relay is started and stopped as rotation_node's
-console script runs the node: the node's own loop (serve), and the same exit. ``--full-interface`` also creates
-rotation_node's other input subscriptions and its two services, idle: the same entities for
-the executor to watch, still no math.
+console script runs the node: the node's own loop (serve), and the same exit.
+``--full-interface`` also creates rotation_node's other input subscriptions and its two
+services, idle: the same entities for the executor to watch, still no math.
 
-Run: ``.venv/bin/python bench/relay_node.py [--executor default|node] [--full-interface]
+Run: ``.venv/bin/python bench/relay_node.py [--executor default|node|events] [--full-interface]
 [--ros-args -r __node:=NAME]`` (default node name ``relay``); SIGINT / SIGTERM end it.
 """
 
