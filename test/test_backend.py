@@ -17,12 +17,13 @@ import subprocess
 import sys
 import textwrap
 import traceback
+from types import SimpleNamespace as Msg
 
 import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
-from rot_tools import _backend, _generate, _generated, decomposition
+from rot_tools import _backend, _generate, _generated, boundary, decomposition
 from rot_tools._trace import compile_kernel, TraceError
 
 REPO = Path(__file__).resolve().parent.parent
@@ -177,10 +178,18 @@ NO_KERNEL = {'rot_x', 'rot_y', 'rot_z', 'skew', 'nearest_rotation', 'mean_rotati
 def _ordinary_items(n=60):
     """n random rotations (every angle, both sides of π/2), translations, Euler angles."""
     rng = np.random.default_rng(5)
-    R = h.cube_rotations() if False else rt.random_rotations(n, rng=rng)
+    R = rt.random_rotations(n, rng=rng)
     b = rng.uniform(-3.0, 3.0, (n, 3))
     e = rng.uniform(-1.5, 1.5, (n, 3))
     return list(R), list(b), list(e)
+
+
+def _xyz(v):
+    return Msg(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def _xyzw(q):
+    return Msg(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
 
 
 def test_every_public_function_and_the_node_path_run_generated_code(fallbacks):
@@ -193,12 +202,19 @@ def test_every_public_function_and_the_node_path_run_generated_code(fallbacks):
         call()
     Rs, bs, es = _ordinary_items()
     for R, b, e in zip(Rs, bs, es):
-        for seq in rt.EULER_SEQUENCES:
-            rt.euler_to_matrix(tuple(e.tolist()), seq)  # as rot_tools.messages calls it
-            rt.matrix_to_euler(R, seq)
-            decomposition.decompose_values(R, b, seq)
-            rt.decompose(R, b, seq)
         q = rt.matrix_to_quaternion(R)
+        for seq in rt.EULER_SEQUENCES:
+            # rotation_node's per-message path: a message in (duck-typed here: the boundary
+            # imports no ROS), its numbers out
+            settings = Msg(quaternion_tolerance=1e-6, euler_sequence=seq, degrees=False)
+            for msg, convert in (
+                    (Msg(header=None, pose=Msg(position=_xyz(b), orientation=_xyzw(q))),
+                     boundary.pose_stamped_to_transform),
+                    (Msg(header=None, vector=_xyz(e)), boundary.euler_stamped_to_transform)):
+                _, R1, b1 = convert(msg, settings)
+                decomposition.decompose_values(R1, b1, seq)
+            rt.matrix_to_euler(R, seq)
+            rt.decompose(R, b, seq)
         rt.quaternion_to_matrix(tuple(q.tolist()))
         rt.quaternion_to_matrix(q)
         rt.matrix_to_rotvec(R, check=False)
