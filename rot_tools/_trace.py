@@ -26,6 +26,7 @@ import numpy as np
 
 from rot_tools._backend import flatten, nest
 
+
 class TraceError(Exception):
     """The kernel does something the tracer cannot turn into straight-line code."""
 
@@ -131,9 +132,12 @@ class _Trace:
         return sym
 
     def guard(self, condition):
-        """ops.rare(condition): False, after a guard that leaves the items where it holds
-        to the kernel itself. Past the guard the condition is known to be false, so later
-        wheres on it are settled (on one item ops.rare is bool(condition))."""
+        """Return False, after a guard that leaves the items where ``condition`` holds to
+        the kernel itself (ops.rare).
+
+        Past the guard the condition is known to be false, so later wheres on it are
+        settled (on one item ops.rare is bool(condition)).
+        """
         name = self.source(condition)
         if name not in self.known:
             self.statements.append((_GUARD, name, {name}))
@@ -268,8 +272,11 @@ def _fold(statements, tails):
     """Fold each temporary read once into the expression that reads it.
 
     statements: [(name, text)] in order (guards included, never folded); tails: the texts
-    after them that read names (the output entries). Returns both rewritten. Every operation is pure, so computing a value where it is used instead of
-    where it was defined changes no result; it only saves storing and loading a local.
+    after them that read names (the output entries). Returns both rewritten. Every
+    operation is pure, so computing a value where it is used instead of where it was
+    defined changes no result; it only saves storing and loading a local. (A value defined
+    before a guard and folded below it is then not computed for the items the guard
+    leaves out, which changes nothing either.)
     """
     uses = Counter(_TEMPORARY.findall(' '.join([t for _, t in statements] + tails)))
     folded, kept = {}, []

@@ -9,7 +9,6 @@ depend on call history; one item must fail as a batch does; and a traceback thro
 name a real file.
 """
 
-import builtins
 import math
 from pathlib import Path
 import re
@@ -122,7 +121,6 @@ def _bits(x):
     if isinstance(x, float):
         return _bits(np.float64(x))
     return x
-
 
 
 @pytest.fixture
@@ -361,7 +359,8 @@ def _fail_alike_calls():
             (f'transform_from_screw {i}', lambda m, v: rt.transform_from_screw(
                 v[..., :3], v[..., 3:6], v[..., 6], v[..., 7]), v),
             (f'euler_to_matrix {i}', lambda m, v: rt.euler_to_matrix(v[..., :3], 'ZYX'), v),
-            (f'frame {i}', lambda m, v: rt.frame_to_matrix(v[..., :3], v[..., 3:6], v[..., 6:9]), v)]
+            (f'frame {i}', lambda m, v: rt.frame_to_matrix(
+                v[..., :3], v[..., 3:6], v[..., 6:9]), v)]
     return mats, vecs, calls
 
 
@@ -581,3 +580,20 @@ def test_float_outputs_are_plain_floats_for_one_item_and_arrays_for_a_batch():
     assert batch[0][1].tolist() == [[3.0, 2.0], [3.0, 7.0]] and batch[2].tolist() == [4.0, 9.0]
     compiled = compile_kernel(kernel, _backend.FLOATS, [(2, 2), ()], outputs)
     assert compiled([(m, (2, 2), 'm', True), (2.0, (), 'a', True)]) == expected
+
+
+def _unindented(text):
+    return '\n'.join(line.strip() for line in text.splitlines())
+
+
+def test_doc_engine_shows_real_code_and_names():
+    doc = (REPO / 'doc' / 'engine.md').read_text(encoding='utf-8')
+    blocks = [_unindented(b) for b in re.findall(r'```python\n(.*?)```', doc, re.S)]
+    sources = [_unindented(p.read_text(encoding='utf-8'))
+               for p in (REPO / 'rot_tools').glob('*.py')]
+    assert len(blocks) == 2 and all(any(b in s for s in sources) for b in blocks), blocks
+    assert 'python -m rot_tools._generate ' in doc and _generate.COMMAND.endswith(
+        'python -m rot_tools._generate')
+    ops = {n for n in dir(_backend.FLOATS) if not n.startswith('_')}
+    table = doc.split('## 2. The ops namespace')[1].split('\n## ')[0]
+    assert ops - {'any'} <= set(re.findall(r'\b(\w+)\b', table)), ops
