@@ -1627,7 +1627,7 @@ def axis_angle_axis_angle_kernel_checked(inputs):
     t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
     t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) & (((t59 != 0) | (t61 != 0)) | (t63 != 0))) | (t72 > 1e+290)):
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
         return None  # rare: apply runs the kernel
     t84 = t82 == 0
     t85 = 1.0 if t84 else t82
@@ -1638,14 +1638,14 @@ def axis_angle_axis_angle_kernel_checked(inputs):
     t100 = 0.5 * (a1 + a3)
     t102 = 0.5 * (a2 + a6)
     t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) & (t96 >= t98)
-    t110 = (t97 > t96) & (t97 >= t98)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
     t112 = t96 if t107 else (t100 if t110 else t102)
     t114 = t100 if t107 else (t97 if t110 else t104)
     t116 = t102 if t107 else (t104 if t110 else t98)
     t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
     t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) & (((t112 != 0) | (t114 != 0)) | (t116 != 0))) | (t121 > 1e+290)):
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
         return None  # rare: apply runs the kernel
     t133 = t131 == 0
     t134 = 1.0 if t133 else t131
@@ -1684,7 +1684,7 @@ def axis_angle__rotvec_of_matrix_kernel_checked(inputs):
     t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
     t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) & (((t59 != 0) | (t61 != 0)) | (t63 != 0))) | (t72 > 1e+290)):
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
         return None  # rare: apply runs the kernel
     t84 = t82 == 0
     t85 = 1.0 if t84 else t82
@@ -1696,14 +1696,14 @@ def axis_angle__rotvec_of_matrix_kernel_checked(inputs):
     t100 = 0.5 * (a1 + a3)
     t102 = 0.5 * (a2 + a6)
     t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) & (t96 >= t98)
-    t110 = (t97 > t96) & (t97 >= t98)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
     t112 = t96 if t107 else (t100 if t110 else t102)
     t114 = t100 if t107 else (t97 if t110 else t104)
     t116 = t102 if t107 else (t104 if t110 else t98)
     t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
     t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) & (((t112 != 0) | (t114 != 0)) | (t116 != 0))) | (t121 > 1e+290)):
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
         return None  # rare: apply runs the kernel
     t133 = t131 == 0
     t134 = 1.0 if t133 else t131
@@ -1748,9 +1748,9 @@ def so3_quaternion_of_matrix_kernel_checked(inputs):
     t71 = a7 - a5
     t72 = a2 - a6
     t73 = a3 - a1
-    t78 = ((t60 >= t63) & (t60 >= t65)) & (t60 >= t67)
-    t83 = ((t63 > t60) & (t63 >= t65)) & (t63 >= t67)
-    t88 = ((t65 > t60) & (t65 > t63)) & (t65 >= t67)
+    t78 = ((t60 >= t63) and (t60 >= t65)) and (t60 >= t67)
+    t83 = ((t63 > t60) and (t63 >= t65)) and (t63 >= t67)
+    t88 = ((t65 > t60) and (t65 > t63)) and (t65 >= t67)
     t91 = t60 if t78 else (t68 if t83 else (t69 if t88 else t71))
     t94 = t68 if t78 else (t63 if t83 else (t70 if t88 else t72))
     t97 = t69 if t78 else (t70 if t83 else (t65 if t88 else t73))
@@ -1795,7 +1795,7 @@ def screw__screw_kernel_checked(inputs):
     t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
     t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) & (((t59 != 0) | (t61 != 0)) | (t63 != 0))) | (t72 > 1e+290)):
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
         return None  # rare: apply runs the kernel
     t84 = t82 == 0
     t85 = 1.0 if t84 else t82
@@ -1807,14 +1807,14 @@ def screw__screw_kernel_checked(inputs):
     t100 = 0.5 * (a1 + a3)
     t102 = 0.5 * (a2 + a6)
     t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) & (t96 >= t98)
-    t110 = (t97 > t96) & (t97 >= t98)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
     t112 = t96 if t107 else (t100 if t110 else t102)
     t114 = t100 if t107 else (t97 if t110 else t104)
     t116 = t102 if t107 else (t104 if t110 else t98)
     t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
     t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) & (((t112 != 0) | (t114 != 0)) | (t116 != 0))) | (t121 > 1e+290)):
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
         return None  # rare: apply runs the kernel
     t133 = t131 == 0
     t134 = 1.0 if t133 else t131
@@ -1827,7 +1827,7 @@ def screw__screw_kernel_checked(inputs):
     t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
     t163 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
     t173 = _op_sqrt(t163)
-    if (((t163 < 1e-290) & (((a9 != 0) | (a10 != 0)) | (a11 != 0))) | (t163 > 1e+290)):
+    if (((t163 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t163 > 1e+290)):
         return None  # rare: apply runs the kernel
     t175 = t173 == 0
     t176 = 1.0 if t175 else t173
@@ -1854,7 +1854,7 @@ def screw__screw_kernel_checked(inputs):
     _pack_3d(o1, 0, t219, t223, t227)
     o2 = _empty((3,), _f64)
     _pack_3d(o2, 0, t230, t233, t236)
-    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), _bool((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) & ((_op_abs(t223)) <= 1.7976931348623157e+308)) & ((_op_abs(t227)) <= 1.7976931348623157e+308)) & ((_op_abs(t230)) <= 1.7976931348623157e+308)) & ((_op_abs(t233)) <= 1.7976931348623157e+308)) & ((_op_abs(t236)) <= 1.7976931348623157e+308)) & ((_op_abs(t194)) <= 1.7976931348623157e+308)) & ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), _bool((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.screw._log_kernel checked(1)
@@ -1891,7 +1891,7 @@ def screw__log_kernel_checked(inputs):
     t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
     t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) & (((t59 != 0) | (t61 != 0)) | (t63 != 0))) | (t72 > 1e+290)):
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
         return None  # rare: apply runs the kernel
     t84 = t82 == 0
     t85 = 1.0 if t84 else t82
@@ -1903,14 +1903,14 @@ def screw__log_kernel_checked(inputs):
     t100 = 0.5 * (a1 + a3)
     t102 = 0.5 * (a2 + a6)
     t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) & (t96 >= t98)
-    t110 = (t97 > t96) & (t97 >= t98)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
     t112 = t96 if t107 else (t100 if t110 else t102)
     t114 = t100 if t107 else (t97 if t110 else t104)
     t116 = t102 if t107 else (t104 if t110 else t98)
     t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
     t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) & (((t112 != 0) | (t114 != 0)) | (t116 != 0))) | (t121 > 1e+290)):
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
         return None  # rare: apply runs the kernel
     t133 = t131 == 0
     t134 = 1.0 if t133 else t131
@@ -1932,7 +1932,7 @@ def screw__log_kernel_checked(inputs):
     t190 = ((t164 * (a10 - t185)) - (t159 * ((t158 * a9) - (t152 * a11)))) + t185
     t191 = t169 * t158
     t196 = ((t164 * (a11 - t191)) - (t159 * ((t152 * a10) - (t155 * a9)))) + t191
-    t204 = (((_op_abs(t184)) <= 1.7976931348623157e+308) & ((_op_abs(t190)) <= 1.7976931348623157e+308)) & ((_op_abs(t196)) <= 1.7976931348623157e+308)
+    t204 = (((_op_abs(t184)) <= 1.7976931348623157e+308) and ((_op_abs(t190)) <= 1.7976931348623157e+308)) and ((_op_abs(t196)) <= 1.7976931348623157e+308)
     if (False if t204 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((6,), _f64)
@@ -1979,7 +1979,7 @@ def rigid__points_kernel_checked(inputs):
     t73 = (((a0 * a12) + (a1 * a13)) + (a2 * a14)) + a9
     t74 = (((a3 * a12) + (a4 * a13)) + (a5 * a14)) + a10
     t75 = (((a6 * a12) + (a7 * a13)) + (a8 * a14)) + a11
-    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) & ((_op_abs(t74)) <= 1.7976931348623157e+308)) & ((_op_abs(t75)) <= 1.7976931348623157e+308)
+    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
     if (False if t83 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
@@ -2039,7 +2039,7 @@ def rigid__compose_kernel_checked2(inputs):
     t176 = (((a0 * a21) + (a1 * a22)) + (a2 * a23)) + a18
     t177 = (((a3 * a21) + (a4 * a22)) + (a5 * a23)) + a19
     t178 = (((a6 * a21) + (a7 * a22)) + (a8 * a23)) + a20
-    t186 = (((_op_abs(t176)) <= 1.7976931348623157e+308) & ((_op_abs(t177)) <= 1.7976931348623157e+308)) & ((_op_abs(t178)) <= 1.7976931348623157e+308)
+    t186 = (((_op_abs(t176)) <= 1.7976931348623157e+308) and ((_op_abs(t177)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)
     if (False if t186 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3, 3), _f64)
@@ -2080,7 +2080,7 @@ def rigid__invert_kernel_checked(inputs):
     t73 = 0.0 - (((a0 * a9) + (a3 * a10)) + (a6 * a11))
     t74 = 0.0 - (((a1 * a9) + (a4 * a10)) + (a7 * a11))
     t75 = 0.0 - (((a2 * a9) + (a5 * a10)) + (a8 * a11))
-    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) & ((_op_abs(t74)) <= 1.7976931348623157e+308)) & ((_op_abs(t75)) <= 1.7976931348623157e+308)
+    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
     if (False if t83 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3, 3), _f64)
@@ -2193,7 +2193,7 @@ def fitting__distance_kernel_checked2(inputs):
     t164 = 0.5 * ((((a0 * a11) + (a3 * a14)) + (a6 * a17)) - (((a2 * a9) + (a5 * a12)) + (a8 * a15)))
     t166 = 0.5 * ((((a1 * a9) + (a4 * a12)) + (a7 * a15)) - (((a0 * a10) + (a3 * a13)) + (a6 * a16)))
     t175 = ((t162 * t162) + (t164 * t164)) + (t166 * t166)
-    if (((t175 < 1e-290) & (((t162 != 0) | (t164 != 0)) | (t166 != 0))) | (t175 > 1e+290)):
+    if (((t175 < 1e-290) and (((t162 != 0) or (t164 != 0)) or (t166 != 0))) or (t175 > 1e+290)):
         return None  # rare: apply runs the kernel
     return (_float64((_op_atan2((_op_sqrt(t175)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
 
@@ -2245,7 +2245,7 @@ def screw__log_kernel(inputs):
     t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
     t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) & (((t1 != 0) | (t3 != 0)) | (t5 != 0))) | (t14 > 1e+290)):
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
         return None  # rare: apply runs the kernel
     t26 = t24 == 0
     t27 = 1.0 if t26 else t24
@@ -2257,14 +2257,14 @@ def screw__log_kernel(inputs):
     t42 = 0.5 * (a1 + a3)
     t44 = 0.5 * (a2 + a6)
     t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) & (t38 >= t40)
-    t52 = (t39 > t38) & (t39 >= t40)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
     t54 = t38 if t49 else (t42 if t52 else t44)
     t56 = t42 if t49 else (t39 if t52 else t46)
     t58 = t44 if t49 else (t46 if t52 else t40)
     t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
     t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) & (((t54 != 0) | (t56 != 0)) | (t58 != 0))) | (t63 > 1e+290)):
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
         return None  # rare: apply runs the kernel
     t75 = t73 == 0
     t76 = 1.0 if t75 else t73
@@ -2286,7 +2286,7 @@ def screw__log_kernel(inputs):
     t132 = ((t106 * (a10 - t127)) - (t101 * ((t100 * a9) - (t94 * a11)))) + t127
     t133 = t111 * t100
     t138 = ((t106 * (a11 - t133)) - (t101 * ((t94 * a10) - (t97 * a9)))) + t133
-    t146 = (((_op_abs(t126)) <= 1.7976931348623157e+308) & ((_op_abs(t132)) <= 1.7976931348623157e+308)) & ((_op_abs(t138)) <= 1.7976931348623157e+308)
+    t146 = (((_op_abs(t126)) <= 1.7976931348623157e+308) and ((_op_abs(t132)) <= 1.7976931348623157e+308)) and ((_op_abs(t138)) <= 1.7976931348623157e+308)
     if (False if t146 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((6,), _f64)
@@ -2311,7 +2311,7 @@ def screw__exp_kernel(inputs):
         return None
     t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
     t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) & (((a0 != 0) | (a1 != 0)) | (a2 != 0))) | (t4 > 1e+290)):
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
         return None  # rare: apply runs the kernel
     t16 = t14 == 0
     t17 = 1.0 if t16 else t14
@@ -2349,7 +2349,7 @@ def screw__exp_kernel(inputs):
     _pack_9d(o0, 0, (t73 + (t74 * t20)), (t80 - t79), (t81 + t78), (t80 + t79), (t73 + (t75 * t23)), (t82 - t77), (t81 - t78), (t82 + t77), (t73 + ((t43 * t25) * t25)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t60, t66, t72)
-    return (o0, o1, _bool(t27), _bool(((((_op_abs(t60)) <= 1.7976931348623157e+308) & ((_op_abs(t66)) <= 1.7976931348623157e+308)) & ((_op_abs(t72)) <= 1.7976931348623157e+308))),)
+    return (o0, o1, _bool(t27), _bool(((((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) and ((_op_abs(t72)) <= 1.7976931348623157e+308))),)
 
 
 # rot_tools.decomposition._motion_kernel checked(1)
@@ -2386,7 +2386,7 @@ def decomposition__motion_kernel_checked(inputs):
     t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
     t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) & (((t59 != 0) | (t61 != 0)) | (t63 != 0))) | (t72 > 1e+290)):
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
         return None  # rare: apply runs the kernel
     t84 = t82 == 0
     t85 = 1.0 if t84 else t82
@@ -2398,14 +2398,14 @@ def decomposition__motion_kernel_checked(inputs):
     t100 = 0.5 * (a1 + a3)
     t102 = 0.5 * (a2 + a6)
     t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) & (t96 >= t98)
-    t110 = (t97 > t96) & (t97 >= t98)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
     t112 = t96 if t107 else (t100 if t110 else t102)
     t114 = t100 if t107 else (t97 if t110 else t104)
     t116 = t102 if t107 else (t104 if t110 else t98)
     t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
     t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) & (((t112 != 0) | (t114 != 0)) | (t116 != 0))) | (t121 > 1e+290)):
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
         return None  # rare: apply runs the kernel
     t133 = t131 == 0
     t134 = 1.0 if t133 else t131
@@ -2418,7 +2418,7 @@ def decomposition__motion_kernel_checked(inputs):
     t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
     t163 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
     t173 = _op_sqrt(t163)
-    if (((t163 < 1e-290) & (((a9 != 0) | (a10 != 0)) | (a11 != 0))) | (t163 > 1e+290)):
+    if (((t163 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t163 > 1e+290)):
         return None  # rare: apply runs the kernel
     t175 = t173 == 0
     t176 = 1.0 if t175 else t173
@@ -2450,7 +2450,7 @@ def decomposition__motion_kernel_checked(inputs):
     t294 = ((t273 * (a10 - t289)) - (t268 * ((t158 * a9) - (t152 * a11)))) + t289
     t295 = t193 * t158
     t300 = ((t273 * (a11 - t295)) - (t268 * ((t152 * a10) - (t155 * a9)))) + t295
-    t308 = (((_op_abs(t288)) <= 1.7976931348623157e+308) & ((_op_abs(t294)) <= 1.7976931348623157e+308)) & ((_op_abs(t300)) <= 1.7976931348623157e+308)
+    t308 = (((_op_abs(t288)) <= 1.7976931348623157e+308) and ((_op_abs(t294)) <= 1.7976931348623157e+308)) and ((_op_abs(t300)) <= 1.7976931348623157e+308)
     if (False if t308 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
@@ -2463,7 +2463,7 @@ def decomposition__motion_kernel_checked(inputs):
     _pack_3d(o4, 0, t230, t233, t236)
     o8 = _empty((6,), _f64)
     _pack_6d(o8, 0, (t94 * t152), (t94 * t155), (t94 * t158), t288, t294, t300)
-    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, _bool(((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) & ((_op_abs(t223)) <= 1.7976931348623157e+308)) & ((_op_abs(t227)) <= 1.7976931348623157e+308)) & ((_op_abs(t230)) <= 1.7976931348623157e+308)) & ((_op_abs(t233)) <= 1.7976931348623157e+308)) & ((_op_abs(t236)) <= 1.7976931348623157e+308)) & ((_op_abs(t194)) <= 1.7976931348623157e+308)) & ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) & t308)), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, _bool(((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308)), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]
@@ -3106,7 +3106,7 @@ def axis_angle_axis_angle_kernel(inputs):
     t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
     t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) & (((t1 != 0) | (t3 != 0)) | (t5 != 0))) | (t14 > 1e+290)):
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
         return None  # rare: apply runs the kernel
     t26 = t24 == 0
     t27 = 1.0 if t26 else t24
@@ -3117,14 +3117,14 @@ def axis_angle_axis_angle_kernel(inputs):
     t42 = 0.5 * (a1 + a3)
     t44 = 0.5 * (a2 + a6)
     t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) & (t38 >= t40)
-    t52 = (t39 > t38) & (t39 >= t40)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
     t54 = t38 if t49 else (t42 if t52 else t44)
     t56 = t42 if t49 else (t39 if t52 else t46)
     t58 = t44 if t49 else (t46 if t52 else t40)
     t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
     t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) & (((t54 != 0) | (t56 != 0)) | (t58 != 0))) | (t63 > 1e+290)):
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
         return None  # rare: apply runs the kernel
     t75 = t73 == 0
     t76 = 1.0 if t75 else t73
@@ -3153,7 +3153,7 @@ def axis_angle__rotvec_of_matrix_kernel(inputs):
     t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
     t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) & (((t1 != 0) | (t3 != 0)) | (t5 != 0))) | (t14 > 1e+290)):
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
         return None  # rare: apply runs the kernel
     t26 = t24 == 0
     t27 = 1.0 if t26 else t24
@@ -3165,14 +3165,14 @@ def axis_angle__rotvec_of_matrix_kernel(inputs):
     t42 = 0.5 * (a1 + a3)
     t44 = 0.5 * (a2 + a6)
     t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) & (t38 >= t40)
-    t52 = (t39 > t38) & (t39 >= t40)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
     t54 = t38 if t49 else (t42 if t52 else t44)
     t56 = t42 if t49 else (t39 if t52 else t46)
     t58 = t44 if t49 else (t46 if t52 else t40)
     t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
     t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) & (((t54 != 0) | (t56 != 0)) | (t58 != 0))) | (t63 > 1e+290)):
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
         return None  # rare: apply runs the kernel
     t75 = t73 == 0
     t76 = 1.0 if t75 else t73
@@ -3207,9 +3207,9 @@ def so3_quaternion_of_matrix_kernel(inputs):
     t13 = a7 - a5
     t14 = a2 - a6
     t15 = a3 - a1
-    t20 = ((t2 >= t5) & (t2 >= t7)) & (t2 >= t9)
-    t25 = ((t5 > t2) & (t5 >= t7)) & (t5 >= t9)
-    t30 = ((t7 > t2) & (t7 > t5)) & (t7 >= t9)
+    t20 = ((t2 >= t5) and (t2 >= t7)) and (t2 >= t9)
+    t25 = ((t5 > t2) and (t5 >= t7)) and (t5 >= t9)
+    t30 = ((t7 > t2) and (t7 > t5)) and (t7 >= t9)
     t33 = t2 if t20 else (t10 if t25 else (t11 if t30 else t13))
     t36 = t10 if t20 else (t5 if t25 else (t12 if t30 else t14))
     t39 = t11 if t20 else (t12 if t25 else (t7 if t30 else t15))
@@ -3244,7 +3244,7 @@ def screw__screw_kernel(inputs):
     t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
     t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) & (((t1 != 0) | (t3 != 0)) | (t5 != 0))) | (t14 > 1e+290)):
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
         return None  # rare: apply runs the kernel
     t26 = t24 == 0
     t27 = 1.0 if t26 else t24
@@ -3256,14 +3256,14 @@ def screw__screw_kernel(inputs):
     t42 = 0.5 * (a1 + a3)
     t44 = 0.5 * (a2 + a6)
     t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) & (t38 >= t40)
-    t52 = (t39 > t38) & (t39 >= t40)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
     t54 = t38 if t49 else (t42 if t52 else t44)
     t56 = t42 if t49 else (t39 if t52 else t46)
     t58 = t44 if t49 else (t46 if t52 else t40)
     t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
     t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) & (((t54 != 0) | (t56 != 0)) | (t58 != 0))) | (t63 > 1e+290)):
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
         return None  # rare: apply runs the kernel
     t75 = t73 == 0
     t76 = 1.0 if t75 else t73
@@ -3276,7 +3276,7 @@ def screw__screw_kernel(inputs):
     t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
     t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
     t115 = _op_sqrt(t105)
-    if (((t105 < 1e-290) & (((a9 != 0) | (a10 != 0)) | (a11 != 0))) | (t105 > 1e+290)):
+    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
         return None  # rare: apply runs the kernel
     t117 = t115 == 0
     t118 = 1.0 if t117 else t115
@@ -3303,7 +3303,7 @@ def screw__screw_kernel(inputs):
     _pack_3d(o1, 0, t161, t165, t169)
     o2 = _empty((3,), _f64)
     _pack_3d(o2, 0, t172, t175, t178)
-    return (o0, o1, o2, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), _bool((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) & ((_op_abs(t165)) <= 1.7976931348623157e+308)) & ((_op_abs(t169)) <= 1.7976931348623157e+308)) & ((_op_abs(t172)) <= 1.7976931348623157e+308)) & ((_op_abs(t175)) <= 1.7976931348623157e+308)) & ((_op_abs(t178)) <= 1.7976931348623157e+308)) & ((_op_abs(t136)) <= 1.7976931348623157e+308)) & ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308))),)
+    return (o0, o1, o2, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), _bool((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308))),)
 
 
 # rot_tools.rigid._points_kernel
@@ -3335,7 +3335,7 @@ def rigid__points_kernel(inputs):
     t15 = (((a0 * a12) + (a1 * a13)) + (a2 * a14)) + a9
     t16 = (((a3 * a12) + (a4 * a13)) + (a5 * a14)) + a10
     t17 = (((a6 * a12) + (a7 * a13)) + (a8 * a14)) + a11
-    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) & ((_op_abs(t16)) <= 1.7976931348623157e+308)) & ((_op_abs(t17)) <= 1.7976931348623157e+308)
+    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
     if (False if t25 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
@@ -3375,7 +3375,7 @@ def rigid__compose_kernel(inputs):
     t60 = (((a0 * a21) + (a1 * a22)) + (a2 * a23)) + a18
     t61 = (((a3 * a21) + (a4 * a22)) + (a5 * a23)) + a19
     t62 = (((a6 * a21) + (a7 * a22)) + (a8 * a23)) + a20
-    t70 = (((_op_abs(t60)) <= 1.7976931348623157e+308) & ((_op_abs(t61)) <= 1.7976931348623157e+308)) & ((_op_abs(t62)) <= 1.7976931348623157e+308)
+    t70 = (((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t61)) <= 1.7976931348623157e+308)) and ((_op_abs(t62)) <= 1.7976931348623157e+308)
     if (False if t70 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3, 3), _f64)
@@ -3406,7 +3406,7 @@ def rigid__invert_kernel(inputs):
     t15 = 0.0 - (((a0 * a9) + (a3 * a10)) + (a6 * a11))
     t16 = 0.0 - (((a1 * a9) + (a4 * a10)) + (a7 * a11))
     t17 = 0.0 - (((a2 * a9) + (a5 * a10)) + (a8 * a11))
-    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) & ((_op_abs(t16)) <= 1.7976931348623157e+308)) & ((_op_abs(t17)) <= 1.7976931348623157e+308)
+    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
     if (False if t25 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3, 3), _f64)
@@ -3456,7 +3456,7 @@ def fitting__distance_kernel(inputs):
     t48 = 0.5 * ((((a0 * a11) + (a3 * a14)) + (a6 * a17)) - (((a2 * a9) + (a5 * a12)) + (a8 * a15)))
     t50 = 0.5 * ((((a1 * a9) + (a4 * a12)) + (a7 * a15)) - (((a0 * a10) + (a3 * a13)) + (a6 * a16)))
     t59 = ((t46 * t46) + (t48 * t48)) + (t50 * t50)
-    if (((t59 < 1e-290) & (((t46 != 0) | (t48 != 0)) | (t50 != 0))) | (t59 > 1e+290)):
+    if (((t59 < 1e-290) and (((t46 != 0) or (t48 != 0)) or (t50 != 0))) or (t59 > 1e+290)):
         return None  # rare: apply runs the kernel
     return (_float64((_op_atan2((_op_sqrt(t59)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))),)
 
@@ -3485,7 +3485,7 @@ def decomposition__motion_kernel(inputs):
     t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
     t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) & (((t1 != 0) | (t3 != 0)) | (t5 != 0))) | (t14 > 1e+290)):
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
         return None  # rare: apply runs the kernel
     t26 = t24 == 0
     t27 = 1.0 if t26 else t24
@@ -3497,14 +3497,14 @@ def decomposition__motion_kernel(inputs):
     t42 = 0.5 * (a1 + a3)
     t44 = 0.5 * (a2 + a6)
     t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) & (t38 >= t40)
-    t52 = (t39 > t38) & (t39 >= t40)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
     t54 = t38 if t49 else (t42 if t52 else t44)
     t56 = t42 if t49 else (t39 if t52 else t46)
     t58 = t44 if t49 else (t46 if t52 else t40)
     t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
     t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) & (((t54 != 0) | (t56 != 0)) | (t58 != 0))) | (t63 > 1e+290)):
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
         return None  # rare: apply runs the kernel
     t75 = t73 == 0
     t76 = 1.0 if t75 else t73
@@ -3517,7 +3517,7 @@ def decomposition__motion_kernel(inputs):
     t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
     t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
     t115 = _op_sqrt(t105)
-    if (((t105 < 1e-290) & (((a9 != 0) | (a10 != 0)) | (a11 != 0))) | (t105 > 1e+290)):
+    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
         return None  # rare: apply runs the kernel
     t117 = t115 == 0
     t118 = 1.0 if t117 else t115
@@ -3549,7 +3549,7 @@ def decomposition__motion_kernel(inputs):
     t236 = ((t215 * (a10 - t231)) - (t210 * ((t100 * a9) - (t94 * a11)))) + t231
     t237 = t135 * t100
     t242 = ((t215 * (a11 - t237)) - (t210 * ((t94 * a10) - (t97 * a9)))) + t237
-    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) & ((_op_abs(t236)) <= 1.7976931348623157e+308)) & ((_op_abs(t242)) <= 1.7976931348623157e+308)
+    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t242)) <= 1.7976931348623157e+308)
     if (False if t250 else True):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
@@ -3562,7 +3562,7 @@ def decomposition__motion_kernel(inputs):
     _pack_3d(o4, 0, t172, t175, t178)
     o8 = _empty((6,), _f64)
     _pack_6d(o8, 0, (t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242)
-    return (o0, _float64(t36), o2, o3, o4, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), o8, _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) & ((_op_abs(t165)) <= 1.7976931348623157e+308)) & ((_op_abs(t169)) <= 1.7976931348623157e+308)) & ((_op_abs(t172)) <= 1.7976931348623157e+308)) & ((_op_abs(t175)) <= 1.7976931348623157e+308)) & ((_op_abs(t178)) <= 1.7976931348623157e+308)) & ((_op_abs(t136)) <= 1.7976931348623157e+308)) & ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) & t250)),)
+    return (o0, _float64(t36), o2, o3, o4, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), o8, _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) and t250)),)
 
 
 # rot_tools.axis_angle._rotvec_kernel
@@ -3581,7 +3581,7 @@ def axis_angle__rotvec_kernel(inputs):
     if (a0 + a1 + a2) * 0.0 != 0.0:
         return None
     t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
-    if (((t4 < 1e-290) & (((a0 != 0) | (a1 != 0)) | (a2 != 0))) | (t4 > 1e+290)):
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
         return None  # rare: apply runs the kernel
     t15 = _op_sqrt(t4)
     t17 = (_op_abs(t15)) <= 1.7976931348623157e+308
@@ -3632,7 +3632,7 @@ def axis_angle__axis_angle_kernel(inputs):
         return None
     t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
     t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) & (((a0 != 0) | (a1 != 0)) | (a2 != 0))) | (t4 > 1e+290)):
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
         return None  # rare: apply runs the kernel
     t16 = t14 == 0
     t17 = 1.0 if t16 else t14
@@ -3655,7 +3655,7 @@ def axis_angle__axis_angle_kernel(inputs):
     t41 = t34 * t25
     o0 = _empty((3, 3), _f64)
     _pack_9d(o0, 0, (t32 + (t33 * t20)), (t39 - t38), (t40 + t37), (t39 + t38), (t32 + (t34 * t23)), (t41 - t36), (t40 - t37), (t41 + t36), (t32 + ((t30 * t25) * t25)))
-    return (o0, _bool((t16 & (a3 != 0))),)
+    return (o0, _bool((t16 and (a3 != 0))),)
 
 
 # rot_tools.so3._quaternion_kernel
@@ -3739,7 +3739,7 @@ def screw__transform_of_screw_kernel(inputs):
         return None
     t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
     t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) & (((a0 != 0) | (a1 != 0)) | (a2 != 0))) | (t4 > 1e+290)):
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
         return None  # rare: apply runs the kernel
     t16 = t14 == 0
     t17 = 1.0 if t16 else t14
@@ -3768,7 +3768,7 @@ def screw__transform_of_screw_kernel(inputs):
     _pack_9d(o0, 0, (t67 + (t68 * t20)), (t74 - t73), (t75 + t72), (t74 + t73), (t67 + (t69 * t23)), (t76 - t71), (t75 - t72), (t76 + t71), (t67 + ((t31 * t25) * t25)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t52, t59, t66)
-    return (o0, o1, _bool(t16), _bool(((((_op_abs(t52)) <= 1.7976931348623157e+308) & ((_op_abs(t59)) <= 1.7976931348623157e+308)) & ((_op_abs(t66)) <= 1.7976931348623157e+308))),)
+    return (o0, o1, _bool(t16), _bool(((((_op_abs(t52)) <= 1.7976931348623157e+308) and ((_op_abs(t59)) <= 1.7976931348623157e+308)) and ((_op_abs(t66)) <= 1.7976931348623157e+308))),)
 
 
 # rot_tools.rigid._frame_kernel
@@ -3804,7 +3804,7 @@ def rigid__frame_kernel(inputs):
         return None
     t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
     t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) & (((a0 != 0) | (a1 != 0)) | (a2 != 0))) | (t4 > 1e+290)):
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
         return None  # rare: apply runs the kernel
     t16 = t14 == 0
     t17 = 1.0 if t16 else t14
@@ -3813,7 +3813,7 @@ def rigid__frame_kernel(inputs):
     t25 = 1.0 if t16 else (a2 / t17)
     t30 = ((a3 * a3) + (a4 * a4)) + (a5 * a5)
     t40 = _op_sqrt(t30)
-    if (((t30 < 1e-290) & (((a3 != 0) | (a4 != 0)) | (a5 != 0))) | (t30 > 1e+290)):
+    if (((t30 < 1e-290) and (((a3 != 0) or (a4 != 0)) or (a5 != 0))) or (t30 > 1e+290)):
         return None  # rare: apply runs the kernel
     t42 = t40 == 0
     t43 = 1.0 if t42 else t40
@@ -3822,7 +3822,7 @@ def rigid__frame_kernel(inputs):
     t51 = 1.0 if t42 else (a5 / t43)
     t56 = ((a6 * a6) + (a7 * a7)) + (a8 * a8)
     t66 = _op_sqrt(t56)
-    if (((t56 < 1e-290) & (((a6 != 0) | (a7 != 0)) | (a8 != 0))) | (t56 > 1e+290)):
+    if (((t56 < 1e-290) and (((a6 != 0) or (a7 != 0)) or (a8 != 0))) or (t56 > 1e+290)):
         return None  # rare: apply runs the kernel
     t68 = t66 == 0
     t69 = 1.0 if t68 else t66
@@ -3861,7 +3861,7 @@ def decomposition__values_kernel(inputs):
     t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
     t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
     t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) & (((t1 != 0) | (t3 != 0)) | (t5 != 0))) | (t14 > 1e+290)):
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
         return None  # rare: apply runs the kernel
     t26 = t24 == 0
     t27 = 1.0 if t26 else t24
@@ -3876,14 +3876,14 @@ def decomposition__values_kernel(inputs):
     t44 = 0.5 * t43
     t45 = a5 + a7
     t46 = 0.5 * t45
-    t49 = (t38 >= t39) & (t38 >= t40)
-    t52 = (t39 > t38) & (t39 >= t40)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
     t54 = t38 if t49 else (t42 if t52 else t44)
     t56 = t42 if t49 else (t39 if t52 else t46)
     t58 = t44 if t49 else (t46 if t52 else t40)
     t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
     t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) & (((t54 != 0) | (t56 != 0)) | (t58 != 0))) | (t63 > 1e+290)):
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
         return None  # rare: apply runs the kernel
     t75 = t73 == 0
     t76 = 1.0 if t75 else t73
@@ -3896,7 +3896,7 @@ def decomposition__values_kernel(inputs):
     t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
     t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
     t115 = _op_sqrt(t105)
-    if (((t105 < 1e-290) & (((a9 != 0) | (a10 != 0)) | (a11 != 0))) | (t105 > 1e+290)):
+    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
         return None  # rare: apply runs the kernel
     t117 = t115 == 0
     t118 = 1.0 if t117 else t115
@@ -3924,7 +3924,7 @@ def decomposition__values_kernel(inputs):
     t236 = ((t215 * (a10 - t231)) - (t210 * ((t100 * a9) - (t94 * a11)))) + t231
     t237 = t135 * t100
     t242 = ((t215 * (a11 - t237)) - (t210 * ((t94 * a10) - (t97 * a9)))) + t237
-    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) & ((_op_abs(t236)) <= 1.7976931348623157e+308)) & ((_op_abs(t242)) <= 1.7976931348623157e+308)
+    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t242)) <= 1.7976931348623157e+308)
     if (False if t250 else True):
         return None  # rare: apply runs the kernel
     t257 = 1.0 + a0
@@ -3933,15 +3933,15 @@ def decomposition__values_kernel(inputs):
     t262 = (t260 + a4) - a8
     t264 = (t260 - a4) + a8
     t266 = (t257 + a4) + a8
-    t271 = ((t259 >= t262) & (t259 >= t264)) & (t259 >= t266)
-    t276 = ((t262 > t259) & (t262 >= t264)) & (t262 >= t266)
-    t281 = ((t264 > t259) & (t264 > t262)) & (t264 >= t266)
+    t271 = ((t259 >= t262) and (t259 >= t264)) and (t259 >= t266)
+    t276 = ((t262 > t259) and (t262 >= t264)) and (t262 >= t266)
+    t281 = ((t264 > t259) and (t264 > t262)) and (t264 >= t266)
     t284 = t259 if t271 else (t41 if t276 else (t43 if t281 else t0))
     t287 = t41 if t271 else (t262 if t276 else (t45 if t281 else t2))
     t290 = t43 if t271 else (t45 if t276 else (t264 if t281 else t4))
     t293 = t0 if t271 else (t2 if t276 else (t4 if t281 else t266))
     t310 = (-1.0 if ((t293 if (t293 != 0) else (t284 if (t284 != 0) else (t287 if (t287 != 0) else t290))) < 0) else 1.0) / (_op_sqrt(((((t284 * t284) + (t287 * t287)) + (t290 * t290)) + (t293 * t293))))
-    return (((t94 * t36), (t97 * t36), (t100 * t36),), ((t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242,), (((t284 * t310) + 0.0), ((t287 * t310) + 0.0), ((t290 * t310) + 0.0), ((t293 * t310) + 0.0),), _float64(t36), _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) & ((_op_abs(t165)) <= 1.7976931348623157e+308)) & ((_op_abs(t169)) <= 1.7976931348623157e+308)) & ((_op_abs(((t165 * t130) - (t169 * t129)))) <= 1.7976931348623157e+308)) & ((_op_abs(((t169 * t128) - (t161 * t130)))) <= 1.7976931348623157e+308)) & ((_op_abs(((t161 * t129) - (t165 * t128)))) <= 1.7976931348623157e+308)) & ((_op_abs(t136)) <= 1.7976931348623157e+308)) & ((_op_abs((0.0 if t127 else (t136 / t143)))) <= 1.7976931348623157e+308)) & t250)),)
+    return (((t94 * t36), (t97 * t36), (t100 * t36),), ((t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242,), (((t284 * t310) + 0.0), ((t287 * t310) + 0.0), ((t290 * t310) + 0.0), ((t293 * t310) + 0.0),), _float64(t36), _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(((t165 * t130) - (t169 * t129)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t169 * t128) - (t161 * t130)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t161 * t129) - (t165 * t128)))) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else (t136 / t143)))) <= 1.7976931348623157e+308)) and t250)),)
 
 
 # rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, True, False)]

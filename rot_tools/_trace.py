@@ -84,9 +84,24 @@ for _name, _symbol in (('add', '+'), ('sub', '-'), ('truediv', '/'), ('floordiv'
                        ('mod', '%'), ('pow', '**')):
     setattr(_Sym, f'__{_name}__', _operator(f'{{}} {_symbol} {{}}'))
     setattr(_Sym, f'__r{_name}__', _operator(f'{{}} {_symbol} {{}}', reflected=True))
-for _name, _symbol in (('and', '&'), ('or', '|'), ('xor', '^')):
-    setattr(_Sym, f'__{_name}__', _operator(f'{{}} {_symbol} {{}}', logical=True))
-    setattr(_Sym, f'__r{_name}__', _operator(f'{{}} {_symbol} {{}}', reflected=True, logical=True))
+
+
+def _condition(word, symbol, reflected=False):
+    """``a & b`` / ``a | b`` of conditions, written ``a and b`` / ``a or b``: on the bools of
+    one item the same value, and the right side is skipped when the left decides (a guard's
+    ``rare & nonzero`` costs one comparison on an ordinary item)."""
+    def op(self, other):
+        a, b = (other, self) if reflected else (self, other)
+        template = f'{{}} {word} {{}}' if not (_real(a) or _real(b)) else f'{{}} {symbol} {{}}'
+        return self.trace.emit(template, a, b, real=False)
+    return op
+
+
+for _name, _word, _symbol in (('and', 'and', '&'), ('or', 'or', '|')):
+    setattr(_Sym, f'__{_name}__', _condition(_word, _symbol))
+    setattr(_Sym, f'__r{_name}__', _condition(_word, _symbol, reflected=True))
+_Sym.__xor__ = _operator('{} ^ {}', logical=True)
+_Sym.__rxor__ = _operator('{} ^ {}', reflected=True, logical=True)
 for _name, _symbol in (('lt', '<'), ('le', '<='), ('gt', '>'), ('ge', '>='), ('eq', '=='),
                        ('ne', '!=')):
     setattr(_Sym, f'__{_name}__', _operator(f'{{}} {_symbol} {{}}', logical=True))
