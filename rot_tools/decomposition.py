@@ -65,10 +65,12 @@ def decompose(R, b, seq='ZYX', *, check=True):
 class Values(NamedTuple):
     """The numbers rotation_node publishes for one input, as plain Python floats.
 
-    rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked, rad (3); twist: screw_log
-    (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives it (4).
+    matrix: R row-major (9); rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked,
+    rad (3); twist: screw_log (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives
+    it (4). For a batch, arrays with those last dimensions.
     """
 
+    matrix: list
     rotvec: tuple
     euler: tuple
     twist: tuple
@@ -90,7 +92,8 @@ _VALUES_KERNELS = {seq: partial(_values_kernel, spec=parse_sequence(seq))
 def decompose_values(R, b, seq='ZYX'):
     """Return the Values of one rigid motion (R (3, 3), b (3,)), from one kernel pass.
 
-    Rotation vector, Euler angles of ``seq`` (rad), twist and quaternion. The same kernels
+    R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist and
+    quaternion. The same kernels
     as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
     θ = π), without building an array for each: rotation_node calls it for every message.
     R is not validated (check=False: the node builds R itself); RotationError where the
@@ -101,4 +104,6 @@ def decompose_values(R, b, seq='ZYX'):
         _VALUES_KERNELS[seq], [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)],
         _VALUES_OUTPUTS)
     refuse_far_axis(fits, angle, b)
-    return Values(rotvec, euler, twist, q)
+    R = np.asarray(R, dtype=np.float64)
+    matrix = R.ravel().tolist() if R.ndim == 2 else R.reshape(R.shape[:-2] + (9,))
+    return Values(matrix, rotvec, euler, twist, q)

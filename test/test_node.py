@@ -32,6 +32,7 @@ from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
     rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
 from rot_tools.report import transform_report
+from rot_tools import messages, rotation_node
 from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 
 ATOL = 1e-12
@@ -824,6 +825,51 @@ def test_screw_path_refusals(rig, case):
     rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
     refused = rig.report()['refused']
     assert refused['total'] == 1 and refused[reason] == 1
+
+
+# ---------------------------------------------------------------------------------------
+# The tables: a new output or parameter is one row
+
+
+def test_every_output_row_is_published_with_its_type(rig):
+    published = {pub.topic_name: pub.msg_type for pub in rig.node.publishers}
+    for kind in rotation_node.OUTPUTS:
+        assert published[rig.node.resolve_topic_name(kind.topic)] is kind.msg_type
+    assert [kind.topic[2:] for kind in rotation_node.OUTPUTS] == list(ALWAYS)
+
+
+def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):
+    row = rotation_node.OutputKind('~/euler_again', Vector3Stamped, 'euler',
+                                   messages.vector3_stamped_msg, angles=True)
+    monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (row,))
+    tester.subscribe(f'{namespace}/rot_tools/euler_again', Vector3Stamped)
+    rig = make_rig(angle_unit='deg')  # (discovery waits for the new topic's match too)
+    q, p = POSE_CASES['general']
+    stamp = rig.send('pose', pose_stamped(q, p))
+    out = rig.outputs(stamp)
+    (extra,) = rig.tester.wait_messages(rig.topic('euler_again'))
+    assert extra.header.stamp.sec == stamp
+    assert xyz(extra.vector).tolist() == xyz(out['euler_angles'].vector).tolist()
+    angles, _ = matrix_to_euler(quaternion_to_matrix(q), 'ZYX')
+    np.testing.assert_allclose(xyz(extra.vector), np.degrees(angles), rtol=0, atol=1e-10)
+
+
+def test_a_new_parameter_is_one_row(ros_context, make_rig, namespace, monkeypatch):
+    from rcl_interfaces.msg import ParameterDescriptor
+    row = rotation_node.ParameterSpec(
+        2.0, ParameterDescriptor(type=ParameterType.PARAMETER_DOUBLE, description='a test'),
+        lambda value: '' if value < 5.0 else f'test_limit {value} is not < 5')
+    monkeypatch.setattr(rotation_node, 'PARAMETERS',
+                        dict(rotation_node.PARAMETERS, test_limit=row))
+    rig = make_rig()
+    assert rig.node.get_parameter('test_limit').value == 2.0
+    assert set_one(rig.node, 'test_limit', 4.5).successful
+    result = set_one(rig.node, 'test_limit', 7.0)
+    assert not result.successful and result.reason == 'test_limit 7.0 is not < 5'
+    assert rig.node.get_parameter('test_limit').value == 4.5
+    with pytest.raises(InvalidParameterValueException, match='test_limit 9.0 is not < 5'):
+        RotationNode(context=ros_context, namespace=namespace,
+                     parameter_overrides=[Parameter('test_limit', value=9.0)])
 
 
 # ---------------------------------------------------------------------------------------
