@@ -67,7 +67,9 @@ class Values(NamedTuple):
 
     matrix: R row-major (9); rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked,
     rad (3); twist: screw_log (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives
-    it (4). For a batch, arrays with those last dimensions.
+    it (4); rpy: roll, pitch, yaw (REP 103: about the fixed x, y, z axes, the extrinsic
+    sequence 'xyz'), rad (3), whatever sequence was asked. For a batch, arrays with those
+    last dimensions.
     """
 
     matrix: list
@@ -75,16 +77,48 @@ class Values(NamedTuple):
     euler: tuple
     twist: tuple
     quaternion: tuple
+    rpy: tuple
+
+
+RPY_SEQUENCE = 'xyz'
+"""Roll, pitch, yaw (REP 103): rotations about the fixed x, y, z axes, in that order."""
+
+_RPY_SPEC = parse_sequence(RPY_SEQUENCE)
+
+
+class _Unbranched:
+    """An engine's ops whose ``any`` is always true: a kernel's optional branch always runs.
+
+    The kernels skip work nobody needs with ``if ops.any(cond):`` (matrix_to_euler's gimbal
+    lock), and the compiled one-item engine (rot_tools._trace) follows each such branch as a
+    path of its own. The roll, pitch, yaw of the node's values kernel would double its paths
+    (to 96 for 22 of the 24 sequences: the lock of 'xyz' is another test than theirs), more
+    than rot_tools._trace compiles, and every message would run on Python floats, 7x slower.
+    Run through this, the lock's extra atan2 is computed on every item and the
+    ``ops.where`` that follows picks the result: one path, the same numbers.
+    """
+
+    def __init__(self, ops):
+        self._ops = ops
+
+    @staticmethod
+    def any(cond):
+        return True
+
+    def __getattr__(self, name):
+        return getattr(self._ops, name)
 
 
 def _values_kernel(ops, m, b, spec):
     axis, angle, angles, _, *_, twist, fits = _decompose_kernel(ops, m, b, spec)
     (q,) = quaternion_of_matrix_kernel(ops, m)
-    return [a * angle for a in axis], angles, twist, q, angle, fits
+    rpy, _ = angles_kernel(_Unbranched(ops), m, _RPY_SPEC, GIMBAL_LOCK_TOL)
+    return [a * angle for a in axis], angles, twist, q, rpy, angle, fits
 
 
 _FLOATS3 = ((3,), float)
-_VALUES_OUTPUTS = [_FLOATS3, _FLOATS3, ((6,), float), ((4,), float), _NUM, ((), np.bool_)]
+_VALUES_OUTPUTS = [_FLOATS3, _FLOATS3, ((6,), float), ((4,), float), _FLOATS3, _NUM,
+                   ((), np.bool_)]
 _VALUES_KERNELS = {seq: partial(_values_kernel, spec=parse_sequence(seq))
                    for seq in EULER_SEQUENCES}
 
@@ -92,18 +126,18 @@ _VALUES_KERNELS = {seq: partial(_values_kernel, spec=parse_sequence(seq))
 def decompose_values(R, b, seq='ZYX'):
     """Return the Values of one rigid motion (R (3, 3), b (3,)), from one kernel pass.
 
-    R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist and
-    quaternion. The same kernels
+    R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist,
+    quaternion, and roll, pitch, yaw (rad). The same kernels
     as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
     θ = π), without building an array for each: rotation_node calls it for every message.
     R is not validated (check=False: the node builds R itself); RotationError where the
     screw overflows float64, as decompose.
     """
     parse_sequence(seq)  # raises the RotationError of an unknown sequence
-    rotvec, euler, twist, q, angle, fits = apply(
+    rotvec, euler, twist, q, rpy, angle, fits = apply(
         _VALUES_KERNELS[seq], [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)],
         _VALUES_OUTPUTS)
     refuse_far_axis(fits, angle, b)
     R = np.asarray(R, dtype=np.float64)
     matrix = R.ravel().tolist() if R.ndim == 2 else R.reshape(R.shape[:-2] + (9,))
-    return Values(matrix, rotvec, euler, twist, q)
+    return Values(matrix, rotvec, euler, twist, q, rpy)

@@ -48,7 +48,7 @@ from rot_tools import drawing, messages, runtime
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
-from rot_tools.report import to_yaml, transform_report
+from rot_tools.report import sequence_hint, to_yaml, transform_report
 # The process runtime's names, for callers written before rot_tools.runtime existed (the
 # benchmarks, test_node_executor.py): import them from rot_tools.runtime.
 from rot_tools.runtime import guard_callbacks, make_executor, serve, spin  # noqa: F401
@@ -123,6 +123,7 @@ OUTPUTS = (
     OutputKind('~/axis_angle', Vector3Stamped, 'rotvec', messages.vector3_stamped_msg),
     OutputKind('~/euler_angles', Vector3Stamped, 'euler', messages.vector3_stamped_msg,
                angles=True),
+    OutputKind('~/rpy', Vector3Stamped, 'rpy', messages.vector3_stamped_msg, angles=True),
     OutputKind('~/screw', TwistStamped, 'twist', messages.twist_stamped_msg),
 )
 """Every output published for each accepted input, from one decompose_values pass; a new
@@ -167,7 +168,8 @@ def _descriptor(kind, description, constraints='', fp_range=None):
 def _check_sequence(value):
     if value in EULER_SEQUENCES:
         return ''
-    return f'euler_sequence {value!r} is not a sequence: use one of ' + ' '.join(EULER_SEQUENCES)
+    return (f'euler_sequence {value!r} is not a sequence: use one of '
+            + ' '.join(EULER_SEQUENCES) + sequence_hint(value))
 
 
 def _check_angle_unit(value):

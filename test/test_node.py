@@ -39,7 +39,7 @@ ATOL = 1e-12
 INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped,
           'pose_with_covariance': PoseWithCovarianceStamped, 'odometry': Odometry, 'imu': Imu,
           'orientation': QuaternionStamped}
-ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw')
+ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
 """Outputs published for every accepted input (screw_axis only for a non-identity one)."""
 
 
@@ -154,6 +154,14 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
     np.testing.assert_allclose(xyz(out['euler_angles'].vector),
                                np.degrees(angles) if degrees else angles,
                                rtol=0, atol=ATOL * (180 if degrees else 1))
+    # ~/rpy: x, y, z = roll, pitch, yaw (REP 103), for every sequence: scipy's extrinsic 'xyz'
+    # where it is unique; at gimbal lock the library's rule (yaw 0, roll the free angle).
+    rpy, lock = matrix_to_euler(R, 'xyz')
+    if not lock:
+        np.testing.assert_allclose(rpy, Rotation.from_matrix(R).as_euler('xyz'), rtol=0,
+                                   atol=1e-10)
+    np.testing.assert_allclose(xyz(out['rpy'].vector), np.degrees(rpy) if degrees else rpy,
+                               rtol=0, atol=ATOL * (180 if degrees else 1))
     twist = out['screw'].twist
     np.testing.assert_allclose(np.concatenate([xyz(twist.angular), xyz(twist.linear)]),
                                screw_log(R, b), rtol=0, atol=ATOL * (1 + np.linalg.norm(b)))
@@ -184,6 +192,8 @@ class Rig:
         self.prefix = node.get_fully_qualified_name()
         tester.add_node(node)
         tester.subscribe_outputs(self.prefix)
+        if self.topic('rpy') not in tester.received:  # (conftest's list may lack it)
+            tester.subscribe(self.topic('rpy'), Vector3Stamped)
         tester.subscribe_rosout()
         self.pubs = {name: tester.node.create_publisher(msg_type, f'{self.prefix}/{name}', 10)
                      for name, msg_type in INPUTS.items()}
@@ -368,6 +378,27 @@ def test_robot_input_outputs(rig, kind, case):
     q_report = report['quaternion']
     assert [q_report[k] for k in 'xyzw'] == pytest.approx(
         Rotation.from_quat(q).as_quat(canonical=True).tolist(), rel=1e-11, abs=1e-12)
+
+
+def test_rpy_whatever_the_euler_sequence(make_rig):
+    # An IMU rolled 5°, pitched −10° and yawed 30° (REP 103: about the fixed x, y, z axes):
+    # ~/rpy carries them as x, y, z in angle_unit, with euler_sequence ZXZ; ~/describe too.
+    q = Rotation.from_euler('xyz', [5.0, -10.0, 30.0], degrees=True).as_quat()
+    rig = make_rig(euler_sequence='ZXZ', angle_unit='deg')
+    out = rig.roundtrip('imu', imu(q))
+    np.testing.assert_allclose(xyz(out['rpy'].vector), [5.0, -10.0, 30.0], rtol=0, atol=1e-12)
+    assert out['rpy'].header == out['euler_angles'].header
+    np.testing.assert_allclose(
+        xyz(out['euler_angles'].vector),
+        np.degrees(matrix_to_euler(quaternion_to_matrix(q), 'ZXZ')[0]), rtol=0, atol=1e-12)
+    rpy = rig.report()['rpy']
+    assert list(rpy) == ['roll', 'pitch', 'yaw', 'unit'] and rpy['unit'] == 'deg'
+    np.testing.assert_allclose([rpy['roll'], rpy['pitch'], rpy['yaw']], [5.0, -10.0, 30.0],
+                               rtol=0, atol=1e-10)
+    assert set_one(rig.node, 'angle_unit', 'rad').successful
+    out = rig.roundtrip('orientation', quaternion_stamped(q))
+    np.testing.assert_allclose(xyz(out['rpy'].vector), np.radians([5.0, -10.0, 30.0]),
+                               rtol=0, atol=1e-15)
 
 
 def test_odometry_yaw_in_degrees(make_rig):
@@ -963,6 +994,9 @@ def test_marker_scale(make_rig):
 
 REFUSED_PARAMETERS = [  # (name, value, why)
     ('euler_sequence', 'ZZY', 'not a sequence'),
+    ('euler_sequence', 'RPY', "roll, pitch, yaw (about the fixed x, y, z axes) are the "
+     "extrinsic sequence 'xyz': every report prints them as rpy, and rotation_node "
+     'publishes them on ~/rpy'),
     ('euler_sequence', 'zYx', 'not a sequence'),
     ('euler_sequence', '', 'not a sequence'),
     ('euler_sequence', 3, 'Wrong parameter type'),
