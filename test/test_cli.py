@@ -103,7 +103,7 @@ def check_rotation(rep, R, seq='ZYX', deg=False):
 
 
 def check_rpy(printed, R, deg=False):
-    """rpy: roll, pitch, yaw about the fixed x, y, z axes (scipy's 'xyz'), in the Euler unit."""
+    """Check rpy: roll, pitch, yaw about the fixed x, y, z axes (scipy's 'xyz'), in the unit."""
     assert list(printed) == ['roll', 'pitch', 'yaw', 'unit']
     assert printed['unit'] == ('deg' if deg else 'rad')
     angles = np.array([printed['roll'], printed['pitch'], printed['yaw']])
@@ -115,7 +115,7 @@ def check_rpy(printed, R, deg=False):
 
 
 def check_quaternion(printed, R):
-    """Check rpy: roll, pitch, yaw about the fixed x, y, z axes (scipy's 'xyz'), in the unit."""
+    """The printed {x, y, z, w} is scipy's canonical quaternion of R (up to sign at π)."""
     assert list(printed) == ['x', 'y', 'z', 'w']
     q = np.array(list(printed.values()))
     reference = Rotation.from_matrix(R).as_quat(canonical=True)  # (x, y, z, w)
