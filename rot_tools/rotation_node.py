@@ -69,6 +69,14 @@ DEFAULT_PATH_STEPS = 20
 MAX_PATH_STEPS = 10_000
 """A tolerance that needs more steps than this is refused (the reply would be huge)."""
 
+MAX_REPLY_BYTES = 16_000_000
+"""Largest ~/screw_path reply (serialised bytes); beyond it the request is path_too_long."""
+
+REPLY_BYTES_PER_POSE = 80
+"""Serialised bytes of one PoseStamped of a reply, besides its frame_id: stamp 8, string
+length 4 and terminating NUL 1, alignment of the pose at most 7, pose 7 × 8 = 56 (76; the
+Path's header, sequence length and encapsulation fit in one more)."""
+
 MARKER_RATE = 30.0
 """Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
 
@@ -364,17 +372,19 @@ class RotationNode(Node):
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
-    def _refuse(self, topic, reason, text):
+    def _refuse(self, topic, reason, text, error=False):
         """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
 
         Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
         stream (a raw IMU without orientation at 50 Hz) would silence every other one.
+        ``error``: log at error level (a refused service request).
         """
         self._refused[reason] += 1
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
             self._warned[topic, reason] = now
-            self.get_logger().warning(f'refused input on {topic} ({reason}): {text}')
+            log = self.get_logger().error if error else self.get_logger().warning
+            log(f'refused input on {topic} ({reason}): {text}')
 
     # -- markers -----------------------------------------------------------------------
 
@@ -462,7 +472,11 @@ class RotationNode(Node):
         return response
 
     def _on_screw_path(self, request, response):
-        """Constant-screw motion start → goal, poses at most ``tolerance`` apart."""
+        """Constant-screw motion start → goal, poses at most ``tolerance`` apart.
+
+        Every failure is a refusal: counted by reason, logged (throttled per reason), and
+        answered with an empty path. The reply is bounded in bytes before it is built.
+        """
         start, goal = request.start, request.goal
         response.plan.header = start.header
         try:
@@ -474,17 +488,25 @@ class RotationNode(Node):
             R0, b0 = messages.pose_to_rt(start.pose, q_tol, 'start.pose')
             R1, b1 = messages.pose_to_rt(goal.pose, q_tol, 'goal.pose')
             with np.errstate(all='ignore'):
+                if not np.isfinite(R0.T @ (b1 - b0)).all():
+                    raise messages.RefusedInput(
+                        NOT_DECOMPOSABLE, 'start and goal are too far apart: goal.position '
+                        '− start.position overflows float64 (beyond ±1.8e308)')
                 steps = self._path_steps(R0, b0, R1, b1, request.tolerance)
+                self._check_reply_bytes(start.header.frame_id, steps + 1)
                 Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, steps + 1),
                                            check=False)
             if not (np.isfinite(Rs).all() and np.isfinite(bs).all()):
                 raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
+            plan = messages.path_msg(start.header, start, goal, Rs, bs)
         except messages.RefusedInput as exc:
-            self._refused[exc.reason] += 1
-            self.get_logger().error(f'refused request on {self._screw_path_name} '
-                                    f'({exc.reason}): {exc}', throttle_duration_sec=1.0)
+            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True)
             return response
-        response.plan = messages.path_msg(start.header, start, goal, Rs, bs)
+        except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
+            self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
+                         f'no screw motion from start to goal: {exc}', error=True)
+            return response
+        response.plan = plan
         return response
 
     @staticmethod
@@ -510,6 +532,31 @@ class RotationNode(Node):
                 PATH_TOO_LONG, f'tolerance {tolerance:g} needs {need:.3g} steps, more than '
                 f'{MAX_PATH_STEPS}')
         return max(1, math.ceil(need - 1e-9))  # 4 + rounding noise is 4 steps, not 5
+
+    @staticmethod
+    def _reply_bytes(frame_id, poses):
+        """Return an upper bound of the serialised size of a GetPlan reply (CDR bytes).
+
+        The path's header and each of its ``poses`` carries a copy of ``frame_id``:
+        REPLY_BYTES_PER_POSE plus the frame_id's UTF-8 bytes each (the Path's own header
+        and sequence length counted as one more pose).
+        """
+        size = len(frame_id.encode('utf-8', 'surrogatepass'))
+        return (poses + 1) * (size + REPLY_BYTES_PER_POSE)
+
+    @classmethod
+    def _check_reply_bytes(cls, frame_id, poses):
+        """Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
+
+        Checked before anything is built: a 100 kB frame_id × 10,001 poses is a 1 GB
+        reply, and the node would hold it twice (messages and their serialisation).
+        """
+        size = cls._reply_bytes(frame_id, poses)
+        if size > MAX_REPLY_BYTES:
+            frame_bytes = len(frame_id.encode('utf-8', 'surrogatepass'))
+            raise messages.RefusedInput(
+                PATH_TOO_LONG, f'a reply of {poses} poses with a frame_id of {frame_bytes} '
+                f'bytes would take {size / 1e6:.3g} MB, more than {MAX_REPLY_BYTES / 1e6:g} MB')
 
 
 def main(args=None):
