@@ -46,7 +46,8 @@ from rot_tools import (
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
 from rot_tools.errors import RotationError
-from rot_tools.report import DEFAULT_PRECISION, to_json, to_yaml, transform_report
+from rot_tools.report import DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
+from rot_tools.report import transform_report
 
 PROG = 'rot-tools'
 MATRIX_TOL = 1e-5
@@ -132,7 +133,7 @@ def _number(text):
 def _sequence(text):
     if text not in EULER_SEQUENCES:
         raise argparse.ArgumentTypeError(
-            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}')
+            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}{sequence_hint(text)}')
     return text
 
 
