@@ -39,6 +39,13 @@ line is known to be good: ``--help``, ``--version`` and bad arguments start noth
 ``rot-tools`` stays ROS-free.
 """
 
+if __name__ == '__main__':
+    # ``python -m rot_tools.rotation_client`` runs like the console script: Ctrl-C at any
+    # moment, imports included, ends it with status 130 (rot_tools.runtime.start_command).
+    import sys
+    from rot_tools.runtime import start_command
+    sys.exit(start_command('rot_tools.rotation_client'))
+
 import argparse
 from collections import deque
 import math
@@ -50,6 +57,7 @@ import time
 import numpy as np
 import yaml
 
+from rot_tools import runtime
 from rot_tools.euler import EULER_SEQUENCES, euler_to_matrix, matrix_to_euler
 from rot_tools.report import to_json, to_yaml
 from rot_tools.so3 import quaternion_to_matrix
@@ -123,12 +131,7 @@ class _Version(argparse.Action):
         super().__init__(option_strings, dest, nargs=0, default=default, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        from importlib.metadata import PackageNotFoundError, version
-        try:
-            text = f'{PROG} {version("rot_tools")}'
-        except PackageNotFoundError:
-            parser.error('--version: rot_tools is not installed (no distribution metadata)')
-        print(text)
+        print(runtime.program_version(PROG))
         parser.exit(0)
 
 
@@ -331,38 +334,6 @@ def without_ros_args(argv):
         else:
             kept.append(arg)
     return kept
-
-
-_C_LOCATION = re.compile(r',? at [^,]*\.[ch](pp)?:\d+')
-
-
-def init_ros(argv, **kwargs):
-    """rclpy.init(args=argv, **kwargs); bad ROS arguments: one line on stderr, exit 2.
-
-    rcl's own log line about them is silenced, and its message shortened to what and why.
-    (rot_tools.runtime.init_ros is to replace this.)
-    """
-    import rclpy
-    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-    from rclpy.logging import get_logger_level, LoggingSeverity, set_logger_level
-    level = get_logger_level('rcl')
-    set_logger_level('rcl', LoggingSeverity.FATAL)
-    try:
-        rclpy.init(args=argv, **kwargs)
-    except _rclpy.UnknownROSArgsError as exc:
-        unknown = re.findall(r"'([^']*)'", str(exc)) or [str(exc)]
-        _fail('unknown ROS argument ' + ', '.join(unknown) + ' (after --ros-args)')
-    except _rclpy.RCLError as exc:
-        text = _C_LOCATION.sub('', str(exc)).replace('failed to initialize rcl: ', '')
-        _fail('bad ROS arguments: ' + ' '.join(text.split()))
-    finally:
-        if get_logger_level('rcl') == LoggingSeverity.FATAL:  # not set by --log-level
-            set_logger_level('rcl', level)
-
-
-def _fail(text):
-    print(f'{PROG}: error: {text}', file=sys.stderr)
-    raise SystemExit(2)
 
 
 # ---------------------------------------------------------------------------------------
@@ -764,7 +735,7 @@ def main(argv=None):
     client = None
     try:
         # Without rclpy's signal handlers Ctrl-C is a plain KeyboardInterrupt.
-        init_ros(argv, signal_handler_options=SignalHandlerOptions.NO)
+        runtime.init_ros(PROG, argv, signal_handler_options=SignalHandlerOptions.NO)
         client = Client(args.node, args.timeout)
         result = COMMANDS[args.command](client, args)
     except Unreachable as exc:
@@ -774,8 +745,8 @@ def main(argv=None):
         print(f'{PROG}: {exc}', file=sys.stderr)
         return 2
     except NameValidationException as exc:  # a -r __node:= / __ns:= rcl could not use
-        print(f'{PROG}: error: {str(exc).splitlines()[0].rstrip(":")}', file=sys.stderr)
-        return 2
+        print(f'{PROG}: {runtime.ros_argument_error(exc)}', file=sys.stderr)
+        return runtime.EXIT_USAGE
     except KeyboardInterrupt:
         return 130
     finally:
@@ -790,6 +761,3 @@ def main(argv=None):
         write(to_yaml(result))
     return 0
 
-
-if __name__ == '__main__':
-    sys.exit(main())
