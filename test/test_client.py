@@ -21,6 +21,7 @@ from scipy.spatial.transform import Rotation
 import yaml
 
 from conftest import console_script, NodeProcess, REPO, RUN, script_env
+from doc_blocks import assert_doc_output
 
 CLIENT = console_script('rotation_client', 'rot_tools.rotation_client')
 DIGITS = dict(rel=1e-11, abs=1e-12)
@@ -478,3 +479,41 @@ def test_interrupt_exits_promptly_and_quietly(tester):
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=30)  # well before the 60 s --timeout
     assert process.returncode == 130 and out == '' and err == '', err
+
+
+# ---------------------------------------------------------------------------------------
+# doc/client.md's examples are this output
+
+
+def console(*commands, names=()):
+    """The transcript of rotation_client ``commands`` as doc/client.md shows it.
+
+    Each command is (shown, extra): the arguments shown after ``$ rotation_client``, and
+    those added to run it here (this run's node). ``names`` are (real, shown) node names,
+    replaced in the output. A failed command is followed by ``$ echo $?`` and its status.
+    """
+    lines = []
+    for shown, extra in commands:
+        result = run(*shown.split(), *extra)
+        lines.append(f'$ rotation_client {shown}\n{result.stdout}{result.stderr}')
+        if result.returncode:
+            lines.append(f'$ echo $?\n{result.returncode}\n')
+    text = ''.join(lines)
+    for real, doc in names:
+        text = text.replace(real, doc)
+    return text
+
+
+def test_doc_examples(node):
+    shown = (node, '/rot_tools')
+    assert_doc_output('client-euler', console(
+        ('euler ZYX 30 20 10 --deg', ('--node', node)), names=[shown]))
+    assert_doc_output('client-screw-path', console(
+        ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 2.0', ('--node', node)),
+        names=[shown]))
+    absent = f'/{RUN}/arm/rot_tools'
+    assert_doc_output('client-errors', console(
+        ('orientation 0 0 0 0', ('--node', node)),
+        ('describe --node /arm/rot_tools --timeout 2', ('--node', absent)),
+        ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1e-300', ()),
+        names=[shown, (absent, '/arm/rot_tools')]))
