@@ -22,6 +22,8 @@ line of text.
 """
 
 from contextlib import contextmanager
+from itertools import islice
+from operator import attrgetter
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +57,7 @@ _COLUMN_SHAPE = {'position': _VECTOR, 'orientation': _QUATERNION,
                  'angular_velocity': _VECTOR}
 
 CHUNK = 1 << 15
-"""Messages of one topic parsed together (their raw bytes are dropped afterwards)."""
+"""Messages read at a time; each topic's among them are parsed together, then dropped."""
 
 _SIZES = {'bool': 1, 'byte': 1, 'char': 1, 'int8': 1, 'uint8': 1, 'int16': 2, 'uint16': 2,
           'int32': 4, 'uint32': 4, 'float32': 4, 'int64': 8, 'uint64': 8, 'float64': 8}
@@ -370,12 +372,12 @@ def fields_of_objects(messages, msgtype):
 
 
 class _TopicReader:
-    """Parses one topic's raw messages chunk by chunk into Columns."""
+    """Parses one topic's raw messages, a chunk at a time, into Columns."""
 
     def __init__(self, reader, topic, msgtype, fast=True):
         self.reader, self.msgtype = reader, msgtype
         self.columns = Columns(topic, msgtype)
-        self.raw, self.times = [], []
+        self.count = 0
         self.layout = None
         if fast:
             try:
@@ -383,14 +385,12 @@ class _TopicReader:
             except (_Unsupported, KeyError):
                 self.layout = None
 
-    def flush(self):
-        if not self.raw:
-            return
-        raw, times, self.raw, self.times = self.raw, self.times, [], []
+    def add(self, raw, times):
         fields = self._fast(raw) if self.layout is not None else None
         if fields is None:
             fields = fields_of_objects(self._deserialise(raw), self.msgtype)
-        self.columns.add(np.array(times, np.int64), fields)
+        self.columns.add(np.asarray(times, np.int64), fields)
+        self.count += len(raw)
 
     def _fast(self, raw):
         """The fields of raw messages by their layout, None if any group fails."""
@@ -413,16 +413,21 @@ class _TopicReader:
         return _assemble(pieces, n, self.msgtype)
 
     def _deserialise(self, raw):
-        topic = self.columns.topic
         out = []
         for k, data in enumerate(raw):
             try:
                 out.append(self.reader.deserialize(data, self.msgtype))
             except Exception as exc:  # noqa: BLE001 - rosbags' serde errors vary
-                raise BagError(f'{topic}: message {len(self.columns._parts) * CHUNK + k} '
-                               f'cannot be decoded as {self.msgtype}: {_one_line(exc)}'
-                               ) from None
+                raise BagError(f'{self.columns.topic}: message {self.count + k} cannot be '
+                               f'decoded as {self.msgtype}: {_one_line(exc)}') from None
         return out
+
+
+def _messages(reader, connections, start, stop):
+    """rosbags' message generator; one bag's own reader when there is one (no merge)."""
+    if len(reader.readers) == 1:
+        return reader.readers[0].messages(connections=connections, start=start, stop=stop)
+    return reader.messages(connections=connections, start=start, stop=stop)
 
 
 def read_topics(reader, connections, start=None, stop=None, fast=True, progress=None):
@@ -440,18 +445,23 @@ def read_topics(reader, connections, start=None, stop=None, fast=True, progress=
         by_id[conn.id] = topic_reader
     count = 0
     try:
-        for conn, timestamp, raw in reader.messages(connections=connections, start=start,
-                                                    stop=stop):
-            target = by_id[conn.id]
-            target.raw.append(raw)
-            target.times.append(timestamp)
-            if len(target.raw) >= CHUNK:
-                target.flush()
-                count += CHUNK
-                if progress is not None:
-                    progress(count)
-        for target in readers.values():
-            target.flush()
+        messages = _messages(reader, connections, start, stop)
+        while True:
+            chunk = list(islice(messages, CHUNK))
+            if not chunk:
+                break
+            conns, times, raws = zip(*chunk)
+            ids = np.fromiter(map(attrgetter('id'), conns), np.int64, len(chunk))
+            unique = np.unique(ids)
+            if len(unique) == 1:
+                by_id[int(unique[0])].add(raws, times)
+            else:
+                for conn_id in unique:
+                    index = np.flatnonzero(ids == conn_id).tolist()
+                    by_id[int(conn_id)].add([raws[i] for i in index], [times[i] for i in index])
+            count += len(chunk)
+            if progress is not None:
+                progress(count)
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags' reader
