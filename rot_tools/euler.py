@@ -169,7 +169,7 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
     """
     spec = parse_sequence(seq)
-    require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
+    lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
     kernel = _ANGLES_KERNELS[seq] if lock_tol == GIMBAL_LOCK_TOL else partial(
         angles_kernel, spec=spec, lock_tol=lock_tol)
     return apply_to_rotations(kernel, R, check, [((3,), np.float64), ((), np.bool_)])

@@ -8,9 +8,12 @@
   S = U·diag(σ1, σ2, σ3)·Vᵀ, M = U·diag(1, 1, s)·Vᵀ with s = det(U·Vᵀ) = ±1. It is unique
   unless σ2 + s·σ3 = 0 (two rotations π apart with equal weights give S of rank 1).
 - **Fit (Wahba's problem, Kabsch).** The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² maximises
-  tr(Rᵀ·H) with H = Σ wᵢ·aᵢbᵢᵀ, so it is the same SVD construction on H. When H has rank 1
-  (a single pair, or all pairs parallel) every rotation about â does as well; the smallest
-  rotation taking b̂ onto â is returned.
+  tr(Rᵀ·H) with H = Σ wᵢ·aᵢbᵢᵀ, so it is the same SVD construction on H. It takes H's
+  first right singular vector onto its first left one; when that direction dominates H
+  (σ2 ≤ DOMINANT·σ1: one weight or one length far above the others), the turn about it is
+  fitted from the pairs directly, since H's rounding (~ε·σ1) would swamp the small pairs.
+  When H has rank 1 (a single pair, or all pairs parallel) every rotation about â does as
+  well; the smallest rotation taking b̂ onto â is returned.
 - **Sampling.** Haar-uniform rotations: Gram–Schmidt on two Gaussian vectors (their
   distribution is invariant under every rotation, and so is the frame built from them). The
   rotation angle of a uniform rotation has density (1 − cos θ)/π on [0, π].
@@ -18,7 +21,9 @@
 The SVD functions use NumPy's batched linalg directly; any leading batch shape works.
 """
 
+import math
 import numbers
+import os
 
 import numpy as np
 
@@ -83,16 +88,16 @@ def _weights(weights, count, name):
     return w / top
 
 
-def _nearest_rotations(s, what, matrix):
-    """U·diag(1, 1, det UVᵀ)·Vᵀ maximising tr(Mᵀ·s) per item, and the rank-1 flags.
+def _nearest_rotations(s, what, matrix, rank_one_below=UNIQUE_TOL):
+    """U·diag(1, 1, det UVᵀ)·Vᵀ maximising tr(Mᵀ·s) per item, and the rank-one flags.
 
-    RotationError when the maximiser is not unique (σ2 + det·σ3 ≤ UNIQUE_TOL·σ1) and s has
-    rank 2 or more; rank-1 items (σ2 ≤ UNIQUE_TOL·σ1) are only flagged.
+    RotationError when the maximiser is not unique (σ2 + det·σ3 ≤ UNIQUE_TOL·σ1) for an item
+    not flagged; items with σ2 ≤ rank_one_below·σ1 are only flagged (the caller decides).
     """
     u, sigma, vt = np.linalg.svd(s)
     sign = np.where(np.linalg.det(u) * np.linalg.det(vt) < 0, -1.0, 1.0)
     gap = sigma[..., 1] + sign * sigma[..., 2]
-    rank_one = sigma[..., 1] <= UNIQUE_TOL * sigma[..., 0]
+    rank_one = sigma[..., 1] <= rank_one_below * sigma[..., 0]
     ambiguous = (gap <= UNIQUE_TOL * sigma[..., 0]) & ~rank_one
     if ambiguous.any():
         index = tuple(int(i) for i in np.argwhere(ambiguous)[0])
@@ -185,14 +190,63 @@ def _rmsd(a, b, R, w):
     return rmsd
 
 
+def _fit_about_dominant(a, b, w, a_axis, b_axis):
+    """The best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
+
+    R0, the smallest rotation taking b_axis onto a_axis, then the turn φ about a_axis that
+    best fits the pairs: with c = R0·b and the parts a⊥, c⊥ of a and c ⊥ a_axis, the cost
+    Σ wᵢ‖aᵢ − Rot(a_axis, φ)·cᵢ‖² is least at φ = atan2(Σ wᵢ (c⊥ᵢ × a⊥ᵢ)·â, Σ wᵢ c⊥ᵢ·a⊥ᵢ)
+    (the way scipy fits the other pairs about a primary one of infinite weight). Both sums
+    come from the pairs themselves, not from H, so pairs that H's rounding would drop still
+    count. Returns (R, unique): unique is False where pairs off a_axis exist but their pulls
+    cancel (every φ fits as well); where every pair lies along the axis (H of rank one), φ is
+    0: the smallest rotation.
+    """
+    r0 = _smallest_rotation(b_axis, a_axis)
+    c = np.einsum('...ij,...nj->...ni', r0, b)
+    n = a_axis[..., None, :]
+    a_perp = a - np.sum(a * n, axis=-1, keepdims=True) * n
+    c_perp = c - np.sum(c * n, axis=-1, keepdims=True) * n
+    a_off = np.linalg.norm(a_perp, axis=-1)
+    c_off = np.linalg.norm(c_perp, axis=-1)
+    # a pair along the axis to rounding pulls nowhere (its ⊥ parts are noise)
+    off_axis = ((a_off > ALONG_AXIS_SIN * np.linalg.norm(a, axis=-1))
+                & (c_off > ALONG_AXIS_SIN * np.linalg.norm(c, axis=-1)))
+    w = np.where(off_axis, w, 0.0)
+    sin = np.sum(w * np.sum(np.cross(c_perp, a_perp) * n, axis=-1), axis=-1)
+    cos = np.sum(w * np.sum(c_perp * a_perp, axis=-1), axis=-1)
+    pull = np.sum(w * a_off * c_off, axis=-1)
+    unique = ~off_axis.any(axis=-1) | (np.hypot(sin, cos) > UNIQUE_TOL * pull)
+    phi = np.arctan2(sin, cos)
+    return axis_angle_to_matrix(a_axis, phi) @ r0, unique
+
+
+DOMINANT = 1e-2
+"""σ2 ≤ DOMINANT·σ1 of H: align_vectors fits about the dominant direction (_fit_about_dominant).
+
+H's entries carry rounding of ~ε·σ1, so the turn that the SVD's second singular vectors
+give is accurate to ~ε·σ1/σ2: 2e-7 rad for weights 1e9 : 1, nothing at all beyond 1e16.
+The rotation maximising tr(Rᵀ·H) takes the first right singular vector onto the first left
+one, and those are accurate to ~ε·σ1/(σ1 − σ2) ≤ 1.02ε here; the turn about them is then
+fitted from the pairs directly.
+"""
+
+ALONG_AXIS_SIN = 64 * np.finfo(float).eps
+"""|a⊥|/|a| at or below which a pair counts as lying along the dominant axis (rounding)."""
+
+
 def align_vectors(a, b, weights=None):
     """The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
 
     a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
     the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
-    from the SVD of H = Σ wᵢ·aᵢbᵢᵀ (module docstring). A single pair, or pairs that are all
-    parallel, give the smallest rotation taking b̂ onto â. RotationError for zero vectors,
-    counts that differ, negative or all-zero weights, and a best rotation that is not unique.
+    from the SVD of H = Σ wᵢ·aᵢbᵢᵀ (module docstring); when one direction dominates H
+    (σ2 ≤ DOMINANT·σ1: a weight or a length far above the rest), R takes its first right
+    singular vector onto its first left one and the turn about that axis is fitted from the
+    pairs directly, so the small pairs still count however large the ratio (1e9, 1e16, ...).
+    A single pair, or pairs that are all parallel, give the smallest rotation taking b̂ onto
+    â. RotationError for zero vectors, counts that differ, negative or all-zero weights, and a
+    best rotation that is not unique.
     """
     a, b = _vectors(a, 'a'), _vectors(b, 'b')
     if not a.shape[-2]:
@@ -212,7 +266,8 @@ def align_vectors(a, b, weights=None):
     h = np.einsum('...n,...ni,...nj->...ij', w, a_dir, b_dir)
     scale = np.einsum('...n,...n,...n->...', w, np.linalg.norm(a_dir, axis=-1),
                       np.linalg.norm(b_dir, axis=-1))
-    R, sigma, u, vt, rank_one = _nearest_rotations(h, 'the best rotation', 'H = Σ wᵢ·aᵢbᵢᵀ')
+    R, sigma, u, vt, dominant = _nearest_rotations(h, 'the best rotation', 'H = Σ wᵢ·aᵢbᵢᵀ',
+                                                   DOMINANT)
     vanishing = sigma[..., 0] <= UNIQUE_TOL * scale
     if vanishing.any():
         index = tuple(int(i) for i in np.argwhere(vanishing)[0])
@@ -221,10 +276,16 @@ def align_vectors(a, b, weights=None):
             f'{sigma[index][0]:.3g} for Σ wᵢ|aᵢ||bᵢ| = {scale[index]:.3g}, with a and b '
             'scaled to max 1): every rotation fits as well' + (f' (item {index})' if index
                                                               else ''))
-    if rank_one.any():
-        # all pairs parallel: every rotation about â fits as well; take the smallest one
-        smallest = _smallest_rotation(vt[..., 0, :], u[..., :, 0])
-        R = np.where(rank_one[..., None, None], smallest, R)
+    if dominant.any():
+        fitted, unique = _fit_about_dominant(a_dir, b_dir, w, u[..., :, 0], vt[..., 0, :])
+        unsure = dominant & ~unique
+        if unsure.any():
+            index = tuple(int(i) for i in np.argwhere(unsure)[0])
+            raise RotationError(
+                'the best rotation is not unique: about the dominant direction of '
+                'H = Σ wᵢ·aᵢbᵢᵀ (σ2 ≤ 0.01·σ1), the other pairs pull equally every way: '
+                'every turn about it fits as well' + (f' (item {index})' if index else ''))
+        R = np.where(dominant[..., None, None], fitted, R)
     return R, _rmsd(a, b, R, np.broadcast_to(w, shape[:-1]))
 
 
@@ -242,7 +303,44 @@ def random_rotations(n=None, rng=None):
         gen = np.random.default_rng(rng)
     except (TypeError, ValueError) as exc:
         raise RotationError(f'rng must be a numpy.random.Generator or a seed: {exc}') from None
-    g = gen.standard_normal((1 if n is None else int(n), 2, 3))
+    count = 1 if n is None else int(n)
+    need = count * _BYTES_PER_SAMPLE
+    if need > _physical_memory():
+        raise RotationError(f'n = {_count(count)} rotations are too many to allocate: about '
+                            f'{_bytes(need)} of float64, more than this machine\'s memory')
+    try:
+        return _haar(gen, count, n is None)
+    except (MemoryError, ValueError) as exc:  # NumPy: 'array is too big', 'Unable to allocate'
+        raise RotationError(f'n = {_count(count)} rotations are too many to allocate: {exc}'
+                            ) from None
+
+
+_BYTES_PER_SAMPLE = 200
+"""Peak memory of random_rotations per rotation: the Gaussian pairs, u, v, the result and
+the temporaries between them (tracemalloc measured 201 bytes at n = 1e5)."""
+
+
+def _count(n):
+    """n as digits, or as 1.0e+400 when it has more than 20."""
+    return str(n) if len(str(n)) <= 20 else _bytes(n)[:-len(' bytes')]
+
+
+def _bytes(count):
+    """A byte count as text, e.g. '9.2e+17 bytes' (any size: Python ints do not overflow)."""
+    digits = str(count)
+    return f'{digits[0]}.{digits[1:2] or "0"}e+{len(digits) - 1} bytes'
+
+
+def _physical_memory():
+    """Bytes of physical memory, or inf where the OS does not say."""
+    try:
+        return os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES')
+    except (AttributeError, OSError, ValueError):
+        return math.inf
+
+
+def _haar(gen, count, single):
+    g = gen.standard_normal((count, 2, 3))
     while True:  # a zero or parallel pair has probability 0; redraw it all the same
         u = g[:, 0] / np.linalg.norm(g[:, 0], axis=-1, keepdims=True)
         v = g[:, 1] - np.sum(g[:, 1] * u, axis=-1, keepdims=True) * u
@@ -254,4 +352,4 @@ def random_rotations(n=None, rng=None):
     v = v - np.sum(v * u, axis=-1, keepdims=True) * u  # twice is enough: ⊥ u to rounding
     v = v / np.linalg.norm(v, axis=-1, keepdims=True)
     out = np.stack([u, v, np.cross(u, v)], axis=-1)
-    return out[0] if n is None else out
+    return out[0] if single else out

@@ -74,7 +74,7 @@ def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
     With a tol above 1e-9 the result may miss validate_rotation's 1e-9: project it with
     nearest_rotation before handing it on.
     """
-    require_tolerance(tol, 'tol', 1.0, '[0, 1)')
+    tol = require_tolerance(tol, 'tol', 1.0, '[0, 1)')
     matrix, *norms, uv, uw, vw, handed = apply(
         _frame_kernel, [(u, (3,), 'frame axis u', True), (v, (3,), 'frame axis v', True),
                         (w, (3,), 'frame axis w', True)], [_MAT] + [_F64] * 7)

@@ -94,7 +94,7 @@ def is_rotation(R, tol=ROTATION_TOL):
     R is (..., 3, 3); the result is a bool, or a bool array of shape (...). A shape that is
     not (..., 3, 3) raises RotationError.
     """
-    require_tolerance(tol, 'tol')
+    tol = require_tolerance(tol, 'tol')
     R = as_float_array(R, (3, 3), 'R')
     finite = np.isfinite(R).all(axis=(-2, -1))
     with np.errstate(invalid='ignore', over='ignore'):
@@ -109,7 +109,7 @@ def validate_rotation(R, tol=ROTATION_TOL):
     Checked in order: shape (..., 3, 3), finite entries, orthogonality max|RᵀR − I| ≤ tol
     (the message gives the size), det R = +1 (det −1 is a reflection).
     """
-    require_tolerance(tol, 'tol')
+    tol = require_tolerance(tol, 'tol')
     R = finite_array(R, (3, 3), 'R')
     refuse_defects(*_defects(R), tol)
     return R
@@ -222,7 +222,7 @@ def quaternion_to_matrix(q, *, tol=None):
 
 def _refuse_non_unit(q, tol):
     """RotationError for the worst q (..., 4) with ||q| − 1| > tol."""
-    require_tolerance(tol, 'tol')
+    tol = require_tolerance(tol, 'tol')
     big = np.abs(q).max(axis=-1)  # |q| = big·|q/big|: |q|² cannot overflow
     scaled = np.linalg.norm(q / np.where(big > 0, big, 1.0)[..., None], axis=-1)
     with np.errstate(over='ignore'):

@@ -680,3 +680,148 @@ def test_unchecked_mean_of_huge_or_non_finite_matrices():
     # finite matrices of any size: the polar factor of their sum (Newton's iteration)
     m = np.stack([rot_z(0.3), rot_x(0.2), np.diag([1.0, 1.1, 0.9])]) * 1e306
     assert h.max_abs(mean_rotation(m, check=False) - h.polar_rotation(m.sum(0) / 1e306)) <= 1e-14
+
+
+# ---- any Python or NumPy input: a RotationError, never another exception -------------------
+# (Python ints beyond float64, complex numbers, tolerances of any numeric type, sizes)
+
+# Every public function that coerces numbers, called with good arguments; CORRUPT replaces
+# one argument at a time.
+def _calls():
+    q = [0.0, 0.0, 0.0, 1.0]
+    v3 = [0.1, 0.2, 0.3]
+    return {
+        'rot_x': (rot_x, [0.3]), 'rot_y': (rot_y, [0.3]), 'rot_z': (rot_z, [0.3]),
+        'skew': (skew, [v3]),
+        'is_rotation': (is_rotation, [I3.tolist()]),
+        'validate_rotation': (validate_rotation, [I3.tolist()]),
+        'nearest_rotation': (nearest_rotation, [I3.tolist()]),
+        'euler_to_matrix': (euler_to_matrix, [v3]),
+        'matrix_to_euler': (matrix_to_euler, [I3.tolist()]),
+        'axis_angle_to_matrix': (axis_angle_to_matrix, [[0.0, 0.0, 1.0], 0.5]),
+        'matrix_to_axis_angle': (matrix_to_axis_angle, [I3.tolist()]),
+        'rotvec_to_matrix': (rotvec_to_matrix, [v3]),
+        'matrix_to_rotvec': (matrix_to_rotvec, [I3.tolist()]),
+        'quaternion_to_matrix': (quaternion_to_matrix, [q]),
+        'matrix_to_quaternion': (matrix_to_quaternion, [I3.tolist()]),
+        'screw_from_transform': (screw_from_transform, [I3.tolist(), v3]),
+        'transform_from_screw': (transform_from_screw, [[0.0, 0.0, 1.0], v3, 0.5, 0.1]),
+        'screw_log': (screw_log, [I3.tolist(), v3]),
+        'screw_exp': (screw_exp, [[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]]),
+        'screw_interpolate': (screw_interpolate, [I3.tolist(), v3, I3.tolist(), v3, 0.5]),
+        'decompose': (decompose, [I3.tolist(), v3]),
+        'frame_to_matrix': (frame_to_matrix, [[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]]),
+        'transform_points': (transform_points, [I3.tolist(), v3, v3]),
+        'compose_transforms': (compose_transforms, [I3.tolist(), v3, I3.tolist(), v3]),
+        'invert_transform': (invert_transform, [I3.tolist(), v3]),
+        'transform_to_homogeneous': (transform_to_homogeneous, [I3.tolist(), v3]),
+        'homogeneous_to_transform': (homogeneous_to_transform, [np.eye(4).tolist()]),
+        'rotation_distance': (rotation_distance, [I3.tolist(), I3.tolist()]),
+        'mean_rotation': (mean_rotation, [[I3.tolist(), I3.tolist()]]),
+        'align_vectors': (align_vectors, [[[1.0, 0, 0], [0, 1.0, 0]], [[1.0, 0, 0], [0, 1.0, 0]]]),
+    }
+
+
+CALLS = _calls()
+
+
+def _replace_first_number(x, new):
+    """x (a number or nested lists) with its first number replaced by ``new``."""
+    if isinstance(x, list):
+        return [_replace_first_number(x[0], new)] + x[1:]
+    return new
+
+
+def _arguments(name):
+    """(index, argument) for every argument of CALLS[name] that holds numbers."""
+    f, args = CALLS[name]
+    return [(i, a) for i, a in enumerate(args)]
+
+
+@pytest.mark.parametrize('name', sorted(CALLS))
+def test_good_arguments_of_the_sweep_are_accepted(name):
+    f, args = CALLS[name]
+    f(*args)  # the sweeps below corrupt these: they must be valid to begin with
+
+
+@pytest.mark.parametrize('name', sorted(CALLS))
+def test_python_int_beyond_float64_is_a_rotation_error(name):
+    # rot_x(10**400) raised OverflowError ('int too large to convert to float')
+    f, args = CALLS[name]
+    for i, arg in _arguments(name):
+        for huge in (10 ** 400, -(10 ** 309)):
+            bad = list(args)
+            bad[i] = _replace_first_number(arg, huge)
+            with pytest.raises(RotationError, match=r'float64'):
+                f(*bad)
+
+
+@pytest.mark.parametrize('name', sorted(CALLS))
+def test_complex_input_is_a_rotation_error(name):
+    # np.asarray(x, dtype=float64) dropped the imaginary part of a complex array (a
+    # ComplexWarning, and a wrong answer); complex Python numbers raised TypeError inside.
+    f, args = CALLS[name]
+    for i, arg in _arguments(name):
+        variants = [_replace_first_number(arg, 1 + 2j), _replace_first_number(arg, 0.5 + 0j),
+                    np.asarray(arg, dtype=complex), np.asarray(arg, dtype=np.complex64),
+                    _replace_first_number(arg, np.complex128(1j))]
+        for variant in variants:
+            bad = list(args)
+            bad[i] = variant
+            with pytest.raises(RotationError, match=r'complex'):
+                f(*bad)
+
+
+def test_python_ints_within_float64_still_work():
+    assert h.max_abs(rot_x(2 ** 1000) - rot_x(float(2 ** 1000))) == 0
+    assert h.max_abs(rot_z([1, 2 ** 80]) - rot_z([1.0, float(2 ** 80)])) == 0
+
+
+def test_complex_message_names_the_input_and_the_imaginary_part():
+    with pytest.raises(RotationError, match=r'^angle must be real, got complex'):
+        rot_x(np.array([0.1 + 0.5j]))
+
+
+def test_int_beyond_float64_message():
+    with pytest.raises(RotationError,
+                       match=r'^angle must be numeric within float64 \(±1.8e308\)'):
+        rot_x(10 ** 400)
+
+
+@pytest.mark.parametrize('tol', [
+    __import__('fractions').Fraction(1, 10 ** 6), __import__('decimal').Decimal('1e-6'),
+    np.float32(1e-6), np.float16(0.001), np.int64(0), 0, np.array(1e-6)])
+def test_tolerances_of_any_real_numeric_type(tol):
+    # a Fraction tol raised AttributeError: NumPy's float64 <= Fraction is a Python bool
+    near = non_orthogonal(1e-7)
+    far = non_orthogonal(1e-2)
+    expect_near = float(tol) >= 1e-7
+    assert is_rotation(near, tol=tol) is expect_near
+    assert is_rotation(np.stack([near, far]), tol=tol).tolist() == [expect_near, False]
+    if expect_near:
+        validate_rotation(near, tol=tol)
+    with pytest.raises(RotationError, match=NOT_ORTHOGONAL):
+        validate_rotation(far, tol=tol)
+    with pytest.raises(RotationError, match=r'not of unit length'):
+        quaternion_to_matrix([0.0, 0.0, 0.0, 1.1], tol=tol)
+    quaternion_to_matrix([0.0, 0.0, 0.0, 1.0], tol=tol)
+    with pytest.raises(RotationError, match=r'not orthogonal'):
+        frame_to_matrix([1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], tol=tol)
+    frame_to_matrix([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], tol=tol)
+    angles, locked = matrix_to_euler(rot_y(np.pi / 2 - 1e-9), lock_tol=tol)
+    assert bool(locked) is (float(tol) >= 1e-9)
+
+
+@pytest.mark.parametrize('tol', [1j, 1e-9 + 0j, np.complex128(1e-9), 10 ** 400,
+                                 __import__('fractions').Fraction(10 ** 400),
+                                 __import__('decimal').Decimal('NaN'), np.array([1e-9])])
+def test_tolerances_that_are_not_a_real_float64_are_refused(tol):
+    for check in (is_rotation, validate_rotation):
+        with pytest.raises(RotationError, match=r'^tol must be a number ≥ 0'):
+            check(np.eye(3), tol=tol)
+    with pytest.raises(RotationError, match=r'^tol must be a number ≥ 0'):
+        quaternion_to_matrix([0.0, 0.0, 0.0, 1.0], tol=tol)
+    with pytest.raises(RotationError, match=r'^tol must be in \[0, 1\)'):
+        frame_to_matrix([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], tol=tol)
+    with pytest.raises(RotationError, match=r'^lock_tol must be in \[0, π/4\) rad'):
+        matrix_to_euler(np.eye(3), lock_tol=tol)

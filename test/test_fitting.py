@@ -542,3 +542,136 @@ def test_random_rotations_bad_rng():
 
 def test_unique_tolerance_is_documented_and_small():
     assert 0 < UNIQUE_TOL <= 1e-9
+
+
+@pytest.mark.parametrize('n', [2 ** 62, 2 ** 64, 10 ** 400, np.uint64(2 ** 63), 10 ** 13],
+                         ids=['2**62', '2**64', '10**400', 'uint64 2**63', '10**13'])
+def test_random_rotations_too_many_to_allocate(n):
+    # 2**62 raised NumPy's ValueError ('array is too big'), a large n a MemoryError
+    with pytest.raises(RotationError,
+                       match=r'^n = [0-9.e+]+ rotations are too many to allocate'):
+        random_rotations(n)
+
+
+# ---- align_vectors when one pair dominates (a weight or a length far above the rest) -------
+
+
+def scipy_angle(R, ref):
+    """Angle between two rotations, by scipy (quaternions): the reference's own distance."""
+    return (Rotation.from_matrix(R).inv() * Rotation.from_matrix(ref)).magnitude()
+
+
+def scipy_primary(a, b, weights, primary):
+    """scipy's answer with pair ``primary`` aligned exactly (an infinite weight)."""
+    w = np.array(weights, dtype=float)
+    w[primary] = np.inf
+    return Rotation.align_vectors(a, b, w)[0].as_matrix()
+
+
+@pytest.mark.parametrize('ratio', [1e8, 1e9, 1e10, 1e12, 1e16, 1e30])
+def test_align_dominant_weight_still_fits_the_second_pair(ratio):
+    # scipy's test_align_vectors_align_constrain with a finite weight: the primary +x of b
+    # goes onto +y of a, then the turn about it takes the rest of b's [1, 1, 0] onto a's
+    # [0, 1, 1]. Weights ≥ 1e9 made the SVD's H rank one to UNIQUE_TOL, and every pair but
+    # the first was ignored: the answer came back 90° off.
+    a = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 1.0]])
+    expected = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    R, rmsd = align_vectors(a, [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [ratio, 1.0])
+    assert h.max_abs(R - expected) <= 1e-15 * 8 + 2 / ratio
+    assert rmsd <= 1e-15 * 8
+    # an inexact second pair: only its part ⊥ the primary can be matched
+    R, rmsd = align_vectors(a, [[1.0, 0.0, 0.0], [1.0, 2.0, 0.0]], [ratio, 1.0])
+    assert h.max_abs(R - expected) <= 1e-15 * 8 + 2 / ratio
+    assert h.max_abs(R @ [1.0, 2.0, 0.0] - [0.0, 1.0, 2.0]) <= 1e-15 * 8 + 4 / ratio
+    assert abs(rmsd - np.sqrt(1.0 / (ratio + 1.0))) <= 1e-13 * rmsd + 2 / ratio + EPS
+
+
+def dominated_sets(rng, n_sets, n_pairs):
+    """Random pair sets: a = R0·b + noise, b of random lengths (scipy as reference)."""
+    b = rng.normal(size=(n_sets, n_pairs, 3))
+    r0 = Rotation.random(n_sets, random_state=int(rng.integers(1 << 30))).as_matrix()
+    a = np.einsum('kij,knj->kni', r0, b) + 0.3 * rng.normal(size=(n_sets, n_pairs, 3))
+    return a, b
+
+
+@pytest.mark.parametrize('ratio', [1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16])
+def test_align_dominant_weight_against_scipy(ratio):
+    # The exact minimiser with weights [ratio, 1, 1, 1] lies within ~Σ wᵢ|aᵢ||bᵢ| / (ratio ·
+    # |a0||b0|) of scipy's with the first weight infinite (that pair aligned exactly, the rest
+    # fitted about it); scipy's own finite-weight SVD is accurate to ~ε·ratio. Each is a
+    # reference where it is sharp.
+    rng = np.random.default_rng(int(np.log10(ratio)))
+    a, b = dominated_sets(rng, 200, 4)
+    weights = np.array([ratio, 1.0, 1.0, 1.0])
+    R, _ = align_vectors(a, b, weights)
+    for k in range(len(a)):
+        lengths = np.linalg.norm(a[k], axis=-1) * np.linalg.norm(b[k], axis=-1)
+        pull = np.sum(lengths[1:]) / (ratio * lengths[0])
+        assert scipy_angle(R[k], scipy_primary(a[k], b[k], weights, 0)) <= 4 * pull + 1e-13
+        if ratio <= 1e9:
+            ref = Rotation.align_vectors(a[k], b[k], weights)[0].as_matrix()
+            assert scipy_angle(R[k], ref) <= 200 * EPS * ratio + 1e-13
+        # the primary pair is aligned, to its share of the pull
+        a0, b0 = a[k, 0] / np.linalg.norm(a[k, 0]), b[k, 0] / np.linalg.norm(b[k, 0])
+        assert np.linalg.norm(R[k] @ b0 - a0) <= 4 * pull + 1e-14
+
+
+@pytest.mark.parametrize('big, small', [(1e3, 1e-3), (1e8, 1e-8), (1e150, 1e-150), (1.0, 1e-9)])
+def test_align_dominant_length_against_scipy(big, small):
+    # Lengths 1e3 vs 1e-3 with equal weights are a weight ratio of 1e12 in H.
+    rng = np.random.default_rng(41)
+    a, b = dominated_sets(rng, 200, 3)
+    a[:, 0] *= big
+    b[:, 0] *= big
+    a[:, 1:] *= small
+    b[:, 1:] *= small
+    R, rmsd = align_vectors(a, b)
+    for k in range(len(a)):
+        lengths = np.linalg.norm(a[k], axis=-1) * np.linalg.norm(b[k], axis=-1)
+        pull = np.sum(lengths[1:]) / lengths[0]
+        ref = scipy_primary(a[k] / big, b[k] / big, np.ones(3), 0)
+        assert scipy_angle(R[k], ref) <= 4 * pull + 1e-13
+    assert np.all(np.isfinite(rmsd))
+
+
+def test_align_dominant_pair_in_a_batch_matches_single_calls():
+    rng = np.random.default_rng(42)
+    a, b = dominated_sets(rng, 6, 4)
+    w = np.ones((6, 4))
+    w[::2, 0] = 1e12  # half the sets dominated, half not
+    R, rmsd = align_vectors(a, b, w)
+    for k in range(6):
+        r1, d1 = align_vectors(a[k], b[k], w[k])
+        assert h.max_abs(R[k] - r1) <= 1e-15 * 8 and abs(rmsd[k] - d1) <= 1e-14 * (1 + d1)
+
+
+def test_align_dominant_pair_with_the_rest_cancelling_is_not_unique():
+    # About the dominant x, the second pair wants a turn of 0 and the third of π, with equal
+    # weights: every turn about x fits them equally (their cost is 4 whatever the angle).
+    a = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]
+    b = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
+    with pytest.raises(RotationError, match=r'best rotation is not unique'):
+        align_vectors(a, b, [1e12, 1.0, 1.0])
+
+
+# ---- UNIQUE_TOL: where rounding, not the data, would pick the answer ----------------------
+
+
+@pytest.mark.parametrize('delta', [1e-12, 1e-11, 1e-10])
+def test_a_mean_decided_by_rounding_is_refused(delta):
+    # rot_z(0) and rot_z(π − δ), equal weights: S = Σ Rᵢ has singular values (2, δ, δ), and
+    # its entries carry rounding of ~ε, so the turn about z of the answer is only known to
+    # ~ε/δ (2e-4 rad at δ = 1e-12). Refused while δ ≤ UNIQUE_TOL·σ1 = 2e-9: a threshold
+    # moved down to 1e-15 (a surviving mutant) accepted these and returned noise.
+    with pytest.raises(RotationError, match=r'mean rotation is not unique'):
+        mean_rotation(np.stack([np.eye(3), Rotation.from_rotvec([0.0, 0.0, PI - delta]).as_matrix()]))
+
+
+@pytest.mark.parametrize('delta', [1e-7, 1e-6])
+def test_a_mean_the_data_decides_is_returned(delta):
+    # The same pair a little further from π apart (σ2/σ1 = δ/2 = 5e-8 and up): determined by
+    # the data to ~ε/δ, returned, and equal to rot_z((π − δ)/2) to that accuracy; a
+    # threshold moved up (1e-6) refused it.
+    M = mean_rotation(np.stack([np.eye(3), Rotation.from_rotvec([0.0, 0.0, PI - delta]).as_matrix()]))
+    ref = Rotation.from_rotvec([0.0, 0.0, (PI - delta) / 2]).as_matrix()
+    assert scipy_angle(M, ref) <= 64 * EPS / delta

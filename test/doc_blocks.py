@@ -1,0 +1,111 @@
+"""Find the example blocks of README.md and doc/*.md, so tests can compare them with real output.
+
+How a block of the docs is kept true (test/test_docs.py enforces it):
+
+- A fenced ``console`` block whose commands are all ``$ rot-tools ...`` (or ``$ echo $?``)
+  is run by test_docs.py, line by line in one bash, from the repository root, with
+  ``rot-tools`` on PATH, and its output compared with the lines that follow each command.
+- A fenced ``pycon`` (or ``python``) block with ``>>>`` lines is run as a doctest (one
+  namespace per file, in order).
+- Any other block that shows output (node logs, ``ros2``/``rotation_client`` output, YAML
+  printed by a service) carries a tag on the line just before its opening fence::
+
+      <!-- output: client-euler -->
+      ```console
+      $ rotation_client euler ZYX 30 20 10 --deg
+      ...
+      ```
+
+  and a test that produces that output compares it with ``doc_block('client-euler')`` (or
+  ``assert_doc_output('client-euler', got)``). test_docs.py fails when a tag is not named
+  in any test file, and when a console block that it cannot run has no tag.
+
+In expected output, ``...`` matches any text (doctest's ELLIPSIS), e.g. for a time stamp.
+"""
+
+import doctest
+from pathlib import Path
+import re
+
+REPO = Path(__file__).resolve().parent.parent
+TAG = re.compile(r'<!--\s*output:\s*([\w.-]+)\s*-->')
+FENCE = re.compile(r'^(\s*)(`{3,})\s*([\w+-]*)\s*$')
+
+
+class Block:
+    """A fenced block of a Markdown file: its language, text, tag and first line number."""
+
+    def __init__(self, path, line, lang, text, tag):
+        self.path, self.line, self.lang, self.text, self.tag = path, line, lang, text, tag
+
+    def __repr__(self):
+        return f'{self.path.relative_to(REPO)}:{self.line}'
+
+
+def doc_files():
+    """README.md and every doc/*.md, in a fixed order."""
+    return [REPO / 'README.md'] + sorted((REPO / 'doc').glob('*.md'))
+
+
+def blocks(path):
+    """Every fenced block of the Markdown file ``path``, with the tag on the line before it."""
+    lines = Path(path).read_text(encoding='utf-8').splitlines()
+    found, i = [], 0
+    while i < len(lines):
+        m = FENCE.match(lines[i])
+        if not m:
+            i += 1
+            continue
+        indent, fence, lang = m.groups()
+        tag = None
+        for before in reversed(lines[:i]):
+            if before.strip():
+                t = TAG.search(before)
+                tag = t.group(1) if t else None
+                break
+        body, j = [], i + 1
+        while j < len(lines) and lines[j].strip() != fence:
+            body.append(lines[j][len(indent):] if lines[j].startswith(indent) else lines[j])
+            j += 1
+        found.append(Block(Path(path), i + 1, lang, '\n'.join(body) + '\n', tag))
+        i = j + 1
+    return found
+
+
+def all_blocks():
+    """Every fenced block of README.md and doc/*.md."""
+    return [b for path in doc_files() for b in blocks(path)]
+
+
+def doc_block(name):
+    """The text of the block tagged ``<!-- output: name -->`` (KeyError if none)."""
+    tagged = [b for b in all_blocks() if b.tag == name]
+    if len(tagged) != 1:
+        raise KeyError(f'{len(tagged)} blocks tagged {name!r} in README.md and doc/*.md')
+    return tagged[0].text
+
+
+def console_steps(text):
+    """Split a console block into [(command, expected output)]: commands start with '$ '."""
+    steps = []
+    for line in text.splitlines():
+        if line.startswith('$ '):
+            steps.append([line[2:], []])
+        elif steps:
+            steps[-1][1].append(line)
+        elif line.strip():
+            raise ValueError(f'output before the first $ command: {line!r}')
+    return [(cmd, '\n'.join(out) + '\n' if out else '') for cmd, out in steps]
+
+
+def matches(want, got):
+    """True when got equals want, ``...`` in want matching any text (doctest ELLIPSIS)."""
+    return doctest.OutputChecker().check_output(want, got, doctest.ELLIPSIS)
+
+
+def assert_doc_output(name, got):
+    """Assert that the block tagged ``name`` shows exactly ``got`` (``...`` matches any text)."""
+    want = doc_block(name)
+    assert matches(want, got), (
+        f'the docs block {name!r} no longer matches the real output:\n--- docs\n{want}'
+        f'--- real\n{got}')
