@@ -7,7 +7,9 @@ Settings: the converters read ``quaternion_tolerance``, and the Euler one
 ``euler_sequence`` and ``degrees``. A message that cannot be one transform — a NaN/Inf in a
 field that is used, a zero quaternion, a quaternion whose norm is further than the tolerance
 from 1, an Imu that says it has no orientation — raises :class:`RefusedInput`, whose
-``reason`` is a short key for counting.
+``reason`` is a short key for counting. The converters and their checks are ROS-free and
+live in rot_tools.boundary (``rot-tools bag`` runs the same checks on recorded messages, as
+batches); they are re-exported here.
 
 Quaternions are (x, y, z, w), the ROS message order. Inbound they go through
 rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_quaternion of R
@@ -19,8 +21,6 @@ Outbound helpers build the node's messages from NumPy values: Float64MultiArray 
 and the MarkerArray of a rot_tools.drawing.Picture.
 """
 
-import math
-
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, QuaternionStamped
 from geometry_msgs.msg import TwistStamped, Vector3Stamped
 from nav_msgs.msg import Path
@@ -29,137 +29,19 @@ from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, Mult
 from visualization_msgs.msg import Marker, MarkerArray
 
 from rot_tools.axis_angle import matrix_to_axis_angle
-from rot_tools.euler import euler_to_matrix
-from rot_tools.so3 import quaternion_to_matrix
-
-NON_FINITE = 'non_finite'
-ZERO_QUATERNION = 'zero_quaternion'
-NON_UNIT_QUATERNION = 'non_unit_quaternion'
-NO_ORIENTATION = 'no_orientation'
-REFUSAL_REASONS = (NON_FINITE, ZERO_QUATERNION, NON_UNIT_QUATERNION, NO_ORIENTATION)
-"""Reasons this module refuses a message for; rotation_node adds its own."""
+# The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.boundary. Its
+# names are re-exported here, where rotation_node has always found them.
+from rot_tools.boundary import (  # noqa: F401
+    euler_stamped_to_transform, imu_to_transform, NO_ORIENTATION, NON_FINITE,
+    NON_UNIT_QUATERNION, odometry_to_transform, pose_stamped_to_transform,
+    pose_to_rt, pose_with_covariance_stamped_to_transform, quaternion_msg_to_matrix,
+    quaternion_stamped_to_transform, REFUSAL_REASONS, RefusedInput,
+    transform_stamped_to_transform, ZERO_QUATERNION)
 
 
 def type_name(msg_type):
     """'nav_msgs/msg/Odometry' for the message class nav_msgs.msg.Odometry."""
     return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
-
-
-class RefusedInput(ValueError):
-    """A message that is not a rigid transform; ``reason`` is a key of REFUSAL_REASONS."""
-
-    def __init__(self, reason, message):
-        super().__init__(message)
-        self.reason = reason
-
-
-# ---------------------------------------------------------------------------------------
-# Inbound: message -> (header, R, b)
-
-
-def _require_finite(prefix, fields, values):
-    """Raise RefusedInput(NON_FINITE) naming the first field (prefix.field) that is NaN or ±Inf.
-
-    (The names are built only for the refusal: this runs for every message.)
-    """
-    if not all(map(math.isfinite, values)):
-        for field, value in zip(fields, values):
-            if not math.isfinite(value):
-                raise RefusedInput(NON_FINITE, f'{prefix}.{field} is {value}')
-
-
-def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
-    """Rotation matrix of a geometry_msgs/Quaternion (x, y, z, w), refused unless near unit.
-
-    Refused (RefusedInput) when a component is NaN/Inf, when q = 0, or when
-    |‖q‖ − 1| > ``tolerance``; within the tolerance q is normalised (R is exactly orthogonal).
-    """
-    x, y, z, w = q.x, q.y, q.z, q.w
-    _require_finite(name, 'xyzw', (x, y, z, w))
-    norm = math.hypot(x, y, z, w)  # hypot: no overflow for huge components
-    if norm == 0.0:
-        raise RefusedInput(ZERO_QUATERNION, f'{name} is the zero quaternion')
-    if abs(norm - 1.0) > tolerance:
-        raise RefusedInput(
-            NON_UNIT_QUATERNION,
-            f'{name} has norm {norm:.9g}, off 1 by {abs(norm - 1.0):.3g} > '
-            f'quaternion_tolerance {tolerance:g}')
-    return quaternion_to_matrix((x / norm, y / norm, z / norm, w / norm))
-
-
-def pose_to_rt(pose, tolerance, name='pose'):
-    """(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
-    p = pose.position
-    _require_finite(f'{name}.position', 'xyz', (p.x, p.y, p.z))
-    R = quaternion_msg_to_matrix(pose.orientation, tolerance, f'{name}.orientation')
-    return R, np.array((p.x, p.y, p.z))
-
-
-def pose_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/PoseStamped."""
-    R, b = pose_to_rt(msg.pose, settings.quaternion_tolerance)
-    return msg.header, R, b
-
-
-def pose_with_covariance_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/PoseWithCovarianceStamped: ``pose.pose``.
-
-    The covariance is not used (a NaN there does not refuse the message).
-    """
-    R, b = pose_to_rt(msg.pose.pose, settings.quaternion_tolerance, 'pose.pose')
-    return msg.header, R, b
-
-
-def odometry_to_transform(msg, settings):
-    """(header, R, b) of a nav_msgs/Odometry: ``pose.pose``, the body in header.frame_id.
-
-    The body is ``child_frame_id``; the twist and the covariances are not used.
-    """
-    R, b = pose_to_rt(msg.pose.pose, settings.quaternion_tolerance, 'pose.pose')
-    return msg.header, R, b
-
-
-def imu_to_transform(msg, settings):
-    """(header, R, 0) of a sensor_msgs/Imu's ``orientation``.
-
-    sensor_msgs/Imu marks "no orientation estimate" with orientation_covariance[0] = -1:
-    such a message is refused (NO_ORIENTATION). Angular velocity, linear acceleration and
-    the covariances are not used.
-    """
-    if msg.orientation_covariance[0] == -1.0:
-        raise RefusedInput(NO_ORIENTATION, 'orientation_covariance[0] is -1: the IMU gives '
-                           'no orientation estimate')
-    R = quaternion_msg_to_matrix(msg.orientation, settings.quaternion_tolerance)
-    return msg.header, R, np.zeros(3)
-
-
-def quaternion_stamped_to_transform(msg, settings):
-    """(header, R, 0) of a geometry_msgs/QuaternionStamped."""
-    R = quaternion_msg_to_matrix(msg.quaternion, settings.quaternion_tolerance, 'quaternion')
-    return msg.header, R, np.zeros(3)
-
-
-def transform_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
-    t = msg.transform.translation
-    _require_finite('transform.translation', 'xyz', (t.x, t.y, t.z))
-    R = quaternion_msg_to_matrix(msg.transform.rotation, settings.quaternion_tolerance,
-                                 'transform.rotation')
-    return msg.header, R, np.array((t.x, t.y, t.z))
-
-
-def euler_stamped_to_transform(msg, settings):
-    """(header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3).
-
-    The angles are of ``settings.euler_sequence``, in degrees when ``settings.degrees``,
-    else radians.
-    """
-    v = msg.vector
-    angles = (v.x, v.y, v.z)
-    _require_finite('vector', 'xyz', angles)
-    if settings.degrees:
-        angles = tuple(math.radians(a) for a in angles)
-    return msg.header, euler_to_matrix(angles, settings.euler_sequence), np.zeros(3)
 
 
 # ---------------------------------------------------------------------------------------

@@ -14,13 +14,17 @@ an input's work, so they are throttled: at most MARKER_RATE a second, the latest
 and the last input is always drawn (a timer publishes it when its turn comes).
 """
 
+if __name__ == '__main__':
+    # ``python -m rot_tools.rotation_node`` starts like the console script: the signal
+    # handlers first, then this module imported by its name (NumPy and rclpy load then),
+    # then main (rot_tools.runtime.start, which never returns).
+    from rot_tools.runtime import start
+    start('rot_tools.rotation_node')
+
 import difflib
-import gc
-from functools import partial, wraps
+from functools import partial
 import math
-import sys
 import time
-import traceback
 from typing import Callable, NamedTuple
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -30,10 +34,8 @@ from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
-import rclpy
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
+from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from sensor_msgs.msg import Imu
@@ -41,11 +43,15 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rot_tools import drawing, messages
+from rot_tools import drawing, messages, runtime
+from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
-from rot_tools.decomposition import decompose_values
 from rot_tools.report import to_yaml, transform_report
+# The process runtime's names, for callers written before rot_tools.runtime existed (the
+# benchmarks, test_node_executor.py): import them from rot_tools.runtime.
+from rot_tools.runtime import guard_callbacks, make_executor, serve, spin  # noqa: F401
+from rot_tools.runtime import SPIN_TIMEOUT  # noqa: F401
 from rot_tools.screw import screw_from_transform, screw_interpolate
 
 FRAME_MISMATCH = 'frame_mismatch'
@@ -62,8 +68,19 @@ DEFAULT_PATH_STEPS = 20
 MAX_PATH_STEPS = 10_000
 """A tolerance that needs more steps than this is refused (the reply would be huge)."""
 
+MAX_REPLY_BYTES = 16_000_000
+"""Largest ~/screw_path reply (serialised bytes); beyond it the request is path_too_long."""
+
+REPLY_BYTES_PER_POSE = 80
+"""Serialised bytes of one PoseStamped of a reply, besides its frame_id: stamp 8, string
+length 4 and terminating NUL 1, alignment of the pose at most 7, pose 7 × 8 = 56 (76; the
+Path's header, sequence length and encapsulation fit in one more)."""
+
 MARKER_RATE = 30.0
 """Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
+
+PROG = 'rotation_node'
+"""The program's name in its messages."""
 
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
@@ -315,17 +332,19 @@ class RotationNode(Node):
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
-    def _refuse(self, topic, reason, text):
+    def _refuse(self, topic, reason, text, error=False):
         """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
 
         Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
         stream (a raw IMU without orientation at 50 Hz) would silence every other one.
+        ``error``: log at error level (a refused service request).
         """
         self._refused[reason] += 1
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
             self._warned[topic, reason] = now
-            self.get_logger().warning(f'refused input on {topic} ({reason}): {text}')
+            log = self.get_logger().error if error else self.get_logger().warning
+            log(f'refused input on {topic} ({reason}): {text}')
 
     # -- markers -----------------------------------------------------------------------
 
@@ -413,7 +432,11 @@ class RotationNode(Node):
         return response
 
     def _on_screw_path(self, request, response):
-        """Constant-screw motion start → goal, poses at most ``tolerance`` apart."""
+        """Constant-screw motion start → goal, poses at most ``tolerance`` apart.
+
+        Every failure is a refusal: counted by reason, logged (throttled per reason), and
+        answered with an empty path. The reply is bounded in bytes before it is built.
+        """
         start, goal = request.start, request.goal
         response.plan.header = start.header
         try:
@@ -425,17 +448,25 @@ class RotationNode(Node):
             R0, b0 = messages.pose_to_rt(start.pose, q_tol, 'start.pose')
             R1, b1 = messages.pose_to_rt(goal.pose, q_tol, 'goal.pose')
             with np.errstate(all='ignore'):
+                if not np.isfinite(R0.T @ (b1 - b0)).all():
+                    raise messages.RefusedInput(
+                        NOT_DECOMPOSABLE, 'start and goal are too far apart: goal.position '
+                        '− start.position overflows float64 (beyond ±1.8e308)')
                 steps = self._path_steps(R0, b0, R1, b1, request.tolerance)
+                self._check_reply_bytes(start.header.frame_id, steps + 1)
                 Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, steps + 1),
                                            check=False)
             if not (np.isfinite(Rs).all() and np.isfinite(bs).all()):
                 raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
+            plan = messages.path_msg(start.header, start, goal, Rs, bs)
         except messages.RefusedInput as exc:
-            self._refused[exc.reason] += 1
-            self.get_logger().error(f'refused request on {self._screw_path_name} '
-                                    f'({exc.reason}): {exc}', throttle_duration_sec=1.0)
+            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True)
             return response
-        response.plan = messages.path_msg(start.header, start, goal, Rs, bs)
+        except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
+            self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
+                         f'no screw motion from start to goal: {exc}', error=True)
+            return response
+        response.plan = plan
         return response
 
     @staticmethod
@@ -462,119 +493,45 @@ class RotationNode(Node):
                 f'{MAX_PATH_STEPS}')
         return max(1, math.ceil(need - 1e-9))  # 4 + rounding noise is 4 steps, not 5
 
+    @staticmethod
+    def _reply_bytes(frame_id, poses):
+        """Return an upper bound of the serialised size of a GetPlan reply (CDR bytes).
 
-SPIN_TIMEOUT = 0.1
-"""Seconds one spin_once waits at most: the longest a shutdown waits for the loop to notice."""
+        The path's header and each of its ``poses`` carries a copy of ``frame_id``:
+        REPLY_BYTES_PER_POSE plus the frame_id's UTF-8 bytes each (the Path's own header
+        and sequence length counted as one more pose).
+        """
+        size = len(frame_id.encode('utf-8', 'surrogatepass'))
+        return (poses + 1) * (size + REPLY_BYTES_PER_POSE)
 
+    @classmethod
+    def _check_reply_bytes(cls, frame_id, poses):
+        """Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
 
-def make_executor(context=None):
-    """The executor rotation_node runs on: rclpy's EventsExecutor (rclpy.experimental).
-
-    Chosen on measurement (bench/README.md): it hands a subscription's queued messages to
-    the callback in one go instead of rebuilding a wait set for each message, which makes
-    the node about twice as fast as on rclpy's default executor. Its hazards in rclpy 7.1.6
-    are kept away by spin(): it is spun with spin_once only (its spin() did not return
-    after shutdown), and no callback of the node raises (a raising callback loses the
-    subscription's other queued messages; a raising *task* crashes the process, rclpy#1641:
-    the node creates no tasks — no clients or coroutine callbacks). test_node_executor.py
-    proves signals, services under load and floods of bad input on it.
-    """
-    from rclpy.experimental import EventsExecutor
-    return EventsExecutor(context=context)
-
-
-def _guarded(callback, node, what, service=False):
-    """callback(*args), but an exception it raises is logged (with its traceback) instead.
-
-    A subscription or timer callback then returns None; a service callback (``service``)
-    returns the response it was given, unfilled, so that the client gets a reply. Once the
-    context is shut down (a signal: rclpy shuts it down from its handler, while a callback
-    may be publishing) a failure is the shutdown's and is not logged. The wrapper has the
-    callback's signature (rclpy inspects it).
-    """
-    @wraps(callback)
-    def guarded(*args):
-        try:
-            return callback(*args)
-        except Exception:  # noqa: BLE001 - any bug: log it, keep serving
-            if node.context.ok():
-                node.get_logger().error(f'{what} callback raised; the node keeps serving:\n'
-                                        + traceback.format_exc(), throttle_duration_sec=1.0)
-            return args[-1] if service else None
-    return guarded
-
-
-def guard_callbacks(node):
-    """Wrap every subscription, timer and service callback of ``node`` in _guarded.
-
-    A callback that raises is then logged and the node keeps serving, on either executor
-    (the EventsExecutor would lose the subscription's other queued messages, the default
-    one would end the spin).
-    """
-    for sub in node.subscriptions:
-        sub.callback = _guarded(sub.callback, node, f'subscription {sub.topic_name}')
-    for timer in node.timers:
-        timer.callback = _guarded(timer.callback, node, 'timer')
-    for srv in node.services:
-        srv.callback = _guarded(srv.callback, node, f'service {srv.srv_name}', service=True)
-
-
-def spin(node, executor):
-    """Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
-
-    The node's callbacks are guarded first (guard_callbacks). rclpy.init installs handlers
-    that shut the context down on SIGINT and SIGTERM; the loop then ends within one
-    SPIN_TIMEOUT (rclpy.spin could hang on a signal).
-    """
-    guard_callbacks(node)
-    executor.add_node(node)
-    try:
-        while rclpy.ok(context=executor.context):
-            executor.spin_once(timeout_sec=SPIN_TIMEOUT)
-    except ExternalShutdownException:
-        pass  # the context shut down during spin_once: the normal end
-    finally:
-        executor.shutdown()
-
-
-def serve(make_node, executor_factory=make_executor):
-    """Build a node, spin it until a signal, destroy it and shut rclpy down.
-
-    The node is make_node(), the executor executor_factory(); rclpy.init is the caller's.
-    A signal during the build is a normal stop; any other exception of the build (an
-    invalid parameter) is raised after the clean-up.
-    """
-    node = None
-    try:
-        node = make_node()
-        # What exists now (modules, the node) lives as long as the process: left out of
-        # the collector's full passes, which otherwise stall a message by ~15 ms every few
-        # seconds under load (the tail of the latency).
-        gc.freeze()
-        spin(node, executor_factory())
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:
-        if rclpy.ok():
-            raise
-        # A signal shut the context down while the node was being built: a normal stop.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+        Checked before anything is built: a 100 kB frame_id × 10,001 poses is a 1 GB
+        reply, and the node would hold it twice (messages and their serialisation).
+        """
+        size = cls._reply_bytes(frame_id, poses)
+        if size > MAX_REPLY_BYTES:
+            frame_bytes = len(frame_id.encode('utf-8', 'surrogatepass'))
+            raise messages.RefusedInput(
+                PATH_TOO_LONG, f'a reply of {poses} poses with a frame_id of {frame_bytes} '
+                f'bytes would take {size / 1e6:.3g} MB, more than {MAX_REPLY_BYTES / 1e6:g} MB')
 
 
 def main(args=None):
-    """Run the node until SIGINT / SIGTERM; exit status 0, or 2 for an invalid parameter."""
-    rclpy.init(args=args)
+    """Run the node until SIGINT / SIGTERM; exit status 0, or 2 for bad arguments.
+
+    ``args``: the command line as rclpy.init takes it (sys.argv when None). Started by
+    rot_tools.runtime.start (the console script, ``python -m rot_tools.rotation_node``),
+    which handles an early signal and ends the process.
+    """
+    runtime.init_ros(PROG, args)
     try:
-        serve(RotationNode)
-    except (InvalidParameterTypeException, InvalidParameterValueException) as exc:
-        print(f'rotation_node: {exc}', file=sys.stderr)
-        return 2
+        runtime.serve(RotationNode)
+    except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2
+        text = runtime.ros_argument_error(exc)
+        if text is None:
+            raise
+        runtime.fail(PROG, text)
     return 0
-
-
-if __name__ == '__main__':
-    from rot_tools.entry import exit_now
-    exit_now(main())

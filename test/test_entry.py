@@ -1,54 +1,164 @@
-"""The console-script entries stop cleanly on a signal even during start-up."""
+"""How rotation_node and rotation_client start: the process runtime (rot_tools.runtime).
 
+Both ways of starting the node — its console script and ``python -m rot_tools.rotation_node``
+(the benchmarks use the latter) — stop cleanly on a signal even while NumPy and rclpy load,
+and bad ROS arguments end them with one line and status 2. The runtime depends on nothing of
+the node: the modules' import graph has no cycle.
+"""
+
+import ast
+from pathlib import Path
 import subprocess
 import sys
 
+from conftest import console_script, script_env
 import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / 'rot_tools'
 
 LIGHT = """
 import sys
-import rot_tools.entry
+import rot_tools.entry, rot_tools.runtime
 heavy = sorted(m for m in ('numpy', 'rclpy') if m in sys.modules)
 print(','.join(heavy) or 'light')
 """
 
-# Delivers the signal exactly while the entry imports the node (NumPy + rclpy), the window in
-# which Python's default handling would exit with -15 or a KeyboardInterrupt traceback.
-SIGNAL_DURING_IMPORT = """
-import builtins, os, signal, sys
-import rot_tools.entry as entry
-real_import = builtins.__import__
-def import_and_signal(name, *args, **kwargs):
-    if name == 'rot_tools.{script}':
+# A sitecustomize that sends a signal to its own process at the first import of NumPy or
+# rclpy: exactly the window in which Python's default handling would end the program with
+# status -15 or a KeyboardInterrupt traceback. Put on PYTHONPATH, it runs in the real
+# command (console script or python -m) before the program does.
+SIGNAL_AT_HEAVY_IMPORT = """
+import builtins, os, signal
+_real_import = builtins.__import__
+_sent = []
+def _import_and_signal(name, *args, **kwargs):
+    if name.split('.')[0] in ('numpy', 'rclpy') and not _sent:
+        _sent.append(name)
         os.kill(os.getpid(), signal.{sig})
-    return real_import(name, *args, **kwargs)
-builtins.__import__ = import_and_signal
-sys.argv = ['{script}', 'describe']
-sys.exit(entry.{script}())
-print('not reached')
+    return _real_import(name, *args, **kwargs)
+builtins.__import__ = _import_and_signal
 """
 
 
-def test_entry_module_imports_nothing_heavy():
+def node_commands():
+    """Both commands that start rotation_node: the console script (when installed), -m."""
+    commands = {'python -m': [sys.executable, '-m', 'rot_tools.rotation_node']}
+    script = console_script('rotation_node', 'rot_tools.rotation_node')
+    if script[0] != sys.executable:
+        commands['console script'] = script
+    return commands
+
+
+NODE_COMMANDS = node_commands()
+
+
+def run(command, *args, env_extra=None, timeout=60):
+    """Run ``command`` + args to the end; return the CompletedProcess (text)."""
+    command = [*command, *args]
+    env = dict(script_env(command), **(env_extra or {}))
+    return subprocess.run(command, capture_output=True, text=True, timeout=timeout, env=env,
+                          stdin=subprocess.DEVNULL)
+
+
+def with_signal_hook(tmp_path, sig):
+    """PYTHONPATH entries that make the next program signal itself at its heavy imports."""
+    (tmp_path / 'sitecustomize.py').write_text(SIGNAL_AT_HEAVY_IMPORT.format(sig=sig))
+    repo = str(PACKAGE.parent)
+    return {'PYTHONPATH': f'{tmp_path}:{repo}'}
+
+
+def test_entry_and_runtime_import_nothing_heavy():
     out = subprocess.run([sys.executable, '-c', LIGHT], capture_output=True, text=True,
                          timeout=60, check=True)
     assert out.stdout.strip() == 'light'
 
 
-@pytest.mark.parametrize('script, sig, status', [
-    ('rotation_node', 'SIGTERM', 0), ('rotation_node', 'SIGINT', 0),
-    ('rotation_client', 'SIGINT', 130)])
-def test_signal_during_start_up_exits_cleanly(script, sig, status):
-    code = SIGNAL_DURING_IMPORT.format(script=script, sig=sig)
-    proc = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                          timeout=60)
-    assert proc.returncode == status, proc.stderr
+@pytest.mark.parametrize('how', sorted(NODE_COMMANDS))
+@pytest.mark.parametrize('sig', ['SIGTERM', 'SIGINT'])
+def test_signal_while_the_node_loads_exits_cleanly(tmp_path, how, sig):
+    proc = run(NODE_COMMANDS[how], env_extra=with_signal_hook(tmp_path, sig))
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ''
+
+
+def test_signal_while_the_client_loads_exits_with_130(tmp_path):
+    command = console_script('rotation_client', 'rot_tools.rotation_client')
+    if command[0] == sys.executable:
+        pytest.skip('rotation_client is not installed: python -m has no early handler')
+    proc = run(command, 'describe', env_extra=with_signal_hook(tmp_path, 'SIGINT'))
+    assert proc.returncode == 130, proc.stderr
     assert 'Traceback' not in proc.stderr
-    assert 'not reached' not in proc.stdout
 
 
-def test_console_script_uses_the_light_entry():
+def test_console_scripts_use_the_light_entry():
     from importlib.metadata import entry_points
     scripts = {ep.name: ep.value for ep in entry_points(group='console_scripts')}
     assert scripts['rotation_node'] == 'rot_tools.entry:rotation_node'
     assert scripts['rotation_client'] == 'rot_tools.entry:rotation_client'
+
+
+def imports_of(module):
+    """Return the rot_tools modules ``module`` imports anywhere (in functions too)."""
+    names = {path.stem for path in PACKAGE.glob('*.py')}
+    found = set()
+    for node in ast.walk(ast.parse((PACKAGE / f'{module}.py').read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module == 'rot_tools':
+            found |= {alias.name for alias in node.names if alias.name in names}
+        elif isinstance(node, ast.ImportFrom) and (node.module or '').startswith('rot_tools.'):
+            found.add(node.module.split('.')[1])
+        elif isinstance(node, ast.Import):
+            found |= {alias.name.split('.')[1] for alias in node.names
+                      if alias.name.startswith('rot_tools.')}
+    return found - {module}
+
+
+def test_the_runtime_depends_on_no_module_of_the_package():
+    assert imports_of('runtime') == set()
+    assert imports_of('entry') == {'runtime'}
+    assert 'runtime' in imports_of('rotation_node')
+
+
+def test_the_package_import_graph_has_no_cycle():
+    graph = {path.stem: imports_of(path.stem) for path in PACKAGE.glob('*.py')}
+    done, stack = set(), []
+
+    def visit(module):
+        if module in stack:
+            pytest.fail('import cycle: ' + ' -> '.join(stack[stack.index(module):] + [module]))
+        if module in done:
+            return
+        stack.append(module)
+        for dependency in sorted(graph.get(module, ())):
+            visit(dependency)
+        stack.pop()
+        done.add(module)
+
+    for module in sorted(graph):
+        visit(module)
+
+
+BAD_ROS_ARGUMENTS = {
+    'missing params file': (['--params-file', '/nonexistent/rot_tools.yaml'],
+                            '/nonexistent/rot_tools.yaml'),
+    'malformed params file': (['--params-file', '{malformed}'], 'params file'),
+    'bad -p': (['-p', 'foo'], '-p NAME:=VALUE'),
+    'bad -r': (['-r', 'bad'], '-r FROM:=TO'),
+    'node name too long': (['-r', '__node:=' + 'n' * 240], '__node:=NAME'),
+    'unknown flag': (['--bogus'], '--bogus'),
+    'parameter of the wrong type': (['-p', 'marker_scale:=abc'], 'marker_scale'),
+    'invalid parameter value': (['-p', 'euler_sequence:=zyz_'], 'euler_sequence'),
+}
+
+
+@pytest.mark.parametrize('how', sorted(NODE_COMMANDS))
+@pytest.mark.parametrize('case', sorted(BAD_ROS_ARGUMENTS))
+def test_bad_ros_arguments_are_one_line_and_status_2(tmp_path, how, case):
+    args, named = BAD_ROS_ARGUMENTS[case]
+    malformed = tmp_path / 'malformed.yaml'
+    malformed.write_text('rot_tools:\n  ros__parameters:\n    marker_scale: [1\n')
+    args = [str(malformed) if a == '{malformed}' else a for a in args]
+    proc = run(NODE_COMMANDS[how], '--ros-args', *args)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith('rotation_node: ') and named in lines[0], lines[0]

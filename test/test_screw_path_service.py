@@ -1,0 +1,182 @@
+"""~/screw_path against a hostile caller: every failure counted, replies bounded in bytes.
+
+The node under test lives in one rclpy context, the caller in another (real DDS between,
+conftest's isolated domain and namespaces). The size of a reply is checked against
+rclpy's own CDR serialisation of it, not against the node's estimate.
+"""
+
+import math
+
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.srv import GetPlan
+import pytest
+from rcl_interfaces.msg import Log
+from rclpy.serialization import serialize_message
+
+from rot_tools import rotation_node
+from rot_tools.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
+
+
+def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map'):
+    """A PoseStamped with orientation q = (x, y, z, w) and position p."""
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
+    o = msg.pose.orientation
+    o.x, o.y, o.z, o.w = map(float, q)
+    return msg
+
+
+def request(start, goal, tolerance=0.0):
+    return GetPlan.Request(start=start, goal=goal, tolerance=float(tolerance))
+
+
+class Service:
+    """A RotationNode under test and the tester that calls it and reads its /rosout."""
+
+    def __init__(self, tester, node):
+        self.tester = tester
+        self.node = node
+        self.name = f'{node.get_fully_qualified_name()}/screw_path'
+        tester.add_node(node)
+        tester.subscribe_rosout()
+
+    def call(self, start, goal, tolerance=0.0):
+        return self.tester.call(GetPlan, self.name, request(start, goal, tolerance)).plan
+
+    def errors(self, count):
+        """Wait until the node has logged ``count`` errors on /rosout; return their texts."""
+        logger = self.node.get_logger().name
+
+        def errors():
+            return [log.msg for log in self.tester.logs
+                    if log.name == logger and log.level == Log.ERROR]
+        self.tester.spin_until(lambda: len(errors()) >= count,
+                               what=f'{count} error(s) of the node on /rosout')
+        return errors()
+
+
+@pytest.fixture
+def service(ros_context, tester, namespace):
+    node = RotationNode(context=ros_context, namespace=namespace)
+    rotation_node.guard_callbacks(node)  # as rotation_node's spin() runs it
+    yield Service(tester, node)
+    tester.remove_node(node)
+    node.destroy_node()
+
+
+def refused(node):
+    return {k: v for k, v in node.refused_counts().items() if v}
+
+
+# ---------------------------------------------------------------------------------------
+# Every failure is a counted refusal with its reason
+
+
+@pytest.mark.parametrize('tolerance', [0.0, 0.5])
+def test_huge_positions_are_a_counted_refusal(service, tolerance):
+    """±1e308: b1 − b0 overflows float64, so there is no screw between them.
+
+    Unchecked, the overflow raised a RotationError inside the callback, with tolerance 0
+    in the interpolation, with 0.5 already when the number of steps is worked out: the
+    caller got an empty path and nothing was counted.
+    """
+    start = pose_stamped(p=(-1e308, 0, 0))
+    goal = pose_stamped(p=(1e308, 0, 0))
+    assert service.call(start, goal, tolerance).poses == []
+    (error,) = service.errors(1)
+    assert error.endswith('(not_decomposable): start and goal are too far apart: '
+                          'goal.position − start.position overflows float64 '
+                          '(beyond ±1.8e308)'), error
+    assert refused(service.node) == {'total': 1, 'not_decomposable': 1}
+    # The node keeps serving.
+    path = service.call(pose_stamped(), pose_stamped(p=(1, 0, 0)), 0.5)
+    assert [p.pose.position.x for p in path.poses] == [0.0, 0.5, 1.0]
+
+
+# ---------------------------------------------------------------------------------------
+# A reply is bounded in bytes
+
+
+def test_reply_size_estimate_bounds_the_serialised_reply():
+    """The estimate is never below what rclpy serialises, and at most 12 bytes a pose above.
+
+    Serialised, a pose takes 69 to 76 bytes besides its frame_id (alignment), the Path's
+    header and sequence length 21 to 24.
+    """
+    for frame in ('', 'm', 'map', 'é' * 5, '😀' * 3, 'x' * 1000):
+        for n in (2, 3, 21, 200):
+            start, goal = pose_stamped(frame=frame), pose_stamped(p=(1, 0, 0), frame=frame)
+            response = GetPlan.Response()
+            response.plan.header = start.header
+            response.plan.poses = [start] + [pose_stamped(frame=frame)] * (n - 2) + [goal]
+            size = len(serialize_message(response))
+            estimate = RotationNode._reply_bytes(frame, n)
+            assert size <= estimate <= size + 12 * n + 60, (frame, n, size, estimate)
+
+
+def test_reply_bytes_bound_the_default_path(service):
+    """21 poses (tolerance 0) in the longest frame_id that fits: served, ≤ MAX_REPLY_BYTES.
+
+    One byte more of frame_id and the reply would not fit: refused as path_too_long before
+    anything is built. Called in-process: the point is the bound, not DDS's large messages.
+    """
+    longest = MAX_REPLY_BYTES // 22 - RotationNode._reply_bytes('', 21) // 22
+    while RotationNode._reply_bytes('x' * (longest + 1), 21) <= MAX_REPLY_BYTES:
+        longest += 1
+    while RotationNode._reply_bytes('x' * longest, 21) > MAX_REPLY_BYTES:
+        longest -= 1
+    for length, fits in ((longest, True), (longest + 1, False)):
+        frame = 'x' * length
+        start, goal = pose_stamped(frame=frame), pose_stamped((0, 0, 1, 0), (1, 2, 3), frame)
+        response = service.node._on_screw_path(request(start, goal), GetPlan.Response())
+        if fits:
+            assert len(response.plan.poses) == 21
+            assert len(serialize_message(response)) <= MAX_REPLY_BYTES
+        else:
+            assert response.plan.poses == []
+    assert refused(service.node) == {'total': 1, 'path_too_long': 1}
+
+
+def test_long_frame_id_times_many_poses_is_refused(service):
+    """A 2 kB frame_id × 10,001 poses (10,000 steps over 1 m) would be a 20.8 MB reply."""
+    frame = 'f' * 2000
+    tolerance = 1.0 / (MAX_PATH_STEPS - 0.5)
+    start, goal = pose_stamped(frame=frame), pose_stamped(p=(1, 0, 0), frame=frame)
+    assert service.call(start, goal, tolerance).poses == []
+    (error,) = service.errors(1)
+    assert error.endswith(f'(path_too_long): a reply of {MAX_PATH_STEPS + 1} poses with a '
+                          'frame_id of 2000 bytes would take 20.8 MB, more than 16 MB'), error
+    assert refused(service.node) == {'total': 1, 'path_too_long': 1}
+    # The same path in a short frame_id is served: it is the bytes that were refused.
+    short = service.call(pose_stamped(), pose_stamped(p=(1, 0, 0)), tolerance)
+    assert len(short.poses) == MAX_PATH_STEPS + 1
+
+
+# ---------------------------------------------------------------------------------------
+# Error logs throttled per reason
+
+
+def test_errors_are_throttled_per_reason(service, monkeypatch):
+    """Refusals for different reasons each log; the same reason again (at once) does not.
+
+    The throttle period is made very long so that "at once" holds on a loaded machine too.
+    """
+    monkeypatch.setattr(rotation_node, 'REFUSAL_WARNING_PERIOD', 1e9)
+    zero = pose_stamped((0, 0, 0, 0))
+    cases = [  # (start, goal, tolerance): reason
+        ((pose_stamped(frame='map'), pose_stamped(frame='odom'), 0.0), 'frame_mismatch'),
+        ((zero, pose_stamped(), 0.0), 'zero_quaternion'),
+        ((zero, pose_stamped(), 0.0), 'zero_quaternion'),
+        ((pose_stamped(), pose_stamped(), math.nan), 'bad_tolerance'),
+        ((pose_stamped(), pose_stamped(p=(1, 0, 0)), 1e-9), 'path_too_long'),
+    ]
+    for args, _ in cases:
+        assert service.call(*args).poses == []
+    errors = service.errors(4)
+    # The node's /rosout is one reliable, ordered stream: the last error has come, so have
+    # all before it.
+    assert [e[e.index('(') + 1:e.index(')')] for e in errors] == [
+        'frame_mismatch', 'zero_quaternion', 'bad_tolerance', 'path_too_long']
+    assert refused(service.node) == {'total': 5, 'frame_mismatch': 1, 'zero_quaternion': 2,
+                                     'bad_tolerance': 1, 'path_too_long': 1}
