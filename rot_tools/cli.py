@@ -203,9 +203,18 @@ def _typed_matrix(parser, args, values, what):
     try:
         validate_rotation(R, tol=_tol(args, MATRIX_TOL))
     except RotationError as exc:
-        hint = ' (the tolerance is --tol)' if np.linalg.det(R) > 0 else ''
+        hint = ' (the tolerance is --tol)' if _det_sign(R) > 0 else ''
         parser.error(f'{what}: {exc}{hint}')
     return nearest_rotation(R)
+
+
+def _det_sign(R):
+    """Sign of det R for any finite R: scaled first, so entries of 1e308 do not overflow."""
+    scale = float(np.abs(R).max()) if np.isfinite(R).all() else 0.0
+    if not scale > 0:
+        return 0.0
+    with np.errstate(all='ignore'):  # a singular R: LU divides by a zero pivot
+        return float(np.sign(np.linalg.det(R / scale)))
 
 
 def _typed_frame(parser, args, values, what):
