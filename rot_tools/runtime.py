@@ -159,7 +159,7 @@ def ros_argument_error(exc):
 
 
 def _missing_params_files(args):
-    """The ``--params-file`` arguments after --ros-args that name no readable file."""
+    """Return the ``--params-file`` arguments (after --ros-args) naming no readable file."""
     missing = []
     inside = False
     for flag, value in zip(args, list(args[1:]) + [None]):
