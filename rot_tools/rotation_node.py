@@ -83,6 +83,9 @@ MARKER_RATE = 30.0
 PROG = 'rotation_node'
 """The program's name in its messages."""
 
+MAX_REFUSAL_TEXT = 400
+"""Longest refusal sentence ~/describe repeats (a refused frame_id may be megabytes)."""
+
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
 
@@ -258,6 +261,7 @@ class RotationNode(Node):
         self.add_post_set_parameters_callback(self._on_parameters_set)
 
         self._refused = dict.fromkeys(REFUSAL_REASONS, 0)
+        self._last_refusals = {}  # reason: (topic, header or None, text) of the latest
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
@@ -357,10 +361,10 @@ class RotationNode(Node):
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
             values = decompose_values(R, b, settings.euler_sequence)
         except messages.RefusedInput as exc:
-            self._refuse(source.topic, exc.reason, str(exc))
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
             return
         except RotationError as exc:
-            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc))
+            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=msg.header)
             return
         degrees = settings.degrees
         for publish, build, out, value_of, angles in self._outputs:
@@ -372,14 +376,16 @@ class RotationNode(Node):
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
-    def _refuse(self, topic, reason, text, error=False):
+    def _refuse(self, topic, reason, text, error=False, header=None):
         """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
 
         Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
         stream (a raw IMU without orientation at 50 Hz) would silence every other one.
-        ``error``: log at error level (a refused service request).
+        ``error``: log at error level (a refused service request). The refusal is kept as
+        the latest of its reason for ~/describe (``header``: the refused message's).
         """
         self._refused[reason] += 1
+        self._last_refusals[reason] = (topic, header, text)
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
             self._warned[topic, reason] = now
@@ -447,27 +453,52 @@ class RotationNode(Node):
         """{'total': N, reason: n, ...} of the inputs refused so far."""
         return {'total': sum(self._refused.values()), **self._refused}
 
+    def last_refusals(self):
+        """{reason: {source, stamp, message}} of the latest refusal of each reason so far.
+
+        In REFUSAL_REASONS order, only the reasons counted; ``stamp`` only when the refused
+        message had a header; ``message`` is the refusal's sentence (what and by how much),
+        cut to MAX_REFUSAL_TEXT characters.
+        """
+        latest = {}
+        for reason in REFUSAL_REASONS:
+            if reason not in self._last_refusals:
+                continue
+            topic, header, text = self._last_refusals[reason]
+            entry = {'source': topic}
+            if header is not None:
+                entry['stamp'] = {'sec': header.stamp.sec, 'nanosec': header.stamp.nanosec}
+            if len(text) > MAX_REFUSAL_TEXT:
+                text = text[:MAX_REFUSAL_TEXT - 1] + '…'
+            entry['message'] = text
+            latest[reason] = entry
+        return latest
+
     def _on_describe(self, request, response):
-        """YAML report of the latest input (rot_tools.report), with the refusal counts."""
+        """YAML report of the latest input (rot_tools.report), with the refusals' data.
+
+        Always a YAML document ending in ``refused`` (the counts by reason) and
+        ``last_refusals`` (last_refusals()). Before any accepted input ``success`` is false
+        and the document starts with ``note``: a sentence saying so, for people.
+        """
         refused = self.refused_counts()
         latest = self._latest
         if latest is None:
-            counts = ', '.join(f'{reason} {n}' for reason, n in refused.items()
-                               if n and reason != 'total')
+            total = refused['total']
+            data = {'note': f'Nothing has been accepted yet on {self._input_topics()} '
+                            f"({total} input{'' if total == 1 else 's'} refused)."}
             response.success = False
-            response.message = (
-                f'Nothing has been accepted yet on {self._input_topics()} '
-                f"({refused['total']} input(s) refused{': ' + counts if counts else ''}).")
-            return response
-        stamp = latest.header.stamp
-        data = {'source': latest.source.topic,
-                'source_type': latest.source.type_name,
-                'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
-                'frame_id': latest.header.frame_id}
-        data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,
-                                     latest.settings.degrees))
+        else:
+            stamp = latest.header.stamp
+            data = {'source': latest.source.topic,
+                    'source_type': latest.source.type_name,
+                    'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
+                    'frame_id': latest.header.frame_id}
+            data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,
+                                         latest.settings.degrees))
+            response.success = True
         data['refused'] = refused
-        response.success = True
+        data['last_refusals'] = self.last_refusals()
         response.message = to_yaml(data)
         return response
 

@@ -9,7 +9,6 @@ significant digits, so its numbers are compared to that.
 """
 
 import math
-import re
 import time
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -250,6 +249,10 @@ class Rig:
         response = self.describe()
         assert response.success, response.message
         return yaml.safe_load(response.message)
+
+    def report_or_note(self):
+        """~/describe's YAML document, with or without an accepted input."""
+        return yaml.safe_load(self.describe().message)
 
     def screw_path(self, start, goal, tolerance=0.0):
         request = GetPlan.Request(start=start, goal=goal, tolerance=float(tolerance))
@@ -677,9 +680,9 @@ def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
     assert len(warnings(odometry_warning)) == 1  # three refused in one second: one warning
     assert 2 <= len(warnings(imu_warning)) <= 1 + elapsed  # throttled, per second
     assert len(rig.node_logs(Log.WARN)) == len(warnings(imu_warning)) + 1
-    counts = re.search(r'\((\d+) input\(s\) refused: non_finite 3, no_orientation (\d+)\)',
-                       rig.describe().message)
-    assert counts and int(counts[1]) == 3 + int(counts[2]) and 0 < int(counts[2]) <= sent
+    refused = rig.report_or_note()['refused']
+    assert refused['non_finite'] == 3 and 0 < refused['no_orientation'] <= sent
+    assert refused['total'] == 3 + refused['no_orientation']
 
 
 # ---------------------------------------------------------------------------------------
@@ -689,19 +692,59 @@ def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
 def test_describe_before_any_input(rig):
     response = rig.describe()
     assert not response.success
-    assert response.message.startswith('Nothing has been accepted yet on')
+    data = yaml.safe_load(response.message)
+    assert list(data) == ['note', 'refused', 'last_refusals']
+    assert data['note'].startswith('Nothing has been accepted yet on')
     for kind in INPUTS:
-        assert rig.topic(kind) in response.message
-    assert response.message.endswith('(0 input(s) refused).')
+        assert rig.topic(kind) in data['note']
+    assert data['note'].endswith('(0 inputs refused).')
+    assert data['refused'] == {'total': 0, **dict.fromkeys(REFUSAL_REASONS, 0)}
+    assert data['last_refusals'] == {}
 
 
 def test_describe_before_any_accepted_input_counts_refusals(rig):
-    rig.send('imu', imu((0, 0, 0, 0), orientation_covariance0=-1.0))
+    msg = imu((0, 0, 0, 0), orientation_covariance0=-1.0)
+    msg.header.stamp.nanosec = 77
+    stamp = rig.send('imu', msg)
     rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1,
                           what='the refusal')
     response = rig.describe()
     assert not response.success
-    assert response.message.endswith('(1 input(s) refused: no_orientation 1).')
+    data = yaml.safe_load(response.message)
+    assert data['note'].endswith('(1 input refused).')
+    assert data['refused']['total'] == data['refused']['no_orientation'] == 1
+    assert data['last_refusals'] == {'no_orientation': {
+        'source': rig.topic('imu'), 'stamp': {'sec': stamp, 'nanosec': 77},
+        'message': 'orientation_covariance[0] is -1: the IMU gives no orientation estimate'}}
+
+
+def test_describe_carries_the_latest_refusal_of_each_reason(rig):
+    # The sentence the node logs, as data: what was wrong and by how much, per reason.
+    half = 1.0 / math.sqrt(2.0)
+    first = rig.send('pose', pose_stamped((0.0, 0.0, 0.0, half)))
+    rig.send('pose', pose_stamped((0.0, 0.0, math.nan, 1.0)))
+    latest = rig.send('orientation', quaternion_stamped((0.0, 0.0, 0.0, 0.5)))
+    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 3, what='refusals')
+    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    report = rig.report()
+    assert report['refused']['non_unit_quaternion'] == 2
+    assert list(report)[-2:] == ['refused', 'last_refusals']
+    assert report['last_refusals'] == {
+        'non_finite': {'source': rig.topic('pose'), 'stamp': {'sec': first + 1, 'nanosec': 0},
+                       'message': 'pose.orientation.z is nan'},
+        'non_unit_quaternion': {
+            'source': rig.topic('orientation'), 'stamp': {'sec': latest, 'nanosec': 0},
+            'message': 'quaternion has norm 0.5, off 1 by 0.5 > quaternion_tolerance 0.001'}}
+
+
+def test_describe_cuts_a_huge_refusal_sentence(rig):
+    start, goal = PoseStamped(), PoseStamped()
+    start.header.frame_id, goal.header.frame_id = 'a' * 100_000, 'map'
+    start.pose.orientation.w = goal.pose.orientation.w = 1.0
+    assert rig.screw_path(start, goal).poses == []
+    (entry,) = rig.report_or_note()['last_refusals'].values()
+    assert len(entry['message']) == rotation_node.MAX_REFUSAL_TEXT
+    assert entry['message'].startswith("start is in frame 'aaa") and entry['message'][-1] == '…'
 
 
 def assert_report_close(actual, expected):
@@ -732,7 +775,8 @@ def test_describe_reports_the_latest_input(rig):
     assert report['frame_id'] == 'odom'
     expected = transform_report(quaternion_to_matrix(q), t, 'ZYX', False)
     assert_report_close({k: report[k] for k in expected}, expected)
-    assert list(report) == ['source', 'source_type', 'stamp', 'frame_id', *expected, 'refused']
+    assert list(report) == ['source', 'source_type', 'stamp', 'frame_id', *expected, 'refused',
+                            'last_refusals']
     assert report['source_type'] == 'geometry_msgs/msg/TransformStamped'
     assert report['refused'] == {'total': 0, **dict.fromkeys(REFUSAL_REASONS, 0)}
     assert set(report['screw']) >= {
