@@ -251,7 +251,7 @@ class Rig:
         return yaml.safe_load(response.message)
 
     def report_or_note(self):
-        """~/describe's YAML document, with or without an accepted input."""
+        """Return ~/describe's YAML document, with or without an accepted input."""
         return yaml.safe_load(self.describe().message)
 
     def screw_path(self, start, goal, tolerance=0.0):
@@ -962,9 +962,9 @@ def test_parameter_descriptors(rig):
         descriptor = node.describe_parameter(name)
         assert descriptor.type == kind and descriptor.description
         assert node.get_parameter(name).value == default
-    for name in ('quaternion_tolerance', 'marker_scale'):
+    for name, low in (('quaternion_tolerance', 0.0), ('marker_scale', 1e-6)):
         (fp_range,) = node.describe_parameter(name).floating_point_range
-        assert fp_range.from_value == 0.0
+        assert (fp_range.from_value, fp_range.to_value) == (low, math.inf)
     assert 'zyz' in node.describe_parameter('euler_sequence').additional_constraints
 
 
@@ -1049,11 +1049,13 @@ REFUSED_PARAMETERS = [  # (name, value, why)
     ('quaternion_tolerance', -0.1, 'out of range'),
     ('quaternion_tolerance', math.nan, 'out of range'),
     ('quaternion_tolerance', math.inf, 'finite'),
-    ('quaternion_tolerance', 1, 'Wrong parameter type'),
     ('quaternion_tolerance', 'small', 'Wrong parameter type'),
     ('publish_markers', 'yes', 'Wrong parameter type'),
     ('publish_markers', 1, 'Wrong parameter type'),
-    ('marker_scale', 0.0, '> 0'),
+    ('marker_scale', 0.0, 'out of range'),
+    ('marker_scale', 5e-324, 'out of range'),
+    ('marker_scale', 9.99e-7, 'out of range'),
+    ('marker_scale', 0, 'out of range'),
     ('marker_scale', -2.0, 'out of range'),
     ('marker_scale', math.inf, 'finite'),
     ('marker_scale', [1.0, 2.0], 'Wrong parameter type'),
@@ -1096,8 +1098,33 @@ def test_parameters_it_does_not_own_are_accepted(rig):
 
 
 @pytest.mark.parametrize('name, value', [('euler_sequence', 'abc'), ('angle_unit', 'turns'),
-                                         ('marker_scale', 0.0)])
+                                         ('marker_scale', 0.0), ('marker_scale', 5e-324),
+                                         ('marker_scale', 0), ('quaternion_tolerance', -1)])
 def test_invalid_override_at_start_up(ros_context, namespace, name, value):
     with pytest.raises(InvalidParameterValueException, match=name):
         RotationNode(context=ros_context, namespace=namespace,
                      parameter_overrides=[Parameter(name, value=value)])
+
+
+def test_double_parameters_take_integer_values(make_rig):
+    # A YAML file's `marker_scale: 3`, `-p marker_scale:=3` and `ros2 param set ... 3` are
+    # integers to rclpy: the node takes them as doubles (test_node_e2e runs the file and -p).
+    rig = make_rig(marker_scale=3, quaternion_tolerance=0)
+    for name, value in (('marker_scale', 3.0), ('quaternion_tolerance', 0.0)):
+        parameter = rig.node.get_parameter(name)
+        assert (parameter.type_, parameter.value) == (Parameter.Type.DOUBLE, value)
+        assert type(parameter.value) is float
+    assert set_one(rig.node, 'marker_scale', 2).successful
+    assert rig.node.get_parameter('marker_scale').value == 2.0
+    results = rig.tester.set_parameters(rig.node.get_fully_qualified_name(), [
+        Parameter('quaternion_tolerance', value=1), Parameter('marker_scale', value=4)])
+    assert [r.successful for r in results] == [True, True]
+    assert rig.node.get_parameter('quaternion_tolerance').get_parameter_value().double_value \
+        == 1.0
+    q, p = POSE_CASES['general']
+    out = rig.roundtrip('pose', pose_stamped(q, p))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', quaternion_to_matrix(q), p,
+                  scale=4.0)
+    # Only doubles: an integer is still not a string, nor a bool.
+    assert not set_one(rig.node, 'euler_sequence', 3).successful
+    assert not set_one(rig.node, 'publish_markers', 1).successful
