@@ -228,6 +228,36 @@ _PLAIN = re.compile(r'[A-Za-z_/][A-Za-z0-9_./ -]*\Z')
 # quaternion block pastes into `ros2 topic pub`.
 _YAML_WORDS = frozenset('yes no true false on off null ~'.split())
 
+# Characters of a string written escaped (YAML double-quoted scalar, JSON string): what
+# YAML does not allow printed (C0 and C1 controls, DEL, lone surrogates, U+FFFE, U+FFFF),
+# line and paragraph separators (YAML folds them) and the byte order mark. Everything else,
+# emoji and accents included, is written as itself: json.dumps's ASCII escapes write a
+# character beyond U+FFFF as a surrogate pair, which YAML reads as two lone surrogates.
+_ESCAPED = re.compile('[^\x20-\x7e\xa0-\ud7ff\ue000-\ufefe\uff00-\ufffd'
+                      '\U00010000-\U0010ffff]|[\u2028\u2029]')
+_YAML_ESCAPED = re.compile(_ESCAPED.pattern + '|["\\\\]')
+_SHORT_ESCAPES = {'"': '\\"', '\\': '\\\\', '\t': '\\t', '\n': '\\n', '\r': '\\r'}
+
+
+def _escape(match):
+    c = match.group()
+    if c in _SHORT_ESCAPES:
+        return _SHORT_ESCAPES[c]
+    code = ord(c)
+    return f'\\x{code:02x}' if code < 0x100 else (
+        f'\\u{code:04x}' if code < 0x10000 else f'\\U{code:08x}')
+
+
+def _yaml_string(text):
+    """``text`` as a YAML double-quoted scalar: printable characters as themselves."""
+    return '"' + _YAML_ESCAPED.sub(_escape, text) + '"'
+
+
+def _json_string(text):
+    """``text`` as a JSON string: printable characters as themselves, the rest \\uXXXX."""
+    return _ESCAPED.sub(lambda m: f'\\u{ord(m.group()):04x}',
+                        json.dumps(text, ensure_ascii=False))
+
 
 def _yaml_scalar(x, precision):
     if x is None:
@@ -246,7 +276,7 @@ def _yaml_scalar(x, precision):
     if isinstance(x, str):
         if _PLAIN.match(x) and not x.endswith(' ') and x.lower() not in _YAML_WORDS:
             return x
-        return json.dumps(x)  # a JSON string is a valid YAML double-quoted scalar
+        return _yaml_string(x)
     raise TypeError(f'to_yaml: cannot write {type(x).__name__} {x!r}')
 
 
@@ -321,8 +351,10 @@ def _json_scalar(x, precision):
         return 'true' if x else 'false'
     if isinstance(x, (int, np.integer)):
         return str(int(x))
-    if x is None or isinstance(x, str):
-        return json.dumps(x)
+    if x is None:
+        return 'null'
+    if isinstance(x, str):
+        return _json_string(x)
     raise TypeError(f'to_json: cannot write {type(x).__name__} {x!r}')
 
 
@@ -334,7 +366,7 @@ def _json(x, indent, precision):
         return '[' + inner + ']' if isinstance(x, (list, tuple)) else '{}'
     pad = '  ' * (indent + 1)
     if isinstance(x, dict):
-        items = [f'{pad}{json.dumps(str(k))}: {_json(v, indent + 1, precision)}'
+        items = [f'{pad}{_json_string(str(k))}: {_json(v, indent + 1, precision)}'
                  for k, v in x.items()]
         return '{\n' + ',\n'.join(items) + '\n' + '  ' * indent + '}'
     items = [f'{pad}{_json(v, indent + 1, precision)}' for v in x]

@@ -311,7 +311,7 @@ def test_quaternion_order_is_ros_and_wxyz_reads_w_first(script):
     assert ok(script, '--wxyz', 'quaternion', c, c, 0, 0, '--json') == wxyz
     q = Rotation.random(random_state=11).as_quat()  # (x, y, z, w)
     rep = ok(script, 'quaternion', q[3], *q[:3], '--wxyz', '--precision', '17', '--json')
-    check_rotation(rep, Rotation.from_quat(q[[3, 0, 1, 2]], scalar_first=True).as_matrix())
+    check_rotation(rep, Rotation.from_quat(q).as_matrix())  # scipy reads (x, y, z, w)
 
 
 def test_quaternion_tolerance_default_and_adjustable(script):
