@@ -68,14 +68,23 @@ def decompose(R, b, seq='ZYX', *, check=True):
 class Values(NamedTuple):
     """The numbers rotation_node publishes for one input, as plain Python floats.
 
-    rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked, rad (3); twist: screw_log
-    (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives it (4).
+    matrix: R row-major (9); rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked,
+    rad (3); twist: screw_log (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives
+    it (4); rpy: roll, pitch, yaw (REP 103: about the fixed x, y, z axes, the extrinsic
+    sequence 'xyz'), rad (3), whatever sequence was asked. For a batch, arrays with those
+    last dimensions.
     """
 
+    matrix: list
     rotvec: tuple
     euler: tuple
     twist: tuple
     quaternion: tuple
+    rpy: tuple
+
+
+RPY_SEQUENCE = 'xyz'
+"""Roll, pitch, yaw (REP 103): rotations about the fixed x, y, z axes, in that order."""
 
 
 def _values_kernel(ops, m, b):
@@ -96,9 +105,10 @@ _EULER_KERNELS = {seq: partial(_euler_kernel, spec=parse_sequence(seq))
 
 
 def decompose_values(R, b, seq='ZYX'):
-    """Return the Values of one rigid motion (R (3, 3), b (3,)), from two kernel passes.
+    """Return the Values of one rigid motion (R (3, 3), b (3,)), from three kernel passes.
 
-    Rotation vector, Euler angles of ``seq`` (rad), twist and quaternion. The same kernels
+    R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist,
+    quaternion, and roll, pitch, yaw (rad: the Euler kernel of 'xyz'). The same kernels
     as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
     θ = π), without building an array for each: rotation_node calls it for every message.
     R is not validated (check=False: the node builds R itself); RotationError where the
@@ -112,4 +122,7 @@ def decompose_values(R, b, seq='ZYX'):
         _VALUES_OUTPUTS)
     refuse_far_axis(fits, angle, b)
     (euler,) = apply(euler_kernel, [(R, (3, 3), 'R', False)], [_FLOATS3])
-    return Values(rotvec, euler, twist, q)
+    (rpy,) = apply(_EULER_KERNELS[RPY_SEQUENCE], [(R, (3, 3), 'R', False)], [_FLOATS3])
+    R = np.asarray(R, dtype=np.float64)
+    matrix = R.ravel().tolist() if R.ndim == 2 else R.reshape(R.shape[:-2] + (9,))
+    return Values(matrix, rotvec, euler, twist, q, rpy)
