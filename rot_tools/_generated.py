@@ -3968,6 +3968,28 @@ def decomposition__euler_kernel_XYX(inputs):
     return ((((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0),),)
 
 
+# rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, False, True)]
+def decomposition__euler_kernel_xyz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a3 * a3) + (a0 * a0)))
+    t5 = _op_atan2((-a6), t3)
+    t9 = _op_atan2(a3, a0)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a0 / t11
+    t15 = -(a3 / t11)
+    t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
+    if ((1.5707963267948966 - (_op_abs(t5))) <= 1e-06):
+        return None  # rare: apply runs the kernel
+    return ((((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0),),)
+
+
 # rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, False, False)]
 def decomposition__euler_kernel_XYZ(inputs):
     if len(inputs) != 1:
@@ -4242,28 +4264,6 @@ def decomposition__euler_kernel_xyx(inputs):
     if ((t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06):
         return None  # rare: apply runs the kernel
     return ((((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0),),)
-
-
-# rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, False, True)]
-def decomposition__euler_kernel_xyz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a3 * a3) + (a0 * a0)))
-    t5 = _op_atan2((-a6), t3)
-    t9 = _op_atan2(a3, a0)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a0 / t11
-    t15 = -(a3 / t11)
-    t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
-    if ((1.5707963267948966 - (_op_abs(t5))) <= 1e-06):
-        return None  # rare: apply runs the kernel
-    return ((((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0),),)
 
 
 # rot_tools.decomposition._euler_kernel[spec=(0, 2, 1, -1.0, True, True)]
@@ -4601,6 +4601,7 @@ CODE = {
     'rot_tools.rigid._frame_kernel': ([((3, 3), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__frame_kernel),
     'rot_tools.decomposition._values_kernel': ([((3,), _float), ((6,), _float), ((4,), _float), ((), _float64), ((), _bool)], decomposition__values_kernel),
     'rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, True, False)]': ([((3,), _float)], decomposition__euler_kernel_XYX),
+    'rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, False, True)]': ([((3,), _float)], decomposition__euler_kernel_xyz),
     'rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, False, False)]': ([((3,), _float)], decomposition__euler_kernel_XYZ),
     'rot_tools.decomposition._euler_kernel[spec=(0, 2, 1, -1.0, True, False)]': ([((3,), _float)], decomposition__euler_kernel_XZX),
     'rot_tools.decomposition._euler_kernel[spec=(0, 2, 1, -1.0, False, False)]': ([((3,), _float)], decomposition__euler_kernel_XZY),
@@ -4613,7 +4614,6 @@ CODE = {
     'rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, False, False)]': ([((3,), _float)], decomposition__euler_kernel_ZYX),
     'rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, True, False)]': ([((3,), _float)], decomposition__euler_kernel_ZYZ),
     'rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, True, True)]': ([((3,), _float)], decomposition__euler_kernel_xyx),
-    'rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, False, True)]': ([((3,), _float)], decomposition__euler_kernel_xyz),
     'rot_tools.decomposition._euler_kernel[spec=(0, 2, 1, -1.0, True, True)]': ([((3,), _float)], decomposition__euler_kernel_xzx),
     'rot_tools.decomposition._euler_kernel[spec=(1, 2, 0, 1.0, False, True)]': ([((3,), _float)], decomposition__euler_kernel_xzy),
     'rot_tools.decomposition._euler_kernel[spec=(1, 0, 2, -1.0, True, True)]': ([((3,), _float)], decomposition__euler_kernel_yxy),
