@@ -17,6 +17,7 @@ _empty, _ndarray = _np.empty, _np.ndarray
 _f64, _b1 = _np.dtype(_np.float64), _np.dtype(_np.bool_)
 _float, _float64, _bool = float, _np.float64, _np.bool_
 _inf, _nan = _math.inf, _math.nan
+_True, _False = _np.True_, _np.False_
 _op_abs = abs
 _op_atan2 = _math.atan2
 _op_cos = _math.cos
@@ -736,7 +737,7 @@ def euler_angles_kernel_XYX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)
@@ -773,7 +774,7 @@ def euler_angles_kernel_XYZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)
@@ -811,7 +812,7 @@ def euler_angles_kernel_XZX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)
@@ -848,7 +849,7 @@ def euler_angles_kernel_XZY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)
@@ -886,7 +887,7 @@ def euler_angles_kernel_YXY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)
@@ -923,7 +924,7 @@ def euler_angles_kernel_YXZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)
@@ -960,7 +961,7 @@ def euler_angles_kernel_YZX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)
@@ -998,7 +999,7 @@ def euler_angles_kernel_YZY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)
@@ -1035,7 +1036,7 @@ def euler_angles_kernel_ZXY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)
@@ -1073,7 +1074,7 @@ def euler_angles_kernel_ZXZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)
@@ -1110,7 +1111,7 @@ def euler_angles_kernel_ZYX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)
@@ -1148,7 +1149,7 @@ def euler_angles_kernel_ZYZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)
@@ -1186,7 +1187,7 @@ def euler_angles_kernel_xyx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)
@@ -1223,7 +1224,7 @@ def euler_angles_kernel_xyz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)
@@ -1261,7 +1262,7 @@ def euler_angles_kernel_xzx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)
@@ -1298,7 +1299,7 @@ def euler_angles_kernel_xzy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)
@@ -1336,7 +1337,7 @@ def euler_angles_kernel_yxy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)
@@ -1373,7 +1374,7 @@ def euler_angles_kernel_yxz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)
@@ -1410,7 +1411,7 @@ def euler_angles_kernel_yzx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)
@@ -1448,7 +1449,7 @@ def euler_angles_kernel_yzy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)
@@ -1485,7 +1486,7 @@ def euler_angles_kernel_zxy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)
@@ -1523,7 +1524,7 @@ def euler_angles_kernel_zxz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)
@@ -1560,7 +1561,7 @@ def euler_angles_kernel_zyx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)
@@ -1598,7 +1599,7 @@ def euler_angles_kernel_zyz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.axis_angle.axis_angle_kernel checked(1)
@@ -1854,7 +1855,7 @@ def screw__screw_kernel_checked(inputs):
     _pack_3d(o1, 0, t219, t223, t227)
     o2 = _empty((3,), _f64)
     _pack_3d(o2, 0, t230, t233, t236)
-    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), _bool((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), (_True if (((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.screw._log_kernel checked(1)
@@ -1937,7 +1938,7 @@ def screw__log_kernel_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((6,), _f64)
     _pack_6d(o0, 0, (t94 * t152), (t94 * t155), (t94 * t158), t184, t190, t196)
-    return (o0, _bool(t204), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t204 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._points_kernel checked(1)
@@ -1984,7 +1985,7 @@ def rigid__points_kernel_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, t73, t74, t75)
-    return (o0, _bool(t83), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t83 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._compose_kernel checked(2)
@@ -2046,7 +2047,7 @@ def rigid__compose_kernel_checked2(inputs):
     _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t176, t177, t178)
-    return (o0, o1, _bool(t186), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
+    return (o0, o1, (_True if t186 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
 
 
 # rot_tools.rigid._invert_kernel checked(1)
@@ -2087,7 +2088,7 @@ def rigid__invert_kernel_checked(inputs):
     _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t73, t74, t75)
-    return (o0, o1, _bool(t83), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, o1, (_True if t83 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._homogeneous_kernel checked(1)
@@ -2291,7 +2292,7 @@ def screw__log_kernel(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((6,), _f64)
     _pack_6d(o0, 0, (t36 * t94), (t36 * t97), (t36 * t100), t126, t132, t138)
-    return (o0, _bool(t146),)
+    return (o0, (_True if t146 else _False),)
 
 
 # rot_tools.screw._exp_kernel
@@ -2349,7 +2350,7 @@ def screw__exp_kernel(inputs):
     _pack_9d(o0, 0, (t73 + (t74 * t20)), (t80 - t79), (t81 + t78), (t80 + t79), (t73 + (t75 * t23)), (t82 - t77), (t81 - t78), (t82 + t77), (t73 + ((t43 * t25) * t25)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t60, t66, t72)
-    return (o0, o1, _bool(t27), _bool(((((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) and ((_op_abs(t72)) <= 1.7976931348623157e+308))),)
+    return (o0, o1, (_True if t27 else _False), (_True if ((((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) and ((_op_abs(t72)) <= 1.7976931348623157e+308)) else _False),)
 
 
 # rot_tools.decomposition._motion_kernel checked(1)
@@ -2463,7 +2464,7 @@ def decomposition__motion_kernel_checked(inputs):
     _pack_3d(o4, 0, t230, t233, t236)
     o8 = _empty((6,), _f64)
     _pack_6d(o8, 0, (t94 * t152), (t94 * t155), (t94 * t158), t288, t294, t300)
-    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, _bool(((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308)), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, (_True if ((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308) else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]
@@ -2490,7 +2491,7 @@ def euler_angles_kernel_XYX(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)]
@@ -2516,7 +2517,7 @@ def euler_angles_kernel_XYZ(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)]
@@ -2542,7 +2543,7 @@ def euler_angles_kernel_XZX(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, (_True if t7 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)]
@@ -2567,7 +2568,7 @@ def euler_angles_kernel_XZY(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)]
@@ -2593,7 +2594,7 @@ def euler_angles_kernel_YXY(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, (_True if t7 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)]
@@ -2618,7 +2619,7 @@ def euler_angles_kernel_YXZ(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)]
@@ -2644,7 +2645,7 @@ def euler_angles_kernel_YZX(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)]
@@ -2671,7 +2672,7 @@ def euler_angles_kernel_YZY(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)]
@@ -2697,7 +2698,7 @@ def euler_angles_kernel_ZXY(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)]
@@ -2724,7 +2725,7 @@ def euler_angles_kernel_ZXZ(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)]
@@ -2749,7 +2750,7 @@ def euler_angles_kernel_ZYX(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)]
@@ -2775,7 +2776,7 @@ def euler_angles_kernel_ZYZ(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, (_True if t7 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)]
@@ -2802,7 +2803,7 @@ def euler_angles_kernel_xyx(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)]
@@ -2827,7 +2828,7 @@ def euler_angles_kernel_xyz(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)]
@@ -2853,7 +2854,7 @@ def euler_angles_kernel_xzx(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, (_True if t7 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)]
@@ -2879,7 +2880,7 @@ def euler_angles_kernel_xzy(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)]
@@ -2905,7 +2906,7 @@ def euler_angles_kernel_yxy(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, (_True if t7 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)]
@@ -2931,7 +2932,7 @@ def euler_angles_kernel_yxz(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)]
@@ -2956,7 +2957,7 @@ def euler_angles_kernel_yzx(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)]
@@ -2983,7 +2984,7 @@ def euler_angles_kernel_yzy(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)]
@@ -3008,7 +3009,7 @@ def euler_angles_kernel_zxy(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)]
@@ -3035,7 +3036,7 @@ def euler_angles_kernel_zxz(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)]
@@ -3061,7 +3062,7 @@ def euler_angles_kernel_zyx(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
+    return (o0, (_True if t8 else _False),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)]
@@ -3087,7 +3088,7 @@ def euler_angles_kernel_zyz(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, (_True if t7 else _False),)
 
 
 # rot_tools.axis_angle.axis_angle_kernel
@@ -3303,7 +3304,7 @@ def screw__screw_kernel(inputs):
     _pack_3d(o1, 0, t161, t165, t169)
     o2 = _empty((3,), _f64)
     _pack_3d(o2, 0, t172, t175, t178)
-    return (o0, o1, o2, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), _bool((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308))),)
+    return (o0, o1, o2, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), (_True if (((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) else _False),)
 
 
 # rot_tools.rigid._points_kernel
@@ -3340,7 +3341,7 @@ def rigid__points_kernel(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, t15, t16, t17)
-    return (o0, _bool(t25),)
+    return (o0, (_True if t25 else _False),)
 
 
 # rot_tools.rigid._compose_kernel
@@ -3382,7 +3383,7 @@ def rigid__compose_kernel(inputs):
     _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t60, t61, t62)
-    return (o0, o1, _bool(t70),)
+    return (o0, o1, (_True if t70 else _False),)
 
 
 # rot_tools.rigid._invert_kernel
@@ -3413,7 +3414,7 @@ def rigid__invert_kernel(inputs):
     _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t15, t16, t17)
-    return (o0, o1, _bool(t25),)
+    return (o0, o1, (_True if t25 else _False),)
 
 
 # rot_tools.rigid._homogeneous_kernel
@@ -3562,7 +3563,7 @@ def decomposition__motion_kernel(inputs):
     _pack_3d(o4, 0, t172, t175, t178)
     o8 = _empty((6,), _f64)
     _pack_6d(o8, 0, (t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242)
-    return (o0, _float64(t36), o2, o3, o4, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), o8, _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) and t250)),)
+    return (o0, _float64(t36), o2, o3, o4, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), o8, (_True if ((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) and t250) else _False),)
 
 
 # rot_tools.axis_angle._rotvec_kernel
@@ -3606,7 +3607,7 @@ def axis_angle__rotvec_kernel(inputs):
     t39 = t32 * t23
     o0 = _empty((3, 3), _f64)
     _pack_9d(o0, 0, (t30 + (t31 * t21)), (t37 - t36), (t38 + t35), (t37 + t36), (t30 + (t32 * t22)), (t39 - t34), (t38 - t35), (t39 + t34), (t30 + ((t28 * t23) * t23)))
-    return (o0, _bool(t17),)
+    return (o0, (_True if t17 else _False),)
 
 
 # rot_tools.axis_angle._axis_angle_kernel
@@ -3655,7 +3656,7 @@ def axis_angle__axis_angle_kernel(inputs):
     t41 = t34 * t25
     o0 = _empty((3, 3), _f64)
     _pack_9d(o0, 0, (t32 + (t33 * t20)), (t39 - t38), (t40 + t37), (t39 + t38), (t32 + (t34 * t23)), (t41 - t36), (t40 - t37), (t41 + t36), (t32 + ((t30 * t25) * t25)))
-    return (o0, _bool((t16 and (a3 != 0))),)
+    return (o0, (_True if (t16 and (a3 != 0)) else _False),)
 
 
 # rot_tools.so3._quaternion_kernel
@@ -3699,7 +3700,7 @@ def so3__quaternion_kernel(inputs):
     t40 = t9 * t12
     o0 = _empty((3, 3), _f64)
     _pack_9d(o0, 0, (1.0 - (t22 * (t14 + t16))), (t22 * (t26 - t27)), (t22 * (t30 + t31)), (t22 * (t26 + t27)), (1.0 - (t22 * (t13 + t16))), (t22 * (t39 - t40)), (t22 * (t30 - t31)), (t22 * (t39 + t40)), (1.0 - (t22 * t15)))
-    return (o0, _bool((t6 == 0)),)
+    return (o0, (_True if (t6 == 0) else _False),)
 
 
 # rot_tools.screw._transform_of_screw_kernel
@@ -3768,7 +3769,7 @@ def screw__transform_of_screw_kernel(inputs):
     _pack_9d(o0, 0, (t67 + (t68 * t20)), (t74 - t73), (t75 + t72), (t74 + t73), (t67 + (t69 * t23)), (t76 - t71), (t75 - t72), (t76 + t71), (t67 + ((t31 * t25) * t25)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t52, t59, t66)
-    return (o0, o1, _bool(t16), _bool(((((_op_abs(t52)) <= 1.7976931348623157e+308) and ((_op_abs(t59)) <= 1.7976931348623157e+308)) and ((_op_abs(t66)) <= 1.7976931348623157e+308))),)
+    return (o0, o1, (_True if t16 else _False), (_True if ((((_op_abs(t52)) <= 1.7976931348623157e+308) and ((_op_abs(t59)) <= 1.7976931348623157e+308)) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) else _False),)
 
 
 # rot_tools.rigid._frame_kernel
@@ -3941,7 +3942,7 @@ def decomposition__values_kernel(inputs):
     t290 = t43 if t271 else (t45 if t276 else (t264 if t281 else t4))
     t293 = t0 if t271 else (t2 if t276 else (t4 if t281 else t266))
     t310 = (-1.0 if ((t293 if (t293 != 0) else (t284 if (t284 != 0) else (t287 if (t287 != 0) else t290))) < 0) else 1.0) / (_op_sqrt(((((t284 * t284) + (t287 * t287)) + (t290 * t290)) + (t293 * t293))))
-    return (((t94 * t36), (t97 * t36), (t100 * t36),), ((t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242,), (((t284 * t310) + 0.0), ((t287 * t310) + 0.0), ((t290 * t310) + 0.0), ((t293 * t310) + 0.0),), _float64(t36), _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(((t165 * t130) - (t169 * t129)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t169 * t128) - (t161 * t130)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t161 * t129) - (t165 * t128)))) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else (t136 / t143)))) <= 1.7976931348623157e+308)) and t250)),)
+    return (((t94 * t36), (t97 * t36), (t100 * t36),), ((t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242,), (((t284 * t310) + 0.0), ((t287 * t310) + 0.0), ((t290 * t310) + 0.0), ((t293 * t310) + 0.0),), _float64(t36), (_True if ((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(((t165 * t130) - (t169 * t129)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t169 * t128) - (t161 * t130)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t161 * t129) - (t165 * t128)))) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else (t136 / t143)))) <= 1.7976931348623157e+308)) and t250) else _False),)
 
 
 # rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, True, False)]
