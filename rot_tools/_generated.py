@@ -737,7 +737,7 @@ def euler_angles_kernel_XYX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)
@@ -774,7 +774,7 @@ def euler_angles_kernel_XYZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)
@@ -812,7 +812,7 @@ def euler_angles_kernel_XZX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)
@@ -849,7 +849,7 @@ def euler_angles_kernel_XZY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)
@@ -887,7 +887,7 @@ def euler_angles_kernel_YXY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)
@@ -924,7 +924,7 @@ def euler_angles_kernel_YXZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)
@@ -961,7 +961,7 @@ def euler_angles_kernel_YZX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)
@@ -999,7 +999,7 @@ def euler_angles_kernel_YZY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)
@@ -1036,7 +1036,7 @@ def euler_angles_kernel_ZXY_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)
@@ -1074,7 +1074,7 @@ def euler_angles_kernel_ZXZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)
@@ -1111,7 +1111,7 @@ def euler_angles_kernel_ZYX_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)
@@ -1149,7 +1149,7 @@ def euler_angles_kernel_ZYZ_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)
@@ -1187,7 +1187,7 @@ def euler_angles_kernel_xyx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)
@@ -1224,7 +1224,7 @@ def euler_angles_kernel_xyz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)
@@ -1262,7 +1262,7 @@ def euler_angles_kernel_xzx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)
@@ -1299,7 +1299,7 @@ def euler_angles_kernel_xzy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)
@@ -1337,7 +1337,7 @@ def euler_angles_kernel_yxy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)
@@ -1374,7 +1374,7 @@ def euler_angles_kernel_yxz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)
@@ -1411,7 +1411,7 @@ def euler_angles_kernel_yzx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)
@@ -1449,7 +1449,7 @@ def euler_angles_kernel_yzy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)
@@ -1486,7 +1486,7 @@ def euler_angles_kernel_zxy_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, (_True if t64 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)
@@ -1524,7 +1524,7 @@ def euler_angles_kernel_zxz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)
@@ -1561,7 +1561,7 @@ def euler_angles_kernel_zyx_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, (_True if t65 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)
@@ -1599,7 +1599,7 @@ def euler_angles_kernel_zyz_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, (_True if t63 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.axis_angle.axis_angle_kernel checked(1)
@@ -1656,7 +1656,7 @@ def axis_angle_axis_angle_kernel_checked(inputs):
     t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, (((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)), (((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)), (((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))))
-    return (o0, _float64((_op_atan2(t82, t67))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float64((_op_atan2(t82, t67))), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.axis_angle._rotvec_of_matrix_kernel checked(1)
@@ -1714,7 +1714,7 @@ def axis_angle__rotvec_of_matrix_kernel_checked(inputs):
     t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)) * t94), ((((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)) * t94), ((((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))) * t94))
-    return (o0, _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.so3.quaternion_of_matrix_kernel checked(1)
@@ -1759,7 +1759,7 @@ def so3_quaternion_of_matrix_kernel_checked(inputs):
     t117 = (-1.0 if ((t100 if (t100 != 0) else (t91 if (t91 != 0) else (t94 if (t94 != 0) else t97))) < 0) else 1.0) / (_op_sqrt(((((t91 * t91) + (t94 * t94)) + (t97 * t97)) + (t100 * t100))))
     o0 = _empty((4,), _f64)
     _pack_4d(o0, 0, ((t91 * t117) + 0.0), ((t94 * t117) + 0.0), ((t97 * t117) + 0.0), ((t100 * t117) + 0.0))
-    return (o0, _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.screw._screw_kernel checked(1)
@@ -1855,7 +1855,7 @@ def screw__screw_kernel_checked(inputs):
     _pack_3d(o1, 0, t219, t223, t227)
     o2 = _empty((3,), _f64)
     _pack_3d(o2, 0, t230, t233, t236)
-    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), (_True if (((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), (_True if (((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.screw._log_kernel checked(1)
@@ -1938,7 +1938,7 @@ def screw__log_kernel_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((6,), _f64)
     _pack_6d(o0, 0, (t94 * t152), (t94 * t155), (t94 * t158), t184, t190, t196)
-    return (o0, (_True if t204 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t204 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._points_kernel checked(1)
@@ -1985,7 +1985,7 @@ def rigid__points_kernel_checked(inputs):
         return None  # rare: apply runs the kernel
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, t73, t74, t75)
-    return (o0, (_True if t83 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, (_True if t83 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._compose_kernel checked(2)
@@ -2047,7 +2047,7 @@ def rigid__compose_kernel_checked2(inputs):
     _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t176, t177, t178)
-    return (o0, o1, (_True if t186 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
+    return (o0, o1, (_True if t186 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float((t100 if t100 >= t96 or t100 != t100 else t96)), _float((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
 
 
 # rot_tools.rigid._invert_kernel checked(1)
@@ -2088,7 +2088,7 @@ def rigid__invert_kernel_checked(inputs):
     _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
     o1 = _empty((3,), _f64)
     _pack_3d(o1, 0, t73, t74, t75)
-    return (o0, o1, (_True if t83 else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, o1, (_True if t83 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._homogeneous_kernel checked(1)
@@ -2121,7 +2121,7 @@ def rigid__homogeneous_kernel_checked(inputs):
     t42 = t41 if t41 >= t32 or t41 != t41 else t32
     o0 = _empty((4, 4), _f64)
     _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
-    return (o0, _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.rigid._transform_of_homogeneous_kernel
@@ -2196,7 +2196,7 @@ def fitting__distance_kernel_checked2(inputs):
     t175 = ((t162 * t162) + (t164 * t164)) + (t166 * t166)
     if (((t175 < 1e-290) and (((t162 != 0) or (t164 != 0)) or (t166 != 0))) or (t175 > 1e+290)):
         return None  # rare: apply runs the kernel
-    return (_float64((_op_atan2((_op_sqrt(t175)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
+    return (_float64((_op_atan2((_op_sqrt(t175)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float((t100 if t100 >= t96 or t100 != t100 else t96)), _float((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
 
 
 # rot_tools.so3.defects_kernel
@@ -2464,7 +2464,7 @@ def decomposition__motion_kernel_checked(inputs):
     _pack_3d(o4, 0, t230, t233, t236)
     o8 = _empty((6,), _f64)
     _pack_6d(o8, 0, (t94 * t152), (t94 * t155), (t94 * t158), t288, t294, t300)
-    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, (_True if ((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308) else _False), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, (_True if ((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308) else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]
@@ -4522,45 +4522,45 @@ CODE = {
     'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zxz),
     'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zyx),
     'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zyz),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XYX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XYZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XZX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XZY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YXY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YXZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YZX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YZY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZXY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZXZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZYX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZYZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xyx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xyz_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xzx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xzy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yxy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yxz_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yzx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yzy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zxy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zxz_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zyx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zyz_checked),
-    'rot_tools.axis_angle.axis_angle_kernel checked(1)': ([((3,), _float64), ((), _float64), ((), _float64), ((), _float64)], axis_angle_axis_angle_kernel_checked),
-    'rot_tools.axis_angle._rotvec_of_matrix_kernel checked(1)': ([((3,), _float64), ((), _float64), ((), _float64)], axis_angle__rotvec_of_matrix_kernel_checked),
-    'rot_tools.so3.quaternion_of_matrix_kernel checked(1)': ([((4,), _float64), ((), _float64), ((), _float64)], so3_quaternion_of_matrix_kernel_checked),
-    'rot_tools.screw._screw_kernel checked(1)': ([((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _bool), ((), _float64), ((), _float64)], screw__screw_kernel_checked),
-    'rot_tools.screw._log_kernel checked(1)': ([((6,), _float64), ((), _bool), ((), _float64), ((), _float64)], screw__log_kernel_checked),
-    'rot_tools.rigid._points_kernel checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], rigid__points_kernel_checked),
-    'rot_tools.rigid._compose_kernel checked(2)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__compose_kernel_checked2),
-    'rot_tools.rigid._invert_kernel checked(1)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], rigid__invert_kernel_checked),
-    'rot_tools.rigid._homogeneous_kernel checked(1)': ([((4, 4), _float64), ((), _float64), ((), _float64)], rigid__homogeneous_kernel_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XYX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XYZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XZX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XZY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YXY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YXZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YZX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YZY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZXY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZXZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZYX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZYZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xyx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xyz_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xzx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xzy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yxy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yxz_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yzx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yzy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zxy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zxz_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zyx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zyz_checked),
+    'rot_tools.axis_angle.axis_angle_kernel checked(1)': ([((3,), _float64), ((), _float64), ((), _float), ((), _float)], axis_angle_axis_angle_kernel_checked),
+    'rot_tools.axis_angle._rotvec_of_matrix_kernel checked(1)': ([((3,), _float64), ((), _float), ((), _float)], axis_angle__rotvec_of_matrix_kernel_checked),
+    'rot_tools.so3.quaternion_of_matrix_kernel checked(1)': ([((4,), _float64), ((), _float), ((), _float)], so3_quaternion_of_matrix_kernel_checked),
+    'rot_tools.screw._screw_kernel checked(1)': ([((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _bool), ((), _float), ((), _float)], screw__screw_kernel_checked),
+    'rot_tools.screw._log_kernel checked(1)': ([((6,), _float64), ((), _bool), ((), _float), ((), _float)], screw__log_kernel_checked),
+    'rot_tools.rigid._points_kernel checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], rigid__points_kernel_checked),
+    'rot_tools.rigid._compose_kernel checked(2)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float), ((), _float), ((), _float), ((), _float)], rigid__compose_kernel_checked2),
+    'rot_tools.rigid._invert_kernel checked(1)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float), ((), _float)], rigid__invert_kernel_checked),
+    'rot_tools.rigid._homogeneous_kernel checked(1)': ([((4, 4), _float64), ((), _float), ((), _float)], rigid__homogeneous_kernel_checked),
     'rot_tools.rigid._transform_of_homogeneous_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__transform_of_homogeneous_kernel),
-    'rot_tools.fitting._distance_kernel checked(2)': ([((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], fitting__distance_kernel_checked2),
+    'rot_tools.fitting._distance_kernel checked(2)': ([((), _float64), ((), _float), ((), _float), ((), _float), ((), _float)], fitting__distance_kernel_checked2),
     'rot_tools.so3.defects_kernel': ([((), _float64), ((), _float64)], so3_defects_kernel),
     'rot_tools.screw._log_kernel': ([((6,), _float64), ((), _bool)], screw__log_kernel),
     'rot_tools.screw._exp_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _bool)], screw__exp_kernel),
-    'rot_tools.decomposition._motion_kernel checked(1)': ([((3,), _float64), ((), _float64), ((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((6,), _float64), ((), _bool), ((), _float64), ((), _float64)], decomposition__motion_kernel_checked),
+    'rot_tools.decomposition._motion_kernel checked(1)': ([((3,), _float64), ((), _float64), ((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((6,), _float64), ((), _bool), ((), _float), ((), _float)], decomposition__motion_kernel_checked),
     'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XYX),
     'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XYZ),
     'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XZX),
