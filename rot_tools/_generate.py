@@ -118,7 +118,8 @@ def function_name(key):
 
 
 def record():
-    """Run ordinary_calls with no generated code: [(name, key, kernel, tails, outputs)]."""
+    """Run ordinary_calls with no generated code: [(name, key, kernel, tails, outputs)],
+    sorted by function name."""
     saved = dict(_backend.GENERATED)
     _backend.GENERATED.clear()
     _backend._CODE_OF.clear()
@@ -129,7 +130,8 @@ def record():
                 call()
             except RotationError as exc:
                 raise RuntimeError(f'the ordinary call {label} was refused: {exc}') from None
-        found = [(function_name(key), key, *_backend.RECORD[key]) for key in _backend.RECORD]
+        found = sorted((function_name(key), key, *_backend.RECORD[key])
+                       for key in _backend.RECORD)  # (by name: the order of calls is free)
     finally:
         _backend.RECORD = None
         _backend.GENERATED.update(saved)
