@@ -517,3 +517,37 @@ def test_doc_examples(node):
         ('describe --node /arm/rot_tools --timeout 2', ('--node', absent)),
         ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1e-300', ()),
         names=[shown, (absent, '/arm/rot_tools')]))
+
+
+# ---------------------------------------------------------------------------------------
+# The node's sentence on refusal, from ~/describe's data
+
+
+def test_refusal_text_uses_the_nodes_sentence():
+    from rot_tools.rotation_client import refusal_text
+    topic = '/rot_tools/orientation'
+    data = {'refused': {'total': 3, 'non_finite': 1, 'non_unit_quaternion': 2},
+            'last_refusals': {
+                'non_finite': {'source': '/rot_tools/pose', 'stamp': {'sec': 5, 'nanosec': 0},
+                               'message': 'pose.position.x is nan'},
+                'non_unit_quaternion': {
+                    'source': topic, 'stamp': {'sec': 7, 'nanosec': 9},
+                    'message': 'orientation has norm 0.707, off 1 by 0.293 > '
+                               'quaternion_tolerance 0.001'}}}
+    sentence = ('orientation has norm 0.707, off 1 by 0.293 > quaternion_tolerance 0.001 '
+                '(non_unit_quaternion)')
+    # Counted since: the sentence when the refusal is of what was sent (source, stamp).
+    assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic,
+                        {(7, 9)}) == sentence
+    assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic) == sentence
+    # Not counted since: nothing.
+    assert refusal_text(data, {'non_unit_quaternion': 2, 'non_finite': 1}, topic) == ''
+    # Another message refused for that reason last (another stamp, another topic): the
+    # reason's name alone, never someone else's sentence.
+    assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic, {(7, 8)}) == (
+        'non_unit_quaternion')
+    assert refusal_text(data, {}, topic, {(7, 9)}) == f'non_finite; {sentence}'
+    assert refusal_text(data, {'non_unit_quaternion': 2}, topic) == 'non_finite'
+    # A node without last_refusals: the reasons' names.
+    del data['last_refusals']
+    assert refusal_text(data, {}, topic) == 'non_finite; non_unit_quaternion'
