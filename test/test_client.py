@@ -10,6 +10,7 @@ significant digits, so numbers are compared to that.
 import json
 import math
 import signal
+import string
 import subprocess
 import sys
 import time
@@ -551,3 +552,37 @@ def test_refusal_text_uses_the_nodes_sentence():
     # A node without last_refusals: the reasons' names.
     del data['last_refusals']
     assert refusal_text(data, {}, topic) == 'non_finite; non_unit_quaternion'
+
+
+# ---------------------------------------------------------------------------------------
+# Text beyond ASCII in the reports (rot_tools.report's YAML and JSON strings)
+
+
+def must_escape(c):
+    """Characters YAML 1.1 does not allow printed, its line breaks, and the byte order mark."""
+    o = ord(c)
+    printable = (0x20 <= o <= 0x7e or 0xa0 <= o <= 0xd7ff or 0xe000 <= o <= 0xfffd
+                 or o >= 0x10000)
+    return not printable or c in '\u2028\u2029\ufeff'
+
+
+@pytest.mark.parametrize('text', [
+    'caméra_😀', '𝄞 ∮ ŋ ü', 'nbsp\xa0', 'tab\t, newline\n, cr\r',
+    'nul\x00 bel\x07 esc\x1b del\x7f', 'c1\x85\x9f', 'ls\u2028 ps\u2029', 'bom\ufeff',
+    '\ufffe\uffff', 'lone \ud83d and \ude00', 'quote " backslash \\'])
+def test_report_strings_round_trip(text):
+    """Every string reads back the same from the YAML and the JSON report (PyYAML, json).
+
+    Printable characters are written as themselves, the rest escaped. Before, an emoji
+    became a surrogate pair, which YAML reads as two lone surrogates.
+    """
+    from rot_tools.report import to_json, to_yaml
+    data = {'frame_id': text, text: [text]}
+    yaml_text, json_text = to_yaml(data), to_json(data)
+    assert yaml.safe_load(yaml_text) == data
+    assert json.loads(json_text) == data
+    for written in (yaml_text, json_text):
+        written.encode('utf-8')  # no lone surrogate left
+        # (not the newline: it also ends the YAML and JSON lines)
+        for c in set(text) - set(' "\\\n') - set(string.ascii_letters + string.digits):
+            assert (c in written) != must_escape(c), (c, written)
