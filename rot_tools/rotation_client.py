@@ -69,7 +69,7 @@ DEFAULT_CHILD_FRAME = 'base_link'
 RESEND = 0.5
 """Seconds to wait for an answer before an input is sent again or a call repeated."""
 
-STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'screw')
+STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
 """The node's outputs that carry the input's header, published for every input."""
 
 PICTURES = ('screw_axis', 'markers')
@@ -510,8 +510,8 @@ class Client:
         from std_msgs.msg import Float64MultiArray
         from visualization_msgs.msg import Marker, MarkerArray
         types = dict(zip(STAMPED_OUTPUTS + PICTURES, (
-            QuaternionStamped, Vector3Stamped, Vector3Stamped, TwistStamped, Marker,
-            MarkerArray)))
+            QuaternionStamped, Vector3Stamped, Vector3Stamped, Vector3Stamped, TwistStamped,
+            Marker, MarkerArray)))
         answers = Answers(msg.header.frame_id)
         outputs = STAMPED_OUTPUTS + (PICTURES if pictures else ())
         qos = QoSProfile(depth=100)
@@ -622,6 +622,8 @@ def _answer_data(answer, parameters):
         'euler_angles': {'sequence': parameters['euler_sequence'],
                          'unit': parameters['angle_unit'],
                          'angles': _xyz(answer['euler_angles'].vector)},
+        'rpy': dict(zip(('roll', 'pitch', 'yaw'), _xyz(answer['rpy'].vector)),
+                    unit=parameters['angle_unit']),
         'screw': {'angular': _xyz(twist.angular), 'linear': _xyz(twist.linear)},
     }
     if 'screw_axis' in answer:

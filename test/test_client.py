@@ -82,6 +82,10 @@ def check_answer(answer, rotation, b=(0.0, 0.0, 0.0), drawn=True):
     q = answer['quaternion']
     assert [q['x'], q['y'], q['z'], q['w']] == approx(rotation.as_quat(canonical=True))
     assert answer['axis_angle'] == approx(rotation.as_rotvec())
+    roll, pitch, yaw = rotation.as_euler('xyz')  # REP 103: about the fixed x, y, z
+    assert answer['rpy'] == {'roll': pytest.approx(roll, **DIGITS),
+                             'pitch': pytest.approx(pitch, **DIGITS),
+                             'yaw': pytest.approx(yaw, **DIGITS), 'unit': 'rad'}
     assert answer['screw']['angular'] == approx(rotation.as_rotvec())
     if not drawn and 'markers' not in answer:
         assert 'screw_axis' not in answer
