@@ -43,7 +43,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rot_tools import drawing, messages, runtime
+from rot_tools import drawing, messages, runtime, tf_input
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
@@ -59,7 +59,7 @@ BAD_TOLERANCE = 'bad_tolerance'
 PATH_TOO_LONG = 'path_too_long'
 NOT_DECOMPOSABLE = 'not_decomposable'
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
-    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG)
+    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG) + tf_input.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
 DEFAULT_PATH_STEPS = 20
@@ -124,6 +124,8 @@ class Settings(NamedTuple):
     quaternion_tolerance: float
     publish_markers: bool
     marker_scale: float
+    tf_reference_frame: str
+    tf_body_frame: str
 
 
 class Outputs(NamedTuple):
@@ -178,6 +180,14 @@ PARAMETERS = {
         'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
         '> 0, finite',
         FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0))),
+    'tf_reference_frame': ('', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        'with tf_body_frame: follow the transform of tf_body_frame in this frame on /tf and '
+        '/tf_static, publishing every output at each new common time of the chain '
+        "(header.frame_id = this frame); '' = off")),
+    'tf_body_frame': ('', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "with tf_reference_frame: the frame followed on /tf and /tf_static; '' = off")),
 }
 """name: (default, descriptor)."""
 
@@ -193,6 +203,8 @@ def _check_parameter(name, value):
         return f'quaternion_tolerance must be finite and >= 0, got {value}'
     if name == 'marker_scale' and not (math.isfinite(value) and value > 0.0):
         return f'marker_scale must be finite and > 0, got {value}'
+    if name in ('tf_reference_frame', 'tf_body_frame') and value:
+        return tf_input.tf2_msgs_missing()
     return ''
 
 
@@ -237,6 +249,15 @@ class RotationNode(Node):
             1.0 / MARKER_RATE, self._publish_picture,
             clock=Clock(clock_type=ClockType.STEADY_TIME), autostart=False)
 
+        # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
+        # needs a tree between messages, two topics with their own QoS, and gives an output
+        # only when the chain has a new common time; rot_tools.tf_input).
+        self._tf = tf_input.TfFollower(
+            self, self._on_tf_transform, self._refuse,
+            quaternion_tolerance=self._settings.quaternion_tolerance)
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None)
+        self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
+
         self._sources = []
         for kind in INPUTS:
             source = Source(self.resolve_topic_name(kind.topic),
@@ -258,6 +279,8 @@ class RotationNode(Node):
     def _input_topics(self):
         """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
         topics = [source.topic for source in self._sources]
+        if self._tf.following:
+            topics.append(f'{self._tf.topic} ({self._tf.reference} ← {self._tf.body})')
         return ', '.join(topics[:-1]) + ' or ' + topics[-1]
 
     # -- parameters --------------------------------------------------------------------
@@ -266,7 +289,8 @@ class RotationNode(Node):
         value = {name: self.get_parameter(name).value for name in PARAMETERS}
         return Settings(value['euler_sequence'], value['angle_unit'] == 'deg',
                         value['quaternion_tolerance'], value['publish_markers'],
-                        value['marker_scale'])
+                        value['marker_scale'], value['tf_reference_frame'],
+                        value['tf_body_frame'])
 
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters (rclpy has checked type and range)."""
@@ -281,9 +305,17 @@ class RotationNode(Node):
         """Take the new values into use from the next message; publish_markers off clears."""
         if any(parameter.name in PARAMETERS for parameter in parameters):
             was_drawing = self._settings.publish_markers
-            self._settings = self._read_settings()
+            old, self._settings = self._settings, self._read_settings()
             if was_drawing and not self._settings.publish_markers:
                 self._clear_picture()
+            new = self._settings
+            self._tf.set_quaternion_tolerance(new.quaternion_tolerance)
+            frames = (new.tf_reference_frame, new.tf_body_frame)
+            if frames != (old.tf_reference_frame, old.tf_body_frame):
+                self._tf.follow(*frames)
+                self.get_logger().info(
+                    f'following {frames[1]!r} in {frames[0]!r} on {self._tf.topic}'
+                    if self._tf.following else f'not following frames on {self._tf.topic}')
 
     def _warn_about_unknown_overrides(self):
         """Warn about each start-up override (-p, --params-file) that names no parameter.
@@ -314,13 +346,27 @@ class RotationNode(Node):
             # hot path: decompose's arrays cost more than the math); the picture's
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
             v = decompose_values(R, b, settings.euler_sequence)
-            angles = tuple(map(math.degrees, v.euler)) if settings.degrees else v.euler
         except messages.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc))
             return
         except RotationError as exc:
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc))
             return
+        self._publish(source, header, R, b, v, settings)
+
+    def _on_tf_transform(self, header, R, b):
+        """The followed frames have a new common time on /tf: publish every output."""
+        settings = self._settings
+        try:
+            v = decompose_values(R, b, settings.euler_sequence)
+        except RotationError as exc:
+            self._refuse(self._tf_source.topic, NOT_DECOMPOSABLE, str(exc))
+            return
+        self._publish(self._tf_source, header, R, b, v, settings)
+
+    def _publish(self, source, header, R, b, v, settings):
+        """Every output of one accepted input (header, R, b) and its decomposition v."""
+        angles = tuple(map(math.degrees, v.euler)) if settings.degrees else v.euler
         out = self._out
         self._matrix_pub.publish(messages.rotation_matrix_msg(R, out.matrix))
         self._quaternion_pub.publish(
@@ -426,6 +472,8 @@ class RotationNode(Node):
                 'frame_id': latest.header.frame_id}
         data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,
                                      latest.settings.degrees))
+        if self._tf.following:
+            data['tf'] = self._tf.describe()
         data['refused'] = refused
         response.success = True
         response.message = to_yaml(data)

@@ -16,6 +16,7 @@ import pytest
 from scipy.linalg import expm, logm
 from scipy.spatial.transform import Rotation
 
+from doc_blocks import assert_doc_output
 import math_helpers as h
 import rot_tools
 from rot_tools import RotationError, TransformLookupError, TransformTree, TransformTreeError
@@ -527,6 +528,5 @@ def test_the_example_of_doc_tf_md_prints_what_the_page_shows(capsys):
     page = (Path(__file__).resolve().parents[1] / 'doc' / 'tf.md').read_text(encoding='utf-8')
     example = page[page.index('### Example'):]
     code = re.search(r'```python\n(.*?)```', example, re.S).group(1)
-    shown = re.search(r'```text\n(.*?)```', example, re.S).group(1)
     exec(compile(code, 'doc/tf.md', 'exec'), {})
-    assert capsys.readouterr().out == shown
+    assert_doc_output('tf-tree-example', capsys.readouterr().out)
