@@ -13,7 +13,8 @@ time. When that time (or the chain itself) is new, it hands ``(header, R, b)`` o
 Refusals are handed on with a reason, for the node to count and warn about:
 ``tf_unknown_frame``, ``tf_not_connected``, ``tf_extrapolation`` (the lookup, after a message
 arrived while it cannot be answered), ``tf_loop`` (a transform that would make a frame its
-own ancestor), ``tf_bad_frame`` (an empty frame_id or child_frame_id), and the boundary's
+own ancestor), ``tf_bad_frame`` (an empty frame_id or child_frame_id), ``tf_too_many_frames``
+(a new frame beyond MAX_FRAMES), and the boundary's
 ``non_finite``, ``zero_quaternion``, ``non_unit_quaternion``.
 
 Stamps. The tree holds float seconds. A header stamp (sec, nanosec) is kept as seconds since
@@ -50,11 +51,14 @@ TF_NOT_CONNECTED = 'tf_not_connected'
 TF_EXTRAPOLATION = 'tf_extrapolation'
 TF_LOOP = 'tf_loop'
 TF_BAD_FRAME = 'tf_bad_frame'
-REFUSAL_REASONS = (TF_UNKNOWN_FRAME, TF_NOT_CONNECTED, TF_EXTRAPOLATION, TF_LOOP, TF_BAD_FRAME)
+TF_TOO_MANY_FRAMES = 'tf_too_many_frames'
+REFUSAL_REASONS = (TF_UNKNOWN_FRAME, TF_NOT_CONNECTED, TF_EXTRAPOLATION, TF_LOOP, TF_BAD_FRAME,
+                   TF_TOO_MANY_FRAMES)
 """The reasons of this input, besides the boundary's (rot_tools.boundary.REFUSAL_REASONS)."""
 
 _REASON = {'unknown_frame': TF_UNKNOWN_FRAME, 'not_connected': TF_NOT_CONNECTED,
            'extrapolation': TF_EXTRAPOLATION, 'loop': TF_LOOP, 'bad_frame': TF_BAD_FRAME,
+           'too_many_frames': TF_TOO_MANY_FRAMES,
            # A transform past the boundary is finite and its R a rotation: these two are
            # only here so that every reason of the tree has a name.
            'non_finite': boundary.NON_FINITE, 'not_rotation': boundary.NON_UNIT_QUATERNION,
@@ -80,6 +84,12 @@ def tf2_msgs_missing():
 DEFAULT_QUATERNION_TOLERANCE = 1e-3
 """|‖q‖ − 1| accepted when no node parameter says otherwise (rotation_client tf)."""
 
+CACHE_SECONDS = 10.0
+MAX_SAMPLES = 10_000
+MAX_FRAMES = 1_000
+"""The follower's tree: 10 s of each edge (tf2's default), at most 10,000 samples an edge
+(1 kHz) and 1,000 frames, so that a flood on /tf holds a few MB at most."""
+
 
 class TfFollower:
     """A TransformTree fed from /tf and /tf_static; the pair (reference, body) looked up.
@@ -90,9 +100,10 @@ class TfFollower:
     """
 
     def __init__(self, node, on_transform, on_refused, *,
-                 quaternion_tolerance=DEFAULT_QUATERNION_TOLERANCE, cache_seconds=10.0):
+                 quaternion_tolerance=DEFAULT_QUATERNION_TOLERANCE, max_frames=MAX_FRAMES):
         self.node = node
-        self.tree = TransformTree(cache_seconds)
+        self.tree = TransformTree(CACHE_SECONDS, max_samples=MAX_SAMPLES,
+                                  max_frames=max_frames)
         self.reference = self.body = ''
         self.topic = node.resolve_topic_name(TF_TOPIC)
         self.static_topic = node.resolve_topic_name(TF_STATIC_TOPIC)

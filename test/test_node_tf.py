@@ -310,9 +310,10 @@ def test_client_tf_once_against_the_reference(tester, tf_publisher):
     assert report['reference_frame'] == 'odom' and report['body_frame'] == 'gimbal'
     assert report['chain'] == CHAIN
     ns = report['stamp']['sec'] * 1_000_000_000 + report['stamp']['nanosec']
-    tester.spin_for(0.2)  # the samples after the client's stamp
+    # The test side catches up with the samples around the client's stamp.
+    tester.spin_until(lambda: reference.pose('odom', 'gimbal', ns) is not None,
+                      TIMEOUT * 2, "the samples around the client's stamp")
     T = reference.pose('odom', 'gimbal', ns)
-    assert T is not None
     assert np.abs(np.array(report['matrix']) - T[:3, :3]).max() <= TOL
     assert np.abs(np.array(report['translation']) - T[:3, 3]).max() <= TOL
     q = report['quaternion']
@@ -387,7 +388,8 @@ def test_follower_refusals_and_stamps(ros_context):
     from rot_tools.tf_input import TfFollower
     node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
     got, refused = [], []
-    follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a))
+    follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a),
+                          max_frames=4)
     try:
         def transform(parent, child, x=0.0, q=(0.0, 0.0, 0.0, 1.0), sec=1_700_000_000,
                       nanosec=123_456_789):
@@ -400,13 +402,15 @@ def test_follower_refusals_and_stamps(ros_context):
             return msg
 
         assert follower.add(transform('a', 'b', 1.0), False, '/tf')
+        assert follower.add(transform('b', 'e'), True, '/tf_static')  # a, b, e: 3 of 4
         assert follower.add(transform('b', 'c', q=(0.0, 0.0, 1.0, 1.0)), True, '/tf_static') \
             is False  # |q| = √2: not a unit quaternion
         for msg, reason in [(transform('a', ''), 'tf_bad_frame'),
                             (transform('', 'b'), 'tf_bad_frame'),
                             (transform('a', 'x', math.nan), 'non_finite'),
                             (transform('a', 'x', q=(0.0, 0.0, 0.0, 0.0)), 'zero_quaternion'),
-                            (transform('b', 'a'), 'tf_loop')]:
+                            (transform('b', 'a'), 'tf_loop'),
+                            (transform('c', 'd'), 'tf_too_many_frames')]:
             refused.clear()
             assert follower.add(msg, False, '/tf') is False
             assert [r[1] for r in refused] == [reason]
