@@ -11,6 +11,7 @@ quick start has this instead (doc/client.md is its manual)::
     rotation_client imu QX QY QZ QW
     rotation_client describe
     rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
+    rotation_client tf REFERENCE BODY [--once] [--seq SEQ] [--deg]
 
 Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
 
@@ -23,7 +24,10 @@ or JSON with ``--json`` (rot_tools.report's writers). The node draws pictures
 (``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so they are
 printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
 seconds. ``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and
-prints the path.
+prints the path. ``tf`` needs no node: it listens to /tf and /tf_static itself
+(rot_tools.tf_input) and prints the report of BODY in REFERENCE — tf2_echo's job, with every
+representation — once a second until Ctrl-C, or once with ``--once``; a frame that does not
+appear within ``--timeout`` is one line on stderr, exit status 1.
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -59,7 +63,7 @@ import yaml
 
 from rot_tools import runtime
 from rot_tools.euler import EULER_SEQUENCES, euler_to_matrix, matrix_to_euler
-from rot_tools.report import to_json, to_yaml
+from rot_tools.report import to_json, to_yaml, transform_report
 from rot_tools.so3 import quaternion_to_matrix
 
 PROG = 'rotation_client'
@@ -246,6 +250,11 @@ COMMANDS_HELP = {
         'call ~/screw_path from one pose to another', f'{_POSE} {_POSE}', (3, 10),
         'The start pose, then the goal pose, each X Y Z QX QY QZ QW; --tolerance bounds '
         'the\nstep between poses (rad and m; <= 0: 20 steps).'),
+    'tf': Command(
+        'print the transform of BODY in REFERENCE from /tf and /tf_static', '', (),
+        'No node needed: listens to /tf and /tf_static itself and prints the report of\n'
+        'the transform p_REFERENCE = R·p_BODY + b at its latest common time, once a second\n'
+        'until Ctrl-C, or once with --once (--node and --frame are not used).'),
 }
 """name: Command."""
 
@@ -265,7 +274,8 @@ def build_parser():
         '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
         '  rotation_client imu 0 0 0.7071068 0.7071068 --frame imu_link\n'
         '  rotation_client describe --json\n'
-        '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n\n'
+        '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n'
+        '  rotation_client tf odom base_link --once --deg\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nor nothing to describe; 2 bad arguments or an input the node '
         'refused.')
@@ -276,6 +286,7 @@ def build_parser():
                                 parser_class=_Parser)
     for name, command in COMMANDS_HELP.items():
         usage = ' '.join(filter(None, [PROG, name, 'SEQ' if name == 'euler' else '',
+                                       'REFERENCE BODY' if name == 'tf' else '',
                                        command.numbers, '[options]']))
         summary = command.summary
         p = sub.add_parser(name, help=summary, usage=usage,
@@ -288,6 +299,13 @@ def build_parser():
         elif name == 'screw-path':
             p.add_argument('--tolerance', type=_tolerance, default=0.0,
                            help='largest step between poses, rad and m (default 0: 20 steps)')
+        elif name == 'tf':
+            p.add_argument('reference', metavar='REFERENCE', help='the reference frame')
+            p.add_argument('body', metavar='BODY', help='the frame whose pose is printed')
+            p.add_argument('--once', action='store_true', help='print one report and exit')
+            p.add_argument('--seq', choices=EULER_SEQUENCES, default='ZYX', metavar='SEQ',
+                           help='Euler sequence of the report (default ZYX)')
+            p.add_argument('--deg', action='store_true', help='Euler angles in degrees')
         elif name in ('odometry', 'transform'):
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
@@ -729,9 +747,45 @@ def _screw_path_command(client, args):
             'poses': [_pose_data(p.pose) for p in plan.poses]}
 
 
+def _tf_report(follower, header, R, b, args):
+    stamp = header.stamp
+    return {'reference_frame': follower.reference, 'body_frame': follower.body,
+            'chain': follower.tree.chain(follower.reference, follower.body),
+            'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
+            **transform_report(R, b, args.seq, args.deg)}
+
+
+def _tf_command(client, args):
+    """tf: print BODY in REFERENCE from /tf and /tf_static, once or once a second."""
+    from rot_tools import tf_input  # tf2_msgs: only this command needs it
+    latest = []
+
+    def keep(header, R, b):
+        latest[:] = [(header, R, b)]
+    follower = tf_input.TfFollower(client.node, keep, lambda topic, reason, text: None)
+    try:
+        follower.follow(args.reference, args.body)
+    except RuntimeError as exc:  # no tf2_msgs
+        raise Unreachable(str(exc)) from None
+    if not client.spin_until(lambda: latest, args.timeout):
+        raise Unreachable(follower.why_not(args.timeout))
+    while True:
+        report = _tf_report(follower, *latest[0], args)
+        if args.once:
+            return report
+        if args.json:
+            write(to_json(report), json_text=True)
+        else:
+            write('---\n' + to_yaml(report))
+        sys.stdout.flush()
+        due = time.monotonic() + 1.0
+        client.spin_until(lambda: time.monotonic() >= due, 1.0)
+
+
 COMMANDS = {'euler': _input_command, 'pose': _input_command, 'odometry': _input_command,
             'transform': _input_command, 'orientation': _input_command, 'imu': _input_command,
-            'describe': _describe_command, 'screw-path': _screw_path_command}
+            'describe': _describe_command, 'screw-path': _screw_path_command,
+            'tf': _tf_command}
 
 
 def write(text, json_text=False):
