@@ -217,6 +217,23 @@ def test_import_rot_tools_from_any_directory(tmp_path, where):
     assert Path(result.stdout.strip()) == REPO / PACKAGE / '__init__.py'
 
 
+def test_activating_the_venv_puts_the_commands_on_path():
+    """`source .venv/bin/activate`, as the README says, is all the commands need."""
+    bin_dir = Path(sys.executable).parent
+    if not (bin_dir / 'activate').is_file():
+        pytest.skip('not running in a venv')
+    path = os.pathsep.join(p for p in os.environ['PATH'].split(os.pathsep)
+                           if Path(p) != bin_dir)
+    script = ('. "$1/activate" && '
+              'for c in rot-tools rotation_node rotation_client; do command -v $c; done')
+    result = subprocess.run(['sh', '-c', script, 'sh', str(bin_dir)],
+                            env=dict(os.environ, PATH=path), stdin=subprocess.DEVNULL,
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == [
+        str(bin_dir / name) for name in ('rot-tools', 'rotation_node', 'rotation_client')]
+
+
 def test_installed_client_runs(colcon_install):
     """`ros2 run rot_tools rotation_client` runs lib/rot_tools/rotation_client: with rclpy."""
     client = colcon_install / 'lib' / PACKAGE / 'rotation_client'
