@@ -496,3 +496,20 @@ def read_tf(reader, connections, start=None, stop=None):
             'parent': ints[:, 1], 'child': ints[:, 2], 'sec': ints[:, 3],
             'nanosec': ints[:, 4], 'position': table[:, 5:8], 'orientation': table[:, 8:12],
             'static': np.array([topic_names[i].endswith('static') for i in ints[:, 0]], bool)}
+
+
+def join_tf(parts):
+    """One read_tf result of several (frames and topics renumbered)."""
+    frames, topics, out = {}, {}, []
+    for part in parts:
+        fmap = np.array([frames.setdefault(f, len(frames)) for f in part['frames']] or [0])
+        tmap = np.array([topics.setdefault(t, len(topics)) for t in part['topics']] or [0])
+        out.append({**part, 'parent': fmap[part['parent']], 'child': fmap[part['child']],
+                    'topic': tmap[part['topic']]})
+    joined = {'frames': list(frames), 'topics': list(topics)}
+    for key in ('topic', 'parent', 'child', 'sec', 'nanosec', 'static'):
+        joined[key] = np.concatenate([p[key] for p in out]) if out else np.zeros(0, np.int64)
+    for key, width in (('position', 3), ('orientation', 4)):
+        joined[key] = (np.concatenate([p[key] for p in out]) if out
+                       else np.zeros((0, width)))
+    return joined

@@ -465,8 +465,10 @@ def _add_bag(sub):
                    help='read this topic (repeat for more); default: every topic of a type '
                    'read')
     p.add_argument('--tf', nargs=2, metavar=('REFERENCE', 'BODY'),
-                   help='also the transform of BODY in REFERENCE from the bag\'s /tf and '
-                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree')
+                   help='the transform of BODY in REFERENCE from the bag\'s /tf and '
+                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree, at every '
+                   'stamp of the dynamic transforms between them (a topic named '
+                   'tf:REFERENCE->BODY); other topics then only with --topic')
     p.add_argument('--wrap', action='store_true',
                    help='angles as computed, each in (−180°, 180°], instead of continuous')
     p.add_argument('--csv', metavar='FILE',
@@ -588,8 +590,6 @@ def _bag(args, parser):
                           ('--all-sequences', args.all_sequences)):
         if given:
             parser.error(f'{option} does not apply to bag')
-    if args.tf:
-        parser.error('--tf: not available yet in this version')
     from rot_tools import bag
     return bag.run(args, parser.error)
 

@@ -111,3 +111,36 @@ def write_bag(dst, messages, storage='sqlite3'):
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=typestore)
             writer.write(conns[topic], t, typestore.serialize_cdr(msg, msgtype))
     return Path(dst)
+
+
+def tf_chain_messages(n=40, bad_at=7):
+    """[(topic, type, t, msg)] of a TF tree map → odom → base_link → imu, plus odom → wheel.
+
+    map → odom and odom → base_link are dynamic, sampled together at 10 Hz; base_link → imu
+    is static (on /tf_static); odom → wheel has a zero quaternion at sample ``bad_at``. Returns
+    (messages, truth): truth[t] = {(parent, child): (q, translation)} of every sample.
+    """
+    b = Builder()
+    rng = np.random.default_rng(17)
+    messages, truth = [], {}
+    static_q = rng.normal(size=4)
+    static_q /= np.linalg.norm(static_q)
+    static = b.transform_stamped(0.5, (0.1, 0.0, 0.2), static_q, 'base_link', 'imu')
+    messages.append(('/tf_static', 'tf2_msgs/msg/TFMessage', 500_000_000,
+                     b.tf_message([static])))
+    for k in range(n):
+        stamp = 1.0 + 0.1 * k
+        sample = {}
+        transforms = []
+        for parent, child in (('map', 'odom'), ('odom', 'base_link'), ('odom', 'wheel')):
+            q = rng.normal(size=4)
+            q /= np.linalg.norm(q)
+            if child == 'wheel' and k == bad_at:
+                q = np.zeros(4)
+            t = rng.normal(size=3)
+            sample[parent, child] = (q, t)
+            transforms.append(b.transform_stamped(stamp, t, q, parent, child))
+        truth[stamp] = sample
+        messages.append(('/tf', 'tf2_msgs/msg/TFMessage', int(stamp * 1e9) + 1000,
+                         b.tf_message(transforms)))
+    return messages, truth, (static_q, np.array([0.1, 0.0, 0.2]))
