@@ -155,7 +155,8 @@ def _plot_file(text):
 def _seconds(text):
     value = _number(text)
     if value < 0:
-        raise argparse.ArgumentTypeError(f'must be >= 0 seconds from the bag\'s start, got {text!r}')
+        raise argparse.ArgumentTypeError(
+            f"must be >= 0 seconds from the bag's start, got {text!r}")
     return value
 
 

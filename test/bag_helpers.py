@@ -28,75 +28,76 @@ class Builder:
         self.store = store()
         self.t = self.store.types
 
-    def _type(self, name):
-        return self.t[name]
+    def make(self, name, **fields):
+        return self.t[name](**fields)
 
     def header(self, stamp, frame='map'):
-        Time = self._type('builtin_interfaces/msg/Time')
         sec = int(np.floor(stamp))
-        return self._type('std_msgs/msg/Header')(
-            stamp=Time(sec=sec, nanosec=int(round((stamp - sec) * 1e9))), frame_id=frame)
+        time = self.make('builtin_interfaces/msg/Time', sec=sec,
+                         nanosec=int(round((stamp - sec) * 1e9)))
+        return self.make('std_msgs/msg/Header', stamp=time, frame_id=frame)
 
     def vector(self, v):
-        return self._type('geometry_msgs/msg/Vector3')(x=float(v[0]), y=float(v[1]),
-                                                        z=float(v[2]))
+        return self.make('geometry_msgs/msg/Vector3', x=float(v[0]), y=float(v[1]),
+                         z=float(v[2]))
 
     def point(self, v):
-        return self._type('geometry_msgs/msg/Point')(x=float(v[0]), y=float(v[1]),
-                                                      z=float(v[2]))
+        return self.make('geometry_msgs/msg/Point', x=float(v[0]), y=float(v[1]),
+                         z=float(v[2]))
 
     def quaternion(self, q):
-        return self._type('geometry_msgs/msg/Quaternion')(
-            x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+        return self.make('geometry_msgs/msg/Quaternion', x=float(q[0]), y=float(q[1]),
+                         z=float(q[2]), w=float(q[3]))
 
     def pose(self, p, q):
-        return self._type('geometry_msgs/msg/Pose')(position=self.point(p),
-                                                     orientation=self.quaternion(q))
+        return self.make('geometry_msgs/msg/Pose', position=self.point(p),
+                         orientation=self.quaternion(q))
 
     def pose_stamped(self, stamp, p, q, frame='map'):
-        return self._type('geometry_msgs/msg/PoseStamped')(header=self.header(stamp, frame),
-                                                            pose=self.pose(p, q))
+        return self.make('geometry_msgs/msg/PoseStamped', header=self.header(stamp, frame),
+                         pose=self.pose(p, q))
+
+    def _covariance(self, p, q):
+        return self.make('geometry_msgs/msg/PoseWithCovariance', pose=self.pose(p, q),
+                         covariance=np.zeros(36))
 
     def pose_with_covariance_stamped(self, stamp, p, q, frame='map'):
-        cov = self._type('geometry_msgs/msg/PoseWithCovariance')(
-            pose=self.pose(p, q), covariance=np.zeros(36))
-        return self._type('geometry_msgs/msg/PoseWithCovarianceStamped')(
-            header=self.header(stamp, frame), pose=cov)
+        return self.make('geometry_msgs/msg/PoseWithCovarianceStamped',
+                         header=self.header(stamp, frame), pose=self._covariance(p, q))
 
     def odometry(self, stamp, p, q, frame='odom', child='base_link'):
-        cov = self._type('geometry_msgs/msg/PoseWithCovariance')(
-            pose=self.pose(p, q), covariance=np.zeros(36))
-        twist = self._type('geometry_msgs/msg/TwistWithCovariance')(
-            twist=self._type('geometry_msgs/msg/Twist')(linear=self.vector((0, 0, 0)),
-                                                        angular=self.vector((0, 0, 0))),
-            covariance=np.zeros(36))
-        return self._type('nav_msgs/msg/Odometry')(header=self.header(stamp, frame),
-                                                   child_frame_id=child, pose=cov, twist=twist)
+        zero = self.vector((0, 0, 0))
+        twist = self.make('geometry_msgs/msg/TwistWithCovariance',
+                          twist=self.make('geometry_msgs/msg/Twist', linear=zero, angular=zero),
+                          covariance=np.zeros(36))
+        return self.make('nav_msgs/msg/Odometry', header=self.header(stamp, frame),
+                         child_frame_id=child, pose=self._covariance(p, q), twist=twist)
 
     def imu(self, stamp, q, gyro=(0, 0, 0), cov0=0.0, frame='imu'):
         cov = np.zeros(9)
         cov[0] = cov0
-        return self._type('sensor_msgs/msg/Imu')(
-            header=self.header(stamp, frame), orientation=self.quaternion(q),
-            orientation_covariance=cov, angular_velocity=self.vector(gyro),
-            angular_velocity_covariance=np.zeros(9), linear_acceleration=self.vector((0, 0, 0)),
-            linear_acceleration_covariance=np.zeros(9))
+        return self.make('sensor_msgs/msg/Imu', header=self.header(stamp, frame),
+                         orientation=self.quaternion(q), orientation_covariance=cov,
+                         angular_velocity=self.vector(gyro),
+                         angular_velocity_covariance=np.zeros(9),
+                         linear_acceleration=self.vector((0, 0, 0)),
+                         linear_acceleration_covariance=np.zeros(9))
 
     def quaternion_stamped(self, stamp, q, frame='map'):
-        return self._type('geometry_msgs/msg/QuaternionStamped')(
-            header=self.header(stamp, frame), quaternion=self.quaternion(q))
+        return self.make('geometry_msgs/msg/QuaternionStamped',
+                         header=self.header(stamp, frame), quaternion=self.quaternion(q))
 
     def transform_stamped(self, stamp, t, q, frame='map', child='body'):
-        tf = self._type('geometry_msgs/msg/Transform')(translation=self.vector(t),
-                                                        rotation=self.quaternion(q))
-        return self._type('geometry_msgs/msg/TransformStamped')(
-            header=self.header(stamp, frame), child_frame_id=child, transform=tf)
+        tf = self.make('geometry_msgs/msg/Transform', translation=self.vector(t),
+                       rotation=self.quaternion(q))
+        return self.make('geometry_msgs/msg/TransformStamped',
+                         header=self.header(stamp, frame), child_frame_id=child, transform=tf)
 
     def tf_message(self, transforms):
-        return self._type('tf2_msgs/msg/TFMessage')(transforms=list(transforms))
+        return self.make('tf2_msgs/msg/TFMessage', transforms=list(transforms))
 
     def string(self, text):
-        return self._type('std_msgs/msg/String')(data=text)
+        return self.make('std_msgs/msg/String', data=text)
 
 
 def write_bag(dst, messages, storage='sqlite3'):

@@ -175,8 +175,8 @@ def test_csv_rows_of_the_real_bag(capsys, reference):
         mine = [r for r in rows if r['topic'] == topic]
         assert len(mine) == len(ref['q'])
         # stamps exactly as recorded: sec.nanosec
-        assert [r['stamp'] for r in mine] == [f'{s}.{n:09d}' for s, n in
-                                             zip(ref['sec'], ref['nsec'])]
+        stamps = [f'{s}.{n:09d}' for s, n in zip(ref['sec'], ref['nsec'])]
+        assert [r['stamp'] for r in mine] == stamps
         assert [r['frame_id'] for r in mine] == ref['frame']
         np.testing.assert_allclose(col(mine, 'x', 'y', 'z'), ref['p'], rtol=1e-11, atol=0)
         rot = Rotation.from_quat(ref['q'])
