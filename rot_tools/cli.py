@@ -46,7 +46,8 @@ from rot_tools import (
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
 from rot_tools.errors import RotationError
-from rot_tools.report import DEFAULT_PRECISION, to_json, to_yaml, transform_report
+from rot_tools.report import DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
+from rot_tools.report import transform_report
 
 PROG = 'rot-tools'
 MATRIX_TOL = 1e-5
@@ -132,7 +133,7 @@ def _number(text):
 def _sequence(text):
     if text not in EULER_SEQUENCES:
         raise argparse.ArgumentTypeError(
-            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}')
+            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}{sequence_hint(text)}')
     return text
 
 
@@ -203,9 +204,18 @@ def _typed_matrix(parser, args, values, what):
     try:
         validate_rotation(R, tol=_tol(args, MATRIX_TOL))
     except RotationError as exc:
-        hint = ' (the tolerance is --tol)' if np.linalg.det(R) > 0 else ''
+        hint = ' (the tolerance is --tol)' if _det_sign(R) > 0 else ''
         parser.error(f'{what}: {exc}{hint}')
     return nearest_rotation(R)
+
+
+def _det_sign(R):
+    """Sign of det R for any finite R: scaled first, so entries of 1e308 do not overflow."""
+    scale = float(np.abs(R).max()) if np.isfinite(R).all() else 0.0
+    if not scale > 0:
+        return 0.0
+    with np.errstate(all='ignore'):  # a singular R: LU divides by a zero pivot
+        return float(np.sign(np.linalg.det(R / scale)))
 
 
 def _typed_frame(parser, args, values, what):

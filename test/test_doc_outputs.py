@@ -1,0 +1,94 @@
+"""The node and client outputs shown in doc/node.md and doc/client.md, produced for real.
+
+Each tagged block (``<!-- output: NAME -->``, see doc_blocks.py) is run against a
+rotation_node process of this run: its ``$ rotation_client ...`` lines with ``--node`` set to
+that process (unless the line names a node), its ``$ rotation_node ...`` lines as a process
+of their own. The run's namespace is taken out of the output, and what changes from run to
+run — time stamps, the ROS domain — is written ``...`` (doctest's ELLIPSIS) in the docs.
+"""
+
+import re
+import shlex
+import subprocess
+
+from conftest import console_script, NodeProcess, script_env
+from doc_blocks import assert_doc_output, console_steps, doc_block
+import pytest
+
+CLIENT = console_script('rotation_client', 'rot_tools.rotation_client')
+NODE = console_script('rotation_node', 'rot_tools.rotation_node')
+
+
+def normalised(text, namespace):
+    """Output with the run's namespace removed and run-dependent values written '...'."""
+    text = text.replace(namespace, '')
+    text = text.replace(namespace[1:].replace('/', '.') + '.', '')  # in a logger's name
+    text = re.sub(r'\[(\d{9,}\.\d+)\]', '[...]', text)  # a log line's time stamp
+    text = re.sub(r'(\n\s*sec: )\d+(\n\s*nanosec: )\d+', r'\1...\2...', text)
+    text = re.sub(r'ROS_DOMAIN_ID \d+', 'ROS_DOMAIN_ID ...', text)
+    return text
+
+
+def run_client_block(name, node_name):
+    """The block's commands run for real: the text the block should show."""
+    namespace = node_name[:-len('/rot_tools')]
+    shown, status = [], 0
+    for command, _ in console_steps(doc_block(name)):
+        shown.append(f'$ {command}\n')
+        if command == 'echo $?':
+            shown.append(f'{status}\n')
+            continue
+        argv = shlex.split(command)
+        head = None
+        if len(argv) > 3 and argv[-3] == '|' and argv[-2] == 'head':  # ... | head -N
+            head, argv = int(argv[-1].lstrip('-')), argv[:-3]
+        quiet = argv[-2:] == ['>', '/dev/null']
+        argv = argv[:-2] if quiet else argv
+        assert argv[0] == 'rotation_client', command
+        if '--node' not in argv:
+            argv += ['--node', node_name]
+        args = CLIENT + argv[1:]
+        done = subprocess.run(args, capture_output=True, text=True, timeout=120,
+                              env=script_env(args), stdin=subprocess.DEVNULL)
+        status = done.returncode
+        out = '' if quiet else done.stdout
+        if head is not None:
+            out = ''.join(out.splitlines(keepends=True)[:head])
+        shown.append(normalised(out + done.stderr, namespace))
+    return ''.join(shown)
+
+
+def test_readme_client(tmp_path):
+    process = NodeProcess(tmp_path)  # a fresh node: its first input is the README's
+    try:
+        assert_doc_output('readme-client', run_client_block('readme-client', process.name))
+    finally:
+        process.kill()
+
+
+def test_node_describe(tmp_path):
+    process = NodeProcess(tmp_path)  # a node of its own: nothing refused before
+    try:
+        assert_doc_output('node-describe', run_client_block('node-describe', process.name))
+    finally:
+        process.kill()
+
+
+def test_node_typo_warning(tmp_path):
+    (command, _), = console_steps(doc_block('node-typo-warning'))
+    process = NodeProcess(tmp_path, *shlex.split(command)[2:])
+    try:
+        err = process.wait_for_stderr('decomposing')
+    finally:
+        process.kill()
+    namespace = process.name[:-len('/rot_tools')]
+    assert_doc_output('node-typo-warning', f'$ {command}\n' + normalised(err, namespace))
+
+
+def test_node_bad_parameter():
+    (command, _), = console_steps(doc_block('node-bad-parameter'))
+    args = NODE + shlex.split(command)[1:]
+    done = subprocess.run(args, capture_output=True, text=True, timeout=120,
+                          env=script_env(args), stdin=subprocess.DEVNULL)
+    assert done.returncode == 2 and done.stdout == ''
+    assert_doc_output('node-bad-parameter', f'$ {command}\n' + done.stderr)
