@@ -237,8 +237,9 @@ def test_fast_columns_equal_rosbags_decoding(converted, storage):
     path = bh.REAL if storage == 'ros1' else converted[storage]
     with bag_read.open_bag(path) as reader:
         conns = list(reader.connections)
-        fast = bag_read.read_topics(reader, conns)
         slow = bag_read.read_topics(reader, conns, fast=False)
+        reader.deserialize = _no_decoding  # the fast path reads every message itself
+        fast = bag_read.read_topics(reader, conns)
     assert set(fast) == set(slow) == {IMU, ODOM}
     for topic in fast:
         a, b = fast[topic], slow[topic]
@@ -285,3 +286,42 @@ def test_plot_one_panel_per_topic(capsys, tmp_path):
     png = tmp_path / 'rpy.png'
     assert run(capsys, 'bag', bh.REAL, '--plot', png, '--deg')[0] == 0
     assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def _no_decoding(raw, msgtype):
+    raise AssertionError('rosbags decoded a message the fast path should have read')
+
+
+def test_fast_columns_with_strings_of_many_lengths(tmp_path):
+    """Frame ids of different lengths, and of the same total length in different places:
+    the layout is split by the strings' lengths, and gives rosbags' columns exactly."""
+    b = bh.Builder()
+    q = Rotation.random(24, random_state=5).as_quat()
+    frames = [('a', 'bbb'), ('bbb', 'a'), ('cc', 'dd'), ('', 'child'), ('xy', 'zw'), ('a', 'bbb')]
+    messages = []
+    for k in range(24):
+        frame, child = frames[k % len(frames)]
+        stamp = 10.0 + 0.05 * k
+        messages.append(('/tf_stamped', 'geometry_msgs/msg/TransformStamped', k + 1,
+                         b.transform_stamped(stamp, (k, -k, 0.5), q[k], frame, child)))
+        messages.append(('/pose', 'geometry_msgs/msg/PoseStamped', k + 1,
+                         b.pose_stamped(stamp, (k, 0, 0), q[k], frame * (k % 3))))
+    for storage in ('sqlite3', 'mcap'):
+        path = bh.write_bag(tmp_path / storage, messages, storage)
+        with bag_read.open_bag(path) as reader:
+            conns = list(reader.connections)
+            slow = bag_read.read_topics(reader, conns, fast=False)
+            reader.deserialize = _no_decoding  # the fast path must read every message itself
+            fast = bag_read.read_topics(reader, conns)
+        for topic in ('/tf_stamped', '/pose'):
+            a, s = fast[topic], slow[topic]
+            names = [a.frame_ids[i] for i in a.frame]
+            assert names == [s.frame_ids[i] for i in s.frame]
+            if a.child is not None:
+                assert [a.child_frame_ids[i] for i in a.child] == [
+                    s.child_frame_ids[i] for i in s.child]
+            for name in ('sec', 'nanosec', 'orientation', 'position'):
+                np.testing.assert_array_equal(getattr(a, name), getattr(s, name))
+        tf = fast['/tf_stamped']
+        assert [tf.frame_ids[i] for i in tf.frame][:6] == [f for f, _ in frames]
+        np.testing.assert_array_equal(tf.position[:, 0], np.arange(24))
