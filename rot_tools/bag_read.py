@@ -311,14 +311,19 @@ class Columns:
 
 
 def _join_strings(parts):
-    """(strings, index) of several (strings, index) chunks."""
-    strings, lookup, indices = [], {}, []
+    """(strings, index) of several (strings, index) chunks (bytes from the fast path, str
+    from rosbags' decoder: the same frame id is one string either way)."""
+    lookup, indices = {}, []
     for chunk_strings, chunk_index in parts:
-        remap = np.array([lookup.setdefault(s, len(lookup)) for s in chunk_strings], np.intp)
+        remap = np.array([lookup.setdefault(_text(s), len(lookup)) for s in chunk_strings],
+                         np.intp)
         indices.append(remap[chunk_index] if len(chunk_index) else chunk_index)
-    strings = [s.decode('utf-8', 'replace') if isinstance(s, bytes) else s for s in lookup]
     index = np.concatenate(indices) if indices else np.zeros(0, np.intp)
-    return strings, index
+    return list(lookup), index
+
+
+def _text(s):
+    return s.decode('utf-8', 'replace') if isinstance(s, bytes) else s
 
 
 def _assemble(pieces, n, msgtype):

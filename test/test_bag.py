@@ -325,3 +325,20 @@ def test_fast_columns_with_strings_of_many_lengths(tmp_path):
         tf = fast['/tf_stamped']
         assert [tf.frame_ids[i] for i in tf.frame][:6] == [f for f, _ in frames]
         np.testing.assert_array_equal(tf.position[:, 0], np.arange(24))
+
+
+def test_frame_ids_of_fast_and_decoded_chunks_are_one_list(monkeypatch, capsys):
+    """A topic read partly by the fast path (bytes) and partly by rosbags (str): one frame."""
+    real_read = bag_read._Layout.read
+    calls = []
+
+    def every_other_chunk(self, rows):
+        calls.append(len(rows))
+        return real_read(self, rows) if len(calls) % 2 else None
+
+    monkeypatch.setattr(bag_read, 'CHUNK', 1000)
+    monkeypatch.setattr(bag_read._Layout, 'read', every_other_chunk)
+    s = summary_of(capsys, 'bag', bh.REAL)
+    assert len(calls) > 4
+    assert s['topics'][IMU]['frame_ids'] == ['base_link']
+    assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']
