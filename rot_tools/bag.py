@@ -22,6 +22,11 @@ step's two ends: a check of the IMU's own consistency.
 
 Messages are taken in the order they were recorded; ``--start``/``--end`` select them by
 record time, in seconds from the bag's start.
+
+``--tf REFERENCE BODY``: the transforms of the bag's TFMessage topics pass the same boundary
+(counted), feed a rot_tools.TransformTree, and the chain between the two frames is looked up
+as one batch at every stamp of its dynamic edges (:func:`tf_topic`); it is one more topic,
+``tf:REFERENCE->BODY``.
 """
 
 import csv

@@ -12,6 +12,7 @@ rot_tools.report) as YAML, or JSON with ``--json``::
     rot-tools frame 0 1 0  -1 0 0  0 0 1
     rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1
     rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
+    rot-tools bag run.bag --csv run.csv --plot rpy.png   (rot_tools.bag: the 'bag' extra)
 
 Every option is accepted before the command, after its arguments (``_add_common``) and
 between them (``_CommandParser``).
