@@ -161,7 +161,7 @@ def _unit_rows(x):
 
 
 def _smallest_rotation(b, a):
-    """The smallest rotation taking the unit vector b onto the unit vector a (..., 3).
+    """Return the smallest rotation taking the unit vector b onto the unit vector a (..., 3).
 
     Axis b × a, angle atan2(|b × a|, b·a). Near the angle π, b × a is small and its
     rounding noise (~ε) is not ⊥ b; a half-turn about an axis tilted by τ off the plane ⊥ b
@@ -179,8 +179,11 @@ def _smallest_rotation(b, a):
 
 
 def _rmsd(a, b, R, w):
-    """sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item, computed on a and b scaled by a common factor
-    so that nothing overflows; RotationError if the rmsd itself does."""
+    """Return sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item.
+
+    Computed on a and b scaled by a common factor so that nothing overflows; RotationError if
+    the rmsd itself does.
+    """
     big = np.maximum(np.abs(a).max(axis=(-2, -1)), np.abs(b).max(axis=(-2, -1)))[..., None, None]
     residual = a / big - np.einsum('...ij,...nj->...ni', R, b / big)
     mean = np.sum(w * np.sum(residual * residual, axis=-1), axis=-1) / np.sum(w, axis=-1)
@@ -191,7 +194,7 @@ def _rmsd(a, b, R, w):
 
 
 def _fit_about_dominant(a, b, w, a_axis, b_axis):
-    """The best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
+    """Return the best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
 
     R0, the smallest rotation taking b_axis onto a_axis, then the turn φ about a_axis that
     best fits the pairs: with c = R0·b and the parts a⊥, c⊥ of a and c ⊥ a_axis, the cost
@@ -236,7 +239,7 @@ ALONG_AXIS_SIN = 64 * np.finfo(float).eps
 
 
 def align_vectors(a, b, weights=None):
-    """The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
+    """Return the rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
 
     a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
     the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
@@ -274,8 +277,8 @@ def align_vectors(a, b, weights=None):
         raise RotationError(
             'the best rotation is not unique: H = Σ wᵢ·aᵢbᵢᵀ vanishes (|H| = '
             f'{sigma[index][0]:.3g} for Σ wᵢ|aᵢ||bᵢ| = {scale[index]:.3g}, with a and b '
-            'scaled to max 1): every rotation fits as well' + (f' (item {index})' if index
-                                                              else ''))
+            'scaled to max 1): every rotation fits as well'
+            + (f' (item {index})' if index else ''))
     if dominant.any():
         fitted, unique = _fit_about_dominant(a_dir, b_dir, w, u[..., :, 0], vt[..., 0, :])
         unsure = dominant & ~unique
@@ -307,7 +310,7 @@ def random_rotations(n=None, rng=None):
     need = count * _BYTES_PER_SAMPLE
     if need > _physical_memory():
         raise RotationError(f'n = {_count(count)} rotations are too many to allocate: about '
-                            f'{_bytes(need)} of float64, more than this machine\'s memory')
+                            f'{_bytes(need)} of float64, more than this machine’s memory')
     try:
         return _haar(gen, count, n is None)
     except (MemoryError, ValueError) as exc:  # NumPy: 'array is too big', 'Unable to allocate'
@@ -321,12 +324,12 @@ the temporaries between them (tracemalloc measured 201 bytes at n = 1e5)."""
 
 
 def _count(n):
-    """n as digits, or as 1.0e+400 when it has more than 20."""
+    """Write n as digits, or as 1.0e+400 when it has more than 20."""
     return str(n) if len(str(n)) <= 20 else _bytes(n)[:-len(' bytes')]
 
 
 def _bytes(count):
-    """A byte count as text, e.g. '9.2e+17 bytes' (any size: Python ints do not overflow)."""
+    """Write a byte count, e.g. '9.2e+17 bytes' (any size: Python ints do not overflow)."""
     digits = str(count)
     return f'{digits[0]}.{digits[1:2] or "0"}e+{len(digits) - 1} bytes'
 

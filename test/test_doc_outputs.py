@@ -30,7 +30,7 @@ def normalised(text, namespace):
 
 
 def run_client_block(name, node_name):
-    """The block's commands run for real: the text the block should show."""
+    """Run the block's commands for real; return the text the block should show."""
     namespace = node_name[:-len('/rot_tools')]
     shown, status = [], 0
     for command, _ in console_steps(doc_block(name)):

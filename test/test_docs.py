@@ -34,7 +34,7 @@ DOCTESTS = [b for b in BLOCKS if b.lang in ('pycon', 'python') and '>>>' in b.te
 
 
 def _scratch(tmp_path):
-    """A working directory that looks like the repository (doc/ writable, ../shared there).
+    """Make a working directory that looks like the repository (doc/ writable, ../shared).
 
     Commands run from the repository root as the docs show them; files they write (a
     ``--plot doc/screw.svg``) land in the scratch copy, never in the clone.

@@ -562,7 +562,7 @@ def scipy_angle(R, ref):
 
 
 def scipy_primary(a, b, weights, primary):
-    """scipy's answer with pair ``primary`` aligned exactly (an infinite weight)."""
+    """Return scipy's answer with pair ``primary`` aligned exactly (an infinite weight)."""
     w = np.array(weights, dtype=float)
     w[primary] = np.inf
     return Rotation.align_vectors(a, b, w)[0].as_matrix()
@@ -657,6 +657,10 @@ def test_align_dominant_pair_with_the_rest_cancelling_is_not_unique():
 # ---- UNIQUE_TOL: where rounding, not the data, would pick the answer ----------------------
 
 
+def rot_z_scipy(angle):
+    return Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()
+
+
 @pytest.mark.parametrize('delta', [1e-12, 1e-11, 1e-10])
 def test_a_mean_decided_by_rounding_is_refused(delta):
     # rot_z(0) and rot_z(π − δ), equal weights: S = Σ Rᵢ has singular values (2, δ, δ), and
@@ -664,7 +668,7 @@ def test_a_mean_decided_by_rounding_is_refused(delta):
     # ~ε/δ (2e-4 rad at δ = 1e-12). Refused while δ ≤ UNIQUE_TOL·σ1 = 2e-9: a threshold
     # moved down to 1e-15 (a surviving mutant) accepted these and returned noise.
     with pytest.raises(RotationError, match=r'mean rotation is not unique'):
-        mean_rotation(np.stack([np.eye(3), Rotation.from_rotvec([0.0, 0.0, PI - delta]).as_matrix()]))
+        mean_rotation(np.stack([np.eye(3), rot_z_scipy(PI - delta)]))
 
 
 @pytest.mark.parametrize('delta', [1e-7, 1e-6])
@@ -672,6 +676,6 @@ def test_a_mean_the_data_decides_is_returned(delta):
     # The same pair a little further from π apart (σ2/σ1 = δ/2 = 5e-8 and up): determined by
     # the data to ~ε/δ, returned, and equal to rot_z((π − δ)/2) to that accuracy; a
     # threshold moved up (1e-6) refused it.
-    M = mean_rotation(np.stack([np.eye(3), Rotation.from_rotvec([0.0, 0.0, PI - delta]).as_matrix()]))
+    M = mean_rotation(np.stack([np.eye(3), rot_z_scipy(PI - delta)]))
     ref = Rotation.from_rotvec([0.0, 0.0, (PI - delta) / 2]).as_matrix()
     assert scipy_angle(M, ref) <= 64 * EPS / delta
