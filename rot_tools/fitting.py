@@ -178,6 +178,12 @@ def _smallest_rotation(b, a):
     return axis_angle_to_matrix(axis, angle)
 
 
+def _log_norms(x):
+    """Return log |xᵢ| of non-zero rows, without |xᵢ|² underflowing (rows of 1e-300)."""
+    big = np.abs(x).max(axis=-1)
+    return np.log(big) + np.log(np.linalg.norm(x / big[..., None], axis=-1))
+
+
 def _rmsd(a, b, R, w):
     """Return sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item.
 
@@ -208,17 +214,23 @@ def _fit_about_dominant(a, b, w, a_axis, b_axis):
     r0 = _smallest_rotation(b_axis, a_axis)
     c = np.einsum('...ij,...nj->...ni', r0, b)
     n = a_axis[..., None, :]
-    a_perp = a - np.sum(a * n, axis=-1, keepdims=True) * n
-    c_perp = c - np.sum(c * n, axis=-1, keepdims=True) * n
+    # unit directions, and each pair's size wᵢ|aᵢ||cᵢ| relative to the largest pair off the
+    # axis, from logarithms: the products of 1e-150-long vectors would underflow
+    a_u, c_u = _unit_rows(a), _unit_rows(c)
+    a_perp = a_u - np.sum(a_u * n, axis=-1, keepdims=True) * n
+    c_perp = c_u - np.sum(c_u * n, axis=-1, keepdims=True) * n
     a_off = np.linalg.norm(a_perp, axis=-1)
     c_off = np.linalg.norm(c_perp, axis=-1)
     # a pair along the axis to rounding pulls nowhere (its ⊥ parts are noise)
-    off_axis = ((a_off > ALONG_AXIS_SIN * np.linalg.norm(a, axis=-1))
-                & (c_off > ALONG_AXIS_SIN * np.linalg.norm(c, axis=-1)))
-    w = np.where(off_axis, w, 0.0)
-    sin = np.sum(w * np.sum(np.cross(c_perp, a_perp) * n, axis=-1), axis=-1)
-    cos = np.sum(w * np.sum(c_perp * a_perp, axis=-1), axis=-1)
-    pull = np.sum(w * a_off * c_off, axis=-1)
+    off_axis = (a_off > ALONG_AXIS_SIN) & (c_off > ALONG_AXIS_SIN)
+    with np.errstate(divide='ignore'):  # log 0 = −inf for a weight 0: a size 0
+        log_size = np.log(w) + _log_norms(a) + _log_norms(c)
+    log_size = np.where(off_axis, log_size, -np.inf)
+    top = np.max(log_size, axis=-1, keepdims=True)
+    size = np.exp(log_size - np.where(np.isfinite(top), top, 0.0))
+    sin = np.sum(size * np.sum(np.cross(c_perp, a_perp) * n, axis=-1), axis=-1)
+    cos = np.sum(size * np.sum(c_perp * a_perp, axis=-1), axis=-1)
+    pull = np.sum(size * a_off * c_off, axis=-1)
     unique = ~off_axis.any(axis=-1) | (np.hypot(sin, cos) > UNIQUE_TOL * pull)
     phi = np.arctan2(sin, cos)
     return axis_angle_to_matrix(a_axis, phi) @ r0, unique
