@@ -14,8 +14,9 @@ setup(
     ],
     install_requires=['setuptools', 'numpy'],
     extras_require={
-        'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib'],
+        'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib', 'rosbags==0.11.9'],
         'plot': ['matplotlib'],
+        'bag': ['rosbags==0.11.9'],
     },
     zip_safe=True,
     maintainer='rot_tools maintainers',

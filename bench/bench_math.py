@@ -37,8 +37,8 @@ import rot_tools as rt
 
 BATCH_GOAL_QUATERNION_ROUTE = 0.25  # scipy routes Euler / matrix conversions via quaternions
 BATCH_GOAL_DIRECT = 1.0  # rotvec, axis-angle, quaternion → matrix: scipy's one direct formula
-SINGLE_GOAL_SCIPY = 0.2  # every single conversion
-SINGLE_GOAL_T3D = 1.0  # Euler → matrix only (transforms3d checks nothing; the others: no goal)
+SINGLE_GOAL_SCIPY = 0.1  # every single conversion
+SINGLE_GOAL_T3D = 0.75  # Euler → matrix only (transforms3d checks nothing; the others: no goal)
 MEMORY_GOAL = 3.0
 TOL = 1e-12
 

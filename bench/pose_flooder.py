@@ -6,7 +6,10 @@ prints ``ready``, then reads commands on stdin, one a line:
 
 ``flood TOPIC RATE SECONDS``  publish RATE msg/s for SECONDS, each message stamped with the
                               wall clock (time.time_ns) just before it is published; prints
-                              ``done SENT ELAPSED`` (elapsed seconds of the flood)
+                              ``done SENT ELAPSED`` (elapsed seconds of the flood). RATE
+                              ``max``: as fast as this process can publish, for SECONDS of
+                              wall time (the fastest flood one publisher sends on the
+                              loopback: ~57k msg/s on the 2-core machine of bench/README.md)
 ``quit``                      exit
 
 Messages come from a pool of 1000 random valid poses (unit quaternions), so the node does
@@ -60,6 +63,22 @@ def flood(publisher, pool, rate, seconds):
     return sent, time.perf_counter() - start
 
 
+def flood_max(publisher, pool, seconds):
+    """Publish back to back for ``seconds`` of wall time; return (sent, elapsed)."""
+    sent = 0
+    start = time.perf_counter()
+    end = start + seconds
+    publish, now_ns, clock = publisher.publish, time.time_ns, time.perf_counter
+    while clock() < end:
+        for _ in range(100):  # look at the clock once per 100 messages
+            msg = pool[sent % POOL]
+            stamp = msg.header.stamp
+            stamp.sec, stamp.nanosec = divmod(now_ns(), 1_000_000_000)
+            publish(msg)
+            sent += 1
+    return sent, time.perf_counter() - start
+
+
 def main(topics):
     rclpy.init()
     node = rclpy.create_node('bench_pose_flooder')
@@ -79,8 +98,11 @@ def main(topics):
         if not words or words[0] == 'quit':
             break
         if words[0] == 'flood':
-            sent, elapsed = flood(publishers[words[1]], pool, float(words[2]),
-                                  float(words[3]))
+            if words[2] == 'max':
+                sent, elapsed = flood_max(publishers[words[1]], pool, float(words[3]))
+            else:
+                sent, elapsed = flood(publishers[words[1]], pool, float(words[2]),
+                                      float(words[3]))
             print(f'done {sent} {elapsed:.6f}', flush=True)
     node.destroy_node()
     rclpy.try_shutdown()

@@ -1,10 +1,10 @@
-"""Run every benchmark (``make bench``): the math, the node, its memory, one table of goals.
+"""Run every benchmark (``make bench``): the math, first calls, the node, its memory, goals.
 
 Each script runs in its own process with this interpreter and prints its own tables; this
-script then collects their figures (JSON) and prints every goal of issue 11 with the ratio
-measured and whether it is met. The whole run takes about 7 minutes on 2 cores.
+script then collects their figures (JSON) and prints every goal with the figure measured
+and whether it is met. The whole run takes about 8 minutes on 2 cores.
 
-Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|node|memory]
+Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|first|node|memory]
 [--json-dir DIR]``. ``--quick`` is a smoke run (smaller batch, fewer repetitions and rates,
 a short flood): its figures are not the ones to quote.
 """
@@ -34,7 +34,7 @@ def run(script, args, json_path):
     return json.loads(json_path.read_text())
 
 
-def goal_rows(math, node, memory):
+def goal_rows(math, node, memory, first=None):
     rows = []
     if math:
         for r in math.get('batch', []):
@@ -55,6 +55,18 @@ def goal_rows(math, node, memory):
             rows.append([f"single {r['operation']}", f"vs {r['reference']}",
                          f"{r['ratio']:.3f}", benchlib.fmt_goal(r['goal']),
                          benchlib.verdict(r['ratio'], r['goal'])])
+    if first:
+        worst = max(first['functions'], key=lambda r: r['worst_cpu_ms'])
+        rows.append(['first 1000 calls, every public function', f"worst: {worst['label']}",
+                     f"{worst['worst_cpu_ms']:.3f} ms CPU", f"<= {first['goal_ms']:g} ms",
+                     'yes' if first['met'] else 'NO'])
+        wall = max(first['functions'], key=lambda r: r['worst_ms'])
+        rows.append(['  (the same, wall clock)', f"worst: {wall['label']}",
+                     f"{wall['worst_ms']:.3f} ms", '- (note)', '-'])
+        for r in first['node']:
+            rows.append([f"first {r['calls']} messages: {r['label']}", 'worst message',
+                         f"{r['worst_cpu_ms']:.3f} ms CPU, {r['worst_ms']:.2f} wall", '-',
+                         '-'])
     if node:
         for g in node['goals']:
             rows.append([g['figure'], 'markers off', f"{g['measured']:.2f}", g['goal'],
@@ -73,7 +85,7 @@ def goal_rows(math, node, memory):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
-    parser.add_argument('--skip', choices=['math', 'node', 'memory'], action='append',
+    parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory'], action='append',
                         default=[])
     parser.add_argument('--json-dir', help='keep the JSON figures here')
     args = parser.parse_args(argv)
@@ -84,26 +96,30 @@ def main(argv=None):
     node_args = ['--rates', '500,2000,5000', '--repeats', '1', '--seconds', '1'] if args.quick \
         else []
     memory_args = ['--seconds', '5'] if args.quick else []
+    first_args = ['--messages', '2000'] if args.quick else []
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as tmp:
         out = Path(args.json_dir or tmp)
         os.makedirs(out, exist_ok=True)
-        math = node = memory = None
+        math = first = node = memory = None
         if 'math' not in args.skip:
             math = run('bench_math.py', math_args, out / 'bench_math.json')
+        if 'first' not in args.skip:
+            first = run('bench_first_calls.py', first_args, out / 'bench_first_calls.json')
         if 'node' not in args.skip:
             node = run('bench_node.py', node_args, out / 'bench_node.json')
         if 'memory' not in args.skip:
             memory = run('bench_memory.py', memory_args, out / 'bench_memory.json')
-        rows = goal_rows(math, node, memory)
-    benchlib.print_table(f'Goals of issue 11 (ratios rot_tools / reference; '
+        rows = goal_rows(math, node, memory, first)
+    benchlib.print_table(f'Goals (ratios rot_tools / reference, first calls in ms; '
                          f'{time.monotonic() - start:.0f} s in all)',
                          ['figure', 'against', 'measured', 'goal', 'met?'], rows)
     missed = [f'{r[0]} ({r[1]})' for r in rows if r[-1] == 'NO']
     goals = [r for r in rows if r[-1] != '-']
     tail = f'; missed: {", ".join(missed)}' if missed else ''
     print(f'\n{len(goals) - len(missed)} of {len(goals)} goals met{tail}')
-    failed = [s for s, res in (('math', math), ('node', node), ('memory', memory))
+    failed = [s for s, res in (('math', math), ('first', first), ('node', node),
+                               ('memory', memory))
               if s not in args.skip and res is None]
     if failed:
         print(f'run_all: {", ".join(failed)} benchmark failed (see above)', file=sys.stderr)

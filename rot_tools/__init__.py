@@ -28,6 +28,8 @@ _HOME = {
     'rot_tools.so3': (
         'ROTATION_TOL', 'is_rotation', 'matrix_to_quaternion', 'nearest_rotation',
         'quaternion_to_matrix', 'rot_x', 'rot_y', 'rot_z', 'skew', 'validate_rotation'),
+    'rot_tools.transform_tree': (
+        'TransformLookupError', 'TransformTree', 'TransformTreeError'),
 }
 _MODULE_OF = {name: module for module, names in _HOME.items() for name in names}
 

@@ -5,9 +5,10 @@ and of the entries of its inputs (a matrix as ``m[row][col]``, a vector as ``v[i
 as itself), returning the entries of its outputs. ``apply`` runs a kernel
 
 - on a single item with Python floats and the ``math`` module (a chain of small NumPy calls
-  costs ~10× more per item than plain floats) — and, once the same kernel has run on single
-  items HOT_AFTER times, as straight-line code generated from it (rot_tools._trace: the
-  same operations without the bookkeeping around them, results equal bit for bit), or
+  costs ~10× more per item than plain floats): as the kernel's function in
+  rot_tools/_generated.py, straight-line code written from the kernel ahead of time by
+  ``python -m rot_tools._generate`` (the same operations without the bookkeeping around
+  them, results equal bit for bit), or as the kernel itself where there is none; or
 - on a batch, in chunks of CHUNK items whose entries are contiguous NumPy arrays (each chunk
   transposed once on the way in and once on the way out), so the temporaries stay in cache
   and the memory used beyond the inputs and outputs stays small.
@@ -16,11 +17,15 @@ Kernels select between branches with ``ops.where`` (both sides are evaluated), s
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
 Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
 flag beside it and the caller refuses the flagged items (floating-point warnings of the
-batch engine are silenced).
-``ops.any`` is the only data-dependent control flow a kernel may use (Python ``if`` on a
-value works on floats but keeps the kernel from being compiled).
+batch engine are silenced). ``ops.any(c)`` and ``ops.rare(c)`` are the only data-dependent
+control flow a kernel may use (true when c holds for the item, or for any item of a chunk);
+``ops.rare`` marks the unusual side — a huge or tiny vector rescaled, gimbal lock — which the
+generated code leaves to the kernel itself. Python ``if`` on a value works on floats but
+keeps the kernel from being generated. doc/engine.md tells the whole story.
 """
 
+from collections import Counter
+from functools import partial
 from itertools import chain
 import math
 import sys
@@ -28,7 +33,7 @@ import sys
 import numpy as np
 
 from rot_tools._arrays import as_float_array, require_finite
-from rot_tools._trace import compile_batch, compile_single, flatten, nest
+from rot_tools._generated import CODE as GENERATED
 from rot_tools.errors import RotationError
 
 CHUNK = 32768
@@ -43,10 +48,21 @@ class _FloatOps:
     cos = staticmethod(math.cos)
     tan = staticmethod(math.tan)
     abs = staticmethod(abs)
-    any = staticmethod(bool)
-    maximum = staticmethod(max)
-    minimum = staticmethod(min)
-    max_of = staticmethod(max)
+    any = rare = staticmethod(bool)
+
+    @staticmethod
+    def maximum(a, b):  # NaN if either is NaN, as NumPy's (max(x, nan) is x)
+        return a if a >= b or a != a else b
+
+    @staticmethod
+    def minimum(a, b):
+        return a if a <= b or a != a else b
+
+    @staticmethod
+    def max_of(first, *rest):
+        for x in rest:
+            first = first if first >= x or first != first else x
+        return first
 
     @staticmethod
     def where(cond, a, b):
@@ -62,7 +78,7 @@ class _ArrayOps:
     cos = staticmethod(np.cos)
     tan = staticmethod(np.tan)
     abs = staticmethod(np.abs)
-    any = staticmethod(np.any)
+    any = rare = staticmethod(np.any)
     maximum = staticmethod(np.maximum)
     minimum = staticmethod(np.minimum)
     where = staticmethod(np.where)
@@ -104,6 +120,24 @@ def _write_columns(out, entries, tail, dtype):
     out[...] = np.moveaxis(cols.reshape(tail + out.shape[:1]), -1, 0)
 
 
+def nest(entries, tail):
+    """Flat entries → a kernel's argument: the scalar, a list (vector) or a list of rows."""
+    if not tail:
+        return entries[0]
+    if len(tail) == 1:
+        return list(entries)
+    return [list(entries[r * tail[1]:(r + 1) * tail[1]]) for r in range(tail[0])]
+
+
+def flatten(value, tail):
+    """A kernel's output → its entries as a flat list (a matrix row-major)."""
+    if not tail:
+        return [value]
+    if len(tail) == 1:
+        return list(value)
+    return [x for row in value for x in row]
+
+
 def _all_finite(values, rank):
     """True when every float of a nested list (rank 0, 1 or 2) is finite."""
     if rank == 0:
@@ -124,15 +158,19 @@ def apply(kernel, inputs, outputs):
     floats for a single item — a float, or a flat tuple of the entries, row-major — and
     float64 arrays for a batch.
 
-    A kernel object that runs on one item often (HOT_AFTER calls) is compiled to
-    straight-line code (rot_tools._trace) and runs that way from then on, with the same
-    results bit for bit. It must then always be applied with the same input tails and
-    outputs, as every kernel of rot_tools is.
+    One item runs the kernel's function in rot_tools/_generated.py when there is one for
+    this kernel and these outputs (the same float operations as the kernel on FLOATS, so the
+    same bits), else the kernel itself on FLOATS (counted in FALLBACKS). Where Python's float
+    arithmetic raises (x/0, sin(inf), sqrt(−1)) the item is run as a batch of one, so that
+    one item gives the inf/NaN a batch gives.
     """
-    fast = getattr(kernel, '__dict__', _NO_CODE).get(_COMPILED)
-    if fast is not None:
-        result = fast(inputs)
-        if result is not None:  # else not one plain item, or a NaN/Inf may be in it
+    code = _CODE_OF.get(kernel) or _find_code(kernel)
+    if code is not None and (code[0] == outputs or code[0] == list(outputs)):
+        try:
+            result = code[1](inputs)
+        except _FLOAT_ERRORS:
+            result = None  # the path below meets it again and answers as a batch
+        if result is not None:  # else not one plain item, NaN/Inf in it, or a rare case
             return result
     # Plain loops: on one item the Python overhead here is a good part of the call.
     arrays, values = [], []
@@ -146,9 +184,13 @@ def apply(kernel, inputs, outputs):
             values.append(v)
         else:
             values = None
+    tails = [t for _, t, _, _ in inputs]
     if values is not None:  # a single item: Python floats
-        _count_call(kernel, inputs, outputs)
-        result = kernel(FLOATS, *values)
+        _count_fallback(kernel, tails, outputs)
+        try:
+            result = kernel(FLOATS, *values)
+        except _FLOAT_ERRORS:
+            return _one_as_batch(kernel, arrays, tails, outputs)
         out = []
         for r, (t, dt) in zip(result, outputs):
             if not t:
@@ -161,7 +203,11 @@ def apply(kernel, inputs, outputs):
     for a, (_, _, name, finite) in zip(arrays, inputs):
         if finite:
             require_finite(a, name)
-    tails = [t for _, t, _, _ in inputs]
+    return _batch(kernel, arrays, tails, outputs)
+
+
+def _batch(kernel, arrays, tails, outputs):
+    """The kernel on ARRAYS, chunk by chunk, over the broadcast batch of the arrays."""
     batches = [a.shape[:a.ndim - len(t)] for a, t in zip(arrays, tails)]
     try:
         shape = np.broadcast_shapes(*batches)
@@ -172,16 +218,12 @@ def apply(kernel, inputs, outputs):
     n = flat[0].shape[0]
     outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
     sizes = [math.prod(t) for t, _ in outputs]
-    code = _batch_code(kernel, tails, outputs, n)
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
             entries = [_columns(f[chunk], t) for f, t in zip(flat, tails)]
-            if code is not None:
-                values = code(*(x for e in entries for x in e))
-            else:
-                result = kernel(ARRAYS, *(nest(e, t) for e, t in zip(entries, tails)))
-                values = [x for r, (t, _) in zip(result, outputs) for x in flatten(r, t)]
+            result = kernel(ARRAYS, *(nest(e, t) for e, t in zip(entries, tails)))
+            values = [x for r, (t, _) in zip(result, outputs) for x in flatten(r, t)]
             k = 0
             for out, size, (t, dt) in zip(outs, sizes, outputs):
                 _write_columns(out[chunk], values[k:k + size], t, dt)
@@ -189,60 +231,65 @@ def apply(kernel, inputs, outputs):
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
 
 
-HOT_AFTER = 16
-"""One-item calls of a kernel object on Python floats before it is compiled (rot_tools._trace).
-
-A kernel used once or twice (a command-line run) is not worth the few milliseconds of
-tracing and compiling; one used per message or in a loop is.
-"""
-
-BATCH_AFTER = 4 * CHUNK
-"""Items a kernel has run on in batches before its batch code is compiled (a 1e6 batch:
-at once; a test's few hundred items: not worth the milliseconds)."""
-
-_COMPILED = '_rot_tools_compiled'  # attributes of a kernel: its compiled one-item code,
-_CALLS = '_rot_tools_calls'  # and how often it ran on one item (False: no more counting)
-_BATCH = '_rot_tools_batch'  # its compiled batch code (False: it cannot be compiled)
-_BATCH_ITEMS = '_rot_tools_batch_items'  # and how many items it has run on in batches
-_NO_CODE = {}
+def _one_as_batch(kernel, arrays, tails, outputs):
+    """One item run as a batch of one, returned as one item (the types of the float path)."""
+    out = []
+    for r, (t, dt) in zip(_batch(kernel, [a[None] for a in arrays], tails, outputs), outputs):
+        if not t:
+            out.append(dt(r[0]))
+        elif dt is float:
+            out.append(tuple(r[0].ravel().tolist()))
+        else:
+            out.append(r[0])
+    return tuple(out)
 
 
-def _count_call(kernel, inputs, outputs):
-    """Count a one-item call of kernel on Python floats; compile it when it becomes hot."""
-    state = getattr(kernel, '__dict__', None)
-    if state is None:  # a kernel that cannot carry attributes runs on Python floats
-        return
-    calls = state.get(_CALLS, 0)
-    if calls is False:
-        return
-    if calls < HOT_AFTER:
-        state[_CALLS] = calls + 1
-        return
-    state[_CALLS] = False
-    try:
-        state[_COMPILED] = compile_single(kernel, FLOATS, [t for _, t, _, _ in inputs],
-                                          list(outputs))
-    except Exception:  # noqa: BLE001 - whatever the tracer cannot follow runs on floats
-        pass
+_FLOAT_ERRORS = (ArithmeticError, ValueError)
+"""What Python's float arithmetic and math module raise where NumPy gives inf or NaN."""
+
+_CODE_OF = {}
+"""kernel object -> (outputs, its generated function), filled as kernels are first met."""
+
+FALLBACKS = Counter()
+"""kernel key -> one-item calls that ran the kernel itself on FLOATS (no generated function
+for it, an input that is not one plain item, NaN/Inf, or an ops.rare case). The test that
+every public kernel runs generated code on ordinary inputs reads it."""
+
+RECORD = None
+"""The generator's (rot_tools._generate): a dict it sets to collect kernel key ->
+(kernel, tails, outputs) of every one-item call that runs on FLOATS."""
 
 
-def _batch_code(kernel, tails, outputs, n):
-    """The compiled batch code of kernel once it has run on BATCH_AFTER items, else None."""
-    state = getattr(kernel, '__dict__', None)
-    if state is None:
-        return None
-    code = state.get(_BATCH)
+def kernel_key(kernel):
+    """The name under which rot_tools/_generated.py lists a kernel object's function.
+
+    ``module.qualname`` of a function, with the fixed arguments of a functools.partial in
+    brackets; a kernel built by a helper (so3's checked kernels) carries its own
+    ``rot_tools_key``.
+    """
+    key = getattr(kernel, 'rot_tools_key', None)
+    if key is not None:
+        return key
+    if type(kernel) is partial:
+        fixed = [repr(a) for a in kernel.args]
+        fixed += [f'{k}={v!r}' for k, v in sorted(kernel.keywords.items())]
+        return f'{kernel_key(kernel.func)}[{", ".join(fixed)}]'
+    return f'{kernel.__module__}.{kernel.__qualname__}'
+
+
+def _find_code(kernel):
+    """(outputs, function) of a kernel from the generated module, remembered; else None."""
+    code = GENERATED.get(kernel_key(kernel))
     if code is not None:
-        return code or None
-    items = state.get(_BATCH_ITEMS, 0) + n
-    state[_BATCH_ITEMS] = items
-    if items < BATCH_AFTER:
-        return None
-    try:
-        state[_BATCH] = compile_batch(kernel, ARRAYS, tails, list(outputs))
-    except Exception:  # noqa: BLE001 - whatever the tracer cannot follow runs as it is
-        state[_BATCH] = False
-    return state[_BATCH] or None
+        _CODE_OF[kernel] = code
+    return code
+
+
+def _count_fallback(kernel, tails, outputs):
+    key = kernel_key(kernel)
+    FALLBACKS[key] += 1
+    if RECORD is not None and key not in RECORD:
+        RECORD[key] = (kernel, list(tails), list(outputs))
 
 
 def dot(u, v):
@@ -271,7 +318,7 @@ def _scaled(ops, v):
 def norm(ops, v):
     """|v| of a 3-vector entry list, without overflow or underflow of |v|² for any finite v."""
     n2 = dot(v, v)
-    if ops.any(_rare(v, n2)):  # rare: rescale by max |v_i|
+    if ops.rare(_rare(v, n2)):  # rescale by max |v_i|
         big, scaled = _scaled(ops, v)
         return big * ops.sqrt(dot(scaled, scaled))
     return ops.sqrt(n2)
@@ -289,7 +336,7 @@ def unit(ops, v):
     n2 = dot(v, v)
     rare = _rare(v, n2)
     n = size = ops.sqrt(n2)
-    if ops.any(rare):
+    if ops.rare(rare):
         big, scaled = _scaled(ops, v)
         m = ops.sqrt(dot(scaled, scaled))
         n = big * m
@@ -323,7 +370,7 @@ def linear_in_range(ops, linear, *vectors):
     """
     out = linear(*vectors)
     fits = in_range(ops, out)
-    if ops.any(ops.where(fits, False, True)):
+    if ops.rare(ops.where(fits, False, True)):
         quarter = linear(*([0.25 * x for x in v] for v in vectors))
         out = [ops.where(fits, x, 4.0 * y) for x, y in zip(out, quarter)]
         fits = in_range(ops, out)

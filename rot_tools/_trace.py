@@ -1,35 +1,30 @@
-"""The one-item engine compiled: a kernel traced once into straight-line Python source.
+"""The tracer: a kernel written out as straight-line Python source, ahead of time.
 
 A kernel (see _backend) is one formula, run by ``apply`` on Python floats for one item. Run
 that way it pays, on every call, for each ``ops.*`` attribute look-up, helper call, list and
-tuple it builds around the arithmetic. ``compile_single`` removes that cost without a second
+tuple it builds around the arithmetic. ``function_source`` removes that cost without a second
 copy of the formula: it runs the kernel once with *symbolic* entries, records every
 arithmetic operation, comparison and ``ops.*`` call as one assignment, in the order the kernel
-evaluates them, and compiles the recording into a Python function of the flat entries. The
+evaluates them, and writes the recording out as a Python function of apply's inputs. The
 function does the same float operations in the same order as ``kernel(FLOATS, ...)``, so its
 results are the same bit for bit; it only leaves out the bookkeeping (and work whose result
-nothing uses).
+nothing uses). rot_tools._generate writes these functions into rot_tools/_generated.py;
+nothing is traced or compiled while a program runs.
 
-``ops.any`` is the kernels' only data-dependent control flow (the rare branches: rescaling a
-huge or tiny vector, the near-π axis). The tracer follows each way through every ``ops.any``
-— the kernel is traced once per path — and writes the paths as nested if/else blocks.
-
-Anything the tracer cannot represent — ``if`` on a value, ``float(x)``, an ``ops`` function
-that returns a container, too many paths — raises TraceError, and the kernel keeps running
-on Python floats. The generated source is kept on the function (``__source__``) and shown in
-tracebacks.
+Branches: ``ops.rare(c)`` is the only one. The tracer follows the usual way (c false) and
+writes ``if c: return None``, so that apply runs an item where c holds on the kernel itself
+(the same bits, no compilation). Everything else is one straight line: ``ops.where`` becomes
+``a if c else b``. Anything the tracer cannot represent — ``if`` on a value, ``float(x)``,
+an ``ops`` function that returns a container — raises TraceError.
 """
 
 from collections import Counter
-import linecache
 import math
 import re
-import struct
 
 import numpy as np
 
-MAX_PATHS = 64
-"""More ways through a kernel's ops.any than this and it is not compiled."""
+from rot_tools._backend import flatten, nest
 
 
 class TraceError(Exception):
@@ -51,7 +46,7 @@ class _Sym:
         self.real = real
 
     def __bool__(self):
-        raise TraceError('the kernel branches on a value (use ops.where / ops.any)')
+        raise TraceError('the kernel branches on a value (use ops.where / ops.rare)')
 
     def _refuse(self, *args):
         raise TraceError('the kernel uses a value as a number, index or container')
@@ -89,9 +84,24 @@ for _name, _symbol in (('add', '+'), ('sub', '-'), ('truediv', '/'), ('floordiv'
                        ('mod', '%'), ('pow', '**')):
     setattr(_Sym, f'__{_name}__', _operator(f'{{}} {_symbol} {{}}'))
     setattr(_Sym, f'__r{_name}__', _operator(f'{{}} {_symbol} {{}}', reflected=True))
-for _name, _symbol in (('and', '&'), ('or', '|'), ('xor', '^')):
-    setattr(_Sym, f'__{_name}__', _operator(f'{{}} {_symbol} {{}}', logical=True))
-    setattr(_Sym, f'__r{_name}__', _operator(f'{{}} {_symbol} {{}}', reflected=True, logical=True))
+
+
+def _condition(word, symbol, reflected=False):
+    """``a & b`` / ``a | b`` of conditions, written ``a and b`` / ``a or b``: on the bools of
+    one item the same value, and the right side is skipped when the left decides (a guard's
+    ``rare & nonzero`` costs one comparison on an ordinary item)."""
+    def op(self, other):
+        a, b = (other, self) if reflected else (self, other)
+        template = f'{{}} {word} {{}}' if not (_real(a) or _real(b)) else f'{{}} {symbol} {{}}'
+        return self.trace.emit(template, a, b, real=False)
+    return op
+
+
+for _name, _word, _symbol in (('and', 'and', '&'), ('or', 'or', '|')):
+    setattr(_Sym, f'__{_name}__', _condition(_word, _symbol))
+    setattr(_Sym, f'__r{_name}__', _condition(_word, _symbol, reflected=True))
+_Sym.__xor__ = _operator('{} ^ {}', logical=True)
+_Sym.__rxor__ = _operator('{} ^ {}', reflected=True, logical=True)
 for _name, _symbol in (('lt', '<'), ('le', '<='), ('gt', '>'), ('ge', '>='), ('eq', '=='),
                        ('ne', '!=')):
     setattr(_Sym, f'__{_name}__', _operator(f'{{}} {_symbol} {{}}', logical=True))
@@ -100,17 +110,16 @@ _Sym.__pos__ = lambda self: self.trace.emit('+{}', self)
 _Sym.__invert__ = lambda self: self.trace.emit('~{}', self, real=False)
 _Sym.__abs__ = lambda self: self.trace.emit('abs({})', self)
 
+_GUARD = None
+"""The name of a statement that is a guard (``if cond: return None``), not an assignment."""
+
 
 class _Trace:
-    """One run of a kernel on symbols, following ``decisions`` at its ops.any branches."""
+    """One run of a kernel on symbols: its statements, in the order it evaluates them."""
 
-    def __init__(self, decisions, single=True):
-        self.decisions = decisions
-        self.single = single  # one item (ops.any is bool), else a batch (np.any)
-        self.statements = []  # (name, source text, names it reads)
-        self.branches = []  # (statement index, condition name, decision taken)
-        self.constants = {}  # global name -> value, for what repr cannot write
-        self.known = {}  # condition name -> the value a branch taken on it implies
+    def __init__(self):
+        self.statements = []  # (name or _GUARD, source text, names it reads)
+        self.known = {}  # condition name -> False once a guard has left its items out
         self.seen = {}  # source text -> its symbol: each expression is computed once
 
     def source(self, x):
@@ -120,13 +129,11 @@ class _Trace:
             return x.name
         if isinstance(x, (bool, np.bool_)):
             return repr(bool(x))
-        if type(x) is int or isinstance(x, float):  # (np.float64 from the batch engine)
+        if type(x) is int or isinstance(x, float):
             x = x if type(x) is int else float(x)
             if math.isfinite(x):
                 return repr(x)
-            name = f'_c{len(self.constants)}'  # inf, nan
-            self.constants[name] = x
-            return name
+            return '_nan' if math.isnan(x) else '_inf' if x > 0 else '(-_inf)'
         raise TraceError(f'the kernel mixes a {type(x).__name__} into its arithmetic')
 
     def emit(self, template, *args, real=None):
@@ -139,21 +146,18 @@ class _Trace:
         sym = self.seen[text] = _Sym(self, name, all(map(_real, args)) if real is None else real)
         return sym
 
-    def branch(self, condition):
-        """Take the next decision of this path at an ops.any.
+    def guard(self, condition):
+        """Return False, after a guard that leaves the items where ``condition`` holds to
+        the kernel itself (ops.rare).
 
-        On one item ops.any is bool(condition), so a branch taken on a condition also
-        settles every later where on it (``known``); on a batch it is np.any and does not.
+        Past the guard the condition is known to be false, so later wheres on it are
+        settled (on one item ops.rare is bool(condition)).
         """
         name = self.source(condition)
-        if name in self.known:
-            return self.known[name]
-        k = len(self.branches)
-        taken = self.decisions[k] if k < len(self.decisions) else False
-        self.branches.append((len(self.statements), name, taken))
-        if self.single:
-            self.known[name] = taken
-        return taken
+        if name not in self.known:
+            self.statements.append((_GUARD, name, {name}))
+            self.known[name] = False
+        return False
 
 
 class _TraceOps:
@@ -171,15 +175,31 @@ class _TraceOps:
             return a if known else b
         if a is b:
             return a
-        real = _real(a) and _real(b)
-        if self._trace.single:
-            return self._trace.emit('{} if {} else {}', a, cond, b, real=real)
-        return self._trace.emit('_op_where({}, {}, {})', cond, a, b, real=real)
+        return self._trace.emit('{} if {} else {}', a, cond, b, real=_real(a) and _real(b))
 
-    def any(self, cond):
+    def maximum(self, a, b):  # written out as the float engine computes them
+        return self._pick(a, b, '>=', self._engine.maximum)
+
+    def minimum(self, a, b):
+        return self._pick(a, b, '<=', self._engine.minimum)
+
+    def max_of(self, first, *rest):
+        for x in rest:
+            first = self.maximum(first, x)
+        return first
+
+    def _pick(self, a, b, compare, fn):
+        if type(a) is not _Sym and type(b) is not _Sym:
+            return fn(a, b)
+        return self._trace.emit(f'{{}} if {{}} {compare} {{}} or {{}} != {{}} else {{}}',
+                                a, a, b, a, a, b, real=_real(a) and _real(b))
+
+    def rare(self, cond):
         if type(cond) is not _Sym:
             return bool(cond)
-        return self._trace.branch(cond)
+        return self._trace.guard(cond)
+
+    any = rare  # (the older name of ops.rare)
 
     def __getattr__(self, name):
         fn = getattr(self._engine, name)
@@ -190,24 +210,6 @@ class _TraceOps:
                 return fn(*args)  # every argument known: the engine's own result
             return trace.emit(f'_op_{name}(' + ', '.join(['{}'] * len(args)) + ')', *args)
         return recorded
-
-
-def nest(entries, tail):
-    """Flat entries → a kernel's argument: the scalar, a list (vector) or a list of rows."""
-    if not tail:
-        return entries[0]
-    if len(tail) == 1:
-        return list(entries)
-    return [list(entries[r * tail[1]:(r + 1) * tail[1]]) for r in range(tail[0])]
-
-
-def flatten(value, tail):
-    """A kernel's output → its entries as a flat list (a matrix row-major)."""
-    if not tail:
-        return [value]
-    if len(tail) == 1:
-        return list(value)
-    return [x for row in value for x in row]
 
 
 def _symbols(trace, prefix, tail, start):
@@ -224,9 +226,9 @@ def _entries_of(value, tail):
     return flatten(value, tail)
 
 
-def _run(kernel, engine, single, tails, outputs, decisions):
-    """Trace kernel along decisions: (trace, flat symbolic outputs per output)."""
-    trace = _Trace(decisions, single)
+def _run(kernel, engine, tails, outputs):
+    """Trace kernel: (trace, flat symbolic outputs per output)."""
+    trace = _Trace()
     args, start = [], 0
     for tail in tails:
         args.append(_symbols(trace, 'a', tail, start))
@@ -238,53 +240,41 @@ def _run(kernel, engine, single, tails, outputs, decisions):
     return trace, flat
 
 
-def _all_paths(kernel, engine, single, tails, outputs):
-    """Every way through the kernel's ops.any: a list of (trace, outputs)."""
-    done, todo = [], [[]]
-    while todo:
-        trace, flat = _run(kernel, engine, single, tails, outputs, todo.pop())
-        done.append((trace, flat))
-        if len(done) > MAX_PATHS:
-            raise TraceError(f'more than {MAX_PATHS} ways through the kernel')
-        taken = [d for _, _, d in trace.branches]
-        for k in range(len(trace.decisions), len(taken)):  # branches first met on this path
-            todo.append(taken[:k] + [True])
-    return done
-
-
 def _live(trace, flat):
-    """Names whose values the outputs or the branch conditions of this path need."""
+    """Names whose values the outputs or the guards need."""
     live = {x.name for out in flat for x in out if type(x) is _Sym}
-    live.update(cond for _, cond, _ in trace.branches)
     for name, _, reads in reversed(trace.statements):
-        if name in live:
+        if name is _GUARD or name in live:
             live |= reads
     return live
 
 
-_PACK_CODES = {np.dtype(np.float64): 'd', np.dtype(np.bool_): '?'}
+DTYPE_NAMES = {float: '_float', np.float64: '_float64', np.bool_: '_bool'}
+"""The names under which the generated module knows each output dtype (see PRELUDE)."""
+_ARRAY_DTYPES = {np.dtype(np.float64): ('d', '_f64'), np.dtype(np.bool_): ('?', '_b1')}
 
 
-def _result_lines(values, outputs, names):
+def _result_lines(values, outputs, packers):
     """Statements that build the output arrays / scalars from their entries' source texts
-    (``values``, one list per output) and return them."""
+    (``values``, one list per output) and return them; packers collects the struct formats
+    (e.g. '9d') whose pack_into the module must define."""
     lines, results = [], []
     for k, (text, (tail, dtype)) in enumerate(zip(values, outputs)):
         if not tail:
-            results.append(f'_dt{k}({text[0]})')
-            names[f'_dt{k}'] = dtype
+            if dtype not in DTYPE_NAMES:
+                raise TraceError(f'no scalar output for dtype {dtype}')
+            results.append(f'{DTYPE_NAMES[dtype]}({text[0]})')
             continue
         if dtype is float:  # plain Python floats: a flat tuple of the entries
             results.append(f'({", ".join(text)},)')
             continue
-        code = _PACK_CODES.get(np.dtype(dtype))
+        code = _ARRAY_DTYPES.get(np.dtype(dtype))
         if code is None:
             raise TraceError(f'no packed output for dtype {dtype}')
-        names[f'_pack{k}'] = struct.Struct(f'{len(text)}{code}').pack_into
-        names[f'_shape{k}'] = tail
-        names[f'_odt{k}'] = np.dtype(dtype)
-        lines.append(f'o{k} = _empty(_shape{k}, _odt{k})')
-        lines.append(f'_pack{k}(o{k}, 0, {", ".join(text)})')
+        fmt = f'{len(text)}{code[0]}'
+        packers.add(fmt)
+        lines.append(f'o{k} = _empty({tail!r}, {code[1]})')
+        lines.append(f'_pack_{fmt}(o{k}, 0, {", ".join(text)})')
         results.append(f'o{k}')
     lines.append(f'return ({", ".join(results)},)')
     return lines
@@ -293,14 +283,15 @@ def _result_lines(values, outputs, names):
 _TEMPORARY = re.compile(r'\bt\d+\b')
 
 
-def _fold(statements, tails, keep):
-    """Fold each temporary read once in its block into the expression that reads it.
+def _fold(statements, tails):
+    """Fold each temporary read once into the expression that reads it.
 
-    statements: [(name, text)] of one straight-line block, in order; tails: the texts after
-    them that read names (the branch condition, or the output entries); keep: names read
-    below the block, which stay variables. Returns both rewritten. Every operation is pure,
-    so computing a value where it is used instead of where it was defined changes no result;
-    it only saves storing and loading a local.
+    statements: [(name, text)] in order (guards included, never folded); tails: the texts
+    after them that read names (the output entries). Returns both rewritten. Every
+    operation is pure, so computing a value where it is used instead of where it was
+    defined changes no result; it only saves storing and loading a local. (A value defined
+    before a guard and folded below it is then not computed for the items the guard
+    leaves out, which changes nothing either.)
     """
     uses = Counter(_TEMPORARY.findall(' '.join([t for _, t in statements] + tails)))
     folded, kept = {}, []
@@ -310,53 +301,42 @@ def _fold(statements, tails, keep):
 
     for name, text in statements:
         text = expand(text)
-        if uses[name] == 1 and name not in keep:
+        if name is not _GUARD and uses[name] == 1:
             folded[name] = f'({text})'
         else:
             kept.append((name, text))
     return kept, [expand(t) for t in tails]
 
 
-def _block(paths, depth, start, outputs, names, indent):
-    """Source lines of the paths that agree on their first ``depth`` decisions."""
-    trace, flat = paths[0]
-    live = set().union(*(_live(t, f) for t, f in paths))
-    pad = '    ' * indent
-    leaf = len(trace.branches) == depth
-    end = len(trace.statements) if leaf else trace.branches[depth][0]
-    statements = [(name, text) for name, text, _ in trace.statements[start:end] if name in live]
-    if leaf:
-        names.update(trace.constants)
-        values = [[trace.source(x) for x in out] for out in flat]
-        sizes = [len(v) for v in values]
-        statements, texts = _fold(statements, [t for v in values for t in v], set())
-        lines = [f'{pad}{name} = {text}' for name, text in statements]
-        if not trace.single:  # a batch: every entry, flat, for apply to write
-            return lines + [f'{pad}return ({", ".join(texts)},)']
-        values = [texts[sum(sizes[:k]):sum(sizes[:k + 1])] for k in range(len(sizes))]
-        return lines + [pad + line for line in _result_lines(values, outputs, names)]
-    below = set()
-    for t, f in paths:
-        below.update(*(reads for _, _, reads in t.statements[end:]))
-        below.update(x.name for out in f for x in out if type(x) is _Sym)
-        below.update(cond for _, cond, _ in t.branches[depth + 1:])
-    statements, (cond,) = _fold(statements, [trace.branches[depth][1]], below)
-    lines = [f'{pad}{name} = {text}' for name, text in statements]
-    ways = {True: [], False: []}
-    for path in paths:
-        ways[path[0].branches[depth][2]].append(path)
-    lines.append(f'{pad}if {cond}:' if trace.single else f'{pad}if _op_any({cond}):')
-    lines += _block(ways[True], depth + 1, end, outputs, names, indent + 1)
-    lines.append(f'{pad}else:')
-    lines += _block(ways[False], depth + 1, end, outputs, names, indent + 1)
+def _statement_lines(statements, pad):
+    """Assignments, and guards written ``if cond: return None``."""
+    lines = []
+    for name, text in statements:
+        if name is _GUARD:
+            lines += [f'{pad}if {text}:', f'{pad}    return None  # rare: apply runs the kernel']
+        else:
+            lines.append(f'{pad}{name} = {text}')
     return lines
+
+
+def _body(trace, flat, outputs, packers):
+    """Source lines of the traced kernel: its live statements, then the outputs built."""
+    live = _live(trace, flat)
+    statements = [(name, text) for name, text, _ in trace.statements
+                  if name is _GUARD or name in live]
+    values = [[trace.source(x) for x in out] for out in flat]
+    sizes = [len(v) for v in values]
+    statements, texts = _fold(statements, [t for v in values for t in v])
+    values = [texts[sum(sizes[:k]):sum(sizes[:k + 1])] for k in range(len(sizes))]
+    return _statement_lines(statements, '    ') + [
+        '    ' + line for line in _result_lines(values, outputs, packers)]
 
 
 def _input_lines(index, tail, first):
     """Return the statements that read input ``index`` into a<first>, a<first + 1>, ...
 
-    They take one item of ``tail``, or return None from the function (the caller's generic
-    path then deals with the input).
+    They take one item of ``tail``, or return None from the function (apply's generic path
+    then deals with the input).
     """
     x, n = f'x{index}', math.prod(tail)
     names = [f'a{first + i}' for i in range(n)]
@@ -377,20 +357,22 @@ def _input_lines(index, tail, first):
             'else:', '    return None']
 
 
-def compile_single(kernel, floats, tails, outputs):
-    """Compile ``kernel`` for one item: f(inputs) → tuple of outputs, or None.
+def function_source(name, kernel, floats, tails, outputs, packers):
+    """Source of ``def name(inputs)``: the kernel for one item, straight-line.
 
-    f takes apply's inputs, ((value, tail, name, finite), ...), with the trailing shapes
-    ``tails``, and returns the outputs — arrays of the shapes of ``outputs`` ((tail, dtype)
-    each), or dtype scalars for tail () — when every value is one item given as a float64
-    ndarray of exactly its tail, a float (a scalar) or a tuple / list of floats (a vector),
-    and holds no NaN/Inf. Otherwise it returns None and the caller takes the generic path,
-    which coerces and checks (the NaN/Inf test is a quick sum that can also fire when the
-    sum overflows, and never misses one). Raises TraceError when the kernel cannot be traced.
+    The function takes apply's inputs, ((value, tail, name, finite), ...), with the trailing
+    shapes ``tails``, and returns the outputs — arrays of the shapes of ``outputs``
+    ((tail, dtype) each), dtype scalars for tail (), flat tuples of floats for dtype float —
+    when every value is one item given as a float64 ndarray of exactly its tail, a float
+    (a scalar) or a tuple / list of floats (a vector), and holds no NaN/Inf, and no
+    ops.rare condition holds. Otherwise it returns None and apply takes its generic path,
+    which coerces, checks and runs the kernel itself (the NaN/Inf test is a quick sum that
+    can also fire when the sum overflows, and never misses one). The names it uses besides
+    its own are PRELUDE's, ``_op_<name>`` for each function of ``floats``, and
+    ``_pack_<fmt>`` for each format added to ``packers``. Raises TraceError when the kernel
+    cannot be traced.
     """
-    paths = _all_paths(kernel, floats, True, tails, outputs)
-    names = {'_empty': np.empty, '_ndarray': np.ndarray, '_f64': np.dtype(np.float64),
-             '_float64': np.float64, '_float': float}
+    trace, flat = _run(kernel, floats, tails, outputs)
     xs = ''.join(f'(x{i}, _, _, _), ' for i in range(len(tails)))
     body = [f'if len(inputs) != {len(tails)}:', '    return None', f'{xs}= inputs']
     count = 0
@@ -400,37 +382,55 @@ def compile_single(kernel, floats, tails, outputs):
     if count:
         body += [f'if ({" + ".join(f"a{i}" for i in range(count))}) * 0.0 != 0.0:',
                  '    return None']
-    return _function('single', 'inputs', body, paths, kernel, floats, outputs, names,
-                     'one item')
+    lines = [f'def {name}(inputs):']
+    lines += ['    ' + line for line in body] + _body(trace, flat, outputs, packers)
+    return '\n'.join(lines) + '\n'
 
 
-def compile_batch(kernel, arrays, tails, outputs):
-    """Compile ``kernel`` for a chunk of items: f(*entries) → every output entry, flat.
+PRELUDE = '''\
+import math as _math
+from struct import Struct as _Struct
 
-    f takes the entries of the inputs (contiguous arrays of the chunk's items, a matrix's
-    row-major) and returns those of the outputs, each an array or a constant, as
-    kernel(arrays, ...) computes them (the same NumPy operations, less the ones whose result
-    nothing uses, and x·1, x·(−1), repeated expressions: exact). Raises TraceError when the
-    kernel cannot be traced.
-    """
-    paths = _all_paths(kernel, arrays, False, tails, outputs)
-    params = ', '.join(f'a{i}' for i in range(sum(math.prod(t) for t in tails)))
-    return _function('batch', params, [], paths, kernel, arrays, outputs, {}, 'a batch')
+import numpy as _np
+
+_empty, _ndarray = _np.empty, _np.ndarray
+_f64, _b1 = _np.dtype(_np.float64), _np.dtype(_np.bool_)
+_float, _float64, _bool = float, _np.float64, _np.bool_
+_inf, _nan = _math.inf, _math.nan
+'''
+"""The names every generated function may use, besides _op_* and _pack_*."""
 
 
-def _function(name, params, body, paths, kernel, engine, outputs, names, what):
-    """Compile ``def name(params): body + the paths' code`` with the engine's functions."""
-    for attr in dir(engine):
-        if not attr.startswith('_'):
-            names[f'_op_{attr}'] = getattr(engine, attr)
-    label = getattr(kernel, '__qualname__', None) or getattr(
-        getattr(kernel, 'func', None), '__qualname__', 'kernel')
-    lines = [f'def {name}({params}):', f'    """{label}, traced: {what}, straight-line."""']
-    lines += ['    ' + line for line in body] + _block(paths, 0, 0, outputs, names, 1)
-    source = '\n'.join(lines) + '\n'
-    filename = f'<rot_tools traced {label} {what} {id(kernel):x}>'
-    exec(compile(source, filename, 'exec'), names)  # noqa: S102 - our own generated code
-    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
-    function = names[name]
+def op_lines(floats):
+    """Module lines binding ``_op_<name>`` to each public function of the float engine."""
+    lines = []
+    for attr in sorted(dir(floats)):
+        if attr.startswith('_') or attr in vars(_TraceOps):
+            continue  # (written out as Python by the tracer: where, rare, maximum, ...)
+        fn = getattr(floats, attr)
+        module = getattr(fn, '__module__', None)
+        if module == 'math':
+            lines.append(f'_op_{attr} = _math.{fn.__name__}')
+        elif module == 'builtins':
+            lines.append(f'_op_{attr} = {fn.__name__}')
+        else:
+            raise TraceError(f'ops.{attr} of the float engine is neither math nor builtin')
+    return lines
+
+
+def packer_lines(packers):
+    """Module lines binding ``_pack_<fmt>`` for each struct format in packers."""
+    return [f'_pack_{fmt} = _Struct({fmt!r}).pack_into' for fmt in sorted(packers)]
+
+
+def compile_kernel(kernel, floats, tails, outputs):
+    """The function of function_source, compiled in a namespace of its own (for tests and
+    for trying a kernel out; rot_tools itself only runs rot_tools/_generated.py)."""
+    packers = set()
+    body = function_source('traced', kernel, floats, tails, outputs, packers)
+    source = '\n'.join([PRELUDE, *op_lines(floats), *packer_lines(packers), '', body])
+    names = {}
+    exec(compile(source, '<rot_tools._trace.compile_kernel>', 'exec'), names)  # noqa: S102
+    function = names['traced']
     function.__source__ = source
     return function

@@ -85,10 +85,9 @@ def axis_angle_kernel(ops, m):
     skew_axis, sin = unit(ops, w)
     angle = ops.atan2(sin, cos)
     near_pi = cos < 0
-    if not ops.any(near_pi):
-        return skew_axis, angle
     # Near π the skew part vanishes with sin θ: take the axis from the symmetric part
-    # (R + Rᵀ)/2 − cos θ·I = (1 − cos θ)·l̂l̂ᵀ, its column with the largest diagonal entry.
+    # (R + Rᵀ)/2 − cos θ·I = (1 − cos θ)·l̂l̂ᵀ, its column with the largest diagonal entry
+    # (computed for every item, like both sides of any ops.where; used where near_pi).
     d0, d1, d2 = m[0][0] - cos, m[1][1] - cos, m[2][2] - cos
     s01, s02, s12 = (
         0.5 * (m[0][1] + m[1][0]), 0.5 * (m[0][2] + m[2][0]), 0.5 * (m[1][2] + m[2][1]))
@@ -101,7 +100,7 @@ def axis_angle_kernel(ops, m):
     # Its sign from the skew part (free at exactly π, where w = 0).
     flip = sym_axis[0] * w[0] + sym_axis[1] * w[1] + sym_axis[2] * w[2] < 0
     sign = ops.where(flip, -1.0, 1.0)
-    axis = [ops.where(near_pi, sign * a, b) + 0.0 for a, b in zip(sym_axis, skew_axis)]
+    axis = [ops.where(near_pi, sign * a + 0.0, b) for a, b in zip(sym_axis, skew_axis)]
     return axis, angle
 
 

@@ -46,7 +46,8 @@ from rot_tools import (
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
 from rot_tools.errors import RotationError
-from rot_tools.report import DEFAULT_PRECISION, to_json, to_yaml, transform_report
+from rot_tools.report import DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
+from rot_tools.report import transform_report
 
 PROG = 'rot-tools'
 MATRIX_TOL = 1e-5
@@ -132,7 +133,7 @@ def _number(text):
 def _sequence(text):
     if text not in EULER_SEQUENCES:
         raise argparse.ArgumentTypeError(
-            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}')
+            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}{sequence_hint(text)}')
     return text
 
 
@@ -150,6 +151,13 @@ def _plot_file(text):
     if not text.lower().endswith(('.png', '.svg')):
         raise argparse.ArgumentTypeError(f'FILE must end in .png or .svg, got {text!r}')
     return text
+
+
+def _seconds(text):
+    value = _number(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f'must be >= 0 seconds from the bag\'s start, got {text!r}')
+    return value
 
 
 def _tolerance(text):
@@ -434,6 +442,74 @@ _NUMBERS = {
 }
 
 
+_BAG_TEXT = (
+    'Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags without ROS (the rosbags library: pip\n'
+    "install 'rot_tools[bag]'). Topics of type PoseStamped, PoseWithCovarianceStamped,\n"
+    'Odometry, Imu, QuaternionStamped and TransformStamped are read (default: all of\n'
+    'them). Each message passes the checks of rotation_node\'s inputs: a NaN/Inf, a zero or\n'
+    'non-unit quaternion (|q| off 1 by more than --tol, default 0.001), an Imu without\n'
+    'orientation is refused and counted by reason.\n\n'
+    'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
+    'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
+    'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
+    'from its gyro (RMS). roll, pitch, yaw are REP-103\'s (about the fixed X, Y, Z axes,\n'
+    'the extrinsic sequence xyz) and continuous along each topic (no jump at ±180°)\n'
+    'unless --wrap. With --csv, one row per accepted message; with --plot, roll, pitch\n'
+    'and yaw against time, one panel per topic.')
+
+
+def _add_bag(sub):
+    """The bag command: its own options, and the common ones that apply to it."""
+    p = sub.add_parser(
+        'bag', help='the orientations recorded in a ROS bag: summary, CSV, plot',
+        usage=f'{PROG} bag PATH [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] [--deg]\n'
+        '       [--wrap] [--csv FILE|-] [--json] [--plot FILE] [--start S] [--end S]',
+        description=f'The orientations recorded in a ROS bag.\n\n{_BAG_TEXT}',
+        epilog='examples:\n  rot-tools bag run.bag\n'
+        '  rot-tools bag run.bag --topic /imu/data --csv imu.csv --deg\n'
+        '  rot-tools bag rosbag2_dir --plot rpy.png --start 10 --end 20')
+    p.set_defaults(handler=None)
+    p.add_argument('path', metavar='PATH',
+                   help='a ROS 1 .bag file, a rosbag2 directory, or a file in one')
+    p.add_argument('--topic', action='append', metavar='T',
+                   help='read this topic (repeat for more); default: every topic of a type '
+                   'read')
+    p.add_argument('--tf', nargs=2, metavar=('REFERENCE', 'BODY'),
+                   help='also the transform of BODY in REFERENCE from the bag\'s /tf and '
+                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree')
+    p.add_argument('--wrap', action='store_true',
+                   help='angles as computed, each in (−180°, 180°], instead of continuous')
+    p.add_argument('--csv', metavar='FILE',
+                   help='write one row per accepted message to FILE (- = standard output, '
+                   'which then gets no summary): topic, stamp (s), frame_id, x, y, z, qx, qy, '
+                   'qz, qw (w ≥ 0), roll, pitch, yaw, the --seq angles SEQ_1..3, rotation '
+                   'vector rx, ry, rz, angle, body angular velocity wx, wy, wz from the '
+                   'previous row of the topic (empty on its first row)')
+    p.add_argument('--start', type=_seconds, metavar='S',
+                   help='only messages recorded S seconds or more after the bag\'s start')
+    p.add_argument('--end', type=_seconds, metavar='S',
+                   help='only messages recorded at most S seconds after the bag\'s start')
+    common = p.add_argument_group('common options')
+    suppress = argparse.SUPPRESS
+    common.add_argument('--deg', action='store_true', default=suppress,
+                        help='every angle in degrees (angular velocities in deg/s)')
+    common.add_argument('--seq', type=_sequence, default=suppress, metavar='SEQ',
+                        help='also the Euler angles of SEQ (CSV columns SEQ_1..3), '
+                        'continuous like roll, pitch, yaw')
+    common.add_argument('--json', action='store_true', default=suppress,
+                        help='print the summary as JSON instead of YAML')
+    common.add_argument('--precision', type=_precision, default=suppress, metavar='N',
+                        help=f'N significant digits (default {DEFAULT_PRECISION}) of the '
+                        'summary and the CSV; CSV stamps are exact')
+    common.add_argument('--tol', type=_tolerance, default=suppress, metavar='TOL',
+                        help='largest ||q| − 1| of a recorded quaternion (default 0.001, '
+                        "rotation_node's quaternion_tolerance); within it q is normalised")
+    common.add_argument('--plot', type=_plot_file, default=suppress, metavar='FILE',
+                        help='draw roll, pitch, yaw against time, one panel per topic, in '
+                        "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
+    common.add_argument('--version', action=_Version, help='print the version and exit')
+
+
 def build_parser():
     """Build the rot-tools ArgumentParser (one subparser per input kind)."""
     parser = _Parser(
@@ -445,6 +521,7 @@ def build_parser():
         'Options may come before COMMAND, after its arguments or between them.',
         epilog='examples:\n  ' + '\n  '.join(
             spec[4].splitlines()[0] for spec in _COMMANDS.values())
+        + '\n  rot-tools bag run.bag --csv run.csv'
         + '\n\n"rot-tools COMMAND --help" explains each command.')
     _add_common(parser, suppress=False)
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True,
@@ -480,6 +557,7 @@ def build_parser():
             p.add_argument('--translation', type=_number, nargs=3, required=True,
                            metavar=('X', 'Y', 'Z'), help='the translation b')
         _add_common(p, suppress=True)
+    _add_bag(sub)
     return parser
 
 
@@ -514,11 +592,25 @@ def _report(args, parser):
         parser.error(f'{args.command}: {exc}')
 
 
+def _bag(args, parser):
+    """rot-tools bag: rot_tools.bag (imported only now: it needs the 'bag' extra)."""
+    for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
+                          ('--all-sequences', args.all_sequences)):
+        if given:
+            parser.error(f'{option} does not apply to bag')
+    if args.tf:
+        parser.error('--tf: not available yet in this version')
+    from rot_tools import bag
+    return bag.run(args, parser.error)
+
+
 def main(argv=None):
     """Run rot-tools on argv (default sys.argv[1:]); return the exit status."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
+        if args.command == 'bag':
+            return _bag(args, parser)
         args.hints = []
         R, b, report = _report(args, parser)
         if args.plot:

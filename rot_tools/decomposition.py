@@ -1,4 +1,4 @@
-"""Every representation of one rigid motion (R, b) from one pass of the kernels.
+"""Every representation of one rigid motion (R, b), from the kernels of each.
 
 :func:`decompose` gives arrays (one item or a batch) for the report, the drawing and people;
 :func:`decompose_values` gives the numbers rotation_node publishes for one input, as plain
@@ -13,7 +13,8 @@ import numpy as np
 
 from rot_tools._backend import apply
 from rot_tools.axis_angle import axis_angle_kernel
-from rot_tools.euler import angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, parse_sequence
+from rot_tools.euler import (
+    _ANGLES_KERNELS, angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, parse_sequence)
 from rot_tools.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
 from rot_tools.so3 import apply_to_rotations, quaternion_of_matrix_kernel
 
@@ -34,71 +35,94 @@ class Decomposition(NamedTuple):
     twist: np.ndarray
 
 
-def _decompose_kernel(ops, m, b, spec):
+def _motion_kernel(ops, m, b):
+    """Every representation but the Euler angles (those depend on the sequence: one kernel
+    per sequence, euler._ANGLES_KERNELS, run beside this one)."""
     axis, angle = axis_angle_kernel(ops, m)
-    angles, lock = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
     screw, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
     twist, twist_fits = twist_kernel(ops, axis, angle, b)
-    return (axis, angle, angles, lock, *screw, twist, screw_fits & twist_fits)
+    return (axis, angle, *screw, twist, screw_fits & twist_fits)
 
 
 _VEC, _NUM = ((3,), np.float64), ((), np.float64)
-_DECOMPOSE_KERNELS = {seq: partial(_decompose_kernel, spec=parse_sequence(seq))
-                      for seq in EULER_SEQUENCES}
+_MOTION_OUTPUTS = [_VEC, _NUM, _VEC, _VEC, _VEC, _NUM, _NUM, _NUM, ((6,), np.float64),
+                   ((), np.bool_)]
+_ANGLES_OUTPUTS = [_VEC, ((), np.bool_)]
 
 
 def decompose(R, b, seq='ZYX', *, check=True):
     """Decomposition of (R (..., 3, 3), b (..., 3)) with Euler angles of ``seq`` (radians).
 
-    One kernel run computes every representation, so the rot-tools report and each output of
-    rotation_node come from the same numbers. RotationError where the screw overflows
-    float64 (as screw_from_transform).
+    One kernel run computes every representation but the Euler angles, and one more the
+    angles, so the rot-tools report and each output of rotation_node come from the same
+    numbers. RotationError where the screw overflows float64 (as screw_from_transform).
     """
     parse_sequence(seq)  # raises the RotationError of an unknown sequence
-    out = apply_to_rotations(_DECOMPOSE_KERNELS[seq], R, check, [
-        _VEC, _NUM, _VEC, ((), np.bool_), _VEC, _VEC, _VEC, _NUM, _NUM, _NUM,
-        ((6,), np.float64), ((), np.bool_)], [(b, (3,), 'translation b', True)])
-    refuse_far_axis(out[11], out[1], b)
-    return Decomposition(*out[:4], Screw(*out[4:10]), out[10])
+    axis, angle, *screw, twist, fits = apply_to_rotations(
+        _motion_kernel, R, check, _MOTION_OUTPUTS, [(b, (3,), 'translation b', True)])
+    refuse_far_axis(fits, angle, b)
+    euler, lock = apply_to_rotations(_ANGLES_KERNELS[seq], R, False, _ANGLES_OUTPUTS)
+    return Decomposition(axis, angle, euler, lock, Screw(*screw), twist)
 
 
 class Values(NamedTuple):
     """The numbers rotation_node publishes for one input, as plain Python floats.
 
-    rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked, rad (3); twist: screw_log
-    (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives it (4).
+    matrix: R row-major (9); rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked,
+    rad (3); twist: screw_log (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives
+    it (4); rpy: roll, pitch, yaw (REP 103: about the fixed x, y, z axes, the extrinsic
+    sequence 'xyz'), rad (3), whatever sequence was asked. For a batch, arrays with those
+    last dimensions.
     """
 
+    matrix: list
     rotvec: tuple
     euler: tuple
     twist: tuple
     quaternion: tuple
+    rpy: tuple
 
 
-def _values_kernel(ops, m, b, spec):
-    axis, angle, angles, _, *_, twist, fits = _decompose_kernel(ops, m, b, spec)
+RPY_SEQUENCE = 'xyz'
+"""Roll, pitch, yaw (REP 103): rotations about the fixed x, y, z axes, in that order."""
+
+
+def _values_kernel(ops, m, b):
+    axis, angle, *_, twist, fits = _motion_kernel(ops, m, b)
     (q,) = quaternion_of_matrix_kernel(ops, m)
-    return [a * angle for a in axis], angles, twist, q, angle, fits
+    return [a * angle for a in axis], twist, q, angle, fits
+
+
+def _euler_kernel(ops, m, spec):
+    angles, _ = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
+    return (angles,)
 
 
 _FLOATS3 = ((3,), float)
-_VALUES_OUTPUTS = [_FLOATS3, _FLOATS3, ((6,), float), ((4,), float), _NUM, ((), np.bool_)]
-_VALUES_KERNELS = {seq: partial(_values_kernel, spec=parse_sequence(seq))
-                   for seq in EULER_SEQUENCES}
+_VALUES_OUTPUTS = [_FLOATS3, ((6,), float), ((4,), float), _NUM, ((), np.bool_)]
+_EULER_KERNELS = {seq: partial(_euler_kernel, spec=parse_sequence(seq))
+                  for seq in EULER_SEQUENCES}
 
 
 def decompose_values(R, b, seq='ZYX'):
-    """Return the Values of one rigid motion (R (3, 3), b (3,)), from one kernel pass.
+    """Return the Values of one rigid motion (R (3, 3), b (3,)), from three kernel passes.
 
-    Rotation vector, Euler angles of ``seq`` (rad), twist and quaternion. The same kernels
+    R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist,
+    quaternion, and roll, pitch, yaw (rad: the Euler kernel of 'xyz'). The same kernels
     as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
     θ = π), without building an array for each: rotation_node calls it for every message.
     R is not validated (check=False: the node builds R itself); RotationError where the
     screw overflows float64, as decompose.
     """
-    parse_sequence(seq)  # raises the RotationError of an unknown sequence
-    rotvec, euler, twist, q, angle, fits = apply(
-        _VALUES_KERNELS[seq], [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)],
+    euler_kernel = _EULER_KERNELS.get(seq) if isinstance(seq, str) else None
+    if euler_kernel is None:
+        parse_sequence(seq)  # raises the RotationError of an unknown sequence
+    rotvec, twist, q, angle, fits = apply(
+        _values_kernel, [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)],
         _VALUES_OUTPUTS)
     refuse_far_axis(fits, angle, b)
-    return Values(rotvec, euler, twist, q)
+    (euler,) = apply(euler_kernel, [(R, (3, 3), 'R', False)], [_FLOATS3])
+    (rpy,) = apply(_EULER_KERNELS[RPY_SEQUENCE], [(R, (3, 3), 'R', False)], [_FLOATS3])
+    R = np.asarray(R, dtype=np.float64)
+    matrix = R.ravel().tolist() if R.ndim == 2 else R.reshape(R.shape[:-2] + (9,))
+    return Values(matrix, rotvec, euler, twist, q, rpy)

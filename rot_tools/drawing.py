@@ -13,7 +13,7 @@ of it holds, in the reference frame:
 - the path: the constant-screw motion T(s) = exp(s·ξ), s ∈ [0, 1], applied to a point p0,
   p(s) = R(s)·p0 + b(s) — a helix about the axis of radius dist(p0, axis) that turns s·θ and
   rises s·d (seed 000 §5, Chasles). p0 is the frame origin, whose path ends at b;
-- a label: θ (in degrees or radians), d and the pitch h = d/θ, placed LABEL_OFFSET·scale off
+- a label: θ (in degrees or radians), d and the screw pitch h = d/θ, placed LABEL_OFFSET·scale off
   the middle of the path, across its chord (towards +z, or +x when the chord is within 60° of
   z) — beside the motion, however far away its axis is (|c| grows like |b|/θ as θ → 0).
 
@@ -85,11 +85,16 @@ def _number(x):
 
 
 def label_text(screw, degrees=False):
-    """The label of a Screw: 'theta = 90 deg, d = 0.5, pitch = 0.3183 /rad' (ASCII)."""
+    """Return the label of a Screw: 'theta = 90 deg, d = 0.5, screw pitch = 0.3183 /rad'.
+
+    ASCII. "screw pitch", not "pitch": next to the angles of an IMU, a bare pitch reads as
+    the Euler (roll, pitch, yaw) one.
+    """
     theta = math.degrees(screw.angle) if degrees else float(screw.angle)
     unit = 'deg' if degrees else 'rad'
     return (f'theta = {_number(theta)} {unit}, d = {_number(screw.translation)}, '
-            f'pitch = {_number(screw.pitch)}' + ('' if math.isinf(screw.pitch) else ' /rad'))
+            f'screw pitch = {_number(screw.pitch)}'
+            + ('' if math.isinf(screw.pitch) else ' /rad'))
 
 
 def path_segments(angle, radius, scale):

@@ -145,7 +145,7 @@ def angles_kernel(ops, m, spec, lock_tol):
         # Solved as the reversed intrinsic sequence: its first angle is the extrinsic θ3,
         # the one to zero at lock; its last then comes from the peel with θ1 = 0.
         t1, t3 = t3, t1
-    if ops.any(lock):  # (an item, or a batch chunk, without lock skips the extra atan2)
+    if ops.rare(lock):  # (an item, or a batch chunk, without lock skips the extra atan2)
         if extrinsic:
             free = ops.atan2(sign3 * m[j][other], m[j][j])
         else:

@@ -66,6 +66,21 @@ def rotation_matrix_msg(R, msg=None):
     return msg
 
 
+def new_rotation_matrix_msg():
+    """Return an empty std_msgs/Float64MultiArray with the layout of a row-major 3x3 R."""
+    return Float64MultiArray(layout=MATRIX_LAYOUT)
+
+
+def matrix_values_msg(header, values, msg=None):
+    """std_msgs/Float64MultiArray of R given as its 9 values row-major (a list of floats).
+
+    The signature of the stamped builders below; the type has no header (it is unused).
+    """
+    msg = new_rotation_matrix_msg() if msg is None else msg
+    msg.data = values
+    return msg
+
+
 def _set_xyz(target, v):
     target.x, target.y, target.z = float(v[0]), float(v[1]), float(v[2])
 

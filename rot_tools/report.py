@@ -24,6 +24,13 @@ this order::
       degenerate:      true at gimbal lock (then θ3 = 0 and θ1 carries the free angle)
       all_sequences:   only with ``all_sequences=True``: for each of the 24 sequences,
                        in rot_tools.EULER_SEQUENCES order, {angles: [...], degenerate: ...}
+    rpy:               roll, pitch, yaw (REP 103): the rotations about the fixed x, y, z axes,
+                       i.e. the Euler angles of the extrinsic sequence xyz, whatever ``seq``
+                       is (at gimbal lock, pitch ±90°, yaw = 0 and roll carries the free angle)
+      roll:            about x
+      pitch:           about y (an angle, not the screw pitch below)
+      yaw:             about z
+      unit:            rad | deg, as euler.unit
     quaternion:        {x, y, z, w}: the unit quaternion of R in the ROS message order
                        (geometry_msgs/Quaternion), canonical sign (w > 0; at w = 0 the first
                        non-zero of x, y, z positive), from rot_tools.matrix_to_quaternion
@@ -38,7 +45,8 @@ this order::
       angle:           θ ∈ [0, π], rad
       angle_deg:       θ in degrees
       translation:     d, signed, along l̂
-      pitch:           d/θ (length per rad); inf for a pure translation, 0 for the identity
+      pitch:           the screw pitch d/θ (length per rad; not rpy's pitch); inf for a pure
+                       translation, 0 for the identity
     point:             only when ``point`` p (3,) is given (b = 0 when b is not)
       p:               the point as given, in the reference frame
       image:           R·p + b, where the motion takes it (rot_tools.transform_points)
@@ -70,7 +78,7 @@ import re
 
 import numpy as np
 
-from rot_tools.decomposition import decompose
+from rot_tools.decomposition import decompose, RPY_SEQUENCE
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES, matrix_to_euler
 from rot_tools.rigid import invert_transform, transform_points, transform_to_homogeneous
@@ -92,6 +100,35 @@ def _deg(rad):
 def _euler(angles, degenerate, degrees):
     angles = np.degrees(angles) if degrees else angles
     return {'angles': _floats(angles), 'degenerate': bool(degenerate)}
+
+
+def _rpy(R, degrees):
+    angles, _ = matrix_to_euler(R, RPY_SEQUENCE, check=False)  # (validated by decompose)
+    roll, pitch, yaw = _floats(np.degrees(angles) if degrees else angles)
+    return {'roll': roll, 'pitch': pitch, 'yaw': yaw, 'unit': 'deg' if degrees else 'rad'}
+
+
+_RPY_NAMES = {'rpy', 'rollpitchyaw'}
+_YPR_NAMES = {'ypr', 'yawpitchroll'}
+
+
+def sequence_hint(name):
+    """Return a hint for a sequence name that means roll, pitch, yaw ('RPY', 'YPR'), or ''.
+
+    No Euler sequence is spelt with the letters R, P, Y; people who type them mean
+    REP 103's roll, pitch, yaw. For the messages that refuse such a name (rot-tools,
+    rotation_node's euler_sequence, rotation_client), after a semicolon.
+    """
+    key = ''.join(c for c in str(name).lower() if c.isalpha())
+    if key in _RPY_NAMES:
+        return ("; roll, pitch, yaw (about the fixed x, y, z axes) are the extrinsic sequence "
+                "'xyz': every report prints them as rpy, and rotation_node publishes them on "
+                '~/rpy')
+    if key in _YPR_NAMES:
+        return ("; yaw, pitch, roll (about the moving z, y', x'' axes) are the intrinsic "
+                "sequence 'ZYX'; every report prints them as rpy (roll, pitch, yaw), and "
+                'rotation_node publishes them on ~/rpy')
+    return ''
 
 
 def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, point=None):
@@ -132,6 +169,7 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, p
             },
         },
         'euler': euler,
+        'rpy': _rpy(R, degrees),
         # R was validated by decompose above.
         'quaternion': dict(zip('xyzw', _floats(matrix_to_quaternion(R, check=False)))),
     }
@@ -190,6 +228,36 @@ _PLAIN = re.compile(r'[A-Za-z_/][A-Za-z0-9_./ -]*\Z')
 # quaternion block pastes into `ros2 topic pub`.
 _YAML_WORDS = frozenset('yes no true false on off null ~'.split())
 
+# Characters of a string written escaped (YAML double-quoted scalar, JSON string): what
+# YAML does not allow printed (C0 and C1 controls, DEL, lone surrogates, U+FFFE, U+FFFF),
+# line and paragraph separators (YAML folds them) and the byte order mark. Everything else,
+# emoji and accents included, is written as itself: json.dumps's ASCII escapes write a
+# character beyond U+FFFF as a surrogate pair, which YAML reads as two lone surrogates.
+_ESCAPED = re.compile('[^\x20-\x7e\xa0-\ud7ff\ue000-\ufefe\uff00-\ufffd'
+                      '\U00010000-\U0010ffff]|[\u2028\u2029]')
+_YAML_ESCAPED = re.compile(_ESCAPED.pattern + '|["\\\\]')
+_SHORT_ESCAPES = {'"': '\\"', '\\': '\\\\', '\t': '\\t', '\n': '\\n', '\r': '\\r'}
+
+
+def _escape(match):
+    c = match.group()
+    if c in _SHORT_ESCAPES:
+        return _SHORT_ESCAPES[c]
+    code = ord(c)
+    return f'\\x{code:02x}' if code < 0x100 else (
+        f'\\u{code:04x}' if code < 0x10000 else f'\\U{code:08x}')
+
+
+def _yaml_string(text):
+    """``text`` as a YAML double-quoted scalar: printable characters as themselves."""
+    return '"' + _YAML_ESCAPED.sub(_escape, text) + '"'
+
+
+def _json_string(text):
+    """``text`` as a JSON string: printable characters as themselves, the rest \\uXXXX."""
+    return _ESCAPED.sub(lambda m: f'\\u{ord(m.group()):04x}',
+                        json.dumps(text, ensure_ascii=False))
+
 
 def _yaml_scalar(x, precision):
     if x is None:
@@ -208,7 +276,7 @@ def _yaml_scalar(x, precision):
     if isinstance(x, str):
         if _PLAIN.match(x) and not x.endswith(' ') and x.lower() not in _YAML_WORDS:
             return x
-        return json.dumps(x)  # a JSON string is a valid YAML double-quoted scalar
+        return _yaml_string(x)
     raise TypeError(f'to_yaml: cannot write {type(x).__name__} {x!r}')
 
 
@@ -283,8 +351,10 @@ def _json_scalar(x, precision):
         return 'true' if x else 'false'
     if isinstance(x, (int, np.integer)):
         return str(int(x))
-    if x is None or isinstance(x, str):
-        return json.dumps(x)
+    if x is None:
+        return 'null'
+    if isinstance(x, str):
+        return _json_string(x)
     raise TypeError(f'to_json: cannot write {type(x).__name__} {x!r}')
 
 
@@ -296,7 +366,7 @@ def _json(x, indent, precision):
         return '[' + inner + ']' if isinstance(x, (list, tuple)) else '{}'
     pad = '  ' * (indent + 1)
     if isinstance(x, dict):
-        items = [f'{pad}{json.dumps(str(k))}: {_json(v, indent + 1, precision)}'
+        items = [f'{pad}{_json_string(str(k))}: {_json(v, indent + 1, precision)}'
                  for k, v in x.items()]
         return '{\n' + ',\n'.join(items) + '\n' + '  ' * indent + '}'
     items = [f'{pad}{_json(v, indent + 1, precision)}' for v in x]

@@ -1,25 +1,29 @@
 """rotation_client: send one input to a running rotation_node and print what it answered.
 
 ros2cli (``ros2 topic pub``/``echo``, ``ros2 service call``) is not on PyPI, so the pip-only
-quick start has this instead::
+quick start has this instead (doc/client.md is its manual)::
 
     rotation_client euler ZYX 30 20 10 --deg
     rotation_client pose X Y Z QX QY QZ QW
+    rotation_client odometry X Y Z QX QY QZ QW
+    rotation_client transform X Y Z QX QY QZ QW
     rotation_client orientation QX QY QZ QW
+    rotation_client imu QX QY QZ QW
     rotation_client describe
     rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
 
+Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
+
 An input command publishes one message, stamped with the current time, on the node's
-``~/euler``, ``~/pose`` or ``~/orientation`` (Euler angles of any sequence and unit are sent
-as the same rotation in the node's euler_sequence and angle_unit: :func:`node_angles`) and
-prints the node's answer on its output topics for that message — matched by header stamp;
-``~/rotation_matrix``, which has no header, is matched by its content against the answer's
-quaternion — as YAML, or JSON with ``--json`` (rot_tools.report's writers). The node draws
-pictures (``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so
-they are printed when the node drew this input: the client waits for them at most
-``PICTURE_WAIT`` seconds.
-``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and prints the
-path.
+input of that name (Euler angles of any sequence and unit are sent as the same rotation in
+the node's euler_sequence and angle_unit: :func:`node_angles`) and prints the node's answer
+on its output topics for that message — matched by header stamp; ``~/rotation_matrix``,
+which has no header, is matched by its content against the answer's quaternion — as YAML,
+or JSON with ``--json`` (rot_tools.report's writers). The node draws pictures
+(``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so they are
+printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
+seconds. ``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and
+prints the path.
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -29,9 +33,18 @@ seconds. Every wait is bounded by ``--timeout``.
 
 Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
 be reached within ``--timeout``, or ~/describe has nothing to report (one line on stderr
-naming what); 2 bad arguments, or the node refused the input (one line on stderr with the
-reason from ~/describe). rclpy is used here only: ``rot-tools`` stays ROS-free.
+naming what); 2 bad arguments, ROS arguments included, or the node refused the input (one
+line on stderr with the node's reason). rclpy is used here only, and only once the command
+line is known to be good: ``--help``, ``--version`` and bad arguments start nothing.
+``rot-tools`` stays ROS-free.
 """
+
+if __name__ == '__main__':
+    # ``python -m rot_tools.rotation_client`` runs like the console script: Ctrl-C at any
+    # moment, imports included, ends it with status 130 (rot_tools.runtime.start_command).
+    import sys
+    from rot_tools.runtime import start_command
+    sys.exit(start_command('rot_tools.rotation_client'))
 
 import argparse
 from collections import deque
@@ -41,49 +54,48 @@ import re
 import sys
 import time
 
-from geometry_msgs.msg import PoseStamped, QuaternionStamped, TwistStamped, Vector3Stamped
-from nav_msgs.srv import GetPlan
 import numpy as np
-from rcl_interfaces.srv import GetParameters
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.parameter import parameter_value_to_python
-from rclpy.qos import QoSProfile
-from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
-from std_msgs.msg import Float64MultiArray
-from std_srvs.srv import Trigger
-from visualization_msgs.msg import Marker, MarkerArray
 import yaml
 
+from rot_tools import runtime
 from rot_tools.euler import EULER_SEQUENCES, euler_to_matrix, matrix_to_euler
-from rot_tools.messages import type_name
 from rot_tools.report import to_json, to_yaml
 from rot_tools.so3 import quaternion_to_matrix
 
 PROG = 'rotation_client'
 DEFAULT_NODE = '/rot_tools'
 DEFAULT_TIMEOUT = 5.0
+DEFAULT_CHILD_FRAME = 'base_link'
 RESEND = 0.5
 """Seconds to wait for an answer before an input is sent again or a call repeated."""
 
-STAMPED_OUTPUTS = {'quaternion': QuaternionStamped, 'axis_angle': Vector3Stamped,
-                   'euler_angles': Vector3Stamped, 'screw': TwistStamped}
+STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'screw')
 """The node's outputs that carry the input's header, published for every input."""
 
-PICTURES = {'screw_axis': Marker, 'markers': MarkerArray}
+PICTURES = ('screw_axis', 'markers')
 """The node's pictures of an input, when publish_markers: at a limited rate, latest wins."""
 
 PICTURE_WAIT = 1.0
 """Seconds to wait for the pictures of an answer (when the node drew that input)."""
 
-MARKER_TYPES = {getattr(Marker, name): name for name in (
-    'ARROW', 'CUBE', 'SPHERE', 'CYLINDER', 'LINE_STRIP', 'LINE_LIST', 'CUBE_LIST',
-    'SPHERE_LIST', 'POINTS', 'TEXT_VIEW_FACING', 'MESH_RESOURCE', 'TRIANGLE_LIST')}
-MARKER_ACTIONS = {Marker.ADD: 'ADD', Marker.DELETE: 'DELETE', Marker.DELETEALL: 'DELETEALL'}
+MARKER_TYPES = ('ARROW', 'CUBE', 'SPHERE', 'CYLINDER', 'LINE_STRIP', 'LINE_LIST',
+                'CUBE_LIST', 'SPHERE_LIST', 'POINTS', 'TEXT_VIEW_FACING', 'MESH_RESOURCE',
+                'TRIANGLE_LIST')
+MARKER_ACTIONS = ('ADD', 'DELETE', 'DELETEALL')
 
 MATRIX_MATCH = 1e-9
 """Largest |entry difference| between ~/rotation_matrix and R of the answer's quaternion."""
+
+NAME_LIMIT = 247
+"""Most characters of a ROS topic or service name (rmw's limit, 255 − 8)."""
+
+NAMES_USED = ('euler', 'pose', 'odometry', 'transform', 'orientation', 'imu',
+              'rotation_matrix', *STAMPED_OUTPUTS, *PICTURES, 'describe', 'screw_path',
+              'get_parameters')
+"""The node's topics and services the client uses, relative to the node."""
+
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+FLOAT32_TINY = float(np.finfo(np.float32).smallest_subnormal)
 
 
 class Unreachable(Exception):
@@ -111,6 +123,18 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
 
 
+class _Version(argparse.Action):
+    """--version: the installed distribution's version, printed without starting ROS."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(runtime.program_version(PROG))
+        parser.exit(0)
+
+
 def _number(text):
     """Any float, NaN and Inf included: the node, not the client, decides what it refuses."""
     try:
@@ -126,10 +150,38 @@ def _positive(text):
     return value
 
 
+def _tolerance(text):
+    """A number whose meaning survives float32, the type of GetPlan's tolerance.
+
+    A positive value float32 turns into 0 would ask for the default 20 steps, one it turns
+    into inf for a single step: both are refused. NaN, and values ≤ 0 (all mean 20 steps)
+    are sent as given.
+    """
+    value = _number(text)
+    if math.isfinite(value) and value > 0.0:
+        with np.errstate(over='ignore', under='ignore'):
+            sent = float(np.float32(value))
+        if sent == 0.0:
+            raise argparse.ArgumentTypeError(
+                f'{text} is below the smallest float32, {FLOAT32_TINY:.2g}: the request '
+                'carries a float32, so the node would read 0 (the default 20 steps)')
+        if math.isinf(sent):
+            raise argparse.ArgumentTypeError(
+                f'{text} is above the largest float32, {FLOAT32_MAX:.4g}: the request '
+                'carries a float32, so the node would read inf (one step)')
+    return value
+
+
 def _node_name(text):
     name = text if text.startswith('/') else '/' + text
     if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
         raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text!r}')
+    longest = max(NAMES_USED, key=len)
+    if len(name) + 1 + len(longest) > NAME_LIMIT:
+        raise argparse.ArgumentTypeError(
+            f'node name of {len(name)} characters is too long: its names such as '
+            f'{name[:12]}.../{longest} would exceed ROS\'s {NAME_LIMIT} characters (at most '
+            f'{NAME_LIMIT - 1 - len(longest)} for the node name)')
     return name
 
 
@@ -152,20 +204,50 @@ def _options(parser, suppress):
                         help='print JSON instead of YAML')
 
 
-_COMMANDS = {  # name: (summary, the numbers it takes, more help)
-    'euler': ('send Euler angles to ~/euler', 'A1 A2 A3',
-              "A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n"
-              "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, "
-              'SEQ),\nthen matrix_to_euler(R, node sequence).'),
-    'pose': ('send a PoseStamped to ~/pose', 'X Y Z QX QY QZ QW',
-             'Position X Y Z, orientation QX QY QZ QW (the ROS order, w last).'),
-    'orientation': ('send a QuaternionStamped to ~/orientation', 'QX QY QZ QW', ''),
-    'describe': ("print ~/describe's report of the latest input", '', ''),
-    'screw-path': ('call ~/screw_path from one pose to another',
-                   'X Y Z QX QY QZ QW X Y Z QX QY QZ QW',
-                   'The start pose, then the goal pose, each X Y Z QX QY QZ QW; --tolerance '
-                   'bounds the step between poses (rad and m; <= 0: 20 steps).'),
+def _wxyz_option(parser, suppress):
+    parser.add_argument('--wxyz', action='store_true',
+                        default=argparse.SUPPRESS if suppress else False,
+                        help='quaternions are given w first: QW QX QY QZ (default: the ROS '
+                        'order, QX QY QZ QW)')
+
+
+class Command:
+    """A command of the client: what it does, the numbers it takes, where its quaternions are.
+
+    ``quaternions``: the index in the numbers of each quaternion's QX (w last).
+    """
+
+    def __init__(self, summary, numbers, quaternions=(), text=''):
+        self.summary, self.numbers, self.quaternions, self.text = (
+            summary, numbers, quaternions, text)
+
+
+_POSE = 'X Y Z QX QY QZ QW'
+_CHILD = ('\nThe body is --child-frame (default base_link), at position X Y Z with '
+          'orientation QX QY QZ QW\nin --frame.')
+COMMANDS_HELP = {
+    'euler': Command(
+        'send Euler angles to ~/euler', 'A1 A2 A3', (),
+        "A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n"
+        "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, SEQ),"
+        '\nthen matrix_to_euler(R, node sequence).'),
+    'pose': Command('send a PoseStamped to ~/pose', _POSE, (3,),
+                    'Position X Y Z, orientation QX QY QZ QW.'),
+    'odometry': Command('send a nav_msgs/Odometry to ~/odometry', _POSE, (3,),
+                        'Its pose.pose: position X Y Z, orientation QX QY QZ QW.' + _CHILD),
+    'transform': Command('send a TransformStamped to ~/transform', _POSE, (3,),
+                         'Translation X Y Z, rotation QX QY QZ QW.' + _CHILD),
+    'orientation': Command('send a QuaternionStamped to ~/orientation', 'QX QY QZ QW', (0,)),
+    'imu': Command('send a sensor_msgs/Imu to ~/imu', 'QX QY QZ QW', (0,),
+                   'Its orientation; the covariances, angular velocity and acceleration '
+                   'are zero.'),
+    'describe': Command("print ~/describe's report of the latest input", ''),
+    'screw-path': Command(
+        'call ~/screw_path from one pose to another', f'{_POSE} {_POSE}', (3, 10),
+        'The start pose, then the goal pose, each X Y Z QX QY QZ QW; --tolerance bounds '
+        'the\nstep between poses (rad and m; <= 0: 20 steps).'),
 }
+"""name: Command."""
 
 
 def build_parser():
@@ -173,45 +255,85 @@ def build_parser():
     parser = _Parser(
         prog=PROG, description='Send one input to a running rotation_node and print its '
         'answer (YAML, or JSON with --json).\nOptions may come before COMMAND or after its '
-        'arguments.',
+        'arguments. Quaternions are QX QY QZ QW (the ROS\norder), or QW QX QY QZ with '
+        '--wxyz.',
         epilog='examples:\n  rotation_client euler ZYX 30 20 10 --deg\n'
         "  rotation_client euler xyz 0.1 0.2 0.3     (sent as the node's euler_sequence)\n"
         '  rotation_client pose 1 0 0.5  0 0 1 0\n'
+        '  rotation_client pose 1 0 0.5  0 0 0 1 --wxyz     (the same pose, w first)\n'
+        '  rotation_client odometry 2 1 0  0 0 0.3826834 0.9238795 --frame odom\n'
         '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
+        '  rotation_client imu 0 0 0.7071068 0.7071068 --frame imu_link\n'
         '  rotation_client describe --json\n'
         '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nor nothing to describe; 2 bad arguments or an input the node '
         'refused.')
+    parser.add_argument('--version', action=_Version, help='print the version and exit')
     _options(parser, suppress=False)
+    _wxyz_option(parser, suppress=False)
     sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True,
                                 parser_class=_Parser)
-    for name, (summary, numbers, text) in _COMMANDS.items():
+    for name, command in COMMANDS_HELP.items():
         usage = ' '.join(filter(None, [PROG, name, 'SEQ' if name == 'euler' else '',
-                                       numbers, '[options]']))
+                                       command.numbers, '[options]']))
+        summary = command.summary
         p = sub.add_parser(name, help=summary, usage=usage,
-                           description=f'{summary[0].upper()}{summary[1:]}.\n{text}'.strip())
+                           description=f'{summary[0].upper()}{summary[1:]}.\n'
+                           f'{command.text}'.strip())
         if name == 'euler':
             p.add_argument('sequence', choices=EULER_SEQUENCES, metavar='SEQ',
                            help='one of the 24 sequences, upper case intrinsic')
             p.add_argument('--deg', action='store_true', help='the angles are in degrees')
         elif name == 'screw-path':
-            p.add_argument('--tolerance', type=_number, default=0.0,
+            p.add_argument('--tolerance', type=_tolerance, default=0.0,
                            help='largest step between poses, rad and m (default 0: 20 steps)')
-        if numbers:
-            p.add_argument('numbers', type=_number, nargs='*', metavar='NUMBER', help=numbers)
-        p.set_defaults(parser=p, expected=len(numbers.split()))
+        elif name in ('odometry', 'transform'):
+            p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
+                           help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
+        if command.numbers:
+            p.add_argument('numbers', type=_number, nargs='*', metavar='NUMBER',
+                           help=command.numbers)
+        p.set_defaults(parser=p, expected=len(command.numbers.split()))
         _options(p, suppress=True)
+        if command.quaternions:
+            _wxyz_option(p, suppress=True)
     return parser
 
 
 def parse_args(argv):
-    """Parse the command line (without ROS arguments); one error line and exit 2 if bad."""
+    """Parse the command line (without ROS arguments); one error line and exit 2 if bad.
+
+    With --wxyz the quaternions are reordered to the ROS order (w last) here.
+    """
     args = build_parser().parse_args(argv)
+    command = COMMANDS_HELP[args.command]
     if args.expected and len(args.numbers) != args.expected:
         args.parser.error(f'{args.command} takes {args.expected} numbers '
-                          f'({_COMMANDS[args.command][1]}), got {len(args.numbers)}')
+                          f'({command.numbers}), got {len(args.numbers)}')
+    if args.wxyz:
+        if not command.quaternions:
+            args.parser.error(f'--wxyz: {args.command} takes no quaternion')
+        for i in command.quaternions:
+            w, *xyz = args.numbers[i:i + 4]
+            args.numbers[i:i + 4] = [*xyz, w]
     return args
+
+
+def without_ros_args(argv):
+    """``argv`` without its ROS arguments: each ``--ros-args`` up to ``--`` or the end.
+
+    As rcl reads them; rclpy.init, given the whole command line, checks them.
+    """
+    kept, ros = [], False
+    for arg in argv:
+        if ros:
+            ros = arg != '--'
+        elif arg == '--ros-args':
+            ros = True
+        else:
+            kept.append(arg)
+    return kept
 
 
 # ---------------------------------------------------------------------------------------
@@ -226,10 +348,18 @@ def _quaternion(q):
     return {'x': q.x, 'y': q.y, 'z': q.z, 'w': q.w}
 
 
+def _set_xyz(v, values):
+    v.x, v.y, v.z = values
+
+
+def _set_quaternion(q, values):
+    q.x, q.y, q.z, q.w = values
+
+
 def _set_pose(pose, values):
     """Fill a geometry_msgs/Pose from X Y Z QX QY QZ QW."""
-    p, q = pose.position, pose.orientation
-    p.x, p.y, p.z, q.x, q.y, q.z, q.w = values
+    _set_xyz(pose.position, values[:3])
+    _set_quaternion(pose.orientation, values[3:])
 
 
 def _pose_data(pose):
@@ -259,6 +389,8 @@ class Client:
     """A short-lived rclpy node that talks to one rotation_node, every wait bounded."""
 
     def __init__(self, target, timeout):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
         self.target = target
         self.timeout = timeout
         self.node = rclpy.create_node(f'rotation_client_{os.getpid()}',
@@ -308,10 +440,13 @@ class Client:
             self.node.destroy_client(client)
 
     def describe(self):
+        from std_srvs.srv import Trigger
         return self.call(Trigger, 'describe', Trigger.Request())
 
     def parameters(self, names):
         """{name: value} of the node's parameters (its ~/get_parameters service)."""
+        from rcl_interfaces.srv import GetParameters
+        from rclpy.parameter import parameter_value_to_python
         response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
@@ -338,12 +473,19 @@ class Client:
         message if the node draws them within PICTURE_WAIT. Refused when the node's refusal
         counts rise instead.
         """
+        from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
+        from rclpy.qos import QoSProfile
+        from std_msgs.msg import Float64MultiArray
+        from visualization_msgs.msg import Marker, MarkerArray
+        types = dict(zip(STAMPED_OUTPUTS + PICTURES, (
+            QuaternionStamped, Vector3Stamped, Vector3Stamped, TwistStamped, Marker,
+            MarkerArray)))
         answers = Answers(msg.header.frame_id)
-        outputs = dict(STAMPED_OUTPUTS, **(PICTURES if pictures else {}))
+        outputs = STAMPED_OUTPUTS + (PICTURES if pictures else ())
         qos = QoSProfile(depth=100)
-        subs = [self.node.create_subscription(msg_type, self.topic(output),
+        subs = [self.node.create_subscription(types[output], self.topic(output),
                                               answers.collector(output), qos)
-                for output, msg_type in outputs.items()]
+                for output in outputs]
         subs.append(self.node.create_subscription(
             Float64MultiArray, self.topic('rotation_matrix'),
             lambda m: answers.matrices.append(m), qos))
@@ -396,7 +538,7 @@ class Answers:
     def collector(self, output):
         """Subscription callback keeping the ``output`` messages stamped as a sent one."""
         def collect(msg):
-            if isinstance(msg, MarkerArray):  # no header of its own: its markers carry it
+            if output == 'markers':  # a MarkerArray has no header: its markers carry it
                 if not msg.markers:
                     return
                 header = msg.markers[0].header
@@ -428,9 +570,12 @@ class Answers:
 
 def _marker_data(marker):
     """{id, action} of a Marker, and for an ADD its type and points."""
-    data = {'id': marker.id, 'action': MARKER_ACTIONS.get(marker.action, marker.action)}
+    from visualization_msgs.msg import Marker
+    types = {getattr(Marker, name): name for name in MARKER_TYPES}
+    actions = {getattr(Marker, name): name for name in MARKER_ACTIONS}
+    data = {'id': marker.id, 'action': actions.get(marker.action, marker.action)}
     if marker.action == Marker.ADD:
-        data['type'] = MARKER_TYPES.get(marker.type, marker.type)
+        data['type'] = types.get(marker.type, marker.type)
         if marker.points:
             data['points'] = [_xyz(p) for p in marker.points]
     return data
@@ -473,25 +618,50 @@ def node_angles(angles, sequence, degrees, node_sequence, node_degrees):
     return tuple(values.tolist())
 
 
-def _input_command(client, args):
-    """euler, pose, orientation: send one message, return the report of the answer."""
-    parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
+def _input_message(args, parameters):
+    """(message, what was sent as plain data) of an input command."""
+    from geometry_msgs.msg import PoseStamped, QuaternionStamped, TransformStamped
+    from geometry_msgs.msg import Vector3Stamped
+    from nav_msgs.msg import Odometry
+    from sensor_msgs.msg import Imu
+    numbers = args.numbers
     if args.command == 'euler':
         sequence, unit = parameters['euler_sequence'], parameters['angle_unit']
-        angles = node_angles(args.numbers, args.sequence, args.deg, sequence, unit == 'deg')
-        msg, name = Vector3Stamped(), 'euler'
-        msg.vector.x, msg.vector.y, msg.vector.z = angles
-        sent = {'sequence': sequence, 'unit': unit, 'angles': list(angles)}
-    elif args.command == 'pose':
-        msg, name = PoseStamped(), 'pose'
-        _set_pose(msg.pose, args.numbers)
-        sent = _pose_data(msg.pose)
-    else:
-        msg, name = QuaternionStamped(), 'orientation'
-        o = msg.quaternion
-        o.x, o.y, o.z, o.w = args.numbers
-        sent = {'quaternion': _quaternion(o)}
+        angles = node_angles(numbers, args.sequence, args.deg, sequence, unit == 'deg')
+        msg = Vector3Stamped()
+        _set_xyz(msg.vector, angles)
+        return msg, {'sequence': sequence, 'unit': unit, 'angles': list(angles)}
+    if args.command == 'pose':
+        msg = PoseStamped()
+        _set_pose(msg.pose, numbers)
+        return msg, _pose_data(msg.pose)
+    if args.command == 'odometry':
+        msg = Odometry(child_frame_id=args.child_frame)
+        _set_pose(msg.pose.pose, numbers)
+        return msg, {'child_frame_id': msg.child_frame_id, **_pose_data(msg.pose.pose)}
+    if args.command == 'transform':
+        msg = TransformStamped(child_frame_id=args.child_frame)
+        t = msg.transform
+        _set_xyz(t.translation, numbers[:3])
+        _set_quaternion(t.rotation, numbers[3:])
+        return msg, {'child_frame_id': msg.child_frame_id, 'translation': _xyz(t.translation),
+                     'rotation': _quaternion(t.rotation)}
+    if args.command == 'imu':
+        msg = Imu()
+        _set_quaternion(msg.orientation, numbers)
+        return msg, {'orientation': _quaternion(msg.orientation)}
+    msg = QuaternionStamped()
+    _set_quaternion(msg.quaternion, numbers)
+    return msg, {'quaternion': _quaternion(msg.quaternion)}
+
+
+def _input_command(client, args):
+    """An input (euler, pose, odometry, ...): send one message, return the answer's report."""
+    from rot_tools.messages import type_name
+    parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
+    msg, sent = _input_message(args, parameters)
     msg.header.frame_id = args.frame
+    name = args.command
     (sec, nanosec), answer = client.send(name, msg, parameters['publish_markers'])
     return {'node': client.target,
             'input': {'topic': client.topic(name), 'type': type_name(type(msg)),
@@ -508,6 +678,7 @@ def _describe_command(client, args):
 
 
 def _screw_path_command(client, args):
+    from nav_msgs.srv import GetPlan
     request = GetPlan.Request(tolerance=args.tolerance)
     for pose, values in ((request.start, args.numbers[:7]), (request.goal, args.numbers[7:])):
         pose.header.frame_id = args.frame
@@ -524,18 +695,47 @@ def _screw_path_command(client, args):
             'poses': [_pose_data(p.pose) for p in plan.poses]}
 
 
-COMMANDS = {'euler': _input_command, 'pose': _input_command, 'orientation': _input_command,
+COMMANDS = {'euler': _input_command, 'pose': _input_command, 'odometry': _input_command,
+            'transform': _input_command, 'orientation': _input_command, 'imu': _input_command,
             'describe': _describe_command, 'screw-path': _screw_path_command}
+
+
+def write(text, json_text=False):
+    """Print ``text`` on stdout, in its encoding even when that is not UTF-8.
+
+    Characters it cannot encode are escaped as YAML or JSON read them back: the report's
+    writers put every non-ASCII character in a double-quoted string, where YAML reads
+    Python's backslash escapes, JSON \\uXXXX (surrogate pairs beyond U+FFFF).
+    """
+    try:
+        text.encode(sys.stdout.encoding or 'utf-8')
+    except UnicodeEncodeError:
+        if json_text:
+            text = re.sub(r'[^\x00-\x7f]', lambda m: _json_escape(m.group()), text)
+        else:
+            sys.stdout.reconfigure(errors='backslashreplace')
+    sys.stdout.write(text)
+
+
+def _json_escape(c):
+    code = ord(c)
+    if code < 0x10000:
+        return f'\\u{code:04x}'
+    code -= 0x10000
+    return f'\\u{0xd800 + (code >> 10):04x}\\u{0xdc00 + (code & 0x3ff):04x}'
 
 
 def main(argv=None):
     """Run one command; return the exit status (0, 1 unreachable, 2 bad input or refused)."""
     argv = sys.argv if argv is None else [PROG, *argv]
-    args = parse_args(remove_ros_args(argv)[1:])
+    args = parse_args(without_ros_args(argv)[1:])  # --help, --version: nothing started
+    import rclpy
+    from rclpy.exceptions import NameValidationException
+    from rclpy.signals import SignalHandlerOptions
     client = None
     try:
         # Without rclpy's signal handlers Ctrl-C is a plain KeyboardInterrupt.
-        rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+        runtime.init_ros(PROG, argv, signal_handler_options=SignalHandlerOptions.NO)
         client = Client(args.node, args.timeout)
         result = COMMANDS[args.command](client, args)
     except Unreachable as exc:
@@ -544,6 +744,9 @@ def main(argv=None):
     except Refused as exc:
         print(f'{PROG}: {exc}', file=sys.stderr)
         return 2
+    except NameValidationException as exc:  # a -r __node:= / __ns:= rcl could not use
+        print(f'{PROG}: {runtime.ros_argument_error(exc)}', file=sys.stderr)
+        return runtime.EXIT_USAGE
     except KeyboardInterrupt:
         return 130
     finally:
@@ -551,11 +754,10 @@ def main(argv=None):
             client.close()
         rclpy.try_shutdown()
     if isinstance(result, str):  # describe's YAML, as the node wrote it
-        print(result, end='')
+        write(result)
+    elif args.json:
+        write(to_json(result), json_text=True)
     else:
-        print(to_json(result) if args.json else to_yaml(result), end='')
+        write(to_yaml(result))
     return 0
 
-
-if __name__ == '__main__':
-    sys.exit(main())

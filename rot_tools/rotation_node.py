@@ -24,6 +24,7 @@ if __name__ == '__main__':
 import difflib
 from functools import partial
 import math
+from operator import attrgetter
 import time
 from typing import Callable, NamedTuple
 
@@ -47,7 +48,7 @@ from rot_tools import drawing, messages, runtime
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
-from rot_tools.report import to_yaml, transform_report
+from rot_tools.report import sequence_hint, to_yaml, transform_report
 # The process runtime's names, for callers written before rot_tools.runtime existed (the
 # benchmarks, test_node_executor.py): import them from rot_tools.runtime.
 from rot_tools.runtime import guard_callbacks, make_executor, serve, spin  # noqa: F401
@@ -108,6 +109,36 @@ INPUTS = (
 """Every input of the node (SPEC §3, §3.1); each joins the one path (header, R, b) → outputs."""
 
 
+class OutputKind(NamedTuple):
+    """One output published for every accepted input: topic, type, and what fills it."""
+
+    topic: str
+    msg_type: type
+    value: str
+    """The field of rot_tools.decomposition.Values the message carries."""
+    build: Callable
+    """build(header, value, msg) -> msg, filled in place (rot_tools.messages)."""
+    angles: bool = False
+    """The value is angles, published in angle_unit (the Values are in radians)."""
+    new: Callable = None
+    """new() -> the message to reuse; None: msg_type()."""
+
+
+OUTPUTS = (
+    OutputKind('~/rotation_matrix', Float64MultiArray, 'matrix', messages.matrix_values_msg,
+               new=messages.new_rotation_matrix_msg),
+    OutputKind('~/quaternion', QuaternionStamped, 'quaternion', messages.quaternion_stamped_msg),
+    OutputKind('~/axis_angle', Vector3Stamped, 'rotvec', messages.vector3_stamped_msg),
+    OutputKind('~/euler_angles', Vector3Stamped, 'euler', messages.vector3_stamped_msg,
+               angles=True),
+    OutputKind('~/rpy', Vector3Stamped, 'rpy', messages.vector3_stamped_msg, angles=True),
+    OutputKind('~/screw', TwistStamped, 'twist', messages.twist_stamped_msg),
+)
+"""Every output published for each accepted input, from one decompose_values pass; a new
+output is a row here and its field of Values (its kernel output). The pictures (~/markers,
+~/screw_axis) are not rows: they are drawn at most MARKER_RATE times a second."""
+
+
 class Source(NamedTuple):
     """An input subscription as the callbacks see it: resolved topic, type name, converter."""
 
@@ -126,17 +157,6 @@ class Settings(NamedTuple):
     marker_scale: float
 
 
-class Outputs(NamedTuple):
-    """The output messages, reused from one input to the next."""
-
-    matrix: Float64MultiArray
-    quaternion: QuaternionStamped
-    rotvec: Vector3Stamped
-    euler: Vector3Stamped
-    twist: TwistStamped
-    marker: Marker
-
-
 class Latest(NamedTuple):
     """The latest accepted input, kept for ~/describe (the report is built on request)."""
 
@@ -153,47 +173,70 @@ def _descriptor(kind, description, constraints='', fp_range=None):
         floating_point_range=[fp_range] if fp_range is not None else [])
 
 
+def _check_sequence(value):
+    if value in EULER_SEQUENCES:
+        return ''
+    return (f'euler_sequence {value!r} is not a sequence: use one of '
+            + ' '.join(EULER_SEQUENCES) + sequence_hint(value))
+
+
+def _check_angle_unit(value):
+    return '' if value in ('rad', 'deg') else f"angle_unit {value!r} is not 'rad' or 'deg'"
+
+
+def _check_tolerance(value):
+    if math.isfinite(value) and value >= 0.0:
+        return ''
+    return f'quaternion_tolerance must be finite and >= 0, got {value}'
+
+
+def _check_marker_scale(value):
+    if math.isfinite(value) and value > 0.0:
+        return ''
+    return f'marker_scale must be finite and > 0, got {value}'
+
+
+def _any_value(value):
+    return ''
+
+
+class ParameterSpec(NamedTuple):
+    """One parameter of the node: default, descriptor, and the check of its values."""
+
+    default: object
+    descriptor: ParameterDescriptor
+    check: Callable = _any_value
+    """check(value) -> '' when valid, else why not (rclpy has checked the type and range)."""
+
+
 PARAMETERS = {
-    'euler_sequence': ('ZYX', _descriptor(
+    'euler_sequence': ParameterSpec('ZYX', _descriptor(
         ParameterType.PARAMETER_STRING,
         'Euler sequence of ~/euler input and ~/euler_angles output: upper case intrinsic '
         '(ZYX: R = Rot_z(θ1) Rot_y(θ2) Rot_x(θ3)), lower case extrinsic',
-        'one of ' + ' '.join(EULER_SEQUENCES))),
-    'angle_unit': ('rad', _descriptor(
+        'one of ' + ' '.join(EULER_SEQUENCES)), _check_sequence),
+    'angle_unit': ParameterSpec('rad', _descriptor(
         ParameterType.PARAMETER_STRING,
-        'unit of the angles of ~/euler and ~/euler_angles', "'rad' or 'deg'")),
-    'quaternion_tolerance': (1e-3, _descriptor(
+        'unit of the angles of ~/euler and ~/euler_angles', "'rad' or 'deg'"),
+        _check_angle_unit),
+    'quaternion_tolerance': ParameterSpec(1e-3, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
         'largest |‖q‖ − 1| of an input quaternion; within it q is normalised, beyond it the '
         'message is refused', '>= 0, finite',
-        FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0))),
-    'publish_markers': (True, _descriptor(
+        FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0)), _check_tolerance),
+    'publish_markers': ParameterSpec(True, _descriptor(
         ParameterType.PARAMETER_BOOL,
         f'publish the picture of each input (at most {MARKER_RATE:g} a second, the latest '
         "wins): the moved frame's axes, screw axis, helical path and label on ~/markers "
         '(MarkerArray) and the screw axis arrow on ~/screw_axis (Marker); switching it off '
         'deletes both')),
-    'marker_scale': (1.0, _descriptor(
+    'marker_scale': ParameterSpec(1.0, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
         'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
         '> 0, finite',
-        FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0))),
+        FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0)), _check_marker_scale),
 }
-"""name: (default, descriptor)."""
-
-
-def _check_parameter(name, value):
-    """Why ``value`` is not valid for parameter ``name`` (types are checked by rclpy), or ''."""
-    if name == 'euler_sequence' and value not in EULER_SEQUENCES:
-        return (f'euler_sequence {value!r} is not a sequence: use one of '
-                + ' '.join(EULER_SEQUENCES))
-    if name == 'angle_unit' and value not in ('rad', 'deg'):
-        return f"angle_unit {value!r} is not 'rad' or 'deg'"
-    if name == 'quaternion_tolerance' and not (math.isfinite(value) and value >= 0.0):
-        return f'quaternion_tolerance must be finite and >= 0, got {value}'
-    if name == 'marker_scale' and not (math.isfinite(value) and value > 0.0):
-        return f'marker_scale must be finite and > 0, got {value}'
-    return ''
+"""Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
 
 class RotationNode(Node):
@@ -201,11 +244,11 @@ class RotationNode(Node):
 
     def __init__(self, node_name='rot_tools', **kwargs):
         super().__init__(node_name, **kwargs)
-        for name, (default, descriptor) in PARAMETERS.items():
-            self.declare_parameter(name, default, descriptor)
-        for name in PARAMETERS:  # overrides given at start-up are checked here
+        for name, spec in PARAMETERS.items():
+            self.declare_parameter(name, spec.default, spec.descriptor)
+        for name, spec in PARAMETERS.items():  # overrides given at start-up are checked here
             value = self.get_parameter(name).value
-            reason = _check_parameter(name, value)
+            reason = spec.check(value)
             if reason:
                 self.destroy_node()
                 raise InvalidParameterValueException(name, value, reason)
@@ -218,16 +261,14 @@ class RotationNode(Node):
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
-        # One message per output, refilled for each input (see rot_tools.messages).
-        self._out = Outputs(messages.rotation_matrix_msg(np.eye(3)), QuaternionStamped(),
-                            Vector3Stamped(), Vector3Stamped(), TwistStamped(),
-                            messages.screw_axis_marker(None, (0, 0, 0), (0, 0, 1), 1.0))
+        # For each output: its publish, build, the one message refilled for each input (see
+        # rot_tools.messages), its Values field getter and whether it is angles (the hot path).
         qos = QoSProfile(depth=10)
-        self._matrix_pub = self.create_publisher(Float64MultiArray, '~/rotation_matrix', qos)
-        self._quaternion_pub = self.create_publisher(QuaternionStamped, '~/quaternion', qos)
-        self._axis_angle_pub = self.create_publisher(Vector3Stamped, '~/axis_angle', qos)
-        self._euler_pub = self.create_publisher(Vector3Stamped, '~/euler_angles', qos)
-        self._screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
+        self._outputs = tuple(
+            (self.create_publisher(kind.msg_type, kind.topic, qos).publish, kind.build,
+             (kind.new or kind.msg_type)(), attrgetter(kind.value), kind.angles)
+            for kind in OUTPUTS)
+        self._axis_marker = messages.screw_axis_marker(None, (0, 0, 0), (0, 0, 1), 1.0)
         self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
         self._markers_pub = self.create_publisher(MarkerArray, '~/markers', qos)
         self._picture_due = None  # the arguments of the latest drawing not yet published
@@ -271,8 +312,9 @@ class RotationNode(Node):
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters (rclpy has checked type and range)."""
         for parameter in parameters:
-            if parameter.name in PARAMETERS:
-                reason = _check_parameter(parameter.name, parameter.value)
+            spec = PARAMETERS.get(parameter.name)
+            if spec is not None:
+                reason = spec.check(parameter.value)
                 if reason:
                     return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
@@ -313,21 +355,19 @@ class RotationNode(Node):
             # Every number published, as plain floats from one compiled kernel pass (the
             # hot path: decompose's arrays cost more than the math); the picture's
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
-            v = decompose_values(R, b, settings.euler_sequence)
-            angles = tuple(map(math.degrees, v.euler)) if settings.degrees else v.euler
+            values = decompose_values(R, b, settings.euler_sequence)
         except messages.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc))
             return
         except RotationError as exc:
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc))
             return
-        out = self._out
-        self._matrix_pub.publish(messages.rotation_matrix_msg(R, out.matrix))
-        self._quaternion_pub.publish(
-            messages.quaternion_stamped_msg(header, v.quaternion, out.quaternion))
-        self._axis_angle_pub.publish(messages.vector3_stamped_msg(header, v.rotvec, out.rotvec))
-        self._euler_pub.publish(messages.vector3_stamped_msg(header, angles, out.euler))
-        self._screw_pub.publish(messages.twist_stamped_msg(header, v.twist, out.twist))
+        degrees = settings.degrees
+        for publish, build, out, value_of, angles in self._outputs:
+            value = value_of(values)
+            if angles and degrees:
+                value = tuple(map(math.degrees, value))
+            publish(build(header, value, out))
         if settings.publish_markers:
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
@@ -382,7 +422,7 @@ class RotationNode(Node):
         self._markers_pub.publish(messages.picture_markers(header, picture))
         self._marker_pub.publish(messages.screw_axis_marker(
             header, picture.screw.point, picture.screw.direction, settings.marker_scale,
-            self._out.marker))
+            self._axis_marker))
 
     def _delete_picture(self, header):
         """DELETE every marker of ~/markers and ~/screw_axis, in ``header``'s frame."""

@@ -97,7 +97,7 @@ def exit_now(status):
     Destroys rclpy's default context (if rclpy was loaded), flushes stdout and stderr, and
     skips the interpreter's teardown (see the module docstring).
     """
-    _install_exit_handlers()  # (the EventsExecutor left them default)
+    _install_exit_handlers()  # (an EventsExecutor leaves them default)
     if 'rclpy' in sys.modules:
         import rclpy
         context = rclpy.get_default_context()
@@ -159,7 +159,7 @@ def ros_argument_error(exc):
 
 
 def _missing_params_files(args):
-    """The ``--params-file`` arguments after --ros-args that name no readable file."""
+    """Return the ``--params-file`` arguments (after --ros-args) naming no readable file."""
     missing = []
     inside = False
     for flag, value in zip(args, list(args[1:]) + [None]):
@@ -216,19 +216,19 @@ SPIN_TIMEOUT = 0.1
 
 
 def make_executor(context=None):
-    """Return the executor rotation_node runs on: rclpy's EventsExecutor (rclpy.experimental).
+    """Return the executor rotation_node runs on: rot_tools.executor.WaitSetExecutor.
 
-    Chosen on measurement (bench/README.md): it hands a subscription's queued messages to
-    the callback in one go instead of rebuilding a wait set for each message, which makes
-    the node about twice as fast as on rclpy's default executor. Its hazards in rclpy 7.1.6
-    are kept away by spin(): it is spun with spin_once only (its spin() did not return
-    after shutdown), and no callback of the node raises (a raising callback loses the
-    subscription's other queued messages; a raising *task* crashes the process, rclpy#1641:
-    the node creates no tasks — no clients or coroutine callbacks). test_node_executor.py
-    proves signals, services under load and floods of bad input on it.
+    Chosen on measurement (bench/README.md, bench/bench_overload.py): under a flood beyond
+    the node's pace rclpy's EventsExecutor queued an event per message without bound (RSS
+    +160 MB a minute, kept afterwards) and left service calls waiting behind the queue for
+    up to 16 s; rclpy's default executor is bounded and fair but costs ~2.4 × the CPU per
+    message. The WaitSetExecutor is bounded and fair (services first, at most a burst of
+    messages per subscription per wake-up) at about the EventsExecutor's cost.
+    test_node_executor.py proves signals, services under a flood, floods of bad input and
+    bounded memory on it.
     """
-    from rclpy.experimental import EventsExecutor
-    return EventsExecutor(context=context)
+    from rot_tools.executor import WaitSetExecutor
+    return WaitSetExecutor(context=context)
 
 
 def _guarded(callback, node, what, service=False):
@@ -258,9 +258,9 @@ def _guarded(callback, node, what, service=False):
 def guard_callbacks(node):
     """Wrap every subscription, timer and service callback of ``node`` in _guarded.
 
-    A callback that raises is then logged and the node keeps serving, on either executor
-    (the EventsExecutor would lose the subscription's other queued messages, the default
-    one would end the spin).
+    A callback that raises is then logged and the node keeps serving, on any executor (the
+    executors would otherwise end the spin; the EventsExecutor would also lose the
+    subscription's other queued messages).
     """
     for sub in node.subscriptions:
         sub.callback = _guarded(sub.callback, node, f'subscription {sub.topic_name}')

@@ -22,7 +22,7 @@ import math
 import numpy as np
 
 from rot_tools._arrays import apart, as_float_array, finite_array, require_tolerance
-from rot_tools._backend import apply
+from rot_tools._backend import apply, kernel_key
 from rot_tools.errors import RotationError
 
 ROTATION_TOL = 1e-9
@@ -140,10 +140,11 @@ def refuse_defects(err, det, tol, name='R'):
 @lru_cache(maxsize=256)
 def _checking(kernel, count=1):
     """kernel with the defects of its first ``count`` inputs (rotations) appended to its
-    outputs; one object per (kernel, count), so that apply can compile it once."""
+    outputs; one object per (kernel, count), with a key of its own for the generated code."""
     def checked(ops, *entries):
         defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
         return (*kernel(ops, *entries), *defects)
+    checked.rot_tools_key = f'{kernel_key(kernel)} checked({count})'
     return checked
 
 

@@ -1,20 +1,31 @@
-"""The two engines of rot_tools._backend and the compiled one-item engine of rot_tools._trace.
+"""The engine: kernels run by rot_tools._backend.apply, and their generated one-item code.
 
-The compiled function of a kernel must give what the kernel gives on Python floats, bit for
-bit, on every path through it (rescaled tiny/huge vectors, the near-π axis, gimbal lock),
-and the same error for the same bad input. Each public one-item conversion is run twice on
-the same adversarial items: once forced onto Python floats, once forced onto compiled code.
+The generated function of a kernel (rot_tools/_generated.py) must give what the kernel
+gives on Python floats, bit for bit (rescaled tiny/huge vectors, the near-π axis and gimbal
+lock run the kernel itself), with the same errors. It must be what the kernels give today
+(regenerated in memory and compared), run from the first call on, for every public function
+and rotation_node's per-message path, with no compilation at call time; the results must not
+depend on call history; one item must fail as a batch does; and a traceback through it must
+name a real file.
 """
 
 import math
+from pathlib import Path
 import re
+import subprocess
+import sys
+import textwrap
+import traceback
+from types import SimpleNamespace as Msg
 
 import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
-from rot_tools import _backend
-from rot_tools._trace import compile_single, TraceError
+from rot_tools import _backend, _generate, _generated, boundary, decomposition
+from rot_tools._trace import compile_kernel, TraceError
+
+REPO = Path(__file__).resolve().parent.parent
 
 SEQUENCES = ('ZYX', 'xyz', 'ZXZ', 'yxy', 'XZY', 'zyz')
 
@@ -114,47 +125,308 @@ def _bits(x):
 
 @pytest.fixture
 def engine(monkeypatch):
-    """engine('floats') runs one-item calls on Python floats, engine('compiled') compiled."""
+    """engine('floats'): one-item calls run the kernels themselves; engine('generated'): as
+    rot_tools runs them, through rot_tools/_generated.py."""
     def use(name):
         monkeypatch.undo()
-        if name == 'floats':  # compiled code is looked up under another name: never found
-            monkeypatch.setattr(_backend, '_COMPILED', '_rot_tools_test_no_code')
-            monkeypatch.setattr(_backend, 'HOT_AFTER', 10**9)
-        else:  # compiled on the first call (which itself runs on floats)
-            monkeypatch.setattr(_backend, 'HOT_AFTER', 0)
+        monkeypatch.setattr(_backend, '_CODE_OF', {})  # (forget the functions found so far)
+        if name == 'floats':
+            monkeypatch.setattr(_backend, 'GENERATED', {})
     return use
 
 
-def _compiled_run(calls):
-    """Each call's result once its kernel is compiled (a first run compiles it)."""
-    for call in calls:
-        _run(call)
-    return [_run(call) for call in calls]
+@pytest.fixture
+def fallbacks():
+    """The FALLBACKS counter, emptied: what ran on the kernels themselves from now on."""
+    _backend.FALLBACKS.clear()
+    yield _backend.FALLBACKS
+    _backend.FALLBACKS.clear()
 
 
-def test_compiled_one_item_engine_matches_python_floats_bit_for_bit(engine):
+def test_generated_code_matches_the_kernels_on_python_floats_bit_for_bit(engine, fallbacks):
     calls = _calls()
     engine('floats')
     floats = [_bits(_run(call)) for _, call in calls]
-    engine('compiled')
-    compiled = [_bits(r) for r in _compiled_run([call for _, call in calls])]
-    differ = [label for (label, _), a, b in zip(calls, floats, compiled) if a != b]
+    engine('generated')
+    fallbacks.clear()
+    generated = [_bits(_run(call)) for _, call in calls]
+    differ = [label for (label, _), a, b in zip(calls, floats, generated) if a != b]
     assert not differ, f'{len(differ)} of {len(calls)} differ, e.g. {differ[:5]}'
     errors = sum(isinstance(r, tuple) and len(r) == 2 and r[0] is type for r in floats)
     assert errors == 0  # (results are compared, error types are classes, never type itself)
+    # Most of these adversarial items ran generated code; the rare ones (tiny/huge vectors,
+    # gimbal lock, NaN/Inf) ran the kernel itself, and so did the bad inputs.
+    assert sum(fallbacks.values()) < len(calls) / 2
 
 
-def test_every_call_above_really_ran_compiled(engine):
-    engine('compiled')
-    for _, call in _calls():
-        _run(call)
-    kernels = [rt.euler.euler_to_matrix.__globals__['_MATRIX_KERNELS']['ZYX'],
-               rt.axis_angle._rotvec_kernel, rt.so3._quaternion_kernel,
-               rt.so3._checking(rt.axis_angle.axis_angle_kernel),
-               rt.so3._checking(rt.decomposition._DECOMPOSE_KERNELS['xyz'])]
-    for kernel in kernels:
-        code = kernel.__dict__.get(_backend._COMPILED)
-        assert callable(code) and 'traced' in code.__doc__, kernel
+def test_the_checked_in_generated_module_is_what_the_kernels_give():
+    current = Path(_generated.__file__).read_text(encoding='utf-8')
+    assert current == _generate.source(), (
+        f'rot_tools/_generated.py is stale: run {_generate.COMMAND} and commit the result')
+    assert current.startswith(f'# flake8: noqa\n"""Generated by ``{_generate.COMMAND}``')
+    assert current.count('\n') < 10_000  # a budget: the common path of each kernel only
+
+
+# Public names that run no kernel (plain NumPy, or not a function): the rest must be in
+# _generate.ordinary_calls, so that a new conversion cannot be forgotten there.
+NO_KERNEL = {'rot_x', 'rot_y', 'rot_z', 'skew', 'nearest_rotation', 'mean_rotation',
+             'align_vectors', 'random_rotations', 'Screw', 'Decomposition', 'RotationError'}
+
+
+def _ordinary_items(n=60):
+    """n random rotations (every angle, both sides of π/2), translations, Euler angles."""
+    rng = np.random.default_rng(5)
+    R = rt.random_rotations(n, rng=rng)
+    b = rng.uniform(-3.0, 3.0, (n, 3))
+    e = rng.uniform(-1.5, 1.5, (n, 3))
+    return list(R), list(b), list(e)
+
+
+def _xyz(v):
+    return Msg(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def _xyzw(q):
+    return Msg(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def test_every_public_function_and_the_node_path_run_generated_code(fallbacks):
+    calls = _generate.ordinary_calls()
+    public = {name for name in rt.__all__ if callable(getattr(rt, name))}
+    covered = {name for _, name, _ in calls}
+    assert public - NO_KERNEL <= covered, public - NO_KERNEL - covered
+    fallbacks.clear()
+    for _, _, call in calls:
+        call()
+    Rs, bs, es = _ordinary_items()
+    for R, b, e in zip(Rs, bs, es):
+        q = rt.matrix_to_quaternion(R)
+        for seq in rt.EULER_SEQUENCES:
+            # rotation_node's per-message path: a message in (duck-typed here: the boundary
+            # imports no ROS), its numbers out
+            settings = Msg(quaternion_tolerance=1e-6, euler_sequence=seq, degrees=False)
+            for msg, convert in (
+                    (Msg(header=None, pose=Msg(position=_xyz(b), orientation=_xyzw(q))),
+                     boundary.pose_stamped_to_transform),
+                    (Msg(header=None, vector=_xyz(e)), boundary.euler_stamped_to_transform)):
+                _, R1, b1 = convert(msg, settings)
+                decomposition.decompose_values(R1, b1, seq)
+            rt.matrix_to_euler(R, seq)
+            rt.decompose(R, b, seq)
+        rt.quaternion_to_matrix(tuple(q.tolist()))
+        rt.quaternion_to_matrix(q)
+        rt.matrix_to_rotvec(R, check=False)
+        rt.rotvec_to_matrix(rt.matrix_to_rotvec(R))
+        rt.axis_angle_to_matrix(*rt.matrix_to_axis_angle(R))
+        rt.screw_exp(rt.screw_log(R, b))
+        rt.transform_from_screw(*rt.screw_from_transform(R, b)[:2], 0.5, 0.1)
+        rt.compose_transforms(*rt.invert_transform(R, b), R, b)
+        rt.transform_points(R, b, e)
+        rt.homogeneous_to_transform(rt.transform_to_homogeneous(R, b))
+        rt.rotation_distance(R, Rs[0])
+        rt.frame_to_matrix(*R.T)
+        rt.is_rotation(R)
+    assert not fallbacks, f'ran the kernel itself, not generated code: {dict(fallbacks)}'
+
+
+def test_a_kernel_missing_from_the_generated_module_is_noticed(monkeypatch, fallbacks):
+    # The silent cliff: without its generated function a kernel still gives the right
+    # answer, slower; FALLBACKS (which the test above reads) says so.
+    table = dict(_backend.GENERATED)
+    key = _backend.kernel_key(rt.so3._checking(rt.axis_angle._rotvec_of_matrix_kernel))
+    del table[key]
+    monkeypatch.setattr(_backend, 'GENERATED', table)
+    monkeypatch.setattr(_backend, '_CODE_OF', {})
+    R = ROTATIONS[4]
+    expected = rt.matrix_to_rotvec(R).tobytes()
+    assert fallbacks == {key: 1}
+    monkeypatch.undo()
+    assert rt.matrix_to_rotvec(R).tobytes() == expected
+    assert fallbacks == {key: 1}
+
+
+def test_no_compilation_or_tracing_happens_at_call_time():
+    # A fresh process: import rot_tools, then forbid compile and exec, then make the first
+    # call of every ordinary call (the node's path included). The tracer is never imported.
+    script = textwrap.dedent('''
+        import builtins, sys
+        import numpy as np
+        import rot_tools as rt
+        from rot_tools import _backend, _generate
+        calls = _generate.ordinary_calls()
+        for name in rt.__all__:  # (rot_tools imports its modules on first use of a name)
+            getattr(rt, name)
+        assert 'rot_tools._trace' not in sys.modules
+        def forbidden(*args, **kwargs):
+            raise AssertionError('compile or exec at call time')
+        builtins.compile = builtins.exec = forbidden
+        for label, name, call in calls:
+            call()
+        assert 'rot_tools._trace' not in sys.modules
+        assert not _backend.FALLBACKS, dict(_backend.FALLBACKS)
+        print('ok', len(calls))
+    ''')
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=120, cwd=REPO)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith('ok ')
+
+
+def test_results_do_not_depend_on_call_history():
+    R, b = ROTATIONS[5], VECTORS[1]
+    calls = [lambda: rt.matrix_to_euler(R, 'zyx'), lambda: rt.matrix_to_axis_angle(R),
+             lambda: decomposition.decompose_values(R, b, 'XYZ'), lambda: rt.screw_log(R, b),
+             lambda: rt.euler_to_matrix([0.1, 0.2, 0.3]), lambda: rt.decompose(R, b),
+             lambda: rt.quaternion_to_matrix((0.0, 0.0, 0.0, 0.0))]
+    first = [_bits(_run(c)) for c in calls]
+    types = [type(_run(c)) for c in calls]
+    for _ in range(200):
+        for c in calls:
+            _run(c)
+    assert [_bits(_run(c)) for c in calls] == first
+    assert [type(_run(c)) for c in calls] == types
+    assert not [n for n in dir(_backend) if 'HOT' in n or 'BATCH' in n or 'CALLS' in n]
+
+
+def test_apply_follows_its_outputs_argument_on_every_call():
+    # (Once hot, the old engine returned the outputs of the first call's spec.)
+    kernel = rt.axis_angle._rotvec_kernel
+    inputs = [((0.3, -1.0, 0.5), (3,), 'rotation vector', True)]
+    arrays = [((3, 3), np.float64), ((), np.bool_)]
+    floats = [((3, 3), float), ((), np.bool_)]
+    for _ in range(40):
+        a = _backend.apply(kernel, inputs, arrays)
+        f = _backend.apply(kernel, inputs, floats)
+        assert type(a[0]) is np.ndarray and a[0].shape == (3, 3)
+        assert type(f[0]) is tuple and len(f[0]) == 9 and type(f[0][0]) is float
+        assert a[0].ravel().tolist() == list(f[0])
+
+
+def test_one_item_gives_what_a_batch_gives_where_float_arithmetic_would_raise():
+    def kernel(ops, v):
+        return (v[0] / v[1], ops.sqrt(v[0]), ops.sin(v[2] * 1e308 * 10.0))
+    outputs = [((), np.float64)] * 3
+    item = np.array([-1.0, 0.0, 1.0])
+    one = _backend.apply(kernel, [(item, (3,), 'v', True)], outputs)
+    batch = _backend.apply(kernel, [(item[None], (3,), 'v', True)], outputs)
+    assert [type(x) for x in one] == [np.float64] * 3
+    assert one[0] == -math.inf and math.isnan(one[1]) and math.isnan(one[2])
+    assert _bits(one) == _bits(tuple(x[0] for x in batch))
+    # The same through a generated function that raises.
+    compiled = compile_kernel(kernel, _backend.FLOATS, [(3,)], outputs)
+    with pytest.raises(ZeroDivisionError):
+        compiled([(item, (3,), 'v', True)])
+
+
+def _weird_items():
+    """Finite and non-finite extremes: every public function, one item and a batch of one."""
+    rng = np.random.default_rng(3)
+    values = [0.0, -0.0, 1.0, -1.0, 1e-300, 1e300, 1.7e308, -1.7e308, 5e-324, 3.0, 0.5]
+    mats = [rng.choice(values, size=(3, 3)) for _ in range(40)]
+    mats += [np.full((3, 3), x) for x in (np.inf, np.nan, 0.0, 1e308)]
+    vecs = [rng.choice(values, size=9) for _ in range(40)] + [np.zeros(9)]
+    return mats, vecs
+
+
+def _fail_alike_calls():
+    mats, vecs = _weird_items()
+    calls = []
+    for i, (m, v) in enumerate(zip(mats, vecs)):
+        b = v[:3]  # (one item; the batch of one gets m[None], v[None])
+        calls += [
+            (f'axis_angle {i}', lambda m, v, b=b: rt.matrix_to_axis_angle(m, check=False), m),
+            (f'rotvec {i}', lambda m, v: rt.matrix_to_rotvec(m, check=False), m),
+            (f'quaternion {i}', lambda m, v: rt.matrix_to_quaternion(m, check=False), m),
+            (f'euler {i}', lambda m, v: rt.matrix_to_euler(m, 'zxz', check=False), m),
+            (f'screw {i}', lambda m, v, b=b: rt.screw_from_transform(m, b, check=False), m),
+            (f'log {i}', lambda m, v, b=b: rt.screw_log(m, b, check=False), m),
+            (f'decompose {i}', lambda m, v, b=b: rt.decompose(m, b, 'YXZ', check=False), m),
+            (f'values {i}', lambda m, v, b=b: decomposition.decompose_values(m, b, 'xyz'), m),
+            (f'points {i}', lambda m, v, b=b: rt.transform_points(m, b, b, check=False), m),
+            (f'compose {i}', lambda m, v, b=b: rt.compose_transforms(m, b, m, b, check=False),
+             m),
+            (f'invert {i}', lambda m, v, b=b: rt.invert_transform(m, b, check=False), m),
+            (f'distance {i}', lambda m, v: rt.rotation_distance(m, m, check=False), m),
+            (f'is_rotation {i}', lambda m, v: rt.is_rotation(m), m),
+            (f'validate {i}', lambda m, v: rt.validate_rotation(m), m),
+            (f'checked rotvec {i}', lambda m, v: rt.matrix_to_rotvec(m), m)]
+        calls += [
+            (f'rotvec_to_matrix {i}', lambda m, v: rt.rotvec_to_matrix(v[..., :3]), v),
+            (f'axis_angle_to_matrix {i}',
+             lambda m, v: rt.axis_angle_to_matrix(v[..., :3], v[..., 3]), v),
+            (f'quaternion_to_matrix {i}', lambda m, v: rt.quaternion_to_matrix(v[..., :4]), v),
+            (f'screw_exp {i}', lambda m, v: rt.screw_exp(v[..., :6]), v),
+            (f'transform_from_screw {i}', lambda m, v: rt.transform_from_screw(
+                v[..., :3], v[..., 3:6], v[..., 6], v[..., 7]), v),
+            (f'euler_to_matrix {i}', lambda m, v: rt.euler_to_matrix(v[..., :3], 'ZYX'), v),
+            (f'frame {i}', lambda m, v: rt.frame_to_matrix(
+                v[..., :3], v[..., 3:6], v[..., 6:9]), v)]
+    return mats, vecs, calls
+
+
+def _outcome(call, m, v, batch=False):
+    try:
+        return call(m, v)
+    except rt.RotationError as exc:
+        text = re.sub(r',? \(?(worst |first )?at item \(0,\)\)?| \(item \(0,\)\)', '',
+                      str(exc))
+        if batch:  # the batch's index of a value has the item first
+            text = text.replace('at index (0, ', 'at index (')
+        return rt.RotationError, text
+
+
+def _same(one, batch):
+    """True when the batch-of-one result is the one-item result (NaN = NaN, ±inf exact)."""
+    if isinstance(one, tuple) and one and one[0] is rt.RotationError:
+        return batch == one
+    if isinstance(one, tuple) and not all(type(x) is float for x in one):
+        return isinstance(batch, tuple) and len(one) == len(batch) and all(
+            _same(a, b) for a, b in zip(one, batch))
+    a, b = np.asarray(one), np.asarray(batch)[0]
+    if a.dtype == bool or b.dtype == bool:
+        return a.shape == b.shape and (a == b).all()
+    exact = ~np.isfinite(a) | ~np.isfinite(b)
+    return a.shape == b.shape and np.array_equal(a[exact], b[exact], equal_nan=True) and \
+        np.allclose(a[~exact], b[~exact], rtol=1e-12, atol=1e-300)
+
+
+def test_one_item_and_a_batch_fail_alike_for_every_public_function():
+    # Each call on one item and on a batch of that one item: the same values (NaN and inf
+    # where the other has them) or the same RotationError (the batch naming item (0,)); never
+    # ZeroDivisionError or "math domain error" on one side only.
+    mats, vecs, calls = _fail_alike_calls()
+    differ = []
+    for label, call, _ in calls:
+        m, v = mats[int(label.split()[-1])], vecs[int(label.split()[-1])]
+        one = _outcome(call, m, v)
+        batch = _outcome(call, m[None], v[None], batch=True)
+        if not _same(one, batch):
+            differ.append((label, one, batch))
+    assert not differ, differ[:3]
+
+
+def test_a_traceback_through_generated_code_names_a_line_of_a_real_file(monkeypatch):
+    def broken(*args):
+        raise RuntimeError('broken sqrt')
+    monkeypatch.setattr(_generated, '_op_sqrt', broken)
+    with pytest.raises(RuntimeError) as info:
+        rt.matrix_to_rotvec(ROTATIONS[4])
+    frames = traceback.extract_tb(info.value.__traceback__)
+    assert all(Path(f.filename).is_file() for f in frames), [f.filename for f in frames]
+    last = frames[-2]  # (the last is `broken` above)
+    assert Path(last.filename).resolve() == REPO / 'rot_tools' / '_generated.py'
+    assert '_op_sqrt(' in last.line
+    assert last.name == 'axis_angle__rotvec_of_matrix_kernel_checked'
+    text = Path(last.filename).read_text(encoding='utf-8').splitlines()[last.lineno - 1]
+    assert text.strip() == last.line
+
+
+def test_a_refused_conversion_traceback_names_real_files_only():
+    with pytest.raises(rt.RotationError) as info:
+        rt.matrix_to_rotvec(np.eye(3) * 1.001)
+    frames = traceback.extract_tb(info.value.__traceback__)
+    assert all(Path(f.filename).is_file() for f in frames)
+    assert 'rot_tools' in frames[-1].filename
 
 
 def test_errors_are_the_same_from_both_engines(engine):
@@ -166,27 +438,26 @@ def test_errors_are_the_same_from_both_engines(engine):
              lambda: rt.quaternion_to_matrix([0.0, 0.0, 0.0, 0.0])]
     engine('floats')
     expected = [_run(c) for c in cases]
-    engine('compiled')
-    got = _compiled_run(cases)
+    engine('generated')
+    got = [_run(c) for c in cases]
     assert got == expected
     assert all(e[0] is rt.RotationError for e in expected)
     assert 'must be finite' in expected[0][1] and 'reflection' in expected[2][1]
 
 
 def test_finite_guard_lets_an_overflowing_sum_through_to_the_exact_check(engine):
-    # 1e308 + 1e308 overflows the guard's quick sum: the call must still succeed (exactly as
-    # on floats), not be refused as non-finite.
+    # 1e308 + 1e308 overflows the generated code's quick sum: the call must still succeed
+    # (exactly as on floats), not be refused as non-finite.
     v = np.array([1e308, 1e308, 0.0])
     engine('floats')
     expected = rt.rotvec_to_matrix(v)
-    engine('compiled')
-    (got,) = _compiled_run([lambda: rt.rotvec_to_matrix(v)])
+    engine('generated')
+    got = rt.rotvec_to_matrix(v)
     assert got.tobytes() == expected.tobytes()
     assert rt.is_rotation(got)
 
 
-def test_inputs_of_any_layout_and_type_take_a_path_that_gives_the_same_result(engine):
-    engine('compiled')
+def test_inputs_of_any_layout_and_type_take_a_path_that_gives_the_same_result():
     a = np.array([0.3, -0.4, 1.2])
     expected = rt.euler_to_matrix(a)
     variants = [a.tolist(), tuple(a), a.astype('>f8'), np.stack([a, a], axis=1)[:, 0],
@@ -203,8 +474,7 @@ def test_inputs_of_any_layout_and_type_take_a_path_that_gives_the_same_result(en
         rt.axis_angle_to_matrix([0, 0, 1], 0.5).tobytes()
 
 
-def test_outputs_are_fresh_arrays_and_scalars_of_the_declared_types(engine):
-    engine('compiled')
+def test_outputs_are_fresh_arrays_and_scalars_of_the_declared_types():
     R = ROTATIONS[4]
     first = rt.matrix_to_euler(R, 'ZYX')
     second = rt.matrix_to_euler(R, 'ZYX')
@@ -214,13 +484,15 @@ def test_outputs_are_fresh_arrays_and_scalars_of_the_declared_types(engine):
     assert type(first[1]) is np.bool_
     assert type(rt.matrix_to_axis_angle(R)[1]) is np.float64
     assert rt.matrix_to_quaternion(R).flags.writeable
+    values = decomposition.decompose_values(R, VECTORS[1], 'zyx')
+    assert all(type(x) is float for field in values for x in field)
 
 
 # -- the tracer itself ----------------------------------------------------------------------
 
 def _compile(kernel, tails, outputs):
-    """kernel compiled, called on plain floats (one vector input per tail)."""
-    single = compile_single(kernel, _backend.FLOATS, tails, outputs)
+    """kernel traced and compiled, called on plain floats (one vector input per tail)."""
+    single = compile_kernel(kernel, _backend.FLOATS, tails, outputs)
 
     def call(*entries):
         inputs, start = [], 0
@@ -235,45 +507,32 @@ def _compile(kernel, tails, outputs):
 _F = ((), np.float64)
 
 
-def test_two_independent_branches_become_four_paths_each_right():
+def test_a_rare_branch_is_left_to_the_kernel_itself():
     def kernel(ops, v):
         x = ops.where(v[0] > 0, v[0], -v[0])
-        if ops.any(v[1] > 1.0):
-            x = x * 10.0
-        if ops.any(v[2] < 0):
-            x = x + 0.5
-        return (x,)
-    f = _compile(kernel, [(3,)], [_F])
-    statements = [line.strip() for line in f.__source__.splitlines()]
-    branches = [line for line in statements if line.startswith('if ') and not re.search(
-        r'type\(|len\(|\* 0\.0', line)]  # (not the checks of the inputs)
-    assert len(branches) == 1 + 2  # the second branch is written once under each way
-    for v in ([2.0, 0.0, 1.0], [-2.0, 5.0, 1.0], [2.0, 0.0, -1.0], [-3.0, 2.0, -1.0]):
-        assert f(*v) == kernel(_backend.FLOATS, v)
-
-
-def test_a_branch_taken_on_a_condition_decides_its_wheres():
-    def kernel(ops, v):
-        big = v[0] > 1.0
-        y = v[1] * 2.0
-        if ops.any(big):
-            y = ops.where(big, y, -y)  # inside the branch big is known to be true
-        return (y,)
+        big = v[1] > 1.0
+        if ops.rare(big):
+            x = ops.where(big, x * 10.0, x)
+        return (x + ops.where(big, 1.0, 0.5),)  # past the guard big is known false
     f = _compile(kernel, [(2,)], [_F])
-    assert ' if t0 else ' not in f.__source__
-    assert f(3.0, 1.5) == (3.0,) and f(0.5, 1.5) == (3.0,)
+    assert 'return None  # rare' in f.__source__ and ' if t' not in f.__source__.split(
+        'return None  # rare')[1].split('return (')[0].replace(' if t0 else', '')
+    assert f(2.0, 0.0) == (2.5,) and f(-3.0, 1.0) == (3.5,)
+    assert f(2.0, 5.0) is None  # the rare case: apply then runs the kernel
+    assert kernel(_backend.FLOATS, [2.0, 5.0]) == (21.0,)
 
 
 def test_sign_products_and_repeated_expressions_are_simplified_exactly():
     def kernel(ops, v):
         return ((1.0 * v[0]) * (-1.0 * v[1]) + ops.sin(v[0]) * ops.sin(v[0]),)
     f = _compile(kernel, [(2,)], [_F])
-    assert '1.0' not in f.__source__ and f.__source__.count('_op_sin') == 1
+    body = f.__source__.split('def traced')[1]
+    assert '1.0' not in body and body.count('_op_sin') == 1
     for v in ([0.3, -0.7], [-0.0, 2.0], [1e308, 2.0]):
         assert f(*v)[0] == kernel(_backend.FLOATS, v)[0]
 
 
-def test_untraceable_kernels_are_refused_and_run_on_floats():
+def test_untraceable_kernels_are_refused_and_run_on_floats(fallbacks):
     def branching(ops, v):
         return (v[0] if v[1] > 0 else v[2],)  # Python if on a value
 
@@ -283,57 +542,25 @@ def test_untraceable_kernels_are_refused_and_run_on_floats():
     for kernel in (branching, as_float):
         with pytest.raises(TraceError):
             _compile(kernel, [(3,)], [_F])
-        for _ in range(_backend.HOT_AFTER + 2):
+        for _ in range(3):
             out = _backend.apply(kernel, [(np.array([1.5, 2.0, 3.0]), (3,), 'v', True)], [_F])
         assert out == (1.5,) if kernel is branching else out == (1.0,)
-        assert kernel.__dict__[_backend._CALLS] is False
-        assert _backend._COMPILED not in kernel.__dict__
-
-
-def test_a_kernel_is_compiled_only_once_it_is_hot():
-    def kernel(ops, v):
-        return ([v[1], v[0]],)
-
-    spec = [((2,), np.float64)]
-    for n in range(_backend.HOT_AFTER):
-        assert _backend.apply(kernel, [(np.array([1.0, 2.0]), (2,), 'v', True)], spec)[0] \
-            .tolist() == [2.0, 1.0]
-        assert kernel.__dict__[_backend._CALLS] == n + 1
-        assert _backend._COMPILED not in kernel.__dict__
-    _backend.apply(kernel, [(np.array([1.0, 2.0]), (2,), 'v', True)], spec)
-    assert callable(kernel.__dict__[_backend._COMPILED])
-    out = _backend.apply(kernel, [(np.array([3.0, 4.0]), (2,), 'v', True)], spec)
-    assert out[0].tolist() == [4.0, 3.0]
-
-
-def test_generated_source_shows_in_tracebacks():
-    def kernel(ops, v):
-        return (v[0] / v[1],)
-    f = _compile(kernel, [(2,)], [_F])
-    with pytest.raises(ZeroDivisionError) as info:
-        f(1.0, 0.0)
-    assert 'a0 / a1' in str(info.traceback[-1])
-    assert f(3.0, 2.0) == (1.5,)
-    assert f(3.0, np.inf) is None  # NaN/Inf: left to the generic path's checks
+        assert fallbacks[_backend.kernel_key(kernel)] == 3
 
 
 def test_values_read_once_are_folded_into_their_reader():
     def kernel(ops, v):
         once = v[0] * v[1]
         twice = v[0] + v[1]
-        below = v[0] - v[1]  # read only inside the branch: stays a variable before it
         out = once + twice * twice
-        if ops.any(v[2] > 0):
-            out = out + below
         return (out,)
     f = _compile(kernel, [(3,)], [_F])
     assignments = [line.strip() for line in f.__source__.splitlines() if ' = ' in line
                    and line.strip().startswith('t')]
     assert any(re.fullmatch(r't\d+ = a0 \+ a1', line) for line in assignments)  # read twice
-    assert any(re.fullmatch(r't\d+ = a0 - a1', line) for line in assignments)  # in a branch
     assert not any(re.fullmatch(r't\d+ = a0 \* a1', line) for line in assignments)  # once:
-    assert any('(a0 * a1) + ' in line for line in assignments)  # folded into its reader
-    for v in ([0.3, -2.0, 1.0], [0.3, -2.0, -1.0], [1e154, -3.0, 1.0]):
+    assert '(a0 * a1) + ' in f.__source__  # folded into its reader
+    for v in ([0.3, -2.0, 1.0], [1e154, -3.0, 1.0]):
         assert f(*v) == kernel(_backend.FLOATS, v)
 
 
@@ -346,74 +573,27 @@ def test_float_outputs_are_plain_floats_for_one_item_and_arrays_for_a_batch():
     def run(m, a):
         return _backend.apply(kernel, [(m, (2, 2), 'm', True), (a, (), 'a', True)], outputs)
     expected = ((2.0, 2.0, 3.0, 6.0), (2.0, -2.0), 4.0)
-    for _ in range(_backend.HOT_AFTER + 2):  # on floats, then compiled
-        got = run(m, 2.0)
-        assert got == expected and all(type(x) is float for x in got[0] + got[1] + got[2:])
-    assert callable(kernel.__dict__[_backend._COMPILED])
+    got = run(m, 2.0)
+    assert got == expected and all(type(x) is float for x in got[0] + got[1] + got[2:])
     batch = run(np.stack([m, m]), np.array([2.0, 3.0]))
     assert batch[0].shape == (2, 2, 2) and batch[0].dtype == np.float64
     assert batch[0][1].tolist() == [[3.0, 2.0], [3.0, 7.0]] and batch[2].tolist() == [4.0, 9.0]
+    compiled = compile_kernel(kernel, _backend.FLOATS, [(2, 2), ()], outputs)
+    assert compiled([(m, (2, 2), 'm', True), (2.0, (), 'a', True)]) == expected
 
 
-def _batch_calls():
-    """(label, call) of every public batch conversion on the adversarial items at once."""
-    R = np.stack(ROTATIONS)
-    b = np.stack([VECTORS[i % len(VECTORS)] for i in range(len(R))])
-    v = np.stack(VECTORS)
-    calls = [('axis_angle', lambda: rt.matrix_to_axis_angle(R)),
-             ('rotvec', lambda: rt.matrix_to_rotvec(R)),
-             ('quaternion', lambda: rt.matrix_to_quaternion(R)),
-             ('validate', lambda: rt.validate_rotation(R)),
-             ('is_rotation', lambda: rt.is_rotation(R)),
-             ('screw', lambda: rt.screw_from_transform(R, b)),
-             ('screw_log', lambda: rt.screw_log(R, b)),
-             ('points', lambda: rt.transform_points(R, b, b[::-1])),
-             ('compose', lambda: rt.compose_transforms(R, b, R[::-1], b)),
-             ('invert', lambda: rt.invert_transform(R, b)),
-             ('values', lambda: rt.decomposition.decompose_values(R, b, 'zyx')),
-             ('rotvec_to_matrix', lambda: rt.rotvec_to_matrix(v)),
-             ('axis_angle_to_matrix', lambda: rt.axis_angle_to_matrix(v[1:], 0.7)),
-             ('quaternion_to_matrix', lambda: rt.quaternion_to_matrix(
-                 np.concatenate([v[1:], np.full((len(v) - 1, 1), 0.5)], axis=1))),
-             ('screw_exp', lambda: rt.screw_exp(np.concatenate([v, v[::-1]], axis=1)))]
-    calls += [(f'{seq}', lambda seq=seq: rt.matrix_to_euler(R, seq)) for seq in SEQUENCES]
-    calls += [(f'decompose {seq}', lambda seq=seq: rt.decompose(R, b, seq))
-              for seq in SEQUENCES[:2]]
-    calls += [(f'euler {seq}', lambda seq=seq: rt.euler_to_matrix(v, seq)) for seq in SEQUENCES]
-    return calls
+def _unindented(text):
+    return '\n'.join(line.strip() for line in text.splitlines())
 
 
-def _tree_bits(x):
-    if isinstance(x, tuple):
-        return tuple(_tree_bits(v) for v in x)
-    return _bits(x)
-
-
-def test_compiled_batch_code_matches_the_array_engine_bit_for_bit(monkeypatch):
-    calls = _batch_calls()
-    monkeypatch.setattr(_backend, '_batch_code', lambda *args: None)
-    arrays = [_tree_bits(_run(call)) for _, call in calls]
-    monkeypatch.undo()
-    monkeypatch.setattr(_backend, 'BATCH_AFTER', 0)
-    compiled = [_tree_bits(_run(call)) for _, call in calls]
-    differ = [label for (label, _), a, c in zip(calls, arrays, compiled) if a != c]
-    assert not differ, differ
-    kernel = rt.so3._checking(rt.euler._ANGLES_KERNELS['ZYX'])
-    code = kernel.__dict__[_backend._BATCH]
-    assert callable(code) and 'a batch' in code.__doc__
-
-
-def test_batch_code_takes_both_ways_of_an_any(monkeypatch):
-    monkeypatch.setattr(_backend, 'BATCH_AFTER', 0)
-
-    def kernel(ops, v):
-        out = v[0] * 2.0
-        if ops.any(v[1] > 0):
-            out = ops.where(v[1] > 0, out + 1.0, out)  # not settled by the branch: a batch
-        return (out,)
-    spec = [((), np.float64)]
-    x = np.array([[1.0, -1.0], [2.0, 1.0], [3.0, -5.0]])
-    assert _backend.apply(kernel, [(x, (2,), 'v', True)], spec)[0].tolist() == [2.0, 5.0, 6.0]
-    assert _backend.apply(kernel, [(x[[0, 2]], (2,), 'v', True)], spec)[0].tolist() == [
-        2.0, 6.0]
-    assert '_op_any(' in kernel.__dict__[_backend._BATCH].__source__
+def test_doc_engine_shows_real_code_and_names():
+    doc = (REPO / 'doc' / 'engine.md').read_text(encoding='utf-8')
+    blocks = [_unindented(b) for b in re.findall(r'```python\n(.*?)```', doc, re.S)]
+    sources = [_unindented(p.read_text(encoding='utf-8'))
+               for p in (REPO / 'rot_tools').glob('*.py')]
+    assert len(blocks) == 2 and all(any(b in s for s in sources) for b in blocks), blocks
+    assert 'python -m rot_tools._generate ' in doc and _generate.COMMAND.endswith(
+        'python -m rot_tools._generate')
+    ops = {n for n in dir(_backend.FLOATS) if not n.startswith('_')}
+    table = doc.split('## 2. The ops namespace')[1].split('\n## ')[0]
+    assert ops - {'any'} <= set(re.findall(r'\b(\w+)\b', table)), ops

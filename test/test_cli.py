@@ -98,7 +98,20 @@ def check_rotation(rep, R, seq='ZYX', deg=False):
     assert (eu['sequence'], eu['unit'], eu['degenerate']) == (
         seq, 'deg' if deg else 'rad', bool(degenerate))
     close(eu['angles'], np.degrees(angles) if deg else angles)
+    check_rpy(rep['rpy'], R, deg)
     check_quaternion(rep['quaternion'], R)
+
+
+def check_rpy(printed, R, deg=False):
+    """Check rpy: roll, pitch, yaw about the fixed x, y, z axes (scipy's 'xyz'), in the unit."""
+    assert list(printed) == ['roll', 'pitch', 'yaw', 'unit']
+    assert printed['unit'] == ('deg' if deg else 'rad')
+    angles = np.array([printed['roll'], printed['pitch'], printed['yaw']])
+    roll, pitch, yaw = np.radians(angles) if deg else angles
+    close(rot_z(yaw) @ rot_y(pitch) @ rot_x(roll), R)
+    if abs(abs(pitch) - math.pi / 2) > 1e-6:  # unique away from gimbal lock
+        reference = Rotation.from_matrix(R).as_euler('xyz')
+        close(angles, np.degrees(reference) if deg else reference)
 
 
 def check_quaternion(printed, R):
@@ -122,7 +135,7 @@ def test_euler_negative_angle_and_options_after_the_arguments(script, fmt):
     R = rot_z(a) @ rot_y(b) @ rot_x(c)  # seed 000 eq. 1
     check_rotation(rep, R, deg=True)
     close(rep['euler']['angles'], [-30.0, 20.0, 10.0])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion']
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion']
 
 
 def test_euler_extrinsic_with_output_sequence_and_exponent_numbers(script):
@@ -298,7 +311,7 @@ def test_quaternion_order_is_ros_and_wxyz_reads_w_first(script):
     assert ok(script, '--wxyz', 'quaternion', c, c, 0, 0, '--json') == wxyz
     q = Rotation.random(random_state=11).as_quat()  # (x, y, z, w)
     rep = ok(script, 'quaternion', q[3], *q[:3], '--wxyz', '--precision', '17', '--json')
-    check_rotation(rep, Rotation.from_quat(q[[3, 0, 1, 2]], scalar_first=True).as_matrix())
+    check_rotation(rep, Rotation.from_quat(q).as_matrix())  # scipy reads (x, y, z, w)
 
 
 def test_quaternion_tolerance_default_and_adjustable(script):
@@ -364,7 +377,7 @@ def test_frame_of_the_tracking_example(script):
     close(rep['point']['p'], q)
     close(rep['point']['image'], R @ q)
     close(rep['point']['in_moved_frame'], [np.dot(u, q), np.dot(v, q), np.dot(w, q)])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'point']
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'point']
 
 
 def test_frame_axes_of_any_length_typed_with_six_digits(script):
@@ -415,7 +428,7 @@ def test_matrix_of_sixteen_numbers_is_a_homogeneous_transform(script, seed):
     close(rep['homogeneous'], T)
     close(rep['point']['image'], (T @ np.append(p, 1.0))[:3])          # 4×4 product
     close(rep['point']['in_moved_frame'], (np.linalg.inv(T) @ np.append(p, 1.0))[:3])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'translation',
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'translation',
                          'homogeneous', 'screw', 'point']
 
 
@@ -700,6 +713,8 @@ def test_main_help(script):
     ('euler ZYX 1 2 3 --precision 0', "argument --precision: expected an integer 1..17, got '0'"),
     ('euler ZYX 1 2 3 --bogus', 'unrecognized arguments: --bogus'),
     ('quat 0 0 0 1', "argument COMMAND: invalid choice: 'quat'"),
+    ('euler RPY 0.1 0.2 0.3', "argument SEQ: unknown Euler sequence 'RPY': use one of the 12"),
+    ('euler ZYX 1 2 3 --seq rpy', "argument --seq: unknown Euler sequence 'rpy'"),
     ('screw --rotvec 1 2 3 --euler ZYX 1 2 3 --translation 0 0 0',
      'argument --euler: not allowed with argument --rotvec'),
 ])
@@ -709,3 +724,18 @@ def test_bad_input_is_one_line_and_status_2(script, args, message):
     assert proc.stdout == ''
     assert proc.stderr.startswith(f'rot-tools: error: {message}'), proc.stderr
     assert proc.stderr.endswith('\n') and proc.stderr.count('\n') == 1, proc.stderr
+
+
+@pytest.mark.parametrize('name, meant', [('RPY', "extrinsic sequence 'xyz'"),
+                                         ('rpy', "extrinsic sequence 'xyz'"),
+                                         ('roll-pitch-yaw', "extrinsic sequence 'xyz'"),
+                                         ('YPR', "intrinsic sequence 'ZYX'")])
+def test_roll_pitch_yaw_as_a_sequence_name_gets_a_hint(script, name, meant):
+    proc = run(script, 'euler', 'ZYX', '0.1', '0.2', '0.3', '--seq', name)
+    assert proc.returncode == 2 and proc.stderr.count('\n') == 1, proc.stderr
+    assert meant in proc.stderr and '~/rpy' in proc.stderr
+    # ... and what it points to is right: rpy is the report's roll, pitch, yaw.
+    rep = ok(script, 'euler', 'xyz', '0.1', '0.2', '0.3')
+    close([rep['rpy'][k] for k in ('roll', 'pitch', 'yaw')], [0.1, 0.2, 0.3])
+    rep = ok(script, 'euler', 'ZYX', '0.3', '0.2', '0.1')
+    close([rep['rpy'][k] for k in ('roll', 'pitch', 'yaw')], [0.1, 0.2, 0.3])

@@ -11,6 +11,7 @@ import json
 import math
 import signal
 import subprocess
+import sys
 import time
 
 from geometry_msgs.msg import QuaternionStamped
@@ -19,23 +20,27 @@ import pytest
 from scipy.spatial.transform import Rotation
 import yaml
 
-from conftest import console_script, NodeProcess, RUN, script_env
+from conftest import console_script, NodeProcess, REPO, RUN, script_env
+from doc_blocks import assert_doc_output
 
 CLIENT = console_script('rotation_client', 'rot_tools.rotation_client')
 DIGITS = dict(rel=1e-11, abs=1e-12)
 """Tolerance of a printed number (12 significant digits and decimal places)."""
 
 
-def run(*args, timeout=60):
-    """Run rotation_client with ``args``; return the CompletedProcess (text)."""
+def run(*args, timeout=60, **env):
+    """Run rotation_client with ``args`` (and ``env`` added to its environment).
+
+    Return the CompletedProcess, its output read as UTF-8 text.
+    """
     command = CLIENT + [str(a) for a in args]
-    return subprocess.run(command, capture_output=True, text=True, timeout=timeout,
-                          env=script_env(command), stdin=subprocess.DEVNULL)
+    return subprocess.run(command, capture_output=True, encoding='utf-8', timeout=timeout,
+                          env=dict(script_env(command), **env), stdin=subprocess.DEVNULL)
 
 
-def answered(*args):
+def answered(*args, **env):
     """Run rotation_client; return its YAML (or --json) output parsed, after checking it."""
-    result = run(*args)
+    result = run(*args, **env)
     assert result.returncode == 0, result.stderr
     assert result.stderr == ''
     return json.loads(result.stdout) if '--json' in args else yaml.safe_load(result.stdout)
@@ -154,6 +159,70 @@ def test_orientation_identity_has_no_screw_axis(node):
     assert answer['rotation_matrix'] == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 
 
+@pytest.mark.parametrize('verb, topic_type', [
+    ('pose', 'geometry_msgs/msg/PoseStamped'),
+    ('odometry', 'nav_msgs/msg/Odometry'),
+    ('transform', 'geometry_msgs/msg/TransformStamped'),
+])
+def test_pose_like_verbs(node, verb, topic_type):
+    """pose, odometry and transform send X Y Z QX QY QZ QW; --wxyz reads QW QX QY QZ."""
+    q = np.array([-0.2, 0.5, 0.1, 0.8])
+    q /= np.linalg.norm(q)
+    b = [0.5, -2.0, 1.5]
+    out = answered(verb, *b, *q, '--frame', 'odom', '--node', node)
+    wxyz = answered(verb, *b, q[3], *q[:3], '--wxyz', '--frame', 'odom', '--node', node)
+    for sent in (out['input'], wxyz['input']):
+        assert sent['topic'] == f'{node}/{verb}' and sent['type'] == topic_type
+        assert sent['frame_id'] == 'odom'
+        position, orientation = ('translation', 'rotation') if verb == 'transform' else (
+            'position', 'orientation')
+        assert sent[position] == approx(b)
+        o = sent[orientation]
+        assert [o['x'], o['y'], o['z'], o['w']] == approx(q)  # w last, however given
+        if verb != 'pose':
+            assert sent['child_frame_id'] == 'base_link'
+    rotation = Rotation.from_quat(q)
+    for answer in (out['answer'], wxyz['answer']):
+        check_answer(answer, rotation, b)
+        # the screw's translation along its axis: d = l̂ · b
+        axis = rotation.as_rotvec() / rotation.magnitude()
+        assert answer['screw']['linear'] @ axis == pytest.approx(axis @ b, **DIGITS)
+
+
+def test_odometry_child_frame(node):
+    out = answered('odometry', 0, 0, 0, 0, 0, 0, 1, '--child-frame', 'robot', '--node', node)
+    assert out['input']['child_frame_id'] == 'robot'
+
+
+@pytest.mark.parametrize('verb, topic_type', [
+    ('orientation', 'geometry_msgs/msg/QuaternionStamped'),
+    ('imu', 'sensor_msgs/msg/Imu'),
+])
+def test_orientation_like_verbs(node, verb, topic_type):
+    """orientation and imu send QX QY QZ QW; --wxyz reads QW QX QY QZ."""
+    q = np.array([0.6, -0.3, 0.2, -0.7])
+    q /= np.linalg.norm(q)
+    out = answered(verb, *q, '--node', node)
+    wxyz = answered('--wxyz', verb, q[3], *q[:3], '--node', node)
+    key = 'quaternion' if verb == 'orientation' else 'orientation'
+    for sent in (out['input'], wxyz['input']):
+        assert sent['topic'] == f'{node}/{verb}' and sent['type'] == topic_type
+        o = sent[key]
+        assert [o['x'], o['y'], o['z'], o['w']] == approx(q)
+    for answer in (out['answer'], wxyz['answer']):
+        check_answer(answer, Rotation.from_quat(q))
+        assert answer['screw']['linear'] == [0.0, 0.0, 0.0]
+
+
+def test_screw_path_wxyz(node):
+    """--wxyz reads both quaternions of screw-path w first."""
+    xyzw = answered('screw-path', 0, 0, 0, 0, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0, '--node', node)
+    wxyz = answered('screw-path', 0, 0, 0, 1, 0, 0, 0, 0, 0, 2, 0, 0, 0, 1, '--wxyz',
+                    '--node', node)
+    assert wxyz['poses'] == xyzw['poses'] and len(wxyz['poses']) == 21
+    assert wxyz['poses'][-1]['orientation'] == {'x': 0.0, 'y': 0.0, 'z': 1.0, 'w': 0.0}
+
+
 def test_answer_is_matched_among_other_inputs(node, tester):
     """The answer to the client's input, while another publisher streams other orientations.
 
@@ -196,6 +265,29 @@ def test_describe_reports_the_input_just_sent(node):
         assert [q['x'], q['y'], q['z'], q['w']] == approx([0, 0, math.sin(0.6), math.cos(0.6)])
         assert report['euler']['angles'] == approx([1.2, 0.0, 0.0])
         assert 'refused' in report
+
+
+@pytest.mark.parametrize('encoding', ['utf-8', 'ascii'])
+def test_frame_id_beyond_ascii_round_trips(node, encoding):
+    """An emoji (beyond U+FFFF) and an accent in frame_id: sent, reported, printed as such.
+
+    Over DDS to the node and back in ~/describe's YAML, then printed by the client. On a
+    UTF-8 stdout the characters are printed as themselves; on an ASCII one as escapes that
+    YAML and JSON read back to the same characters.
+    """
+    frame = 'caméra_😀'
+    env = {'PYTHONIOENCODING': encoding}
+    sent = answered('orientation', 0, 0, 0, 1, '--frame', frame, '--node', node, **env)
+    assert sent['input']['frame_id'] == frame
+    for args in (('describe',), ('describe', '--json')):
+        result = run(*args, '--node', node, **env)
+        assert result.returncode == 0 and result.stderr == '', result.stderr
+        report = (json.loads if '--json' in args else yaml.safe_load)(result.stdout)
+        assert report['frame_id'] == frame and report['stamp'] == sent['input']['stamp']
+        if encoding == 'utf-8':
+            assert frame in result.stdout
+        else:
+            assert result.stdout.isascii()
 
 
 def test_screw_path(node):
@@ -289,6 +381,25 @@ def test_unreachable_topic(node_process):
     (('orientation', 0, 0, 1), 'orientation takes 4 numbers (QX QY QZ QW), got 3'),
     (('screw-path', *[0] * 13), 'screw-path takes 14 numbers'),
     (('describe', '--timeout', '-1'), "--timeout: must be a number > 0, got '-1'"),
+    (('describe', '--timeout', '0'), "--timeout: must be a number > 0, got '0'"),
+    (('describe', '--timeout', 'nan'), "--timeout: must be a number > 0, got 'nan'"),
+    (('euler', 'ZYX', 1, 2, 3, 4), 'euler takes 3 numbers (A1 A2 A3), got 4'),
+    (('pose', *[0] * 8), 'pose takes 7 numbers (X Y Z QX QY QZ QW), got 8'),
+    (('odometry', *[0] * 8), 'odometry takes 7 numbers (X Y Z QX QY QZ QW), got 8'),
+    (('transform', *[0] * 6), 'transform takes 7 numbers (X Y Z QX QY QZ QW), got 6'),
+    (('orientation', *[0] * 5), 'orientation takes 4 numbers (QX QY QZ QW), got 5'),
+    (('imu', *[0] * 5), 'imu takes 4 numbers (QX QY QZ QW), got 5'),
+    (('screw-path', *[0] * 15), 'screw-path takes 14 numbers'),
+    (('screw-path', *[0] * 14, '--tolerance', '1e-300'),
+     'argument --tolerance: 1e-300 is below the smallest float32, 1.4e-45: the request '
+     'carries a float32, so the node would read 0 (the default 20 steps)'),
+    (('screw-path', *[0] * 14, '--tolerance', '1e39'),
+     'argument --tolerance: 1e39 is above the largest float32, 3.403e+38: the request '
+     'carries a float32, so the node would read inf (one step)'),
+    (('euler', 'ZYX', 1, 2, 3, '--wxyz'), 'unrecognized arguments: --wxyz'),
+    (('--wxyz', 'describe'), '--wxyz: describe takes no quaternion'),
+    (('describe', '--node', '/' + 'n' * 239),
+     'argument --node: node name of 240 characters is too long'),
     (('describe', '--node', 'bad name'), "not a node name like /ns/name: 'bad name'"),
     (('teleport',), "invalid choice: 'teleport'"),
 ])
@@ -297,10 +408,60 @@ def test_bad_arguments(args, message):
     assert line.startswith('rotation_client: error: ') and message in line
 
 
+@pytest.mark.parametrize('tolerance, poses', [
+    ('3.4e38', 2), ('-1e-300', 21), ('-1e39', 21), ('2e-45', 'path_too_long')])
+def test_tolerances_float32_keeps_are_sent(node, tolerance, poses):
+    """Tolerances whose meaning float32 keeps are sent as given.
+
+    3.4e38 (below float32's largest) is one step; -1e-300 and -1e39 become -0 and -inf,
+    still <= 0: 20 steps; 2e-45 becomes 1.4e-45, not 0: 1 m in such steps is too many.
+    """
+    path = ('screw-path', *[0] * 6, 1, 1, 0, 0, *[0] * 3, 1, '--tolerance', tolerance,
+            '--node', node)
+    if poses == 'path_too_long':
+        assert one_line_error(run(*path), 2).endswith(': path_too_long')
+    else:
+        assert len(answered(*path)['poses']) == poses
+
+
+@pytest.mark.parametrize('ros_args, message', [
+    (('--ros-args', '-p', 'foo'), "'-p foo'"),
+    (('--ros-args', '-r', 'bad'), "'-r bad'"),
+    (('--ros-args', '--params-file', '/nonexistent.yaml'), '/nonexistent.yaml'),
+    (('--ros-args', '--no-such-flag'), '--no-such-flag'),
+])
+def test_bad_ros_arguments(ros_args, message):
+    """Bad ROS arguments are one line and exit 2, before anything is started."""
+    line = one_line_error(run('describe', *ros_args), 2)
+    assert message in line and 'Traceback' not in line, line
+
+
+def test_version():
+    """--version prints the installed version and exits 0 without importing rclpy."""
+    from importlib.metadata import version
+    expected = f'rotation_client {version("rot_tools")}\n'
+    result = run('--version')
+    assert (result.returncode, result.stdout, result.stderr) == (0, expected, '')
+    probe = (
+        'import sys\n'
+        'class RefuseRos:\n'
+        '    def find_spec(self, name, path=None, target=None):\n'
+        "        if name.split('.')[0] in ('rclpy', 'rosidl_parser', 'std_srvs'):\n"
+        "            raise ImportError('refused: ' + name)\n"
+        'sys.meta_path.insert(0, RefuseRos())\n'
+        'from rot_tools.rotation_client import main\n'
+        "main(['--version', '--ros-args', '-p', 'foo'])\n")
+    command = [sys.executable, '-c', probe]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60,
+                            env=script_env(command), cwd=REPO)
+    assert (result.returncode, result.stdout, result.stderr) == (0, expected, '')
+
+
 def test_help():
     result = run('--help')
     assert result.returncode == 0 and result.stdout.startswith('usage: rotation_client')
-    for command in ('euler', 'pose', 'orientation', 'describe', 'screw-path'):
+    for command in ('euler', 'pose', 'odometry', 'transform', 'orientation', 'imu',
+                    'describe', 'screw-path', '--wxyz', '--version'):
         assert command in result.stdout
     euler = run('euler', '--help')
     assert euler.returncode == 0
@@ -318,3 +479,41 @@ def test_interrupt_exits_promptly_and_quietly(tester):
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=30)  # well before the 60 s --timeout
     assert process.returncode == 130 and out == '' and err == '', err
+
+
+# ---------------------------------------------------------------------------------------
+# doc/client.md's examples are this output
+
+
+def console(*commands, names=()):
+    """The transcript of rotation_client ``commands`` as doc/client.md shows it.
+
+    Each command is (shown, extra): the arguments shown after ``$ rotation_client``, and
+    those added to run it here (this run's node). ``names`` are (real, shown) node names,
+    replaced in the output. A failed command is followed by ``$ echo $?`` and its status.
+    """
+    lines = []
+    for shown, extra in commands:
+        result = run(*shown.split(), *extra)
+        lines.append(f'$ rotation_client {shown}\n{result.stdout}{result.stderr}')
+        if result.returncode:
+            lines.append(f'$ echo $?\n{result.returncode}\n')
+    text = ''.join(lines)
+    for real, doc in names:
+        text = text.replace(real, doc)
+    return text
+
+
+def test_doc_examples(node):
+    shown = (node, '/rot_tools')
+    assert_doc_output('client-euler', console(
+        ('euler ZYX 30 20 10 --deg', ('--node', node)), names=[shown]))
+    assert_doc_output('client-screw-path', console(
+        ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 2.0', ('--node', node)),
+        names=[shown]))
+    absent = f'/{RUN}/arm/rot_tools'
+    assert_doc_output('client-errors', console(
+        ('orientation 0 0 0 0', ('--node', node)),
+        ('describe --node /arm/rot_tools --timeout 2', ('--node', absent)),
+        ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1e-300', ()),
+        names=[shown, (absent, '/arm/rot_tools')]))

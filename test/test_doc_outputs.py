@@ -58,27 +58,12 @@ def run_client_block(name, node_name):
     return ''.join(shown)
 
 
-@pytest.fixture(scope='module')
-def node(tmp_path_factory):
-    process = NodeProcess(tmp_path_factory.mktemp('docs'))
-    yield process
-    process.kill()
-
-
 def test_readme_client(tmp_path):
     process = NodeProcess(tmp_path)  # a fresh node: its first input is the README's
     try:
         assert_doc_output('readme-client', run_client_block('readme-client', process.name))
     finally:
         process.kill()
-
-
-def test_client_euler(node):
-    assert_doc_output('client-euler', run_client_block('client-euler', node.name))
-
-
-def test_client_path_refusal_and_unreachable_node(node):
-    assert_doc_output('client-more', run_client_block('client-more', node.name))
 
 
 def test_node_describe(tmp_path):

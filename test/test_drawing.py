@@ -178,7 +178,7 @@ def test_pure_translation_is_a_straight_path_without_axis():
     pic = picture(np.eye(3), b, scale=0.5)
     assert (pic.kind, pic.traced, pic.axis) == (drawing.TRANSLATION, 'origin', None)
     np.testing.assert_array_equal(pic.path, [np.zeros(3), b])
-    assert pic.label == 'theta = 0 rad, d = 3, pitch = inf'
+    assert pic.label == 'theta = 0 rad, d = 3, screw pitch = inf'
 
 
 def test_identity_has_nothing_to_draw():
@@ -189,11 +189,14 @@ def test_identity_has_nothing_to_draw():
 def test_labels_of_the_worked_example():
     # 90° about z through (0.5, 0.5, 0), rising 0.5: pitch 0.5/(π/2) = 0.3183.
     R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, 0.5)
-    assert picture(R, b, degrees=True).label == 'theta = 90 deg, d = 0.5, pitch = 0.3183 /rad'
-    assert picture(R, b).label == 'theta = 1.571 rad, d = 0.5, pitch = 0.3183 /rad'
+    assert picture(R, b, degrees=True).label == (
+        'theta = 90 deg, d = 0.5, screw pitch = 0.3183 /rad')
+    assert picture(R, b).label == 'theta = 1.571 rad, d = 0.5, screw pitch = 0.3183 /rad'
     R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, -0.5)
-    assert picture(R, b, degrees=True).label == 'theta = 90 deg, d = -0.5, pitch = -0.3183 /rad'
-    assert picture(R, np.zeros(3), degrees=True).label == 'theta = 90 deg, d = 0, pitch = 0 /rad'
+    assert picture(R, b, degrees=True).label == (
+        'theta = 90 deg, d = -0.5, screw pitch = -0.3183 /rad')
+    assert picture(R, np.zeros(3), degrees=True).label == (
+        'theta = 90 deg, d = 0, screw pitch = 0 /rad')
 
 
 def test_a_given_decomposition_is_used():

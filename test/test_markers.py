@@ -71,7 +71,7 @@ def test_screw_markers():
                                rtol=0, atol=1e-12)
     label = m[messages.LABEL_ID]
     assert label.type == Marker.TEXT_VIEW_FACING and label.scale.z > 0
-    assert label.text == (f'theta = 2 rad, d = 0.7, pitch = {0.7 / 2:.4g} /rad\n'
+    assert label.text == (f'theta = 2 rad, d = 0.7, screw pitch = {0.7 / 2:.4g} /rad\n'
                           'path: origin')
 
 
@@ -102,14 +102,14 @@ def test_pure_translation_deletes_the_axis():
     assert all(m[i].action == Marker.ADD for i in messages.MARKER_IDS
                if i != messages.AXIS_ID)
     assert [xyz(p).tolist() for p in m[messages.PATH_ID].points] == [[0, 0, 0], [0, 3, 4]]
-    assert 'pitch = inf' in m[messages.LABEL_ID].text
+    assert 'screw pitch = inf' in m[messages.LABEL_ID].text
 
 
 def test_pure_rotation_labels_the_traced_tip():
     R = Rotation.from_rotvec([0.0, 0.0, math.pi / 2]).as_matrix()
     array = messages.picture_markers(HEADER, picture(R, np.zeros(3), degrees=True))
     m = by_id(array)
-    assert m[messages.LABEL_ID].text == ('theta = 90 deg, d = 0, pitch = 0 /rad\n'
+    assert m[messages.LABEL_ID].text == ('theta = 90 deg, d = 0, screw pitch = 0 /rad\n'
                                          'path: x-axis tip')
     np.testing.assert_allclose(xyz(m[messages.PATH_ID].points[-1]), (0, 1, 0), atol=1e-15)
 

@@ -32,13 +32,14 @@ from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
     rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
 from rot_tools.report import transform_report
+from rot_tools import messages, rotation_node
 from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 
 ATOL = 1e-12
 INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped,
           'pose_with_covariance': PoseWithCovarianceStamped, 'odometry': Odometry, 'imu': Imu,
           'orientation': QuaternionStamped}
-ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw')
+ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
 """Outputs published for every accepted input (screw_axis only for a non-identity one)."""
 
 
@@ -153,6 +154,14 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
     np.testing.assert_allclose(xyz(out['euler_angles'].vector),
                                np.degrees(angles) if degrees else angles,
                                rtol=0, atol=ATOL * (180 if degrees else 1))
+    # ~/rpy: x, y, z = roll, pitch, yaw (REP 103), for every sequence: scipy's extrinsic 'xyz'
+    # where it is unique; at gimbal lock the library's rule (yaw 0, roll the free angle).
+    rpy, lock = matrix_to_euler(R, 'xyz')
+    if not lock:
+        np.testing.assert_allclose(rpy, Rotation.from_matrix(R).as_euler('xyz'), rtol=0,
+                                   atol=1e-10)
+    np.testing.assert_allclose(xyz(out['rpy'].vector), np.degrees(rpy) if degrees else rpy,
+                               rtol=0, atol=ATOL * (180 if degrees else 1))
     twist = out['screw'].twist
     np.testing.assert_allclose(np.concatenate([xyz(twist.angular), xyz(twist.linear)]),
                                screw_log(R, b), rtol=0, atol=ATOL * (1 + np.linalg.norm(b)))
@@ -183,6 +192,8 @@ class Rig:
         self.prefix = node.get_fully_qualified_name()
         tester.add_node(node)
         tester.subscribe_outputs(self.prefix)
+        if self.topic('rpy') not in tester.received:  # (conftest's list may lack it)
+            tester.subscribe(self.topic('rpy'), Vector3Stamped)
         tester.subscribe_rosout()
         self.pubs = {name: tester.node.create_publisher(msg_type, f'{self.prefix}/{name}', 10)
                      for name, msg_type in INPUTS.items()}
@@ -367,6 +378,27 @@ def test_robot_input_outputs(rig, kind, case):
     q_report = report['quaternion']
     assert [q_report[k] for k in 'xyzw'] == pytest.approx(
         Rotation.from_quat(q).as_quat(canonical=True).tolist(), rel=1e-11, abs=1e-12)
+
+
+def test_rpy_whatever_the_euler_sequence(make_rig):
+    # An IMU rolled 5°, pitched −10° and yawed 30° (REP 103: about the fixed x, y, z axes):
+    # ~/rpy carries them as x, y, z in angle_unit, with euler_sequence ZXZ; ~/describe too.
+    q = Rotation.from_euler('xyz', [5.0, -10.0, 30.0], degrees=True).as_quat()
+    rig = make_rig(euler_sequence='ZXZ', angle_unit='deg')
+    out = rig.roundtrip('imu', imu(q))
+    np.testing.assert_allclose(xyz(out['rpy'].vector), [5.0, -10.0, 30.0], rtol=0, atol=1e-12)
+    assert out['rpy'].header == out['euler_angles'].header
+    np.testing.assert_allclose(
+        xyz(out['euler_angles'].vector),
+        np.degrees(matrix_to_euler(quaternion_to_matrix(q), 'ZXZ')[0]), rtol=0, atol=1e-12)
+    rpy = rig.report()['rpy']
+    assert list(rpy) == ['roll', 'pitch', 'yaw', 'unit'] and rpy['unit'] == 'deg'
+    np.testing.assert_allclose([rpy['roll'], rpy['pitch'], rpy['yaw']], [5.0, -10.0, 30.0],
+                               rtol=0, atol=1e-10)
+    assert set_one(rig.node, 'angle_unit', 'rad').successful
+    out = rig.roundtrip('orientation', quaternion_stamped(q))
+    np.testing.assert_allclose(xyz(out['rpy'].vector), np.radians([5.0, -10.0, 30.0]),
+                               rtol=0, atol=1e-15)
 
 
 def test_odometry_yaw_in_degrees(make_rig):
@@ -827,6 +859,51 @@ def test_screw_path_refusals(rig, case):
 
 
 # ---------------------------------------------------------------------------------------
+# The tables: a new output or parameter is one row
+
+
+def test_every_output_row_is_published_with_its_type(rig):
+    published = {pub.topic_name: pub.msg_type for pub in rig.node.publishers}
+    for kind in rotation_node.OUTPUTS:
+        assert published[rig.node.resolve_topic_name(kind.topic)] is kind.msg_type
+    assert [kind.topic[2:] for kind in rotation_node.OUTPUTS] == list(ALWAYS)
+
+
+def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):
+    row = rotation_node.OutputKind('~/euler_again', Vector3Stamped, 'euler',
+                                   messages.vector3_stamped_msg, angles=True)
+    monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (row,))
+    tester.subscribe(f'{namespace}/rot_tools/euler_again', Vector3Stamped)
+    rig = make_rig(angle_unit='deg')  # (discovery waits for the new topic's match too)
+    q, p = POSE_CASES['general']
+    stamp = rig.send('pose', pose_stamped(q, p))
+    out = rig.outputs(stamp)
+    (extra,) = rig.tester.wait_messages(rig.topic('euler_again'))
+    assert extra.header.stamp.sec == stamp
+    assert xyz(extra.vector).tolist() == xyz(out['euler_angles'].vector).tolist()
+    angles, _ = matrix_to_euler(quaternion_to_matrix(q), 'ZYX')
+    np.testing.assert_allclose(xyz(extra.vector), np.degrees(angles), rtol=0, atol=1e-10)
+
+
+def test_a_new_parameter_is_one_row(ros_context, make_rig, namespace, monkeypatch):
+    from rcl_interfaces.msg import ParameterDescriptor
+    row = rotation_node.ParameterSpec(
+        2.0, ParameterDescriptor(type=ParameterType.PARAMETER_DOUBLE, description='a test'),
+        lambda value: '' if value < 5.0 else f'test_limit {value} is not < 5')
+    monkeypatch.setattr(rotation_node, 'PARAMETERS',
+                        dict(rotation_node.PARAMETERS, test_limit=row))
+    rig = make_rig()
+    assert rig.node.get_parameter('test_limit').value == 2.0
+    assert set_one(rig.node, 'test_limit', 4.5).successful
+    result = set_one(rig.node, 'test_limit', 7.0)
+    assert not result.successful and result.reason == 'test_limit 7.0 is not < 5'
+    assert rig.node.get_parameter('test_limit').value == 4.5
+    with pytest.raises(InvalidParameterValueException, match='test_limit 9.0 is not < 5'):
+        RotationNode(context=ros_context, namespace=namespace,
+                     parameter_overrides=[Parameter('test_limit', value=9.0)])
+
+
+# ---------------------------------------------------------------------------------------
 # Parameters
 
 
@@ -917,6 +994,9 @@ def test_marker_scale(make_rig):
 
 REFUSED_PARAMETERS = [  # (name, value, why)
     ('euler_sequence', 'ZZY', 'not a sequence'),
+    ('euler_sequence', 'RPY', "roll, pitch, yaw (about the fixed x, y, z axes) are the "
+     "extrinsic sequence 'xyz': every report prints them as rpy, and rotation_node "
+     'publishes them on ~/rpy'),
     ('euler_sequence', 'zYx', 'not a sequence'),
     ('euler_sequence', '', 'not a sequence'),
     ('euler_sequence', 3, 'Wrong parameter type'),

@@ -252,9 +252,9 @@ def test_shipped_parameter_file_holds_every_default():
     document = yaml.safe_load(PARAMETER_FILE.read_text())
     assert list(document) == ['/**']
     values = document['/**']['ros__parameters']
-    assert values == {name: default for name, (default, _) in PARAMETERS.items()}
-    for name, (default, _) in PARAMETERS.items():
-        assert type(values[name]) is type(default), name  # 1.0 stays a double, not 1
+    assert values == {name: spec.default for name, spec in PARAMETERS.items()}
+    for name, spec in PARAMETERS.items():
+        assert type(values[name]) is type(spec.default), name  # 1.0 stays a double, not 1
 
 
 def test_shipped_parameter_file_names_the_topics_of_each_descriptor():
@@ -267,8 +267,8 @@ def test_shipped_parameter_file_names_the_topics_of_each_descriptor():
             comments[line.split(':')[0].strip()] = ' '.join(lines)
             lines = []
     assert list(comments) == list(PARAMETERS)
-    for name, (_, descriptor) in PARAMETERS.items():
-        topics = set(re.findall(r'~/\w+', descriptor.description))
+    for name, spec in PARAMETERS.items():
+        topics = set(re.findall(r'~/\w+', spec.descriptor.description))
         assert topics == set(re.findall(r'~/\w+', comments[name])), name
     assert {'~/markers', '~/screw_axis'} <= set(re.findall(r'~/\w+', comments['marker_scale']))
 
@@ -279,7 +279,7 @@ def test_parameter_file_is_applied(tester, node_process, tmp_path):
     assert 'WARN' not in stderr
     names = list(PARAMETERS)
     assert Remote(tester, shipped.name).parameters(names) == {
-        name: default for name, (default, _) in PARAMETERS.items()}
+        name: spec.default for name, spec in PARAMETERS.items()}
     assert_clean_exit(*shipped.stop(signal.SIGTERM))
 
     changed = {'euler_sequence': 'xyz', 'angle_unit': 'deg', 'quaternion_tolerance': 0.01,
@@ -287,7 +287,7 @@ def test_parameter_file_is_applied(tester, node_process, tmp_path):
     edited = tmp_path / 'edited.yaml'
     text = PARAMETER_FILE.read_text()
     for name, value in changed.items():
-        default = yaml.safe_dump(PARAMETERS[name][0]).split('\n')[0]
+        default = yaml.safe_dump(PARAMETERS[name].default).split('\n')[0]
         new = yaml.safe_dump(value).split('\n')[0]
         assert f'    {name}: {default}\n' in text
         text = text.replace(f'    {name}: {default}\n', f'    {name}: {new}\n')

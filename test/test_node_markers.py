@@ -124,7 +124,7 @@ def test_markers_of_a_screw_motion(make_rig, case, kind):
     assert (label.type, label.action) == (Marker.TEXT_VIEW_FACING, Marker.ADD)
     assert label.scale.z > 0
     assert label.text == (f'theta = {theta:.4g} rad, d = {d + 0.0:.4g}, '
-                          f'pitch = {d / theta + 0.0:.4g} /rad\npath: origin')
+                          f'screw pitch = {d / theta + 0.0:.4g} /rad\npath: origin')
     # ~/screw_axis of the same input: the arrow from c along l̂, marker_scale long.
     arrow = screw_axis_of(rig, stamp)
     assert (arrow.ns, arrow.id, arrow.action) == ('screw_axis', 0, Marker.ADD)
@@ -145,7 +145,7 @@ def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):
     start, end = xyz(m[AXIS].points[0]), xyz(m[AXIS].points[1])
     np.testing.assert_allclose([start[:2], end[:2]], 0.0, atol=1e-15)
     assert end[2] - start[2] >= 4.0  # marker_scale beyond both ends of the drawing
-    assert m[LABEL].text == 'theta = 90 deg, d = 0, pitch = 0 /rad\npath: x-axis tip'
+    assert m[LABEL].text == 'theta = 90 deg, d = 0, screw pitch = 0 /rad\npath: x-axis tip'
 
 
 def test_identity_deletes_what_was_drawn_on_both_topics(rig):
@@ -173,7 +173,7 @@ def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):
     assert m[AXIS].action == Marker.DELETE
     check_triad(m, np.eye(3), b, 1.0)
     assert [xyz(p).tolist() for p in m[PATH].points] == [[0, 0, 0], b.tolist()]
-    assert m[LABEL].text == 'theta = 0 rad, d = 3, pitch = inf\npath: origin'
+    assert m[LABEL].text == 'theta = 0 rad, d = 3, screw pitch = inf\npath: origin'
 
 
 def actions(rig):

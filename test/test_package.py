@@ -23,7 +23,7 @@ CONSOLE_SCRIPTS = {
 # exec_depends the contract (SPEC §3) needs whatever the code happens to import today.
 REQUIRED_EXEC_DEPENDS = {
     'rclpy', 'geometry_msgs', 'std_msgs', 'std_srvs', 'nav_msgs', 'sensor_msgs',
-    'visualization_msgs', 'rcl_interfaces', 'builtin_interfaces', 'python3-numpy',
+    'visualization_msgs', 'rcl_interfaces', 'builtin_interfaces', 'python3-numpy', 'tf2_msgs',
 }
 # rosdep keys of the non-ROS third-party modules rot_tools may import.
 ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
@@ -150,6 +150,71 @@ def test_installed_package_is_imported_from_the_install_space(colcon_install):
         colcon_install, sys.executable, '-c', 'import rot_tools; print(rot_tools.__file__)')
     assert result.returncode == 0, result.stderr
     assert Path(result.stdout.strip()).is_relative_to(colcon_install)
+
+
+def test_colcon_builds_only_rot_tools_not_the_vendored_tf2_msgs(colcon_install):
+    built = sorted(p.name for p in colcon_install.parent.iterdir() if p.is_dir())
+    assert built == [PACKAGE]
+
+
+def test_colcon_never_builds_the_vendored_tf2_msgs(tmp_path):
+    """vendor/tf2_msgs is for the pip path only: colcon skips it even when pointed at it."""
+    assert (REPO / 'vendor' / 'tf2_msgs' / 'package.xml').is_file()
+    colcon = Path(sys.executable).with_name('colcon')
+    result = subprocess.run(
+        [str(colcon if colcon.is_file() else 'colcon'), 'build', '--base-paths',
+         str(REPO / 'vendor')], cwd=tmp_path, env=dict(os.environ, COLCON_HOME=str(tmp_path)),
+        stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=COLCON_TIMEOUT)
+    assert result.returncode == 0, result.stderr
+    assert 'tf2_msgs' not in result.stdout + result.stderr
+    assert not (tmp_path / 'install' / 'tf2_msgs').exists()
+
+
+def _requirements(name):
+    """Return the requirement lines of a requirements file as {name: line}, without -r."""
+    lines = (line.split('#')[0].strip() for line in (REPO / name).read_text().splitlines())
+    return {line.split('==')[0].lower(): line for line in lines
+            if line and not line.startswith('-')}
+
+
+def test_stock_requirements_differ_from_the_pinned_ones_only_in_numpy():
+    pinned, stock = _requirements('requirements.txt'), _requirements('requirements-stock.txt')
+    assert (pinned.pop('numpy'), stock.pop('numpy')) == ('numpy==2.4.6', 'numpy==1.26.4')
+    assert stock == pinned
+
+
+@pytest.mark.parametrize('name, version', [
+    ('pytest', '7.4.4'), ('scipy', '1.11.4'), ('numpy', '1.26.4')])
+def test_stock_requirements_are_ubuntu_24_04s_versions(name, version):
+    stock = _requirements('requirements-stock.txt') | _requirements('requirements-stock-test.txt')
+    assert stock[name] == f'{name}=={version}'
+
+
+def test_every_requirement_is_pinned_exactly():
+    for path in sorted(REPO.glob('requirements*.txt')):
+        for line in _requirements(path.name).values():
+            assert line.count('==') == 1 and not set('<>~!;') & set(line), (path.name, line)
+
+
+@pytest.mark.parametrize('where', ['beside_a_clone', 'parent', 'root'])
+def test_import_rot_tools_from_any_directory(tmp_path, where):
+    """Import the package, not a directory rot_tools without __init__.py beside it.
+
+    Such a directory (a clone, seen from its parent) is imported as an empty namespace
+    package when the installed package is found only after the current directory's
+    namespace portion, as with setuptools' default editable import hook.
+    """
+    if where == 'beside_a_clone':
+        cwd = tmp_path
+        (cwd / PACKAGE / PACKAGE).mkdir(parents=True)
+        (cwd / PACKAGE / 'README.md').write_text('a clone\n')
+    else:
+        cwd = REPO.parent if where == 'parent' else Path('/')
+    code = 'import rot_tools; print(rot_tools.__file__); rot_tools.euler_to_matrix'
+    result = subprocess.run([sys.executable, '-c', code], cwd=cwd, stdin=subprocess.DEVNULL,
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert Path(result.stdout.strip()) == REPO / PACKAGE / '__init__.py'
 
 
 def test_installed_client_runs(colcon_install):

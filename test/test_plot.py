@@ -58,7 +58,7 @@ def test_screw_figure_holds_frames_axis_and_helix():
     for p in axis:
         assert np.linalg.norm(np.cross(p - c, u)) < 1e-12
     (ax,) = fig.axes
-    assert ax.get_title() == 'screw motion\nθ = 90 deg, d = 0.5, pitch = 0.3183 /rad'
+    assert ax.get_title() == 'screw motion\nθ = 90 deg, d = 0.5, screw pitch = 0.3183 /rad'
     spans = [np.ptp(lim) for lim in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
     assert spans == pytest.approx([spans[0]] * 3, rel=1e-12)  # equal axes
     assert ax.get_box_aspect() is not None
@@ -79,7 +79,7 @@ def test_rotation_figure_draws_the_arc_of_the_x_tip():
     axis = points(lines['screw_axis'])
     np.testing.assert_allclose(axis[:, :2], 0.0, atol=1e-15)
     (ax,) = fig.axes
-    assert ax.get_title() == 'rotation\nθ = 1 rad, d = 0, pitch = 0 /rad'
+    assert ax.get_title() == 'rotation\nθ = 1 rad, d = 0, screw pitch = 0 /rad'
     assert 'path of the x-axis tip' in [t.get_text() for t in ax.get_legend().get_texts()]
 
 
@@ -130,10 +130,10 @@ def svg_text(path):
 
 
 @pytest.mark.parametrize('args, title', [
-    (['axis-angle', '0', '0', '1', '90', '--deg'], 'θ = 90 deg, d = 0, pitch = 0 /rad'),
-    (['axis-angle', '0', '0', '1', '1.5'], 'θ = 1.5 rad, d = 0, pitch = 0 /rad'),
+    (['axis-angle', '0', '0', '1', '90', '--deg'], 'θ = 90 deg, d = 0, screw pitch = 0 /rad'),
+    (['axis-angle', '0', '0', '1', '1.5'], 'θ = 1.5 rad, d = 0, screw pitch = 0 /rad'),
     (['screw', '--axis-angle', '0', '0', '1', '2', '--translation', '1', '0', '0', '--deg'],
-     'θ = 2 deg, d = 0, pitch = 0 /rad')], ids=['deg', 'rad', 'screw_deg'])
+     'θ = 2 deg, d = 0, screw pitch = 0 /rad')], ids=['deg', 'rad', 'screw_deg'])
 def test_plot_option_draws_theta_in_the_unit_asked(tmp_path, args, title):
     from rot_tools.cli import main
     out = tmp_path / 'picture.svg'

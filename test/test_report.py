@@ -45,17 +45,18 @@ def _json_loads(text):
 
 def test_keys_in_order_and_plain_python_types():
     rep = transform_report(R0, B0, point=[1.0, -2.0, 0.5])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'quaternion', 'translation',
+    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'translation',
                          'homogeneous', 'screw', 'point']
     assert list(rep['axis_angle']) == [
         'axis', 'angle', 'angle_deg', 'rotation_vector', 'second_solution']
     assert list(rep['axis_angle']['second_solution']) == ['axis', 'angle', 'angle_deg']
     assert list(rep['euler']) == ['sequence', 'unit', 'angles', 'degenerate']
+    assert list(rep['rpy']) == ['roll', 'pitch', 'yaw', 'unit']
     assert list(rep['quaternion']) == ['x', 'y', 'z', 'w']
     assert list(rep['screw']) == [
         'direction', 'point', 'moment', 'angle', 'angle_deg', 'translation', 'pitch']
     assert list(rep['point']) == ['p', 'image', 'in_moved_frame']
-    assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler', 'quaternion']
+    assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion']
     for item in _walk(rep):
         assert type(item) in (dict, list, float, bool, str), (type(item), item)
 
@@ -154,6 +155,39 @@ def test_degrees_switch_the_euler_angles_only():
                                atol=TOL)
     for key in ('axis_angle', 'screw', 'matrix', 'translation', 'quaternion', 'homogeneous'):
         assert deg[key] == rad[key]
+
+
+@pytest.mark.parametrize('seq', ['ZYX', 'zxz', 'XYZ'])
+@pytest.mark.parametrize('degrees', [False, True])
+def test_rpy_are_the_fixed_axis_angles_whatever_the_sequence(seq, degrees):
+    # REP 103: roll, pitch, yaw about the fixed x, y, z axes = extrinsic 'xyz'; independent
+    # reference: scipy, and the closed form R = Rot_z(yaw) Rot_y(pitch) Rot_x(roll).
+    rng = np.random.default_rng(11)
+    for R in [R0, *Rotation.random(20, random_state=rng).as_matrix()]:
+        rpy = transform_report(R, seq=seq, degrees=degrees)['rpy']
+        assert rpy['unit'] == ('deg' if degrees else 'rad')
+        angles = np.array([rpy['roll'], rpy['pitch'], rpy['yaw']])
+        rad = np.radians(angles) if degrees else angles
+        np.testing.assert_allclose(rad, Rotation.from_matrix(R).as_euler('xyz'), rtol=0,
+                                   atol=1e-12)
+        roll, pitch, yaw = rad
+        np.testing.assert_allclose(rot_z(yaw) @ rot_y(pitch) @ rot_x(roll), R, rtol=0,
+                                   atol=1e-12)
+    roll, pitch, yaw = 0.1, -0.2, 0.3
+    rep = transform_report(rot_z(yaw) @ rot_y(pitch) @ rot_x(roll), seq=seq)['rpy']
+    assert [rep['roll'], rep['pitch'], rep['yaw']] == pytest.approx([roll, pitch, yaw],
+                                                                    abs=1e-15)
+
+
+def test_rpy_at_gimbal_lock():
+    # Pitch +90°: roll and yaw turn about the same axis; as for every extrinsic sequence,
+    # yaw (θ3) is 0 and roll carries the free angle roll − yaw.
+    R = rot_z(0.5) @ rot_y(math.pi / 2) @ rot_x(0.2)
+    rpy = transform_report(R)['rpy']
+    assert rpy['pitch'] == pytest.approx(math.pi / 2, abs=1e-12)
+    assert rpy['yaw'] == 0.0
+    assert rpy['roll'] == pytest.approx(0.2 - 0.5, abs=1e-12)
+    np.testing.assert_allclose(rot_y(rpy['pitch']) @ rot_x(rpy['roll']), R, atol=1e-12)
 
 
 def test_gimbal_lock_flag_and_all_sequences():
@@ -267,6 +301,11 @@ euler:
   unit: deg
   angles: [90.0, 0.0, 0.0]
   degenerate: false
+rpy:
+  roll: 0.0
+  pitch: 0.0
+  yaw: 90.0
+  unit: deg
 quaternion:
   x: 0.0
   y: 0.0
@@ -378,10 +417,12 @@ def test_decompose_values_are_decompose_and_matrix_to_quaternion_as_floats():
     rng = np.random.default_rng(8)
     R = np.concatenate([rt.rotvec_to_matrix(rng.normal(size=(20, 3))),
                         rt.axis_angle_to_matrix(rng.normal(size=(5, 3)), np.pi),
+                        [rot_z(0.5) @ rot_y(np.pi / 2) @ rot_x(0.2)],  # rpy's gimbal lock
+                        [rot_x(0.3) @ rot_y(np.pi / 2) @ rot_z(1.0)],  # XYZ's
                         np.eye(3)[None], np.eye(3)[None]])
     b = rng.normal(size=(len(R), 3))
     b[-1] = 0.0
-    for seq in ('ZYX', 'xzx'):
+    for seq in ('ZYX', 'xzx', 'XYZ'):
         for _ in range(2):  # (the second round runs compiled)
             for Ri, bi in zip(R, b):
                 v = decompose_values(Ri, bi, seq)
@@ -391,6 +432,8 @@ def test_decompose_values_are_decompose_and_matrix_to_quaternion_as_floats():
                 assert list(v.euler) == d.euler.tolist()
                 assert list(v.twist) == d.twist.tolist()
                 assert list(v.quaternion) == rt.matrix_to_quaternion(Ri).tolist()
+                assert list(v.rpy) == rt.matrix_to_euler(Ri, 'xyz', check=False)[0].tolist()
+                assert v.matrix == Ri.ravel().tolist()
     batch = decompose_values(R, b, 'ZYX')
     assert batch.twist.shape == (len(R), 6)
     assert np.array_equal(batch.twist, rt.decompose(R, b).twist)

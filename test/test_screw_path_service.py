@@ -42,7 +42,10 @@ class Service:
         tester.subscribe_rosout()
 
     def call(self, start, goal, tolerance=0.0):
-        return self.tester.call(GetPlan, self.name, request(start, goal, tolerance)).plan
+        """The path of a request; a big reply (10,001 poses, 1 MB) may take long to come
+        on a loaded machine: 30 s an attempt."""
+        return self.tester.call(GetPlan, self.name, request(start, goal, tolerance),
+                                timeout=30.0, attempts=3).plan
 
     def errors(self, count):
         """Wait until the node has logged ``count`` errors on /rosout; return their texts."""

@@ -1,0 +1,285 @@
+"""First calls: what each public one-item function costs from its first call after import.
+
+Not a ratio benchmark: the figures are absolute, and the goal is absolute too (every one of
+the first 1,000 calls ≤ 1 ms: no call pays for compilation or other one-off work). Each
+function runs in a FRESH process: ``import rot_tools``, the function looked up (which imports
+its module; shown as "import"), 1,000 different ordinary inputs built with plain NumPy (so
+nothing of rot_tools is warmed), then the 1,000 calls, each timed alone. Printed per
+function: the first call, the median and the worst of the 1,000.
+
+The node: rotation_node's per-message path from its first message, in a fresh process —
+RotationNode's ``~/pose`` callback called directly with 10,000 different PoseStamped (it
+converts, decomposes and publishes its five outputs to topics nobody subscribes, DDS on the
+loopback in a domain of its own), markers off and, separately, on (a picture every
+1/30 s). Where the node cannot be built (no rclpy), the same path without the node:
+rot_tools.boundary's PoseStamped conversion, decomposition.decompose_values and the
+rot_tools.messages fill functions.
+
+Run: ``.venv/bin/python bench/bench_first_calls.py [--calls N] [--messages N] [--skip-node]
+[--json PATH]``; ``--one NAME`` / ``--node MARKERS`` are the child processes' modes.
+"""
+
+import argparse
+import json
+import os
+from pathlib import Path
+import statistics
+import subprocess
+import sys
+import time
+
+import benchlib
+
+GOAL_MS = 1.0
+BENCH = Path(__file__).resolve().parent
+
+
+# -- ordinary inputs, plain NumPy -------------------------------------------------------------
+
+def _rotations(rng, n):
+    """n Haar-random rotation matrices (QR of Gaussian matrices, signs fixed, det +1)."""
+    import numpy as np
+    q, r = np.linalg.qr(rng.standard_normal((n, 3, 3)))
+    q = q * np.sign(np.diagonal(r, axis1=1, axis2=2))[:, None, :]
+    q[np.linalg.det(q) < 0, :, 0] *= -1.0
+    return list(np.ascontiguousarray(q))
+
+
+def cases():
+    """{label: (public name, function of (rt, rng, n) → list of argument tuples, kwargs)}."""
+    def rot(rt, rng, n):
+        return [(R,) for R in _rotations(rng, n)]
+
+    def rot_b(rt, rng, n):
+        return [(R, b) for R, b in zip(_rotations(rng, n), rng.uniform(-3, 3, (n, 3)))]
+
+    def vec(rt, rng, n):
+        return [(v,) for v in rng.uniform(-3, 3, (n, 3))]
+
+    return {
+        'euler_to_matrix ZYX': ('euler_to_matrix', vec, {'seq': 'ZYX'}),
+        'euler_to_matrix zxz': ('euler_to_matrix', vec, {'seq': 'zxz'}),
+        'matrix_to_euler ZYX': ('matrix_to_euler', rot, {'seq': 'ZYX'}),
+        'matrix_to_euler xyx': ('matrix_to_euler', rot, {'seq': 'xyx'}),
+        'matrix_to_axis_angle': ('matrix_to_axis_angle', rot, {}),
+        'matrix_to_rotvec': ('matrix_to_rotvec', rot, {}),
+        'matrix_to_quaternion': ('matrix_to_quaternion', rot, {}),
+        'rotvec_to_matrix': ('rotvec_to_matrix', vec, {}),
+        'axis_angle_to_matrix': ('axis_angle_to_matrix', lambda rt, rng, n: [
+            (a, t) for a, t in zip(rng.standard_normal((n, 3)), rng.uniform(0, 3, n).tolist())],
+            {}),
+        'quaternion_to_matrix': ('quaternion_to_matrix',
+                                 lambda rt, rng, n: [(q,) for q in rng.standard_normal((n, 4))],
+                                 {}),
+        'is_rotation': ('is_rotation', rot, {}),
+        'validate_rotation': ('validate_rotation', rot, {}),
+        'rotation_distance': ('rotation_distance', lambda rt, rng, n: list(zip(
+            _rotations(rng, n), _rotations(rng, n))), {}),
+        'frame_to_matrix': ('frame_to_matrix', lambda rt, rng, n: [
+            tuple(R.T) for R in _rotations(rng, n)], {}),
+        'screw_from_transform': ('screw_from_transform', rot_b, {}),
+        'screw_log': ('screw_log', rot_b, {}),
+        'screw_exp': ('screw_exp', lambda rt, rng, n: [
+            (t,) for t in rng.uniform(-2, 2, (n, 6))], {}),
+        'transform_from_screw': ('transform_from_screw', lambda rt, rng, n: [
+            (d, p, a, t) for d, p, a, t in zip(rng.standard_normal((n, 3)),
+                                               rng.uniform(-2, 2, (n, 3)),
+                                               rng.uniform(0, 3, n).tolist(),
+                                               rng.uniform(-1, 1, n).tolist())], {}),
+        'screw_interpolate': ('screw_interpolate', lambda rt, rng, n: [
+            (R0, b0, R1, b1, 0.3) for R0, b0, R1, b1 in zip(
+                _rotations(rng, n), rng.uniform(-2, 2, (n, 3)), _rotations(rng, n),
+                rng.uniform(-2, 2, (n, 3)))], {}),
+        'transform_points': ('transform_points', lambda rt, rng, n: [
+            (R, b, p) for R, b, p in zip(_rotations(rng, n), rng.uniform(-2, 2, (n, 3)),
+                                         rng.uniform(-2, 2, (n, 3)))], {}),
+        'compose_transforms': ('compose_transforms', lambda rt, rng, n: [
+            (R1, b1, R2, b2) for R1, b1, R2, b2 in zip(
+                _rotations(rng, n), rng.uniform(-2, 2, (n, 3)), _rotations(rng, n),
+                rng.uniform(-2, 2, (n, 3)))], {}),
+        'invert_transform': ('invert_transform', rot_b, {}),
+        'transform_to_homogeneous': ('transform_to_homogeneous', rot_b, {}),
+        'homogeneous_to_transform': ('homogeneous_to_transform', lambda rt, rng, n: [
+            (_homogeneous(R, b),) for R, b in zip(_rotations(rng, n),
+                                                  rng.uniform(-2, 2, (n, 3)))], {}),
+        'decompose ZYX': ('decompose', rot_b, {'seq': 'ZYX'}),
+        'decompose_values XYZ (node)': ('decompose_values', rot_b, {'seq': 'XYZ'}),
+    }
+
+
+def _homogeneous(R, b):
+    import numpy as np
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, b
+    return T
+
+
+# -- child: one function in a fresh process -----------------------------------------------
+
+def run_one(label, n):
+    start = time.perf_counter()
+    import rot_tools as rt
+    name, make, kwargs = cases()[label]
+    if name == 'decompose_values':
+        from rot_tools.decomposition import decompose_values as fn
+    else:
+        fn = getattr(rt, name)  # imports the function's module
+    imported = time.perf_counter() - start
+    import numpy as np
+    args = make(rt, np.random.default_rng(7), n)
+    clock, cpu = time.perf_counter_ns, time.thread_time_ns
+    times, cpus = [], []
+    for a in args:
+        c0, t0 = cpu(), clock()
+        fn(*a, **kwargs)
+        t1, c1 = clock(), cpu()
+        times.append(t1 - t0)
+        cpus.append(c1 - c0)
+    return dict(_summary(label, times, cpus), import_ms=imported * 1e3)
+
+
+# -- child: the node's callback in a fresh process ----------------------------------------
+
+def _poses(n):
+    """n (position, unit quaternion) of ordinary poses, plain NumPy."""
+    import numpy as np
+    rng = np.random.default_rng(11)
+    q = rng.standard_normal((n, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    return rng.uniform(-3, 3, (n, 3)).tolist(), q.tolist()
+
+
+def run_node(markers, n):
+    os.environ.setdefault('ROS_DOMAIN_ID', str(1 + (os.getpid() * 7 + 3) % 101))
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    positions, quaternions = _poses(n)
+    try:
+        import rclpy
+        from geometry_msgs.msg import PoseStamped
+        from rclpy.parameter import Parameter
+        from rot_tools.rotation_node import RotationNode
+    except ImportError as exc:
+        return run_path_without_node(n, positions, quaternions, f'no node: {exc}')
+    rclpy.init()
+    try:
+        node = RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
+            Parameter('publish_markers', value=markers)])
+        source = next(s for s in node._sources if s.topic.endswith('/pose'))
+        msgs = []
+        for p, q in zip(positions, quaternions):
+            msg = PoseStamped()
+            msg.header.frame_id = 'world'
+            msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = p
+            o = msg.pose.orientation
+            o.x, o.y, o.z, o.w = q
+            msgs.append(msg)
+        clock, cpu = time.perf_counter_ns, time.thread_time_ns
+        times, cpus = [], []
+        for msg in msgs:
+            c0, t0 = cpu(), clock()
+            node._on_input(source, msg)
+            t1, c1 = clock(), cpu()
+            times.append(t1 - t0)
+            cpus.append(c1 - c0)
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown()
+    return _summary(f'RotationNode ~/pose callback, markers {"on" if markers else "off"}',
+                    times, cpus)
+
+
+def run_path_without_node(n, positions, quaternions, why):
+    from types import SimpleNamespace as Msg
+    from rot_tools import boundary
+    from rot_tools.decomposition import decompose_values
+    settings = Msg(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False)
+    clock, cpu = time.perf_counter_ns, time.thread_time_ns
+    times, cpus = [], []
+    for p, q in zip(positions, quaternions):
+        msg = Msg(header=None, pose=Msg(position=Msg(x=p[0], y=p[1], z=p[2]),
+                                        orientation=Msg(x=q[0], y=q[1], z=q[2], w=q[3])))
+        c0, t0 = cpu(), clock()
+        _, R, b = boundary.pose_stamped_to_transform(msg, settings)
+        decompose_values(R, b, settings.euler_sequence)
+        t1, c1 = clock(), cpu()
+        times.append(t1 - t0)
+        cpus.append(c1 - c0)
+    return _summary(f'boundary + decompose_values ({why})', times, cpus)
+
+
+def _summary(label, times, cpus):
+    """Figures of one run: wall clock per call, and this thread's CPU time per call (what the
+    call itself cost: a pause while another process had the core is not in it)."""
+    ms = 1e-6
+    return {'label': label, 'first_ms': times[0] * ms, 'median_ms': statistics.median(times) * ms,
+            'worst_ms': max(times) * ms, 'worst_at': times.index(max(times)),
+            'first_cpu_ms': cpus[0] * ms, 'worst_cpu_ms': max(cpus) * ms,
+            'worst_cpu_at': cpus.index(max(cpus)), 'calls': len(times),
+            'over_1ms': sum(t > GOAL_MS * 1e6 for t in times),
+            'cpu_over_1ms': sum(c > GOAL_MS * 1e6 for c in cpus)}
+
+
+# -- parent -------------------------------------------------------------------------------
+
+def child(args):
+    out = subprocess.run([sys.executable, str(Path(__file__).resolve())] + args,
+                         capture_output=True, text=True, timeout=600)
+    if out.returncode != 0:
+        raise RuntimeError(f'{args}: {out.stderr.strip()[-2000:]}')
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--calls', type=int, default=1000, help='calls per function (1000)')
+    parser.add_argument('--messages', type=int, default=10000,
+                        help='messages to the node (10000)')
+    parser.add_argument('--skip-node', action='store_true')
+    parser.add_argument('--json', help='write the figures here')
+    parser.add_argument('--one', help=argparse.SUPPRESS)
+    parser.add_argument('--node', choices=['on', 'off'], help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.one:
+        print(json.dumps(run_one(args.one, args.calls)))
+        return 0
+    if args.node:
+        print(json.dumps(run_node(args.node == 'on', args.messages)))
+        return 0
+    print(f'bench_first_calls: {benchlib.machine_line()}, {time.strftime("%Y-%m-%d %H:%M")}')
+    rows, functions = [], []
+    for label in cases():
+        r = child(['--one', label, '--calls', str(args.calls)])
+        functions.append(r)
+        rows.append([label, f"{r['import_ms']:.0f}", f"{r['first_ms'] * 1e3:.0f}",
+                     f"{r['median_ms'] * 1e3:.1f}", f"{r['worst_ms'] * 1e3:.0f}",
+                     f"{r['worst_cpu_ms'] * 1e3:.0f} (#{r['worst_cpu_at'] + 1})",
+                     'yes' if r['worst_cpu_ms'] <= GOAL_MS else 'NO'])
+    benchlib.print_table(
+        f'First {args.calls} calls of each public one-item function, each in a fresh process '
+        '(µs; import = looking the function up, ms; worst CPU = the call\'s own CPU time, '
+        'without pauses while another process had the core)',
+        ['function', 'import ms', 'first µs', 'median µs', 'worst µs', 'worst CPU µs (call)',
+         f'≤ {GOAL_MS:g} ms?'], rows)
+    node = []
+    if not args.skip_node:
+        for markers in ('off', 'on'):
+            node.append(child(['--node', markers, '--messages', str(args.messages)]))
+        benchlib.print_table(
+            f"rotation_node's per-message path, first {args.messages} messages, fresh process "
+            '(µs)', ['path', 'first µs', 'median µs', 'worst µs (msg)', 'worst CPU µs (msg)',
+                     'msgs > 1 ms: wall, CPU'],
+            [[r['label'], f"{r['first_ms'] * 1e3:.0f}", f"{r['median_ms'] * 1e3:.1f}",
+              f"{r['worst_ms'] * 1e3:.0f} (#{r['worst_at'] + 1})",
+              f"{r['worst_cpu_ms'] * 1e3:.0f} (#{r['worst_cpu_at'] + 1})",
+              f"{r['over_1ms']}, {r['cpu_over_1ms']}"] for r in node])
+    met = all(r['worst_cpu_ms'] <= GOAL_MS for r in functions)
+    print(f'\nevery function: the worst of its first {args.calls} calls ≤ {GOAL_MS:g} ms of '
+          f'CPU: {"yes" if met else "NO"}; of wall clock: '
+          f'{"yes" if all(r["worst_ms"] <= GOAL_MS for r in functions) else "no"}')
+    benchlib.write_json(args.json, {'functions': functions, 'node': node, 'goal_ms': GOAL_MS,
+                                    'met': met})
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,190 @@
+"""Write rot_tools/_generated.py: the one-item code of every kernel rot_tools uses.
+
+Run ``python -m rot_tools._generate`` after changing a kernel, or after adding a conversion
+(with its calls in ``ordinary_calls`` below); ``--check`` only says whether the file is up
+to date (test_backend does the same and fails when it is not).
+
+How: every call of ``ordinary_calls`` — each public one-item function with ordinary inputs,
+every Euler sequence, with and without validation, and rotation_node's per-message path — is
+run once with no generated code, so that ``apply`` runs each kernel on Python floats and
+records it with its inputs' shapes and its outputs (``_backend.RECORD``). Each recorded
+kernel is then traced (rot_tools._trace) into one function of the generated module, named
+after the first call that met it, and listed in its CODE table under the kernel's key.
+"""
+
+import argparse
+from pathlib import Path
+import re
+import sys
+
+import numpy as np
+
+from rot_tools import _backend
+from rot_tools.errors import RotationError
+
+GENERATED = Path(__file__).resolve().parent / '_generated.py'
+COMMAND = 'python -m rot_tools._generate'
+
+_R = np.array([[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]])  # a rotation
+_B = np.array([0.3, -1.2, 2.5])
+
+
+def ordinary_calls():
+    """(label, public function name, call) of every one-item use of a kernel, ordinary inputs.
+
+    The test that
+    every public kernel runs generated code runs these (and its own inputs) and counts the
+    calls that did not.
+    """
+    import rot_tools as rt
+    from rot_tools import decomposition
+    R, b = _R, _B
+    R2 = rt.euler_to_matrix([0.3, -0.2, 2.9])  # θ > π/2: the other way through axis-angle
+    calls = []
+
+    def add(label, name, call):
+        calls.append((label, name, call))
+
+    for seq in rt.EULER_SEQUENCES:
+        add(f'euler_to_matrix_{seq}', 'euler_to_matrix',
+            lambda seq=seq: rt.euler_to_matrix([0.4, -0.3, 1.2], seq))
+    for check in (True, False):
+        tag = '' if check else '_unchecked'
+        for seq in rt.EULER_SEQUENCES:
+            add(f'matrix_to_euler_{seq}{tag}', 'matrix_to_euler',
+                lambda seq=seq, check=check: rt.matrix_to_euler(R, seq, check=check))
+        add(f'matrix_to_axis_angle{tag}', 'matrix_to_axis_angle',
+            lambda check=check: (rt.matrix_to_axis_angle(R, check=check),
+                                 rt.matrix_to_axis_angle(R2, check=check)))
+        add(f'matrix_to_rotvec{tag}', 'matrix_to_rotvec',
+            lambda check=check: rt.matrix_to_rotvec(R, check=check))
+        add(f'matrix_to_quaternion{tag}', 'matrix_to_quaternion',
+            lambda check=check: rt.matrix_to_quaternion(R, check=check))
+        add(f'screw_from_transform{tag}', 'screw_from_transform',
+            lambda check=check: rt.screw_from_transform(R, b, check=check))
+        add(f'screw_log{tag}', 'screw_log', lambda check=check: rt.screw_log(R, b, check=check))
+        add(f'transform_points{tag}', 'transform_points',
+            lambda check=check: rt.transform_points(R, b, [1.0, 2.0, 3.0], check=check))
+        add(f'compose_transforms{tag}', 'compose_transforms',
+            lambda check=check: rt.compose_transforms(R, b, R2, -b, check=check))
+        add(f'invert_transform{tag}', 'invert_transform',
+            lambda check=check: rt.invert_transform(R, b, check=check))
+        add(f'transform_to_homogeneous{tag}', 'transform_to_homogeneous',
+            lambda check=check: rt.transform_to_homogeneous(R, b, check=check))
+        add(f'homogeneous_to_transform{tag}', 'homogeneous_to_transform',
+            lambda check=check: rt.homogeneous_to_transform(
+                np.block([[R, b[:, None]], [np.zeros((1, 3)), np.ones((1, 1))]]), check=check))
+        add(f'rotation_distance{tag}', 'rotation_distance',
+            lambda check=check: rt.rotation_distance(R, R2, check=check))
+        add(f'screw_interpolate{tag}', 'screw_interpolate',
+            lambda check=check: rt.screw_interpolate(R, b, R2, -b, 0.25, check=check))
+        for seq in rt.EULER_SEQUENCES:
+            add(f'decompose_{seq}{tag}', 'decompose',
+                lambda seq=seq, check=check: rt.decompose(R, b, seq, check=check))
+    add('is_rotation', 'is_rotation', lambda: rt.is_rotation(R))
+    add('validate_rotation', 'validate_rotation', lambda: rt.validate_rotation(R))
+    add('rotvec_to_matrix', 'rotvec_to_matrix', lambda: rt.rotvec_to_matrix([0.3, -1.0, 0.5]))
+    add('axis_angle_to_matrix', 'axis_angle_to_matrix',
+        lambda: rt.axis_angle_to_matrix([0.0, 0.6, 0.8], 1.3))
+    add('quaternion_to_matrix', 'quaternion_to_matrix',
+        lambda: rt.quaternion_to_matrix([0.1, -0.5, 0.3, 0.8]))
+    add('screw_exp', 'screw_exp', lambda: rt.screw_exp([0.3, -1.0, 0.5, 1.0, 2.0, -0.5]))
+    add('transform_from_screw', 'transform_from_screw',
+        lambda: rt.transform_from_screw([0.0, 0.6, 0.8], [1.0, 2.0, 0.0], 1.3, -0.4))
+    add('frame_to_matrix', 'frame_to_matrix',
+        lambda: rt.frame_to_matrix(R[:, 0], R[:, 1], R[:, 2]))
+    for seq in rt.EULER_SEQUENCES:  # rotation_node's per-message path (and rot_tools.messages:
+        # quaternion_to_matrix and euler_to_matrix of tuples of floats, met above)
+        add(f'decompose_values_{seq}', 'decompose_values',
+            lambda seq=seq: (decomposition.decompose_values(R, b, seq),
+                             decomposition.decompose_values(R2, b, seq)))
+    return calls
+
+
+def function_name(key):
+    """A readable function name for a kernel key, e.g. euler_angles_kernel_ZYX_checked."""
+    from rot_tools.euler import _PARSED
+    name = key.split('[')[0].split(' ')[0].removeprefix('rot_tools.').replace('.', '_')
+    for seq, spec in _PARSED.items():
+        if f'spec={spec!r}' in key:
+            name += f'_{seq}'
+    checked = re.search(r' checked\((\d+)\)$', key)
+    if checked:
+        name += '_checked' + ('' if checked.group(1) == '1' else checked.group(1))
+    if not name.isidentifier():
+        raise ValueError(f'no function name for the kernel {key}')
+    return name
+
+
+def record():
+    """Run ordinary_calls with no generated code: [(name, key, kernel, tails, outputs)]."""
+    saved = dict(_backend.GENERATED)
+    _backend.GENERATED.clear()
+    _backend._CODE_OF.clear()
+    _backend.RECORD = {}
+    try:
+        for label, _, call in ordinary_calls():
+            try:
+                call()
+            except RotationError as exc:
+                raise RuntimeError(f'the ordinary call {label} was refused: {exc}') from None
+        found = [(function_name(key), key, *_backend.RECORD[key]) for key in _backend.RECORD]
+    finally:
+        _backend.RECORD = None
+        _backend.GENERATED.update(saved)
+        _backend._CODE_OF.clear()
+    return found
+
+
+HEADER = f'''\
+# flake8: noqa
+"""Generated by ``{COMMAND}`` from the kernels of rot_tools: do not edit.
+
+One function per kernel the library and rotation_node use on one item: the kernel written
+out straight-line by rot_tools._trace (the same float operations as the kernel on Python
+floats, so the same bits). rot_tools._backend.apply finds them in CODE by the kernel's key.
+test/test_backend.py fails when this file is not what the kernels give: after changing or
+adding a kernel, run the command above.
+"""
+
+'''
+
+
+def source():
+    """The text of rot_tools/_generated.py, from the kernels as they are now."""
+    from rot_tools import _trace  # (only here: running rot_tools never imports the tracer)
+    packers, functions, table = set(), [], []
+    found = record()
+    names = [name for name, *_ in found]
+    if len(set(names)) != len(names):
+        raise ValueError(f'two kernels would have one function name: {sorted(names)}')
+    for name, key, kernel, tails, outputs in found:
+        functions.append(f'# {key}\n' + _trace.function_source(
+            name, kernel, _backend.FLOATS, tails, outputs, packers))
+        spec = ', '.join(f'({tail!r}, {_trace.DTYPE_NAMES[dtype]})' for tail, dtype in outputs)
+        table.append(f'    {key!r}: ([{spec}], {name}),')
+    lines = [HEADER + _trace.PRELUDE.rstrip('\n'), *_trace.op_lines(_backend.FLOATS),
+             *_trace.packer_lines(packers), '', '']
+    return '\n'.join(lines) + '\n\n'.join(functions) + '\n\nCODE = {\n' + '\n'.join(
+        table) + '\n}\n'
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog=COMMAND, description=__doc__.split('\n')[0])
+    parser.add_argument('--check', action='store_true',
+                        help='only say whether the file is up to date (exit 1 if not)')
+    args = parser.parse_args(argv)
+    text = source()
+    current = GENERATED.read_text(encoding='utf-8') if GENERATED.exists() else ''
+    if args.check:
+        print(f'{GENERATED}: {"up to date" if text == current else "STALE: run " + COMMAND}')
+        return 0 if text == current else 1
+    if text != current:
+        GENERATED.write_text(text, encoding='utf-8')
+    print(f'{GENERATED}: {text.count(chr(10))} lines, {text.count("def ")} functions'
+          + ('' if text != current else ' (unchanged)'))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,287 @@
+"""rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 and MCAP).
+
+Every value is checked against an independent computation from the messages as rosbags
+decodes them: scipy's Rotation (from_quat, as_euler('xyz'), as_rotvec, mean), numpy.unwrap,
+and a log map written here. Runs the CLI in-process (rot_tools.cli.main), and as the console
+script where the exit status and the exact stderr matter (test_bag_errors.py).
+"""
+
+import csv
+import io
+import json
+import math
+
+import numpy as np
+import pytest
+
+rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+import bag_helpers as bh  # noqa: E402
+from rot_tools import bag, bag_read, cli  # noqa: E402
+
+IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
+
+
+def run(capsys, *args):
+    """(status, stdout, stderr) of rot-tools ARGS, in-process."""
+    status = cli.main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def summary_of(capsys, *args):
+    status, out, err = run(capsys, *args, '--json')
+    assert (status, err) == (0, ''), err
+    return json.loads(out)
+
+
+def rows_of(capsys, *args):
+    status, out, err = run(capsys, *args, '--csv', '-')
+    assert (status, err) == (0, ''), err
+    return list(csv.DictReader(io.StringIO(out)))
+
+
+@pytest.fixture(scope='module')
+def reference():
+    """{topic: dict of arrays} decoded message by message by rosbags (the user's way)."""
+    from rosbags.highlevel import AnyReader
+    out = {}
+    with AnyReader([bh.REAL]) as reader:
+        for conn, t, raw in reader.messages():
+            msg = reader.deserialize(raw, conn.msgtype)
+            d = out.setdefault(conn.topic, {'q': [], 'p': [], 'stamp': [], 'gyro': [],
+                                            'sec': [], 'nsec': [], 'frame': []})
+            if conn.msgtype == 'sensor_msgs/msg/Imu':
+                q, p = msg.orientation, None
+                g = msg.angular_velocity
+                d['gyro'].append((g.x, g.y, g.z))
+            else:
+                q, p = msg.pose.pose.orientation, msg.pose.pose.position
+            d['q'].append((q.x, q.y, q.z, q.w))
+            d['p'].append((p.x, p.y, p.z) if p is not None else (0.0, 0.0, 0.0))
+            d['sec'].append(msg.header.stamp.sec)
+            d['nsec'].append(msg.header.stamp.nanosec)
+            d['frame'].append(msg.header.frame_id)
+    for d in out.values():
+        for k in ('q', 'p', 'gyro'):
+            d[k] = np.array(d[k], float)
+        d['stamp'] = np.array(d['sec']) + 1e-9 * np.array(d['nsec'])
+    return out
+
+
+@pytest.fixture(scope='module')
+def converted(tmp_path_factory):
+    """The real recording as rosbag2 sqlite3 and MCAP bags (converted by rosbags)."""
+    tmp = tmp_path_factory.mktemp('converted')
+    return {s: bh.convert_real(tmp / s, s) for s in ('sqlite3', 'mcap')}
+
+
+def log_map(R):
+    """Rotation vectors of rotations R (n, 3, 3), away from π (written here, not rot_tools)."""
+    cos = np.clip((np.trace(R, axis1=1, axis2=2) - 1) / 2, -1, 1)
+    angle = np.arccos(cos)
+    w = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], 1)
+    sin = np.sin(angle)
+    scale = np.where(angle < 1e-6, 0.5 + angle ** 2 / 12, angle / (2 * np.where(sin == 0, 1, sin)))
+    return w * scale[:, None]
+
+
+def canonical(q):
+    """q with w > 0 (none of the real bag's quaternions has w = 0)."""
+    return q * np.where(q[:, 3] < 0, -1.0, 1.0)[:, None]
+
+
+def col(rows, *names):
+    return np.array([[float(r[n]) for n in names] for r in rows])
+
+
+# ---------------------------------------------------------------------------------------
+# The summary
+
+
+def test_summary_of_the_real_bag(capsys, reference):
+    s = summary_of(capsys, 'bag', bh.REAL)
+    assert s['storage'] == 'rosbag1'
+    assert list(s['topics']) == [IMU, ODOM]
+    imu, odom = s['topics'][IMU], s['topics'][ODOM]
+    assert (imu['type'], imu['frame_ids'], imu['messages'], imu['accepted']) == (
+        'sensor_msgs/msg/Imu', ['base_link'], 3061, 3061)
+    assert (odom['type'], odom['frame_ids'], odom['child_frame_ids'], odom['messages']) == (
+        'nav_msgs/msg/Odometry', ['odom'], ['base_link'], 3060)
+    assert imu['refused'] == {'total': 0, 'non_finite': 0, 'zero_quaternion': 0,
+                              'non_unit_quaternion': 0, 'no_orientation': 0}
+    for topic in (IMU, ODOM):
+        t, ref = s['topics'][topic], reference[topic]
+        assert t['start'] == pytest.approx(ref['stamp'].min(), abs=1e-9)
+        assert t['end'] == pytest.approx(ref['stamp'].max(), abs=1e-9)
+        assert t['rate'] == pytest.approx((len(ref['stamp']) - 1) / np.ptp(ref['stamp']),
+                                          rel=1e-9)
+        rot = Rotation.from_quat(ref['q'])
+        rpy = np.unwrap(rot.as_euler('xyz'), axis=0)
+        for k, name in enumerate(('roll', 'pitch', 'yaw')):
+            np.testing.assert_allclose(t['rpy_range'][name], [rpy[:, k].min(), rpy[:, k].max()],
+                                       rtol=0, atol=1e-10)
+        # total angle: Σ 2·acos|q_{k-1}·q_k| of the unit quaternions (no matrix involved)
+        qn = ref['q'] / np.linalg.norm(ref['q'], axis=1)[:, None]
+        dots = np.abs(np.sum(qn[:-1] * qn[1:], axis=1))
+        steps = 2 * np.arctan2(np.linalg.norm(
+            qn[1:, :3] * qn[:-1, 3:] - qn[:-1, :3] * qn[1:, 3:]
+            - np.cross(qn[:-1, :3], qn[1:, :3]), axis=1), dots)
+        assert t['total_angle'] == pytest.approx(steps.sum(), rel=1e-9)
+        mean = rot.mean()
+        got = t['mean_orientation']['quaternion']
+        np.testing.assert_allclose([got[c] for c in 'xyzw'], canonical(mean.as_quat()[None])[0],
+                                   rtol=0, atol=1e-9)
+        np.testing.assert_allclose(list(t['mean_orientation']['rpy'].values()),
+                                   mean.as_euler('xyz'), rtol=0, atol=1e-9)
+    # Imu: RMS |ω − mean gyro of the step's ends|, ω from consecutive orientations
+    ref = reference[IMU]
+    rel = Rotation.from_quat(ref['q'][:-1]).inv() * Rotation.from_quat(ref['q'][1:])
+    omega = rel.as_rotvec() / np.diff(ref['stamp'])[:, None]
+    diff = omega - 0.5 * (ref['gyro'][:-1] + ref['gyro'][1:])
+    assert imu['gyro_rms_difference'] == pytest.approx(
+        math.sqrt(np.mean(np.sum(diff ** 2, axis=1))), rel=1e-7)
+    assert imu['gyro_rms_difference_unit'] == 'rad/s'
+    assert 'gyro_rms_difference' not in odom
+
+
+def test_summary_in_degrees_and_yaml(capsys):
+    yaml = pytest.importorskip('yaml')
+    rad = summary_of(capsys, 'bag', bh.REAL)
+    status, out, err = run(capsys, '--deg', 'bag', bh.REAL)  # an option before the command
+    assert (status, err) == (0, '')
+    deg = yaml.safe_load(out)
+    for topic in (IMU, ODOM):
+        r, d = rad['topics'][topic], deg['topics'][topic]
+        assert d['unit'] == 'deg'
+        np.testing.assert_allclose(d['rpy_range']['yaw'], np.degrees(r['rpy_range']['yaw']),
+                                   rtol=1e-11)
+        assert d['total_angle'] == pytest.approx(math.degrees(r['total_angle']), rel=1e-11)
+        assert d['messages'] == r['messages']
+
+
+# ---------------------------------------------------------------------------------------
+# The CSV
+
+
+def test_csv_rows_of_the_real_bag(capsys, reference):
+    rows = rows_of(capsys, 'bag', bh.REAL, '--seq', 'ZYX')
+    assert list(rows[0]) == bag.csv_header('ZYX') == [
+        'topic', 'stamp', 'frame_id', 'x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'roll', 'pitch',
+        'yaw', 'ZYX_1', 'ZYX_2', 'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz']
+    for topic in (IMU, ODOM):
+        ref = reference[topic]
+        mine = [r for r in rows if r['topic'] == topic]
+        assert len(mine) == len(ref['q'])
+        # stamps exactly as recorded: sec.nanosec
+        assert [r['stamp'] for r in mine] == [f'{s}.{n:09d}' for s, n in
+                                             zip(ref['sec'], ref['nsec'])]
+        assert [r['frame_id'] for r in mine] == ref['frame']
+        np.testing.assert_allclose(col(mine, 'x', 'y', 'z'), ref['p'], rtol=1e-11, atol=0)
+        rot = Rotation.from_quat(ref['q'])
+        q = col(mine, 'qx', 'qy', 'qz', 'qw')
+        np.testing.assert_allclose(q, canonical(rot.as_quat()), rtol=0, atol=1e-11)
+        assert (q[:, 3] > 0).all()
+        np.testing.assert_allclose(col(mine, 'roll', 'pitch', 'yaw'),
+                                   np.unwrap(rot.as_euler('xyz'), axis=0), rtol=0, atol=1e-10)
+        np.testing.assert_allclose(col(mine, 'ZYX_1', 'ZYX_2', 'ZYX_3'),
+                                   np.unwrap(rot.as_euler('ZYX'), axis=0), rtol=0, atol=1e-10)
+        np.testing.assert_allclose(col(mine, 'rx', 'ry', 'rz'), rot.as_rotvec(), rtol=0,
+                                   atol=1e-11)
+        np.testing.assert_allclose(col(mine, 'angle')[:, 0], rot.magnitude(), rtol=0,
+                                   atol=1e-11)
+        # body angular velocity from the previous row: log(R_{k-1}ᵀ R_k) / Δt
+        assert [mine[0][c] for c in ('wx', 'wy', 'wz')] == ['', '', '']
+        R = rot.as_matrix()
+        w = log_map(np.einsum('nji,njk->nik', R[:-1], R[1:])) / np.diff(ref['stamp'])[:, None]
+        np.testing.assert_allclose(col(mine[1:], 'wx', 'wy', 'wz'), w, rtol=1e-9, atol=1e-9)
+    # the yaw of the odometry really turns past ±π (what unwrapping is for)
+    yaw = col([r for r in rows if r['topic'] == ODOM], 'yaw')[:, 0]
+    assert yaw.max() > 10 * math.pi and np.abs(np.diff(yaw)).max() < 0.1
+
+
+def test_csv_wrap_and_degrees(capsys, reference):
+    rows = rows_of(capsys, 'bag', bh.REAL, '--topic', ODOM, '--wrap', '--deg')
+    ref = reference[ODOM]
+    rot = Rotation.from_quat(ref['q'])
+    got = col(rows, 'roll', 'pitch', 'yaw')
+    want = np.degrees(rot.as_euler('xyz'))
+    assert got.max() <= 180 and got.min() > -180
+    # ±180° are the same angle: compare on the circle
+    np.testing.assert_allclose((got - want + 180) % 360 - 180, 0, atol=1e-9)
+    np.testing.assert_allclose(col(rows, 'angle')[:, 0], np.degrees(rot.magnitude()),
+                               rtol=0, atol=1e-9)
+    R = rot.as_matrix()
+    w = log_map(np.einsum('nji,njk->nik', R[:-1], R[1:])) / np.diff(ref['stamp'])[:, None]
+    np.testing.assert_allclose(col(rows[1:], 'wx', 'wy', 'wz'), np.degrees(w), rtol=1e-9,
+                               atol=1e-7)
+    assert {r['topic'] for r in rows} == {ODOM}
+
+
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
+def test_rosbag2_gives_what_the_ros1_bag_gives(capsys, converted, storage):
+    want = rows_of(capsys, 'bag', bh.REAL, '--seq', 'zyz')
+    got = rows_of(capsys, 'bag', converted[storage], '--seq', 'zyz')
+    assert got == want
+    s = summary_of(capsys, 'bag', converted[storage])
+    assert s['storage'] == f'rosbag2 {storage}'
+    assert s['topics'] == summary_of(capsys, 'bag', bh.REAL)['topics']
+    # a file of the bag names the bag too
+    inner = next(p for p in converted[storage].iterdir() if p.suffix in ('.db3', '.mcap'))
+    assert summary_of(capsys, 'bag', inner)['topics'] == s['topics']
+
+
+@pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
+def test_fast_columns_equal_rosbags_decoding(converted, storage):
+    path = bh.REAL if storage == 'ros1' else converted[storage]
+    with bag_read.open_bag(path) as reader:
+        conns = list(reader.connections)
+        fast = bag_read.read_topics(reader, conns)
+        slow = bag_read.read_topics(reader, conns, fast=False)
+    assert set(fast) == set(slow) == {IMU, ODOM}
+    for topic in fast:
+        a, b = fast[topic], slow[topic]
+        for name in ('record', 'sec', 'nanosec', 'frame', 'orientation', 'position',
+                     'covariance0', 'angular_velocity', 'child'):
+            x, y = getattr(a, name), getattr(b, name)
+            assert (x is None) == (y is None)
+            if x is not None:
+                np.testing.assert_array_equal(x, y)
+        assert (a.frame_ids, a.child_frame_ids) == (b.frame_ids, b.child_frame_ids)
+
+
+def test_start_and_end_select_by_record_time(capsys):
+    from rosbags.highlevel import AnyReader
+    with AnyReader([bh.REAL]) as reader:
+        t0 = reader.start_time
+        times = {}
+        for conn, t, _ in reader.messages():
+            times.setdefault(conn.topic, []).append((t - t0) * 1e-9)
+    s = summary_of(capsys, 'bag', bh.REAL, '--start', 10, '--end', 20.5)
+    for topic, ts in times.items():
+        ts = np.array(ts)
+        assert s['topics'][topic]['messages'] == int(((ts >= 10) & (ts <= 20.5)).sum()) > 400
+
+
+def test_csv_to_a_file_and_the_summary_to_stdout(capsys, tmp_path):
+    path = tmp_path / 'out.csv'
+    status, out, err = run(capsys, 'bag', bh.REAL, '--csv', path, '--topic', IMU)
+    assert (status, err) == (0, '')
+    assert out.startswith('bag: ') and IMU in out and ODOM not in out
+    lines = path.read_text().splitlines()
+    assert len(lines) == 3062 and lines[0].startswith('topic,stamp,frame_id,')
+
+
+def test_plot_one_panel_per_topic(capsys, tmp_path):
+    pytest.importorskip('matplotlib')
+    svg = tmp_path / 'rpy.svg'
+    status, _, err = run(capsys, 'bag', bh.REAL, '--plot', svg)
+    assert (status, err) == (0, '')
+    text = svg.read_text()
+    for topic in (IMU, ODOM):
+        for angle in ('roll', 'pitch', 'yaw'):
+            assert f'id="{topic}:{angle}"' in text
+    png = tmp_path / 'rpy.png'
+    assert run(capsys, 'bag', bh.REAL, '--plot', png, '--deg')[0] == 0
+    assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
