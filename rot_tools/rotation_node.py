@@ -47,7 +47,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rot_tools import drawing, messages, runtime
+from rot_tools import drawing, messages, runtime, tf_input
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
@@ -63,7 +63,7 @@ BAD_TOLERANCE = 'bad_tolerance'
 PATH_TOO_LONG = 'path_too_long'
 NOT_DECOMPOSABLE = 'not_decomposable'
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
-    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG)
+    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG) + tf_input.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
 DEFAULT_PATH_STEPS = 20
@@ -165,6 +165,8 @@ class Settings(NamedTuple):
     quaternion_tolerance: float
     publish_markers: bool
     marker_scale: float
+    tf_reference_frame: str
+    tf_body_frame: str
 
 
 class Latest(NamedTuple):
@@ -207,6 +209,10 @@ def _check_marker_scale(value):
             f'not drawn), got {value}')
 
 
+def _check_tf_frame(value):
+    return tf_input.tf2_msgs_missing() if value else ''
+
+
 def _any_value(value):
     return ''
 
@@ -247,6 +253,15 @@ PARAMETERS = {
         f'>= {MIN_MARKER_SCALE:g}, finite',
         FloatingPointRange(from_value=MIN_MARKER_SCALE, to_value=math.inf, step=0.0)),
         _check_marker_scale),
+    'tf_reference_frame': ParameterSpec('', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        'with tf_body_frame: follow the transform of tf_body_frame in this frame on /tf and '
+        '/tf_static, publishing every output at each new common time of the chain '
+        "(header.frame_id = this frame); '' = off"), _check_tf_frame),
+    'tf_body_frame': ParameterSpec('', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "with tf_reference_frame: the frame followed on /tf and /tf_static; '' = off"),
+        _check_tf_frame),
 }
 """Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
@@ -289,6 +304,14 @@ class RotationNode(Node):
             1.0 / MARKER_RATE, self._publish_picture,
             clock=Clock(clock_type=ClockType.STEADY_TIME), autostart=False)
 
+        # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
+        # needs a tree between messages, two topics with their own QoS, and gives an output
+        # only when the chain has a new common time; rot_tools.tf_input).
+        self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
+                                       quaternion_tolerance=self._settings.quaternion_tolerance)
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None)
+        self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
+
         self._sources = []
         for kind in INPUTS:
             source = Source(self.resolve_topic_name(kind.topic),
@@ -310,6 +333,8 @@ class RotationNode(Node):
     def _input_topics(self):
         """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
         topics = [source.topic for source in self._sources]
+        if self._tf.following:
+            topics.append(f'{self._tf.topic} ({self._tf.reference} ← {self._tf.body})')
         return ', '.join(topics[:-1]) + ' or ' + topics[-1]
 
     # -- parameters --------------------------------------------------------------------
@@ -351,7 +376,8 @@ class RotationNode(Node):
         value = {name: self.get_parameter(name).value for name in PARAMETERS}
         return Settings(value['euler_sequence'], value['angle_unit'] == 'deg',
                         value['quaternion_tolerance'], value['publish_markers'],
-                        value['marker_scale'])
+                        value['marker_scale'], value['tf_reference_frame'],
+                        value['tf_body_frame'])
 
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters (rclpy has checked type and range)."""
@@ -367,9 +393,17 @@ class RotationNode(Node):
         """Take the new values into use from the next message; publish_markers off clears."""
         if any(parameter.name in PARAMETERS for parameter in parameters):
             was_drawing = self._settings.publish_markers
-            self._settings = self._read_settings()
+            old, self._settings = self._settings, self._read_settings()
             if was_drawing and not self._settings.publish_markers:
                 self._clear_picture()
+            new = self._settings
+            self._tf.set_quaternion_tolerance(new.quaternion_tolerance)
+            frames = (new.tf_reference_frame, new.tf_body_frame)
+            if frames != (old.tf_reference_frame, old.tf_body_frame):
+                self._tf.follow(*frames)
+                self.get_logger().info(
+                    f'following {frames[1]!r} in {frames[0]!r} on {self._tf.topic}'
+                    if self._tf.following else f'not following frames on {self._tf.topic}')
 
     def _warn_about_unknown_overrides(self):
         """Warn about each start-up override (-p, --params-file) that names no parameter.
@@ -396,8 +430,8 @@ class RotationNode(Node):
         settings = self._settings
         try:
             header, R, b = source.convert(msg, settings)
-            # Every number published, as plain floats from one compiled kernel pass (the
-            # hot path: decompose's arrays cost more than the math); the picture's
+            # Every number published, as plain floats from the generated kernels (the hot
+            # path: decompose's arrays cost more than the math); the picture's
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
             values = decompose_values(R, b, settings.euler_sequence)
         except messages.RefusedInput as exc:
@@ -406,6 +440,20 @@ class RotationNode(Node):
         except RotationError as exc:
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=msg.header)
             return
+        self._publish(source, header, R, b, values, settings)
+
+    def _on_tf_transform(self, header, R, b):
+        """The followed frames have a new common time on /tf: publish every output."""
+        settings = self._settings
+        try:
+            values = decompose_values(R, b, settings.euler_sequence)
+        except RotationError as exc:
+            self._refuse(self._tf_source.topic, NOT_DECOMPOSABLE, str(exc))
+            return
+        self._publish(self._tf_source, header, R, b, values, settings)
+
+    def _publish(self, source, header, R, b, values, settings):
+        """Every output of one accepted input (header, R, b), ``values`` its decomposition."""
         degrees = settings.degrees
         for publish, build, out, value_of, angles in self._outputs:
             value = value_of(values)
@@ -536,6 +584,8 @@ class RotationNode(Node):
                     'frame_id': latest.header.frame_id}
             data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,
                                          latest.settings.degrees))
+            if self._tf.following:
+                data['tf'] = self._tf.describe()
             response.success = True
         data['refused'] = refused
         data['last_refusals'] = self.last_refusals()

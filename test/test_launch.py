@@ -213,6 +213,11 @@ def test_doc_node_md_lists_every_launch_argument_and_every_topic_and_parameter()
     for kind in OUTPUTS:
         assert f'| `{kind.topic}` | {kind.msg_type.__module__.split(".")[0]}/msg/' \
             f'{kind.msg_type.__name__} |' in doc, kind.topic
+    rows = {line.split(' | ')[0][3:-1]: line.split(' | ')[1] for line in doc.splitlines()
+            if line.startswith('| `')}  # '| `name` | `default` | ...' (names may share a row)
     for name, spec in PARAMETERS.items():
-        default = str(spec.default).lower() if isinstance(spec.default, bool) else spec.default
-        assert f'| `{name}` | `{default}` |' in doc, name
+        default = spec.default
+        if isinstance(default, bool) or default == '':
+            default = {True: 'true', False: 'false', '': "''"}[default]
+        (row,) = [key for key in rows if f'`{name}`' in f'`{key}`'.split(', ')]
+        assert rows[row] == f'`{default}`', name

@@ -295,7 +295,8 @@ def test_parameter_file_is_applied(tester, node_process, tmp_path):
     edited.write_text(text)
     process = node_process('--params-file', str(edited))
     remote = Remote(tester, process.name)
-    assert remote.parameters(names) == changed
+    assert remote.parameters(names) == {
+        **{name: spec.default for name, spec in PARAMETERS.items()}, **changed}
     euler = Vector3Stamped()
     euler.header.frame_id = 'map'
     euler.vector.x, euler.vector.y, euler.vector.z = 10.0, 20.0, 30.0
