@@ -92,7 +92,7 @@ def listen(node):
     listener = rclpy.create_node('bench_overload_listener')
     count = [0]
     outputs = dict(rotation_matrix=Float64MultiArray, quaternion=QuaternionStamped,
-                   axis_angle=Vector3Stamped, euler_angles=Vector3Stamped,
+                   axis_angle=Vector3Stamped, euler_angles=Vector3Stamped, rpy=Vector3Stamped,
                    screw=TwistStamped, screw_axis=Marker, markers=MarkerArray)
     for name, msg_type in outputs.items():
         def on_output(data, screw=name == 'screw'):
