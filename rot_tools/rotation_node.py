@@ -621,11 +621,13 @@ class RotationNode(Node):
                 raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
             plan = messages.path_msg(start.header, start, goal, Rs, bs)
         except messages.RefusedInput as exc:
-            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True)
+            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True,
+                         header=start.header)
             return response
         except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
             self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
-                         f'no screw motion from start to goal: {exc}', error=True)
+                         f'no screw motion from start to goal: {exc}', error=True,
+                         header=start.header)
             return response
         response.plan = plan
         return response
