@@ -561,10 +561,13 @@ class Client:
         if not self.spin_until(lambda: answers.matrix(R), self.timeout):
             raise Unreachable(f'no matching message on {self.topic("rotation_matrix")} '
                               f'within {self.timeout:g} s')
+        # Kept now: while the pictures are awaited, another publisher's inputs may push it
+        # out of the latest matrices.
+        matrix = answers.matrix(R)
         if pictures:
             self.spin_until(lambda: set(PICTURES) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
-        return stamp, dict(answer, rotation_matrix=answers.matrix(R))
+        return stamp, dict(answer, rotation_matrix=matrix)
 
 
 def _key(stamp):
