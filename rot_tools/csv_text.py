@@ -32,9 +32,9 @@ _POW10_INT = 10 ** np.arange(19, dtype=np.int64)
 
 def numbers_fit(values, precision):
     """True when every finite value's digits at ``precision`` fit the int64 arithmetic."""
-    finite = np.abs(values[np.isfinite(values)])
-    return precision <= MAX_PRECISION and (not finite.size or finite.max() < 1e15) and not (
-        np.isinf(values).any())
+    values = np.asarray(values, dtype=np.float64).ravel()
+    big = np.fmax.reduce(np.abs(values)) if values.size else 0.0  # NaN ignored, ±inf not
+    return precision <= MAX_PRECISION and not big >= 1e15
 
 
 def _groups(v, count):
