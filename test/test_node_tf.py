@@ -97,7 +97,8 @@ class Reference:
 
     def edge(self, child, ns):
         """(parent, T) of child's edge at stamp ns, or None when the samples around it are
-        not both here (T0·expm(s·logm(T0⁻¹T1)) between them)."""
+        not both here (T0·expm(s·logm(T0⁻¹T1)) between them).
+        """
         if child in self.static:
             return self.static[child]
         parent, samples = self.samples[child]
@@ -150,8 +151,8 @@ def describe(tester, node_name):
 # The node
 
 
-def test_node_publishes_the_chain_at_each_new_common_time(node_process, tester, namespace,
-                                                           tf_publisher):
+def test_node_publishes_the_chain_at_each_new_common_time(
+        node_process, tester, namespace, tf_publisher):
     node = node_process(*node_args(namespace))
     reference = Reference(tester, f'{namespace}/tf', f'{namespace}/tf_static')
     tester.subscribe_outputs(node.name)
@@ -228,8 +229,8 @@ def test_describe_names_source_frames_and_chain_and_the_type_hash_is_upstreams(
 
 def test_refusals_are_counted_and_the_node_keeps_serving(node_process, tester, namespace,
                                                          tf_publisher):
-    from rclpy.parameter import Parameter
     from geometry_msgs.msg import QuaternionStamped
+    from rclpy.parameter import Parameter
     node = node_process(*node_args(namespace))
     out = f'{node.name}/quaternion'
     tester.subscribe(out, QuaternionStamped)
