@@ -73,7 +73,7 @@ DEFAULT_CHILD_FRAME = 'base_link'
 RESEND = 0.5
 """Seconds to wait for an answer before an input is sent again or a call repeated."""
 
-STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'screw')
+STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
 """The node's outputs that carry the input's header, published for every input."""
 
 PICTURES = ('screw_axis', 'markers')
@@ -384,19 +384,49 @@ def _pose_data(pose):
     return {'position': _xyz(pose.position), 'orientation': _quaternion(pose.orientation)}
 
 
-def _refusal_counts(response):
-    """{reason: n} of the refusals counted in a ~/describe response.
+def describe_data(response):
+    """~/describe's YAML document as data: at least ``refused`` {total, reason: n}.
 
-    From its YAML ``refused`` block or, before any accepted input, from its sentence
-    '... (3 input(s) refused: non_finite 3).'
+    The node writes YAML even before it has accepted an input (then ``success`` is false and
+    ``note`` says so). A node of an earlier version wrote one sentence instead, '... (3
+    input(s) refused: non_finite 3).', which gives {'note': sentence, 'refused': counts}.
     """
-    if response.success:
-        counts = yaml.safe_load(response.message)['refused']
-    else:
+    try:
+        data = yaml.safe_load(response.message)
+    except yaml.YAMLError:
+        data = None
+    if not isinstance(data, dict) or 'refused' not in data:
         tail = response.message.rpartition('refused')[2]
-        counts = {reason: int(n) for reason, n in re.findall(r'([a-z_]+) (\d+)', tail)}
-    counts.pop('total', None)
-    return counts
+        data = {'note': response.message, 'refused': {
+            reason: int(n) for reason, n in re.findall(r'([a-z_]+) (\d+)', tail)}}
+    return data
+
+
+def _counts(data):
+    """{reason: n} of describe_data's refusal counts (without the total)."""
+    return {reason: n for reason, n in data['refused'].items() if reason != 'total'}
+
+
+def refusal_text(data, before, source, stamps=None):
+    """Why the node refused what the client sent to ``source``, or '' if it did not.
+
+    ``data`` is describe_data now, ``before`` the counts before sending. For each reason
+    counted since, the node's sentence (what and by how much) from ``last_refusals`` when
+    that refusal is of ``source`` — and of one of ``stamps`` (sent header stamps, (sec,
+    nanosec)), when given and the refusal has one — else the reason's name alone.
+    """
+    last = data.get('last_refusals') or {}
+    texts = []
+    for reason, n in _counts(data).items():
+        if n <= before.get(reason, 0):
+            continue
+        refusal = last.get(reason) or {}
+        stamp = refusal.get('stamp')
+        ours = refusal.get('source') == source and (
+            stamps is None or stamp is None or (stamp['sec'], stamp['nanosec']) in stamps)
+        texts.append(f"{refusal['message']} ({reason})" if ours and refusal.get('message')
+                     else reason)
+    return '; '.join(texts)
 
 
 # ---------------------------------------------------------------------------------------
@@ -468,11 +498,13 @@ class Client:
         response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
-    def refused_since(self, before):
-        """{reason: n} of the refusals counted since ``before`` (a _refusal_counts)."""
-        now = _refusal_counts(self.describe())
-        return {reason: n - before.get(reason, 0) for reason, n in now.items()
-                if n > before.get(reason, 0)}
+    def refusal_counts(self):
+        """{reason: n} of the refusals the node has counted so far."""
+        return _counts(describe_data(self.describe()))
+
+    def refused(self, before, source, stamps=None):
+        """Why the node refused what was sent to ``source`` since ``before``, or ''."""
+        return refusal_text(describe_data(self.describe()), before, source, stamps)
 
     def wait_for_match(self, pub, subs):
         """Wait until the node subscribes to ``pub`` and publishes on every one of ``subs``."""
@@ -496,8 +528,8 @@ class Client:
         from std_msgs.msg import Float64MultiArray
         from visualization_msgs.msg import Marker, MarkerArray
         types = dict(zip(STAMPED_OUTPUTS + PICTURES, (
-            QuaternionStamped, Vector3Stamped, Vector3Stamped, TwistStamped, Marker,
-            MarkerArray)))
+            QuaternionStamped, Vector3Stamped, Vector3Stamped, Vector3Stamped, TwistStamped,
+            Marker, MarkerArray)))
         answers = Answers(msg.header.frame_id)
         outputs = STAMPED_OUTPUTS + (PICTURES if pictures else ())
         qos = QoSProfile(depth=100)
@@ -510,7 +542,7 @@ class Client:
         topic = self.topic(name)
         pub = self.node.create_publisher(type(msg), topic, 10)
         self.wait_for_match(pub, subs)
-        before = _refusal_counts(self.describe())
+        before = self.refusal_counts()
         deadline = time.monotonic() + self.timeout
         while True:
             msg.header.stamp = self.node.get_clock().now().to_msg()
@@ -518,10 +550,9 @@ class Client:
             pub.publish(msg)
             if self.spin_until(answers.complete, min(RESEND, deadline - time.monotonic())):
                 break
-            refused = self.refused_since(before)
+            refused = self.refused(before, topic, answers.sent)
             if refused:
-                raise Refused(f'node {self.target} refused the input on {topic}: '
-                              + ', '.join(refused))
+                raise Refused(f'node {self.target} refused the input on {topic}: {refused}')
             if time.monotonic() >= deadline:
                 raise Unreachable(f'no answer from node {self.target} to the input on {topic} '
                                   f'within {self.timeout:g} s')
@@ -609,6 +640,8 @@ def _answer_data(answer, parameters):
         'euler_angles': {'sequence': parameters['euler_sequence'],
                          'unit': parameters['angle_unit'],
                          'angles': _xyz(answer['euler_angles'].vector)},
+        'rpy': dict(zip(('roll', 'pitch', 'yaw'), _xyz(answer['rpy'].vector)),
+                    unit=parameters['angle_unit']),
         'screw': {'angular': _xyz(twist.angular), 'linear': _xyz(twist.linear)},
     }
     if 'screw_axis' in answer:
@@ -691,7 +724,8 @@ def _input_command(client, args):
 def _describe_command(client, args):
     response = client.describe()
     if not response.success:
-        raise Unreachable(f'{client.topic("describe")}: {response.message}')
+        note = describe_data(response).get('note', response.message)
+        raise Unreachable(f'{client.topic("describe")}: {" ".join(str(note).split())}')
     return yaml.safe_load(response.message) if args.json else response.message
 
 
@@ -702,12 +736,12 @@ def _screw_path_command(client, args):
         pose.header.frame_id = args.frame
         pose.header.stamp = client.node.get_clock().now().to_msg()
         _set_pose(pose.pose, values)
-    before = _refusal_counts(client.describe())
+    before = client.refusal_counts()
     plan = client.call(GetPlan, 'screw_path', request).plan
     if not plan.poses:
-        refused = client.refused_since(before)
+        refused = client.refused(before, client.topic('screw_path'))
         raise Refused(f'node {client.target} refused the screw_path request: '
-                      + (', '.join(refused) or 'an empty path'))
+                      + (refused or 'an empty path'))
     return {'node': client.target, 'service': client.topic('screw_path'),
             'frame_id': plan.header.frame_id,
             'poses': [_pose_data(p.pose) for p in plan.poses]}

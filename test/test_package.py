@@ -28,6 +28,10 @@ REQUIRED_EXEC_DEPENDS = {
 # rosdep keys of the non-ROS third-party modules rot_tools may import.
 ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
                'matplotlib': 'python3-matplotlib'}
+# Modules of an optional extra of setup.py that have no rosdep key: {module: extra}. They
+# are not exec_depends; rot_tools imports them only inside functions, so that everything
+# else works without them.
+OPTIONAL_EXTRAS = {'rosbags': 'bag'}
 # Packages the ROS wheels registered in this environment's ament index (sys.prefix/share).
 AMENT_INDEX = Path(sys.prefix, 'share', 'ament_index', 'resource_index', 'packages')
 COLCON_TIMEOUT = 300  # seconds; the build itself takes about 1 s
@@ -43,14 +47,22 @@ def manifest():
     return package
 
 
-def _imported_top_level_modules(path):
-    """Absolute imports of one module, as top-level names."""
+def _imported_top_level_modules(path, module_level_only=False):
+    """Absolute imports of one module, as top-level names (optionally: outside functions)."""
     names = set()
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
-        if isinstance(node, ast.Import):
+
+    def visit(node, in_function):
+        if isinstance(node, ast.Import) and not (module_level_only and in_function):
             names.update(alias.name.split('.')[0] for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+        elif (isinstance(node, ast.ImportFrom) and node.level == 0
+              and not (module_level_only and in_function)):
             names.add(node.module.split('.')[0])
+        in_function = in_function or isinstance(
+            node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+        for child in ast.iter_child_nodes(node):
+            visit(child, in_function)
+
+    visit(ast.parse(path.read_text(), filename=str(path)), False)
     return names
 
 
@@ -78,6 +90,11 @@ def test_package_xml_declares_every_package_the_code_imports(manifest):
         for name in _imported_top_level_modules(path):
             if name in sys.stdlib_module_names or name == PACKAGE:
                 continue
+            if name in OPTIONAL_EXTRAS:
+                assert name not in _imported_top_level_modules(path, module_level_only=True), (
+                    f'{path.name} imports {name!r} (optional extra '
+                    f'{OPTIONAL_EXTRAS[name]!r}) at module level: import it where it is used')
+                continue
             if (AMENT_INDEX / name).is_file():
                 key = name
             else:
@@ -88,6 +105,13 @@ def test_package_xml_declares_every_package_the_code_imports(manifest):
             if key not in declared:
                 missing.setdefault(key, []).append(path.name)
     assert missing == {}, f'imported but not an <exec_depend> in package.xml: {missing}'
+
+
+def test_optional_extras_name_their_modules():
+    requires = importlib.metadata.distribution(PACKAGE).requires
+    for module, extra in OPTIONAL_EXTRAS.items():
+        assert any(req.startswith(f'{module}==') and f'extra == "{extra}"' in req
+                   for req in requires), (module, extra, requires)
 
 
 def test_installed_distribution_matches_setup():
@@ -215,6 +239,23 @@ def test_import_rot_tools_from_any_directory(tmp_path, where):
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     assert Path(result.stdout.strip()) == REPO / PACKAGE / '__init__.py'
+
+
+def test_activating_the_venv_puts_the_commands_on_path():
+    """`source .venv/bin/activate`, as the README says, is all the commands need."""
+    bin_dir = Path(sys.executable).parent
+    if not (bin_dir / 'activate').is_file():
+        pytest.skip('not running in a venv')
+    path = os.pathsep.join(p for p in os.environ['PATH'].split(os.pathsep)
+                           if Path(p) != bin_dir)
+    script = ('. "$1/activate" && '
+              'for c in rot-tools rotation_node rotation_client; do command -v $c; done')
+    result = subprocess.run(['sh', '-c', script, 'sh', str(bin_dir)],
+                            env=dict(os.environ, PATH=path), stdin=subprocess.DEVNULL,
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == [
+        str(bin_dir / name) for name in ('rot-tools', 'rotation_node', 'rotation_client')]
 
 
 def test_installed_client_runs(colcon_install):
