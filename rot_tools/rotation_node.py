@@ -7,7 +7,7 @@ From there one path serves them all: one pass of the decomposition kernels
 Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, and the quaternion (matrix_to_quaternion
 of R) — and the picture's decomposition runs the same kernels, so at θ = π all outputs of
 one input share the axis sign. Outputs carry the input's header. Topics, services and
-parameters: SPEC §3, §3.1 and README "Using it in ROS 2".
+parameters: doc/node.md, and ``rotation_node --help``.
 
 The pictures (~/markers and ~/screw_axis, rot_tools.drawing) cost several times the rest of
 an input's work, so they are throttled: at most MARKER_RATE a second, the latest input wins,
@@ -116,7 +116,7 @@ INPUTS = (
     InputKind('~/imu', Imu, messages.imu_to_transform),
     InputKind('~/orientation', QuaternionStamped, messages.quaternion_stamped_to_transform),
 )
-"""Every input of the node (SPEC §3, §3.1); each joins the one path (header, R, b) → outputs."""
+"""Every input of the node; each joins the one path (header, R, b) → outputs."""
 
 
 class OutputKind(NamedTuple):

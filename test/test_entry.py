@@ -228,3 +228,12 @@ def test_user_arguments_are_what_rclpy_leaves(argv):
     from rclpy.utilities import remove_ros_args
     from rot_tools.runtime import user_arguments
     assert user_arguments(argv) == remove_ros_args(argv)[1:]
+
+
+def test_the_documented_bad_ros_argument_line():
+    from doc_blocks import assert_doc_output, console_steps, doc_block
+    ((command, _),) = console_steps(doc_block('node-bad-ros-argument'))
+    assert command.startswith('rotation_node --ros-args ')
+    proc = run(NODE_COMMANDS['python -m'], *command.split()[1:])
+    assert proc.returncode == 2
+    assert_doc_output('node-bad-ros-argument', f'$ {command}\n' + proc.stderr)

@@ -10,9 +10,10 @@ from pathlib import Path
 import re
 import signal
 import subprocess
+import time
 import xml.etree.ElementTree as ElementTree
 
-from conftest import console_script, RUN, script_env
+from conftest import console_script, RUN, script_env, TIMEOUT
 from geometry_msgs.msg import Vector3Stamped
 import numpy as np
 import pytest
@@ -165,6 +166,11 @@ def test_launched_with_a_namespace_a_remapped_imu_and_a_parameter_file(
     process, err = launched({'namespace': namespace, 'node_name': 'rotations',
                              'imu': imu_topic, 'params_file': str(params)})
     node = f'{namespace}/rotations'
+    deadline = time.monotonic() + 4 * TIMEOUT  # start-up, on a loaded machine
+    while 'decomposing' not in err.read_text():
+        assert process.poll() is None and time.monotonic() < deadline, err.read_text()
+        time.sleep(0.05)
+    assert f'{imu_topic} or' in err.read_text()  # the remap took
     tester.subscribe(f'{node}/rpy', Vector3Stamped)
     imu = tester.publisher(imu_topic, Imu, qos_profile_sensor_data)  # the remap took
     tester.wait_matched([f'{node}/rpy'])
@@ -194,3 +200,24 @@ def test_launched_with_a_namespace_a_remapped_imu_and_a_parameter_file(
 
 def test_a_relative_namespace_is_made_absolute_as_launch_ros_does():
     assert launch_command({'namespace': 'robot'})[2][4] == '__ns:=/robot'
+
+
+def test_doc_node_md_lists_every_launch_argument_and_every_topic_and_parameter():
+    from rot_tools.rotation_node import INPUTS, OUTPUTS, PARAMETERS
+    doc = (REPO / 'doc' / 'node.md').read_text(encoding='utf-8')
+    for arg in ElementTree.parse(LAUNCH_FILE).getroot().iter('arg'):
+        assert f"`{arg.get('name')}`" in doc, arg.get('name')
+    for kind in INPUTS:
+        assert f'| `{kind.topic}` (in) | {kind.msg_type.__module__.split(".")[0]}/msg/' \
+            f'{kind.msg_type.__name__} |' in doc, kind.topic
+    for kind in OUTPUTS:
+        assert f'| `{kind.topic}` | {kind.msg_type.__module__.split(".")[0]}/msg/' \
+            f'{kind.msg_type.__name__} |' in doc, kind.topic
+    rows = {line.split(' | ')[0][3:-1]: line.split(' | ')[1] for line in doc.splitlines()
+            if line.startswith('| `')}  # '| `name` | `default` | ...' (names may share a row)
+    for name, spec in PARAMETERS.items():
+        default = spec.default
+        if isinstance(default, bool) or default == '':
+            default = {True: 'true', False: 'false', '': "''"}[default]
+        (row,) = [key for key in rows if f'`{name}`' in f'`{key}`'.split(', ')]
+        assert rows[row] == f'`{default}`', name

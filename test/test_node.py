@@ -718,6 +718,19 @@ def test_describe_before_any_accepted_input_counts_refusals(rig):
         'message': 'orientation_covariance[0] is -1: the IMU gives no orientation estimate'}}
 
 
+def test_the_documented_describe_before_any_accepted_input(rig):
+    from doc_blocks import assert_doc_output
+    msg = pose_stamped((0.0, 0.0, 0.0, 1.0 / math.sqrt(2.0)))
+    msg.header.stamp.sec = 7
+    rig.pubs['pose'].publish(msg)
+    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1, what='the refusal')
+    response = rig.describe()
+    assert not response.success
+    # As the docs show it: the node at its default name, /rot_tools.
+    assert_doc_output('node-describe-nothing-yet',
+                      response.message.replace(rig.prefix + '/', '/rot_tools/'))
+
+
 def test_describe_carries_the_latest_refusal_of_each_reason(rig):
     # The sentence the node logs, as data: what was wrong and by how much, per reason.
     half = 1.0 / math.sqrt(2.0)
