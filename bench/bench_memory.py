@@ -57,7 +57,7 @@ class Listener:
         self.node = rclpy.create_node('bench_memory_listener')
         self.screws = 0
         outputs = dict(rotation_matrix=Float64MultiArray, quaternion=QuaternionStamped,
-                       axis_angle=Vector3Stamped, euler_angles=Vector3Stamped,
+                       axis_angle=Vector3Stamped, euler_angles=Vector3Stamped, rpy=Vector3Stamped,
                        screw=TwistStamped, screw_axis=Marker, markers=MarkerArray)
         for name, msg_type in outputs.items():
             cb = self._count if name == 'screw' else (lambda data: None)

@@ -197,7 +197,7 @@ class Tester:
         the kind rotation_node runs on (rotation_node.make_executor), so that every node
         test holds on it; both are spun in turn, in this thread.
         """
-        from rot_tools.rotation_node import make_executor
+        from rot_tools.runtime import make_executor
         if node.context is self.context:
             self.executors[0].add_node(node)
         else:

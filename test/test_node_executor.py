@@ -47,7 +47,7 @@ import yaml
 
 from conftest import RUN, TIMEOUT
 from rot_tools import runtime
-from rot_tools.executor import BURST, WaitSetExecutor
+from rot_tools.executor import WaitSetExecutor
 from rot_tools.rotation_node import RotationNode
 from rot_tools.runtime import guard_callbacks, make_executor, spin
 
