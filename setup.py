@@ -11,6 +11,7 @@ setup(
             ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', ['config/rot_tools.yaml']),
+        ('share/' + package_name + '/launch', ['launch/rot_tools.launch.xml']),
     ],
     install_requires=['setuptools', 'numpy'],
     extras_require={

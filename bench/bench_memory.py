@@ -1,11 +1,12 @@
 """Memory of rotation_node under a long flood: its resident set at the start and the end.
 
-Starts ``rotation_node`` (defaults: markers on) in an isolated DDS domain, a subscriber to
-its outputs in this process (so every output is really sent), and bench/pose_flooder.py;
-after a warm-up floods ``~/pose`` at 5000 msg/s for 60 s and samples the node's RSS
-(/proc/PID/status VmRSS) every second. Memory is *bounded* when the RSS grows by less than
-BOUND_MB over the second half of the flood (a leak of a few hundred bytes per message would
-show as tens of MB there). Not a test: a script that prints what it measured.
+Starts ``rotation_node`` by its console script (defaults: markers on) in an isolated DDS
+domain, a subscriber to its outputs in this process (so every output is really sent), and
+bench/pose_flooder.py; after a warm-up floods ``~/pose`` at 5000 msg/s for 60 s and samples
+the node's RSS (/proc/PID/status VmRSS) every second. Memory is *bounded* when the RSS
+grows by less than BOUND_MB over the second half of the flood (a leak of a few hundred
+bytes per message would show as tens of MB there). Not a test: a script that prints what it
+measured.
 
 Run: ``.venv/bin/python bench/bench_memory.py [--rate 5000] [--seconds 60] [--json PATH]``.
 """
@@ -87,8 +88,9 @@ def flood(flooder, rate, seconds):
 def measure(rate, seconds, logdir):
     python = sys.executable
     node_log = open(os.path.join(logdir, 'node.log'), 'w')
-    node = subprocess.Popen([python, '-m', 'rot_tools.rotation_node', '--ros-args', '-r',
-                             f'__node:={NODE}'], stdout=node_log, stderr=subprocess.STDOUT)
+    script = Path(python).parent / 'rotation_node'  # the console script, as a user starts it
+    node = subprocess.Popen([str(script) if script.exists() else 'rotation_node', '--ros-args',
+                             '-r', f'__node:={NODE}'], stdout=node_log, stderr=subprocess.STDOUT)
     listener = flooder = None
     try:
         listener = Listener()

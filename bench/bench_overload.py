@@ -17,10 +17,10 @@ Timeline: warm-up (a slow flood until the outputs reach the listener, one answer
 each service), RSS at the start, the flood for ``--seconds`` (60), RSS at its end, then the
 calls stop and the RSS is sampled for ``--after`` (10) seconds more. Printed: RSS at the
 start, at the end, at most and ``--after`` s after; for each service the latency p50, p99
-and max during the flood and how many calls went unanswered. The goals (§6.5 of the
-contract): RSS grows by at most 50 MB and is back within 20 MB of the start 10 s after the
-flood; every service answers within 1 s at p99 during it (an unanswered call counts as
-infinitely late). Not a test: a script that prints what it measured.
+and max during the flood and how many calls went unanswered. The goals: RSS grows by at
+most 50 MB and is back within 20 MB of the start 10 s after the flood; every service
+answers within 1 s at p99 during it (an unanswered call counts as infinitely late). Not a
+test: a script that prints what it measured.
 
 Run: ``.venv/bin/python bench/bench_overload.py [--seconds 60] [--after 10]
 [--executor node|events|single|multi] [--json PATH]``.

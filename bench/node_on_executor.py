@@ -24,10 +24,8 @@ import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
 
-try:  # where house has moved the process runtime
-    from rot_tools.runtime import make_executor, serve
-except ImportError:
-    from rot_tools.rotation_node import make_executor, serve
+from rot_tools import runtime
+from rot_tools.runtime import make_executor, serve
 from rot_tools.rotation_node import RotationNode
 
 
@@ -67,4 +65,4 @@ def main(argv=None):
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    runtime.exit_now(main())  # the node's own exit (no interpreter teardown)

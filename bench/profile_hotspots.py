@@ -95,7 +95,7 @@ def node_callback(top):
         candidates = {'rot_tools, markers off': on_pose[False],
                       'rot_tools, markers on': on_pose[True], 'relay': relay._on_pose}
         for cb in candidates.values():
-            for _ in range(100):  # warm: the one-item kernels compile after a few calls
+            for _ in range(100):  # warm (caches, first calls of NumPy and rclpy)
                 cb(msg)
         times = {}
         for _ in range(5):  # interleaved

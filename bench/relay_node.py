@@ -9,12 +9,13 @@ the stamped ones. So its throughput and latency are rclpy's own messaging limit 
 machine, the baseline bench_node.py measures rotation_node against.
 
 ``--executor default`` spins it on rclpy's default SingleThreadedExecutor; ``--executor
-node`` on the executor rotation_node itself uses (rotation_node.make_executor). Either way
-the loop is rotation_node.serve, the node's own. ``--full-interface`` also creates
-rotation_node's other input subscriptions and its two services, idle: the same entities for
-the executor to watch, still no math.
+node`` on the executor rotation_node itself uses (make_executor); ``--executor events`` on
+rclpy's EventsExecutor. Either way the relay is started and stopped as rotation_node's
+console script runs the node: the node's own loop (serve), and the same exit.
+``--full-interface`` also creates rotation_node's other input subscriptions and its two
+services, idle: the same entities for the executor to watch, still no math.
 
-Run: ``.venv/bin/python bench/relay_node.py [--executor default|node] [--full-interface]
+Run: ``.venv/bin/python bench/relay_node.py [--executor default|node|events] [--full-interface]
 [--ros-args -r __node:=NAME]`` (default node name ``relay``); SIGINT / SIGTERM end it.
 """
 
@@ -31,7 +32,9 @@ from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from std_srvs.srv import Trigger
 
-from rot_tools.rotation_node import INPUTS, make_executor, serve
+from rot_tools import runtime
+from rot_tools.runtime import make_executor, serve
+from rot_tools.rotation_node import INPUTS
 
 
 class RelayNode(Node):
@@ -87,15 +90,24 @@ def main(argv=None):
     """Spin until SIGINT / SIGTERM (exit 0), with rotation_node's loop."""
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--executor', choices=('default', 'node'), default='default',
-                        help="rclpy's SingleThreadedExecutor, or rotation_node's own")
+    parser.add_argument('--executor', choices=EXECUTORS, default='default',
+                        help="rclpy's SingleThreadedExecutor, rotation_node's own, or rclpy's "
+                        'EventsExecutor')
     parser.add_argument('--full-interface', action='store_true')
     args, ros_args = parser.parse_known_args(argv)
     rclpy.init(args=[sys.argv[0], *ros_args])  # SIGINT/SIGTERM: shutdown
-    serve(lambda: RelayNode(full_interface=args.full_interface),
-          SingleThreadedExecutor if args.executor == 'default' else make_executor)
+    serve(lambda: RelayNode(full_interface=args.full_interface), EXECUTORS[args.executor])
     return 0
 
 
+def _events_executor(context=None):
+    from rclpy.experimental import EventsExecutor
+    return EventsExecutor(context=context)
+
+
+EXECUTORS = {'default': SingleThreadedExecutor, 'node': make_executor,
+             'events': _events_executor}
+
+
 if __name__ == '__main__':
-    sys.exit(main())
+    runtime.exit_now(main())  # the node's own exit (no interpreter teardown)

@@ -1,10 +1,10 @@
-"""Run every benchmark (``make bench``): the math, first calls, the node, its memory, goals.
+"""Run every benchmark (``make bench``): math, first calls, node, memory, overload, goals.
 
 Each script runs in its own process with this interpreter and prints its own tables; this
 script then collects their figures (JSON) and prints every goal with the figure measured
-and whether it is met. The whole run takes about 8 minutes on 2 cores.
+and whether it is met. The whole run takes about 10 minutes on 2 cores.
 
-Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|first|node|memory]
+Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|first|node|memory|overload]
 [--json-dir DIR]``. ``--quick`` is a smoke run (smaller batch, fewer repetitions and rates,
 a short flood): its figures are not the ones to quote.
 """
@@ -34,7 +34,7 @@ def run(script, args, json_path):
     return json.loads(json_path.read_text())
 
 
-def goal_rows(math, node, memory, first=None):
+def goal_rows(math, node, memory, first=None, overload=None):
     rows = []
     if math:
         for r in math.get('batch', []):
@@ -79,14 +79,25 @@ def goal_rows(math, node, memory, first=None):
         rows.append(['node RSS growth under a 5 kHz flood', f"{memory['seconds']:.0f} s",
                      f"{memory['rss_end_mb'] - memory['rss_start_mb']:+.1f} MB",
                      'bounded', 'yes' if memory['bounded'] else 'NO'])
+    if overload:
+        flood = f"{overload['seconds']:.0f} s back to back"
+        goals = overload['goals']
+        rows.append(['overload: node RSS growth', flood, f"{overload['growth_mb']:+.1f} MB",
+                     '<= 50 MB', 'yes' if goals['growth'] else 'NO'])
+        rows.append([f"overload: RSS {overload['after']:.0f} s after - start", flood,
+                     f"{overload['rss_after_mb'] - overload['rss_start_mb']:+.1f} MB",
+                     '<= 20 MB', 'yes' if goals['returned'] else 'NO'])
+        for name, v in overload['latency'].items():
+            rows.append([f'overload: ~/{name} p99', f"{v['unanswered']} unanswered",
+                         f"{v['p99']:.3f} s", '<= 1 s', 'yes' if v['p99'] <= 1.0 else 'NO'])
     return rows
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
-    parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory'], action='append',
-                        default=[])
+    parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory', 'overload'],
+                        action='append', default=[])
     parser.add_argument('--json-dir', help='keep the JSON figures here')
     args = parser.parse_args(argv)
 
@@ -97,11 +108,12 @@ def main(argv=None):
         else []
     memory_args = ['--seconds', '5'] if args.quick else []
     first_args = ['--messages', '2000'] if args.quick else []
+    overload_args = ['--seconds', '5', '--after', '3'] if args.quick else []
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as tmp:
         out = Path(args.json_dir or tmp)
         os.makedirs(out, exist_ok=True)
-        math = first = node = memory = None
+        math = first = node = memory = overload = None
         if 'math' not in args.skip:
             math = run('bench_math.py', math_args, out / 'bench_math.json')
         if 'first' not in args.skip:
@@ -110,7 +122,9 @@ def main(argv=None):
             node = run('bench_node.py', node_args, out / 'bench_node.json')
         if 'memory' not in args.skip:
             memory = run('bench_memory.py', memory_args, out / 'bench_memory.json')
-        rows = goal_rows(math, node, memory, first)
+        if 'overload' not in args.skip:
+            overload = run('bench_overload.py', overload_args, out / 'bench_overload.json')
+        rows = goal_rows(math, node, memory, first, overload)
     benchlib.print_table(f'Goals (ratios rot_tools / reference, first calls in ms; '
                          f'{time.monotonic() - start:.0f} s in all)',
                          ['figure', 'against', 'measured', 'goal', 'met?'], rows)
@@ -119,7 +133,7 @@ def main(argv=None):
     tail = f'; missed: {", ".join(missed)}' if missed else ''
     print(f'\n{len(goals) - len(missed)} of {len(goals)} goals met{tail}')
     failed = [s for s, res in (('math', math), ('first', first), ('node', node),
-                               ('memory', memory))
+                               ('memory', memory), ('overload', overload))
               if s not in args.skip and res is None]
     if failed:
         print(f'run_all: {", ".join(failed)} benchmark failed (see above)', file=sys.stderr)

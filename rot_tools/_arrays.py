@@ -28,7 +28,7 @@ def as_float_array(x, tail, name):
 
 
 def _numeric_array(x, name):
-    """x as a NumPy array of real numbers within float64's range (any dtype), or RotationError.
+    """Return x as an array of real numbers within float64's range (any dtype), or raise.
 
     For inputs that are not already a real NumPy array: nested lists of Python numbers,
     complex arrays, objects. NumPy's own cast would drop an imaginary part with only a
@@ -76,7 +76,7 @@ def _overflows(v):
 
 
 def _short(v):
-    """A huge number as text short enough for a message: 1e+400 rather than 401 digits."""
+    """Write a huge number short enough for a message: 1e+400 rather than 401 digits."""
     text = str(v)
     if len(text) <= 30:
         return text
@@ -150,9 +150,12 @@ def refuse_overflow(fits, what):
 
 
 def apart(big, small, digits=(3, 6)):
-    """(big, small) as text with digits[0] and digits[1] significant digits (3 for a measured
-    size, 6 = :g for a tolerance), more where fewer would not show big > small: not
-    '|cos| = 1 > tol 1' for 1 > 0.99999999. Equal numbers (or NaN) keep the given digits."""
+    """Write (big, small) as text with digits[0] and digits[1] significant digits.
+
+    3 for a measured size, 6 = :g for a tolerance; more where fewer would not show
+    big > small: not '|cos| = 1 > tol 1' for 1 > 0.99999999. Equal numbers (or NaN) keep the
+    given digits.
+    """
     for extra in range(15):
         shown, bound = f'{big:.{digits[0] + extra}g}', f'{small:.{digits[1] + extra}g}'
         if float(shown) > float(bound) or not big > small:

@@ -14,6 +14,7 @@ after the first call that met it, and listed in its CODE table under the kernel'
 
 import argparse
 from pathlib import Path
+import py_compile
 import re
 import sys
 
@@ -117,7 +118,8 @@ def function_name(key):
 
 
 def record():
-    """Run ordinary_calls with no generated code: [(name, key, kernel, tails, outputs)]."""
+    """Run ordinary_calls with no generated code: [(name, key, kernel, tails, outputs)],
+    sorted by function name."""
     saved = dict(_backend.GENERATED)
     _backend.GENERATED.clear()
     _backend._CODE_OF.clear()
@@ -128,7 +130,8 @@ def record():
                 call()
             except RotationError as exc:
                 raise RuntimeError(f'the ordinary call {label} was refused: {exc}') from None
-        found = [(function_name(key), key, *_backend.RECORD[key]) for key in _backend.RECORD]
+        found = sorted((function_name(key), key, *_backend.RECORD[key])
+                       for key in _backend.RECORD)  # (by name: the order of calls is free)
     finally:
         _backend.RECORD = None
         _backend.GENERATED.update(saved)
@@ -181,6 +184,9 @@ def main(argv=None):
         return 0 if text == current else 1
     if text != current:
         GENERATED.write_text(text, encoding='utf-8')
+    # Its bytecode for this interpreter now (even where PYTHONDONTWRITEBYTECODE is set):
+    # compiling the module's source takes ~0.1 s, loading the bytecode a few ms.
+    py_compile.compile(str(GENERATED), doraise=True)
     print(f'{GENERATED}: {text.count(chr(10))} lines, {text.count("def ")} functions'
           + ('' if text != current else ' (unchanged)'))
     return 0

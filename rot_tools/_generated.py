@@ -17,6 +17,7 @@ _empty, _ndarray = _np.empty, _np.ndarray
 _f64, _b1 = _np.dtype(_np.float64), _np.dtype(_np.bool_)
 _float, _float64, _bool = float, _np.float64, _np.bool_
 _inf, _nan = _math.inf, _math.nan
+_True, _False = _np.True_, _np.False_
 _op_abs = abs
 _op_atan2 = _math.atan2
 _op_cos = _math.cos
@@ -29,8 +30,57 @@ _pack_4d = _Struct('4d').pack_into
 _pack_6d = _Struct('6d').pack_into
 _pack_9d = _Struct('9d').pack_into
 
-# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, False)]
-def euler__matrix_kernel_ZYX(inputs):
+# rot_tools.axis_angle._axis_angle_kernel
+def axis_angle__axis_angle_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if type(x1) is float:
+        a3 = x1
+    elif type(x1) is _float64:
+        a3 = _float(x1)
+    else:
+        return None
+    if (a0 + a1 + a2 + a3) * 0.0 != 0.0:
+        return None
+    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
+    t14 = _op_sqrt(t4)
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t16 = t14 == 0
+    t17 = 1.0 if t16 else t14
+    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
+    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
+    t25 = 1.0 if t16 else (a2 / t17)
+    t26 = 0.5 * a3
+    t27 = _op_sin(t26)
+    t29 = 2.0 * t27
+    t30 = t29 * t27
+    t31 = t29 * (_op_cos(t26))
+    t32 = 1.0 - t30
+    t33 = t30 * t20
+    t34 = t30 * t23
+    t36 = t31 * t20
+    t37 = t31 * t23
+    t38 = t31 * t25
+    t39 = t33 * t23
+    t40 = t33 * t25
+    t41 = t34 * t25
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t32 + (t33 * t20)), (t39 - t38), (t40 + t37), (t39 + t38), (t32 + (t34 * t23)), (t41 - t36), (t40 - t37), (t41 + t36), (t32 + ((t30 * t25) * t25)))
+    return (o0, (_True if (t16 and (a3 != 0)) else _False),)
+
+
+# rot_tools.axis_angle._rotvec_kernel
+def axis_angle__rotvec_kernel(inputs):
     if len(inputs) != 1:
         return None
     (x0, _, _, _), = inputs
@@ -44,1618 +94,81 @@ def euler__matrix_kernel_ZYX(inputs):
         return None
     if (a0 + a1 + a2) * 0.0 != 0.0:
         return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t9 = -t0
-    t15 = -t1
+    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t15 = _op_sqrt(t4)
+    t17 = (_op_abs(t15)) <= 1.7976931348623157e+308
+    t18 = t15 if t17 else 0.0
+    t20 = t18 if (t18 > 0) else 1.0
+    t21 = a0 / t20
+    t22 = a1 / t20
+    t23 = a2 / t20
+    t24 = 0.5 * t18
+    t25 = _op_sin(t24)
+    t27 = 2.0 * t25
+    t28 = t27 * t25
+    t29 = t27 * (_op_cos(t24))
+    t30 = 1.0 - t28
+    t31 = t28 * t21
+    t32 = t28 * t22
+    t34 = t29 * t21
+    t35 = t29 * t22
+    t36 = t29 * t23
+    t37 = t31 * t22
+    t38 = t31 * t23
+    t39 = t32 * t23
     o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (-t3), (t2 * t5), (t2 * t4))
+    _pack_9d(o0, 0, (t30 + (t31 * t21)), (t37 - t36), (t38 + t35), (t37 + t36), (t30 + (t32 * t22)), (t39 - t34), (t38 - t35), (t39 + t34), (t30 + ((t28 * t23) * t23)))
+    return (o0, (_True if t17 else _False),)
+
+
+# rot_tools.axis_angle._rotvec_of_matrix_kernel
+def axis_angle__rotvec_of_matrix_kernel(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t1 = 0.5 * (a7 - a5)
+    t3 = 0.5 * (a2 - a6)
+    t5 = 0.5 * (a3 - a1)
+    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
+    t24 = _op_sqrt(t14)
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t26 = t24 == 0
+    t27 = 1.0 if t26 else t24
+    t36 = _op_atan2(t24, t9)
+    t37 = t9 < 0
+    t38 = a0 - t9
+    t39 = a4 - t9
+    t40 = a8 - t9
+    t42 = 0.5 * (a1 + a3)
+    t44 = 0.5 * (a2 + a6)
+    t46 = 0.5 * (a5 + a7)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
+    t54 = t38 if t49 else (t42 if t52 else t44)
+    t56 = t42 if t49 else (t39 if t52 else t46)
+    t58 = t44 if t49 else (t46 if t52 else t40)
+    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
+    t73 = _op_sqrt(t63)
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t75 = t73 == 0
+    t76 = 1.0 if t75 else t73
+    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
+    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
+    t84 = 1.0 if t75 else (t58 / t76)
+    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)) * t36), ((((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)) * t36), ((((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))) * t36))
     return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, False)]
-def euler__matrix_kernel_XYX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t10 = t1 * t2
-    t19 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, t2, (t3 * t5), (t3 * t4), (t1 * t3), ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, False)]
-def euler__matrix_kernel_XYZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t10 = t1 * t3
-    t19 = t0 * t3
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t2 * t4), ((-t2) * t5), t3, ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, False)]
-def euler__matrix_kernel_XZX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t11 = t1 * t2
-    t18 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, t2, ((-t3) * t4), (t3 * t5), (t0 * t3), ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t1 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, False)]
-def euler__matrix_kernel_XZY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t9 = -t0
-    t15 = -t1
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t2 * t4), (-t3), (t2 * t5), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, False)]
-def euler__matrix_kernel_YXY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t11 = t1 * t2
-    t18 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - (t11 * t5)), (t1 * t3), ((t0 * t5) + (t11 * t4)), (t3 * t5), t2, ((-t3) * t4), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t18 * t4) - (t1 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, False)]
-def euler__matrix_kernel_YXZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t9 = -t0
-    t15 = -t1
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), (t2 * t5), (t2 * t4), (-t3), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, False)]
-def euler__matrix_kernel_YZX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t10 = t1 * t3
-    t19 = t0 * t3
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t0 * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), t3, (t2 * t4), ((-t2) * t5), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, False)]
-def euler__matrix_kernel_YZY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t10 = t1 * t2
-    t19 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t19 * t4) - (t1 * t5)), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), (t3 * t4), t2, (t3 * t5), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t0 * t4) - (t10 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, False)]
-def euler__matrix_kernel_ZXY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t10 = t1 * t3
-    t19 = t0 * t3
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2), ((t1 * t5) - (t19 * t4)), ((-t2) * t5), t3, (t2 * t4))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, False)]
-def euler__matrix_kernel_ZXZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t10 = t1 * t2
-    t19 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)), ((-t0) * t3), (t3 * t5), (t3 * t4), t2)
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, False)]
-def euler__matrix_kernel_ZYZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a0)
-    t1 = _op_sin(a0)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a2)
-    t5 = _op_sin(a2)
-    t11 = t1 * t2
-    t18 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)), (t1 * t3), ((-t3) * t4), (t3 * t5), t2)
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, True)]
-def euler__matrix_kernel_xyx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t10 = t1 * t2
-    t19 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, t2, (t3 * t5), (t3 * t4), (t1 * t3), ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, True)]
-def euler__matrix_kernel_xyz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t9 = -t0
-    t15 = -t1
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (-t3), (t2 * t5), (t2 * t4))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, True)]
-def euler__matrix_kernel_xzx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t11 = t1 * t2
-    t18 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, t2, ((-t3) * t4), (t3 * t5), (t0 * t3), ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t1 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, True)]
-def euler__matrix_kernel_xzy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t10 = t1 * t3
-    t19 = t0 * t3
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t0 * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), t3, (t2 * t4), ((-t2) * t5), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, True)]
-def euler__matrix_kernel_yxy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t11 = t1 * t2
-    t18 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - (t11 * t5)), (t1 * t3), ((t0 * t5) + (t11 * t4)), (t3 * t5), t2, ((-t3) * t4), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t18 * t4) - (t1 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, True)]
-def euler__matrix_kernel_yxz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t10 = t1 * t3
-    t19 = t0 * t3
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2), ((t1 * t5) - (t19 * t4)), ((-t2) * t5), t3, (t2 * t4))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, True)]
-def euler__matrix_kernel_yzx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t9 = -t0
-    t15 = -t1
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t2 * t4), (-t3), (t2 * t5), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, True)]
-def euler__matrix_kernel_yzy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t10 = t1 * t2
-    t19 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t19 * t4) - (t1 * t5)), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), (t3 * t4), t2, (t3 * t5), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t0 * t4) - (t10 * t5)))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, True)]
-def euler__matrix_kernel_zxy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t9 = -t0
-    t15 = -t1
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), (t2 * t5), (t2 * t4), (-t3), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, True)]
-def euler__matrix_kernel_zxz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t10 = t1 * t2
-    t19 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)), ((-t0) * t3), (t3 * t5), (t3 * t4), t2)
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, True)]
-def euler__matrix_kernel_zyx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t10 = t1 * t3
-    t19 = t0 * t3
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t2 * t4), ((-t2) * t5), t3, ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2))
-    return (o0,)
-
-
-# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, True)]
-def euler__matrix_kernel_zyz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t0 = _op_cos(a2)
-    t1 = _op_sin(a2)
-    t2 = _op_cos(a1)
-    t3 = _op_sin(a1)
-    t4 = _op_cos(a0)
-    t5 = _op_sin(a0)
-    t11 = t1 * t2
-    t18 = t0 * t2
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)), (t1 * t3), ((-t3) * t4), (t3 * t5), t2)
-    return (o0,)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)] checked(1)
-def euler_angles_kernel_XYX_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t1 = a3 * a3
-    t6 = _op_abs(((((a0 * a0) + t1) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a6
-    t61 = _op_sqrt((t1 + (t58 * t58)))
-    t62 = _op_atan2(t61, a0)
-    t63 = 3.141592653589793 - t62
-    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
-    t66 = _op_atan2(a3, t58)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = t58 / t68
-    t70 = a3 / t68
-    t78 = _op_atan2((-((t69 * a5) + (t70 * a8))), ((t69 * a4) + (t70 * a7)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)
-def euler_angles_kernel_XYZ_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t17 = a8 * a8
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + t17) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a5
-    t61 = _op_sqrt(((t58 * t58) + t17))
-    t62 = _op_atan2(a2, t61)
-    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
-    t66 = _op_atan2(t58, a8)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = a8 / t68
-    t70 = t58 / t68
-    t77 = _op_atan2(((t69 * a3) + (t70 * a6)), ((t69 * a4) + (t70 * a7)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)
-def euler_angles_kernel_XZX_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t1 = a3 * a3
-    t3 = a6 * a6
-    t6 = _op_abs(((((a0 * a0) + t1) + t3) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t3 + t1))
-    t60 = _op_atan2(t59, a0)
-    t61 = 3.141592653589793 - t60
-    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
-    t64 = _op_atan2(a6, a3)
-    t66 = t59 if (t59 > 0) else 1.0
-    t67 = a3 / t66
-    t70 = -(a6 / t66)
-    t76 = _op_atan2(((t67 * a7) + (t70 * a4)), ((t67 * a8) + (t70 * a5)))
-    if t63:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)
-def euler_angles_kernel_XZY_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t8 = a4 * a4
-    t10 = a7 * a7
-    t13 = _op_abs(((((a1 * a1) + t8) + t10) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t10 + t8))
-    t61 = _op_atan2((-a1), t59)
-    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
-    t65 = _op_atan2(a7, a4)
-    t67 = t59 if (t59 > 0) else 1.0
-    t68 = a4 / t67
-    t71 = -(a7 / t67)
-    t78 = _op_atan2((-((t68 * a6) + (t71 * a3))), ((t68 * a8) + (t71 * a5)))
-    if t64:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)
-def euler_angles_kernel_YXY_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t7 = a1 * a1
-    t10 = a7 * a7
-    t13 = _op_abs((((t7 + (a4 * a4)) + t10) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t7 + t10))
-    t60 = _op_atan2(t59, a4)
-    t61 = 3.141592653589793 - t60
-    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
-    t64 = _op_atan2(a1, a7)
-    t66 = t59 if (t59 > 0) else 1.0
-    t67 = a7 / t66
-    t70 = -(a1 / t66)
-    t76 = _op_atan2(((t67 * a2) + (t70 * a8)), ((t67 * a0) + (t70 * a6)))
-    if t63:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)
-def euler_angles_kernel_YXZ_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t14 = a2 * a2
-    t17 = a8 * a8
-    t20 = _op_abs((((t14 + (a5 * a5)) + t17) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t14 + t17))
-    t61 = _op_atan2((-a5), t59)
-    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
-    t65 = _op_atan2(a2, a8)
-    t67 = t59 if (t59 > 0) else 1.0
-    t68 = a8 / t67
-    t71 = -(a2 / t67)
-    t78 = _op_atan2((-((t68 * a1) + (t71 * a7))), ((t68 * a0) + (t71 * a6)))
-    if t64:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)
-def euler_angles_kernel_YZX_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = a0 * a0
-    t6 = _op_abs((((t0 + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a6
-    t61 = _op_sqrt(((t58 * t58) + t0))
-    t62 = _op_atan2(a3, t61)
-    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
-    t66 = _op_atan2(t58, a0)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = a0 / t68
-    t70 = t58 / t68
-    t77 = _op_atan2(((t69 * a7) + (t70 * a1)), ((t69 * a8) + (t70 * a2)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)
-def euler_angles_kernel_YZY_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t10 = a7 * a7
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + t10) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a1
-    t61 = _op_sqrt((t10 + (t58 * t58)))
-    t62 = _op_atan2(t61, a4)
-    t63 = 3.141592653589793 - t62
-    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
-    t66 = _op_atan2(a7, t58)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = t58 / t68
-    t70 = a7 / t68
-    t78 = _op_atan2((-((t69 * a6) + (t70 * a0))), ((t69 * a8) + (t70 * a2)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)
-def euler_angles_kernel_ZXY_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t8 = a4 * a4
-    t13 = _op_abs(((((a1 * a1) + t8) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a1
-    t61 = _op_sqrt(((t58 * t58) + t8))
-    t62 = _op_atan2(a7, t61)
-    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
-    t66 = _op_atan2(t58, a4)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = a4 / t68
-    t70 = t58 / t68
-    t77 = _op_atan2(((t69 * a2) + (t70 * a5)), ((t69 * a0) + (t70 * a3)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)
-def euler_angles_kernel_ZXZ_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t14 = a2 * a2
-    t20 = _op_abs((((t14 + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a5
-    t61 = _op_sqrt((t14 + (t58 * t58)))
-    t62 = _op_atan2(t61, a8)
-    t63 = 3.141592653589793 - t62
-    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
-    t66 = _op_atan2(a2, t58)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = t58 / t68
-    t70 = a2 / t68
-    t78 = _op_atan2((-((t69 * a1) + (t70 * a4))), ((t69 * a0) + (t70 * a3)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)
-def euler_angles_kernel_ZYX_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = a0 * a0
-    t1 = a3 * a3
-    t6 = _op_abs((((t0 + t1) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t1 + t0))
-    t61 = _op_atan2((-a6), t59)
-    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
-    t65 = _op_atan2(a3, a0)
-    t67 = t59 if (t59 > 0) else 1.0
-    t68 = a0 / t67
-    t71 = -(a3 / t67)
-    t78 = _op_atan2((-((t68 * a5) + (t71 * a2))), ((t68 * a4) + (t71 * a1)))
-    if t64:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)
-def euler_angles_kernel_ZYZ_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t14 = a2 * a2
-    t15 = a5 * a5
-    t20 = _op_abs((((t14 + t15) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t15 + t14))
-    t60 = _op_atan2(t59, a8)
-    t61 = 3.141592653589793 - t60
-    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
-    t64 = _op_atan2(a5, a2)
-    t66 = t59 if (t59 > 0) else 1.0
-    t67 = a2 / t66
-    t70 = -(a5 / t66)
-    t76 = _op_atan2(((t67 * a3) + (t70 * a0)), ((t67 * a4) + (t70 * a1)))
-    if t63:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)
-def euler_angles_kernel_xyx_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t1 = a3 * a3
-    t6 = _op_abs(((((a0 * a0) + t1) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a6
-    t61 = _op_sqrt((t1 + (t58 * t58)))
-    t62 = _op_atan2(t61, a0)
-    t63 = 3.141592653589793 - t62
-    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
-    t66 = _op_atan2(a3, t58)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = t58 / t68
-    t70 = a3 / t68
-    t78 = _op_atan2((-((t69 * a5) + (t70 * a8))), ((t69 * a4) + (t70 * a7)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)
-def euler_angles_kernel_xyz_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = a0 * a0
-    t1 = a3 * a3
-    t6 = _op_abs((((t0 + t1) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t1 + t0))
-    t61 = _op_atan2((-a6), t59)
-    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
-    t65 = _op_atan2(a3, a0)
-    t67 = t59 if (t59 > 0) else 1.0
-    t68 = a0 / t67
-    t71 = -(a3 / t67)
-    t78 = _op_atan2((-((t68 * a5) + (t71 * a2))), ((t68 * a4) + (t71 * a1)))
-    if t64:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)
-def euler_angles_kernel_xzx_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t1 = a3 * a3
-    t3 = a6 * a6
-    t6 = _op_abs(((((a0 * a0) + t1) + t3) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t3 + t1))
-    t60 = _op_atan2(t59, a0)
-    t61 = 3.141592653589793 - t60
-    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
-    t64 = _op_atan2(a6, a3)
-    t66 = t59 if (t59 > 0) else 1.0
-    t67 = a3 / t66
-    t70 = -(a6 / t66)
-    t76 = _op_atan2(((t67 * a7) + (t70 * a4)), ((t67 * a8) + (t70 * a5)))
-    if t63:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)
-def euler_angles_kernel_xzy_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = a0 * a0
-    t6 = _op_abs((((t0 + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a6
-    t61 = _op_sqrt(((t58 * t58) + t0))
-    t62 = _op_atan2(a3, t61)
-    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
-    t66 = _op_atan2(t58, a0)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = a0 / t68
-    t70 = t58 / t68
-    t77 = _op_atan2(((t69 * a7) + (t70 * a1)), ((t69 * a8) + (t70 * a2)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)
-def euler_angles_kernel_yxy_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t7 = a1 * a1
-    t10 = a7 * a7
-    t13 = _op_abs((((t7 + (a4 * a4)) + t10) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t7 + t10))
-    t60 = _op_atan2(t59, a4)
-    t61 = 3.141592653589793 - t60
-    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
-    t64 = _op_atan2(a1, a7)
-    t66 = t59 if (t59 > 0) else 1.0
-    t67 = a7 / t66
-    t70 = -(a1 / t66)
-    t76 = _op_atan2(((t67 * a2) + (t70 * a8)), ((t67 * a0) + (t70 * a6)))
-    if t63:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)
-def euler_angles_kernel_yxz_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t8 = a4 * a4
-    t13 = _op_abs(((((a1 * a1) + t8) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a1
-    t61 = _op_sqrt(((t58 * t58) + t8))
-    t62 = _op_atan2(a7, t61)
-    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
-    t66 = _op_atan2(t58, a4)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = a4 / t68
-    t70 = t58 / t68
-    t77 = _op_atan2(((t69 * a2) + (t70 * a5)), ((t69 * a0) + (t70 * a3)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)
-def euler_angles_kernel_yzx_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t8 = a4 * a4
-    t10 = a7 * a7
-    t13 = _op_abs(((((a1 * a1) + t8) + t10) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t10 + t8))
-    t61 = _op_atan2((-a1), t59)
-    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
-    t65 = _op_atan2(a7, a4)
-    t67 = t59 if (t59 > 0) else 1.0
-    t68 = a4 / t67
-    t71 = -(a7 / t67)
-    t78 = _op_atan2((-((t68 * a6) + (t71 * a3))), ((t68 * a8) + (t71 * a5)))
-    if t64:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)
-def euler_angles_kernel_yzy_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t10 = a7 * a7
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + t10) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a1
-    t61 = _op_sqrt((t10 + (t58 * t58)))
-    t62 = _op_atan2(t61, a4)
-    t63 = 3.141592653589793 - t62
-    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
-    t66 = _op_atan2(a7, t58)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = t58 / t68
-    t70 = a7 / t68
-    t78 = _op_atan2((-((t69 * a6) + (t70 * a0))), ((t69 * a8) + (t70 * a2)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)
-def euler_angles_kernel_zxy_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t14 = a2 * a2
-    t17 = a8 * a8
-    t20 = _op_abs((((t14 + (a5 * a5)) + t17) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t14 + t17))
-    t61 = _op_atan2((-a5), t59)
-    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
-    t65 = _op_atan2(a2, a8)
-    t67 = t59 if (t59 > 0) else 1.0
-    t68 = a8 / t67
-    t71 = -(a2 / t67)
-    t78 = _op_atan2((-((t68 * a1) + (t71 * a7))), ((t68 * a0) + (t71 * a6)))
-    if t64:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
-    return (o0, _bool(t64), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)
-def euler_angles_kernel_zxz_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t14 = a2 * a2
-    t20 = _op_abs((((t14 + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a5
-    t61 = _op_sqrt((t14 + (t58 * t58)))
-    t62 = _op_atan2(t61, a8)
-    t63 = 3.141592653589793 - t62
-    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
-    t66 = _op_atan2(a2, t58)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = t58 / t68
-    t70 = a2 / t68
-    t78 = _op_atan2((-((t69 * a1) + (t70 * a4))), ((t69 * a0) + (t70 * a3)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)
-def euler_angles_kernel_zyx_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t17 = a8 * a8
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + t17) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = -a5
-    t61 = _op_sqrt(((t58 * t58) + t17))
-    t62 = _op_atan2(a2, t61)
-    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
-    t66 = _op_atan2(t58, a8)
-    t68 = t61 if (t61 > 0) else 1.0
-    t69 = a8 / t68
-    t70 = t58 / t68
-    t77 = _op_atan2(((t69 * a3) + (t70 * a6)), ((t69 * a4) + (t70 * a7)))
-    if t65:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
-    return (o0, _bool(t65), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)
-def euler_angles_kernel_zyz_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t14 = a2 * a2
-    t15 = a5 * a5
-    t20 = _op_abs((((t14 + t15) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = _op_sqrt((t15 + t14))
-    t60 = _op_atan2(t59, a8)
-    t61 = 3.141592653589793 - t60
-    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
-    t64 = _op_atan2(a5, a2)
-    t66 = t59 if (t59 > 0) else 1.0
-    t67 = a2 / t66
-    t70 = -(a5 / t66)
-    t76 = _op_atan2(((t67 * a3) + (t70 * a0)), ((t67 * a4) + (t70 * a1)))
-    if t63:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
-    return (o0, _bool(t63), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.axis_angle.axis_angle_kernel checked(1)
-def axis_angle_axis_angle_kernel_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = 0.5 * (a7 - a5)
-    t61 = 0.5 * (a2 - a6)
-    t63 = 0.5 * (a3 - a1)
-    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
-    t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t84 = t82 == 0
-    t85 = 1.0 if t84 else t82
-    t95 = t67 < 0
-    t96 = a0 - t67
-    t97 = a4 - t67
-    t98 = a8 - t67
-    t100 = 0.5 * (a1 + a3)
-    t102 = 0.5 * (a2 + a6)
-    t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) and (t96 >= t98)
-    t110 = (t97 > t96) and (t97 >= t98)
-    t112 = t96 if t107 else (t100 if t110 else t102)
-    t114 = t100 if t107 else (t97 if t110 else t104)
-    t116 = t102 if t107 else (t104 if t110 else t98)
-    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
-    t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t133 = t131 == 0
-    t134 = 1.0 if t133 else t131
-    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
-    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
-    t142 = 1.0 if t133 else (t116 / t134)
-    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, (((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)), (((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)), (((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))))
-    return (o0, _float64((_op_atan2(t82, t67))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.axis_angle._rotvec_of_matrix_kernel checked(1)
@@ -1713,1381 +226,7 @@ def axis_angle__rotvec_of_matrix_kernel_checked(inputs):
     t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
     o0 = _empty((3,), _f64)
     _pack_3d(o0, 0, ((((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)) * t94), ((((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)) * t94), ((((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))) * t94))
-    return (o0, _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.so3.quaternion_of_matrix_kernel checked(1)
-def so3_quaternion_of_matrix_kernel_checked(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t58 = 1.0 + a0
-    t60 = (t58 - a4) - a8
-    t61 = 1.0 - a0
-    t63 = (t61 + a4) - a8
-    t65 = (t61 - a4) + a8
-    t67 = (t58 + a4) + a8
-    t68 = a1 + a3
-    t69 = a2 + a6
-    t70 = a5 + a7
-    t71 = a7 - a5
-    t72 = a2 - a6
-    t73 = a3 - a1
-    t78 = ((t60 >= t63) and (t60 >= t65)) and (t60 >= t67)
-    t83 = ((t63 > t60) and (t63 >= t65)) and (t63 >= t67)
-    t88 = ((t65 > t60) and (t65 > t63)) and (t65 >= t67)
-    t91 = t60 if t78 else (t68 if t83 else (t69 if t88 else t71))
-    t94 = t68 if t78 else (t63 if t83 else (t70 if t88 else t72))
-    t97 = t69 if t78 else (t70 if t83 else (t65 if t88 else t73))
-    t100 = t71 if t78 else (t72 if t83 else (t73 if t88 else t67))
-    t117 = (-1.0 if ((t100 if (t100 != 0) else (t91 if (t91 != 0) else (t94 if (t94 != 0) else t97))) < 0) else 1.0) / (_op_sqrt(((((t91 * t91) + (t94 * t94)) + (t97 * t97)) + (t100 * t100))))
-    o0 = _empty((4,), _f64)
-    _pack_4d(o0, 0, ((t91 * t117) + 0.0), ((t94 * t117) + 0.0), ((t97 * t117) + 0.0), ((t100 * t117) + 0.0))
-    return (o0, _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.screw._screw_kernel checked(1)
-def screw__screw_kernel_checked(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = 0.5 * (a7 - a5)
-    t61 = 0.5 * (a2 - a6)
-    t63 = 0.5 * (a3 - a1)
-    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
-    t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t84 = t82 == 0
-    t85 = 1.0 if t84 else t82
-    t94 = _op_atan2(t82, t67)
-    t95 = t67 < 0
-    t96 = a0 - t67
-    t97 = a4 - t67
-    t98 = a8 - t67
-    t100 = 0.5 * (a1 + a3)
-    t102 = 0.5 * (a2 + a6)
-    t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) and (t96 >= t98)
-    t110 = (t97 > t96) and (t97 >= t98)
-    t112 = t96 if t107 else (t100 if t110 else t102)
-    t114 = t100 if t107 else (t97 if t110 else t104)
-    t116 = t102 if t107 else (t104 if t110 else t98)
-    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
-    t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t133 = t131 == 0
-    t134 = 1.0 if t133 else t131
-    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
-    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
-    t142 = 1.0 if t133 else (t116 / t134)
-    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
-    t152 = ((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)
-    t155 = ((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)
-    t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
-    t163 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
-    t173 = _op_sqrt(t163)
-    if (((t163 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t163 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t175 = t173 == 0
-    t176 = 1.0 if t175 else t173
-    t185 = t94 < 1e-12
-    t186 = ((0.0 if t175 else (a9 / t176)) + 0.0) if t185 else t152
-    t187 = ((0.0 if t175 else (a10 / t176)) + 0.0) if t185 else t155
-    t188 = (1.0 if t175 else (a11 / t176)) if t185 else t158
-    t194 = t173 if t185 else (((a9 * t152) + (a10 * t155)) + (a11 * t158))
-    t196 = a9 - (t194 * t186)
-    t198 = a10 - (t194 * t187)
-    t200 = a11 - (t194 * t188)
-    t201 = 1.0 if t185 else t94
-    t215 = 0.5 * (0.0 if t185 else (1.0 / (_op_tan((0.5 * t201)))))
-    t219 = 0.0 if t185 else ((0.5 * t196) + (t215 * ((t187 * t200) - (t188 * t198))))
-    t223 = 0.0 if t185 else ((0.5 * t198) + (t215 * ((t188 * t196) - (t186 * t200))))
-    t227 = 0.0 if t185 else ((0.5 * t200) + (t215 * ((t186 * t198) - (t187 * t196))))
-    t230 = (t223 * t188) - (t227 * t187)
-    t233 = (t227 * t186) - (t219 * t188)
-    t236 = (t219 * t187) - (t223 * t186)
-    t237 = t194 / t201
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, t186, t187, t188)
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t219, t223, t227)
-    o2 = _empty((3,), _f64)
-    _pack_3d(o2, 0, t230, t233, t236)
-    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), _bool((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.screw._log_kernel checked(1)
-def screw__log_kernel_checked(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = 0.5 * (a7 - a5)
-    t61 = 0.5 * (a2 - a6)
-    t63 = 0.5 * (a3 - a1)
-    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
-    t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t84 = t82 == 0
-    t85 = 1.0 if t84 else t82
-    t94 = _op_atan2(t82, t67)
-    t95 = t67 < 0
-    t96 = a0 - t67
-    t97 = a4 - t67
-    t98 = a8 - t67
-    t100 = 0.5 * (a1 + a3)
-    t102 = 0.5 * (a2 + a6)
-    t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) and (t96 >= t98)
-    t110 = (t97 > t96) and (t97 >= t98)
-    t112 = t96 if t107 else (t100 if t110 else t102)
-    t114 = t100 if t107 else (t97 if t110 else t104)
-    t116 = t102 if t107 else (t104 if t110 else t98)
-    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
-    t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t133 = t131 == 0
-    t134 = 1.0 if t133 else t131
-    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
-    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
-    t142 = 1.0 if t133 else (t116 / t134)
-    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
-    t152 = ((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)
-    t155 = ((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)
-    t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
-    t159 = 0.5 * t94
-    t160 = _op_tan(t159)
-    t161 = t160 == 0
-    t164 = 1.0 if t161 else (t159 / (1.0 if t161 else t160))
-    t169 = ((a9 * t152) + (a10 * t155)) + (a11 * t158)
-    t179 = t169 * t152
-    t184 = ((t164 * (a9 - t179)) - (t159 * ((t155 * a11) - (t158 * a10)))) + t179
-    t185 = t169 * t155
-    t190 = ((t164 * (a10 - t185)) - (t159 * ((t158 * a9) - (t152 * a11)))) + t185
-    t191 = t169 * t158
-    t196 = ((t164 * (a11 - t191)) - (t159 * ((t152 * a10) - (t155 * a9)))) + t191
-    t204 = (((_op_abs(t184)) <= 1.7976931348623157e+308) and ((_op_abs(t190)) <= 1.7976931348623157e+308)) and ((_op_abs(t196)) <= 1.7976931348623157e+308)
-    if (False if t204 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((6,), _f64)
-    _pack_6d(o0, 0, (t94 * t152), (t94 * t155), (t94 * t158), t184, t190, t196)
-    return (o0, _bool(t204), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.rigid._points_kernel checked(1)
-def rigid__points_kernel_checked(inputs):
-    if len(inputs) != 3:
-        return None
-    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
-        a12, a13, a14, = x2.tolist()
-    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
-        a12, a13, a14, = x2
-        if not (type(a12) is float and type(a13) is float and type(a14) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t73 = (((a0 * a12) + (a1 * a13)) + (a2 * a14)) + a9
-    t74 = (((a3 * a12) + (a4 * a13)) + (a5 * a14)) + a10
-    t75 = (((a6 * a12) + (a7 * a13)) + (a8 * a14)) + a11
-    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
-    if (False if t83 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, t73, t74, t75)
-    return (o0, _bool(t83), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.rigid._compose_kernel checked(2)
-def rigid__compose_kernel_checked2(inputs):
-    if len(inputs) != 4:
-        return None
-    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), (x3, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
-        return None
-    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
-    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
-        a18, a19, a20, = x2.tolist()
-    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
-        a18, a19, a20, = x2
-        if not (type(a18) is float and type(a19) is float and type(a20) is float):
-            return None
-    else:
-        return None
-    if type(x3) is _ndarray and x3.dtype is _f64 and x3.shape == (3,):
-        a21, a22, a23, = x3.tolist()
-    elif (type(x3) is tuple or type(x3) is list) and len(x3) == 3:
-        a21, a22, a23, = x3
-        if not (type(a21) is float and type(a22) is float and type(a23) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17 + a18 + a19 + a20 + a21 + a22 + a23) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t64 = _op_abs(((((a9 * a9) + (a12 * a12)) + (a15 * a15)) - 1.0))
-    t71 = _op_abs(((((a10 * a10) + (a13 * a13)) + (a16 * a16)) - 1.0))
-    t78 = _op_abs(((((a11 * a11) + (a14 * a14)) + (a17 * a17)) - 1.0))
-    t84 = _op_abs((((a9 * a10) + (a12 * a13)) + (a15 * a16)))
-    t90 = _op_abs((((a9 * a11) + (a12 * a14)) + (a15 * a17)))
-    t96 = _op_abs((((a10 * a11) + (a13 * a14)) + (a16 * a17)))
-    t97 = t64 if t64 >= t71 or t64 != t64 else t71
-    t98 = t97 if t97 >= t78 or t97 != t97 else t78
-    t99 = t98 if t98 >= t84 or t98 != t98 else t84
-    t100 = t99 if t99 >= t90 or t99 != t99 else t90
-    t176 = (((a0 * a21) + (a1 * a22)) + (a2 * a23)) + a18
-    t177 = (((a3 * a21) + (a4 * a22)) + (a5 * a23)) + a19
-    t178 = (((a6 * a21) + (a7 * a22)) + (a8 * a23)) + a20
-    t186 = (((_op_abs(t176)) <= 1.7976931348623157e+308) and ((_op_abs(t177)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)
-    if (False if t186 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t176, t177, t178)
-    return (o0, o1, _bool(t186), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
-
-
-# rot_tools.rigid._invert_kernel checked(1)
-def rigid__invert_kernel_checked(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t73 = 0.0 - (((a0 * a9) + (a3 * a10)) + (a6 * a11))
-    t74 = 0.0 - (((a1 * a9) + (a4 * a10)) + (a7 * a11))
-    t75 = 0.0 - (((a2 * a9) + (a5 * a10)) + (a8 * a11))
-    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
-    if (False if t83 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t73, t74, t75)
-    return (o0, o1, _bool(t83), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.rigid._homogeneous_kernel checked(1)
-def rigid__homogeneous_kernel_checked(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    o0 = _empty((4, 4), _f64)
-    _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
-    return (o0, _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.rigid._transform_of_homogeneous_kernel
-def rigid__transform_of_homogeneous_kernel(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (4, 4)):
-        return None
-    (a0, a1, a2, a3,), (a4, a5, a6, a7,), (a8, a9, a10, a11,), (a12, a13, a14, a15,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15) * 0.0 != 0.0:
-        return None
-    t0 = _op_abs(a12)
-    t1 = _op_abs(a13)
-    t2 = _op_abs(a14)
-    t4 = _op_abs((a15 - 1.0))
-    t5 = t0 if t0 >= t1 or t0 != t0 else t1
-    t6 = t5 if t5 >= t2 or t5 != t5 else t2
-    t14 = _op_abs(((((a0 * a0) + (a4 * a4)) + (a8 * a8)) - 1.0))
-    t21 = _op_abs(((((a1 * a1) + (a5 * a5)) + (a9 * a9)) - 1.0))
-    t28 = _op_abs(((((a2 * a2) + (a6 * a6)) + (a10 * a10)) - 1.0))
-    t34 = _op_abs((((a0 * a1) + (a4 * a5)) + (a8 * a9)))
-    t40 = _op_abs((((a0 * a2) + (a4 * a6)) + (a8 * a10)))
-    t46 = _op_abs((((a1 * a2) + (a5 * a6)) + (a9 * a10)))
-    t47 = t14 if t14 >= t21 or t14 != t14 else t21
-    t48 = t47 if t47 >= t28 or t47 != t47 else t28
-    t49 = t48 if t48 >= t34 or t48 != t48 else t34
-    t50 = t49 if t49 >= t40 or t49 != t49 else t40
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, a0, a1, a2, a4, a5, a6, a8, a9, a10)
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, a3, a7, a11)
-    return (o0, o1, _float64((t6 if t6 >= t4 or t6 != t6 else t4)), _float64((t50 if t50 >= t46 or t50 != t50 else t46)), _float64((((a0 * ((a5 * a10) - (a6 * a9))) - (a1 * ((a4 * a10) - (a6 * a8)))) + (a2 * ((a4 * a9) - (a5 * a8))))),)
-
-
-# rot_tools.fitting._distance_kernel checked(2)
-def fitting__distance_kernel_checked2(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
-        return None
-    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t64 = _op_abs(((((a9 * a9) + (a12 * a12)) + (a15 * a15)) - 1.0))
-    t71 = _op_abs(((((a10 * a10) + (a13 * a13)) + (a16 * a16)) - 1.0))
-    t78 = _op_abs(((((a11 * a11) + (a14 * a14)) + (a17 * a17)) - 1.0))
-    t84 = _op_abs((((a9 * a10) + (a12 * a13)) + (a15 * a16)))
-    t90 = _op_abs((((a9 * a11) + (a12 * a14)) + (a15 * a17)))
-    t96 = _op_abs((((a10 * a11) + (a13 * a14)) + (a16 * a17)))
-    t97 = t64 if t64 >= t71 or t64 != t64 else t71
-    t98 = t97 if t97 >= t78 or t97 != t97 else t78
-    t99 = t98 if t98 >= t84 or t98 != t98 else t84
-    t100 = t99 if t99 >= t90 or t99 != t99 else t90
-    t162 = 0.5 * ((((a2 * a10) + (a5 * a13)) + (a8 * a16)) - (((a1 * a11) + (a4 * a14)) + (a7 * a17)))
-    t164 = 0.5 * ((((a0 * a11) + (a3 * a14)) + (a6 * a17)) - (((a2 * a9) + (a5 * a12)) + (a8 * a15)))
-    t166 = 0.5 * ((((a1 * a9) + (a4 * a12)) + (a7 * a15)) - (((a0 * a10) + (a3 * a13)) + (a6 * a16)))
-    t175 = ((t162 * t162) + (t164 * t164)) + (t166 * t166)
-    if (((t175 < 1e-290) and (((t162 != 0) or (t164 != 0)) or (t166 != 0))) or (t175 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    return (_float64((_op_atan2((_op_sqrt(t175)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float64((t100 if t100 >= t96 or t100 != t100 else t96)), _float64((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
-
-
-# rot_tools.so3.defects_kernel
-def so3_defects_kernel(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    return (_float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.screw._log_kernel
-def screw__log_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t1 = 0.5 * (a7 - a5)
-    t3 = 0.5 * (a2 - a6)
-    t5 = 0.5 * (a3 - a1)
-    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
-    t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t26 = t24 == 0
-    t27 = 1.0 if t26 else t24
-    t36 = _op_atan2(t24, t9)
-    t37 = t9 < 0
-    t38 = a0 - t9
-    t39 = a4 - t9
-    t40 = a8 - t9
-    t42 = 0.5 * (a1 + a3)
-    t44 = 0.5 * (a2 + a6)
-    t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) and (t38 >= t40)
-    t52 = (t39 > t38) and (t39 >= t40)
-    t54 = t38 if t49 else (t42 if t52 else t44)
-    t56 = t42 if t49 else (t39 if t52 else t46)
-    t58 = t44 if t49 else (t46 if t52 else t40)
-    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
-    t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t75 = t73 == 0
-    t76 = 1.0 if t75 else t73
-    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
-    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
-    t84 = 1.0 if t75 else (t58 / t76)
-    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
-    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
-    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
-    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
-    t101 = 0.5 * t36
-    t102 = _op_tan(t101)
-    t103 = t102 == 0
-    t106 = 1.0 if t103 else (t101 / (1.0 if t103 else t102))
-    t111 = ((a9 * t94) + (a10 * t97)) + (a11 * t100)
-    t121 = t111 * t94
-    t126 = ((t106 * (a9 - t121)) - (t101 * ((t97 * a11) - (t100 * a10)))) + t121
-    t127 = t111 * t97
-    t132 = ((t106 * (a10 - t127)) - (t101 * ((t100 * a9) - (t94 * a11)))) + t127
-    t133 = t111 * t100
-    t138 = ((t106 * (a11 - t133)) - (t101 * ((t94 * a10) - (t97 * a9)))) + t133
-    t146 = (((_op_abs(t126)) <= 1.7976931348623157e+308) and ((_op_abs(t132)) <= 1.7976931348623157e+308)) and ((_op_abs(t138)) <= 1.7976931348623157e+308)
-    if (False if t146 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((6,), _f64)
-    _pack_6d(o0, 0, (t36 * t94), (t36 * t97), (t36 * t100), t126, t132, t138)
-    return (o0, _bool(t146),)
-
-
-# rot_tools.screw._exp_kernel
-def screw__exp_kernel(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (6,):
-        a0, a1, a2, a3, a4, a5, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 6:
-        a0, a1, a2, a3, a4, a5, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float and type(a3) is float and type(a4) is float and type(a5) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5) * 0.0 != 0.0:
-        return None
-    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
-    t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t16 = t14 == 0
-    t17 = 1.0 if t16 else t14
-    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
-    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
-    t25 = 1.0 if t16 else (a2 / t17)
-    t27 = (_op_abs(t14)) <= 1.7976931348623157e+308
-    t28 = t14 if t27 else 0.0
-    t33 = ((t20 * a3) + (t23 * a4)) + (t25 * a5)
-    t34 = 0.5 * t28
-    t35 = _op_sin(t34)
-    t36 = t28 < 1e-08
-    t37 = 1.0 if t36 else t28
-    t38 = 2.0 * t35
-    t40 = t38 * (_op_cos(t34))
-    t42 = 1.0 if t36 else (t40 / t37)
-    t43 = t38 * t35
-    t45 = t34 if t36 else (t43 / t37)
-    t55 = t33 * t20
-    t60 = ((t42 * (a3 - t55)) + (t45 * ((t23 * a5) - (t25 * a4)))) + t55
-    t61 = t33 * t23
-    t66 = ((t42 * (a4 - t61)) + (t45 * ((t25 * a3) - (t20 * a5)))) + t61
-    t67 = t33 * t25
-    t72 = ((t42 * (a5 - t67)) + (t45 * ((t20 * a4) - (t23 * a3)))) + t67
-    t73 = 1.0 - t43
-    t74 = t43 * t20
-    t75 = t43 * t23
-    t77 = t40 * t20
-    t78 = t40 * t23
-    t79 = t40 * t25
-    t80 = t74 * t23
-    t81 = t74 * t25
-    t82 = t75 * t25
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t73 + (t74 * t20)), (t80 - t79), (t81 + t78), (t80 + t79), (t73 + (t75 * t23)), (t82 - t77), (t81 - t78), (t82 + t77), (t73 + ((t43 * t25) * t25)))
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t60, t66, t72)
-    return (o0, o1, _bool(t27), _bool(((((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) and ((_op_abs(t72)) <= 1.7976931348623157e+308))),)
-
-
-# rot_tools.decomposition._motion_kernel checked(1)
-def decomposition__motion_kernel_checked(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
-    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
-    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
-    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
-    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
-    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
-    t39 = t6 if t6 >= t13 or t6 != t6 else t13
-    t40 = t39 if t39 >= t20 or t39 != t39 else t20
-    t41 = t40 if t40 >= t26 or t40 != t40 else t26
-    t42 = t41 if t41 >= t32 or t41 != t41 else t32
-    t59 = 0.5 * (a7 - a5)
-    t61 = 0.5 * (a2 - a6)
-    t63 = 0.5 * (a3 - a1)
-    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
-    t82 = _op_sqrt(t72)
-    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t84 = t82 == 0
-    t85 = 1.0 if t84 else t82
-    t94 = _op_atan2(t82, t67)
-    t95 = t67 < 0
-    t96 = a0 - t67
-    t97 = a4 - t67
-    t98 = a8 - t67
-    t100 = 0.5 * (a1 + a3)
-    t102 = 0.5 * (a2 + a6)
-    t104 = 0.5 * (a5 + a7)
-    t107 = (t96 >= t97) and (t96 >= t98)
-    t110 = (t97 > t96) and (t97 >= t98)
-    t112 = t96 if t107 else (t100 if t110 else t102)
-    t114 = t100 if t107 else (t97 if t110 else t104)
-    t116 = t102 if t107 else (t104 if t110 else t98)
-    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
-    t131 = _op_sqrt(t121)
-    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t133 = t131 == 0
-    t134 = 1.0 if t133 else t131
-    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
-    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
-    t142 = 1.0 if t133 else (t116 / t134)
-    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
-    t152 = ((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)
-    t155 = ((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)
-    t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
-    t163 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
-    t173 = _op_sqrt(t163)
-    if (((t163 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t163 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t175 = t173 == 0
-    t176 = 1.0 if t175 else t173
-    t185 = t94 < 1e-12
-    t186 = ((0.0 if t175 else (a9 / t176)) + 0.0) if t185 else t152
-    t187 = ((0.0 if t175 else (a10 / t176)) + 0.0) if t185 else t155
-    t188 = (1.0 if t175 else (a11 / t176)) if t185 else t158
-    t193 = ((a9 * t152) + (a10 * t155)) + (a11 * t158)
-    t194 = t173 if t185 else t193
-    t196 = a9 - (t194 * t186)
-    t198 = a10 - (t194 * t187)
-    t200 = a11 - (t194 * t188)
-    t201 = 1.0 if t185 else t94
-    t215 = 0.5 * (0.0 if t185 else (1.0 / (_op_tan((0.5 * t201)))))
-    t219 = 0.0 if t185 else ((0.5 * t196) + (t215 * ((t187 * t200) - (t188 * t198))))
-    t223 = 0.0 if t185 else ((0.5 * t198) + (t215 * ((t188 * t196) - (t186 * t200))))
-    t227 = 0.0 if t185 else ((0.5 * t200) + (t215 * ((t186 * t198) - (t187 * t196))))
-    t230 = (t223 * t188) - (t227 * t187)
-    t233 = (t227 * t186) - (t219 * t188)
-    t236 = (t219 * t187) - (t223 * t186)
-    t237 = t194 / t201
-    t268 = 0.5 * t94
-    t269 = _op_tan(t268)
-    t270 = t269 == 0
-    t273 = 1.0 if t270 else (t268 / (1.0 if t270 else t269))
-    t283 = t193 * t152
-    t288 = ((t273 * (a9 - t283)) - (t268 * ((t155 * a11) - (t158 * a10)))) + t283
-    t289 = t193 * t155
-    t294 = ((t273 * (a10 - t289)) - (t268 * ((t158 * a9) - (t152 * a11)))) + t289
-    t295 = t193 * t158
-    t300 = ((t273 * (a11 - t295)) - (t268 * ((t152 * a10) - (t155 * a9)))) + t295
-    t308 = (((_op_abs(t288)) <= 1.7976931348623157e+308) and ((_op_abs(t294)) <= 1.7976931348623157e+308)) and ((_op_abs(t300)) <= 1.7976931348623157e+308)
-    if (False if t308 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, t152, t155, t158)
-    o2 = _empty((3,), _f64)
-    _pack_3d(o2, 0, t186, t187, t188)
-    o3 = _empty((3,), _f64)
-    _pack_3d(o3, 0, t219, t223, t227)
-    o4 = _empty((3,), _f64)
-    _pack_3d(o4, 0, t230, t233, t236)
-    o8 = _empty((6,), _f64)
-    _pack_6d(o8, 0, (t94 * t152), (t94 * t155), (t94 * t158), t288, t294, t300)
-    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, _bool(((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308)), _float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]
-def euler_angles_kernel_XYX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a6
-    t4 = _op_sqrt(((a3 * a3) + (t0 * t0)))
-    t5 = _op_atan2(t4, a0)
-    t6 = 3.141592653589793 - t5
-    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
-    t9 = _op_atan2(a3, t0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = t0 / t11
-    t13 = a3 / t11
-    t21 = _op_atan2((-((t12 * a5) + (t13 * a8))), ((t12 * a4) + (t13 * a7)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)]
-def euler_angles_kernel_XYZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a5
-    t4 = _op_sqrt(((t0 * t0) + (a8 * a8)))
-    t5 = _op_atan2(a2, t4)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(t0, a8)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = a8 / t11
-    t13 = t0 / t11
-    t20 = _op_atan2(((t12 * a3) + (t13 * a6)), ((t12 * a4) + (t13 * a7)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)]
-def euler_angles_kernel_XZX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a6 * a6) + (a3 * a3)))
-    t4 = _op_atan2(t3, a0)
-    t5 = 3.141592653589793 - t4
-    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
-    t8 = _op_atan2(a6, a3)
-    t10 = t3 if (t3 > 0) else 1.0
-    t11 = a3 / t10
-    t14 = -(a6 / t10)
-    t20 = _op_atan2(((t11 * a7) + (t14 * a4)), ((t11 * a8) + (t14 * a5)))
-    if t7:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t7),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)]
-def euler_angles_kernel_XZY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a7 * a7) + (a4 * a4)))
-    t5 = _op_atan2((-a1), t3)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(a7, a4)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a4 / t11
-    t15 = -(a7 / t11)
-    t22 = _op_atan2((-((t12 * a6) + (t15 * a3))), ((t12 * a8) + (t15 * a5)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)]
-def euler_angles_kernel_YXY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a1 * a1) + (a7 * a7)))
-    t4 = _op_atan2(t3, a4)
-    t5 = 3.141592653589793 - t4
-    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
-    t8 = _op_atan2(a1, a7)
-    t10 = t3 if (t3 > 0) else 1.0
-    t11 = a7 / t10
-    t14 = -(a1 / t10)
-    t20 = _op_atan2(((t11 * a2) + (t14 * a8)), ((t11 * a0) + (t14 * a6)))
-    if t7:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t7),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)]
-def euler_angles_kernel_YXZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a2 * a2) + (a8 * a8)))
-    t5 = _op_atan2((-a5), t3)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(a2, a8)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a8 / t11
-    t15 = -(a2 / t11)
-    t22 = _op_atan2((-((t12 * a1) + (t15 * a7))), ((t12 * a0) + (t15 * a6)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)]
-def euler_angles_kernel_YZX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a6
-    t4 = _op_sqrt(((t0 * t0) + (a0 * a0)))
-    t5 = _op_atan2(a3, t4)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(t0, a0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = a0 / t11
-    t13 = t0 / t11
-    t20 = _op_atan2(((t12 * a7) + (t13 * a1)), ((t12 * a8) + (t13 * a2)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)]
-def euler_angles_kernel_YZY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a1
-    t4 = _op_sqrt(((a7 * a7) + (t0 * t0)))
-    t5 = _op_atan2(t4, a4)
-    t6 = 3.141592653589793 - t5
-    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
-    t9 = _op_atan2(a7, t0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = t0 / t11
-    t13 = a7 / t11
-    t21 = _op_atan2((-((t12 * a6) + (t13 * a0))), ((t12 * a8) + (t13 * a2)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)]
-def euler_angles_kernel_ZXY(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a1
-    t4 = _op_sqrt(((t0 * t0) + (a4 * a4)))
-    t5 = _op_atan2(a7, t4)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(t0, a4)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = a4 / t11
-    t13 = t0 / t11
-    t20 = _op_atan2(((t12 * a2) + (t13 * a5)), ((t12 * a0) + (t13 * a3)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)]
-def euler_angles_kernel_ZXZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a5
-    t4 = _op_sqrt(((a2 * a2) + (t0 * t0)))
-    t5 = _op_atan2(t4, a8)
-    t6 = 3.141592653589793 - t5
-    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
-    t9 = _op_atan2(a2, t0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = t0 / t11
-    t13 = a2 / t11
-    t21 = _op_atan2((-((t12 * a1) + (t13 * a4))), ((t12 * a0) + (t13 * a3)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)]
-def euler_angles_kernel_ZYX(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a3 * a3) + (a0 * a0)))
-    t5 = _op_atan2((-a6), t3)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(a3, a0)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a0 / t11
-    t15 = -(a3 / t11)
-    t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)]
-def euler_angles_kernel_ZYZ(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a5 * a5) + (a2 * a2)))
-    t4 = _op_atan2(t3, a8)
-    t5 = 3.141592653589793 - t4
-    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
-    t8 = _op_atan2(a5, a2)
-    t10 = t3 if (t3 > 0) else 1.0
-    t11 = a2 / t10
-    t14 = -(a5 / t10)
-    t20 = _op_atan2(((t11 * a3) + (t14 * a0)), ((t11 * a4) + (t14 * a1)))
-    if t7:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
-    return (o0, _bool(t7),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)]
-def euler_angles_kernel_xyx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a6
-    t4 = _op_sqrt(((a3 * a3) + (t0 * t0)))
-    t5 = _op_atan2(t4, a0)
-    t6 = 3.141592653589793 - t5
-    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
-    t9 = _op_atan2(a3, t0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = t0 / t11
-    t13 = a3 / t11
-    t21 = _op_atan2((-((t12 * a5) + (t13 * a8))), ((t12 * a4) + (t13 * a7)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)]
-def euler_angles_kernel_xyz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a3 * a3) + (a0 * a0)))
-    t5 = _op_atan2((-a6), t3)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(a3, a0)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a0 / t11
-    t15 = -(a3 / t11)
-    t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)]
-def euler_angles_kernel_xzx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a6 * a6) + (a3 * a3)))
-    t4 = _op_atan2(t3, a0)
-    t5 = 3.141592653589793 - t4
-    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
-    t8 = _op_atan2(a6, a3)
-    t10 = t3 if (t3 > 0) else 1.0
-    t11 = a3 / t10
-    t14 = -(a6 / t10)
-    t20 = _op_atan2(((t11 * a7) + (t14 * a4)), ((t11 * a8) + (t14 * a5)))
-    if t7:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
-    return (o0, _bool(t7),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)]
-def euler_angles_kernel_xzy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a6
-    t4 = _op_sqrt(((t0 * t0) + (a0 * a0)))
-    t5 = _op_atan2(a3, t4)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(t0, a0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = a0 / t11
-    t13 = t0 / t11
-    t20 = _op_atan2(((t12 * a7) + (t13 * a1)), ((t12 * a8) + (t13 * a2)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)]
-def euler_angles_kernel_yxy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a1 * a1) + (a7 * a7)))
-    t4 = _op_atan2(t3, a4)
-    t5 = 3.141592653589793 - t4
-    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
-    t8 = _op_atan2(a1, a7)
-    t10 = t3 if (t3 > 0) else 1.0
-    t11 = a7 / t10
-    t14 = -(a1 / t10)
-    t20 = _op_atan2(((t11 * a2) + (t14 * a8)), ((t11 * a0) + (t14 * a6)))
-    if t7:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
-    return (o0, _bool(t7),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)]
-def euler_angles_kernel_yxz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a1
-    t4 = _op_sqrt(((t0 * t0) + (a4 * a4)))
-    t5 = _op_atan2(a7, t4)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(t0, a4)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = a4 / t11
-    t13 = t0 / t11
-    t20 = _op_atan2(((t12 * a2) + (t13 * a5)), ((t12 * a0) + (t13 * a3)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)]
-def euler_angles_kernel_yzx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a7 * a7) + (a4 * a4)))
-    t5 = _op_atan2((-a1), t3)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(a7, a4)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a4 / t11
-    t15 = -(a7 / t11)
-    t22 = _op_atan2((-((t12 * a6) + (t15 * a3))), ((t12 * a8) + (t15 * a5)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)]
-def euler_angles_kernel_yzy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a1
-    t4 = _op_sqrt(((a7 * a7) + (t0 * t0)))
-    t5 = _op_atan2(t4, a4)
-    t6 = 3.141592653589793 - t5
-    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
-    t9 = _op_atan2(a7, t0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = t0 / t11
-    t13 = a7 / t11
-    t21 = _op_atan2((-((t12 * a6) + (t13 * a0))), ((t12 * a8) + (t13 * a2)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)]
-def euler_angles_kernel_zxy(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a2 * a2) + (a8 * a8)))
-    t5 = _op_atan2((-a5), t3)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(a2, a8)
-    t11 = t3 if (t3 > 0) else 1.0
-    t12 = a8 / t11
-    t15 = -(a2 / t11)
-    t22 = _op_atan2((-((t12 * a1) + (t15 * a7))), ((t12 * a0) + (t15 * a6)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)]
-def euler_angles_kernel_zxz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a5
-    t4 = _op_sqrt(((a2 * a2) + (t0 * t0)))
-    t5 = _op_atan2(t4, a8)
-    t6 = 3.141592653589793 - t5
-    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
-    t9 = _op_atan2(a2, t0)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = t0 / t11
-    t13 = a2 / t11
-    t21 = _op_atan2((-((t12 * a1) + (t13 * a4))), ((t12 * a0) + (t13 * a3)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)]
-def euler_angles_kernel_zyx(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = -a5
-    t4 = _op_sqrt(((t0 * t0) + (a8 * a8)))
-    t5 = _op_atan2(a2, t4)
-    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
-    t9 = _op_atan2(t0, a8)
-    t11 = t4 if (t4 > 0) else 1.0
-    t12 = a8 / t11
-    t13 = t0 / t11
-    t20 = _op_atan2(((t12 * a3) + (t13 * a6)), ((t12 * a4) + (t13 * a7)))
-    if t8:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
-    return (o0, _bool(t8),)
-
-
-# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)]
-def euler_angles_kernel_zyz(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t3 = _op_sqrt(((a5 * a5) + (a2 * a2)))
-    t4 = _op_atan2(t3, a8)
-    t5 = 3.141592653589793 - t4
-    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
-    t8 = _op_atan2(a5, a2)
-    t10 = t3 if (t3 > 0) else 1.0
-    t11 = a2 / t10
-    t14 = -(a5 / t10)
-    t20 = _op_atan2(((t11 * a3) + (t14 * a0)), ((t11 * a4) + (t14 * a1)))
-    if t7:
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
-    return (o0, _bool(t7),)
+    return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.axis_angle.axis_angle_kernel
@@ -3137,8 +276,8 @@ def axis_angle_axis_angle_kernel(inputs):
     return (o0, _float64((_op_atan2(t24, t9))),)
 
 
-# rot_tools.axis_angle._rotvec_of_matrix_kernel
-def axis_angle__rotvec_of_matrix_kernel(inputs):
+# rot_tools.axis_angle.axis_angle_kernel checked(1)
+def axis_angle_axis_angle_kernel_checked(inputs):
     if len(inputs) != 1:
         return None
     (x0, _, _, _), = inputs
@@ -3147,801 +286,51 @@ def axis_angle__rotvec_of_matrix_kernel(inputs):
     (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
     if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
         return None
-    t1 = 0.5 * (a7 - a5)
-    t3 = 0.5 * (a2 - a6)
-    t5 = 0.5 * (a3 - a1)
-    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
-    t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = 0.5 * (a7 - a5)
+    t61 = 0.5 * (a2 - a6)
+    t63 = 0.5 * (a3 - a1)
+    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
+    t82 = _op_sqrt(t72)
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
         return None  # rare: apply runs the kernel
-    t26 = t24 == 0
-    t27 = 1.0 if t26 else t24
-    t36 = _op_atan2(t24, t9)
-    t37 = t9 < 0
-    t38 = a0 - t9
-    t39 = a4 - t9
-    t40 = a8 - t9
-    t42 = 0.5 * (a1 + a3)
-    t44 = 0.5 * (a2 + a6)
-    t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) and (t38 >= t40)
-    t52 = (t39 > t38) and (t39 >= t40)
-    t54 = t38 if t49 else (t42 if t52 else t44)
-    t56 = t42 if t49 else (t39 if t52 else t46)
-    t58 = t44 if t49 else (t46 if t52 else t40)
-    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
-    t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
+    t84 = t82 == 0
+    t85 = 1.0 if t84 else t82
+    t95 = t67 < 0
+    t96 = a0 - t67
+    t97 = a4 - t67
+    t98 = a8 - t67
+    t100 = 0.5 * (a1 + a3)
+    t102 = 0.5 * (a2 + a6)
+    t104 = 0.5 * (a5 + a7)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
+    t112 = t96 if t107 else (t100 if t110 else t102)
+    t114 = t100 if t107 else (t97 if t110 else t104)
+    t116 = t102 if t107 else (t104 if t110 else t98)
+    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
+    t131 = _op_sqrt(t121)
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
         return None  # rare: apply runs the kernel
-    t75 = t73 == 0
-    t76 = 1.0 if t75 else t73
-    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
-    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
-    t84 = 1.0 if t75 else (t58 / t76)
-    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
+    t133 = t131 == 0
+    t134 = 1.0 if t133 else t131
+    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
+    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
+    t142 = 1.0 if t133 else (t116 / t134)
+    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
     o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, ((((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)) * t36), ((((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)) * t36), ((((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))) * t36))
-    return (o0,)
-
-
-# rot_tools.so3.quaternion_of_matrix_kernel
-def so3_quaternion_of_matrix_kernel(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t0 = 1.0 + a0
-    t2 = (t0 - a4) - a8
-    t3 = 1.0 - a0
-    t5 = (t3 + a4) - a8
-    t7 = (t3 - a4) + a8
-    t9 = (t0 + a4) + a8
-    t10 = a1 + a3
-    t11 = a2 + a6
-    t12 = a5 + a7
-    t13 = a7 - a5
-    t14 = a2 - a6
-    t15 = a3 - a1
-    t20 = ((t2 >= t5) and (t2 >= t7)) and (t2 >= t9)
-    t25 = ((t5 > t2) and (t5 >= t7)) and (t5 >= t9)
-    t30 = ((t7 > t2) and (t7 > t5)) and (t7 >= t9)
-    t33 = t2 if t20 else (t10 if t25 else (t11 if t30 else t13))
-    t36 = t10 if t20 else (t5 if t25 else (t12 if t30 else t14))
-    t39 = t11 if t20 else (t12 if t25 else (t7 if t30 else t15))
-    t42 = t13 if t20 else (t14 if t25 else (t15 if t30 else t9))
-    t59 = (-1.0 if ((t42 if (t42 != 0) else (t33 if (t33 != 0) else (t36 if (t36 != 0) else t39))) < 0) else 1.0) / (_op_sqrt(((((t33 * t33) + (t36 * t36)) + (t39 * t39)) + (t42 * t42))))
-    o0 = _empty((4,), _f64)
-    _pack_4d(o0, 0, ((t33 * t59) + 0.0), ((t36 * t59) + 0.0), ((t39 * t59) + 0.0), ((t42 * t59) + 0.0))
-    return (o0,)
-
-
-# rot_tools.screw._screw_kernel
-def screw__screw_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t1 = 0.5 * (a7 - a5)
-    t3 = 0.5 * (a2 - a6)
-    t5 = 0.5 * (a3 - a1)
-    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
-    t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t26 = t24 == 0
-    t27 = 1.0 if t26 else t24
-    t36 = _op_atan2(t24, t9)
-    t37 = t9 < 0
-    t38 = a0 - t9
-    t39 = a4 - t9
-    t40 = a8 - t9
-    t42 = 0.5 * (a1 + a3)
-    t44 = 0.5 * (a2 + a6)
-    t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) and (t38 >= t40)
-    t52 = (t39 > t38) and (t39 >= t40)
-    t54 = t38 if t49 else (t42 if t52 else t44)
-    t56 = t42 if t49 else (t39 if t52 else t46)
-    t58 = t44 if t49 else (t46 if t52 else t40)
-    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
-    t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t75 = t73 == 0
-    t76 = 1.0 if t75 else t73
-    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
-    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
-    t84 = 1.0 if t75 else (t58 / t76)
-    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
-    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
-    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
-    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
-    t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
-    t115 = _op_sqrt(t105)
-    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t117 = t115 == 0
-    t118 = 1.0 if t117 else t115
-    t127 = t36 < 1e-12
-    t128 = ((0.0 if t117 else (a9 / t118)) + 0.0) if t127 else t94
-    t129 = ((0.0 if t117 else (a10 / t118)) + 0.0) if t127 else t97
-    t130 = (1.0 if t117 else (a11 / t118)) if t127 else t100
-    t136 = t115 if t127 else (((a9 * t94) + (a10 * t97)) + (a11 * t100))
-    t138 = a9 - (t136 * t128)
-    t140 = a10 - (t136 * t129)
-    t142 = a11 - (t136 * t130)
-    t143 = 1.0 if t127 else t36
-    t157 = 0.5 * (0.0 if t127 else (1.0 / (_op_tan((0.5 * t143)))))
-    t161 = 0.0 if t127 else ((0.5 * t138) + (t157 * ((t129 * t142) - (t130 * t140))))
-    t165 = 0.0 if t127 else ((0.5 * t140) + (t157 * ((t130 * t138) - (t128 * t142))))
-    t169 = 0.0 if t127 else ((0.5 * t142) + (t157 * ((t128 * t140) - (t129 * t138))))
-    t172 = (t165 * t130) - (t169 * t129)
-    t175 = (t169 * t128) - (t161 * t130)
-    t178 = (t161 * t129) - (t165 * t128)
-    t179 = t136 / t143
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, t128, t129, t130)
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t161, t165, t169)
-    o2 = _empty((3,), _f64)
-    _pack_3d(o2, 0, t172, t175, t178)
-    return (o0, o1, o2, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), _bool((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308))),)
-
-
-# rot_tools.rigid._points_kernel
-def rigid__points_kernel(inputs):
-    if len(inputs) != 3:
-        return None
-    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
-        a12, a13, a14, = x2.tolist()
-    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
-        a12, a13, a14, = x2
-        if not (type(a12) is float and type(a13) is float and type(a14) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14) * 0.0 != 0.0:
-        return None
-    t15 = (((a0 * a12) + (a1 * a13)) + (a2 * a14)) + a9
-    t16 = (((a3 * a12) + (a4 * a13)) + (a5 * a14)) + a10
-    t17 = (((a6 * a12) + (a7 * a13)) + (a8 * a14)) + a11
-    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
-    if (False if t25 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, t15, t16, t17)
-    return (o0, _bool(t25),)
-
-
-# rot_tools.rigid._compose_kernel
-def rigid__compose_kernel(inputs):
-    if len(inputs) != 4:
-        return None
-    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), (x3, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
-        return None
-    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
-    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
-        a18, a19, a20, = x2.tolist()
-    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
-        a18, a19, a20, = x2
-        if not (type(a18) is float and type(a19) is float and type(a20) is float):
-            return None
-    else:
-        return None
-    if type(x3) is _ndarray and x3.dtype is _f64 and x3.shape == (3,):
-        a21, a22, a23, = x3.tolist()
-    elif (type(x3) is tuple or type(x3) is list) and len(x3) == 3:
-        a21, a22, a23, = x3
-        if not (type(a21) is float and type(a22) is float and type(a23) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17 + a18 + a19 + a20 + a21 + a22 + a23) * 0.0 != 0.0:
-        return None
-    t60 = (((a0 * a21) + (a1 * a22)) + (a2 * a23)) + a18
-    t61 = (((a3 * a21) + (a4 * a22)) + (a5 * a23)) + a19
-    t62 = (((a6 * a21) + (a7 * a22)) + (a8 * a23)) + a20
-    t70 = (((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t61)) <= 1.7976931348623157e+308)) and ((_op_abs(t62)) <= 1.7976931348623157e+308)
-    if (False if t70 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t60, t61, t62)
-    return (o0, o1, _bool(t70),)
-
-
-# rot_tools.rigid._invert_kernel
-def rigid__invert_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t15 = 0.0 - (((a0 * a9) + (a3 * a10)) + (a6 * a11))
-    t16 = 0.0 - (((a1 * a9) + (a4 * a10)) + (a7 * a11))
-    t17 = 0.0 - (((a2 * a9) + (a5 * a10)) + (a8 * a11))
-    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
-    if (False if t25 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t15, t16, t17)
-    return (o0, o1, _bool(t25),)
-
-
-# rot_tools.rigid._homogeneous_kernel
-def rigid__homogeneous_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    o0 = _empty((4, 4), _f64)
-    _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
-    return (o0,)
-
-
-# rot_tools.fitting._distance_kernel
-def fitting__distance_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
-        return None
-    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17) * 0.0 != 0.0:
-        return None
-    t46 = 0.5 * ((((a2 * a10) + (a5 * a13)) + (a8 * a16)) - (((a1 * a11) + (a4 * a14)) + (a7 * a17)))
-    t48 = 0.5 * ((((a0 * a11) + (a3 * a14)) + (a6 * a17)) - (((a2 * a9) + (a5 * a12)) + (a8 * a15)))
-    t50 = 0.5 * ((((a1 * a9) + (a4 * a12)) + (a7 * a15)) - (((a0 * a10) + (a3 * a13)) + (a6 * a16)))
-    t59 = ((t46 * t46) + (t48 * t48)) + (t50 * t50)
-    if (((t59 < 1e-290) and (((t46 != 0) or (t48 != 0)) or (t50 != 0))) or (t59 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    return (_float64((_op_atan2((_op_sqrt(t59)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))),)
-
-
-# rot_tools.decomposition._motion_kernel
-def decomposition__motion_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t1 = 0.5 * (a7 - a5)
-    t3 = 0.5 * (a2 - a6)
-    t5 = 0.5 * (a3 - a1)
-    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
-    t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t26 = t24 == 0
-    t27 = 1.0 if t26 else t24
-    t36 = _op_atan2(t24, t9)
-    t37 = t9 < 0
-    t38 = a0 - t9
-    t39 = a4 - t9
-    t40 = a8 - t9
-    t42 = 0.5 * (a1 + a3)
-    t44 = 0.5 * (a2 + a6)
-    t46 = 0.5 * (a5 + a7)
-    t49 = (t38 >= t39) and (t38 >= t40)
-    t52 = (t39 > t38) and (t39 >= t40)
-    t54 = t38 if t49 else (t42 if t52 else t44)
-    t56 = t42 if t49 else (t39 if t52 else t46)
-    t58 = t44 if t49 else (t46 if t52 else t40)
-    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
-    t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t75 = t73 == 0
-    t76 = 1.0 if t75 else t73
-    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
-    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
-    t84 = 1.0 if t75 else (t58 / t76)
-    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
-    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
-    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
-    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
-    t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
-    t115 = _op_sqrt(t105)
-    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t117 = t115 == 0
-    t118 = 1.0 if t117 else t115
-    t127 = t36 < 1e-12
-    t128 = ((0.0 if t117 else (a9 / t118)) + 0.0) if t127 else t94
-    t129 = ((0.0 if t117 else (a10 / t118)) + 0.0) if t127 else t97
-    t130 = (1.0 if t117 else (a11 / t118)) if t127 else t100
-    t135 = ((a9 * t94) + (a10 * t97)) + (a11 * t100)
-    t136 = t115 if t127 else t135
-    t138 = a9 - (t136 * t128)
-    t140 = a10 - (t136 * t129)
-    t142 = a11 - (t136 * t130)
-    t143 = 1.0 if t127 else t36
-    t157 = 0.5 * (0.0 if t127 else (1.0 / (_op_tan((0.5 * t143)))))
-    t161 = 0.0 if t127 else ((0.5 * t138) + (t157 * ((t129 * t142) - (t130 * t140))))
-    t165 = 0.0 if t127 else ((0.5 * t140) + (t157 * ((t130 * t138) - (t128 * t142))))
-    t169 = 0.0 if t127 else ((0.5 * t142) + (t157 * ((t128 * t140) - (t129 * t138))))
-    t172 = (t165 * t130) - (t169 * t129)
-    t175 = (t169 * t128) - (t161 * t130)
-    t178 = (t161 * t129) - (t165 * t128)
-    t179 = t136 / t143
-    t210 = 0.5 * t36
-    t211 = _op_tan(t210)
-    t212 = t211 == 0
-    t215 = 1.0 if t212 else (t210 / (1.0 if t212 else t211))
-    t225 = t135 * t94
-    t230 = ((t215 * (a9 - t225)) - (t210 * ((t97 * a11) - (t100 * a10)))) + t225
-    t231 = t135 * t97
-    t236 = ((t215 * (a10 - t231)) - (t210 * ((t100 * a9) - (t94 * a11)))) + t231
-    t237 = t135 * t100
-    t242 = ((t215 * (a11 - t237)) - (t210 * ((t94 * a10) - (t97 * a9)))) + t237
-    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t242)) <= 1.7976931348623157e+308)
-    if (False if t250 else True):
-        return None  # rare: apply runs the kernel
-    o0 = _empty((3,), _f64)
-    _pack_3d(o0, 0, t94, t97, t100)
-    o2 = _empty((3,), _f64)
-    _pack_3d(o2, 0, t128, t129, t130)
-    o3 = _empty((3,), _f64)
-    _pack_3d(o3, 0, t161, t165, t169)
-    o4 = _empty((3,), _f64)
-    _pack_3d(o4, 0, t172, t175, t178)
-    o8 = _empty((6,), _f64)
-    _pack_6d(o8, 0, (t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242)
-    return (o0, _float64(t36), o2, o3, o4, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), o8, _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) and t250)),)
-
-
-# rot_tools.axis_angle._rotvec_kernel
-def axis_angle__rotvec_kernel(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2) * 0.0 != 0.0:
-        return None
-    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
-    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t15 = _op_sqrt(t4)
-    t17 = (_op_abs(t15)) <= 1.7976931348623157e+308
-    t18 = t15 if t17 else 0.0
-    t20 = t18 if (t18 > 0) else 1.0
-    t21 = a0 / t20
-    t22 = a1 / t20
-    t23 = a2 / t20
-    t24 = 0.5 * t18
-    t25 = _op_sin(t24)
-    t27 = 2.0 * t25
-    t28 = t27 * t25
-    t29 = t27 * (_op_cos(t24))
-    t30 = 1.0 - t28
-    t31 = t28 * t21
-    t32 = t28 * t22
-    t34 = t29 * t21
-    t35 = t29 * t22
-    t36 = t29 * t23
-    t37 = t31 * t22
-    t38 = t31 * t23
-    t39 = t32 * t23
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t30 + (t31 * t21)), (t37 - t36), (t38 + t35), (t37 + t36), (t30 + (t32 * t22)), (t39 - t34), (t38 - t35), (t39 + t34), (t30 + ((t28 * t23) * t23)))
-    return (o0, _bool(t17),)
-
-
-# rot_tools.axis_angle._axis_angle_kernel
-def axis_angle__axis_angle_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if type(x1) is float:
-        a3 = x1
-    elif type(x1) is _float64:
-        a3 = _float(x1)
-    else:
-        return None
-    if (a0 + a1 + a2 + a3) * 0.0 != 0.0:
-        return None
-    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
-    t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t16 = t14 == 0
-    t17 = 1.0 if t16 else t14
-    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
-    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
-    t25 = 1.0 if t16 else (a2 / t17)
-    t26 = 0.5 * a3
-    t27 = _op_sin(t26)
-    t29 = 2.0 * t27
-    t30 = t29 * t27
-    t31 = t29 * (_op_cos(t26))
-    t32 = 1.0 - t30
-    t33 = t30 * t20
-    t34 = t30 * t23
-    t36 = t31 * t20
-    t37 = t31 * t23
-    t38 = t31 * t25
-    t39 = t33 * t23
-    t40 = t33 * t25
-    t41 = t34 * t25
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t32 + (t33 * t20)), (t39 - t38), (t40 + t37), (t39 + t38), (t32 + (t34 * t23)), (t41 - t36), (t40 - t37), (t41 + t36), (t32 + ((t30 * t25) * t25)))
-    return (o0, _bool((t16 and (a3 != 0))),)
-
-
-# rot_tools.so3._quaternion_kernel
-def so3__quaternion_kernel(inputs):
-    if len(inputs) != 1:
-        return None
-    (x0, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (4,):
-        a0, a1, a2, a3, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 4:
-        a0, a1, a2, a3, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float and type(a3) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3) * 0.0 != 0.0:
-        return None
-    t0 = _op_abs(a0)
-    t1 = _op_abs(a1)
-    t2 = t0 if t0 >= t1 or t0 != t0 else t1
-    t3 = _op_abs(a2)
-    t4 = _op_abs(a3)
-    t5 = t3 if t3 >= t4 or t3 != t3 else t4
-    t6 = t2 if t2 >= t5 or t2 != t2 else t5
-    t8 = t6 if (t6 > 0) else 1.0
-    t9 = a0 / t8
-    t10 = a1 / t8
-    t11 = a2 / t8
-    t12 = a3 / t8
-    t13 = t9 * t9
-    t14 = t10 * t10
-    t15 = t13 + t14
-    t16 = t11 * t11
-    t19 = (t15 + t16) + (t12 * t12)
-    t22 = 2.0 / (t19 if (t19 > 0) else 1.0)
-    t26 = t9 * t10
-    t27 = t11 * t12
-    t30 = t9 * t11
-    t31 = t10 * t12
-    t39 = t10 * t11
-    t40 = t9 * t12
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (1.0 - (t22 * (t14 + t16))), (t22 * (t26 - t27)), (t22 * (t30 + t31)), (t22 * (t26 + t27)), (1.0 - (t22 * (t13 + t16))), (t22 * (t39 - t40)), (t22 * (t30 - t31)), (t22 * (t39 + t40)), (1.0 - (t22 * t15)))
-    return (o0, _bool((t6 == 0)),)
-
-
-# rot_tools.screw._transform_of_screw_kernel
-def screw__transform_of_screw_kernel(inputs):
-    if len(inputs) != 4:
-        return None
-    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), (x3, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a3, a4, a5, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a3, a4, a5, = x1
-        if not (type(a3) is float and type(a4) is float and type(a5) is float):
-            return None
-    else:
-        return None
-    if type(x2) is float:
-        a6 = x2
-    elif type(x2) is _float64:
-        a6 = _float(x2)
-    else:
-        return None
-    if type(x3) is float:
-        a7 = x3
-    elif type(x3) is _float64:
-        a7 = _float(x3)
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7) * 0.0 != 0.0:
-        return None
-    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
-    t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t16 = t14 == 0
-    t17 = 1.0 if t16 else t14
-    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
-    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
-    t25 = 1.0 if t16 else (a2 / t17)
-    t26 = 0.5 * a6
-    t27 = _op_sin(t26)
-    t29 = 2.0 * t27
-    t30 = t29 * (_op_cos(t26))
-    t31 = t29 * t27
-    t36 = ((a3 * t20) + (a4 * t23)) + (a5 * t25)
-    t52 = ((t31 * (a3 - (t36 * t20))) - (t30 * ((t23 * a5) - (t25 * a4)))) + (a7 * t20)
-    t59 = ((t31 * (a4 - (t36 * t23))) - (t30 * ((t25 * a3) - (t20 * a5)))) + (a7 * t23)
-    t66 = ((t31 * (a5 - (t36 * t25))) - (t30 * ((t20 * a4) - (t23 * a3)))) + (a7 * t25)
-    t67 = 1.0 - t31
-    t68 = t31 * t20
-    t69 = t31 * t23
-    t71 = t30 * t20
-    t72 = t30 * t23
-    t73 = t30 * t25
-    t74 = t68 * t23
-    t75 = t68 * t25
-    t76 = t69 * t25
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (t67 + (t68 * t20)), (t74 - t73), (t75 + t72), (t74 + t73), (t67 + (t69 * t23)), (t76 - t71), (t75 - t72), (t76 + t71), (t67 + ((t31 * t25) * t25)))
-    o1 = _empty((3,), _f64)
-    _pack_3d(o1, 0, t52, t59, t66)
-    return (o0, o1, _bool(t16), _bool(((((_op_abs(t52)) <= 1.7976931348623157e+308) and ((_op_abs(t59)) <= 1.7976931348623157e+308)) and ((_op_abs(t66)) <= 1.7976931348623157e+308))),)
-
-
-# rot_tools.rigid._frame_kernel
-def rigid__frame_kernel(inputs):
-    if len(inputs) != 3:
-        return None
-    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), = inputs
-    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
-        a0, a1, a2, = x0.tolist()
-    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
-        a0, a1, a2, = x0
-        if not (type(a0) is float and type(a1) is float and type(a2) is float):
-            return None
-    else:
-        return None
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a3, a4, a5, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a3, a4, a5, = x1
-        if not (type(a3) is float and type(a4) is float and type(a5) is float):
-            return None
-    else:
-        return None
-    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
-        a6, a7, a8, = x2.tolist()
-    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
-        a6, a7, a8, = x2
-        if not (type(a6) is float and type(a7) is float and type(a8) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
-        return None
-    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
-    t14 = _op_sqrt(t4)
-    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t16 = t14 == 0
-    t17 = 1.0 if t16 else t14
-    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
-    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
-    t25 = 1.0 if t16 else (a2 / t17)
-    t30 = ((a3 * a3) + (a4 * a4)) + (a5 * a5)
-    t40 = _op_sqrt(t30)
-    if (((t30 < 1e-290) and (((a3 != 0) or (a4 != 0)) or (a5 != 0))) or (t30 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t42 = t40 == 0
-    t43 = 1.0 if t42 else t40
-    t46 = (0.0 if t42 else (a3 / t43)) + 0.0
-    t49 = (0.0 if t42 else (a4 / t43)) + 0.0
-    t51 = 1.0 if t42 else (a5 / t43)
-    t56 = ((a6 * a6) + (a7 * a7)) + (a8 * a8)
-    t66 = _op_sqrt(t56)
-    if (((t56 < 1e-290) and (((a6 != 0) or (a7 != 0)) or (a8 != 0))) or (t56 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t68 = t66 == 0
-    t69 = 1.0 if t68 else t66
-    t72 = (0.0 if t68 else (a6 / t69)) + 0.0
-    t75 = (0.0 if t68 else (a7 / t69)) + 0.0
-    t77 = 1.0 if t68 else (a8 / t69)
-    o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, t20, t46, t72, t23, t49, t75, t25, t51, t77)
-    return (o0, _float64(t14), _float64(t40), _float64(t66), _float64((((t20 * t46) + (t23 * t49)) + (t25 * t51))), _float64((((t20 * t72) + (t23 * t75)) + (t25 * t77))), _float64((((t46 * t72) + (t49 * t75)) + (t51 * t77))), _float64((((((t23 * t51) - (t25 * t49)) * t72) + (((t25 * t46) - (t20 * t51)) * t75)) + (((t20 * t49) - (t23 * t46)) * t77))),)
-
-
-# rot_tools.decomposition._values_kernel
-def decomposition__values_kernel(inputs):
-    if len(inputs) != 2:
-        return None
-    (x0, _, _, _), (x1, _, _, _), = inputs
-    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
-        return None
-    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
-    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
-        a9, a10, a11, = x1.tolist()
-    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
-        a9, a10, a11, = x1
-        if not (type(a9) is float and type(a10) is float and type(a11) is float):
-            return None
-    else:
-        return None
-    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
-        return None
-    t0 = a7 - a5
-    t1 = 0.5 * t0
-    t2 = a2 - a6
-    t3 = 0.5 * t2
-    t4 = a3 - a1
-    t5 = 0.5 * t4
-    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
-    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
-    t24 = _op_sqrt(t14)
-    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t26 = t24 == 0
-    t27 = 1.0 if t26 else t24
-    t36 = _op_atan2(t24, t9)
-    t37 = t9 < 0
-    t38 = a0 - t9
-    t39 = a4 - t9
-    t40 = a8 - t9
-    t41 = a1 + a3
-    t42 = 0.5 * t41
-    t43 = a2 + a6
-    t44 = 0.5 * t43
-    t45 = a5 + a7
-    t46 = 0.5 * t45
-    t49 = (t38 >= t39) and (t38 >= t40)
-    t52 = (t39 > t38) and (t39 >= t40)
-    t54 = t38 if t49 else (t42 if t52 else t44)
-    t56 = t42 if t49 else (t39 if t52 else t46)
-    t58 = t44 if t49 else (t46 if t52 else t40)
-    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
-    t73 = _op_sqrt(t63)
-    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t75 = t73 == 0
-    t76 = 1.0 if t75 else t73
-    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
-    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
-    t84 = 1.0 if t75 else (t58 / t76)
-    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
-    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
-    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
-    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
-    t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
-    t115 = _op_sqrt(t105)
-    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
-        return None  # rare: apply runs the kernel
-    t117 = t115 == 0
-    t118 = 1.0 if t117 else t115
-    t127 = t36 < 1e-12
-    t128 = ((0.0 if t117 else (a9 / t118)) + 0.0) if t127 else t94
-    t129 = ((0.0 if t117 else (a10 / t118)) + 0.0) if t127 else t97
-    t130 = (1.0 if t117 else (a11 / t118)) if t127 else t100
-    t135 = ((a9 * t94) + (a10 * t97)) + (a11 * t100)
-    t136 = t115 if t127 else t135
-    t138 = a9 - (t136 * t128)
-    t140 = a10 - (t136 * t129)
-    t142 = a11 - (t136 * t130)
-    t143 = 1.0 if t127 else t36
-    t157 = 0.5 * (0.0 if t127 else (1.0 / (_op_tan((0.5 * t143)))))
-    t161 = 0.0 if t127 else ((0.5 * t138) + (t157 * ((t129 * t142) - (t130 * t140))))
-    t165 = 0.0 if t127 else ((0.5 * t140) + (t157 * ((t130 * t138) - (t128 * t142))))
-    t169 = 0.0 if t127 else ((0.5 * t142) + (t157 * ((t128 * t140) - (t129 * t138))))
-    t210 = 0.5 * t36
-    t211 = _op_tan(t210)
-    t212 = t211 == 0
-    t215 = 1.0 if t212 else (t210 / (1.0 if t212 else t211))
-    t225 = t135 * t94
-    t230 = ((t215 * (a9 - t225)) - (t210 * ((t97 * a11) - (t100 * a10)))) + t225
-    t231 = t135 * t97
-    t236 = ((t215 * (a10 - t231)) - (t210 * ((t100 * a9) - (t94 * a11)))) + t231
-    t237 = t135 * t100
-    t242 = ((t215 * (a11 - t237)) - (t210 * ((t94 * a10) - (t97 * a9)))) + t237
-    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t242)) <= 1.7976931348623157e+308)
-    if (False if t250 else True):
-        return None  # rare: apply runs the kernel
-    t257 = 1.0 + a0
-    t259 = (t257 - a4) - a8
-    t260 = 1.0 - a0
-    t262 = (t260 + a4) - a8
-    t264 = (t260 - a4) + a8
-    t266 = (t257 + a4) + a8
-    t271 = ((t259 >= t262) and (t259 >= t264)) and (t259 >= t266)
-    t276 = ((t262 > t259) and (t262 >= t264)) and (t262 >= t266)
-    t281 = ((t264 > t259) and (t264 > t262)) and (t264 >= t266)
-    t284 = t259 if t271 else (t41 if t276 else (t43 if t281 else t0))
-    t287 = t41 if t271 else (t262 if t276 else (t45 if t281 else t2))
-    t290 = t43 if t271 else (t45 if t276 else (t264 if t281 else t4))
-    t293 = t0 if t271 else (t2 if t276 else (t4 if t281 else t266))
-    t310 = (-1.0 if ((t293 if (t293 != 0) else (t284 if (t284 != 0) else (t287 if (t287 != 0) else t290))) < 0) else 1.0) / (_op_sqrt(((((t284 * t284) + (t287 * t287)) + (t290 * t290)) + (t293 * t293))))
-    return (((t94 * t36), (t97 * t36), (t100 * t36),), ((t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242,), (((t284 * t310) + 0.0), ((t287 * t310) + 0.0), ((t290 * t310) + 0.0), ((t293 * t310) + 0.0),), _float64(t36), _bool(((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(((t165 * t130) - (t169 * t129)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t169 * t128) - (t161 * t130)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t161 * t129) - (t165 * t128)))) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else (t136 / t143)))) <= 1.7976931348623157e+308)) and t250)),)
+    _pack_3d(o0, 0, (((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)), (((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)), (((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))))
+    return (o0, _float64((_op_atan2(t82, t67))), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
 
 
 # rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, True, False)]
@@ -4496,110 +885,3625 @@ def decomposition__euler_kernel_zyz(inputs):
     return ((((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0),),)
 
 
+# rot_tools.decomposition._motion_kernel
+def decomposition__motion_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t1 = 0.5 * (a7 - a5)
+    t3 = 0.5 * (a2 - a6)
+    t5 = 0.5 * (a3 - a1)
+    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
+    t24 = _op_sqrt(t14)
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t26 = t24 == 0
+    t27 = 1.0 if t26 else t24
+    t36 = _op_atan2(t24, t9)
+    t37 = t9 < 0
+    t38 = a0 - t9
+    t39 = a4 - t9
+    t40 = a8 - t9
+    t42 = 0.5 * (a1 + a3)
+    t44 = 0.5 * (a2 + a6)
+    t46 = 0.5 * (a5 + a7)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
+    t54 = t38 if t49 else (t42 if t52 else t44)
+    t56 = t42 if t49 else (t39 if t52 else t46)
+    t58 = t44 if t49 else (t46 if t52 else t40)
+    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
+    t73 = _op_sqrt(t63)
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t75 = t73 == 0
+    t76 = 1.0 if t75 else t73
+    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
+    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
+    t84 = 1.0 if t75 else (t58 / t76)
+    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
+    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
+    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
+    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
+    t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
+    t115 = _op_sqrt(t105)
+    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t117 = t115 == 0
+    t118 = 1.0 if t117 else t115
+    t127 = t36 < 1e-12
+    t128 = ((0.0 if t117 else (a9 / t118)) + 0.0) if t127 else t94
+    t129 = ((0.0 if t117 else (a10 / t118)) + 0.0) if t127 else t97
+    t130 = (1.0 if t117 else (a11 / t118)) if t127 else t100
+    t135 = ((a9 * t94) + (a10 * t97)) + (a11 * t100)
+    t136 = t115 if t127 else t135
+    t138 = a9 - (t136 * t128)
+    t140 = a10 - (t136 * t129)
+    t142 = a11 - (t136 * t130)
+    t143 = 1.0 if t127 else t36
+    t157 = 0.5 * (0.0 if t127 else (1.0 / (_op_tan((0.5 * t143)))))
+    t161 = 0.0 if t127 else ((0.5 * t138) + (t157 * ((t129 * t142) - (t130 * t140))))
+    t165 = 0.0 if t127 else ((0.5 * t140) + (t157 * ((t130 * t138) - (t128 * t142))))
+    t169 = 0.0 if t127 else ((0.5 * t142) + (t157 * ((t128 * t140) - (t129 * t138))))
+    t172 = (t165 * t130) - (t169 * t129)
+    t175 = (t169 * t128) - (t161 * t130)
+    t178 = (t161 * t129) - (t165 * t128)
+    t179 = t136 / t143
+    t210 = 0.5 * t36
+    t211 = _op_tan(t210)
+    t212 = t211 == 0
+    t215 = 1.0 if t212 else (t210 / (1.0 if t212 else t211))
+    t225 = t135 * t94
+    t230 = ((t215 * (a9 - t225)) - (t210 * ((t97 * a11) - (t100 * a10)))) + t225
+    t231 = t135 * t97
+    t236 = ((t215 * (a10 - t231)) - (t210 * ((t100 * a9) - (t94 * a11)))) + t231
+    t237 = t135 * t100
+    t242 = ((t215 * (a11 - t237)) - (t210 * ((t94 * a10) - (t97 * a9)))) + t237
+    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t242)) <= 1.7976931348623157e+308)
+    if (False if t250 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, t94, t97, t100)
+    o2 = _empty((3,), _f64)
+    _pack_3d(o2, 0, t128, t129, t130)
+    o3 = _empty((3,), _f64)
+    _pack_3d(o3, 0, t161, t165, t169)
+    o4 = _empty((3,), _f64)
+    _pack_3d(o4, 0, t172, t175, t178)
+    o8 = _empty((6,), _f64)
+    _pack_6d(o8, 0, (t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242)
+    return (o0, _float64(t36), o2, o3, o4, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), o8, (_True if ((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) and t250) else _False),)
+
+
+# rot_tools.decomposition._motion_kernel checked(1)
+def decomposition__motion_kernel_checked(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = 0.5 * (a7 - a5)
+    t61 = 0.5 * (a2 - a6)
+    t63 = 0.5 * (a3 - a1)
+    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
+    t82 = _op_sqrt(t72)
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t84 = t82 == 0
+    t85 = 1.0 if t84 else t82
+    t94 = _op_atan2(t82, t67)
+    t95 = t67 < 0
+    t96 = a0 - t67
+    t97 = a4 - t67
+    t98 = a8 - t67
+    t100 = 0.5 * (a1 + a3)
+    t102 = 0.5 * (a2 + a6)
+    t104 = 0.5 * (a5 + a7)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
+    t112 = t96 if t107 else (t100 if t110 else t102)
+    t114 = t100 if t107 else (t97 if t110 else t104)
+    t116 = t102 if t107 else (t104 if t110 else t98)
+    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
+    t131 = _op_sqrt(t121)
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t133 = t131 == 0
+    t134 = 1.0 if t133 else t131
+    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
+    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
+    t142 = 1.0 if t133 else (t116 / t134)
+    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
+    t152 = ((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)
+    t155 = ((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)
+    t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
+    t163 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
+    t173 = _op_sqrt(t163)
+    if (((t163 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t163 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t175 = t173 == 0
+    t176 = 1.0 if t175 else t173
+    t185 = t94 < 1e-12
+    t186 = ((0.0 if t175 else (a9 / t176)) + 0.0) if t185 else t152
+    t187 = ((0.0 if t175 else (a10 / t176)) + 0.0) if t185 else t155
+    t188 = (1.0 if t175 else (a11 / t176)) if t185 else t158
+    t193 = ((a9 * t152) + (a10 * t155)) + (a11 * t158)
+    t194 = t173 if t185 else t193
+    t196 = a9 - (t194 * t186)
+    t198 = a10 - (t194 * t187)
+    t200 = a11 - (t194 * t188)
+    t201 = 1.0 if t185 else t94
+    t215 = 0.5 * (0.0 if t185 else (1.0 / (_op_tan((0.5 * t201)))))
+    t219 = 0.0 if t185 else ((0.5 * t196) + (t215 * ((t187 * t200) - (t188 * t198))))
+    t223 = 0.0 if t185 else ((0.5 * t198) + (t215 * ((t188 * t196) - (t186 * t200))))
+    t227 = 0.0 if t185 else ((0.5 * t200) + (t215 * ((t186 * t198) - (t187 * t196))))
+    t230 = (t223 * t188) - (t227 * t187)
+    t233 = (t227 * t186) - (t219 * t188)
+    t236 = (t219 * t187) - (t223 * t186)
+    t237 = t194 / t201
+    t268 = 0.5 * t94
+    t269 = _op_tan(t268)
+    t270 = t269 == 0
+    t273 = 1.0 if t270 else (t268 / (1.0 if t270 else t269))
+    t283 = t193 * t152
+    t288 = ((t273 * (a9 - t283)) - (t268 * ((t155 * a11) - (t158 * a10)))) + t283
+    t289 = t193 * t155
+    t294 = ((t273 * (a10 - t289)) - (t268 * ((t158 * a9) - (t152 * a11)))) + t289
+    t295 = t193 * t158
+    t300 = ((t273 * (a11 - t295)) - (t268 * ((t152 * a10) - (t155 * a9)))) + t295
+    t308 = (((_op_abs(t288)) <= 1.7976931348623157e+308) and ((_op_abs(t294)) <= 1.7976931348623157e+308)) and ((_op_abs(t300)) <= 1.7976931348623157e+308)
+    if (False if t308 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, t152, t155, t158)
+    o2 = _empty((3,), _f64)
+    _pack_3d(o2, 0, t186, t187, t188)
+    o3 = _empty((3,), _f64)
+    _pack_3d(o3, 0, t219, t223, t227)
+    o4 = _empty((3,), _f64)
+    _pack_3d(o4, 0, t230, t233, t236)
+    o8 = _empty((6,), _f64)
+    _pack_6d(o8, 0, (t94 * t152), (t94 * t155), (t94 * t158), t288, t294, t300)
+    return (o0, _float64(t94), o2, o3, o4, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), o8, (_True if ((((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) and t308) else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.decomposition._values_kernel
+def decomposition__values_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t0 = a7 - a5
+    t1 = 0.5 * t0
+    t2 = a2 - a6
+    t3 = 0.5 * t2
+    t4 = a3 - a1
+    t5 = 0.5 * t4
+    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
+    t24 = _op_sqrt(t14)
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t26 = t24 == 0
+    t27 = 1.0 if t26 else t24
+    t36 = _op_atan2(t24, t9)
+    t37 = t9 < 0
+    t38 = a0 - t9
+    t39 = a4 - t9
+    t40 = a8 - t9
+    t41 = a1 + a3
+    t42 = 0.5 * t41
+    t43 = a2 + a6
+    t44 = 0.5 * t43
+    t45 = a5 + a7
+    t46 = 0.5 * t45
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
+    t54 = t38 if t49 else (t42 if t52 else t44)
+    t56 = t42 if t49 else (t39 if t52 else t46)
+    t58 = t44 if t49 else (t46 if t52 else t40)
+    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
+    t73 = _op_sqrt(t63)
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t75 = t73 == 0
+    t76 = 1.0 if t75 else t73
+    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
+    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
+    t84 = 1.0 if t75 else (t58 / t76)
+    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
+    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
+    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
+    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
+    t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
+    t115 = _op_sqrt(t105)
+    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t117 = t115 == 0
+    t118 = 1.0 if t117 else t115
+    t127 = t36 < 1e-12
+    t128 = ((0.0 if t117 else (a9 / t118)) + 0.0) if t127 else t94
+    t129 = ((0.0 if t117 else (a10 / t118)) + 0.0) if t127 else t97
+    t130 = (1.0 if t117 else (a11 / t118)) if t127 else t100
+    t135 = ((a9 * t94) + (a10 * t97)) + (a11 * t100)
+    t136 = t115 if t127 else t135
+    t138 = a9 - (t136 * t128)
+    t140 = a10 - (t136 * t129)
+    t142 = a11 - (t136 * t130)
+    t143 = 1.0 if t127 else t36
+    t157 = 0.5 * (0.0 if t127 else (1.0 / (_op_tan((0.5 * t143)))))
+    t161 = 0.0 if t127 else ((0.5 * t138) + (t157 * ((t129 * t142) - (t130 * t140))))
+    t165 = 0.0 if t127 else ((0.5 * t140) + (t157 * ((t130 * t138) - (t128 * t142))))
+    t169 = 0.0 if t127 else ((0.5 * t142) + (t157 * ((t128 * t140) - (t129 * t138))))
+    t210 = 0.5 * t36
+    t211 = _op_tan(t210)
+    t212 = t211 == 0
+    t215 = 1.0 if t212 else (t210 / (1.0 if t212 else t211))
+    t225 = t135 * t94
+    t230 = ((t215 * (a9 - t225)) - (t210 * ((t97 * a11) - (t100 * a10)))) + t225
+    t231 = t135 * t97
+    t236 = ((t215 * (a10 - t231)) - (t210 * ((t100 * a9) - (t94 * a11)))) + t231
+    t237 = t135 * t100
+    t242 = ((t215 * (a11 - t237)) - (t210 * ((t94 * a10) - (t97 * a9)))) + t237
+    t250 = (((_op_abs(t230)) <= 1.7976931348623157e+308) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t242)) <= 1.7976931348623157e+308)
+    if (False if t250 else True):
+        return None  # rare: apply runs the kernel
+    t257 = 1.0 + a0
+    t259 = (t257 - a4) - a8
+    t260 = 1.0 - a0
+    t262 = (t260 + a4) - a8
+    t264 = (t260 - a4) + a8
+    t266 = (t257 + a4) + a8
+    t271 = ((t259 >= t262) and (t259 >= t264)) and (t259 >= t266)
+    t276 = ((t262 > t259) and (t262 >= t264)) and (t262 >= t266)
+    t281 = ((t264 > t259) and (t264 > t262)) and (t264 >= t266)
+    t284 = t259 if t271 else (t41 if t276 else (t43 if t281 else t0))
+    t287 = t41 if t271 else (t262 if t276 else (t45 if t281 else t2))
+    t290 = t43 if t271 else (t45 if t276 else (t264 if t281 else t4))
+    t293 = t0 if t271 else (t2 if t276 else (t4 if t281 else t266))
+    t310 = (-1.0 if ((t293 if (t293 != 0) else (t284 if (t284 != 0) else (t287 if (t287 != 0) else t290))) < 0) else 1.0) / (_op_sqrt(((((t284 * t284) + (t287 * t287)) + (t290 * t290)) + (t293 * t293))))
+    return (((t94 * t36), (t97 * t36), (t100 * t36),), ((t36 * t94), (t36 * t97), (t36 * t100), t230, t236, t242,), (((t284 * t310) + 0.0), ((t287 * t310) + 0.0), ((t290 * t310) + 0.0), ((t293 * t310) + 0.0),), _float64(t36), (_True if ((((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(((t165 * t130) - (t169 * t129)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t169 * t128) - (t161 * t130)))) <= 1.7976931348623157e+308)) and ((_op_abs(((t161 * t129) - (t165 * t128)))) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else (t136 / t143)))) <= 1.7976931348623157e+308)) and t250) else _False),)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, False)]
+def euler__matrix_kernel_XYX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t10 = t1 * t2
+    t19 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, t2, (t3 * t5), (t3 * t4), (t1 * t3), ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, False)]
+def euler__matrix_kernel_XYZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t10 = t1 * t3
+    t19 = t0 * t3
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t2 * t4), ((-t2) * t5), t3, ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, False)]
+def euler__matrix_kernel_XZX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t11 = t1 * t2
+    t18 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, t2, ((-t3) * t4), (t3 * t5), (t0 * t3), ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t1 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, False)]
+def euler__matrix_kernel_XZY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t9 = -t0
+    t15 = -t1
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t2 * t4), (-t3), (t2 * t5), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, False)]
+def euler__matrix_kernel_YXY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t11 = t1 * t2
+    t18 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - (t11 * t5)), (t1 * t3), ((t0 * t5) + (t11 * t4)), (t3 * t5), t2, ((-t3) * t4), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t18 * t4) - (t1 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, False)]
+def euler__matrix_kernel_YXZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t9 = -t0
+    t15 = -t1
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), (t2 * t5), (t2 * t4), (-t3), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, False)]
+def euler__matrix_kernel_YZX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t10 = t1 * t3
+    t19 = t0 * t3
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t0 * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), t3, (t2 * t4), ((-t2) * t5), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, False)]
+def euler__matrix_kernel_YZY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t10 = t1 * t2
+    t19 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t19 * t4) - (t1 * t5)), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), (t3 * t4), t2, (t3 * t5), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t0 * t4) - (t10 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, False)]
+def euler__matrix_kernel_ZXY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t10 = t1 * t3
+    t19 = t0 * t3
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2), ((t1 * t5) - (t19 * t4)), ((-t2) * t5), t3, (t2 * t4))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, False)]
+def euler__matrix_kernel_ZXZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t10 = t1 * t2
+    t19 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)), ((-t0) * t3), (t3 * t5), (t3 * t4), t2)
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, False)]
+def euler__matrix_kernel_ZYX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t9 = -t0
+    t15 = -t1
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (-t3), (t2 * t5), (t2 * t4))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, False)]
+def euler__matrix_kernel_ZYZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a0)
+    t1 = _op_sin(a0)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a2)
+    t5 = _op_sin(a2)
+    t11 = t1 * t2
+    t18 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)), (t1 * t3), ((-t3) * t4), (t3 * t5), t2)
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, True)]
+def euler__matrix_kernel_xyx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t10 = t1 * t2
+    t19 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, t2, (t3 * t5), (t3 * t4), (t1 * t3), ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, True)]
+def euler__matrix_kernel_xyz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t9 = -t0
+    t15 = -t1
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (-t3), (t2 * t5), (t2 * t4))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, True)]
+def euler__matrix_kernel_xzx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t11 = t1 * t2
+    t18 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, t2, ((-t3) * t4), (t3 * t5), (t0 * t3), ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t1 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, True)]
+def euler__matrix_kernel_xzy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t10 = t1 * t3
+    t19 = t0 * t3
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t0 * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), t3, (t2 * t4), ((-t2) * t5), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, True)]
+def euler__matrix_kernel_yxy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t11 = t1 * t2
+    t18 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - (t11 * t5)), (t1 * t3), ((t0 * t5) + (t11 * t4)), (t3 * t5), t2, ((-t3) * t4), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t18 * t4) - (t1 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, True)]
+def euler__matrix_kernel_yxz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t10 = t1 * t3
+    t19 = t0 * t3
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2), ((t1 * t5) - (t19 * t4)), ((-t2) * t5), t3, (t2 * t4))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, True)]
+def euler__matrix_kernel_yzx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t9 = -t0
+    t15 = -t1
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t2 * t4), (-t3), (t2 * t5), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, True)]
+def euler__matrix_kernel_yzy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t10 = t1 * t2
+    t19 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t19 * t4) - (t1 * t5)), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), (t3 * t4), t2, (t3 * t5), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t0 * t4) - (t10 * t5)))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, True)]
+def euler__matrix_kernel_zxy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t9 = -t0
+    t15 = -t1
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), (t2 * t5), (t2 * t4), (-t3), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, True)]
+def euler__matrix_kernel_zxz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t10 = t1 * t2
+    t19 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)), ((-t0) * t3), (t3 * t5), (t3 * t4), t2)
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, True)]
+def euler__matrix_kernel_zyx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t10 = t1 * t3
+    t19 = t0 * t3
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t2 * t4), ((-t2) * t5), t3, ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2))
+    return (o0,)
+
+
+# rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, True)]
+def euler__matrix_kernel_zyz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2) * 0.0 != 0.0:
+        return None
+    t0 = _op_cos(a2)
+    t1 = _op_sin(a2)
+    t2 = _op_cos(a1)
+    t3 = _op_sin(a1)
+    t4 = _op_cos(a0)
+    t5 = _op_sin(a0)
+    t11 = t1 * t2
+    t18 = t0 * t2
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)), (t1 * t3), ((-t3) * t4), (t3 * t5), t2)
+    return (o0,)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]
+def euler_angles_kernel_XYX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a6
+    t4 = _op_sqrt(((a3 * a3) + (t0 * t0)))
+    t5 = _op_atan2(t4, a0)
+    t6 = 3.141592653589793 - t5
+    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
+    t9 = _op_atan2(a3, t0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = t0 / t11
+    t13 = a3 / t11
+    t21 = _op_atan2((-((t12 * a5) + (t13 * a8))), ((t12 * a4) + (t13 * a7)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)] checked(1)
+def euler_angles_kernel_XYX_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t1 = a3 * a3
+    t6 = _op_abs(((((a0 * a0) + t1) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a6
+    t61 = _op_sqrt((t1 + (t58 * t58)))
+    t62 = _op_atan2(t61, a0)
+    t63 = 3.141592653589793 - t62
+    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
+    t66 = _op_atan2(a3, t58)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = t58 / t68
+    t70 = a3 / t68
+    t78 = _op_atan2((-((t69 * a5) + (t70 * a8))), ((t69 * a4) + (t70 * a7)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)]
+def euler_angles_kernel_XYZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a5
+    t4 = _op_sqrt(((t0 * t0) + (a8 * a8)))
+    t5 = _op_atan2(a2, t4)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(t0, a8)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = a8 / t11
+    t13 = t0 / t11
+    t20 = _op_atan2(((t12 * a3) + (t13 * a6)), ((t12 * a4) + (t13 * a7)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)
+def euler_angles_kernel_XYZ_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t17 = a8 * a8
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + t17) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a5
+    t61 = _op_sqrt(((t58 * t58) + t17))
+    t62 = _op_atan2(a2, t61)
+    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
+    t66 = _op_atan2(t58, a8)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = a8 / t68
+    t70 = t58 / t68
+    t77 = _op_atan2(((t69 * a3) + (t70 * a6)), ((t69 * a4) + (t70 * a7)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)]
+def euler_angles_kernel_XZX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a6 * a6) + (a3 * a3)))
+    t4 = _op_atan2(t3, a0)
+    t5 = 3.141592653589793 - t4
+    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
+    t8 = _op_atan2(a6, a3)
+    t10 = t3 if (t3 > 0) else 1.0
+    t11 = a3 / t10
+    t14 = -(a6 / t10)
+    t20 = _op_atan2(((t11 * a7) + (t14 * a4)), ((t11 * a8) + (t14 * a5)))
+    if t7:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
+    return (o0, (_True if t7 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)
+def euler_angles_kernel_XZX_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t1 = a3 * a3
+    t3 = a6 * a6
+    t6 = _op_abs(((((a0 * a0) + t1) + t3) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t3 + t1))
+    t60 = _op_atan2(t59, a0)
+    t61 = 3.141592653589793 - t60
+    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
+    t64 = _op_atan2(a6, a3)
+    t66 = t59 if (t59 > 0) else 1.0
+    t67 = a3 / t66
+    t70 = -(a6 / t66)
+    t76 = _op_atan2(((t67 * a7) + (t70 * a4)), ((t67 * a8) + (t70 * a5)))
+    if t63:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)]
+def euler_angles_kernel_XZY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a7 * a7) + (a4 * a4)))
+    t5 = _op_atan2((-a1), t3)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(a7, a4)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a4 / t11
+    t15 = -(a7 / t11)
+    t22 = _op_atan2((-((t12 * a6) + (t15 * a3))), ((t12 * a8) + (t15 * a5)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)
+def euler_angles_kernel_XZY_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t8 = a4 * a4
+    t10 = a7 * a7
+    t13 = _op_abs(((((a1 * a1) + t8) + t10) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t10 + t8))
+    t61 = _op_atan2((-a1), t59)
+    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
+    t65 = _op_atan2(a7, a4)
+    t67 = t59 if (t59 > 0) else 1.0
+    t68 = a4 / t67
+    t71 = -(a7 / t67)
+    t78 = _op_atan2((-((t68 * a6) + (t71 * a3))), ((t68 * a8) + (t71 * a5)))
+    if t64:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)]
+def euler_angles_kernel_YXY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a1 * a1) + (a7 * a7)))
+    t4 = _op_atan2(t3, a4)
+    t5 = 3.141592653589793 - t4
+    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
+    t8 = _op_atan2(a1, a7)
+    t10 = t3 if (t3 > 0) else 1.0
+    t11 = a7 / t10
+    t14 = -(a1 / t10)
+    t20 = _op_atan2(((t11 * a2) + (t14 * a8)), ((t11 * a0) + (t14 * a6)))
+    if t7:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
+    return (o0, (_True if t7 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)
+def euler_angles_kernel_YXY_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t7 = a1 * a1
+    t10 = a7 * a7
+    t13 = _op_abs((((t7 + (a4 * a4)) + t10) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t7 + t10))
+    t60 = _op_atan2(t59, a4)
+    t61 = 3.141592653589793 - t60
+    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
+    t64 = _op_atan2(a1, a7)
+    t66 = t59 if (t59 > 0) else 1.0
+    t67 = a7 / t66
+    t70 = -(a1 / t66)
+    t76 = _op_atan2(((t67 * a2) + (t70 * a8)), ((t67 * a0) + (t70 * a6)))
+    if t63:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)]
+def euler_angles_kernel_YXZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a2 * a2) + (a8 * a8)))
+    t5 = _op_atan2((-a5), t3)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(a2, a8)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a8 / t11
+    t15 = -(a2 / t11)
+    t22 = _op_atan2((-((t12 * a1) + (t15 * a7))), ((t12 * a0) + (t15 * a6)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)
+def euler_angles_kernel_YXZ_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t14 = a2 * a2
+    t17 = a8 * a8
+    t20 = _op_abs((((t14 + (a5 * a5)) + t17) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t14 + t17))
+    t61 = _op_atan2((-a5), t59)
+    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
+    t65 = _op_atan2(a2, a8)
+    t67 = t59 if (t59 > 0) else 1.0
+    t68 = a8 / t67
+    t71 = -(a2 / t67)
+    t78 = _op_atan2((-((t68 * a1) + (t71 * a7))), ((t68 * a0) + (t71 * a6)))
+    if t64:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)]
+def euler_angles_kernel_YZX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a6
+    t4 = _op_sqrt(((t0 * t0) + (a0 * a0)))
+    t5 = _op_atan2(a3, t4)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(t0, a0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = a0 / t11
+    t13 = t0 / t11
+    t20 = _op_atan2(((t12 * a7) + (t13 * a1)), ((t12 * a8) + (t13 * a2)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)
+def euler_angles_kernel_YZX_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = a0 * a0
+    t6 = _op_abs((((t0 + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a6
+    t61 = _op_sqrt(((t58 * t58) + t0))
+    t62 = _op_atan2(a3, t61)
+    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
+    t66 = _op_atan2(t58, a0)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = a0 / t68
+    t70 = t58 / t68
+    t77 = _op_atan2(((t69 * a7) + (t70 * a1)), ((t69 * a8) + (t70 * a2)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)]
+def euler_angles_kernel_YZY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a1
+    t4 = _op_sqrt(((a7 * a7) + (t0 * t0)))
+    t5 = _op_atan2(t4, a4)
+    t6 = 3.141592653589793 - t5
+    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
+    t9 = _op_atan2(a7, t0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = t0 / t11
+    t13 = a7 / t11
+    t21 = _op_atan2((-((t12 * a6) + (t13 * a0))), ((t12 * a8) + (t13 * a2)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)
+def euler_angles_kernel_YZY_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t10 = a7 * a7
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + t10) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a1
+    t61 = _op_sqrt((t10 + (t58 * t58)))
+    t62 = _op_atan2(t61, a4)
+    t63 = 3.141592653589793 - t62
+    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
+    t66 = _op_atan2(a7, t58)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = t58 / t68
+    t70 = a7 / t68
+    t78 = _op_atan2((-((t69 * a6) + (t70 * a0))), ((t69 * a8) + (t70 * a2)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)]
+def euler_angles_kernel_ZXY(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a1
+    t4 = _op_sqrt(((t0 * t0) + (a4 * a4)))
+    t5 = _op_atan2(a7, t4)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(t0, a4)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = a4 / t11
+    t13 = t0 / t11
+    t20 = _op_atan2(((t12 * a2) + (t13 * a5)), ((t12 * a0) + (t13 * a3)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)
+def euler_angles_kernel_ZXY_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t8 = a4 * a4
+    t13 = _op_abs(((((a1 * a1) + t8) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a1
+    t61 = _op_sqrt(((t58 * t58) + t8))
+    t62 = _op_atan2(a7, t61)
+    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
+    t66 = _op_atan2(t58, a4)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = a4 / t68
+    t70 = t58 / t68
+    t77 = _op_atan2(((t69 * a2) + (t70 * a5)), ((t69 * a0) + (t70 * a3)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)]
+def euler_angles_kernel_ZXZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a5
+    t4 = _op_sqrt(((a2 * a2) + (t0 * t0)))
+    t5 = _op_atan2(t4, a8)
+    t6 = 3.141592653589793 - t5
+    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
+    t9 = _op_atan2(a2, t0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = t0 / t11
+    t13 = a2 / t11
+    t21 = _op_atan2((-((t12 * a1) + (t13 * a4))), ((t12 * a0) + (t13 * a3)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)
+def euler_angles_kernel_ZXZ_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t14 = a2 * a2
+    t20 = _op_abs((((t14 + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a5
+    t61 = _op_sqrt((t14 + (t58 * t58)))
+    t62 = _op_atan2(t61, a8)
+    t63 = 3.141592653589793 - t62
+    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
+    t66 = _op_atan2(a2, t58)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = t58 / t68
+    t70 = a2 / t68
+    t78 = _op_atan2((-((t69 * a1) + (t70 * a4))), ((t69 * a0) + (t70 * a3)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)]
+def euler_angles_kernel_ZYX(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a3 * a3) + (a0 * a0)))
+    t5 = _op_atan2((-a6), t3)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(a3, a0)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a0 / t11
+    t15 = -(a3 / t11)
+    t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)
+def euler_angles_kernel_ZYX_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = a0 * a0
+    t1 = a3 * a3
+    t6 = _op_abs((((t0 + t1) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t1 + t0))
+    t61 = _op_atan2((-a6), t59)
+    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
+    t65 = _op_atan2(a3, a0)
+    t67 = t59 if (t59 > 0) else 1.0
+    t68 = a0 / t67
+    t71 = -(a3 / t67)
+    t78 = _op_atan2((-((t68 * a5) + (t71 * a2))), ((t68 * a4) + (t71 * a1)))
+    if t64:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)]
+def euler_angles_kernel_ZYZ(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a5 * a5) + (a2 * a2)))
+    t4 = _op_atan2(t3, a8)
+    t5 = 3.141592653589793 - t4
+    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
+    t8 = _op_atan2(a5, a2)
+    t10 = t3 if (t3 > 0) else 1.0
+    t11 = a2 / t10
+    t14 = -(a5 / t10)
+    t20 = _op_atan2(((t11 * a3) + (t14 * a0)), ((t11 * a4) + (t14 * a1)))
+    if t7:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
+    return (o0, (_True if t7 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)
+def euler_angles_kernel_ZYZ_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t14 = a2 * a2
+    t15 = a5 * a5
+    t20 = _op_abs((((t14 + t15) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t15 + t14))
+    t60 = _op_atan2(t59, a8)
+    t61 = 3.141592653589793 - t60
+    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
+    t64 = _op_atan2(a5, a2)
+    t66 = t59 if (t59 > 0) else 1.0
+    t67 = a2 / t66
+    t70 = -(a5 / t66)
+    t76 = _op_atan2(((t67 * a3) + (t70 * a0)), ((t67 * a4) + (t70 * a1)))
+    if t63:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)]
+def euler_angles_kernel_xyx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a6
+    t4 = _op_sqrt(((a3 * a3) + (t0 * t0)))
+    t5 = _op_atan2(t4, a0)
+    t6 = 3.141592653589793 - t5
+    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
+    t9 = _op_atan2(a3, t0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = t0 / t11
+    t13 = a3 / t11
+    t21 = _op_atan2((-((t12 * a5) + (t13 * a8))), ((t12 * a4) + (t13 * a7)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)
+def euler_angles_kernel_xyx_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t1 = a3 * a3
+    t6 = _op_abs(((((a0 * a0) + t1) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a6
+    t61 = _op_sqrt((t1 + (t58 * t58)))
+    t62 = _op_atan2(t61, a0)
+    t63 = 3.141592653589793 - t62
+    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
+    t66 = _op_atan2(a3, t58)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = t58 / t68
+    t70 = a3 / t68
+    t78 = _op_atan2((-((t69 * a5) + (t70 * a8))), ((t69 * a4) + (t70 * a7)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)]
+def euler_angles_kernel_xyz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a3 * a3) + (a0 * a0)))
+    t5 = _op_atan2((-a6), t3)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(a3, a0)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a0 / t11
+    t15 = -(a3 / t11)
+    t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)
+def euler_angles_kernel_xyz_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = a0 * a0
+    t1 = a3 * a3
+    t6 = _op_abs((((t0 + t1) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t1 + t0))
+    t61 = _op_atan2((-a6), t59)
+    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
+    t65 = _op_atan2(a3, a0)
+    t67 = t59 if (t59 > 0) else 1.0
+    t68 = a0 / t67
+    t71 = -(a3 / t67)
+    t78 = _op_atan2((-((t68 * a5) + (t71 * a2))), ((t68 * a4) + (t71 * a1)))
+    if t64:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)]
+def euler_angles_kernel_xzx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a6 * a6) + (a3 * a3)))
+    t4 = _op_atan2(t3, a0)
+    t5 = 3.141592653589793 - t4
+    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
+    t8 = _op_atan2(a6, a3)
+    t10 = t3 if (t3 > 0) else 1.0
+    t11 = a3 / t10
+    t14 = -(a6 / t10)
+    t20 = _op_atan2(((t11 * a7) + (t14 * a4)), ((t11 * a8) + (t14 * a5)))
+    if t7:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
+    return (o0, (_True if t7 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)
+def euler_angles_kernel_xzx_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t1 = a3 * a3
+    t3 = a6 * a6
+    t6 = _op_abs(((((a0 * a0) + t1) + t3) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t3 + t1))
+    t60 = _op_atan2(t59, a0)
+    t61 = 3.141592653589793 - t60
+    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
+    t64 = _op_atan2(a6, a3)
+    t66 = t59 if (t59 > 0) else 1.0
+    t67 = a3 / t66
+    t70 = -(a6 / t66)
+    t76 = _op_atan2(((t67 * a7) + (t70 * a4)), ((t67 * a8) + (t70 * a5)))
+    if t63:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)]
+def euler_angles_kernel_xzy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a6
+    t4 = _op_sqrt(((t0 * t0) + (a0 * a0)))
+    t5 = _op_atan2(a3, t4)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(t0, a0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = a0 / t11
+    t13 = t0 / t11
+    t20 = _op_atan2(((t12 * a7) + (t13 * a1)), ((t12 * a8) + (t13 * a2)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)
+def euler_angles_kernel_xzy_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = a0 * a0
+    t6 = _op_abs((((t0 + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a6
+    t61 = _op_sqrt(((t58 * t58) + t0))
+    t62 = _op_atan2(a3, t61)
+    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
+    t66 = _op_atan2(t58, a0)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = a0 / t68
+    t70 = t58 / t68
+    t77 = _op_atan2(((t69 * a7) + (t70 * a1)), ((t69 * a8) + (t70 * a2)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)]
+def euler_angles_kernel_yxy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a1 * a1) + (a7 * a7)))
+    t4 = _op_atan2(t3, a4)
+    t5 = 3.141592653589793 - t4
+    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
+    t8 = _op_atan2(a1, a7)
+    t10 = t3 if (t3 > 0) else 1.0
+    t11 = a7 / t10
+    t14 = -(a1 / t10)
+    t20 = _op_atan2(((t11 * a2) + (t14 * a8)), ((t11 * a0) + (t14 * a6)))
+    if t7:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
+    return (o0, (_True if t7 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)
+def euler_angles_kernel_yxy_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t7 = a1 * a1
+    t10 = a7 * a7
+    t13 = _op_abs((((t7 + (a4 * a4)) + t10) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t7 + t10))
+    t60 = _op_atan2(t59, a4)
+    t61 = 3.141592653589793 - t60
+    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
+    t64 = _op_atan2(a1, a7)
+    t66 = t59 if (t59 > 0) else 1.0
+    t67 = a7 / t66
+    t70 = -(a1 / t66)
+    t76 = _op_atan2(((t67 * a2) + (t70 * a8)), ((t67 * a0) + (t70 * a6)))
+    if t63:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)]
+def euler_angles_kernel_yxz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a1
+    t4 = _op_sqrt(((t0 * t0) + (a4 * a4)))
+    t5 = _op_atan2(a7, t4)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(t0, a4)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = a4 / t11
+    t13 = t0 / t11
+    t20 = _op_atan2(((t12 * a2) + (t13 * a5)), ((t12 * a0) + (t13 * a3)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)
+def euler_angles_kernel_yxz_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t8 = a4 * a4
+    t13 = _op_abs(((((a1 * a1) + t8) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a1
+    t61 = _op_sqrt(((t58 * t58) + t8))
+    t62 = _op_atan2(a7, t61)
+    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
+    t66 = _op_atan2(t58, a4)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = a4 / t68
+    t70 = t58 / t68
+    t77 = _op_atan2(((t69 * a2) + (t70 * a5)), ((t69 * a0) + (t70 * a3)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)]
+def euler_angles_kernel_yzx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a7 * a7) + (a4 * a4)))
+    t5 = _op_atan2((-a1), t3)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(a7, a4)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a4 / t11
+    t15 = -(a7 / t11)
+    t22 = _op_atan2((-((t12 * a6) + (t15 * a3))), ((t12 * a8) + (t15 * a5)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)
+def euler_angles_kernel_yzx_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t8 = a4 * a4
+    t10 = a7 * a7
+    t13 = _op_abs(((((a1 * a1) + t8) + t10) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t10 + t8))
+    t61 = _op_atan2((-a1), t59)
+    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
+    t65 = _op_atan2(a7, a4)
+    t67 = t59 if (t59 > 0) else 1.0
+    t68 = a4 / t67
+    t71 = -(a7 / t67)
+    t78 = _op_atan2((-((t68 * a6) + (t71 * a3))), ((t68 * a8) + (t71 * a5)))
+    if t64:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)]
+def euler_angles_kernel_yzy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a1
+    t4 = _op_sqrt(((a7 * a7) + (t0 * t0)))
+    t5 = _op_atan2(t4, a4)
+    t6 = 3.141592653589793 - t5
+    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
+    t9 = _op_atan2(a7, t0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = t0 / t11
+    t13 = a7 / t11
+    t21 = _op_atan2((-((t12 * a6) + (t13 * a0))), ((t12 * a8) + (t13 * a2)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)
+def euler_angles_kernel_yzy_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t10 = a7 * a7
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + t10) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a1
+    t61 = _op_sqrt((t10 + (t58 * t58)))
+    t62 = _op_atan2(t61, a4)
+    t63 = 3.141592653589793 - t62
+    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
+    t66 = _op_atan2(a7, t58)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = t58 / t68
+    t70 = a7 / t68
+    t78 = _op_atan2((-((t69 * a6) + (t70 * a0))), ((t69 * a8) + (t70 * a2)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)]
+def euler_angles_kernel_zxy(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a2 * a2) + (a8 * a8)))
+    t5 = _op_atan2((-a5), t3)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(a2, a8)
+    t11 = t3 if (t3 > 0) else 1.0
+    t12 = a8 / t11
+    t15 = -(a2 / t11)
+    t22 = _op_atan2((-((t12 * a1) + (t15 * a7))), ((t12 * a0) + (t15 * a6)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)
+def euler_angles_kernel_zxy_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t14 = a2 * a2
+    t17 = a8 * a8
+    t20 = _op_abs((((t14 + (a5 * a5)) + t17) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t14 + t17))
+    t61 = _op_atan2((-a5), t59)
+    t64 = (1.5707963267948966 - (_op_abs(t61))) <= 1e-06
+    t65 = _op_atan2(a2, a8)
+    t67 = t59 if (t59 > 0) else 1.0
+    t68 = a8 / t67
+    t71 = -(a2 / t67)
+    t78 = _op_atan2((-((t68 * a1) + (t71 * a7))), ((t68 * a0) + (t71 * a6)))
+    if t64:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
+    return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)]
+def euler_angles_kernel_zxz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a5
+    t4 = _op_sqrt(((a2 * a2) + (t0 * t0)))
+    t5 = _op_atan2(t4, a8)
+    t6 = 3.141592653589793 - t5
+    t8 = (t5 if t5 <= t6 or t5 != t5 else t6) <= 1e-06
+    t9 = _op_atan2(a2, t0)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = t0 / t11
+    t13 = a2 / t11
+    t21 = _op_atan2((-((t12 * a1) + (t13 * a4))), ((t12 * a0) + (t13 * a3)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)
+def euler_angles_kernel_zxz_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t14 = a2 * a2
+    t20 = _op_abs((((t14 + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a5
+    t61 = _op_sqrt((t14 + (t58 * t58)))
+    t62 = _op_atan2(t61, a8)
+    t63 = 3.141592653589793 - t62
+    t65 = (t62 if t62 <= t63 or t62 != t62 else t63) <= 1e-06
+    t66 = _op_atan2(a2, t58)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = t58 / t68
+    t70 = a2 / t68
+    t78 = _op_atan2((-((t69 * a1) + (t70 * a4))), ((t69 * a0) + (t70 * a3)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)]
+def euler_angles_kernel_zyx(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = -a5
+    t4 = _op_sqrt(((t0 * t0) + (a8 * a8)))
+    t5 = _op_atan2(a2, t4)
+    t8 = (1.5707963267948966 - (_op_abs(t5))) <= 1e-06
+    t9 = _op_atan2(t0, a8)
+    t11 = t4 if (t4 > 0) else 1.0
+    t12 = a8 / t11
+    t13 = t0 / t11
+    t20 = _op_atan2(((t12 * a3) + (t13 * a6)), ((t12 * a4) + (t13 * a7)))
+    if t8:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
+    return (o0, (_True if t8 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)
+def euler_angles_kernel_zyx_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t17 = a8 * a8
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + t17) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = -a5
+    t61 = _op_sqrt(((t58 * t58) + t17))
+    t62 = _op_atan2(a2, t61)
+    t65 = (1.5707963267948966 - (_op_abs(t62))) <= 1e-06
+    t66 = _op_atan2(t58, a8)
+    t68 = t61 if (t61 > 0) else 1.0
+    t69 = a8 / t68
+    t70 = t58 / t68
+    t77 = _op_atan2(((t69 * a3) + (t70 * a6)), ((t69 * a4) + (t70 * a7)))
+    if t65:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
+    return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)]
+def euler_angles_kernel_zyz(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t3 = _op_sqrt(((a5 * a5) + (a2 * a2)))
+    t4 = _op_atan2(t3, a8)
+    t5 = 3.141592653589793 - t4
+    t7 = (t4 if t4 <= t5 or t4 != t4 else t5) <= 1e-06
+    t8 = _op_atan2(a5, a2)
+    t10 = t3 if (t3 > 0) else 1.0
+    t11 = a2 / t10
+    t14 = -(a5 / t10)
+    t20 = _op_atan2(((t11 * a3) + (t14 * a0)), ((t11 * a4) + (t14 * a1)))
+    if t7:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
+    return (o0, (_True if t7 else _False),)
+
+
+# rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)
+def euler_angles_kernel_zyz_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t14 = a2 * a2
+    t15 = a5 * a5
+    t20 = _op_abs((((t14 + t15) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = _op_sqrt((t15 + t14))
+    t60 = _op_atan2(t59, a8)
+    t61 = 3.141592653589793 - t60
+    t63 = (t60 if t60 <= t61 or t60 != t60 else t61) <= 1e-06
+    t64 = _op_atan2(a5, a2)
+    t66 = t59 if (t59 > 0) else 1.0
+    t67 = a2 / t66
+    t70 = -(a5 / t66)
+    t76 = _op_atan2(((t67 * a3) + (t70 * a0)), ((t67 * a4) + (t70 * a1)))
+    if t63:
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
+    return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.fitting._distance_kernel
+def fitting__distance_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
+        return None
+    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17) * 0.0 != 0.0:
+        return None
+    t46 = 0.5 * ((((a2 * a10) + (a5 * a13)) + (a8 * a16)) - (((a1 * a11) + (a4 * a14)) + (a7 * a17)))
+    t48 = 0.5 * ((((a0 * a11) + (a3 * a14)) + (a6 * a17)) - (((a2 * a9) + (a5 * a12)) + (a8 * a15)))
+    t50 = 0.5 * ((((a1 * a9) + (a4 * a12)) + (a7 * a15)) - (((a0 * a10) + (a3 * a13)) + (a6 * a16)))
+    t59 = ((t46 * t46) + (t48 * t48)) + (t50 * t50)
+    if (((t59 < 1e-290) and (((t46 != 0) or (t48 != 0)) or (t50 != 0))) or (t59 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    return (_float64((_op_atan2((_op_sqrt(t59)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))),)
+
+
+# rot_tools.fitting._distance_kernel checked(2)
+def fitting__distance_kernel_checked2(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
+        return None
+    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t64 = _op_abs(((((a9 * a9) + (a12 * a12)) + (a15 * a15)) - 1.0))
+    t71 = _op_abs(((((a10 * a10) + (a13 * a13)) + (a16 * a16)) - 1.0))
+    t78 = _op_abs(((((a11 * a11) + (a14 * a14)) + (a17 * a17)) - 1.0))
+    t84 = _op_abs((((a9 * a10) + (a12 * a13)) + (a15 * a16)))
+    t90 = _op_abs((((a9 * a11) + (a12 * a14)) + (a15 * a17)))
+    t96 = _op_abs((((a10 * a11) + (a13 * a14)) + (a16 * a17)))
+    t97 = t64 if t64 >= t71 or t64 != t64 else t71
+    t98 = t97 if t97 >= t78 or t97 != t97 else t78
+    t99 = t98 if t98 >= t84 or t98 != t98 else t84
+    t100 = t99 if t99 >= t90 or t99 != t99 else t90
+    t162 = 0.5 * ((((a2 * a10) + (a5 * a13)) + (a8 * a16)) - (((a1 * a11) + (a4 * a14)) + (a7 * a17)))
+    t164 = 0.5 * ((((a0 * a11) + (a3 * a14)) + (a6 * a17)) - (((a2 * a9) + (a5 * a12)) + (a8 * a15)))
+    t166 = 0.5 * ((((a1 * a9) + (a4 * a12)) + (a7 * a15)) - (((a0 * a10) + (a3 * a13)) + (a6 * a16)))
+    t175 = ((t162 * t162) + (t164 * t164)) + (t166 * t166)
+    if (((t175 < 1e-290) and (((t162 != 0) or (t164 != 0)) or (t166 != 0))) or (t175 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    return (_float64((_op_atan2((_op_sqrt(t175)), (0.5 * ((((((a0 * a9) + (a3 * a12)) + (a6 * a15)) + (((a1 * a10) + (a4 * a13)) + (a7 * a16))) + (((a2 * a11) + (a5 * a14)) + (a8 * a17))) - 1.0))))), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float((t100 if t100 >= t96 or t100 != t100 else t96)), _float((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
+
+
+# rot_tools.rigid._compose_kernel
+def rigid__compose_kernel(inputs):
+    if len(inputs) != 4:
+        return None
+    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), (x3, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
+        return None
+    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
+    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
+        a18, a19, a20, = x2.tolist()
+    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
+        a18, a19, a20, = x2
+        if not (type(a18) is float and type(a19) is float and type(a20) is float):
+            return None
+    else:
+        return None
+    if type(x3) is _ndarray and x3.dtype is _f64 and x3.shape == (3,):
+        a21, a22, a23, = x3.tolist()
+    elif (type(x3) is tuple or type(x3) is list) and len(x3) == 3:
+        a21, a22, a23, = x3
+        if not (type(a21) is float and type(a22) is float and type(a23) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17 + a18 + a19 + a20 + a21 + a22 + a23) * 0.0 != 0.0:
+        return None
+    t60 = (((a0 * a21) + (a1 * a22)) + (a2 * a23)) + a18
+    t61 = (((a3 * a21) + (a4 * a22)) + (a5 * a23)) + a19
+    t62 = (((a6 * a21) + (a7 * a22)) + (a8 * a23)) + a20
+    t70 = (((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t61)) <= 1.7976931348623157e+308)) and ((_op_abs(t62)) <= 1.7976931348623157e+308)
+    if (False if t70 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t60, t61, t62)
+    return (o0, o1, (_True if t70 else _False),)
+
+
+# rot_tools.rigid._compose_kernel checked(2)
+def rigid__compose_kernel_checked2(inputs):
+    if len(inputs) != 4:
+        return None
+    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), (x3, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if not (type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3, 3)):
+        return None
+    (a9, a10, a11,), (a12, a13, a14,), (a15, a16, a17,), = x1.tolist()
+    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
+        a18, a19, a20, = x2.tolist()
+    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
+        a18, a19, a20, = x2
+        if not (type(a18) is float and type(a19) is float and type(a20) is float):
+            return None
+    else:
+        return None
+    if type(x3) is _ndarray and x3.dtype is _f64 and x3.shape == (3,):
+        a21, a22, a23, = x3.tolist()
+    elif (type(x3) is tuple or type(x3) is list) and len(x3) == 3:
+        a21, a22, a23, = x3
+        if not (type(a21) is float and type(a22) is float and type(a23) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15 + a16 + a17 + a18 + a19 + a20 + a21 + a22 + a23) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t64 = _op_abs(((((a9 * a9) + (a12 * a12)) + (a15 * a15)) - 1.0))
+    t71 = _op_abs(((((a10 * a10) + (a13 * a13)) + (a16 * a16)) - 1.0))
+    t78 = _op_abs(((((a11 * a11) + (a14 * a14)) + (a17 * a17)) - 1.0))
+    t84 = _op_abs((((a9 * a10) + (a12 * a13)) + (a15 * a16)))
+    t90 = _op_abs((((a9 * a11) + (a12 * a14)) + (a15 * a17)))
+    t96 = _op_abs((((a10 * a11) + (a13 * a14)) + (a16 * a17)))
+    t97 = t64 if t64 >= t71 or t64 != t64 else t71
+    t98 = t97 if t97 >= t78 or t97 != t97 else t78
+    t99 = t98 if t98 >= t84 or t98 != t98 else t84
+    t100 = t99 if t99 >= t90 or t99 != t99 else t90
+    t176 = (((a0 * a21) + (a1 * a22)) + (a2 * a23)) + a18
+    t177 = (((a3 * a21) + (a4 * a22)) + (a5 * a23)) + a19
+    t178 = (((a6 * a21) + (a7 * a22)) + (a8 * a23)) + a20
+    t186 = (((_op_abs(t176)) <= 1.7976931348623157e+308) and ((_op_abs(t177)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)
+    if (False if t186 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t176, t177, t178)
+    return (o0, o1, (_True if t186 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float((t100 if t100 >= t96 or t100 != t100 else t96)), _float((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
+
+
+# rot_tools.rigid._frame_kernel
+def rigid__frame_kernel(inputs):
+    if len(inputs) != 3:
+        return None
+    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a3, a4, a5, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a3, a4, a5, = x1
+        if not (type(a3) is float and type(a4) is float and type(a5) is float):
+            return None
+    else:
+        return None
+    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
+        a6, a7, a8, = x2.tolist()
+    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
+        a6, a7, a8, = x2
+        if not (type(a6) is float and type(a7) is float and type(a8) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
+    t14 = _op_sqrt(t4)
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t16 = t14 == 0
+    t17 = 1.0 if t16 else t14
+    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
+    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
+    t25 = 1.0 if t16 else (a2 / t17)
+    t30 = ((a3 * a3) + (a4 * a4)) + (a5 * a5)
+    t40 = _op_sqrt(t30)
+    if (((t30 < 1e-290) and (((a3 != 0) or (a4 != 0)) or (a5 != 0))) or (t30 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t42 = t40 == 0
+    t43 = 1.0 if t42 else t40
+    t46 = (0.0 if t42 else (a3 / t43)) + 0.0
+    t49 = (0.0 if t42 else (a4 / t43)) + 0.0
+    t51 = 1.0 if t42 else (a5 / t43)
+    t56 = ((a6 * a6) + (a7 * a7)) + (a8 * a8)
+    t66 = _op_sqrt(t56)
+    if (((t56 < 1e-290) and (((a6 != 0) or (a7 != 0)) or (a8 != 0))) or (t56 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t68 = t66 == 0
+    t69 = 1.0 if t68 else t66
+    t72 = (0.0 if t68 else (a6 / t69)) + 0.0
+    t75 = (0.0 if t68 else (a7 / t69)) + 0.0
+    t77 = 1.0 if t68 else (a8 / t69)
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, t20, t46, t72, t23, t49, t75, t25, t51, t77)
+    return (o0, _float64(t14), _float64(t40), _float64(t66), _float64((((t20 * t46) + (t23 * t49)) + (t25 * t51))), _float64((((t20 * t72) + (t23 * t75)) + (t25 * t77))), _float64((((t46 * t72) + (t49 * t75)) + (t51 * t77))), _float64((((((t23 * t51) - (t25 * t49)) * t72) + (((t25 * t46) - (t20 * t51)) * t75)) + (((t20 * t49) - (t23 * t46)) * t77))),)
+
+
+# rot_tools.rigid._homogeneous_kernel
+def rigid__homogeneous_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    o0 = _empty((4, 4), _f64)
+    _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
+    return (o0,)
+
+
+# rot_tools.rigid._homogeneous_kernel checked(1)
+def rigid__homogeneous_kernel_checked(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    o0 = _empty((4, 4), _f64)
+    _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
+    return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.rigid._invert_kernel
+def rigid__invert_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t15 = 0.0 - (((a0 * a9) + (a3 * a10)) + (a6 * a11))
+    t16 = 0.0 - (((a1 * a9) + (a4 * a10)) + (a7 * a11))
+    t17 = 0.0 - (((a2 * a9) + (a5 * a10)) + (a8 * a11))
+    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
+    if (False if t25 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t15, t16, t17)
+    return (o0, o1, (_True if t25 else _False),)
+
+
+# rot_tools.rigid._invert_kernel checked(1)
+def rigid__invert_kernel_checked(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t73 = 0.0 - (((a0 * a9) + (a3 * a10)) + (a6 * a11))
+    t74 = 0.0 - (((a1 * a9) + (a4 * a10)) + (a7 * a11))
+    t75 = 0.0 - (((a2 * a9) + (a5 * a10)) + (a8 * a11))
+    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
+    if (False if t83 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t73, t74, t75)
+    return (o0, o1, (_True if t83 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.rigid._points_kernel
+def rigid__points_kernel(inputs):
+    if len(inputs) != 3:
+        return None
+    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
+        a12, a13, a14, = x2.tolist()
+    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
+        a12, a13, a14, = x2
+        if not (type(a12) is float and type(a13) is float and type(a14) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14) * 0.0 != 0.0:
+        return None
+    t15 = (((a0 * a12) + (a1 * a13)) + (a2 * a14)) + a9
+    t16 = (((a3 * a12) + (a4 * a13)) + (a5 * a14)) + a10
+    t17 = (((a6 * a12) + (a7 * a13)) + (a8 * a14)) + a11
+    t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
+    if (False if t25 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, t15, t16, t17)
+    return (o0, (_True if t25 else _False),)
+
+
+# rot_tools.rigid._points_kernel checked(1)
+def rigid__points_kernel_checked(inputs):
+    if len(inputs) != 3:
+        return None
+    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if type(x2) is _ndarray and x2.dtype is _f64 and x2.shape == (3,):
+        a12, a13, a14, = x2.tolist()
+    elif (type(x2) is tuple or type(x2) is list) and len(x2) == 3:
+        a12, a13, a14, = x2
+        if not (type(a12) is float and type(a13) is float and type(a14) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t73 = (((a0 * a12) + (a1 * a13)) + (a2 * a14)) + a9
+    t74 = (((a3 * a12) + (a4 * a13)) + (a5 * a14)) + a10
+    t75 = (((a6 * a12) + (a7 * a13)) + (a8 * a14)) + a11
+    t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
+    if (False if t83 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, t73, t74, t75)
+    return (o0, (_True if t83 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.rigid._transform_of_homogeneous_kernel
+def rigid__transform_of_homogeneous_kernel(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (4, 4)):
+        return None
+    (a0, a1, a2, a3,), (a4, a5, a6, a7,), (a8, a9, a10, a11,), (a12, a13, a14, a15,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11 + a12 + a13 + a14 + a15) * 0.0 != 0.0:
+        return None
+    t0 = _op_abs(a12)
+    t1 = _op_abs(a13)
+    t2 = _op_abs(a14)
+    t4 = _op_abs((a15 - 1.0))
+    t5 = t0 if t0 >= t1 or t0 != t0 else t1
+    t6 = t5 if t5 >= t2 or t5 != t5 else t2
+    t14 = _op_abs(((((a0 * a0) + (a4 * a4)) + (a8 * a8)) - 1.0))
+    t21 = _op_abs(((((a1 * a1) + (a5 * a5)) + (a9 * a9)) - 1.0))
+    t28 = _op_abs(((((a2 * a2) + (a6 * a6)) + (a10 * a10)) - 1.0))
+    t34 = _op_abs((((a0 * a1) + (a4 * a5)) + (a8 * a9)))
+    t40 = _op_abs((((a0 * a2) + (a4 * a6)) + (a8 * a10)))
+    t46 = _op_abs((((a1 * a2) + (a5 * a6)) + (a9 * a10)))
+    t47 = t14 if t14 >= t21 or t14 != t14 else t21
+    t48 = t47 if t47 >= t28 or t47 != t47 else t28
+    t49 = t48 if t48 >= t34 or t48 != t48 else t34
+    t50 = t49 if t49 >= t40 or t49 != t49 else t40
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, a0, a1, a2, a4, a5, a6, a8, a9, a10)
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, a3, a7, a11)
+    return (o0, o1, _float64((t6 if t6 >= t4 or t6 != t6 else t4)), _float64((t50 if t50 >= t46 or t50 != t50 else t46)), _float64((((a0 * ((a5 * a10) - (a6 * a9))) - (a1 * ((a4 * a10) - (a6 * a8)))) + (a2 * ((a4 * a9) - (a5 * a8))))),)
+
+
+# rot_tools.screw._exp_kernel
+def screw__exp_kernel(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (6,):
+        a0, a1, a2, a3, a4, a5, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 6:
+        a0, a1, a2, a3, a4, a5, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float and type(a3) is float and type(a4) is float and type(a5) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5) * 0.0 != 0.0:
+        return None
+    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
+    t14 = _op_sqrt(t4)
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t16 = t14 == 0
+    t17 = 1.0 if t16 else t14
+    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
+    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
+    t25 = 1.0 if t16 else (a2 / t17)
+    t27 = (_op_abs(t14)) <= 1.7976931348623157e+308
+    t28 = t14 if t27 else 0.0
+    t33 = ((t20 * a3) + (t23 * a4)) + (t25 * a5)
+    t34 = 0.5 * t28
+    t35 = _op_sin(t34)
+    t36 = t28 < 1e-08
+    t37 = 1.0 if t36 else t28
+    t38 = 2.0 * t35
+    t40 = t38 * (_op_cos(t34))
+    t42 = 1.0 if t36 else (t40 / t37)
+    t43 = t38 * t35
+    t45 = t34 if t36 else (t43 / t37)
+    t55 = t33 * t20
+    t60 = ((t42 * (a3 - t55)) + (t45 * ((t23 * a5) - (t25 * a4)))) + t55
+    t61 = t33 * t23
+    t66 = ((t42 * (a4 - t61)) + (t45 * ((t25 * a3) - (t20 * a5)))) + t61
+    t67 = t33 * t25
+    t72 = ((t42 * (a5 - t67)) + (t45 * ((t20 * a4) - (t23 * a3)))) + t67
+    t73 = 1.0 - t43
+    t74 = t43 * t20
+    t75 = t43 * t23
+    t77 = t40 * t20
+    t78 = t40 * t23
+    t79 = t40 * t25
+    t80 = t74 * t23
+    t81 = t74 * t25
+    t82 = t75 * t25
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t73 + (t74 * t20)), (t80 - t79), (t81 + t78), (t80 + t79), (t73 + (t75 * t23)), (t82 - t77), (t81 - t78), (t82 + t77), (t73 + ((t43 * t25) * t25)))
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t60, t66, t72)
+    return (o0, o1, (_True if t27 else _False), (_True if ((((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) and ((_op_abs(t72)) <= 1.7976931348623157e+308)) else _False),)
+
+
+# rot_tools.screw._log_kernel
+def screw__log_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t1 = 0.5 * (a7 - a5)
+    t3 = 0.5 * (a2 - a6)
+    t5 = 0.5 * (a3 - a1)
+    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
+    t24 = _op_sqrt(t14)
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t26 = t24 == 0
+    t27 = 1.0 if t26 else t24
+    t36 = _op_atan2(t24, t9)
+    t37 = t9 < 0
+    t38 = a0 - t9
+    t39 = a4 - t9
+    t40 = a8 - t9
+    t42 = 0.5 * (a1 + a3)
+    t44 = 0.5 * (a2 + a6)
+    t46 = 0.5 * (a5 + a7)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
+    t54 = t38 if t49 else (t42 if t52 else t44)
+    t56 = t42 if t49 else (t39 if t52 else t46)
+    t58 = t44 if t49 else (t46 if t52 else t40)
+    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
+    t73 = _op_sqrt(t63)
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t75 = t73 == 0
+    t76 = 1.0 if t75 else t73
+    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
+    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
+    t84 = 1.0 if t75 else (t58 / t76)
+    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
+    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
+    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
+    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
+    t101 = 0.5 * t36
+    t102 = _op_tan(t101)
+    t103 = t102 == 0
+    t106 = 1.0 if t103 else (t101 / (1.0 if t103 else t102))
+    t111 = ((a9 * t94) + (a10 * t97)) + (a11 * t100)
+    t121 = t111 * t94
+    t126 = ((t106 * (a9 - t121)) - (t101 * ((t97 * a11) - (t100 * a10)))) + t121
+    t127 = t111 * t97
+    t132 = ((t106 * (a10 - t127)) - (t101 * ((t100 * a9) - (t94 * a11)))) + t127
+    t133 = t111 * t100
+    t138 = ((t106 * (a11 - t133)) - (t101 * ((t94 * a10) - (t97 * a9)))) + t133
+    t146 = (((_op_abs(t126)) <= 1.7976931348623157e+308) and ((_op_abs(t132)) <= 1.7976931348623157e+308)) and ((_op_abs(t138)) <= 1.7976931348623157e+308)
+    if (False if t146 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((6,), _f64)
+    _pack_6d(o0, 0, (t36 * t94), (t36 * t97), (t36 * t100), t126, t132, t138)
+    return (o0, (_True if t146 else _False),)
+
+
+# rot_tools.screw._log_kernel checked(1)
+def screw__log_kernel_checked(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = 0.5 * (a7 - a5)
+    t61 = 0.5 * (a2 - a6)
+    t63 = 0.5 * (a3 - a1)
+    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
+    t82 = _op_sqrt(t72)
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t84 = t82 == 0
+    t85 = 1.0 if t84 else t82
+    t94 = _op_atan2(t82, t67)
+    t95 = t67 < 0
+    t96 = a0 - t67
+    t97 = a4 - t67
+    t98 = a8 - t67
+    t100 = 0.5 * (a1 + a3)
+    t102 = 0.5 * (a2 + a6)
+    t104 = 0.5 * (a5 + a7)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
+    t112 = t96 if t107 else (t100 if t110 else t102)
+    t114 = t100 if t107 else (t97 if t110 else t104)
+    t116 = t102 if t107 else (t104 if t110 else t98)
+    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
+    t131 = _op_sqrt(t121)
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t133 = t131 == 0
+    t134 = 1.0 if t133 else t131
+    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
+    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
+    t142 = 1.0 if t133 else (t116 / t134)
+    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
+    t152 = ((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)
+    t155 = ((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)
+    t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
+    t159 = 0.5 * t94
+    t160 = _op_tan(t159)
+    t161 = t160 == 0
+    t164 = 1.0 if t161 else (t159 / (1.0 if t161 else t160))
+    t169 = ((a9 * t152) + (a10 * t155)) + (a11 * t158)
+    t179 = t169 * t152
+    t184 = ((t164 * (a9 - t179)) - (t159 * ((t155 * a11) - (t158 * a10)))) + t179
+    t185 = t169 * t155
+    t190 = ((t164 * (a10 - t185)) - (t159 * ((t158 * a9) - (t152 * a11)))) + t185
+    t191 = t169 * t158
+    t196 = ((t164 * (a11 - t191)) - (t159 * ((t152 * a10) - (t155 * a9)))) + t191
+    t204 = (((_op_abs(t184)) <= 1.7976931348623157e+308) and ((_op_abs(t190)) <= 1.7976931348623157e+308)) and ((_op_abs(t196)) <= 1.7976931348623157e+308)
+    if (False if t204 else True):
+        return None  # rare: apply runs the kernel
+    o0 = _empty((6,), _f64)
+    _pack_6d(o0, 0, (t94 * t152), (t94 * t155), (t94 * t158), t184, t190, t196)
+    return (o0, (_True if t204 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.screw._screw_kernel
+def screw__screw_kernel(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t1 = 0.5 * (a7 - a5)
+    t3 = 0.5 * (a2 - a6)
+    t5 = 0.5 * (a3 - a1)
+    t9 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t14 = ((t1 * t1) + (t3 * t3)) + (t5 * t5)
+    t24 = _op_sqrt(t14)
+    if (((t14 < 1e-290) and (((t1 != 0) or (t3 != 0)) or (t5 != 0))) or (t14 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t26 = t24 == 0
+    t27 = 1.0 if t26 else t24
+    t36 = _op_atan2(t24, t9)
+    t37 = t9 < 0
+    t38 = a0 - t9
+    t39 = a4 - t9
+    t40 = a8 - t9
+    t42 = 0.5 * (a1 + a3)
+    t44 = 0.5 * (a2 + a6)
+    t46 = 0.5 * (a5 + a7)
+    t49 = (t38 >= t39) and (t38 >= t40)
+    t52 = (t39 > t38) and (t39 >= t40)
+    t54 = t38 if t49 else (t42 if t52 else t44)
+    t56 = t42 if t49 else (t39 if t52 else t46)
+    t58 = t44 if t49 else (t46 if t52 else t40)
+    t63 = ((t54 * t54) + (t56 * t56)) + (t58 * t58)
+    t73 = _op_sqrt(t63)
+    if (((t63 < 1e-290) and (((t54 != 0) or (t56 != 0)) or (t58 != 0))) or (t63 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t75 = t73 == 0
+    t76 = 1.0 if t75 else t73
+    t79 = (0.0 if t75 else (t54 / t76)) + 0.0
+    t82 = (0.0 if t75 else (t56 / t76)) + 0.0
+    t84 = 1.0 if t75 else (t58 / t76)
+    t91 = -1.0 if ((((t79 * t1) + (t82 * t3)) + (t84 * t5)) < 0) else 1.0
+    t94 = ((t91 * t79) + 0.0) if t37 else ((0.0 if t26 else (t1 / t27)) + 0.0)
+    t97 = ((t91 * t82) + 0.0) if t37 else ((0.0 if t26 else (t3 / t27)) + 0.0)
+    t100 = ((t91 * t84) + 0.0) if t37 else (1.0 if t26 else (t5 / t27))
+    t105 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
+    t115 = _op_sqrt(t105)
+    if (((t105 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t105 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t117 = t115 == 0
+    t118 = 1.0 if t117 else t115
+    t127 = t36 < 1e-12
+    t128 = ((0.0 if t117 else (a9 / t118)) + 0.0) if t127 else t94
+    t129 = ((0.0 if t117 else (a10 / t118)) + 0.0) if t127 else t97
+    t130 = (1.0 if t117 else (a11 / t118)) if t127 else t100
+    t136 = t115 if t127 else (((a9 * t94) + (a10 * t97)) + (a11 * t100))
+    t138 = a9 - (t136 * t128)
+    t140 = a10 - (t136 * t129)
+    t142 = a11 - (t136 * t130)
+    t143 = 1.0 if t127 else t36
+    t157 = 0.5 * (0.0 if t127 else (1.0 / (_op_tan((0.5 * t143)))))
+    t161 = 0.0 if t127 else ((0.5 * t138) + (t157 * ((t129 * t142) - (t130 * t140))))
+    t165 = 0.0 if t127 else ((0.5 * t140) + (t157 * ((t130 * t138) - (t128 * t142))))
+    t169 = 0.0 if t127 else ((0.5 * t142) + (t157 * ((t128 * t140) - (t129 * t138))))
+    t172 = (t165 * t130) - (t169 * t129)
+    t175 = (t169 * t128) - (t161 * t130)
+    t178 = (t161 * t129) - (t165 * t128)
+    t179 = t136 / t143
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, t128, t129, t130)
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t161, t165, t169)
+    o2 = _empty((3,), _f64)
+    _pack_3d(o2, 0, t172, t175, t178)
+    return (o0, o1, o2, _float64((0.0 if t127 else t36)), _float64((t136 + 0.0)), _float64((((_inf if (t115 > 0) else 0.0) if t127 else t179) + 0.0)), (_True if (((((((((_op_abs(t161)) <= 1.7976931348623157e+308) and ((_op_abs(t165)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t175)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)) and ((_op_abs(t136)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t127 else t179))) <= 1.7976931348623157e+308)) else _False),)
+
+
+# rot_tools.screw._screw_kernel checked(1)
+def screw__screw_kernel_checked(inputs):
+    if len(inputs) != 2:
+        return None
+    (x0, _, _, _), (x1, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a9, a10, a11, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a9, a10, a11, = x1
+        if not (type(a9) is float and type(a10) is float and type(a11) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t59 = 0.5 * (a7 - a5)
+    t61 = 0.5 * (a2 - a6)
+    t63 = 0.5 * (a3 - a1)
+    t67 = 0.5 * (((a0 + a4) + a8) - 1.0)
+    t72 = ((t59 * t59) + (t61 * t61)) + (t63 * t63)
+    t82 = _op_sqrt(t72)
+    if (((t72 < 1e-290) and (((t59 != 0) or (t61 != 0)) or (t63 != 0))) or (t72 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t84 = t82 == 0
+    t85 = 1.0 if t84 else t82
+    t94 = _op_atan2(t82, t67)
+    t95 = t67 < 0
+    t96 = a0 - t67
+    t97 = a4 - t67
+    t98 = a8 - t67
+    t100 = 0.5 * (a1 + a3)
+    t102 = 0.5 * (a2 + a6)
+    t104 = 0.5 * (a5 + a7)
+    t107 = (t96 >= t97) and (t96 >= t98)
+    t110 = (t97 > t96) and (t97 >= t98)
+    t112 = t96 if t107 else (t100 if t110 else t102)
+    t114 = t100 if t107 else (t97 if t110 else t104)
+    t116 = t102 if t107 else (t104 if t110 else t98)
+    t121 = ((t112 * t112) + (t114 * t114)) + (t116 * t116)
+    t131 = _op_sqrt(t121)
+    if (((t121 < 1e-290) and (((t112 != 0) or (t114 != 0)) or (t116 != 0))) or (t121 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t133 = t131 == 0
+    t134 = 1.0 if t133 else t131
+    t137 = (0.0 if t133 else (t112 / t134)) + 0.0
+    t140 = (0.0 if t133 else (t114 / t134)) + 0.0
+    t142 = 1.0 if t133 else (t116 / t134)
+    t149 = -1.0 if ((((t137 * t59) + (t140 * t61)) + (t142 * t63)) < 0) else 1.0
+    t152 = ((t149 * t137) + 0.0) if t95 else ((0.0 if t84 else (t59 / t85)) + 0.0)
+    t155 = ((t149 * t140) + 0.0) if t95 else ((0.0 if t84 else (t61 / t85)) + 0.0)
+    t158 = ((t149 * t142) + 0.0) if t95 else (1.0 if t84 else (t63 / t85))
+    t163 = ((a9 * a9) + (a10 * a10)) + (a11 * a11)
+    t173 = _op_sqrt(t163)
+    if (((t163 < 1e-290) and (((a9 != 0) or (a10 != 0)) or (a11 != 0))) or (t163 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t175 = t173 == 0
+    t176 = 1.0 if t175 else t173
+    t185 = t94 < 1e-12
+    t186 = ((0.0 if t175 else (a9 / t176)) + 0.0) if t185 else t152
+    t187 = ((0.0 if t175 else (a10 / t176)) + 0.0) if t185 else t155
+    t188 = (1.0 if t175 else (a11 / t176)) if t185 else t158
+    t194 = t173 if t185 else (((a9 * t152) + (a10 * t155)) + (a11 * t158))
+    t196 = a9 - (t194 * t186)
+    t198 = a10 - (t194 * t187)
+    t200 = a11 - (t194 * t188)
+    t201 = 1.0 if t185 else t94
+    t215 = 0.5 * (0.0 if t185 else (1.0 / (_op_tan((0.5 * t201)))))
+    t219 = 0.0 if t185 else ((0.5 * t196) + (t215 * ((t187 * t200) - (t188 * t198))))
+    t223 = 0.0 if t185 else ((0.5 * t198) + (t215 * ((t188 * t196) - (t186 * t200))))
+    t227 = 0.0 if t185 else ((0.5 * t200) + (t215 * ((t186 * t198) - (t187 * t196))))
+    t230 = (t223 * t188) - (t227 * t187)
+    t233 = (t227 * t186) - (t219 * t188)
+    t236 = (t219 * t187) - (t223 * t186)
+    t237 = t194 / t201
+    o0 = _empty((3,), _f64)
+    _pack_3d(o0, 0, t186, t187, t188)
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t219, t223, t227)
+    o2 = _empty((3,), _f64)
+    _pack_3d(o2, 0, t230, t233, t236)
+    return (o0, o1, o2, _float64((0.0 if t185 else t94)), _float64((t194 + 0.0)), _float64((((_inf if (t173 > 0) else 0.0) if t185 else t237) + 0.0)), (_True if (((((((((_op_abs(t219)) <= 1.7976931348623157e+308) and ((_op_abs(t223)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t233)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)) and ((_op_abs(t194)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t185 else t237))) <= 1.7976931348623157e+308)) else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.screw._transform_of_screw_kernel
+def screw__transform_of_screw_kernel(inputs):
+    if len(inputs) != 4:
+        return None
+    (x0, _, _, _), (x1, _, _, _), (x2, _, _, _), (x3, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3,):
+        a0, a1, a2, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 3:
+        a0, a1, a2, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float):
+            return None
+    else:
+        return None
+    if type(x1) is _ndarray and x1.dtype is _f64 and x1.shape == (3,):
+        a3, a4, a5, = x1.tolist()
+    elif (type(x1) is tuple or type(x1) is list) and len(x1) == 3:
+        a3, a4, a5, = x1
+        if not (type(a3) is float and type(a4) is float and type(a5) is float):
+            return None
+    else:
+        return None
+    if type(x2) is float:
+        a6 = x2
+    elif type(x2) is _float64:
+        a6 = _float(x2)
+    else:
+        return None
+    if type(x3) is float:
+        a7 = x3
+    elif type(x3) is _float64:
+        a7 = _float(x3)
+    else:
+        return None
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7) * 0.0 != 0.0:
+        return None
+    t4 = ((a0 * a0) + (a1 * a1)) + (a2 * a2)
+    t14 = _op_sqrt(t4)
+    if (((t4 < 1e-290) and (((a0 != 0) or (a1 != 0)) or (a2 != 0))) or (t4 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t16 = t14 == 0
+    t17 = 1.0 if t16 else t14
+    t20 = (0.0 if t16 else (a0 / t17)) + 0.0
+    t23 = (0.0 if t16 else (a1 / t17)) + 0.0
+    t25 = 1.0 if t16 else (a2 / t17)
+    t26 = 0.5 * a6
+    t27 = _op_sin(t26)
+    t29 = 2.0 * t27
+    t30 = t29 * (_op_cos(t26))
+    t31 = t29 * t27
+    t36 = ((a3 * t20) + (a4 * t23)) + (a5 * t25)
+    t52 = ((t31 * (a3 - (t36 * t20))) - (t30 * ((t23 * a5) - (t25 * a4)))) + (a7 * t20)
+    t59 = ((t31 * (a4 - (t36 * t23))) - (t30 * ((t25 * a3) - (t20 * a5)))) + (a7 * t23)
+    t66 = ((t31 * (a5 - (t36 * t25))) - (t30 * ((t20 * a4) - (t23 * a3)))) + (a7 * t25)
+    t67 = 1.0 - t31
+    t68 = t31 * t20
+    t69 = t31 * t23
+    t71 = t30 * t20
+    t72 = t30 * t23
+    t73 = t30 * t25
+    t74 = t68 * t23
+    t75 = t68 * t25
+    t76 = t69 * t25
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (t67 + (t68 * t20)), (t74 - t73), (t75 + t72), (t74 + t73), (t67 + (t69 * t23)), (t76 - t71), (t75 - t72), (t76 + t71), (t67 + ((t31 * t25) * t25)))
+    o1 = _empty((3,), _f64)
+    _pack_3d(o1, 0, t52, t59, t66)
+    return (o0, o1, (_True if t16 else _False), (_True if ((((_op_abs(t52)) <= 1.7976931348623157e+308) and ((_op_abs(t59)) <= 1.7976931348623157e+308)) and ((_op_abs(t66)) <= 1.7976931348623157e+308)) else _False),)
+
+
+# rot_tools.so3._quaternion_kernel
+def so3__quaternion_kernel(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (4,):
+        a0, a1, a2, a3, = x0.tolist()
+    elif (type(x0) is tuple or type(x0) is list) and len(x0) == 4:
+        a0, a1, a2, a3, = x0
+        if not (type(a0) is float and type(a1) is float and type(a2) is float and type(a3) is float):
+            return None
+    else:
+        return None
+    if (a0 + a1 + a2 + a3) * 0.0 != 0.0:
+        return None
+    t0 = _op_abs(a0)
+    t1 = _op_abs(a1)
+    t2 = t0 if t0 >= t1 or t0 != t0 else t1
+    t3 = _op_abs(a2)
+    t4 = _op_abs(a3)
+    t5 = t3 if t3 >= t4 or t3 != t3 else t4
+    t6 = t2 if t2 >= t5 or t2 != t2 else t5
+    t8 = t6 if (t6 > 0) else 1.0
+    t9 = a0 / t8
+    t10 = a1 / t8
+    t11 = a2 / t8
+    t12 = a3 / t8
+    t13 = t9 * t9
+    t14 = t10 * t10
+    t15 = t13 + t14
+    t16 = t11 * t11
+    t19 = (t15 + t16) + (t12 * t12)
+    t22 = 2.0 / (t19 if (t19 > 0) else 1.0)
+    t26 = t9 * t10
+    t27 = t11 * t12
+    t30 = t9 * t11
+    t31 = t10 * t12
+    t39 = t10 * t11
+    t40 = t9 * t12
+    o0 = _empty((3, 3), _f64)
+    _pack_9d(o0, 0, (1.0 - (t22 * (t14 + t16))), (t22 * (t26 - t27)), (t22 * (t30 + t31)), (t22 * (t26 + t27)), (1.0 - (t22 * (t13 + t16))), (t22 * (t39 - t40)), (t22 * (t30 - t31)), (t22 * (t39 + t40)), (1.0 - (t22 * t15)))
+    return (o0, (_True if (t6 == 0) else _False),)
+
+
+# rot_tools.so3.defects_kernel
+def so3_defects_kernel(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    return (_float64((t42 if t42 >= t38 or t42 != t42 else t38)), _float64((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
+# rot_tools.so3.quaternion_of_matrix_kernel
+def so3_quaternion_of_matrix_kernel(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t0 = 1.0 + a0
+    t2 = (t0 - a4) - a8
+    t3 = 1.0 - a0
+    t5 = (t3 + a4) - a8
+    t7 = (t3 - a4) + a8
+    t9 = (t0 + a4) + a8
+    t10 = a1 + a3
+    t11 = a2 + a6
+    t12 = a5 + a7
+    t13 = a7 - a5
+    t14 = a2 - a6
+    t15 = a3 - a1
+    t20 = ((t2 >= t5) and (t2 >= t7)) and (t2 >= t9)
+    t25 = ((t5 > t2) and (t5 >= t7)) and (t5 >= t9)
+    t30 = ((t7 > t2) and (t7 > t5)) and (t7 >= t9)
+    t33 = t2 if t20 else (t10 if t25 else (t11 if t30 else t13))
+    t36 = t10 if t20 else (t5 if t25 else (t12 if t30 else t14))
+    t39 = t11 if t20 else (t12 if t25 else (t7 if t30 else t15))
+    t42 = t13 if t20 else (t14 if t25 else (t15 if t30 else t9))
+    t59 = (-1.0 if ((t42 if (t42 != 0) else (t33 if (t33 != 0) else (t36 if (t36 != 0) else t39))) < 0) else 1.0) / (_op_sqrt(((((t33 * t33) + (t36 * t36)) + (t39 * t39)) + (t42 * t42))))
+    o0 = _empty((4,), _f64)
+    _pack_4d(o0, 0, ((t33 * t59) + 0.0), ((t36 * t59) + 0.0), ((t39 * t59) + 0.0), ((t42 * t59) + 0.0))
+    return (o0,)
+
+
+# rot_tools.so3.quaternion_of_matrix_kernel checked(1)
+def so3_quaternion_of_matrix_kernel_checked(inputs):
+    if len(inputs) != 1:
+        return None
+    (x0, _, _, _), = inputs
+    if not (type(x0) is _ndarray and x0.dtype is _f64 and x0.shape == (3, 3)):
+        return None
+    (a0, a1, a2,), (a3, a4, a5,), (a6, a7, a8,), = x0.tolist()
+    if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8) * 0.0 != 0.0:
+        return None
+    t6 = _op_abs(((((a0 * a0) + (a3 * a3)) + (a6 * a6)) - 1.0))
+    t13 = _op_abs(((((a1 * a1) + (a4 * a4)) + (a7 * a7)) - 1.0))
+    t20 = _op_abs(((((a2 * a2) + (a5 * a5)) + (a8 * a8)) - 1.0))
+    t26 = _op_abs((((a0 * a1) + (a3 * a4)) + (a6 * a7)))
+    t32 = _op_abs((((a0 * a2) + (a3 * a5)) + (a6 * a8)))
+    t38 = _op_abs((((a1 * a2) + (a4 * a5)) + (a7 * a8)))
+    t39 = t6 if t6 >= t13 or t6 != t6 else t13
+    t40 = t39 if t39 >= t20 or t39 != t39 else t20
+    t41 = t40 if t40 >= t26 or t40 != t40 else t26
+    t42 = t41 if t41 >= t32 or t41 != t41 else t32
+    t58 = 1.0 + a0
+    t60 = (t58 - a4) - a8
+    t61 = 1.0 - a0
+    t63 = (t61 + a4) - a8
+    t65 = (t61 - a4) + a8
+    t67 = (t58 + a4) + a8
+    t68 = a1 + a3
+    t69 = a2 + a6
+    t70 = a5 + a7
+    t71 = a7 - a5
+    t72 = a2 - a6
+    t73 = a3 - a1
+    t78 = ((t60 >= t63) and (t60 >= t65)) and (t60 >= t67)
+    t83 = ((t63 > t60) and (t63 >= t65)) and (t63 >= t67)
+    t88 = ((t65 > t60) and (t65 > t63)) and (t65 >= t67)
+    t91 = t60 if t78 else (t68 if t83 else (t69 if t88 else t71))
+    t94 = t68 if t78 else (t63 if t83 else (t70 if t88 else t72))
+    t97 = t69 if t78 else (t70 if t83 else (t65 if t88 else t73))
+    t100 = t71 if t78 else (t72 if t83 else (t73 if t88 else t67))
+    t117 = (-1.0 if ((t100 if (t100 != 0) else (t91 if (t91 != 0) else (t94 if (t94 != 0) else t97))) < 0) else 1.0) / (_op_sqrt(((((t91 * t91) + (t94 * t94)) + (t97 * t97)) + (t100 * t100))))
+    o0 = _empty((4,), _f64)
+    _pack_4d(o0, 0, ((t91 * t117) + 0.0), ((t94 * t117) + 0.0), ((t97 * t117) + 0.0), ((t100 * t117) + 0.0))
+    return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
+
+
 CODE = {
-    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZYX),
-    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XYX),
-    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XYZ),
-    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XZX),
-    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XZY),
-    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YXY),
-    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YXZ),
-    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YZX),
-    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YZY),
-    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZXY),
-    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZXZ),
-    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZYZ),
-    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xyx),
-    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xyz),
-    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xzx),
-    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xzy),
-    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yxy),
-    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yxz),
-    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yzx),
-    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yzy),
-    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zxy),
-    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zxz),
-    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zyx),
-    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zyz),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XYX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XYZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XZX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_XZY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YXY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YXZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YZX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_YZY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZXY_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZXZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZYX_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_ZYZ_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xyx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xyz_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xzx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_xzy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yxy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yxz_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yzx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_yzy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zxy_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zxz_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zyx_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], euler_angles_kernel_zyz_checked),
-    'rot_tools.axis_angle.axis_angle_kernel checked(1)': ([((3,), _float64), ((), _float64), ((), _float64), ((), _float64)], axis_angle_axis_angle_kernel_checked),
-    'rot_tools.axis_angle._rotvec_of_matrix_kernel checked(1)': ([((3,), _float64), ((), _float64), ((), _float64)], axis_angle__rotvec_of_matrix_kernel_checked),
-    'rot_tools.so3.quaternion_of_matrix_kernel checked(1)': ([((4,), _float64), ((), _float64), ((), _float64)], so3_quaternion_of_matrix_kernel_checked),
-    'rot_tools.screw._screw_kernel checked(1)': ([((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _bool), ((), _float64), ((), _float64)], screw__screw_kernel_checked),
-    'rot_tools.screw._log_kernel checked(1)': ([((6,), _float64), ((), _bool), ((), _float64), ((), _float64)], screw__log_kernel_checked),
-    'rot_tools.rigid._points_kernel checked(1)': ([((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], rigid__points_kernel_checked),
-    'rot_tools.rigid._compose_kernel checked(2)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__compose_kernel_checked2),
-    'rot_tools.rigid._invert_kernel checked(1)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float64), ((), _float64)], rigid__invert_kernel_checked),
-    'rot_tools.rigid._homogeneous_kernel checked(1)': ([((4, 4), _float64), ((), _float64), ((), _float64)], rigid__homogeneous_kernel_checked),
-    'rot_tools.rigid._transform_of_homogeneous_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__transform_of_homogeneous_kernel),
-    'rot_tools.fitting._distance_kernel checked(2)': ([((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], fitting__distance_kernel_checked2),
-    'rot_tools.so3.defects_kernel': ([((), _float64), ((), _float64)], so3_defects_kernel),
-    'rot_tools.screw._log_kernel': ([((6,), _float64), ((), _bool)], screw__log_kernel),
-    'rot_tools.screw._exp_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _bool)], screw__exp_kernel),
-    'rot_tools.decomposition._motion_kernel checked(1)': ([((3,), _float64), ((), _float64), ((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((6,), _float64), ((), _bool), ((), _float64), ((), _float64)], decomposition__motion_kernel_checked),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XYX),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XYZ),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XZX),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XZY),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YXY),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YXZ),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YZX),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YZY),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZXY),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZXZ),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZYX),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZYZ),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xyx),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xyz),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xzx),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xzy),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yxy),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yxz),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yzx),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yzy),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zxy),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zxz),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zyx),
-    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zyz),
-    'rot_tools.axis_angle.axis_angle_kernel': ([((3,), _float64), ((), _float64)], axis_angle_axis_angle_kernel),
-    'rot_tools.axis_angle._rotvec_of_matrix_kernel': ([((3,), _float64)], axis_angle__rotvec_of_matrix_kernel),
-    'rot_tools.so3.quaternion_of_matrix_kernel': ([((4,), _float64)], so3_quaternion_of_matrix_kernel),
-    'rot_tools.screw._screw_kernel': ([((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _bool)], screw__screw_kernel),
-    'rot_tools.rigid._points_kernel': ([((3,), _float64), ((), _bool)], rigid__points_kernel),
-    'rot_tools.rigid._compose_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool)], rigid__compose_kernel),
-    'rot_tools.rigid._invert_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool)], rigid__invert_kernel),
-    'rot_tools.rigid._homogeneous_kernel': ([((4, 4), _float64)], rigid__homogeneous_kernel),
-    'rot_tools.fitting._distance_kernel': ([((), _float64)], fitting__distance_kernel),
-    'rot_tools.decomposition._motion_kernel': ([((3,), _float64), ((), _float64), ((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((6,), _float64), ((), _bool)], decomposition__motion_kernel),
-    'rot_tools.axis_angle._rotvec_kernel': ([((3, 3), _float64), ((), _bool)], axis_angle__rotvec_kernel),
     'rot_tools.axis_angle._axis_angle_kernel': ([((3, 3), _float64), ((), _bool)], axis_angle__axis_angle_kernel),
-    'rot_tools.so3._quaternion_kernel': ([((3, 3), _float64), ((), _bool)], so3__quaternion_kernel),
-    'rot_tools.screw._transform_of_screw_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _bool)], screw__transform_of_screw_kernel),
-    'rot_tools.rigid._frame_kernel': ([((3, 3), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__frame_kernel),
-    'rot_tools.decomposition._values_kernel': ([((3,), _float), ((6,), _float), ((4,), _float), ((), _float64), ((), _bool)], decomposition__values_kernel),
+    'rot_tools.axis_angle._rotvec_kernel': ([((3, 3), _float64), ((), _bool)], axis_angle__rotvec_kernel),
+    'rot_tools.axis_angle._rotvec_of_matrix_kernel': ([((3,), _float64)], axis_angle__rotvec_of_matrix_kernel),
+    'rot_tools.axis_angle._rotvec_of_matrix_kernel checked(1)': ([((3,), _float64), ((), _float), ((), _float)], axis_angle__rotvec_of_matrix_kernel_checked),
+    'rot_tools.axis_angle.axis_angle_kernel': ([((3,), _float64), ((), _float64)], axis_angle_axis_angle_kernel),
+    'rot_tools.axis_angle.axis_angle_kernel checked(1)': ([((3,), _float64), ((), _float64), ((), _float), ((), _float)], axis_angle_axis_angle_kernel_checked),
     'rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, True, False)]': ([((3,), _float)], decomposition__euler_kernel_XYX),
     'rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, False, False)]': ([((3,), _float)], decomposition__euler_kernel_XYZ),
     'rot_tools.decomposition._euler_kernel[spec=(0, 2, 1, -1.0, True, False)]': ([((3,), _float)], decomposition__euler_kernel_XZX),
@@ -4624,4 +4528,101 @@ CODE = {
     'rot_tools.decomposition._euler_kernel[spec=(2, 0, 1, 1.0, True, True)]': ([((3,), _float)], decomposition__euler_kernel_zxz),
     'rot_tools.decomposition._euler_kernel[spec=(0, 1, 2, 1.0, False, True)]': ([((3,), _float)], decomposition__euler_kernel_zyx),
     'rot_tools.decomposition._euler_kernel[spec=(2, 1, 0, -1.0, True, True)]': ([((3,), _float)], decomposition__euler_kernel_zyz),
+    'rot_tools.decomposition._motion_kernel': ([((3,), _float64), ((), _float64), ((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((6,), _float64), ((), _bool)], decomposition__motion_kernel),
+    'rot_tools.decomposition._motion_kernel checked(1)': ([((3,), _float64), ((), _float64), ((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((6,), _float64), ((), _bool), ((), _float), ((), _float)], decomposition__motion_kernel_checked),
+    'rot_tools.decomposition._values_kernel': ([((3,), _float), ((6,), _float), ((4,), _float), ((), _float64), ((), _bool)], decomposition__values_kernel),
+    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XYX),
+    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XYZ),
+    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XZX),
+    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_XZY),
+    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YXY),
+    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YXZ),
+    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YZX),
+    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_YZY),
+    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZXY),
+    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZXZ),
+    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZYX),
+    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, False)]': ([((3, 3), _float64)], euler__matrix_kernel_ZYZ),
+    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xyx),
+    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xyz),
+    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xzx),
+    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_xzy),
+    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yxy),
+    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yxz),
+    'rot_tools.euler._matrix_kernel[spec=(0, 2, 1, -1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yzx),
+    'rot_tools.euler._matrix_kernel[spec=(1, 2, 0, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_yzy),
+    'rot_tools.euler._matrix_kernel[spec=(1, 0, 2, -1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zxy),
+    'rot_tools.euler._matrix_kernel[spec=(2, 0, 1, 1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zxz),
+    'rot_tools.euler._matrix_kernel[spec=(0, 1, 2, 1.0, False, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zyx),
+    'rot_tools.euler._matrix_kernel[spec=(2, 1, 0, -1.0, True, True)]': ([((3, 3), _float64)], euler__matrix_kernel_zyz),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XYX),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XYX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XYZ),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XYZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XZX),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XZX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_XZY),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_XZY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YXY),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YXY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YXZ),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YXZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YZX),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YZX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_YZY),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_YZY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZXY),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZXY_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZXZ),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZXZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZYX),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZYX_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_ZYZ),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, False)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_ZYZ_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xyx),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xyx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xyz),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xyz_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xzx),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xzx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_xzy),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_xzy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yxy),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yxy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yxz),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yxz_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yzx),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 2, 1, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yzx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_yzy),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 2, 0, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_yzy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zxy),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(1, 0, 2, -1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zxy_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zxz),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 0, 1, 1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zxz_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zyx),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(0, 1, 2, 1.0, False, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zyx_checked),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)]': ([((3,), _float64), ((), _bool)], euler_angles_kernel_zyz),
+    'rot_tools.euler.angles_kernel[lock_tol=1e-06, spec=(2, 1, 0, -1.0, True, True)] checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], euler_angles_kernel_zyz_checked),
+    'rot_tools.fitting._distance_kernel': ([((), _float64)], fitting__distance_kernel),
+    'rot_tools.fitting._distance_kernel checked(2)': ([((), _float64), ((), _float), ((), _float), ((), _float), ((), _float)], fitting__distance_kernel_checked2),
+    'rot_tools.rigid._compose_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool)], rigid__compose_kernel),
+    'rot_tools.rigid._compose_kernel checked(2)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float), ((), _float), ((), _float), ((), _float)], rigid__compose_kernel_checked2),
+    'rot_tools.rigid._frame_kernel': ([((3, 3), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__frame_kernel),
+    'rot_tools.rigid._homogeneous_kernel': ([((4, 4), _float64)], rigid__homogeneous_kernel),
+    'rot_tools.rigid._homogeneous_kernel checked(1)': ([((4, 4), _float64), ((), _float), ((), _float)], rigid__homogeneous_kernel_checked),
+    'rot_tools.rigid._invert_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool)], rigid__invert_kernel),
+    'rot_tools.rigid._invert_kernel checked(1)': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _float), ((), _float)], rigid__invert_kernel_checked),
+    'rot_tools.rigid._points_kernel': ([((3,), _float64), ((), _bool)], rigid__points_kernel),
+    'rot_tools.rigid._points_kernel checked(1)': ([((3,), _float64), ((), _bool), ((), _float), ((), _float)], rigid__points_kernel_checked),
+    'rot_tools.rigid._transform_of_homogeneous_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64)], rigid__transform_of_homogeneous_kernel),
+    'rot_tools.screw._exp_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _bool)], screw__exp_kernel),
+    'rot_tools.screw._log_kernel': ([((6,), _float64), ((), _bool)], screw__log_kernel),
+    'rot_tools.screw._log_kernel checked(1)': ([((6,), _float64), ((), _bool), ((), _float), ((), _float)], screw__log_kernel_checked),
+    'rot_tools.screw._screw_kernel': ([((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _bool)], screw__screw_kernel),
+    'rot_tools.screw._screw_kernel checked(1)': ([((3,), _float64), ((3,), _float64), ((3,), _float64), ((), _float64), ((), _float64), ((), _float64), ((), _bool), ((), _float), ((), _float)], screw__screw_kernel_checked),
+    'rot_tools.screw._transform_of_screw_kernel': ([((3, 3), _float64), ((3,), _float64), ((), _bool), ((), _bool)], screw__transform_of_screw_kernel),
+    'rot_tools.so3._quaternion_kernel': ([((3, 3), _float64), ((), _bool)], so3__quaternion_kernel),
+    'rot_tools.so3.defects_kernel': ([((), _float64), ((), _float64)], so3_defects_kernel),
+    'rot_tools.so3.quaternion_of_matrix_kernel': ([((4,), _float64)], so3_quaternion_of_matrix_kernel),
+    'rot_tools.so3.quaternion_of_matrix_kernel checked(1)': ([((4,), _float64), ((), _float), ((), _float)], so3_quaternion_of_matrix_kernel_checked),
 }

@@ -263,7 +263,10 @@ def _result_lines(values, outputs, packers):
         if not tail:
             if dtype not in DTYPE_NAMES:
                 raise TraceError(f'no scalar output for dtype {dtype}')
-            results.append(f'{DTYPE_NAMES[dtype]}({text[0]})')
+            if dtype is np.bool_:  # (NumPy's two bools are singletons: np.bool_(c) is one)
+                results.append(f'(_True if {text[0]} else _False)')
+            else:
+                results.append(f'{DTYPE_NAMES[dtype]}({text[0]})')
             continue
         if dtype is float:  # plain Python floats: a flat tuple of the entries
             results.append(f'({", ".join(text)},)')
@@ -397,6 +400,7 @@ _empty, _ndarray = _np.empty, _np.ndarray
 _f64, _b1 = _np.dtype(_np.float64), _np.dtype(_np.bool_)
 _float, _float64, _bool = float, _np.float64, _np.bool_
 _inf, _nan = _math.inf, _math.nan
+_True, _False = _np.True_, _np.False_
 '''
 """The names every generated function may use, besides _op_* and _pack_*."""
 

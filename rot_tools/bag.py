@@ -22,13 +22,20 @@ step's two ends: a check of the IMU's own consistency.
 
 Messages are taken in the order they were recorded; ``--start``/``--end`` select them by
 record time, in seconds from the bag's start.
+
+``--tf REFERENCE BODY``: the transforms of the bag's TFMessage topics pass the same boundary
+(counted), feed a rot_tools.TransformTree, and the chain between the two frames is looked up
+as one batch at every stamp of its dynamic edges (:func:`tf_topic`); it is one more topic,
+``tf:REFERENCE->BODY``.
 """
 
 import csv
 import io
+import math
 import os
 import sys
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -49,15 +56,21 @@ DEFAULT_TOLERANCE = 1e-3
 class Topic:
     """One topic's accepted messages and everything computed from them (radians)."""
 
-    def __init__(self, columns, tolerance, seq=None, wrap=False):
+    def __init__(self, columns, tolerance, seq=None, wrap=False, chain=None):
         self.columns = c = columns
         self.topic, self.msgtype = c.topic, c.msgtype
-        self.codes, norms = boundary.check_batch(c.orientation, tolerance, c.position,
-                                                 c.covariance0)
         self.tolerance = tolerance
-        ok = self.codes == boundary.ACCEPTED
+        self.chain = chain
+        if chain is None:
+            self.codes, norms = boundary.check_batch(c.orientation, tolerance, c.position,
+                                                     c.covariance0)
+            ok = self.codes == boundary.ACCEPTED
+            self.R = boundary.accepted_rotations(c.orientation, norms, self.codes)
+        else:  # a TF chain: its lookups, all made; the transforms' refusals are chain.codes
+            self.codes = chain.codes
+            ok = np.ones(len(c), bool)
+            self.R = chain.R
         self.ok = ok
-        self.R = boundary.accepted_rotations(c.orientation, norms, self.codes)
         n = len(self.R)
         self.sec, self.nanosec, self.frame = c.sec[ok], c.nanosec[ok], c.frame[ok]
         self.position = c.position[ok] if c.position is not None else np.zeros((n, 3))
@@ -100,7 +113,7 @@ class Topic:
         bad = np.flatnonzero(self.codes != boundary.ACCEPTED)
         if not len(bad):
             return None
-        k, c = int(bad[0]), self.columns
+        k, c = int(bad[0]), self.columns if self.chain is None else self.chain.transforms
         q = c.orientation[k]
         code = int(self.codes[k])
         _, norm = boundary.check_batch(q[None], self.tolerance)
@@ -123,9 +136,16 @@ def topic_summary(t, degrees):
     out = {'type': t.msgtype, 'frame_ids': list(c.frame_ids)}
     if c.child_frame_ids is not None:
         out['child_frame_ids'] = list(c.child_frame_ids)
-    out['messages'] = len(c)
-    out['accepted'] = int(t.ok.sum())
-    out['refused'] = t.refused()
+    if t.chain is not None:
+        out['chain'] = t.chain.frames
+        out['transforms'] = len(t.codes)
+        out['accepted'] = int((t.codes == boundary.ACCEPTED).sum())
+        out['refused'] = t.refused()
+        out['lookups'] = len(c)
+    else:
+        out['messages'] = len(c)
+        out['accepted'] = int(t.ok.sum())
+        out['refused'] = t.refused()
     refusal = t.first_refusal()
     if refusal is not None:
         out['first_refusal'] = refusal
@@ -318,25 +338,122 @@ def select_connections(reader, topics):
     return chosen
 
 
+class _Chain:
+    """The lookups of a TF chain: R (n, 3, 3), the frames, the TF transforms' reason codes."""
+
+    def __init__(self, R, frames, codes, transforms):
+        self.R, self.frames, self.codes, self.transforms = R, frames, codes, transforms
+
+
+def tf_topic(reader, reference, body, tolerance, lo, hi):
+    """(Columns, _Chain) of BODY in REFERENCE from the bag's TFMessage topics.
+
+    Every transform passes the boundary's checks (refusals counted); the accepted ones feed a
+    rot_tools.TransformTree (static ones whatever --start/--end say), which is looked up at
+    every stamp of the chain's dynamic edges where all of them have data (one batch).
+    """
+    from rot_tools.errors import RotationError
+    try:
+        from rot_tools.transform_tree import TransformTree
+    except ImportError:  # pragma: no cover - a checkout older than the TF tree
+        raise bag_read.BagError('--tf needs rot_tools.TransformTree, not in this version'
+                                ) from None
+
+    connections = [c for c in reader.connections if c.msgtype == bag_read.TF_TYPE]
+    if not connections:
+        raise bag_read.BagError('--tf: the bag has no tf2_msgs/msg/TFMessage topic')
+    static = [c for c in connections if c.topic.endswith('tf_static')]
+    dynamic = [c for c in connections if c not in static]
+    parts = [bag_read.read_tf(reader, static)] if static else []
+    parts += [bag_read.read_tf(reader, dynamic, lo, hi)] if dynamic else []
+    tf = bag_read.join_tf(parts)
+    codes, norms = boundary.check_batch(tf['orientation'], tolerance, tf['position'])
+    ok = codes == boundary.ACCEPTED
+    R = boundary.accepted_rotations(tf['orientation'], norms, codes)
+    b, parent, child = tf['position'][ok], tf['parent'][ok], tf['child'][ok]
+    sec, nanosec, is_static = tf['sec'][ok], tf['nanosec'][ok], tf['static'][ok]
+    stamps = sec + 1e-9 * nanosec
+    exact = dict(zip(stamps.tolist(), zip(sec.tolist(), nanosec.tolist())))
+    frames = tf['frames']
+    tree = TransformTree(cache_seconds=math.inf)
+    edge_stamps = {}
+    keys = np.stack([parent, child, is_static], axis=1) if len(parent) else np.zeros((0, 3))
+    order = np.unique(keys, axis=0, return_index=True)[1] if len(keys) else []
+    try:
+        for first in sorted(order):
+            p, ch, st = keys[first]
+            rows = np.flatnonzero((parent == p) & (child == ch) & (is_static == st))
+            if st:
+                last = rows[np.argmax(stamps[rows])]
+                tree.set_transform(frames[p], frames[ch], R[last], b[last], stamps[last],
+                                   static=True)
+                continue
+            rows = rows[np.argsort(stamps[rows], kind='stable')]
+            t_rows, keep = np.unique(stamps[rows][::-1], return_index=True)
+            rows = rows[::-1][keep]  # one sample per stamp: the last recorded
+            tree.set_transform(frames[p], frames[ch], R[rows], b[rows], stamps[rows])
+            edge_stamps[frames[ch]] = stamps[rows]
+        for frame in (reference, body):
+            if frame not in tree.frames:
+                known = ', '.join(tree.frames) or 'none'
+                raise bag_read.BagError(
+                    f'--tf: frame {frame} never appears in the bag\'s TF (frames: {known})')
+        chain = tree.chain(reference, body)
+        times = [edge_stamps[f] for f in chain if f in edge_stamps
+                 and tree.parent(f) in chain]
+        first, last = tree.time_range(reference, body)
+        if times:
+            t = np.unique(np.concatenate(times))
+            t = t[(t >= first) & (t <= last)]
+        else:  # static edges only: one lookup
+            t = np.array([tree.lookup(reference, body)[2]])
+        if not len(t):
+            raise bag_read.BagError(f'--tf: no time at which every edge of {reference} → '
+                                    f'{body} has data')
+        R_chain, b_chain, _ = tree.lookup(reference, body, t)
+    except RotationError as exc:  # TransformTreeError / TransformLookupError: one line
+        raise bag_read.BagError(f'--tf {reference} {body}: {exc}') from None
+    columns = bag_read.Columns(f'tf:{reference}->{body}', bag_read.TF_TYPE)
+    pairs = [exact.get(x, (int(math.floor(x)), int(round((x - math.floor(x)) * 1e9))))
+             for x in t.tolist()]
+    columns.record = np.zeros(len(t), np.int64)
+    columns.sec = np.array([p[0] for p in pairs], np.int64)
+    columns.nanosec = np.array([p[1] for p in pairs], np.int64)
+    columns.frame_ids, columns.frame = [reference], np.zeros(len(t), np.intp)
+    columns.child_frame_ids, columns.child = [body], np.zeros(len(t), np.intp)
+    columns.position = np.asarray(b_chain, np.float64).reshape(-1, 3)
+    columns.orientation = None
+    columns.covariance0 = columns.angular_velocity = None
+    transforms = SimpleNamespace(orientation=tf['orientation'], position=tf['position'])
+    return columns, _Chain(np.asarray(R_chain).reshape(-1, 3, 3), chain, codes, transforms)
+
+
 def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, seq=None,
-            wrap=False, fast=True, progress_stream=None):
-    """(storage name, [Topic]) of the bag at PATH; BagError for what cannot be read."""
+            wrap=False, fast=True, progress_stream=None, tf=None):
+    """(storage name, [Topic]) of the bag at PATH; BagError for what cannot be read.
+
+    tf: (REFERENCE, BODY) adds the TF chain between them (then topics are read only when
+    asked for by name).
+    """
     with bag_read.open_bag(path) as reader:
         if not reader.connections or not sum(c.msgcount for c in reader.connections):
             raise bag_read.BagError(f'{path}: the bag holds no messages')
-        connections = select_connections(reader, topics)
+        connections = select_connections(reader, topics) if topics or not tf else []
         bag_start = reader.start_time
         lo = None if start is None else bag_start + int(round(start * 1e9))
         hi = None if end is None else bag_start + int(round(end * 1e9)) + 1
         progress = Progress(sum(c.msgcount for c in connections), progress_stream)
         try:
             columns = bag_read.read_topics(reader, connections, lo, hi, fast=fast,
-                                           progress=progress)
+                                           progress=progress) if connections else {}
         finally:
             progress.done()
+        chain = tf_topic(reader, tf[0], tf[1], tolerance, lo, hi) if tf else None
         storage = bag_read.storage_name(reader)
-    order = sorted(columns)
-    return storage, [Topic(columns[name], tolerance, seq, wrap) for name in order]
+    out = [Topic(columns[name], tolerance, seq, wrap) for name in sorted(columns)]
+    if chain is not None:
+        out.append(Topic(chain[0], tolerance, seq, wrap, chain=chain[1]))
+    return storage, out
 
 
 def run(args, error):
@@ -352,7 +469,7 @@ def run(args, error):
     try:
         storage, topics = analyse(args.path, args.topic or (), args.start, args.end,
                                   DEFAULT_TOLERANCE if args.tol is None else args.tol,
-                                  args.seq, args.wrap)
+                                  args.seq, args.wrap, tf=args.tf)
     except bag_read.BagError as exc:
         error(f'bag: {exc}')
     if args.plot:

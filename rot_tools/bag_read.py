@@ -311,14 +311,19 @@ class Columns:
 
 
 def _join_strings(parts):
-    """(strings, index) of several (strings, index) chunks."""
-    strings, lookup, indices = [], {}, []
+    """(strings, index) of several (strings, index) chunks (bytes from the fast path, str
+    from rosbags' decoder: the same frame id is one string either way)."""
+    lookup, indices = {}, []
     for chunk_strings, chunk_index in parts:
-        remap = np.array([lookup.setdefault(s, len(lookup)) for s in chunk_strings], np.intp)
+        remap = np.array([lookup.setdefault(_text(s), len(lookup)) for s in chunk_strings],
+                         np.intp)
         indices.append(remap[chunk_index] if len(chunk_index) else chunk_index)
-    strings = [s.decode('utf-8', 'replace') if isinstance(s, bytes) else s for s in lookup]
     index = np.concatenate(indices) if indices else np.zeros(0, np.intp)
-    return strings, index
+    return list(lookup), index
+
+
+def _text(s):
+    return s.decode('utf-8', 'replace') if isinstance(s, bytes) else s
 
 
 def _assemble(pieces, n, msgtype):
@@ -496,3 +501,20 @@ def read_tf(reader, connections, start=None, stop=None):
             'parent': ints[:, 1], 'child': ints[:, 2], 'sec': ints[:, 3],
             'nanosec': ints[:, 4], 'position': table[:, 5:8], 'orientation': table[:, 8:12],
             'static': np.array([topic_names[i].endswith('static') for i in ints[:, 0]], bool)}
+
+
+def join_tf(parts):
+    """One read_tf result of several (frames and topics renumbered)."""
+    frames, topics, out = {}, {}, []
+    for part in parts:
+        fmap = np.array([frames.setdefault(f, len(frames)) for f in part['frames']] or [0])
+        tmap = np.array([topics.setdefault(t, len(topics)) for t in part['topics']] or [0])
+        out.append({**part, 'parent': fmap[part['parent']], 'child': fmap[part['child']],
+                    'topic': tmap[part['topic']]})
+    joined = {'frames': list(frames), 'topics': list(topics)}
+    for key in ('topic', 'parent', 'child', 'sec', 'nanosec', 'static'):
+        joined[key] = np.concatenate([p[key] for p in out]) if out else np.zeros(0, np.int64)
+    for key, width in (('position', 3), ('orientation', 4)):
+        joined[key] = (np.concatenate([p[key] for p in out]) if out
+                       else np.zeros((0, width)))
+    return joined

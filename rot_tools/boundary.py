@@ -267,6 +267,7 @@ QUATERNION_FIELD = {
     'sensor_msgs/msg/Imu': ('orientation', None),
     'geometry_msgs/msg/QuaternionStamped': ('quaternion', None),
     'geometry_msgs/msg/TransformStamped': ('transform.rotation', 'transform.translation'),
+    'tf2_msgs/msg/TFMessage': ('transform.rotation', 'transform.translation'),  # each one
 }
 """Per message type: the names of its orientation and position fields (as the per-message
 converters name them in refusals; None: no position, b = 0)."""

@@ -12,6 +12,7 @@ rot_tools.report) as YAML, or JSON with ``--json``::
     rot-tools frame 0 1 0  -1 0 0  0 0 1
     rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1
     rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
+    rot-tools bag run.bag --csv run.csv --plot rpy.png   (rot_tools.bag: the 'bag' extra)
 
 Every option is accepted before the command, after its arguments (``_add_common``) and
 between them (``_CommandParser``).
@@ -156,7 +157,8 @@ def _plot_file(text):
 def _seconds(text):
     value = _number(text)
     if value < 0:
-        raise argparse.ArgumentTypeError(f'must be >= 0 seconds from the bag\'s start, got {text!r}')
+        raise argparse.ArgumentTypeError(
+            f"must be >= 0 seconds from the bag's start, got {text!r}")
     return value
 
 
@@ -475,8 +477,10 @@ def _add_bag(sub):
                    help='read this topic (repeat for more); default: every topic of a type '
                    'read')
     p.add_argument('--tf', nargs=2, metavar=('REFERENCE', 'BODY'),
-                   help='also the transform of BODY in REFERENCE from the bag\'s /tf and '
-                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree')
+                   help='the transform of BODY in REFERENCE from the bag\'s /tf and '
+                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree, at every '
+                   'stamp of the dynamic transforms between them (a topic named '
+                   'tf:REFERENCE->BODY); other topics then only with --topic')
     p.add_argument('--wrap', action='store_true',
                    help='angles as computed, each in (−180°, 180°], instead of continuous')
     p.add_argument('--csv', metavar='FILE',
@@ -598,8 +602,6 @@ def _bag(args, parser):
                           ('--all-sequences', args.all_sequences)):
         if given:
             parser.error(f'{option} does not apply to bag')
-    if args.tf:
-        parser.error('--tf: not available yet in this version')
     from rot_tools import bag
     return bag.run(args, parser.error)
 

@@ -6,24 +6,33 @@ of rclpy's: the class docstring, and bench/README.md for the figures.
 """
 
 from contextlib import ExitStack
+import time
 
 from rclpy.exceptions import InvalidHandle
 from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
 from rclpy.utilities import timeout_sec_to_nsec
+from rclpy.waitable import NumberOfEntities
 
 BURST = 10
 """Messages taken from one subscription per wake-up at most (the inputs keep the last 10)."""
+
+EVENT_PERIOD = 0.5
+"""Seconds between two looks at the waitables (the QoS events: incompatible QoS or type)."""
 
 
 class WaitSetExecutor(Executor):
     """A lean single-threaded executor: one wait set, services first, bounded bursts.
 
-    Each spin_once waits on every entity of its nodes (subscriptions, services, timers, QoS
-    events, its own guard conditions) and then serves what is ready: timers, every waiting
-    service request, QoS events, and at most BURST messages of each ready subscription —
+    Each spin_once waits on the subscriptions, services and timers of its nodes and on its
+    own guard conditions (a new entity, a signal), and serves what is ready: timers, every
+    waiting service request, then at most BURST messages of each ready subscription —
     taken one at a time from the middleware's queue and handed straight to the callback.
+    The waitables (rotation_node's are the QoS events of its 15 publishers and
+    subscriptions: "incompatible QoS" warnings) are looked at once every EVENT_PERIOD, in a
+    wait set of their own without waiting: with the middleware a wait costs in proportion
+    to the entities waited on, and the events would double the node's.
 
     Why not rclpy's executors (bench/README.md has the figures):
 
@@ -32,21 +41,23 @@ class WaitSetExecutor(Executor):
       at its size afterwards, and a service request waited behind the whole queue (up to
       16 s; some never answered).
     - The default SingleThreadedExecutor is fair and bounded — nothing waits outside the
-      middleware's keep-last queues — but wraps every callback in a Task and rebuilds its
-      wait set in ~60 lines of Python per message: about 2.4 × the CPU per message.
+      middleware's keep-last queues — but wraps every callback in a Task, rebuilds its wait
+      set in Python for each message, and waits on every entity: about 2 × the CPU per
+      message.
 
     This one keeps the middleware's bound (keep-last 10 per input: a flood costs lost
     messages, never memory), answers a service within one burst per subscription, and
-    costs about what the EventsExecutor does per message. Single-threaded, synchronous
-    callbacks only: a node with clients, guard conditions or coroutine callbacks is refused
-    (rotation_node has none), and so is create_task.
+    costs about what the EventsExecutor does per message under load. Single-threaded,
+    synchronous callbacks only: a node with clients, guard conditions or coroutine
+    callbacks is refused (rotation_node has none), and so is create_task.
     """
 
-    def __init__(self, *, context=None, burst=BURST):
+    def __init__(self, *, context=None, burst=BURST, event_period=EVENT_PERIOD):
         super().__init__(context=context)
         self._burst = burst
-        self._wait_set = None
-        self._wait_set_size = None
+        self._event_period = event_period
+        self._events_due = 0.0  # time.monotonic() of the next look at the waitables
+        self._wait_sets = {}  # sizes: a wait set of those sizes (reused)
 
     def create_task(self, callback, *args, **kwargs):
         raise NotImplementedError(f'{type(self).__name__} runs no tasks')
@@ -64,23 +75,17 @@ class WaitSetExecutor(Executor):
             services.extend(node.services)
             timers.extend(node.timers)
             waitables.extend(node.waitables)
-        guards = [self._guard, self._sigint_gc]
+        wait = max(0.0, self._events_due - time.monotonic())
+        if timeout_sec is not None and timeout_sec >= 0:
+            wait = min(wait, timeout_sec)
         with ExitStack() as in_use:  # nothing is destroyed while the wait set holds it
             subscriptions = _in_use(in_use, subscriptions)
             services = _in_use(in_use, services)
             timers = _in_use(in_use, timers)
-            guards = _in_use(in_use, guards)
-            events = 0
-            for waitable in list(waitables):
-                try:
-                    in_use.enter_context(waitable)
-                except InvalidHandle:
-                    waitables.remove(waitable)
-                else:
-                    events += waitable.get_num_entities().num_events
+            guards = _in_use(in_use, [self._guard, self._sigint_gc])
             in_use.enter_context(self._context.handle)
-            wait_set = self._prepare_wait_set(
-                len(subscriptions), len(guards), len(timers), len(services), events)
+            wait_set = self._wait_set(len(subscriptions), len(guards), len(timers), 0,
+                                      len(services), 0)
             for sub in subscriptions:
                 wait_set.add_subscription(sub.handle)
             for srv in services:
@@ -89,10 +94,8 @@ class WaitSetExecutor(Executor):
                 wait_set.add_timer(timer.handle)
             for guard in guards:
                 wait_set.add_guard_condition(guard.handle)
-            for waitable in waitables:
-                waitable.add_to_wait_set(wait_set)
 
-            wait_set.wait(timeout_sec_to_nsec(timeout_sec))
+            wait_set.wait(timeout_sec_to_nsec(wait))
             if self._is_shutdown:
                 return
             if not self._context.ok():
@@ -107,27 +110,48 @@ class WaitSetExecutor(Executor):
             for srv in services:
                 if srv.handle.pointer in ready:
                     _serve_requests(srv)
-            for waitable in waitables:
-                if waitable.is_ready(wait_set):
-                    _run_now(waitable.execute(waitable.take_data()))
             ready = set(wait_set.get_ready_entities('subscription'))
             for sub in subscriptions:
                 if sub.handle.pointer in ready:
                     self._take_messages(sub)
+        if waitables and time.monotonic() >= self._events_due:
+            self._events_due = time.monotonic() + self._event_period
+            self._serve_waitables(waitables)
 
-    def _prepare_wait_set(self, subscriptions, guards, timers, services, events):
-        """Return the wait set for these counts of entities, cleared (reused while they stay)."""
-        size = (subscriptions, guards, timers, 0, services, events)
-        if size != self._wait_set_size:
-            self._wait_set = _rclpy.WaitSet(*size, self._context.handle)
-            self._wait_set_size = size
-        self._wait_set.clear_entities()
-        return self._wait_set
+    def _wait_set(self, *sizes):
+        """Return a wait set of these sizes, cleared (one per set of sizes, reused)."""
+        wait_set = self._wait_sets.get(sizes)
+        if wait_set is None:
+            wait_set = self._wait_sets[sizes] = _rclpy.WaitSet(*sizes, self._context.handle)
+        wait_set.clear_entities()
+        return wait_set
+
+    def _serve_waitables(self, waitables):
+        """Execute every ready waitable, without waiting."""
+        with ExitStack() as in_use:
+            usable, sizes = [], NumberOfEntities()
+            for waitable in waitables:
+                try:
+                    in_use.enter_context(waitable)
+                except InvalidHandle:
+                    continue
+                usable.append(waitable)
+                sizes += waitable.get_num_entities()
+            in_use.enter_context(self._context.handle)
+            wait_set = self._wait_set(
+                sizes.num_subscriptions, sizes.num_guard_conditions, sizes.num_timers,
+                sizes.num_clients, sizes.num_services, sizes.num_events)
+            for waitable in usable:
+                waitable.add_to_wait_set(wait_set)
+            wait_set.wait(0)
+            for waitable in usable:
+                if waitable.is_ready(wait_set):
+                    _run_now(waitable.execute(waitable.take_data()))
 
     def _take_messages(self, sub):
         """Hand at most BURST queued messages of ``sub`` to its callback, one at a time."""
-        take, msg_type, raw, callback = sub.handle.take_message, sub.msg_type, sub.raw, \
-            sub.callback
+        take, msg_type, raw, callback = (sub.handle.take_message, sub.msg_type, sub.raw,
+                                         sub.callback)
         message_only = sub._callback_type is Subscription.CallbackType.MessageOnly
         for _ in range(self._burst):
             taken = take(msg_type, raw)

@@ -161,7 +161,7 @@ def _unit_rows(x):
 
 
 def _smallest_rotation(b, a):
-    """The smallest rotation taking the unit vector b onto the unit vector a (..., 3).
+    """Return the smallest rotation taking the unit vector b onto the unit vector a (..., 3).
 
     Axis b × a, angle atan2(|b × a|, b·a). Near the angle π, b × a is small and its
     rounding noise (~ε) is not ⊥ b; a half-turn about an axis tilted by τ off the plane ⊥ b
@@ -178,9 +178,18 @@ def _smallest_rotation(b, a):
     return axis_angle_to_matrix(axis, angle)
 
 
+def _log_norms(x):
+    """Return log |xᵢ| of non-zero rows, without |xᵢ|² underflowing (rows of 1e-300)."""
+    big = np.abs(x).max(axis=-1)
+    return np.log(big) + np.log(np.linalg.norm(x / big[..., None], axis=-1))
+
+
 def _rmsd(a, b, R, w):
-    """sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item, computed on a and b scaled by a common factor
-    so that nothing overflows; RotationError if the rmsd itself does."""
+    """Return sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item.
+
+    Computed on a and b scaled by a common factor so that nothing overflows; RotationError if
+    the rmsd itself does.
+    """
     big = np.maximum(np.abs(a).max(axis=(-2, -1)), np.abs(b).max(axis=(-2, -1)))[..., None, None]
     residual = a / big - np.einsum('...ij,...nj->...ni', R, b / big)
     mean = np.sum(w * np.sum(residual * residual, axis=-1), axis=-1) / np.sum(w, axis=-1)
@@ -191,7 +200,7 @@ def _rmsd(a, b, R, w):
 
 
 def _fit_about_dominant(a, b, w, a_axis, b_axis):
-    """The best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
+    """Return the best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
 
     R0, the smallest rotation taking b_axis onto a_axis, then the turn φ about a_axis that
     best fits the pairs: with c = R0·b and the parts a⊥, c⊥ of a and c ⊥ a_axis, the cost
@@ -205,17 +214,23 @@ def _fit_about_dominant(a, b, w, a_axis, b_axis):
     r0 = _smallest_rotation(b_axis, a_axis)
     c = np.einsum('...ij,...nj->...ni', r0, b)
     n = a_axis[..., None, :]
-    a_perp = a - np.sum(a * n, axis=-1, keepdims=True) * n
-    c_perp = c - np.sum(c * n, axis=-1, keepdims=True) * n
+    # unit directions, and each pair's size wᵢ|aᵢ||cᵢ| relative to the largest pair off the
+    # axis, from logarithms: the products of 1e-150-long vectors would underflow
+    a_u, c_u = _unit_rows(a), _unit_rows(c)
+    a_perp = a_u - np.sum(a_u * n, axis=-1, keepdims=True) * n
+    c_perp = c_u - np.sum(c_u * n, axis=-1, keepdims=True) * n
     a_off = np.linalg.norm(a_perp, axis=-1)
     c_off = np.linalg.norm(c_perp, axis=-1)
     # a pair along the axis to rounding pulls nowhere (its ⊥ parts are noise)
-    off_axis = ((a_off > ALONG_AXIS_SIN * np.linalg.norm(a, axis=-1))
-                & (c_off > ALONG_AXIS_SIN * np.linalg.norm(c, axis=-1)))
-    w = np.where(off_axis, w, 0.0)
-    sin = np.sum(w * np.sum(np.cross(c_perp, a_perp) * n, axis=-1), axis=-1)
-    cos = np.sum(w * np.sum(c_perp * a_perp, axis=-1), axis=-1)
-    pull = np.sum(w * a_off * c_off, axis=-1)
+    off_axis = (a_off > ALONG_AXIS_SIN) & (c_off > ALONG_AXIS_SIN)
+    with np.errstate(divide='ignore'):  # log 0 = −inf for a weight 0: a size 0
+        log_size = np.log(w) + _log_norms(a) + _log_norms(c)
+    log_size = np.where(off_axis, log_size, -np.inf)
+    top = np.max(log_size, axis=-1, keepdims=True)
+    size = np.exp(log_size - np.where(np.isfinite(top), top, 0.0))
+    sin = np.sum(size * np.sum(np.cross(c_perp, a_perp) * n, axis=-1), axis=-1)
+    cos = np.sum(size * np.sum(c_perp * a_perp, axis=-1), axis=-1)
+    pull = np.sum(size * a_off * c_off, axis=-1)
     unique = ~off_axis.any(axis=-1) | (np.hypot(sin, cos) > UNIQUE_TOL * pull)
     phi = np.arctan2(sin, cos)
     return axis_angle_to_matrix(a_axis, phi) @ r0, unique
@@ -236,7 +251,7 @@ ALONG_AXIS_SIN = 64 * np.finfo(float).eps
 
 
 def align_vectors(a, b, weights=None):
-    """The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
+    """Return the rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
 
     a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
     the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
@@ -274,8 +289,8 @@ def align_vectors(a, b, weights=None):
         raise RotationError(
             'the best rotation is not unique: H = Σ wᵢ·aᵢbᵢᵀ vanishes (|H| = '
             f'{sigma[index][0]:.3g} for Σ wᵢ|aᵢ||bᵢ| = {scale[index]:.3g}, with a and b '
-            'scaled to max 1): every rotation fits as well' + (f' (item {index})' if index
-                                                              else ''))
+            'scaled to max 1): every rotation fits as well'
+            + (f' (item {index})' if index else ''))
     if dominant.any():
         fitted, unique = _fit_about_dominant(a_dir, b_dir, w, u[..., :, 0], vt[..., 0, :])
         unsure = dominant & ~unique
@@ -307,7 +322,7 @@ def random_rotations(n=None, rng=None):
     need = count * _BYTES_PER_SAMPLE
     if need > _physical_memory():
         raise RotationError(f'n = {_count(count)} rotations are too many to allocate: about '
-                            f'{_bytes(need)} of float64, more than this machine\'s memory')
+                            f'{_bytes(need)} of float64, more than this machine’s memory')
     try:
         return _haar(gen, count, n is None)
     except (MemoryError, ValueError) as exc:  # NumPy: 'array is too big', 'Unable to allocate'
@@ -321,12 +336,12 @@ the temporaries between them (tracemalloc measured 201 bytes at n = 1e5)."""
 
 
 def _count(n):
-    """n as digits, or as 1.0e+400 when it has more than 20."""
+    """Write n as digits, or as 1.0e+400 when it has more than 20."""
     return str(n) if len(str(n)) <= 20 else _bytes(n)[:-len(' bytes')]
 
 
 def _bytes(count):
-    """A byte count as text, e.g. '9.2e+17 bytes' (any size: Python ints do not overflow)."""
+    """Write a byte count, e.g. '9.2e+17 bytes' (any size: Python ints do not overflow)."""
     digits = str(count)
     return f'{digits[0]}.{digits[1:2] or "0"}e+{len(digits) - 1} bytes'
 

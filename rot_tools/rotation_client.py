@@ -11,6 +11,7 @@ quick start has this instead (doc/client.md is its manual)::
     rotation_client imu QX QY QZ QW
     rotation_client describe
     rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
+    rotation_client tf REFERENCE BODY [--once] [--seq SEQ] [--deg]
 
 Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
 
@@ -23,7 +24,10 @@ or JSON with ``--json`` (rot_tools.report's writers). The node draws pictures
 (``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so they are
 printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
 seconds. ``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and
-prints the path.
+prints the path. ``tf`` needs no node: it listens to /tf and /tf_static itself
+(rot_tools.tf_input) and prints the report of BODY in REFERENCE — tf2_echo's job, with every
+representation — once a second until Ctrl-C, or once with ``--once``; a frame that does not
+appear within ``--timeout`` is one line on stderr, exit status 1.
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -59,7 +63,7 @@ import yaml
 
 from rot_tools import runtime
 from rot_tools.euler import EULER_SEQUENCES, euler_to_matrix, matrix_to_euler
-from rot_tools.report import to_json, to_yaml
+from rot_tools.report import to_json, to_yaml, transform_report
 from rot_tools.so3 import quaternion_to_matrix
 
 PROG = 'rotation_client'
@@ -69,7 +73,7 @@ DEFAULT_CHILD_FRAME = 'base_link'
 RESEND = 0.5
 """Seconds to wait for an answer before an input is sent again or a call repeated."""
 
-STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'screw')
+STAMPED_OUTPUTS = ('quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
 """The node's outputs that carry the input's header, published for every input."""
 
 PICTURES = ('screw_axis', 'markers')
@@ -246,6 +250,11 @@ COMMANDS_HELP = {
         'call ~/screw_path from one pose to another', f'{_POSE} {_POSE}', (3, 10),
         'The start pose, then the goal pose, each X Y Z QX QY QZ QW; --tolerance bounds '
         'the\nstep between poses (rad and m; <= 0: 20 steps).'),
+    'tf': Command(
+        'print the transform of BODY in REFERENCE from /tf and /tf_static', '', (),
+        'No node needed: listens to /tf and /tf_static itself and prints the report of\n'
+        'the transform p_REFERENCE = R·p_BODY + b at its latest common time, once a second\n'
+        'until Ctrl-C, or once with --once (--node and --frame are not used).'),
 }
 """name: Command."""
 
@@ -265,7 +274,8 @@ def build_parser():
         '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
         '  rotation_client imu 0 0 0.7071068 0.7071068 --frame imu_link\n'
         '  rotation_client describe --json\n'
-        '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n\n'
+        '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n'
+        '  rotation_client tf odom base_link --once --deg\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nor nothing to describe; 2 bad arguments or an input the node '
         'refused.')
@@ -276,6 +286,7 @@ def build_parser():
                                 parser_class=_Parser)
     for name, command in COMMANDS_HELP.items():
         usage = ' '.join(filter(None, [PROG, name, 'SEQ' if name == 'euler' else '',
+                                       'REFERENCE BODY' if name == 'tf' else '',
                                        command.numbers, '[options]']))
         summary = command.summary
         p = sub.add_parser(name, help=summary, usage=usage,
@@ -288,6 +299,13 @@ def build_parser():
         elif name == 'screw-path':
             p.add_argument('--tolerance', type=_tolerance, default=0.0,
                            help='largest step between poses, rad and m (default 0: 20 steps)')
+        elif name == 'tf':
+            p.add_argument('reference', metavar='REFERENCE', help='the reference frame')
+            p.add_argument('body', metavar='BODY', help='the frame whose pose is printed')
+            p.add_argument('--once', action='store_true', help='print one report and exit')
+            p.add_argument('--seq', choices=EULER_SEQUENCES, default='ZYX', metavar='SEQ',
+                           help='Euler sequence of the report (default ZYX)')
+            p.add_argument('--deg', action='store_true', help='Euler angles in degrees')
         elif name in ('odometry', 'transform'):
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
@@ -366,19 +384,49 @@ def _pose_data(pose):
     return {'position': _xyz(pose.position), 'orientation': _quaternion(pose.orientation)}
 
 
-def _refusal_counts(response):
-    """{reason: n} of the refusals counted in a ~/describe response.
+def describe_data(response):
+    """~/describe's YAML document as data: at least ``refused`` {total, reason: n}.
 
-    From its YAML ``refused`` block or, before any accepted input, from its sentence
-    '... (3 input(s) refused: non_finite 3).'
+    The node writes YAML even before it has accepted an input (then ``success`` is false and
+    ``note`` says so). A node of an earlier version wrote one sentence instead, '... (3
+    input(s) refused: non_finite 3).', which gives {'note': sentence, 'refused': counts}.
     """
-    if response.success:
-        counts = yaml.safe_load(response.message)['refused']
-    else:
+    try:
+        data = yaml.safe_load(response.message)
+    except yaml.YAMLError:
+        data = None
+    if not isinstance(data, dict) or 'refused' not in data:
         tail = response.message.rpartition('refused')[2]
-        counts = {reason: int(n) for reason, n in re.findall(r'([a-z_]+) (\d+)', tail)}
-    counts.pop('total', None)
-    return counts
+        data = {'note': response.message, 'refused': {
+            reason: int(n) for reason, n in re.findall(r'([a-z_]+) (\d+)', tail)}}
+    return data
+
+
+def _counts(data):
+    """{reason: n} of describe_data's refusal counts (without the total)."""
+    return {reason: n for reason, n in data['refused'].items() if reason != 'total'}
+
+
+def refusal_text(data, before, source, stamps=None):
+    """Why the node refused what the client sent to ``source``, or '' if it did not.
+
+    ``data`` is describe_data now, ``before`` the counts before sending. For each reason
+    counted since, the node's sentence (what and by how much) from ``last_refusals`` when
+    that refusal is of ``source`` — and of one of ``stamps`` (sent header stamps, (sec,
+    nanosec)), when given and the refusal has one — else the reason's name alone.
+    """
+    last = data.get('last_refusals') or {}
+    texts = []
+    for reason, n in _counts(data).items():
+        if n <= before.get(reason, 0):
+            continue
+        refusal = last.get(reason) or {}
+        stamp = refusal.get('stamp')
+        ours = refusal.get('source') == source and (
+            stamps is None or stamp is None or (stamp['sec'], stamp['nanosec']) in stamps)
+        texts.append(f"{refusal['message']} ({reason})" if ours and refusal.get('message')
+                     else reason)
+    return '; '.join(texts)
 
 
 # ---------------------------------------------------------------------------------------
@@ -450,11 +498,13 @@ class Client:
         response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
-    def refused_since(self, before):
-        """{reason: n} of the refusals counted since ``before`` (a _refusal_counts)."""
-        now = _refusal_counts(self.describe())
-        return {reason: n - before.get(reason, 0) for reason, n in now.items()
-                if n > before.get(reason, 0)}
+    def refusal_counts(self):
+        """{reason: n} of the refusals the node has counted so far."""
+        return _counts(describe_data(self.describe()))
+
+    def refused(self, before, source, stamps=None):
+        """Why the node refused what was sent to ``source`` since ``before``, or ''."""
+        return refusal_text(describe_data(self.describe()), before, source, stamps)
 
     def wait_for_match(self, pub, subs):
         """Wait until the node subscribes to ``pub`` and publishes on every one of ``subs``."""
@@ -478,8 +528,8 @@ class Client:
         from std_msgs.msg import Float64MultiArray
         from visualization_msgs.msg import Marker, MarkerArray
         types = dict(zip(STAMPED_OUTPUTS + PICTURES, (
-            QuaternionStamped, Vector3Stamped, Vector3Stamped, TwistStamped, Marker,
-            MarkerArray)))
+            QuaternionStamped, Vector3Stamped, Vector3Stamped, Vector3Stamped, TwistStamped,
+            Marker, MarkerArray)))
         answers = Answers(msg.header.frame_id)
         outputs = STAMPED_OUTPUTS + (PICTURES if pictures else ())
         qos = QoSProfile(depth=100)
@@ -492,7 +542,7 @@ class Client:
         topic = self.topic(name)
         pub = self.node.create_publisher(type(msg), topic, 10)
         self.wait_for_match(pub, subs)
-        before = _refusal_counts(self.describe())
+        before = self.refusal_counts()
         deadline = time.monotonic() + self.timeout
         while True:
             msg.header.stamp = self.node.get_clock().now().to_msg()
@@ -500,10 +550,9 @@ class Client:
             pub.publish(msg)
             if self.spin_until(answers.complete, min(RESEND, deadline - time.monotonic())):
                 break
-            refused = self.refused_since(before)
+            refused = self.refused(before, topic, answers.sent)
             if refused:
-                raise Refused(f'node {self.target} refused the input on {topic}: '
-                              + ', '.join(refused))
+                raise Refused(f'node {self.target} refused the input on {topic}: {refused}')
             if time.monotonic() >= deadline:
                 raise Unreachable(f'no answer from node {self.target} to the input on {topic} '
                                   f'within {self.timeout:g} s')
@@ -591,6 +640,8 @@ def _answer_data(answer, parameters):
         'euler_angles': {'sequence': parameters['euler_sequence'],
                          'unit': parameters['angle_unit'],
                          'angles': _xyz(answer['euler_angles'].vector)},
+        'rpy': dict(zip(('roll', 'pitch', 'yaw'), _xyz(answer['rpy'].vector)),
+                    unit=parameters['angle_unit']),
         'screw': {'angular': _xyz(twist.angular), 'linear': _xyz(twist.linear)},
     }
     if 'screw_axis' in answer:
@@ -673,7 +724,8 @@ def _input_command(client, args):
 def _describe_command(client, args):
     response = client.describe()
     if not response.success:
-        raise Unreachable(f'{client.topic("describe")}: {response.message}')
+        note = describe_data(response).get('note', response.message)
+        raise Unreachable(f'{client.topic("describe")}: {" ".join(str(note).split())}')
     return yaml.safe_load(response.message) if args.json else response.message
 
 
@@ -684,20 +736,56 @@ def _screw_path_command(client, args):
         pose.header.frame_id = args.frame
         pose.header.stamp = client.node.get_clock().now().to_msg()
         _set_pose(pose.pose, values)
-    before = _refusal_counts(client.describe())
+    before = client.refusal_counts()
     plan = client.call(GetPlan, 'screw_path', request).plan
     if not plan.poses:
-        refused = client.refused_since(before)
+        refused = client.refused(before, client.topic('screw_path'))
         raise Refused(f'node {client.target} refused the screw_path request: '
-                      + (', '.join(refused) or 'an empty path'))
+                      + (refused or 'an empty path'))
     return {'node': client.target, 'service': client.topic('screw_path'),
             'frame_id': plan.header.frame_id,
             'poses': [_pose_data(p.pose) for p in plan.poses]}
 
 
+def _tf_report(follower, header, R, b, args):
+    stamp = header.stamp
+    return {'reference_frame': follower.reference, 'body_frame': follower.body,
+            'chain': follower.tree.chain(follower.reference, follower.body),
+            'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
+            **transform_report(R, b, args.seq, args.deg)}
+
+
+def _tf_command(client, args):
+    """tf: print BODY in REFERENCE from /tf and /tf_static, once or once a second."""
+    from rot_tools import tf_input  # tf2_msgs: only this command needs it
+    latest = []
+
+    def keep(header, R, b):
+        latest[:] = [(header, R, b)]
+    follower = tf_input.TfFollower(client.node, keep, lambda topic, reason, text: None)
+    try:
+        follower.follow(args.reference, args.body)
+    except RuntimeError as exc:  # no tf2_msgs
+        raise Unreachable(str(exc)) from None
+    if not client.spin_until(lambda: latest, args.timeout):
+        raise Unreachable(follower.why_not(args.timeout))
+    while True:
+        report = _tf_report(follower, *latest[0], args)
+        if args.once:
+            return report
+        if args.json:
+            write(to_json(report), json_text=True)
+        else:
+            write('---\n' + to_yaml(report))
+        sys.stdout.flush()
+        due = time.monotonic() + 1.0
+        client.spin_until(lambda: time.monotonic() >= due, 1.0)
+
+
 COMMANDS = {'euler': _input_command, 'pose': _input_command, 'odometry': _input_command,
             'transform': _input_command, 'orientation': _input_command, 'imu': _input_command,
-            'describe': _describe_command, 'screw-path': _screw_path_command}
+            'describe': _describe_command, 'screw-path': _screw_path_command,
+            'tf': _tf_command}
 
 
 def write(text, json_text=False):

@@ -7,7 +7,7 @@ From there one path serves them all: one pass of the decomposition kernels
 Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, and the quaternion (matrix_to_quaternion
 of R) — and the picture's decomposition runs the same kernels, so at θ = π all outputs of
 one input share the axis sign. Outputs carry the input's header. Topics, services and
-parameters: SPEC §3, §3.1 and README "Using it in ROS 2".
+parameters: doc/node.md, and ``rotation_node --help``.
 
 The pictures (~/markers and ~/screw_axis, rot_tools.drawing) cost several times the rest of
 an input's work, so they are throttled: at most MARKER_RATE a second, the latest input wins,
@@ -25,6 +25,8 @@ import difflib
 from functools import partial
 import math
 from operator import attrgetter
+import sys
+import textwrap
 import time
 from typing import Callable, NamedTuple
 
@@ -38,13 +40,14 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
-from rot_tools import drawing, messages, runtime
+from rot_tools import drawing, messages, runtime, tf_input
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
@@ -60,7 +63,7 @@ BAD_TOLERANCE = 'bad_tolerance'
 PATH_TOO_LONG = 'path_too_long'
 NOT_DECOMPOSABLE = 'not_decomposable'
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
-    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG)
+    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG) + tf_input.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
 DEFAULT_PATH_STEPS = 20
@@ -82,6 +85,13 @@ MARKER_RATE = 30.0
 
 PROG = 'rotation_node'
 """The program's name in its messages."""
+
+MAX_REFUSAL_TEXT = 400
+"""Longest refusal sentence ~/describe repeats (a refused frame_id may be megabytes)."""
+
+MIN_MARKER_SCALE = 1e-6
+"""Smallest marker_scale (m): the arrows' shafts are 5 % of it, and RViz draws nothing of
+a zero width (5e-324 was accepted once)."""
 
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
@@ -106,7 +116,7 @@ INPUTS = (
     InputKind('~/imu', Imu, messages.imu_to_transform),
     InputKind('~/orientation', QuaternionStamped, messages.quaternion_stamped_to_transform),
 )
-"""Every input of the node (SPEC §3, §3.1); each joins the one path (header, R, b) → outputs."""
+"""Every input of the node; each joins the one path (header, R, b) → outputs."""
 
 
 class OutputKind(NamedTuple):
@@ -155,6 +165,8 @@ class Settings(NamedTuple):
     quaternion_tolerance: float
     publish_markers: bool
     marker_scale: float
+    tf_reference_frame: str
+    tf_body_frame: str
 
 
 class Latest(NamedTuple):
@@ -191,9 +203,14 @@ def _check_tolerance(value):
 
 
 def _check_marker_scale(value):
-    if math.isfinite(value) and value > 0.0:
+    if math.isfinite(value) and value >= MIN_MARKER_SCALE:
         return ''
-    return f'marker_scale must be finite and > 0, got {value}'
+    return (f'marker_scale must be finite and >= {MIN_MARKER_SCALE:g} m (thinner arrows are '
+            f'not drawn), got {value}')
+
+
+def _check_tf_frame(value):
+    return tf_input.tf2_msgs_missing() if value else ''
 
 
 def _any_value(value):
@@ -217,7 +234,7 @@ PARAMETERS = {
         'one of ' + ' '.join(EULER_SEQUENCES)), _check_sequence),
     'angle_unit': ParameterSpec('rad', _descriptor(
         ParameterType.PARAMETER_STRING,
-        'unit of the angles of ~/euler and ~/euler_angles', "'rad' or 'deg'"),
+        'unit of the angles of ~/euler, ~/euler_angles and ~/rpy', "'rad' or 'deg'"),
         _check_angle_unit),
     'quaternion_tolerance': ParameterSpec(1e-3, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
@@ -233,8 +250,18 @@ PARAMETERS = {
     'marker_scale': ParameterSpec(1.0, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
         'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
-        '> 0, finite',
-        FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0)), _check_marker_scale),
+        f'>= {MIN_MARKER_SCALE:g}, finite',
+        FloatingPointRange(from_value=MIN_MARKER_SCALE, to_value=math.inf, step=0.0)),
+        _check_marker_scale),
+    'tf_reference_frame': ParameterSpec('', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        'with tf_body_frame: follow the transform of tf_body_frame in this frame on /tf and '
+        '/tf_static, publishing every output at each new common time of the chain '
+        "(header.frame_id = this frame); '' = off"), _check_tf_frame),
+    'tf_body_frame': ParameterSpec('', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        "with tf_reference_frame: the frame followed on /tf and /tf_static; '' = off"),
+        _check_tf_frame),
 }
 """Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
@@ -244,20 +271,19 @@ class RotationNode(Node):
 
     def __init__(self, node_name='rot_tools', **kwargs):
         super().__init__(node_name, **kwargs)
-        for name, spec in PARAMETERS.items():
-            self.declare_parameter(name, spec.default, spec.descriptor)
-        for name, spec in PARAMETERS.items():  # overrides given at start-up are checked here
-            value = self.get_parameter(name).value
-            reason = spec.check(value)
-            if reason:
-                self.destroy_node()
-                raise InvalidParameterValueException(name, value, reason)
+        try:
+            self._declare_parameters()
+        except Exception:
+            self.destroy_node()
+            raise
         self._warn_about_unknown_overrides()
         self._settings = self._read_settings()
+        self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
 
         self._refused = dict.fromkeys(REFUSAL_REASONS, 0)
+        self._last_refusals = {}  # reason: (topic, header or None, text) of the latest
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
@@ -277,6 +303,14 @@ class RotationNode(Node):
         self._picture_timer = self.create_timer(
             1.0 / MARKER_RATE, self._publish_picture,
             clock=Clock(clock_type=ClockType.STEADY_TIME), autostart=False)
+
+        # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
+        # needs a tree between messages, two topics with their own QoS, and gives an output
+        # only when the chain has a new common time; rot_tools.tf_input).
+        self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
+                                       quaternion_tolerance=self._settings.quaternion_tolerance)
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None)
+        self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
 
         self._sources = []
         for kind in INPUTS:
@@ -299,15 +333,51 @@ class RotationNode(Node):
     def _input_topics(self):
         """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
         topics = [source.topic for source in self._sources]
+        if self._tf.following:
+            topics.append(f'{self._tf.topic} ({self._tf.reference} ← {self._tf.body})')
         return ', '.join(topics[:-1]) + ' or ' + topics[-1]
 
     # -- parameters --------------------------------------------------------------------
+
+    def _declare_parameters(self):
+        """Declare PARAMETERS; check the start-up overrides (InvalidParameterValueException)."""
+        overrides = getattr(self, '_parameter_overrides', {})  # (see the method below)
+        for name, override in overrides.items():  # `marker_scale: 3` in a file, -p ...:=3
+            if name in PARAMETERS:
+                (overrides[name],) = self._integers_as_doubles([override])
+        for name, spec in PARAMETERS.items():
+            self.declare_parameter(name, spec.default, spec.descriptor)
+        for name, spec in PARAMETERS.items():
+            value = self.get_parameter(name).value
+            reason = spec.check(value)
+            if reason:
+                raise InvalidParameterValueException(name, value, reason)
+
+    @staticmethod
+    def _integers_as_doubles(parameters):
+        """Return the parameters, with an integer value of a double parameter made a double.
+
+        rclpy types a parameter by its value: ``marker_scale: 3`` in a YAML file, ``-p
+        marker_scale:=3`` or ``ros2 param set ... marker_scale 3`` is an integer, which a
+        double parameter refuses. Run before rclpy's type check (a pre-set callback, and on
+        the start-up overrides).
+        """
+        converted = []
+        for parameter in parameters:
+            spec = PARAMETERS.get(parameter.name)
+            if (spec is not None and parameter.type_ == Parameter.Type.INTEGER
+                    and spec.descriptor.type == ParameterType.PARAMETER_DOUBLE):
+                parameter = Parameter(parameter.name, Parameter.Type.DOUBLE,
+                                      float(parameter.value))
+            converted.append(parameter)
+        return converted
 
     def _read_settings(self):
         value = {name: self.get_parameter(name).value for name in PARAMETERS}
         return Settings(value['euler_sequence'], value['angle_unit'] == 'deg',
                         value['quaternion_tolerance'], value['publish_markers'],
-                        value['marker_scale'])
+                        value['marker_scale'], value['tf_reference_frame'],
+                        value['tf_body_frame'])
 
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters (rclpy has checked type and range)."""
@@ -323,9 +393,17 @@ class RotationNode(Node):
         """Take the new values into use from the next message; publish_markers off clears."""
         if any(parameter.name in PARAMETERS for parameter in parameters):
             was_drawing = self._settings.publish_markers
-            self._settings = self._read_settings()
+            old, self._settings = self._settings, self._read_settings()
             if was_drawing and not self._settings.publish_markers:
                 self._clear_picture()
+            new = self._settings
+            self._tf.set_quaternion_tolerance(new.quaternion_tolerance)
+            frames = (new.tf_reference_frame, new.tf_body_frame)
+            if frames != (old.tf_reference_frame, old.tf_body_frame):
+                self._tf.follow(*frames)
+                self.get_logger().info(
+                    f'following {frames[1]!r} in {frames[0]!r} on {self._tf.topic}'
+                    if self._tf.following else f'not following frames on {self._tf.topic}')
 
     def _warn_about_unknown_overrides(self):
         """Warn about each start-up override (-p, --params-file) that names no parameter.
@@ -352,16 +430,30 @@ class RotationNode(Node):
         settings = self._settings
         try:
             header, R, b = source.convert(msg, settings)
-            # Every number published, as plain floats from one compiled kernel pass (the
-            # hot path: decompose's arrays cost more than the math); the picture's
+            # Every number published, as plain floats from the generated kernels (the hot
+            # path: decompose's arrays cost more than the math); the picture's
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
             values = decompose_values(R, b, settings.euler_sequence)
         except messages.RefusedInput as exc:
-            self._refuse(source.topic, exc.reason, str(exc))
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
             return
         except RotationError as exc:
-            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc))
+            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=msg.header)
             return
+        self._publish(source, header, R, b, values, settings)
+
+    def _on_tf_transform(self, header, R, b):
+        """The followed frames have a new common time on /tf: publish every output."""
+        settings = self._settings
+        try:
+            values = decompose_values(R, b, settings.euler_sequence)
+        except RotationError as exc:
+            self._refuse(self._tf_source.topic, NOT_DECOMPOSABLE, str(exc))
+            return
+        self._publish(self._tf_source, header, R, b, values, settings)
+
+    def _publish(self, source, header, R, b, values, settings):
+        """Every output of one accepted input (header, R, b), ``values`` its decomposition."""
         degrees = settings.degrees
         for publish, build, out, value_of, angles in self._outputs:
             value = value_of(values)
@@ -372,14 +464,16 @@ class RotationNode(Node):
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
-    def _refuse(self, topic, reason, text, error=False):
+    def _refuse(self, topic, reason, text, error=False, header=None):
         """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
 
         Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
         stream (a raw IMU without orientation at 50 Hz) would silence every other one.
-        ``error``: log at error level (a refused service request).
+        ``error``: log at error level (a refused service request). The refusal is kept as
+        the latest of its reason for ~/describe (``header``: the refused message's).
         """
         self._refused[reason] += 1
+        self._last_refusals[reason] = (topic, header, text)
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
             self._warned[topic, reason] = now
@@ -447,27 +541,54 @@ class RotationNode(Node):
         """{'total': N, reason: n, ...} of the inputs refused so far."""
         return {'total': sum(self._refused.values()), **self._refused}
 
+    def last_refusals(self):
+        """{reason: {source, stamp, message}} of the latest refusal of each reason so far.
+
+        In REFUSAL_REASONS order, only the reasons counted; ``stamp`` only when the refused
+        message had a header; ``message`` is the refusal's sentence (what and by how much),
+        cut to MAX_REFUSAL_TEXT characters.
+        """
+        latest = {}
+        for reason in REFUSAL_REASONS:
+            if reason not in self._last_refusals:
+                continue
+            topic, header, text = self._last_refusals[reason]
+            entry = {'source': topic}
+            if header is not None:
+                entry['stamp'] = {'sec': header.stamp.sec, 'nanosec': header.stamp.nanosec}
+            if len(text) > MAX_REFUSAL_TEXT:
+                text = text[:MAX_REFUSAL_TEXT - 1] + '…'
+            entry['message'] = text
+            latest[reason] = entry
+        return latest
+
     def _on_describe(self, request, response):
-        """YAML report of the latest input (rot_tools.report), with the refusal counts."""
+        """YAML report of the latest input (rot_tools.report), with the refusals' data.
+
+        Always a YAML document ending in ``refused`` (the counts by reason) and
+        ``last_refusals`` (last_refusals()). Before any accepted input ``success`` is false
+        and the document starts with ``note``: a sentence saying so, for people.
+        """
         refused = self.refused_counts()
         latest = self._latest
         if latest is None:
-            counts = ', '.join(f'{reason} {n}' for reason, n in refused.items()
-                               if n and reason != 'total')
+            total = refused['total']
+            data = {'note': f'Nothing has been accepted yet on {self._input_topics()} '
+                            f"({total} input{'' if total == 1 else 's'} refused)."}
             response.success = False
-            response.message = (
-                f'Nothing has been accepted yet on {self._input_topics()} '
-                f"({refused['total']} input(s) refused{': ' + counts if counts else ''}).")
-            return response
-        stamp = latest.header.stamp
-        data = {'source': latest.source.topic,
-                'source_type': latest.source.type_name,
-                'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
-                'frame_id': latest.header.frame_id}
-        data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,
-                                     latest.settings.degrees))
+        else:
+            stamp = latest.header.stamp
+            data = {'source': latest.source.topic,
+                    'source_type': latest.source.type_name,
+                    'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
+                    'frame_id': latest.header.frame_id}
+            data.update(transform_report(latest.R, latest.b, latest.settings.euler_sequence,
+                                         latest.settings.degrees))
+            if self._tf.following:
+                data['tf'] = self._tf.describe()
+            response.success = True
         data['refused'] = refused
-        response.success = True
+        data['last_refusals'] = self.last_refusals()
         response.message = to_yaml(data)
         return response
 
@@ -559,14 +680,75 @@ class RotationNode(Node):
                 f'bytes would take {size / 1e6:.3g} MB, more than {MAX_REPLY_BYTES / 1e6:g} MB')
 
 
+def _rows(rows, width=99):
+    """'  name  text' lines, the text wrapped under itself."""
+    left = max(len(name) for name, _ in rows) + 4
+    lines = []
+    for name, text in rows:
+        lines += textwrap.wrap(text, width, initial_indent=f'  {name:{left - 2}}',
+                               subsequent_indent=' ' * left)
+    return lines
+
+
+def _default_text(value):
+    return ('true' if value else 'false') if isinstance(value, bool) else str(value)
+
+
+def usage():
+    """Return the text of ``rotation_node --help``, from INPUTS, OUTPUTS and PARAMETERS."""
+    inputs = [(kind.topic, messages.type_name(kind.msg_type)) for kind in INPUTS]
+    outputs = [(kind.topic, messages.type_name(kind.msg_type)
+                + (' (in angle_unit)' if kind.angles else '')) for kind in OUTPUTS]
+    outputs += [('~/markers, ~/screw_axis', 'the picture of the motion (MarkerArray, Marker), '
+                 f'when publish_markers, at most {MARKER_RATE:g} a second')]
+    parameters = [(f'{name} = {_default_text(spec.default)}', spec.descriptor.description
+                   + (f' ({spec.descriptor.additional_constraints})'
+                      if spec.descriptor.additional_constraints else ''))
+                  for name, spec in PARAMETERS.items()]
+    return '\n'.join([
+        f'usage: {PROG} [--help] [--version] [--ros-args ROS_ARGUMENT ...]', '',
+        textwrap.fill(
+            'A ROS 2 node: every input (an orientation or a pose) is turned into one rigid '
+            'motion (R, b) and republished as rotation matrix, quaternion, rotation vector, '
+            'Euler angles, roll/pitch/yaw and screw (Chasles) decomposition, with the '
+            "input's header.", 99),
+        '', 'inputs (subscribed, sensor-data QoS):', *_rows(inputs),
+        '', 'outputs (for every accepted input, reliable, depth 10):', *_rows(outputs),
+        '', 'services:', *_rows([('~/describe', "std_srvs/srv/Trigger: the latest input's "
+                                  'report and the refusals, as YAML'),
+                                 ('~/screw_path', 'nav_msgs/srv/GetPlan: the constant-screw '
+                                  'motion from start to goal')]),
+        '', 'parameters (-p NAME:=VALUE, --params-file FILE):', *_rows(parameters),
+        '', 'examples:',
+        f"  {PROG} --ros-args -r __ns:=/robot -r '~/imu:=/robot/imu/data' -p angle_unit:=deg",
+        f'  {PROG} --ros-args --params-file rot_tools.yaml   (copied from share/rot_tools/'
+        'config)',
+        '  ros2 launch rot_tools rot_tools.launch.xml imu:=/robot/imu/data',
+        '', "Quote a ~ that starts a word ('~/imu:=...'): the shell would expand it.",
+        'The node and its interface are described in doc/node.md.', ''])
+
+
 def main(args=None):
     """Run the node until SIGINT / SIGTERM; exit status 0, or 2 for bad arguments.
 
-    ``args``: the command line as rclpy.init takes it (sys.argv when None). Started by
+    ``args``: the whole command line as rclpy.init takes it, program name first (sys.argv
+    when None). ``--help`` and ``--version`` print and return 0 before anything ROS
+    starts; any other argument outside ``--ros-args`` is refused. Started by
     rot_tools.runtime.start (the console script, ``python -m rot_tools.rotation_node``),
     which handles an early signal and ends the process.
     """
-    runtime.init_ros(PROG, args)
+    argv = sys.argv if args is None else list(args)
+    options = runtime.user_arguments(argv)
+    if '-h' in options or '--help' in options:
+        print(usage(), end='')
+        return 0
+    if '--version' in options:
+        print(runtime.program_version(PROG))
+        return 0
+    if options:
+        runtime.fail(PROG, f'unknown argument {options[0]!r} (ROS arguments go after '
+                     f'--ros-args; see {PROG} --help)')
+    runtime.init_ros(PROG, argv)
     try:
         runtime.serve(RotationNode)
     except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2

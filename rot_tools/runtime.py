@@ -158,6 +158,24 @@ def ros_argument_error(exc):
     return None
 
 
+def user_arguments(argv):
+    """Return the arguments of ``argv`` (program name first) outside its ROS arguments.
+
+    ROS arguments run from each ``--ros-args`` to the next ``--`` or the end, as rcl reads
+    them; unlike rclpy.utilities.remove_ros_args this does not parse them (a bad one is
+    init_ros's to report), so a program can answer --help before anything ROS starts.
+    """
+    found, inside = [], False
+    for arg in argv[1:]:
+        if arg == '--ros-args':
+            inside = True
+        elif inside and arg == '--':
+            inside = False
+        elif not inside:
+            found.append(arg)
+    return found
+
+
 def _missing_params_files(args):
     """Return the ``--params-file`` arguments (after --ros-args) naming no readable file."""
     missing = []

@@ -81,6 +81,7 @@ def defects_kernel(ops, m):
 
 
 _F64 = ((), np.float64)
+_FLOAT = ((), float)  # (a Python float for one item: refuse_defects' quick path)
 
 
 def _defects(R):
@@ -120,7 +121,11 @@ def refuse_defects(err, det, tol, name='R'):
 
     name: how the message calls the matrix: 'R', 'R2', 'R (T[:3, :3])'.
     """
-    if err.ndim == 0 and err <= tol and abs(det - 1.0) <= tol:
+    if type(err) is float:  # one item, as Python floats
+        if err <= tol and abs(det - 1.0) <= tol:
+            return
+        err, det = np.float64(err), np.float64(det)
+    elif err.ndim == 0 and err <= tol and abs(det - 1.0) <= tol:
         return  # one good item: no NumPy reductions
     where = '' if err.ndim == 0 else ' (worst at item {})'
     if not (err <= tol).all():
@@ -158,7 +163,7 @@ def apply_to_rotations(kernel, R, check, outputs, extra=()):
     if not check:
         return apply(kernel, [(R, (3, 3), 'R', False), *extra], outputs)
     *results, err, det = apply(_checking(kernel), [(R, (3, 3), 'R', True), *extra],
-                               [*outputs, _F64, _F64])
+                               [*outputs, _FLOAT, _FLOAT])
     refuse_defects(err, det, ROTATION_TOL)
     return tuple(results)
 
@@ -174,7 +179,7 @@ def apply_to_named_rotations(kernel, rotations, check, outputs, extra=()):
         return apply(kernel, [*inputs, *extra], outputs)
     count = len(rotations)
     results = apply(_checking(kernel, count), [*inputs, *extra],
-                    [*outputs] + [_F64, _F64] * count)
+                    [*outputs] + [_FLOAT, _FLOAT] * count)
     for i, (_, name) in enumerate(rotations):
         err, det = results[len(outputs) + 2 * i:len(outputs) + 2 * i + 2]
         refuse_defects(err, det, ROTATION_TOL, name)

@@ -33,20 +33,21 @@ static edges were set with (tf2 gives 0 there), and a frame looked up in itself 
 newest stamp of its own edge (0 for a root, as tf2).
 
 **Refusals.** A lookup that cannot be answered raises TransformLookupError (a RotationError)
-whose ``reason`` is one of ``unknown_frame``, ``not_connected`` (no common ancestor: two trees)
-or ``extrapolation`` (the message names the edge, the data it has and by how many seconds t
-is outside it; ``edge`` and ``seconds`` carry them). ``set_transform`` refuses with a
-TransformTreeError (the parent class, also a RotationError) whose reason is ``bad_frame`` (an
-empty or non-string frame name), ``loop`` (the child is the parent or one of its ancestors: a
-loop published by mistake), ``non_finite`` (NaN/Inf in R, b or the stamp), ``not_rotation``
-(R fails validate_rotation) or ``bad_value`` (a shape or type that is not a transform).
+whose ``reason`` is one of ``unknown_frame``, ``not_connected`` (no common ancestor: two
+trees) or ``extrapolation`` (the message names the edge, the data it has and by how many
+seconds t is outside it; ``edge`` and ``seconds`` carry them). ``set_transform`` refuses
+with a TransformTreeError (the parent class, also a RotationError) whose reason is
+``bad_frame`` (an empty or non-string frame name), ``loop`` (the child is the parent or one
+of its ancestors: a loop published by mistake), ``too_many_frames`` (beyond ``max_frames``),
+``non_finite`` (NaN/Inf in R, b or the stamp), ``not_rotation`` (R fails validate_rotation)
+or ``bad_value`` (a shape or type that is not a transform).
 
 **Memory.** Samples of a dynamic edge older than ``cache_seconds`` before its newest are
 dropped, and at most ``max_samples`` (the newest) are kept, so a flood cannot grow the tree
-without bound. A sample older than the window is not stored (set_transform returns 0); a
-sample at the stamp of a stored one replaces it. A frame that gets a new parent, or an edge
-that turns static or dynamic, replaces its old edge and forgets its samples. Frames once seen
-stay known.
+without bound; nor can frames beyond ``max_frames``. A sample older than the window is not
+stored (set_transform returns 0); a sample at the stamp of a stored one replaces it. A frame
+that gets a new parent, or an edge that turns static or dynamic, replaces its old edge and
+forgets its samples. Frames once seen stay known.
 
 Batches: ``set_transform`` takes many samples of one edge at once (stamps (n,), R (n, 3, 3),
 b (n, 3)) and ``lookup`` many stamps at once (t (...) → R (..., 3, 3), b (..., 3), t (...)),
@@ -75,11 +76,15 @@ LOOP = 'loop'
 NON_FINITE = 'non_finite'
 NOT_ROTATION = 'not_rotation'
 BAD_VALUE = 'bad_value'
-SET_REASONS = (BAD_FRAME, LOOP, NON_FINITE, NOT_ROTATION, BAD_VALUE)
+TOO_MANY_FRAMES = 'too_many_frames'
+SET_REASONS = (BAD_FRAME, LOOP, NON_FINITE, NOT_ROTATION, BAD_VALUE, TOO_MANY_FRAMES)
 """Reasons set_transform refuses a transform for (TransformTreeError.reason)."""
 
 DEFAULT_MAX_SAMPLES = 100_000
 """Samples kept per dynamic edge at most: 10 s at 10 kHz (9.6 MB per edge when full)."""
+
+DEFAULT_MAX_FRAMES = 10_000
+"""Frames a tree holds at most (a few kB each); a transform that would add more is refused."""
 
 _IDENTITY = np.eye(3)
 _ZERO = np.zeros(3)
@@ -276,16 +281,22 @@ class TransformTree:
 
     cache_seconds: how long a dynamic edge keeps its samples (before its newest), > 0, inf
     allowed (a bag read whole). max_samples: the most samples a dynamic edge keeps.
+    max_frames: the most frames the tree holds (a transform adding more is refused).
     See the module docstring for the conventions, the time rules and the refusals.
     """
 
-    def __init__(self, cache_seconds=10.0, *, max_samples=DEFAULT_MAX_SAMPLES):
+    def __init__(self, cache_seconds=10.0, *, max_samples=DEFAULT_MAX_SAMPLES,
+                 max_frames=DEFAULT_MAX_FRAMES):
         cache_seconds = _number(cache_seconds, 'cache_seconds')
         if not cache_seconds > 0:
             raise RotationError(f'cache_seconds must be > 0, got {cache_seconds!r}')
         if (not isinstance(max_samples, numbers.Integral) or isinstance(max_samples, bool)
                 or max_samples < 2):
             raise RotationError(f'max_samples must be an integer ≥ 2, got {max_samples!r}')
+        if (not isinstance(max_frames, numbers.Integral) or isinstance(max_frames, bool)
+                or max_frames < 2):
+            raise RotationError(f'max_frames must be an integer ≥ 2, got {max_frames!r}')
+        self.max_frames = int(max_frames)
         self.cache_seconds = cache_seconds
         self.max_samples = int(max_samples)
         self._edges = {}  # child -> _Edge
@@ -336,6 +347,12 @@ class TransformTree:
                 NOT_ROTATION, f'the transform {parent!r} → {child!r}: {exc}') from None
         with self._lock:
             self._refuse_loop(parent, child)
+            new = len({parent, child} - self._frames)
+            if new and len(self._frames) + new > self.max_frames:
+                raise TransformTreeError(
+                    TOO_MANY_FRAMES, f'the transform {parent!r} → {child!r} would add '
+                    f'{new} frame(s) to a tree that holds {len(self._frames)}, at most '
+                    f'max_frames = {self.max_frames}')
             edge = self._edges.get(child)
             if edge is None or edge.parent != parent or edge.static != bool(static):
                 edge = _Edge(parent, bool(static), 1 if static else 16)

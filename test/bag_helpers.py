@@ -28,75 +28,76 @@ class Builder:
         self.store = store()
         self.t = self.store.types
 
-    def _type(self, name):
-        return self.t[name]
+    def make(self, name, **fields):
+        return self.t[name](**fields)
 
     def header(self, stamp, frame='map'):
-        Time = self._type('builtin_interfaces/msg/Time')
         sec = int(np.floor(stamp))
-        return self._type('std_msgs/msg/Header')(
-            stamp=Time(sec=sec, nanosec=int(round((stamp - sec) * 1e9))), frame_id=frame)
+        time = self.make('builtin_interfaces/msg/Time', sec=sec,
+                         nanosec=int(round((stamp - sec) * 1e9)))
+        return self.make('std_msgs/msg/Header', stamp=time, frame_id=frame)
 
     def vector(self, v):
-        return self._type('geometry_msgs/msg/Vector3')(x=float(v[0]), y=float(v[1]),
-                                                        z=float(v[2]))
+        return self.make('geometry_msgs/msg/Vector3', x=float(v[0]), y=float(v[1]),
+                         z=float(v[2]))
 
     def point(self, v):
-        return self._type('geometry_msgs/msg/Point')(x=float(v[0]), y=float(v[1]),
-                                                      z=float(v[2]))
+        return self.make('geometry_msgs/msg/Point', x=float(v[0]), y=float(v[1]),
+                         z=float(v[2]))
 
     def quaternion(self, q):
-        return self._type('geometry_msgs/msg/Quaternion')(
-            x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+        return self.make('geometry_msgs/msg/Quaternion', x=float(q[0]), y=float(q[1]),
+                         z=float(q[2]), w=float(q[3]))
 
     def pose(self, p, q):
-        return self._type('geometry_msgs/msg/Pose')(position=self.point(p),
-                                                     orientation=self.quaternion(q))
+        return self.make('geometry_msgs/msg/Pose', position=self.point(p),
+                         orientation=self.quaternion(q))
 
     def pose_stamped(self, stamp, p, q, frame='map'):
-        return self._type('geometry_msgs/msg/PoseStamped')(header=self.header(stamp, frame),
-                                                            pose=self.pose(p, q))
+        return self.make('geometry_msgs/msg/PoseStamped', header=self.header(stamp, frame),
+                         pose=self.pose(p, q))
+
+    def _covariance(self, p, q):
+        return self.make('geometry_msgs/msg/PoseWithCovariance', pose=self.pose(p, q),
+                         covariance=np.zeros(36))
 
     def pose_with_covariance_stamped(self, stamp, p, q, frame='map'):
-        cov = self._type('geometry_msgs/msg/PoseWithCovariance')(
-            pose=self.pose(p, q), covariance=np.zeros(36))
-        return self._type('geometry_msgs/msg/PoseWithCovarianceStamped')(
-            header=self.header(stamp, frame), pose=cov)
+        return self.make('geometry_msgs/msg/PoseWithCovarianceStamped',
+                         header=self.header(stamp, frame), pose=self._covariance(p, q))
 
     def odometry(self, stamp, p, q, frame='odom', child='base_link'):
-        cov = self._type('geometry_msgs/msg/PoseWithCovariance')(
-            pose=self.pose(p, q), covariance=np.zeros(36))
-        twist = self._type('geometry_msgs/msg/TwistWithCovariance')(
-            twist=self._type('geometry_msgs/msg/Twist')(linear=self.vector((0, 0, 0)),
-                                                        angular=self.vector((0, 0, 0))),
-            covariance=np.zeros(36))
-        return self._type('nav_msgs/msg/Odometry')(header=self.header(stamp, frame),
-                                                   child_frame_id=child, pose=cov, twist=twist)
+        zero = self.vector((0, 0, 0))
+        twist = self.make('geometry_msgs/msg/TwistWithCovariance',
+                          twist=self.make('geometry_msgs/msg/Twist', linear=zero, angular=zero),
+                          covariance=np.zeros(36))
+        return self.make('nav_msgs/msg/Odometry', header=self.header(stamp, frame),
+                         child_frame_id=child, pose=self._covariance(p, q), twist=twist)
 
     def imu(self, stamp, q, gyro=(0, 0, 0), cov0=0.0, frame='imu'):
         cov = np.zeros(9)
         cov[0] = cov0
-        return self._type('sensor_msgs/msg/Imu')(
-            header=self.header(stamp, frame), orientation=self.quaternion(q),
-            orientation_covariance=cov, angular_velocity=self.vector(gyro),
-            angular_velocity_covariance=np.zeros(9), linear_acceleration=self.vector((0, 0, 0)),
-            linear_acceleration_covariance=np.zeros(9))
+        return self.make('sensor_msgs/msg/Imu', header=self.header(stamp, frame),
+                         orientation=self.quaternion(q), orientation_covariance=cov,
+                         angular_velocity=self.vector(gyro),
+                         angular_velocity_covariance=np.zeros(9),
+                         linear_acceleration=self.vector((0, 0, 0)),
+                         linear_acceleration_covariance=np.zeros(9))
 
     def quaternion_stamped(self, stamp, q, frame='map'):
-        return self._type('geometry_msgs/msg/QuaternionStamped')(
-            header=self.header(stamp, frame), quaternion=self.quaternion(q))
+        return self.make('geometry_msgs/msg/QuaternionStamped',
+                         header=self.header(stamp, frame), quaternion=self.quaternion(q))
 
     def transform_stamped(self, stamp, t, q, frame='map', child='body'):
-        tf = self._type('geometry_msgs/msg/Transform')(translation=self.vector(t),
-                                                        rotation=self.quaternion(q))
-        return self._type('geometry_msgs/msg/TransformStamped')(
-            header=self.header(stamp, frame), child_frame_id=child, transform=tf)
+        tf = self.make('geometry_msgs/msg/Transform', translation=self.vector(t),
+                       rotation=self.quaternion(q))
+        return self.make('geometry_msgs/msg/TransformStamped',
+                         header=self.header(stamp, frame), child_frame_id=child, transform=tf)
 
     def tf_message(self, transforms):
-        return self._type('tf2_msgs/msg/TFMessage')(transforms=list(transforms))
+        return self.make('tf2_msgs/msg/TFMessage', transforms=list(transforms))
 
     def string(self, text):
-        return self._type('std_msgs/msg/String')(data=text)
+        return self.make('std_msgs/msg/String', data=text)
 
 
 def write_bag(dst, messages, storage='sqlite3'):
@@ -111,3 +112,36 @@ def write_bag(dst, messages, storage='sqlite3'):
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=typestore)
             writer.write(conns[topic], t, typestore.serialize_cdr(msg, msgtype))
     return Path(dst)
+
+
+def tf_chain_messages(n=40, bad_at=7):
+    """[(topic, type, t, msg)] of a TF tree map → odom → base_link → imu, plus odom → wheel.
+
+    map → odom and odom → base_link are dynamic, sampled together at 10 Hz; base_link → imu
+    is static (on /tf_static); odom → wheel has a zero quaternion at sample ``bad_at``. Returns
+    (messages, truth): truth[t] = {(parent, child): (q, translation)} of every sample.
+    """
+    b = Builder()
+    rng = np.random.default_rng(17)
+    messages, truth = [], {}
+    static_q = rng.normal(size=4)
+    static_q /= np.linalg.norm(static_q)
+    static = b.transform_stamped(0.5, (0.1, 0.0, 0.2), static_q, 'base_link', 'imu')
+    messages.append(('/tf_static', 'tf2_msgs/msg/TFMessage', 500_000_000,
+                     b.tf_message([static])))
+    for k in range(n):
+        stamp = 1.0 + 0.1 * k
+        sample = {}
+        transforms = []
+        for parent, child in (('map', 'odom'), ('odom', 'base_link'), ('odom', 'wheel')):
+            q = rng.normal(size=4)
+            q /= np.linalg.norm(q)
+            if child == 'wheel' and k == bad_at:
+                q = np.zeros(4)
+            t = rng.normal(size=3)
+            sample[parent, child] = (q, t)
+            transforms.append(b.transform_stamped(stamp, t, q, parent, child))
+        truth[stamp] = sample
+        messages.append(('/tf', 'tf2_msgs/msg/TFMessage', int(stamp * 1e9) + 1000,
+                         b.tf_message(transforms)))
+    return messages, truth, (static_q, np.array([0.1, 0.0, 0.2]))

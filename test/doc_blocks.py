@@ -78,7 +78,7 @@ def all_blocks():
 
 
 def doc_block(name):
-    """The text of the block tagged ``<!-- output: name -->`` (KeyError if none)."""
+    """Return the text of the block tagged ``<!-- output: name -->`` (KeyError if none)."""
     tagged = [b for b in all_blocks() if b.tag == name]
     if len(tagged) != 1:
         raise KeyError(f'{len(tagged)} blocks tagged {name!r} in README.md and doc/*.md')
@@ -99,7 +99,7 @@ def console_steps(text):
 
 
 def matches(want, got):
-    """True when got equals want, ``...`` in want matching any text (doctest ELLIPSIS)."""
+    """Tell whether got equals want, ``...`` in want matching any text (doctest ELLIPSIS)."""
     return doctest.OutputChecker().check_output(want, got, doctest.ELLIPSIS)
 
 

@@ -9,6 +9,7 @@ depend on call history; one item must fail as a batch does; and a traceback thro
 name a real file.
 """
 
+import inspect
 import math
 from pathlib import Path
 import re
@@ -167,10 +168,11 @@ def test_the_checked_in_generated_module_is_what_the_kernels_give():
     assert current.count('\n') < 10_000  # a budget: the common path of each kernel only
 
 
-# Public names that run no kernel (plain NumPy, or not a function): the rest must be in
-# _generate.ordinary_calls, so that a new conversion cannot be forgotten there.
+# Public functions that run no kernel (plain NumPy): every other public function must be in
+# _generate.ordinary_calls, so that a new conversion cannot be forgotten there. (Classes
+# are not checked: a class whose methods run kernels needs calls there too.)
 NO_KERNEL = {'rot_x', 'rot_y', 'rot_z', 'skew', 'nearest_rotation', 'mean_rotation',
-             'align_vectors', 'random_rotations', 'Screw', 'Decomposition', 'RotationError'}
+             'align_vectors', 'random_rotations'}
 
 
 def _ordinary_items(n=60):
@@ -192,7 +194,7 @@ def _xyzw(q):
 
 def test_every_public_function_and_the_node_path_run_generated_code(fallbacks):
     calls = _generate.ordinary_calls()
-    public = {name for name in rt.__all__ if callable(getattr(rt, name))}
+    public = {name for name in rt.__all__ if inspect.isfunction(getattr(rt, name))}
     covered = {name for _, name, _ in calls}
     assert public - NO_KERNEL <= covered, public - NO_KERNEL - covered
     fallbacks.clear()
@@ -386,8 +388,12 @@ def _same(one, batch):
     if a.dtype == bool or b.dtype == bool:
         return a.shape == b.shape and (a == b).all()
     exact = ~np.isfinite(a) | ~np.isfinite(b)
+    # Finite values to rounding, relative to the largest of the output: libm's and NumPy's
+    # tan, sin, ... may differ in the last bit, and a cancellation of entries near 1e308
+    # turns that into ~1e292 (NumPy 1.26's tan in screw_from_transform).
+    scale = np.abs(a[~exact]).max(initial=0.0)
     return a.shape == b.shape and np.array_equal(a[exact], b[exact], equal_nan=True) and \
-        np.allclose(a[~exact], b[~exact], rtol=1e-12, atol=1e-300)
+        np.allclose(a[~exact], b[~exact], rtol=1e-12, atol=1e-12 * scale)
 
 
 def test_one_item_and_a_batch_fail_alike_for_every_public_function():

@@ -175,8 +175,8 @@ def test_csv_rows_of_the_real_bag(capsys, reference):
         mine = [r for r in rows if r['topic'] == topic]
         assert len(mine) == len(ref['q'])
         # stamps exactly as recorded: sec.nanosec
-        assert [r['stamp'] for r in mine] == [f'{s}.{n:09d}' for s, n in
-                                             zip(ref['sec'], ref['nsec'])]
+        stamps = [f'{s}.{n:09d}' for s, n in zip(ref['sec'], ref['nsec'])]
+        assert [r['stamp'] for r in mine] == stamps
         assert [r['frame_id'] for r in mine] == ref['frame']
         np.testing.assert_allclose(col(mine, 'x', 'y', 'z'), ref['p'], rtol=1e-11, atol=0)
         rot = Rotation.from_quat(ref['q'])
@@ -237,8 +237,9 @@ def test_fast_columns_equal_rosbags_decoding(converted, storage):
     path = bh.REAL if storage == 'ros1' else converted[storage]
     with bag_read.open_bag(path) as reader:
         conns = list(reader.connections)
-        fast = bag_read.read_topics(reader, conns)
         slow = bag_read.read_topics(reader, conns, fast=False)
+        reader.deserialize = _no_decoding  # the fast path reads every message itself
+        fast = bag_read.read_topics(reader, conns)
     assert set(fast) == set(slow) == {IMU, ODOM}
     for topic in fast:
         a, b = fast[topic], slow[topic]
@@ -285,3 +286,59 @@ def test_plot_one_panel_per_topic(capsys, tmp_path):
     png = tmp_path / 'rpy.png'
     assert run(capsys, 'bag', bh.REAL, '--plot', png, '--deg')[0] == 0
     assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def _no_decoding(raw, msgtype):
+    raise AssertionError('rosbags decoded a message the fast path should have read')
+
+
+def test_fast_columns_with_strings_of_many_lengths(tmp_path):
+    """Frame ids of different lengths, and of the same total length in different places:
+    the layout is split by the strings' lengths, and gives rosbags' columns exactly."""
+    b = bh.Builder()
+    q = Rotation.random(24, random_state=5).as_quat()
+    frames = [('a', 'bbb'), ('bbb', 'a'), ('cc', 'dd'), ('', 'child'), ('xy', 'zw'), ('a', 'bbb')]
+    messages = []
+    for k in range(24):
+        frame, child = frames[k % len(frames)]
+        stamp = 10.0 + 0.05 * k
+        messages.append(('/tf_stamped', 'geometry_msgs/msg/TransformStamped', k + 1,
+                         b.transform_stamped(stamp, (k, -k, 0.5), q[k], frame, child)))
+        messages.append(('/pose', 'geometry_msgs/msg/PoseStamped', k + 1,
+                         b.pose_stamped(stamp, (k, 0, 0), q[k], frame * (k % 3))))
+    for storage in ('sqlite3', 'mcap'):
+        path = bh.write_bag(tmp_path / storage, messages, storage)
+        with bag_read.open_bag(path) as reader:
+            conns = list(reader.connections)
+            slow = bag_read.read_topics(reader, conns, fast=False)
+            reader.deserialize = _no_decoding  # the fast path must read every message itself
+            fast = bag_read.read_topics(reader, conns)
+        for topic in ('/tf_stamped', '/pose'):
+            a, s = fast[topic], slow[topic]
+            names = [a.frame_ids[i] for i in a.frame]
+            assert names == [s.frame_ids[i] for i in s.frame]
+            if a.child is not None:
+                assert [a.child_frame_ids[i] for i in a.child] == [
+                    s.child_frame_ids[i] for i in s.child]
+            for name in ('sec', 'nanosec', 'orientation', 'position'):
+                np.testing.assert_array_equal(getattr(a, name), getattr(s, name))
+        tf = fast['/tf_stamped']
+        assert [tf.frame_ids[i] for i in tf.frame][:6] == [f for f, _ in frames]
+        np.testing.assert_array_equal(tf.position[:, 0], np.arange(24))
+
+
+def test_frame_ids_of_fast_and_decoded_chunks_are_one_list(monkeypatch, capsys):
+    """A topic read partly by the fast path (bytes) and partly by rosbags (str): one frame."""
+    real_read = bag_read._Layout.read
+    calls = []
+
+    def every_other_chunk(self, rows):
+        calls.append(len(rows))
+        return real_read(self, rows) if len(calls) % 2 else None
+
+    monkeypatch.setattr(bag_read, 'CHUNK', 1000)
+    monkeypatch.setattr(bag_read._Layout, 'read', every_other_chunk)
+    s = summary_of(capsys, 'bag', bh.REAL)
+    assert len(calls) > 4
+    assert s['topics'][IMU]['frame_ids'] == ['base_link']
+    assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']

@@ -8,6 +8,7 @@ wherever it comes from), and a sample again as the installed script, counting st
 """
 
 import itertools
+from pathlib import Path
 import shutil
 import subprocess
 import sys
@@ -94,8 +95,7 @@ def test_extreme_numbers_give_a_report_or_one_error_line(chunk, capsys):
 
 
 def _script():
-    found = shutil.which('rot-tools', path=str(__import__('pathlib').Path(sys.executable)
-                                                   .parent))
+    found = shutil.which('rot-tools', path=str(Path(sys.executable).parent))
     return [found] if found else [sys.executable, '-m', 'rot_tools.cli']
 
 

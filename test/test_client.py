@@ -10,6 +10,7 @@ significant digits, so numbers are compared to that.
 import json
 import math
 import signal
+import string
 import subprocess
 import sys
 import time
@@ -81,6 +82,10 @@ def check_answer(answer, rotation, b=(0.0, 0.0, 0.0), drawn=True):
     q = answer['quaternion']
     assert [q['x'], q['y'], q['z'], q['w']] == approx(rotation.as_quat(canonical=True))
     assert answer['axis_angle'] == approx(rotation.as_rotvec())
+    roll, pitch, yaw = rotation.as_euler('xyz')  # REP 103: about the fixed x, y, z
+    assert answer['rpy'] == {'roll': pytest.approx(roll, **DIGITS),
+                             'pitch': pytest.approx(pitch, **DIGITS),
+                             'yaw': pytest.approx(yaw, **DIGITS), 'unit': 'rad'}
     assert answer['screw']['angular'] == approx(rotation.as_rotvec())
     if not drawn and 'markers' not in answer:
         assert 'screw_axis' not in answer
@@ -517,3 +522,71 @@ def test_doc_examples(node):
         ('describe --node /arm/rot_tools --timeout 2', ('--node', absent)),
         ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1e-300', ()),
         names=[shown, (absent, '/arm/rot_tools')]))
+
+
+# ---------------------------------------------------------------------------------------
+# The node's sentence on refusal, from ~/describe's data
+
+
+def test_refusal_text_uses_the_nodes_sentence():
+    from rot_tools.rotation_client import refusal_text
+    topic = '/rot_tools/orientation'
+    data = {'refused': {'total': 3, 'non_finite': 1, 'non_unit_quaternion': 2},
+            'last_refusals': {
+                'non_finite': {'source': '/rot_tools/pose', 'stamp': {'sec': 5, 'nanosec': 0},
+                               'message': 'pose.position.x is nan'},
+                'non_unit_quaternion': {
+                    'source': topic, 'stamp': {'sec': 7, 'nanosec': 9},
+                    'message': 'orientation has norm 0.707, off 1 by 0.293 > '
+                               'quaternion_tolerance 0.001'}}}
+    sentence = ('orientation has norm 0.707, off 1 by 0.293 > quaternion_tolerance 0.001 '
+                '(non_unit_quaternion)')
+    # Counted since: the sentence when the refusal is of what was sent (source, stamp).
+    assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic,
+                        {(7, 9)}) == sentence
+    assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic) == sentence
+    # Not counted since: nothing.
+    assert refusal_text(data, {'non_unit_quaternion': 2, 'non_finite': 1}, topic) == ''
+    # Another message refused for that reason last (another stamp, another topic): the
+    # reason's name alone, never someone else's sentence.
+    assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic, {(7, 8)}) == (
+        'non_unit_quaternion')
+    assert refusal_text(data, {}, topic, {(7, 9)}) == f'non_finite; {sentence}'
+    assert refusal_text(data, {'non_unit_quaternion': 2}, topic) == 'non_finite'
+    # A node without last_refusals: the reasons' names.
+    del data['last_refusals']
+    assert refusal_text(data, {}, topic) == 'non_finite; non_unit_quaternion'
+
+
+# ---------------------------------------------------------------------------------------
+# Text beyond ASCII in the reports (rot_tools.report's YAML and JSON strings)
+
+
+def must_escape(c):
+    """Characters YAML 1.1 does not allow printed, its line breaks, and the byte order mark."""
+    o = ord(c)
+    printable = (0x20 <= o <= 0x7e or 0xa0 <= o <= 0xd7ff or 0xe000 <= o <= 0xfffd
+                 or o >= 0x10000)
+    return not printable or c in '\u2028\u2029\ufeff'
+
+
+@pytest.mark.parametrize('text', [
+    'caméra_😀', '𝄞 ∮ ŋ ü', 'nbsp\xa0', 'tab\t, newline\n, cr\r',
+    'nul\x00 bel\x07 esc\x1b del\x7f', 'c1\x85\x9f', 'ls\u2028 ps\u2029', 'bom\ufeff',
+    '\ufffe\uffff', 'lone \ud83d and \ude00', 'quote " backslash \\'])
+def test_report_strings_round_trip(text):
+    """Every string reads back the same from the YAML and the JSON report (PyYAML, json).
+
+    Printable characters are written as themselves, the rest escaped. Before, an emoji
+    became a surrogate pair, which YAML reads as two lone surrogates.
+    """
+    from rot_tools.report import to_json, to_yaml
+    data = {'frame_id': text, text: [text]}
+    yaml_text, json_text = to_yaml(data), to_json(data)
+    assert yaml.safe_load(yaml_text) == data
+    assert json.loads(json_text) == data
+    for written in (yaml_text, json_text):
+        written.encode('utf-8')  # no lone surrogate left
+        # (not the newline: it also ends the YAML and JSON lines)
+        for c in set(text) - set(' "\\\n') - set(string.ascii_letters + string.digits):
+            assert (c in written) != must_escape(c), (c, written)

@@ -11,7 +11,7 @@ import re
 import shlex
 import subprocess
 
-from conftest import console_script, NodeProcess, script_env
+from conftest import console_script, NodeProcess, REPO, script_env
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import pytest
 
@@ -30,7 +30,7 @@ def normalised(text, namespace):
 
 
 def run_client_block(name, node_name):
-    """The block's commands run for real: the text the block should show."""
+    """Run the block's commands for real; return the text the block should show."""
     namespace = node_name[:-len('/rot_tools')]
     shown, status = [], 0
     for command, _ in console_steps(doc_block(name)):
@@ -92,3 +92,13 @@ def test_node_bad_parameter():
                           env=script_env(args), stdin=subprocess.DEVNULL)
     assert done.returncode == 2 and done.stdout == ''
     assert_doc_output('node-bad-parameter', f'$ {command}\n' + done.stderr)
+
+
+def test_readme_bag():
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    (command, _), = console_steps(doc_block('readme-bag'))
+    args = console_script('rot-tools', 'rot_tools.cli') + shlex.split(command)[1:]
+    done = subprocess.run(args, capture_output=True, text=True, timeout=120, cwd=REPO,
+                          env=script_env(args), stdin=subprocess.DEVNULL)
+    assert done.returncode == 0 and done.stderr == '', done.stderr
+    assert_doc_output('readme-bag', f'$ {command}\n' + done.stdout)

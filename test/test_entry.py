@@ -164,3 +164,76 @@ def test_bad_ros_arguments_are_one_line_and_status_2(tmp_path, how, case):
     lines = proc.stderr.splitlines()
     assert len(lines) == 1, proc.stderr
     assert lines[0].startswith('rotation_node: ') and named in lines[0], lines[0]
+
+
+# A sitecustomize that makes rclpy.init fail loudly: --help and --version must not call it.
+NO_RCLPY_INIT = """
+import builtins, sys
+_real_import = builtins.__import__
+def _import(name, *args, **kwargs):
+    module = _real_import(name, *args, **kwargs)
+    rclpy = sys.modules.get('rclpy')
+    if hasattr(rclpy, 'init') and not hasattr(rclpy.init, 'forbidden'):
+        def init(*args, **kwargs):
+            raise SystemExit('rclpy.init was called')
+        init.forbidden = True
+        rclpy.init = init
+    return module
+builtins.__import__ = _import
+"""
+
+
+@pytest.mark.parametrize('how', sorted(NODE_COMMANDS))
+@pytest.mark.parametrize('flag', ['--help', '-h', '--version'])
+def test_help_and_version_print_and_start_nothing(tmp_path, how, flag):
+    from importlib.metadata import version
+    from rot_tools.rotation_node import INPUTS, OUTPUTS, PARAMETERS
+    (tmp_path / 'sitecustomize.py').write_text(NO_RCLPY_INIT)
+    proc = run(NODE_COMMANDS[how], flag, '--ros-args', '-p', 'angle_unit:=deg',
+               env_extra={'PYTHONPATH': f'{tmp_path}:{PACKAGE.parent}'})
+    assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
+    if flag == '--version':
+        assert proc.stdout == f"rotation_node {version('rot_tools')}\n"
+        return
+    assert proc.stdout.startswith('usage: rotation_node [--help] [--version] [--ros-args')
+    for kind in INPUTS + OUTPUTS:
+        assert f'\n  {kind.topic} ' in proc.stdout, kind.topic
+    for name in PARAMETERS:
+        assert f'\n  {name} = ' in proc.stdout, name
+    assert max(map(len, proc.stdout.splitlines())) <= 99
+
+
+def test_the_hook_does_catch_rclpy_init(tmp_path):
+    (tmp_path / 'sitecustomize.py').write_text(NO_RCLPY_INIT)
+    proc = run(NODE_COMMANDS['python -m'], '--ros-args', '-p', 'angle_unit:=deg',
+               env_extra={'PYTHONPATH': f'{tmp_path}:{PACKAGE.parent}'}, timeout=20)
+    assert proc.returncode == 1 and 'rclpy.init was called' in proc.stderr
+
+
+@pytest.mark.parametrize('args', [['foo'], ['--verbose', '--ros-args'], ['--', 'x']])
+def test_arguments_outside_ros_args_are_one_line_and_status_2(args):
+    proc = run(NODE_COMMANDS['python -m'], *args)
+    assert proc.returncode == 2, proc.stderr
+    (line,) = proc.stderr.splitlines()
+    assert line.startswith('rotation_node: unknown argument ') and '--help' in line
+
+
+@pytest.mark.parametrize('argv', [
+    ['prog'], ['prog', '--help'], ['prog', '--ros-args', '-p', 'a:=1'],
+    ['prog', 'x', '--ros-args', '-r', 'a:=b', '--', 'y', '--ros-args', '-p', 'c:=2'],
+    ['prog', '--ros-args', '--params-file', str(PACKAGE.parent / 'config' / 'rot_tools.yaml'),
+     '--', '--version'],
+    ['prog', '--', '--ros-args', '-p', 'a:=1', '--', '--']])
+def test_user_arguments_are_what_rclpy_leaves(argv):
+    from rclpy.utilities import remove_ros_args
+    from rot_tools.runtime import user_arguments
+    assert user_arguments(argv) == remove_ros_args(argv)[1:]
+
+
+def test_the_documented_bad_ros_argument_line():
+    from doc_blocks import assert_doc_output, console_steps, doc_block
+    ((command, _),) = console_steps(doc_block('node-bad-ros-argument'))
+    assert command.startswith('rotation_node --ros-args ')
+    proc = run(NODE_COMMANDS['python -m'], *command.split()[1:])
+    assert proc.returncode == 2
+    assert_doc_output('node-bad-ros-argument', f'$ {command}\n' + proc.stderr)

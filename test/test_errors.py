@@ -9,8 +9,8 @@ import pytest
 from rot_tools import (
     align_vectors, axis_angle_to_matrix, compose_transforms, decompose, euler_to_matrix,
     frame_to_matrix, homogeneous_to_transform, invert_transform, is_rotation,
-    matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion, mean_rotation,
-    matrix_to_rotvec, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
+    matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion, matrix_to_rotvec,
+    mean_rotation, nearest_rotation, quaternion_to_matrix, rot_x, rot_y, rot_z,
     rotation_distance, RotationError, rotvec_to_matrix, screw_exp, screw_from_transform,
     screw_interpolate, screw_log, skew, transform_from_screw, transform_points,
     transform_to_homogeneous, validate_rotation)
@@ -726,7 +726,7 @@ CALLS = _calls()
 
 
 def _replace_first_number(x, new):
-    """x (a number or nested lists) with its first number replaced by ``new``."""
+    """Return x (a number or nested lists) with its first number replaced by ``new``."""
     if isinstance(x, list):
         return [_replace_first_number(x[0], new)] + x[1:]
     return new

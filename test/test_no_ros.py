@@ -5,7 +5,7 @@ import pathlib
 import subprocess
 import sys
 
-ROS_AWARE = {'messages', 'rotation_node', 'rotation_client', 'executor'}
+ROS_AWARE = {'messages', 'rotation_node', 'rotation_client', 'executor', 'tf_input'}
 
 # Runs in a fresh interpreter: a meta-path finder records (and refuses) every attempt to
 # import a ROS package, so even a guarded `try: import rclpy` is caught; then every math
@@ -17,7 +17,7 @@ import sys
 
 ROS_PREFIXES = ('rclpy', 'rosidl', 'rcl_interfaces', 'builtin_interfaces', 'geometry_msgs',
                 'std_msgs', 'nav_msgs', 'sensor_msgs', 'std_srvs', 'visualization_msgs',
-                'ament_index')
+                'ament_index', 'tf2_msgs')
 attempts = []
 
 

@@ -9,7 +9,6 @@ significant digits, so its numbers are compared to that.
 """
 
 import math
-import re
 import time
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -250,6 +249,10 @@ class Rig:
         response = self.describe()
         assert response.success, response.message
         return yaml.safe_load(response.message)
+
+    def report_or_note(self):
+        """Return ~/describe's YAML document, with or without an accepted input."""
+        return yaml.safe_load(self.describe().message)
 
     def screw_path(self, start, goal, tolerance=0.0):
         request = GetPlan.Request(start=start, goal=goal, tolerance=float(tolerance))
@@ -677,9 +680,9 @@ def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
     assert len(warnings(odometry_warning)) == 1  # three refused in one second: one warning
     assert 2 <= len(warnings(imu_warning)) <= 1 + elapsed  # throttled, per second
     assert len(rig.node_logs(Log.WARN)) == len(warnings(imu_warning)) + 1
-    counts = re.search(r'\((\d+) input\(s\) refused: non_finite 3, no_orientation (\d+)\)',
-                       rig.describe().message)
-    assert counts and int(counts[1]) == 3 + int(counts[2]) and 0 < int(counts[2]) <= sent
+    refused = rig.report_or_note()['refused']
+    assert refused['non_finite'] == 3 and 0 < refused['no_orientation'] <= sent
+    assert refused['total'] == 3 + refused['no_orientation']
 
 
 # ---------------------------------------------------------------------------------------
@@ -689,19 +692,72 @@ def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
 def test_describe_before_any_input(rig):
     response = rig.describe()
     assert not response.success
-    assert response.message.startswith('Nothing has been accepted yet on')
+    data = yaml.safe_load(response.message)
+    assert list(data) == ['note', 'refused', 'last_refusals']
+    assert data['note'].startswith('Nothing has been accepted yet on')
     for kind in INPUTS:
-        assert rig.topic(kind) in response.message
-    assert response.message.endswith('(0 input(s) refused).')
+        assert rig.topic(kind) in data['note']
+    assert data['note'].endswith('(0 inputs refused).')
+    assert data['refused'] == {'total': 0, **dict.fromkeys(REFUSAL_REASONS, 0)}
+    assert data['last_refusals'] == {}
 
 
 def test_describe_before_any_accepted_input_counts_refusals(rig):
-    rig.send('imu', imu((0, 0, 0, 0), orientation_covariance0=-1.0))
+    msg = imu((0, 0, 0, 0), orientation_covariance0=-1.0)
+    msg.header.stamp.nanosec = 77
+    stamp = rig.send('imu', msg)
     rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1,
                           what='the refusal')
     response = rig.describe()
     assert not response.success
-    assert response.message.endswith('(1 input(s) refused: no_orientation 1).')
+    data = yaml.safe_load(response.message)
+    assert data['note'].endswith('(1 input refused).')
+    assert data['refused']['total'] == data['refused']['no_orientation'] == 1
+    assert data['last_refusals'] == {'no_orientation': {
+        'source': rig.topic('imu'), 'stamp': {'sec': stamp, 'nanosec': 77},
+        'message': 'orientation_covariance[0] is -1: the IMU gives no orientation estimate'}}
+
+
+def test_the_documented_describe_before_any_accepted_input(rig):
+    from doc_blocks import assert_doc_output
+    msg = pose_stamped((0.0, 0.0, 0.0, 1.0 / math.sqrt(2.0)))
+    msg.header.stamp.sec = 7
+    rig.pubs['pose'].publish(msg)
+    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1, what='the refusal')
+    response = rig.describe()
+    assert not response.success
+    # As the docs show it: the node at its default name, /rot_tools.
+    assert_doc_output('node-describe-nothing-yet',
+                      response.message.replace(rig.prefix + '/', '/rot_tools/'))
+
+
+def test_describe_carries_the_latest_refusal_of_each_reason(rig):
+    # The sentence the node logs, as data: what was wrong and by how much, per reason.
+    half = 1.0 / math.sqrt(2.0)
+    first = rig.send('pose', pose_stamped((0.0, 0.0, 0.0, half)))
+    rig.send('pose', pose_stamped((0.0, 0.0, math.nan, 1.0)))
+    latest = rig.send('orientation', quaternion_stamped((0.0, 0.0, 0.0, 0.5)))
+    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 3, what='refusals')
+    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    report = rig.report()
+    assert report['refused']['non_unit_quaternion'] == 2
+    assert list(report)[-2:] == ['refused', 'last_refusals']
+    assert report['last_refusals'] == {
+        'non_finite': {'source': rig.topic('pose'), 'stamp': {'sec': first + 1, 'nanosec': 0},
+                       'message': 'pose.orientation.z is nan'},
+        'non_unit_quaternion': {
+            'source': rig.topic('orientation'), 'stamp': {'sec': latest, 'nanosec': 0},
+            'message': 'quaternion has norm 0.5, off 1 by 0.5 > quaternion_tolerance 0.001'}}
+
+
+def test_describe_cuts_a_huge_refusal_sentence(rig):
+    start, goal = PoseStamped(), PoseStamped()
+    start.header.frame_id, goal.header.frame_id = 'a' * 100_000, 'map'
+    start.pose.orientation.w = goal.pose.orientation.w = 1.0
+    assert rig.screw_path(start, goal).poses == []
+    (entry,) = rig.report_or_note()['last_refusals'].values()
+    assert len(entry['message']) == rotation_node.MAX_REFUSAL_TEXT
+    assert entry['message'].startswith("start is in frame 'aaa") and entry['message'][-1] == '…'
 
 
 def assert_report_close(actual, expected):
@@ -732,7 +788,8 @@ def test_describe_reports_the_latest_input(rig):
     assert report['frame_id'] == 'odom'
     expected = transform_report(quaternion_to_matrix(q), t, 'ZYX', False)
     assert_report_close({k: report[k] for k in expected}, expected)
-    assert list(report) == ['source', 'source_type', 'stamp', 'frame_id', *expected, 'refused']
+    assert list(report) == ['source', 'source_type', 'stamp', 'frame_id', *expected, 'refused',
+                            'last_refusals']
     assert report['source_type'] == 'geometry_msgs/msg/TransformStamped'
     assert report['refused'] == {'total': 0, **dict.fromkeys(REFUSAL_REASONS, 0)}
     assert set(report['screw']) >= {
@@ -918,9 +975,9 @@ def test_parameter_descriptors(rig):
         descriptor = node.describe_parameter(name)
         assert descriptor.type == kind and descriptor.description
         assert node.get_parameter(name).value == default
-    for name in ('quaternion_tolerance', 'marker_scale'):
+    for name, low in (('quaternion_tolerance', 0.0), ('marker_scale', 1e-6)):
         (fp_range,) = node.describe_parameter(name).floating_point_range
-        assert fp_range.from_value == 0.0
+        assert (fp_range.from_value, fp_range.to_value) == (low, math.inf)
     assert 'zyz' in node.describe_parameter('euler_sequence').additional_constraints
 
 
@@ -1005,11 +1062,13 @@ REFUSED_PARAMETERS = [  # (name, value, why)
     ('quaternion_tolerance', -0.1, 'out of range'),
     ('quaternion_tolerance', math.nan, 'out of range'),
     ('quaternion_tolerance', math.inf, 'finite'),
-    ('quaternion_tolerance', 1, 'Wrong parameter type'),
     ('quaternion_tolerance', 'small', 'Wrong parameter type'),
     ('publish_markers', 'yes', 'Wrong parameter type'),
     ('publish_markers', 1, 'Wrong parameter type'),
-    ('marker_scale', 0.0, '> 0'),
+    ('marker_scale', 0.0, 'out of range'),
+    ('marker_scale', 5e-324, 'out of range'),
+    ('marker_scale', 9.99e-7, 'out of range'),
+    ('marker_scale', 0, 'out of range'),
     ('marker_scale', -2.0, 'out of range'),
     ('marker_scale', math.inf, 'finite'),
     ('marker_scale', [1.0, 2.0], 'Wrong parameter type'),
@@ -1052,8 +1111,33 @@ def test_parameters_it_does_not_own_are_accepted(rig):
 
 
 @pytest.mark.parametrize('name, value', [('euler_sequence', 'abc'), ('angle_unit', 'turns'),
-                                         ('marker_scale', 0.0)])
+                                         ('marker_scale', 0.0), ('marker_scale', 5e-324),
+                                         ('marker_scale', 0), ('quaternion_tolerance', -1)])
 def test_invalid_override_at_start_up(ros_context, namespace, name, value):
     with pytest.raises(InvalidParameterValueException, match=name):
         RotationNode(context=ros_context, namespace=namespace,
                      parameter_overrides=[Parameter(name, value=value)])
+
+
+def test_double_parameters_take_integer_values(make_rig):
+    # A YAML file's `marker_scale: 3`, `-p marker_scale:=3` and `ros2 param set ... 3` are
+    # integers to rclpy: the node takes them as doubles (test_node_e2e runs the file and -p).
+    rig = make_rig(marker_scale=3, quaternion_tolerance=0)
+    for name, value in (('marker_scale', 3.0), ('quaternion_tolerance', 0.0)):
+        parameter = rig.node.get_parameter(name)
+        assert (parameter.type_, parameter.value) == (Parameter.Type.DOUBLE, value)
+        assert type(parameter.value) is float
+    assert set_one(rig.node, 'marker_scale', 2).successful
+    assert rig.node.get_parameter('marker_scale').value == 2.0
+    results = rig.tester.set_parameters(rig.node.get_fully_qualified_name(), [
+        Parameter('quaternion_tolerance', value=1), Parameter('marker_scale', value=4)])
+    assert [r.successful for r in results] == [True, True]
+    assert rig.node.get_parameter('quaternion_tolerance').get_parameter_value().double_value \
+        == 1.0
+    q, p = POSE_CASES['general']
+    out = rig.roundtrip('pose', pose_stamped(q, p))
+    check_outputs(out, out['screw'].header.stamp.sec, 'map', quaternion_to_matrix(q), p,
+                  scale=4.0)
+    # Only doubles: an integer is still not a string, nor a bool.
+    assert not set_one(rig.node, 'euler_sequence', 3).successful
+    assert not set_one(rig.node, 'publish_markers', 1).successful

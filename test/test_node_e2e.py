@@ -206,7 +206,8 @@ def test_signal_ends_the_node_cleanly(tester, node_process, signum):
 
 
 @pytest.mark.parametrize('override', ['euler_sequence:=QQQ', 'angle_unit:=grad',
-                                      'marker_scale:=2', 'marker_scale:=-1.0'])
+                                      'marker_scale:=true', 'marker_scale:=-1.0',
+                                      'marker_scale:=5e-324'])
 def test_invalid_start_up_parameter(node_process, override):
     process = node_process('-p', override)
     status = process.process.wait(timeout=20.0)
@@ -294,7 +295,8 @@ def test_parameter_file_is_applied(tester, node_process, tmp_path):
     edited.write_text(text)
     process = node_process('--params-file', str(edited))
     remote = Remote(tester, process.name)
-    assert remote.parameters(names) == changed
+    assert remote.parameters(names) == {
+        **{name: spec.default for name, spec in PARAMETERS.items()}, **changed}
     euler = Vector3Stamped()
     euler.header.frame_id = 'map'
     euler.vector.x, euler.vector.y, euler.vector.z = 10.0, 20.0, 30.0
@@ -306,3 +308,23 @@ def test_parameter_file_is_applied(tester, node_process, tmp_path):
                                rtol=0, atol=1e-12)
     assert tester.received[f'{process.name}/screw_axis'] == []  # publish_markers: false
     assert_clean_exit(*process.stop(signal.SIGTERM))
+
+
+def test_double_parameters_take_integers_from_a_file_and_from_p(tester, node_process, tmp_path):
+    # `marker_scale: 3` in a YAML file and -p marker_scale:=2 are integers to rclpy; they
+    # stopped the node at start-up ("expecting type 'DOUBLE'").
+    edited = tmp_path / 'integers.yaml'
+    text = PARAMETER_FILE.read_text()
+    assert '    marker_scale: 1.0\n' in text
+    edited.write_text(text.replace('    marker_scale: 1.0\n', '    marker_scale: 3\n'))
+    runs = [(node_process('--params-file', str(edited)),
+             {'marker_scale': 3.0, 'quaternion_tolerance': 0.001}),
+            (node_process('-p', 'marker_scale:=2', '-p', 'quaternion_tolerance:=0'),
+             {'marker_scale': 2.0, 'quaternion_tolerance': 0.0})]
+    for process, expected in runs:
+        assert 'WARN' not in process.wait_for_stderr('decomposing')
+        response = tester.call(GetParameters, f'{process.name}/get_parameters',
+                               GetParameters.Request(names=list(expected)))
+        assert [value.type for value in response.values] == [Parameter.Type.DOUBLE.value] * 2
+        assert dict(zip(expected, map(parameter_value_to_python, response.values))) == expected
+        assert_clean_exit(*process.stop(signal.SIGINT))

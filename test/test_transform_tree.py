@@ -16,6 +16,7 @@ import pytest
 from scipy.linalg import expm, logm
 from scipy.spatial.transform import Rotation
 
+from doc_blocks import assert_doc_output
 import math_helpers as h
 import rot_tools
 from rot_tools import RotationError, TransformLookupError, TransformTree, TransformTreeError
@@ -392,6 +393,22 @@ def test_the_sample_count_is_capped_keeping_the_newest():
     assert many.time_range('a', 'b') == (950.0, 999.0)
 
 
+def test_the_frame_count_is_capped():
+    tree = TransformTree(max_frames=4)
+    tree.set_transform('a', 'b', np.eye(3), [0.0, 0.0, 0.0], 0.0)
+    tree.set_transform('b', 'c', np.eye(3), [0.0, 0.0, 0.0], 0.0, static=True)
+    with pytest.raises(TransformTreeError, match='max_frames = 4') as excinfo:
+        tree.set_transform('x', 'y', np.eye(3), [0.0, 0.0, 0.0], 0.0)  # two more: 5
+    assert excinfo.value.reason == 'too_many_frames'
+    assert tree.frames == ['a', 'b', 'c']
+    tree.set_transform('c', 'd', np.eye(3), [0.0, 0.0, 0.0], 0.0)  # the fourth
+    tree.set_transform('a', 'c', np.eye(3), [0.0, 0.0, 0.0], 1.0)  # re-parented: no new frame
+    with pytest.raises(TransformTreeError, match='too_many_frames|max_frames'):
+        tree.set_transform('d', 'e', np.eye(3), [0.0, 0.0, 0.0], 0.0)
+    with pytest.raises(RotationError, match='max_frames'):
+        TransformTree(max_frames=1)
+
+
 def test_samples_out_of_order_and_repeated_stamps():
     in_order, shuffled = TransformTree(), TransformTree()
     stamps = np.arange(0.0, 3.0, 0.1)
@@ -527,6 +544,5 @@ def test_the_example_of_doc_tf_md_prints_what_the_page_shows(capsys):
     page = (Path(__file__).resolve().parents[1] / 'doc' / 'tf.md').read_text(encoding='utf-8')
     example = page[page.index('### Example'):]
     code = re.search(r'```python\n(.*?)```', example, re.S).group(1)
-    shown = re.search(r'```text\n(.*?)```', example, re.S).group(1)
     exec(compile(code, 'doc/tf.md', 'exec'), {})
-    assert capsys.readouterr().out == shown
+    assert_doc_output('tf-tree-example', capsys.readouterr().out)

@@ -1,0 +1,460 @@
+"""rotation_node following two frames of /tf, and `rotation_client tf`, over real DDS.
+
+A separate process (test/tf_publisher.py) publishes a chain of four frames, one edge static,
+the two dynamic edges stamped half a period apart (so the node interpolates one of them).
+The test side listens to the same /tf and /tf_static and computes what the node must
+publish on its own: 4×4 products of the transforms received (quaternions turned into
+matrices by scipy), each dynamic edge between its samples by scipy.linalg's
+T0·expm(s·logm(T0⁻¹T1)), the twist by logm. Each test remaps /tf and /tf_static into its
+own namespace (tf2's usual ``-r /tf:=...``), except the client's, which uses the real names
+in this run's own DDS domain.
+"""
+
+import math
+import os
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.linalg import expm, logm
+from scipy.spatial.transform import Rotation
+import yaml
+
+from conftest import console_script, REPO, RUN, script_env, TIMEOUT
+from doc_blocks import assert_doc_output
+
+tf2_msgs = pytest.importorskip('tf2_msgs.msg', reason='tf2_msgs is built by make test-venv')
+
+TF_TYPE_HASH = 'RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087'
+CHAIN = ['odom', 'base_link', 'camera', 'gimbal']
+TOL = 1e-9
+
+
+# ---------------------------------------------------------------------------------------
+# The publisher process and the independent reference
+
+
+@pytest.fixture
+def tf_publisher():
+    """Start test/tf_publisher.py processes; kill them after the test."""
+    started = []
+
+    def start(tf_topic, static_topic, *options):
+        args = [sys.executable, str(REPO / 'test' / 'tf_publisher.py'), tf_topic,
+                static_topic, '--lifetime', '120', *options]
+        started.append(subprocess.Popen(args, env=script_env(args),
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE))
+        return started[-1]
+
+    yield start
+    for process in started:
+        if process.poll() is None:
+            process.kill()
+        process.wait()
+
+
+def nanoseconds(stamp):
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def hom(transform):
+    """4×4 matrix of a geometry_msgs/Transform (scipy for the quaternion)."""
+    q, t = transform.rotation, transform.translation
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
+    T[:3, 3] = t.x, t.y, t.z
+    return T
+
+
+class Reference:
+    """Every transform heard on /tf and /tf_static; the pose of a frame at a stamp."""
+
+    def __init__(self, tester, tf_topic, static_topic):
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        self.samples = {}  # child: (parent, {stamp ns: 4×4})
+        self.static = {}  # child: (parent, 4×4)
+        reliable = dict(reliability=ReliabilityPolicy.RELIABLE, depth=1000)
+        tester.node.create_subscription(
+            tf2_msgs.TFMessage, tf_topic, lambda msg: self._add(msg, False),
+            QoSProfile(**reliable))
+        tester.node.create_subscription(
+            tf2_msgs.TFMessage, static_topic, lambda msg: self._add(msg, True),
+            QoSProfile(durability=DurabilityPolicy.TRANSIENT_LOCAL, **reliable))
+
+    def _add(self, msg, static):
+        for t in msg.transforms:
+            if not all(map(math.isfinite, (t.transform.translation.x, t.transform.translation.y,
+                                           t.transform.translation.z))):
+                continue
+            if static:
+                self.static[t.child_frame_id] = (t.header.frame_id, hom(t.transform))
+            else:
+                parent, samples = self.samples.setdefault(t.child_frame_id,
+                                                          (t.header.frame_id, {}))
+                samples[nanoseconds(t.header.stamp)] = hom(t.transform)
+
+    def edge(self, child, ns):
+        """(parent, T) of child's edge at stamp ns, or None when the samples around it are
+        not both here (T0·expm(s·logm(T0⁻¹T1)) between them)."""
+        if child in self.static:
+            return self.static[child]
+        parent, samples = self.samples[child]
+        if ns in samples:
+            return parent, samples[ns]
+        before = [s for s in samples if s < ns]
+        after = [s for s in samples if s > ns]
+        if not before or not after:
+            return None
+        s0, s1 = max(before), min(after)
+        T0, T1 = samples[s0], samples[s1]
+        return parent, T0 @ expm((ns - s0) / (s1 - s0) * np.real(logm(np.linalg.inv(T0) @ T1)))
+
+    def pose(self, reference, body, ns):
+        """T_reference_body at ns along CHAIN's order (reference an ancestor of body)."""
+        T, frame = np.eye(4), body
+        while frame != reference:
+            found = self.edge(frame, ns)
+            if found is None:
+                return None
+            frame, T_edge = found
+            T = T_edge @ T
+        return T
+
+
+def canonical(q):
+    """The quaternion (x, y, z, w) with w > 0."""
+    q = np.asarray(q, dtype=float)
+    return -q if q[3] < 0 else q
+
+
+def twist_of(T):
+    """(ω, v) of logm(T) = [[ω×, v], [0, 0]]: the exponential coordinates of T."""
+    L = np.real(logm(T))
+    return np.array([L[2, 1], L[0, 2], L[1, 0], *L[:3, 3]])
+
+
+def node_args(namespace, reference='odom', body='gimbal'):
+    return ['-p', f'tf_reference_frame:={reference}', '-p', f'tf_body_frame:={body}',
+            '-r', f'/tf:={namespace}/tf', '-r', f'/tf_static:={namespace}/tf_static']
+
+
+def describe(tester, node_name):
+    from std_srvs.srv import Trigger
+    response = tester.call(Trigger, f'{node_name}/describe', Trigger.Request())
+    return response, (yaml.safe_load(response.message) if response.success else None)
+
+
+# ---------------------------------------------------------------------------------------
+# The node
+
+
+def test_node_publishes_the_chain_at_each_new_common_time(node_process, tester, namespace,
+                                                           tf_publisher):
+    node = node_process(*node_args(namespace))
+    reference = Reference(tester, f'{namespace}/tf', f'{namespace}/tf_static')
+    tester.subscribe_outputs(node.name)
+    tester.wait_matched([f'{node.name}/quaternion'])
+    tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static')
+    outputs = {name: tester.wait_messages(f'{node.name}/{name}', 1, TIMEOUT * 4)
+               for name in ('quaternion', 'axis_angle', 'screw')}
+    tester.spin_until(lambda: len(outputs['quaternion']) >= 20, TIMEOUT * 4, '20 outputs')
+    tester.spin_until(lambda: len(outputs['screw']) >= 20, TIMEOUT, '20 screws')
+    checked = 0
+    gimbal_stamps = set(reference.samples['gimbal'][1])
+    by_stamp = {name: {nanoseconds(m.header.stamp): m for m in messages}
+                for name, messages in outputs.items()}
+    for ns, q_msg in by_stamp['quaternion'].items():
+        assert q_msg.header.frame_id == 'odom'
+        T = reference.pose('odom', 'gimbal', ns)
+        if T is None or ns not in by_stamp['axis_angle'] or ns not in by_stamp['screw']:
+            continue  # samples the test side had not heard yet (before discovery)
+        rotvec_msg, twist_msg = by_stamp['axis_angle'][ns], by_stamp['screw'][ns]
+        assert rotvec_msg.header == q_msg.header == twist_msg.header
+        # The common time is the gimbal's newest stamp (odom → base_link runs half a period
+        # ahead): base_link is interpolated there.
+        assert ns in gimbal_stamps
+        assert ns not in reference.samples['base_link'][1]
+        q = q_msg.quaternion
+        assert np.abs(canonical([q.x, q.y, q.z, q.w])
+                      - canonical(Rotation.from_matrix(T[:3, :3]).as_quat())).max() <= TOL
+        v = rotvec_msg.vector
+        assert np.abs([v.x, v.y, v.z] - Rotation.from_matrix(T[:3, :3]).as_rotvec()).max() \
+            <= TOL
+        w, u = twist_msg.twist.angular, twist_msg.twist.linear
+        assert np.abs([w.x, w.y, w.z, u.x, u.y, u.z] - twist_of(T)).max() <= TOL
+        checked += 1
+    assert checked >= 10
+    # Each common time once: no output repeats a stamp.
+    stamps = [nanoseconds(m.header.stamp) for m in outputs['quaternion']]
+    assert len(set(stamps)) == len(stamps) and stamps == sorted(stamps)
+
+
+def test_describe_names_source_frames_and_chain_and_the_type_hash_is_upstreams(
+        node_process, tester, namespace, tf_publisher):
+    from geometry_msgs.msg import QuaternionStamped
+    node = node_process(*node_args(namespace))
+    tester.subscribe(f'{node.name}/quaternion', QuaternionStamped)
+    tester.wait_matched()
+    tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static')
+    tester.wait_messages(f'{node.name}/quaternion', 1, TIMEOUT * 4)
+    response, data = describe(tester, node.name)
+    assert response.success
+    assert data['source'] == f'{namespace}/tf'
+    assert data['source_type'] == 'tf2_msgs/msg/TFMessage'
+    assert data['frame_id'] == 'odom'
+    assert data['tf'] == {'source': f'{namespace}/tf', 'reference_frame': 'odom',
+                          'body_frame': 'gimbal', 'chain': CHAIN}
+    # Every endpoint of /tf and /tf_static, the node's and the publisher's, has upstream
+    # Jazzy's type hash.
+    for topic in (f'{namespace}/tf', f'{namespace}/tf_static'):
+        tester.spin_until(
+            lambda: tester.node.get_publishers_info_by_topic(topic)
+            and any(e.node_name == 'rot_tools'
+                    for e in tester.node.get_subscriptions_info_by_topic(topic)),
+            what=f'the endpoints of {topic} in the graph')
+        for endpoints in (tester.node.get_subscriptions_info_by_topic(topic),
+                          tester.node.get_publishers_info_by_topic(topic)):
+            assert {str(e.topic_type_hash) for e in endpoints} == {TF_TYPE_HASH}
+            assert {e.topic_type for e in endpoints} == {'tf2_msgs/msg/TFMessage'}
+        subs = tester.node.get_subscriptions_info_by_topic(topic)
+        node_subs = [e for e in subs if e.node_name == 'rot_tools']
+        assert len(node_subs) == 1
+        durability = node_subs[0].qos_profile.durability.name
+        assert durability == ('TRANSIENT_LOCAL' if topic.endswith('static') else 'VOLATILE')
+        assert node_subs[0].qos_profile.reliability.name == 'RELIABLE'
+
+
+def test_refusals_are_counted_and_the_node_keeps_serving(node_process, tester, namespace,
+                                                         tf_publisher):
+    from rclpy.parameter import Parameter
+    from geometry_msgs.msg import QuaternionStamped
+    node = node_process(*node_args(namespace))
+    out = f'{node.name}/quaternion'
+    tester.subscribe(out, QuaternionStamped)
+    tester.wait_matched()
+    tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static', '--bad')
+
+    def counts():
+        response, data = describe(tester, node.name)
+        return data['refused'] if response.success else {}
+
+    tester.wait_messages(out, 1, TIMEOUT * 4)
+    # NaN on /tf and a loop: refused with their reasons, once a second.
+    tester.spin_until(lambda: counts().get('non_finite', 0) >= 1
+                      and counts().get('tf_loop', 0) >= 1, TIMEOUT * 2, 'non_finite, tf_loop')
+    cases = [('odom', 'nowhere', 'tf_unknown_frame'), ('rover', 'gimbal', 'tf_not_connected'),
+             # old_marker stopped 20 s ago, beyond the 10 s that base_link's edge keeps.
+             ('gimbal', 'old_marker', 'tf_extrapolation')]
+    for reference, body, reason in cases:
+        before = counts().get(reason, 0)
+        results = tester.set_parameters(node.name, [
+            Parameter('tf_reference_frame', value=reference),
+            Parameter('tf_body_frame', value=body)])
+        assert all(r.successful for r in results)
+        tester.spin_until(lambda: counts().get(reason, 0) > before, TIMEOUT * 2, reason)
+    # (The warnings of one reason are throttled to one a second: the one shown may be an
+    # earlier one, from the start-up while the tree filled.)
+    warnings = node.wait_for_stderr("following 'old_marker' in 'gimbal'")
+    assert re.search(r"\(tf_extrapolation\): lookup of '\w+' in '\w+' at t = \S+ s would "
+                     r"extrapolate [\d.]+ s before the oldest sample of the edge '\w+' → '\w+'",
+                     warnings)
+    assert "(tf_unknown_frame): frame '" in warnings
+    assert '(non_finite): transform' in warnings and '(tf_loop):' in warnings
+    # Back to a good pair: outputs flow again, in the new reference frame.
+    tester.set_parameters(node.name, [Parameter('tf_reference_frame', value='base_link'),
+                                      Parameter('tf_body_frame', value='gimbal')])
+    tester.spin_until(lambda: tester.received[out][-1].header.frame_id == 'base_link',
+                      TIMEOUT * 2, 'outputs in base_link')
+    # Off: nothing more is published.
+    tester.set_parameters(node.name, [Parameter('tf_body_frame', value='')])
+    tester.spin_for(0.3)
+    seen = len(tester.received[out])
+    tester.spin_for(0.5)
+    assert len(tester.received[out]) == seen
+
+
+def test_the_node_describe_shown_in_the_docs(node_process, tester, namespace, tf_publisher):
+    from geometry_msgs.msg import QuaternionStamped
+    node = node_process(*node_args(namespace, 'odom', 'gimbal'), '-p', 'angle_unit:=deg')
+    tester.subscribe(f'{node.name}/quaternion', QuaternionStamped)
+    tester.wait_matched()
+    tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static', '--still')
+    tester.wait_messages(f'{node.name}/quaternion', 1, TIMEOUT * 4)
+    response, _ = describe(tester, node.name)
+    shown = response.message.replace(namespace, '')
+    shown = shown[:shown.index('refused:')]
+    assert_doc_output('tf-node-describe', shown)
+
+
+# ---------------------------------------------------------------------------------------
+# rotation_client tf
+
+
+def run_client(*args, timeout=60):
+    command = console_script('rotation_client', 'rot_tools.rotation_client') + list(args)
+    return subprocess.run(command, env=script_env(command), capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_client_tf_once_against_the_reference(tester, tf_publisher):
+    # The real /tf and /tf_static names, in this run's own DDS domain.
+    reference = Reference(tester, '/tf', '/tf_static')
+    tf_publisher('/tf', '/tf_static')
+    tester.spin_until(lambda: len(reference.samples.get('gimbal', (0, {}))[1]) >= 3
+                      and 'camera' in reference.static, TIMEOUT * 4, 'the TF chain')
+    result = run_client('tf', 'odom', 'gimbal', '--once', '--timeout', '20')
+    assert result.returncode == 0, result.stderr
+    report = yaml.safe_load(result.stdout)
+    assert report['reference_frame'] == 'odom' and report['body_frame'] == 'gimbal'
+    assert report['chain'] == CHAIN
+    ns = report['stamp']['sec'] * 1_000_000_000 + report['stamp']['nanosec']
+    # The test side catches up with the samples around the client's stamp.
+    tester.spin_until(lambda: reference.pose('odom', 'gimbal', ns) is not None,
+                      TIMEOUT * 2, "the samples around the client's stamp")
+    T = reference.pose('odom', 'gimbal', ns)
+    assert np.abs(np.array(report['matrix']) - T[:3, :3]).max() <= TOL
+    assert np.abs(np.array(report['translation']) - T[:3, 3]).max() <= TOL
+    q = report['quaternion']
+    assert np.abs(canonical([q['x'], q['y'], q['z'], q['w']])
+                  - canonical(Rotation.from_matrix(T[:3, :3]).as_quat())).max() <= TOL
+
+
+def test_client_tf_prints_once_a_second_in_the_reference_frame(tester, namespace,
+                                                               tf_publisher):
+    tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static')
+    command = console_script('rotation_client', 'rot_tools.rotation_client') + [
+        'tf', 'base_link', 'gimbal', '--deg', '--timeout', '20', '--ros-args',
+        '-r', f'/tf:={namespace}/tf', '-r', f'/tf_static:={namespace}/tf_static']
+    process = subprocess.Popen(command, env=script_env(command), stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    try:
+        documents = []
+        for line in process.stdout:
+            if line == '---\n':
+                documents.append([])
+            documents[-1].append(line)
+            if len(documents) == 3:
+                break
+    finally:
+        process.terminate()
+        process.wait(timeout=10)
+    reports = [yaml.safe_load(''.join(d)) for d in documents[:2]]
+    assert [r['chain'] for r in reports] == [CHAIN[1:]] * 2
+    assert all(r['euler']['unit'] == 'deg' for r in reports)
+    stamps = [r['stamp']['sec'] + 1e-9 * r['stamp']['nanosec'] for r in reports]
+    assert 0.5 < stamps[1] - stamps[0] < 2.0  # once a second, each the latest
+
+
+@pytest.mark.parametrize('frames, shown', [
+    (['odom', 'nowhere'], "frame 'nowhere' did not appear on /tf or /tf_static within 5 s"),
+    (['rover', 'gimbal'], "no transform of 'gimbal' in 'rover' within 5 s: frames 'rover' "
+                          "and 'gimbal' are not connected")])
+def test_client_tf_without_the_frames_is_one_line_and_exit_1(tester, tf_publisher, frames,
+                                                             shown):
+    reference = Reference(tester, '/tf', '/tf_static')
+    tf_publisher('/tf', '/tf_static')
+    tester.spin_until(lambda: 'rover' in reference.static and reference.samples,
+                      TIMEOUT * 4, 'the TF trees')
+    result = run_client('tf', *frames)  # the default --timeout: 5 s
+    assert result.returncode == 1
+    assert result.stdout == ''
+    assert result.stderr.startswith(f'rotation_client: {shown}')
+    assert result.stderr.count('\n') == 1
+    if frames[1] == 'nowhere':
+        assert_doc_output('tf-client-missing', '$ rotation_client tf odom nowhere\n'
+                          + result.stderr + '$ echo $?\n1\n')
+
+
+def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
+    tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static', '--still')
+    result = run_client('tf', 'odom', 'gimbal', '--once', '--deg', '--timeout', '20',
+                        '--ros-args', '-r', f'/tf:={namespace}/tf',
+                        '-r', f'/tf_static:={namespace}/tf_static')
+    assert result.returncode == 0, result.stderr
+    assert_doc_output('tf-client-once', '$ rotation_client tf odom gimbal --once --deg\n'
+                      + result.stdout)
+    assert os.environ['ROS_DOMAIN_ID']  # the run's own domain (conftest)
+
+
+# ---------------------------------------------------------------------------------------
+# The follower in-process: each refusal's reason, stamps to the nanosecond
+
+
+def test_follower_refusals_and_stamps(ros_context):
+    import rclpy
+    from geometry_msgs.msg import TransformStamped
+    from rot_tools.tf_input import TfFollower
+    node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
+    got, refused = [], []
+    follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a),
+                          max_frames=4)
+    try:
+        def transform(parent, child, x=0.0, q=(0.0, 0.0, 0.0, 1.0), sec=1_700_000_000,
+                      nanosec=123_456_789):
+            msg = TransformStamped()
+            msg.header.frame_id, msg.child_frame_id = parent, child
+            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            msg.transform.translation.x = x
+            r = msg.transform.rotation
+            r.x, r.y, r.z, r.w = q
+            return msg
+
+        assert follower.add(transform('a', 'b', 1.0), False, '/tf')
+        assert follower.add(transform('b', 'e'), True, '/tf_static')  # a, b, e: 3 of 4
+        assert follower.add(transform('b', 'c', q=(0.0, 0.0, 1.0, 1.0)), True, '/tf_static') \
+            is False  # |q| = √2: not a unit quaternion
+        for msg, reason in [(transform('a', ''), 'tf_bad_frame'),
+                            (transform('', 'b'), 'tf_bad_frame'),
+                            (transform('a', 'x', math.nan), 'non_finite'),
+                            (transform('a', 'x', q=(0.0, 0.0, 0.0, 0.0)), 'zero_quaternion'),
+                            (transform('b', 'a'), 'tf_loop'),
+                            (transform('c', 'd'), 'tf_too_many_frames')]:
+            refused.clear()
+            assert follower.add(msg, False, '/tf') is False
+            assert [r[1] for r in refused] == [reason]
+        follower.follow('a', 'b')
+        assert len(got) == 1
+        header, R, b = got[0]
+        assert header.frame_id == 'a'
+        assert (header.stamp.sec, header.stamp.nanosec) == (1_700_000_000, 123_456_789)
+        assert np.array_equal(R, np.eye(3)) and np.array_equal(b, [1.0, 0.0, 0.0])
+        follower.update()  # no new common time: nothing more
+        assert len(got) == 1
+        follower.add(transform('a', 'b', 2.0, nanosec=123_456_790), False, '/tf')
+        follower.update()
+        assert len(got) == 2 and got[1][0].stamp.nanosec == 123_456_790
+        # Every stamp within days of the first keeps its nanoseconds through the tree's floats.
+        from builtin_interfaces.msg import Time
+        for sec in (1_700_000_000, 1_700_000_000 - 3600, 1_700_000_000 + 864_000):
+            for nanosec in [*range(0, 1_000_000_000, 7_777_777), 999_999_999]:
+                back = follower.time_msg(follower.seconds(Time(sec=sec, nanosec=nanosec)))
+                assert (back.sec, back.nanosec) == (sec, nanosec)
+        refused.clear()
+        follower.follow('a', 'nowhere')
+        assert [r[1] for r in refused] == ['tf_unknown_frame']
+        assert follower.describe()['chain'].startswith("none: frame 'nowhere' is unknown")
+    finally:
+        follower.follow('', '')
+        node.destroy_node()
+
+
+def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
+    # A tf2_msgs that cannot be imported, first on the path: the other inputs would still
+    # run, but following frames is refused at start-up (exit 2) and the client exits 1.
+    fake = tmp_path / 'tf2_msgs'
+    fake.mkdir()
+    (fake / '__init__.py').write_text("raise ImportError('no tf2_msgs here')\n")
+    for command, status in [
+            (console_script('rotation_node', 'rot_tools.rotation_node')
+             + ['--ros-args', '-p', 'tf_reference_frame:=odom', '-p', 'tf_body_frame:=a'], 2),
+            (console_script('rotation_client', 'rot_tools.rotation_client')
+             + ['tf', 'odom', 'a'], 1)]:
+        env = script_env(command)
+        env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(tmp_path),
+                                                          env.get('PYTHONPATH')]))
+        result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=60)
+        assert result.returncode == status
+        assert result.stderr.count('\n') == 1
+        assert 'tf2_msgs is not importable (no tf2_msgs here): run make' in result.stderr
