@@ -208,8 +208,11 @@ def run_path_without_node(n, positions, quaternions, why):
 
 
 def _summary(label, times, cpus):
-    """Figures of one run: wall clock per call, and this thread's CPU time per call (what the
-    call itself cost: a pause while another process had the core is not in it)."""
+    """Summarise one run: wall clock per call, and this thread's CPU time per call.
+
+    The CPU time is what the call itself cost: a pause while another process had the core
+    is not in it.
+    """
     ms = 1e-6
     return {'label': label, 'first_ms': times[0] * ms, 'median_ms': statistics.median(times) * ms,
             'worst_ms': max(times) * ms, 'worst_at': times.index(max(times)),
@@ -256,7 +259,7 @@ def main(argv=None):
                      'yes' if r['worst_cpu_ms'] <= GOAL_MS else 'NO'])
     benchlib.print_table(
         f'First {args.calls} calls of each public one-item function, each in a fresh process '
-        '(µs; import = looking the function up, ms; worst CPU = the call\'s own CPU time, '
+        "(µs; import = looking the function up, ms; worst CPU = the call's own CPU time, "
         'without pauses while another process had the core)',
         ['function', 'import ms', 'first µs', 'median µs', 'worst µs', 'worst CPU µs (call)',
          f'≤ {GOAL_MS:g} ms?'], rows)

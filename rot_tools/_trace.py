@@ -390,7 +390,7 @@ def function_source(name, kernel, floats, tails, outputs, packers):
     return '\n'.join(lines) + '\n'
 
 
-PRELUDE = '''\
+PRELUDE = """\
 import math as _math
 from struct import Struct as _Struct
 
@@ -401,7 +401,7 @@ _f64, _b1 = _np.dtype(_np.float64), _np.dtype(_np.bool_)
 _float, _float64, _bool = float, _np.float64, _np.bool_
 _inf, _nan = _math.inf, _math.nan
 _True, _False = _np.True_, _np.False_
-'''
+"""
 """The names every generated function may use, besides _op_* and _pack_*."""
 
 

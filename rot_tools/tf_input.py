@@ -23,8 +23,8 @@ so that every stamp within days of it keeps its nanoseconds through the float an
 (seconds since 1970 would lose up to a hundred).
 """
 
-from types import SimpleNamespace
 import time
+from types import SimpleNamespace
 
 from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -80,6 +80,7 @@ def tf2_msgs_missing():
         return (f'tf2_msgs is not importable ({exc}): run make in the rot_tools checkout, '
                 'which builds it into .venv, or source a ROS 2 Jazzy install')
     return ''
+
 
 DEFAULT_QUATERNION_TOLERANCE = 1e-3
 """|‖q‖ − 1| accepted when no node parameter says otherwise (rotation_client tf)."""
@@ -187,7 +188,8 @@ class TfFollower:
 
     def lookup(self):
         """(header, R, b) of body in reference at the latest common time, or
-        TransformLookupError."""
+        TransformLookupError.
+        """
         R, b, stamp = self.tree.lookup(self.reference, self.body)
         return Header(frame_id=self.reference, stamp=self.time_msg(stamp)), R, b
 

@@ -247,7 +247,8 @@ class _Edge:
 
     def at_one(self, t, child, query):
         """(R (3, 3), b (3,)) of the edge at one time t (a float): the per-message path,
-        through the one-item functions (a batch of one costs several times more)."""
+        through the one-item functions (a batch of one costs several times more).
+        """
         if self.static:
             return self.R[self.start], self.b[self.start]
         stamps = self.stamps[self.start:self.end]
@@ -407,7 +408,8 @@ class TransformTree:
 
     def _path(self, reference, body):
         """(up, down): the frames from reference and from body up to (not including) their
-        common ancestor."""
+        common ancestor.
+        """
         self._require_known(reference)
         self._require_known(body)
         ancestors = {}
@@ -435,7 +437,8 @@ class TransformTree:
 
     def chain(self, reference, body):
         """The frames from ``reference`` to ``body`` through their common ancestor, both ends
-        included (['odom', 'base_link', 'camera']; [frame] for a frame in itself)."""
+        included (['odom', 'base_link', 'camera']; [frame] for a frame in itself).
+        """
         with self._lock:
             up, down = self._path(reference, body)
             common = self._edges[up[-1]].parent if up else reference
@@ -443,7 +446,8 @@ class TransformTree:
 
     def time_range(self, reference, body):
         """(first, last): the times at which the chain can be looked up, every dynamic edge
-        having data; (-inf, inf) for a chain of static edges only."""
+        having data; (-inf, inf) for a chain of static edges only.
+        """
         with self._lock:
             up, down = self._path(reference, body)
             dynamic = [e for e in map(self._edges.get, up + down) if not e.static]
@@ -511,7 +515,8 @@ class TransformTree:
 
     def _compose(self, frames, t, query):
         """T_common_x of the first frame x of ``frames`` (x's chain up to the common ancestor)
-        at times t (n,): E(x_k)···E(x); the identity for no frames."""
+        at times t (n,): E(x_k)···E(x); the identity for no frames.
+        """
         R = np.broadcast_to(_IDENTITY, t.shape + (3, 3))
         b = np.broadcast_to(_ZERO, t.shape + (3,))
         for frame in frames:  # from x up: T ← E(y)·T

@@ -126,8 +126,11 @@ def _bits(x):
 
 @pytest.fixture
 def engine(monkeypatch):
-    """engine('floats'): one-item calls run the kernels themselves; engine('generated'): as
-    rot_tools runs them, through rot_tools/_generated.py."""
+    """Switch one-item calls between the kernels themselves and the generated code.
+
+    engine('floats'): the kernels on Python floats; engine('generated'): as rot_tools runs
+    them, through rot_tools/_generated.py.
+    """
     def use(name):
         monkeypatch.undo()
         monkeypatch.setattr(_backend, '_CODE_OF', {})  # (forget the functions found so far)
@@ -250,7 +253,7 @@ def test_a_kernel_missing_from_the_generated_module_is_noticed(monkeypatch, fall
 def test_no_compilation_or_tracing_happens_at_call_time():
     # A fresh process: import rot_tools, then forbid compile and exec, then make the first
     # call of every ordinary call (the node's path included). The tracer is never imported.
-    script = textwrap.dedent('''
+    script = textwrap.dedent("""
         import builtins, sys
         import numpy as np
         import rot_tools as rt
@@ -267,7 +270,7 @@ def test_no_compilation_or_tracing_happens_at_call_time():
         assert 'rot_tools._trace' not in sys.modules
         assert not _backend.FALLBACKS, dict(_backend.FALLBACKS)
         print('ok', len(calls))
-    ''')
+    """)
     done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                           timeout=120, cwd=REPO)
     assert done.returncode == 0, done.stderr
