@@ -13,7 +13,7 @@ import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
 
-from rot_tools import rotation_node
+from rot_tools import rotation_node, runtime
 from rot_tools.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
 
 
@@ -62,7 +62,7 @@ class Service:
 @pytest.fixture
 def service(ros_context, tester, namespace):
     node = RotationNode(context=ros_context, namespace=namespace)
-    rotation_node.guard_callbacks(node)  # as rotation_node's spin() runs it
+    runtime.guard_callbacks(node)  # as the runtime's spin() runs it
     yield Service(tester, node)
     tester.remove_node(node)
     node.destroy_node()
