@@ -1,4 +1,5 @@
-"""The engine: kernels run by rot_tools._backend.apply, and their generated one-item code.
+"""
+The engine: kernels run by rot_tools._backend.apply, and their generated one-item code.
 
 The generated function of a kernel (rot_tools/_generated.py) must give what the kernel
 gives on Python floats, bit for bit (rescaled tiny/huge vectors, the near-π axis and gimbal
@@ -102,7 +103,7 @@ def _calls():
 
 
 def _run(call):
-    """The call's result, or the type and text of the error it raised."""
+    """Return the call's result, or the type and text of the error it raised."""
     try:
         return call()
     except Exception as exc:  # compared below: the same error from both engines
@@ -126,8 +127,12 @@ def _bits(x):
 
 @pytest.fixture
 def engine(monkeypatch):
-    """engine('floats'): one-item calls run the kernels themselves; engine('generated'): as
-    rot_tools runs them, through rot_tools/_generated.py."""
+    """
+    Run one-item calls on an engine.
+
+    engine('floats'): one-item calls run the kernels themselves; engine('generated'): as
+    rot_tools runs them, through rot_tools/_generated.py.
+    """
     def use(name):
         monkeypatch.undo()
         monkeypatch.setattr(_backend, '_CODE_OF', {})  # (forget the functions found so far)
@@ -138,7 +143,7 @@ def engine(monkeypatch):
 
 @pytest.fixture
 def fallbacks():
-    """The FALLBACKS counter, emptied: what ran on the kernels themselves from now on."""
+    """Return the FALLBACKS counter, emptied: what ran on the kernels themselves from now on."""
     _backend.FALLBACKS.clear()
     yield _backend.FALLBACKS
     _backend.FALLBACKS.clear()
@@ -176,7 +181,7 @@ NO_KERNEL = {'rot_x', 'rot_y', 'rot_z', 'skew', 'nearest_rotation', 'mean_rotati
 
 
 def _ordinary_items(n=60):
-    """n random rotations (every angle, both sides of π/2), translations, Euler angles."""
+    """Return n random rotations (every angle, both sides of π/2), translations, angles."""
     rng = np.random.default_rng(5)
     R = rt.random_rotations(n, rng=rng)
     b = rng.uniform(-3.0, 3.0, (n, 3))
@@ -250,7 +255,7 @@ def test_a_kernel_missing_from_the_generated_module_is_noticed(monkeypatch, fall
 def test_no_compilation_or_tracing_happens_at_call_time():
     # A fresh process: import rot_tools, then forbid compile and exec, then make the first
     # call of every ordinary call (the node's path included). The tracer is never imported.
-    script = textwrap.dedent('''
+    script = textwrap.dedent("""
         import builtins, sys
         import numpy as np
         import rot_tools as rt
@@ -267,7 +272,7 @@ def test_no_compilation_or_tracing_happens_at_call_time():
         assert 'rot_tools._trace' not in sys.modules
         assert not _backend.FALLBACKS, dict(_backend.FALLBACKS)
         print('ok', len(calls))
-    ''')
+    """)
     done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                           timeout=120, cwd=REPO)
     assert done.returncode == 0, done.stderr
@@ -378,7 +383,7 @@ def _outcome(call, m, v, batch=False):
 
 
 def _same(one, batch):
-    """True when the batch-of-one result is the one-item result (NaN = NaN, ±inf exact)."""
+    """Tell whether the batch-of-one result is the one-item result (NaN = NaN)."""
     if isinstance(one, tuple) and one and one[0] is rt.RotationError:
         return batch == one
     if isinstance(one, tuple) and not all(type(x) is float for x in one):
@@ -497,7 +502,7 @@ def test_outputs_are_fresh_arrays_and_scalars_of_the_declared_types():
 # -- the tracer itself ----------------------------------------------------------------------
 
 def _compile(kernel, tails, outputs):
-    """kernel traced and compiled, called on plain floats (one vector input per tail)."""
+    """Return the kernel traced and compiled, called on plain floats."""
     single = compile_kernel(kernel, _backend.FLOATS, tails, outputs)
 
     def call(*entries):
