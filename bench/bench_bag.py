@@ -15,13 +15,17 @@ taken, as every benchmark here does:
   position, quaternion, roll, pitch, yaw;
 - (b) rosbags' own read-and-deserialise loop, nothing else.
 
-Goals: rot-tools ≤ 0.2 × (a) and ≤ 1.5 × (b). Prints the times and the two ratios.
+Goals: rot-tools ≤ 0.2 × (a) and ≤ 1.5 × (b). Prints each side's wall time and CPU time
+(user + system of its process: on a machine shared with other work the wall time of a
+minutes-long run depends on what else ran meanwhile, its CPU time much less) and the two
+ratios of each.
 
     .venv/bin/python bench/bench_bag.py [--messages 1000000] [--storage sqlite3|mcap]
 """
 
 import argparse
 from pathlib import Path
+import resource
 import shutil
 import statistics
 import struct
@@ -103,22 +107,27 @@ def write_bag(dst, count, storage):
 
 
 def timed(cmd):
+    """(wall seconds, CPU seconds: user + system) of one run of cmd."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run(cmd, capture_output=True, text=True)
-    seconds = time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode:
         sys.exit(f'{cmd[:3]} failed: {done.stderr[-2000:]}')
-    return seconds
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu
 
 
 def interleaved(commands, repeat):
-    """{name: median seconds} of the commands, run in a rotating order ``repeat`` times."""
+    """{name: (median wall s, median CPU s)} of the commands, in a rotating order."""
     names = list(commands)
     runs = {name: [] for name in names}
     for k in range(repeat):
         for name in names[k % len(names):] + names[:k % len(names)]:
             runs[name].append(timed(commands[name]))
-    return {name: statistics.median(times) for name, times in runs.items()}
+    return {name: (statistics.median(w for w, _ in times), statistics.median(c for _, c in times))
+            for name, times in runs.items()}
 
 
 def main():
@@ -144,14 +153,17 @@ def main():
             'ours': [str(script), 'bag', str(bag), '--csv', str(tmp / 'ours.csv')],
             'a': [sys.executable, str(tmp / 'a.py'), str(bag), str(tmp / 'a.csv')],
             'b': [sys.executable, str(tmp / 'b.py'), str(bag)]}, args.repeat)
-        ours, a, b = times['ours'], times['a'], times['b']
         rows = sum(1 for _ in open(tmp / 'ours.csv')) - 1
-        print(f'rot-tools bag --csv: {ours:7.2f} s ({rows} rows, '
-              f'{ours / n * 1e6:.2f} µs/message)')
-        print(f'(a) rosbags + scipy per message + csv: {a:7.2f} s ({a / n * 1e6:.2f} µs/message)')
-        print(f'(b) rosbags read + deserialise:        {b:7.2f} s ({b / n * 1e6:.2f} µs/message)')
-        print(f'ratio to (a): {ours / a:.3f} (goal <= 0.2)   ratio to (b): {ours / b:.3f} '
-              '(goal <= 1.5)')
+        labels = {'ours': f'rot-tools bag --csv ({rows} rows)',
+                  'a': '(a) rosbags + scipy per message + csv',
+                  'b': '(b) rosbags read + deserialise'}
+        for name, (wall, cpu) in times.items():
+            print(f'{labels[name]:<42} wall {wall:7.2f} s   CPU {cpu:7.2f} s '
+                  f'({cpu / n * 1e6:.2f} µs/message)')
+        for k, what in enumerate(('wall', 'CPU')):
+            ours, a, b = (times[name][k] for name in ('ours', 'a', 'b'))
+            print(f'{what:>4}: ratio to (a) {ours / a:.3f} (goal <= 0.2), ratio to (b) '
+                  f'{ours / b:.3f} (goal <= 1.5)')
         shutil.rmtree(bag, ignore_errors=True)
 
 

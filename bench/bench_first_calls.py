@@ -210,10 +210,10 @@ def run_path_without_node(n, positions, quaternions, why):
 
 def _summary(label, times, cpus):
     """
-    Print the figures of one run.
+    Summarise one run: wall clock per call, and this thread's CPU time per call.
 
-    Figures of one run: wall clock per call, and this thread's CPU time per call (what the
-    call itself cost: a pause while another process had the core is not in it).
+    The CPU time is what the call itself cost: a pause while another process had the core
+    is not in it.
     """
     ms = 1e-6
     return {'label': label, 'first_ms': times[0] * ms, 'median_ms': statistics.median(times) * ms,

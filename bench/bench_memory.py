@@ -60,7 +60,8 @@ class Listener:
         self.screws = 0
         outputs = {'rotation_matrix': Float64MultiArray, 'quaternion': QuaternionStamped,
                    'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped,
-                   'screw': TwistStamped, 'screw_axis': Marker, 'markers': MarkerArray}
+                   'rpy': Vector3Stamped, 'screw': TwistStamped, 'screw_axis': Marker,
+                   'markers': MarkerArray}
         for name, msg_type in outputs.items():
             cb = self._count if name == 'screw' else (lambda data: None)
             self.node.create_subscription(msg_type, f'/{NODE}/{name}', cb, QoSProfile(depth=10),

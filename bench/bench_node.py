@@ -6,7 +6,7 @@ Processes (all started here, all on the loopback of one isolated DDS domain):
 - ``rotation_node`` by its console script, as a user starts it, twice: ``bench_rot_tools``
   with ``publish_markers:=false`` (the goals are measured on it) and
   ``bench_rot_tools_markers`` with the markers on;
-- ``bench/relay_node.py`` twice: the same five message outputs, types and QoS with constant
+- ``bench/relay_node.py`` twice: the same six message outputs, types and QoS with constant
   content and no math — rclpy's own messaging limit — ``bench_relay_default`` on rclpy's
   default SingleThreadedExecutor and ``bench_relay_node`` on the executor rotation_node
   uses (rot_tools.runtime.make_executor); each relay is started, spun and stopped as the
@@ -55,8 +55,8 @@ THROUGHPUT_GOAL_DEFAULT = 1.25  # node's sustained msg/s ≥ 1.25 × the default
 THROUGHPUT_GOAL_OWN = 0.95  # and ≥ 0.95 × the relay's on the node's own executor
 LATENCY_GOAL = 1.5  # node's p99 ≤ 1.5 × the relay's on the node's own executor
 LOSS_OK = 0.01  # a rate is sustained when at most 1 % of the inputs are lost
-OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw')
-"""The five message outputs every target publishes for every input."""
+OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
+"""The six message outputs every target publishes for every input."""
 MARKER_OUTPUTS = ('screw_axis', 'markers')
 """What rotation_node publishes besides, with publish_markers (at most 30 pictures a second)."""
 
@@ -167,7 +167,8 @@ class Measurer:
         self.node = rclpy.create_node('bench_node_measurer')
         types = {'rotation_matrix': Float64MultiArray, 'quaternion': QuaternionStamped,
                  'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped,
-                 'screw': TwistStamped, 'screw_axis': Marker, 'markers': MarkerArray}
+                 'rpy': Vector3Stamped, 'screw': TwistStamped, 'screw_axis': Marker,
+                 'markers': MarkerArray}
         qos = QoSProfile(depth=10)  # the outputs' QoS: reliable, keep last 10
         self.records = {t: [] for t in TARGETS}
         self.seen = {(t, o): 0 for t, target in TARGETS.items() for o in target.outputs}

@@ -24,7 +24,7 @@ answers within 1 s at p99 during it (an unanswered call counts as infinitely lat
 test: a script that prints what it measured.
 
 Run: ``.venv/bin/python bench/bench_overload.py [--seconds 60] [--after 10]
-[--executor node|events|single|multi] [--json PATH]``.
+[--executor node|events|single|multi] [--caller-heartbeat SECONDS] [--json PATH]``.
 """
 
 import argparse
@@ -46,6 +46,15 @@ GROWTH_GOAL_MB = 50.0
 RETURN_GOAL_MB = 20.0
 LATENCY_GOAL_S = 1.0
 SERVICES = ('describe', 'get_parameters', 'set_parameters')
+HEARTBEAT_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
+<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <data_writer profile_name="bench_overload_caller" is_default_profile="true">
+    <times><heartbeatPeriod><sec>{sec}</sec><nanosec>{nanosec}</nanosec></heartbeatPeriod>
+    </times>
+  </data_writer>
+</profiles>
+"""
+"""Fast DDS profile of the caller with --caller-heartbeat (the default period is 3 s)."""
 
 
 def rss_mb(pid):
@@ -84,8 +93,8 @@ def listen(node):
     listener = rclpy.create_node('bench_overload_listener')
     count = [0]
     outputs = {'rotation_matrix': Float64MultiArray, 'quaternion': QuaternionStamped,
-               'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped, 'screw': TwistStamped,
-               'screw_axis': Marker, 'markers': MarkerArray}
+               'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped, 'rpy': Vector3Stamped,
+               'screw': TwistStamped, 'screw_axis': Marker, 'markers': MarkerArray}
     for name, msg_type in outputs.items():
         def on_output(data, screw=name == 'screw'):
             if screw:
@@ -109,7 +118,7 @@ def listen(node):
 class Caller:
     """This process's service client of the node: one call at a time, bounded waits."""
 
-    def __init__(self, node, timeout):
+    def __init__(self, node, timeout, heartbeat=None, logdir=None):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
@@ -118,7 +127,13 @@ class Caller:
         from std_srvs.srv import Trigger
         self._rclpy = rclpy
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+        if heartbeat:  # this process's DDS writers (the requests) heartbeat more often
+            profile = Path(logdir, 'caller_profile.xml')
+            profile.write_text(HEARTBEAT_PROFILE.format(
+                sec=int(heartbeat), nanosec=int(round(heartbeat % 1 * 1e9))))
+            os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(profile)
         self.node = rclpy.create_node('bench_overload_caller')
+        os.environ.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)  # (not for the others)
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self.timeout = timeout
@@ -232,12 +247,12 @@ class Listener:
         self.log.close()
 
 
-def measure(seconds, after, executor, call_timeout, logdir):
+def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
     node_log = open(os.path.join(logdir, 'node.log'), 'w')
     node = subprocess.Popen(node_command(executor), stdout=node_log, stderr=subprocess.STDOUT)
     listener = flooder = caller = None
     try:
-        caller = Caller(NODE, call_timeout)
+        caller = Caller(NODE, call_timeout, heartbeat, logdir)
         listener = Listener(logdir)
         flooder = subprocess.Popen([sys.executable, str(BENCH / 'pose_flooder.py'),
                                     f'/{NODE}/pose'],
@@ -373,6 +388,9 @@ def main(argv=None):
     parser.add_argument('--executor', choices=('node', 'events', 'single', 'multi'),
                         help='run rotation_node on this executor (bench/node_on_executor.py) '
                         'instead of by its console script')
+    parser.add_argument('--caller-heartbeat', type=float, metavar='SECONDS',
+                        help="the calling process's DDS writers heartbeat this often (Fast DDS: "
+                        '3 s): a request the flooded node lost is sent again sooner')
     parser.add_argument('--listen', metavar='NODE', help=argparse.SUPPRESS)
     parser.add_argument('--json', metavar='PATH', help='also write the figures as JSON')
     args = parser.parse_args(argv)
@@ -386,7 +404,8 @@ def main(argv=None):
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as logdir:
-        m = measure(args.seconds, args.after, args.executor, args.call_timeout, logdir)
+        m = measure(args.seconds, args.after, args.executor, args.call_timeout, logdir,
+                    args.caller_heartbeat)
     print_results(m)
     benchlib.write_json(args.json, m)
     return 0

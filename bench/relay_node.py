@@ -2,9 +2,10 @@
 A bare rclpy relay: rotation_node's topics and QoS with constant content and no math.
 
 It subscribes ``~/pose`` (geometry_msgs/PoseStamped, sensor-data QoS: best effort) and, for
-every message, publishes rotation_node's five message outputs (reliable, depth 10):
+every message, publishes rotation_node's six message outputs (reliable, depth 10):
 ``~/rotation_matrix`` (Float64MultiArray), ``~/quaternion`` (QuaternionStamped),
-``~/axis_angle`` and ``~/euler_angles`` (Vector3Stamped) and ``~/screw`` (TwistStamped).
+``~/axis_angle``, ``~/euler_angles`` and ``~/rpy`` (Vector3Stamped) and ``~/screw``
+(TwistStamped).
 Their content is built once at start-up; each callback only copies the input's header into
 the stamped ones. So its throughput and latency are rclpy's own messaging limit on this
 machine, the baseline bench_node.py measures rotation_node against.
@@ -38,7 +39,7 @@ from std_srvs.srv import Trigger
 
 
 class RelayNode(Node):
-    """Pose in, rotation_node's five message outputs out, with precomputed content."""
+    """Pose in, rotation_node's six message outputs out, with precomputed content."""
 
     def __init__(self, node_name='relay', full_interface=False):
         super().__init__(node_name)
@@ -55,6 +56,7 @@ class RelayNode(Node):
         self._quaternion_pub = self.create_publisher(QuaternionStamped, '~/quaternion', qos)
         self._axis_angle_pub = self.create_publisher(Vector3Stamped, '~/axis_angle', qos)
         self._euler_pub = self.create_publisher(Vector3Stamped, '~/euler_angles', qos)
+        self._rpy_pub = self.create_publisher(Vector3Stamped, '~/rpy', qos)
         self._screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
         self._pose_sub = self.create_subscription(
             PoseStamped, '~/pose', self._on_pose, qos_profile_sensor_data)
@@ -69,6 +71,7 @@ class RelayNode(Node):
         self._quaternion.quaternion.z, self._quaternion.quaternion.w = 0.6, 0.8
         self._axis_angle = Vector3Stamped(vector=Vector3(x=0.1, y=0.2, z=0.3))
         self._euler = Vector3Stamped(vector=Vector3(x=0.3, y=0.2, z=0.1))
+        self._rpy = Vector3Stamped(vector=Vector3(x=0.1, y=0.2, z=0.3))
         self._screw = TwistStamped()
         self._screw.twist.angular = Vector3(x=0.1, y=0.2, z=0.3)
         self._screw.twist.linear = Vector3(x=1.0, y=2.0, z=3.0)
@@ -78,11 +81,13 @@ class RelayNode(Node):
         self._quaternion.header = header
         self._axis_angle.header = header
         self._euler.header = header
+        self._rpy.header = header
         self._screw.header = header
         self._matrix_pub.publish(self._matrix)
         self._quaternion_pub.publish(self._quaternion)
         self._axis_angle_pub.publish(self._axis_angle)
         self._euler_pub.publish(self._euler)
+        self._rpy_pub.publish(self._rpy)
         self._screw_pub.publish(self._screw)
 
 

@@ -39,7 +39,7 @@ import time
 from types import SimpleNamespace
 
 import numpy as np
-from rot_tools import bag_read, boundary
+from rot_tools import bag_read, boundary, csv_text
 from rot_tools.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
 from rot_tools.errors import RotationError
 from rot_tools.euler import matrix_to_euler
@@ -206,19 +206,43 @@ def _csv_quote(text):
     return out.getvalue()
 
 
-ROWS_PER_WRITE = 1 << 14
+ROWS_PER_CHUNK = 1024
+"""Rows made into text at a time (their arrays stay in the CPU's cache)."""
+
+
+def _number_text(value, precision):
+    """One number by the rule of rot_tools.csv_text, with Python's (correctly rounded) %f."""
+    if value != value:
+        return ''
+    digits = len('%d' % abs(value)) if abs(value) >= 1 else 0
+    text = '%.*f' % (max(0, precision - digits), value)
+    if '.' in text:
+        text = text.rstrip('0').rstrip('.')
+    return '0' if text in ('-0', '') else text
+
+
+def _binary_writer(out):
+    """Return a function writing bytes to the text stream ``out`` (through its buffer if any)."""
+    buffer = getattr(out, 'buffer', None)
+    if buffer is None:
+        return lambda data: out.write(data.decode('utf-8'))
+    out.flush()
+    return buffer.write
 
 
 def write_csv(out, topics, degrees, precision):
     """
     Write the rows of every topic (topic by topic, in the bag's order) to ``out``.
 
-    Numbers with ``precision`` significant digits (%g), the stamp exactly (sec.nanosec),
-    −0 as 0; ω empty on a topic's first row and where Δt ≤ 0.
+    Numbers rounded to ``precision`` significant digits and ``precision`` decimal places (the
+    rule of every number rot-tools prints), trailing zeros dropped, −0 as 0; the stamp
+    exactly (sec.nanosec); ω empty on a topic's first row and where Δt ≤ 0. The text is
+    made by rot_tools.csv_text for a chunk of rows at once (Python's formatting, one
+    number at a time, where its arithmetic would not be exact: precision > 12, |x| ≥ 1e15).
     """
     seq = next((t.seq for t in topics if t.seq), None)
     out.write(','.join(csv_header(seq)) + '\n')
-    number = f'%.{precision}g'
+    write = _binary_writer(out)
     for t in topics:
         if not len(t.R):
             continue
@@ -227,18 +251,21 @@ def write_csv(out, topics, degrees, precision):
             columns.append(_unit(t.seq_angles, degrees))
         columns += [_unit(t.rotvec, degrees), _unit(t.angle, degrees)[:, None],
                     _unit(t.omega, degrees)]
-        values = np.hstack(columns) + 0.0  # −0.0 → 0.0
-        k = values.shape[1]
-        prefix = _csv_quote(t.topic).replace('%', '%%')
-        frames = [_csv_quote(f) for f in t.columns.frame_ids]
-        fmt = f'{prefix},%d.%09d,%s,' + ','.join([number] * k) + '\n'
-        empty = ',nan,nan,nan\n'
-        for start in range(0, len(values), ROWS_PER_WRITE):
-            part = slice(start, start + ROWS_PER_WRITE)
-            rows = zip(t.sec[part].tolist(), t.nanosec[part].tolist(),
-                       [frames[i] for i in t.frame[part].tolist()], *values[part].T.tolist())
-            text = ''.join(map(fmt.__mod__, rows))
-            out.write(text.replace(empty, ',,,\n'))
+        values = np.hstack(columns)
+        topic = _csv_quote(t.topic).encode()
+        frames = [_csv_quote(f).encode() for f in t.columns.frame_ids]
+        fast = csv_text.numbers_fit(values, precision)
+        for start in range(0, len(values), ROWS_PER_CHUNK):
+            part = slice(start, start + ROWS_PER_CHUNK)
+            if fast:
+                write(csv_text.rows(topic, t.sec[part], t.nanosec[part], frames,
+                                    t.frame[part], values[part], precision))
+                continue
+            lines = [b'%s,%d.%09d,%s,%s\n' % (topic, sec, nsec, frames[f], ','.join(
+                _number_text(v, precision) for v in row).encode())
+                for sec, nsec, f, row in zip(t.sec[part].tolist(), t.nanosec[part].tolist(),
+                                             t.frame[part].tolist(), values[part].tolist())]
+            write(b''.join(lines))
 
 
 # ---------------------------------------------------------------------------------------

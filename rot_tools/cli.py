@@ -509,8 +509,9 @@ def _add_bag(sub):
     common.add_argument('--json', action='store_true', default=suppress,
                         help='print the summary as JSON instead of YAML')
     common.add_argument('--precision', type=_precision, default=suppress, metavar='N',
-                        help=f'N significant digits (default {DEFAULT_PRECISION}) of the '
-                        'summary and the CSV; CSV stamps are exact')
+                        help='round numbers to N significant digits and N decimal places '
+                        f'(default {DEFAULT_PRECISION}), in the summary and the CSV (whose '
+                        'stamps are exact)')
     common.add_argument('--tol', type=_tolerance, default=suppress, metavar='TOL',
                         help='largest ||q| − 1| of a recorded quaternion (default 0.001, '
                         "rotation_node's quaternion_tolerance); within it q is normalised")

@@ -39,19 +39,20 @@ class WaitSetExecutor(Executor):
     Why not rclpy's executors (bench/README.md has the figures):
 
     - ``rclpy.experimental.EventsExecutor`` queues one event per arriving message with no
-      bound. Under a flood beyond the node's pace the queue grew by ~160 MB a minute, stayed
-      at its size afterwards, and a service request waited behind the whole queue (up to
-      16 s; some never answered).
+      bound. Under a flood beyond the node's pace the queue grew by 140–160 MB a minute,
+      stayed at its size afterwards, and a service request waited behind the whole queue
+      (up to 16 s; some never answered).
     - The default SingleThreadedExecutor is fair and bounded — nothing waits outside the
       middleware's keep-last queues — but wraps every callback in a Task, rebuilds its wait
-      set in Python for each message, and waits on every entity: about 2 × the CPU per
+      set in Python for each message, and waits on every entity: up to 2 × the CPU per
       message.
 
     This one keeps the middleware's bound (keep-last 10 per input: a flood costs lost
     messages, never memory), answers a service within one burst per subscription, and
-    costs about what the EventsExecutor does per message under load. Single-threaded,
-    synchronous callbacks only: a node with clients, guard conditions or coroutine
-    callbacks is refused (rotation_node has none), and so is create_task.
+    costs 1.0–1.3 × the EventsExecutor's CPU per message (the most at one message per
+    wake-up). Single-threaded, plain-function callbacks only (a coroutine callback would
+    not run): a node with clients or guard conditions is refused (rotation_node has
+    none), and so is create_task.
     """
 
     def __init__(self, *, context=None, burst=BURST, event_period=EVENT_PERIOD):

@@ -393,18 +393,17 @@ def describe_data(response):
     """
     Return ~/describe's YAML document as data: at least ``refused`` {total, reason: n}.
 
-    The node writes YAML even before it has accepted an input (then ``success`` is false and
-    ``note`` says so). A node of an earlier version wrote one sentence instead, '... (3
-    input(s) refused: non_finite 3).', which gives {'note': sentence, 'refused': counts}.
+    The node writes one even before it has accepted an input (then ``success`` is false and
+    ``note`` says so). Anything else is not a rotation_node's report: Unreachable.
     """
     try:
         data = yaml.safe_load(response.message)
     except yaml.YAMLError:
         data = None
-    if not isinstance(data, dict) or 'refused' not in data:
-        tail = response.message.rpartition('refused')[2]
-        data = {'note': response.message, 'refused': {
-            reason: int(n) for reason, n in re.findall(r'([a-z_]+) (\d+)', tail)}}
+    if not (isinstance(data, dict) and isinstance(data.get('refused'), dict)):
+        text = ' '.join(response.message.split())
+        raise Unreachable(f'~/describe did not answer with a rotation_node report: '
+                          f'{text[:200]!r}')
     return data
 
 
@@ -570,10 +569,13 @@ class Client:
         if not self.spin_until(lambda: answers.matrix(R), self.timeout):
             raise Unreachable(f'no matching message on {self.topic("rotation_matrix")} '
                               f'within {self.timeout:g} s')
+        # Kept now: while the pictures are awaited, another publisher's inputs may push it
+        # out of the latest matrices.
+        matrix = answers.matrix(R)
         if pictures:
             self.spin_until(lambda: set(PICTURES) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
-        return stamp, dict(answer, rotation_matrix=answers.matrix(R))
+        return stamp, dict(answer, rotation_matrix=matrix)
 
 
 def _key(stamp):
@@ -748,7 +750,9 @@ def _screw_path_command(client, args):
     before = client.refusal_counts()
     plan = client.call(GetPlan, 'screw_path', request).plan
     if not plan.poses:
-        refused = client.refused(before, client.topic('screw_path'))
+        stamp = request.start.header.stamp
+        refused = client.refused(before, client.topic('screw_path'),
+                                 {(stamp.sec, stamp.nanosec)})
         raise Refused(f'node {client.target} refused the screw_path request: '
                       + (refused or 'an empty path'))
     return {'node': client.target, 'service': client.topic('screw_path'),

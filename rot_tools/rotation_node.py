@@ -54,7 +54,7 @@ from rot_tools.runtime import guard_callbacks, make_executor, serve, spin  # noq
 from rot_tools.runtime import SPIN_TIMEOUT  # noqa: F401
 from rot_tools.screw import screw_from_transform, screw_interpolate
 from sensor_msgs.msg import Imu
-from std_msgs.msg import Float64MultiArray
+from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -92,6 +92,10 @@ MAX_REFUSAL_TEXT = 400
 MIN_MARKER_SCALE = 1e-6
 """Smallest marker_scale (m): the arrows' shafts are 5 % of it, and RViz draws nothing of
 a zero width (5e-324 was accepted once)."""
+
+WARM_UP_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+WARM_UP_TRANSLATION = np.array([0.0, 0.0, 1.0])
+"""The screw motion drawn (and not published) at start-up: a quarter turn about z, 1 m up."""
 
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
@@ -303,6 +307,7 @@ class RotationNode(Node):
         self._picture_timer = self.create_timer(
             1.0 / MARKER_RATE, self._publish_picture,
             clock=Clock(clock_type=ClockType.STEADY_TIME), autostart=False)
+        self._warm_up_picture()
 
         # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
         # needs a tree between messages, two topics with their own QoS, and gives an output
@@ -522,6 +527,21 @@ class RotationNode(Node):
             header, picture.screw.point, picture.screw.direction, settings.marker_scale,
             self._axis_marker))
 
+    def _warm_up_picture(self):
+        """
+        Draw one picture and build its messages, publishing nothing.
+
+        The first drawing of a process pays for one-off work (NumPy's first calls, the type
+        support of the marker messages): ~10 ms, paid here at start-up instead of inside the
+        callback of the first input.
+        """
+        header = Header()
+        picture = drawing.picture(WARM_UP_ROTATION, WARM_UP_TRANSLATION, 1.0, False)
+        messages.picture_markers(header, picture)
+        messages.screw_axis_marker(header, picture.screw.point, picture.screw.direction, 1.0)
+        messages.delete_picture_markers(header)
+        messages.delete_marker(header, messages.SCREW_AXIS_NS, 0)
+
     def _delete_picture(self, header):
         """DELETE every marker of ~/markers and ~/screw_axis, in ``header``'s frame."""
         self._picture_shown = None
@@ -629,11 +649,13 @@ class RotationNode(Node):
                 raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
             plan = messages.path_msg(start.header, start, goal, Rs, bs)
         except messages.RefusedInput as exc:
-            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True)
+            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True,
+                         header=start.header)
             return response
         except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
             self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
-                         f'no screw motion from start to goal: {exc}', error=True)
+                         f'no screw motion from start to goal: {exc}', error=True,
+                         header=start.header)
             return response
         response.plan = plan
         return response

@@ -246,10 +246,10 @@ def make_executor(context=None):
 
     Chosen on measurement (bench/README.md, bench/bench_overload.py): under a flood beyond
     the node's pace rclpy's EventsExecutor queued an event per message without bound (RSS
-    +160 MB a minute, kept afterwards) and left service calls waiting behind the queue for
-    up to 16 s; rclpy's default executor is bounded and fair but costs ~2.4 × the CPU per
-    message. The WaitSetExecutor is bounded and fair (services first, at most a burst of
-    messages per subscription per wake-up) at about the EventsExecutor's cost.
+    +140–160 MB a minute, kept afterwards) and left service calls waiting behind the queue
+    for up to 16 s; rclpy's default executor is bounded and fair but costs up to 2 × the CPU
+    per message. The WaitSetExecutor is bounded and fair (services first, at most a burst of
+    messages per subscription per wake-up) at 1.0–1.3 × the EventsExecutor's cost.
     test_node_executor.py proves signals, services under a flood, floods of bad input and
     bounded memory on it.
     """

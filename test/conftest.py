@@ -37,7 +37,7 @@ os.environ.pop('ROS_STATIC_PEERS', None)
 RUN = f'rt{os.getpid()}_{secrets.token_hex(4)}'
 """This test run's token: the namespaces of its nodes start with /RUN."""
 
-OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'screw',
+OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw',
            'screw_axis', 'markers')
 """Published topics of rotation_node, relative to its name."""
 
@@ -205,7 +205,7 @@ class Tester:
         the kind rotation_node runs on (rotation_node.make_executor), so that every node
         test holds on it; both are spun in turn, in this thread.
         """
-        from rot_tools.rotation_node import make_executor
+        from rot_tools.runtime import make_executor
         if node.context is self.context:
             self.executors[0].add_node(node)
         else:
@@ -253,7 +253,7 @@ class Tester:
         from std_msgs.msg import Float64MultiArray
         from visualization_msgs.msg import Marker, MarkerArray
         types = (Float64MultiArray, QuaternionStamped, Vector3Stamped, Vector3Stamped,
-                 TwistStamped, Marker, MarkerArray)
+                 Vector3Stamped, TwistStamped, Marker, MarkerArray)
         for name, msg_type in zip(OUTPUTS, types):
             self.subscribe(f'{prefix}/{name}', msg_type)
 

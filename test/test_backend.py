@@ -128,10 +128,10 @@ def _bits(x):
 @pytest.fixture
 def engine(monkeypatch):
     """
-    Run one-item calls on an engine.
+    Switch one-item calls between the kernels themselves and the generated code.
 
-    engine('floats'): one-item calls run the kernels themselves; engine('generated'): as
-    rot_tools runs them, through rot_tools/_generated.py.
+    engine('floats'): the kernels on Python floats; engine('generated'): as rot_tools runs
+    them, through rot_tools/_generated.py.
     """
     def use(name):
         monkeypatch.undo()

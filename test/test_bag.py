@@ -178,7 +178,7 @@ def test_csv_rows_of_the_real_bag(capsys, reference):
         stamps = [f'{s}.{n:09d}' for s, n in zip(ref['sec'], ref['nsec'])]
         assert [r['stamp'] for r in mine] == stamps
         assert [r['frame_id'] for r in mine] == ref['frame']
-        np.testing.assert_allclose(col(mine, 'x', 'y', 'z'), ref['p'], rtol=1e-11, atol=0)
+        np.testing.assert_allclose(col(mine, 'x', 'y', 'z'), ref['p'], rtol=1e-11, atol=1e-12)
         rot = Rotation.from_quat(ref['q'])
         q = col(mine, 'qx', 'qy', 'qz', 'qw')
         np.testing.assert_allclose(q, canonical(rot.as_quat()), rtol=0, atol=1e-11)
@@ -346,3 +346,14 @@ def test_frame_ids_of_fast_and_decoded_chunks_are_one_list(monkeypatch, capsys):
     assert len(calls) > 4
     assert s['topics'][IMU]['frame_ids'] == ['base_link']
     assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']
+
+
+def test_csv_beyond_twelve_digits_uses_python_formatting(capsys):
+    fast = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU)
+    slow = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '15')
+    assert len(fast) == len(slow) == 3061
+    names = [n for n in bag.csv_header(None) if n not in ('topic', 'stamp', 'frame_id')]
+    assert [r['stamp'] for r in fast] == [r['stamp'] for r in slow]
+    np.testing.assert_allclose(col(slow[1:], *names), col(fast[1:], *names), rtol=1e-11,
+                               atol=1e-12)
+    assert max(len(r['roll']) for r in slow) > max(len(r['roll']) for r in fast)

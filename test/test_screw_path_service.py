@@ -90,6 +90,7 @@ def test_huge_positions_are_a_counted_refusal(service, tolerance):
     caller got an empty path and nothing was counted.
     """
     start = pose_stamped(p=(-1e308, 0, 0))
+    start.header.stamp.sec, start.header.stamp.nanosec = 42, 7
     goal = pose_stamped(p=(1e308, 0, 0))
     assert service.call(start, goal, tolerance).poses == []
     (error,) = service.errors(1)
@@ -97,6 +98,10 @@ def test_huge_positions_are_a_counted_refusal(service, tolerance):
                           'goal.position − start.position overflows float64 '
                           '(beyond ±1.8e308)'), error
     assert refused(service.node) == {'total': 1, 'not_decomposable': 1}
+    # ~/describe's data names the request (service, start's stamp) and says why.
+    assert service.node.last_refusals() == {'not_decomposable': {
+        'source': service.name, 'stamp': {'sec': 42, 'nanosec': 7},
+        'message': error.partition('(not_decomposable): ')[2]}}
     # The node keeps serving.
     path = service.call(pose_stamped(), pose_stamped(p=(1, 0, 0)), 0.5)
     assert [p.pose.position.x for p in path.poses] == [0.0, 0.5, 1.0]
