@@ -6,8 +6,8 @@ message order (x, y, z, w): quaternion_to_matrix and its twin matrix_to_quaterni
 rest of rot_tools never uses them.
 
 Conventions used throughout rot_tools: column vectors, active rotations, ``p' = R p``;
-a rotation matrix R is 3x3 orthogonal with det R = +1 (Jia, Rotation in the Space, Theorem 1). Every function
-takes one item or a batch with any leading shape ``...``.
+a rotation matrix R is 3x3 orthogonal with det R = +1 (Jia, Rotation in the Space,
+Theorem 1). Every function takes one item or a batch with any leading shape ``...``.
 
 Functions that take R validate it as validate_rotation does, unless called with
 ``check=False``: for callers that built R as a rotation themselves (the node, the report),

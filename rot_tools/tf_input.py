@@ -119,7 +119,7 @@ class TfFollower:
 
     @property
     def following(self):
-        """True when both frames are set."""
+        """Tell whether both frames are set."""
         return bool(self.reference and self.body)
 
     def set_quaternion_tolerance(self, tolerance):
