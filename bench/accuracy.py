@@ -1,4 +1,5 @@
-"""Measured worst-case errors of rot_tools' round trips and cross-checks (quoted in README).
+"""
+Measured worst-case errors of rot_tools' round trips and cross-checks (quoted in README).
 
 Run: .venv/bin/python bench/accuracy.py   (numpy only; about 15 s)
 
@@ -10,7 +11,6 @@ plain-NumPy 4×4 products and closed forms.
 """
 
 import numpy as np
-
 import rot_tools as rt
 
 RNG = np.random.default_rng(20261121)
@@ -117,7 +117,7 @@ def homogeneous(R, b):
 
 
 def frames_and_fitting(R, b, axes, angles, Ra):
-    """The second-round functions: rigid motions, frames, comparing, fitting, quaternions."""
+    """Measure the second-round functions: rigid motions, frames, fitting, quaternions."""
     n = len(R)
     scale = 1.0 + np.linalg.norm(b, axis=1)
     p = RNG.normal(size=(n, 3)) * 10.0 ** RNG.uniform(-3, 3, (n, 1))

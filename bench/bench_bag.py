@@ -1,4 +1,5 @@
-"""The whole `rot-tools bag --csv` on a bag of >= 1e6 orientation messages, against two scripts.
+"""
+The whole `rot-tools bag --csv` on a bag of >= 1e6 orientation messages, against two scripts.
 
 The bag is written here from the real recording (../shared/data/jackal_imu_odometry.bag: 3,061
 Imu and 3,060 Odometry messages, 61 s): its messages, converted to CDR by rosbags, are
@@ -36,7 +37,7 @@ import time
 REPO = Path(__file__).resolve().parents[1]
 REAL = REPO.parent / 'shared' / 'data' / 'jackal_imu_odometry.bag'
 
-SCRIPT_A = r'''
+SCRIPT_A = r"""
 import csv, sys
 from pathlib import Path
 from rosbags.highlevel import AnyReader
@@ -56,9 +57,9 @@ with AnyReader([Path(sys.argv[1])]) as reader, open(sys.argv[2], 'w', newline=''
         stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
         xyz = (p.x, p.y, p.z) if p is not None else (0.0, 0.0, 0.0)
         out.writerow([conn.topic, stamp, *xyz, q.x, q.y, q.z, q.w, roll, pitch, yaw])
-'''
+"""
 
-SCRIPT_B = r'''
+SCRIPT_B = r"""
 import sys
 from pathlib import Path
 from rosbags.highlevel import AnyReader
@@ -66,11 +67,11 @@ from rosbags.highlevel import AnyReader
 with AnyReader([Path(sys.argv[1])]) as reader:
     for conn, t, raw in reader.messages():
         reader.deserialize(raw, conn.msgtype)
-'''
+"""
 
 
 def write_bag(dst, count, storage):
-    """A rosbag2 bag of >= count messages: the real recording, repeated, shifted in time."""
+    """Return a rosbag2 bag of >= count messages: the real recording, repeated, shifted in time."""
     from rosbags.highlevel import AnyReader
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import get_typestore, Stores

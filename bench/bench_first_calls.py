@@ -1,4 +1,5 @@
-"""First calls: what each public one-item function costs from its first call after import.
+"""
+First calls: what each public one-item function costs from its first call after import.
 
 Not a ratio benchmark: the figures are absolute, and the goal is absolute too (every one of
 the first 1,000 calls ≤ 1 ms: no call pays for compilation or other one-off work). Each
@@ -37,7 +38,7 @@ BENCH = Path(__file__).resolve().parent
 # -- ordinary inputs, plain NumPy -------------------------------------------------------------
 
 def _rotations(rng, n):
-    """n Haar-random rotation matrices (QR of Gaussian matrices, signs fixed, det +1)."""
+    """Return n Haar-random rotation matrices (QR of Gaussian matrices, det +1)."""
     import numpy as np
     q, r = np.linalg.qr(rng.standard_normal((n, 3, 3)))
     q = q * np.sign(np.diagonal(r, axis1=1, axis2=2))[:, None, :]
@@ -141,7 +142,7 @@ def run_one(label, n):
 # -- child: the node's callback in a fresh process ----------------------------------------
 
 def _poses(n):
-    """n (position, unit quaternion) of ordinary poses, plain NumPy."""
+    """Return n (position, unit quaternion) of ordinary poses, plain NumPy."""
     import numpy as np
     rng = np.random.default_rng(11)
     q = rng.standard_normal((n, 4))
@@ -208,7 +209,8 @@ def run_path_without_node(n, positions, quaternions, why):
 
 
 def _summary(label, times, cpus):
-    """Summarise one run: wall clock per call, and this thread's CPU time per call.
+    """
+    Summarise one run: wall clock per call, and this thread's CPU time per call.
 
     The CPU time is what the call itself cost: a pause while another process had the core
     is not in it.

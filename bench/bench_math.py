@@ -1,4 +1,5 @@
-"""Math benchmark: rot_tools against scipy, transforms3d and pytransform3d, as ratios.
+"""
+Math benchmark: rot_tools against scipy, transforms3d and pytransform3d, as ratios.
 
 Three tables, each measured side by side in one run (repetitions interleaved, medians):
 
@@ -24,16 +25,15 @@ import timeit
 import tracemalloc
 import warnings
 
+import benchlib
 import numpy as np
 import pytransform3d.trajectories as pt_trajectories
 import pytransform3d.transformations as pt_transformations
+import rot_tools as rt
 from scipy.spatial.transform import Rotation
 import transforms3d.axangles as t3d_axangles
 import transforms3d.euler as t3d_euler
 import transforms3d.quaternions as t3d_quaternions
-
-import benchlib
-import rot_tools as rt
 
 BATCH_GOAL_QUATERNION_ROUTE = 0.25  # scipy routes Euler / matrix conversions via quaternions
 BATCH_GOAL_DIRECT = 1.0  # rotvec, axis-angle, quaternion → matrix: scipy's one direct formula
@@ -65,8 +65,8 @@ def make_inputs(n, seed=20261121):
     T[:, :3, :3] = R
     T[:, :3, 3] = b
     T[:, 3, 3] = 1.0
-    return dict(R=R, e_tb=e_tb, e_proper=e_proper, axis=axis, angle=angle, rotvec=rotvec,
-                b=b, T=T, q=q)
+    return {'R': R, 'e_tb': e_tb, 'e_proper': e_proper, 'axis': axis, 'angle': angle,
+            'rotvec': rotvec, 'b': b, 'T': T, 'q': q}
 
 
 # -- result comparisons (max difference to the reference) ---------------------------------
@@ -91,7 +91,8 @@ def diff_euler(rt_out, ref, seq, R):
 
 
 def screw_note(twist, ref, R, b):
-    """Where rot_tools' and pytransform3d's twists differ most, and which one is right.
+    """
+    Where rot_tools' and pytransform3d's twists differ most, and which one is right.
 
     Both twists are mapped back with rot_tools.screw_exp (exact Rodrigues) and compared with
     the (R, b) they came from; the difference is also given with θ within 1e-4 of π left out.
@@ -113,8 +114,12 @@ def screw_note(twist, ref, R, b):
 
 
 def diff_quaternion(a, b):
-    """Quaternions: both canonical (w > 0, at w = 0 the first non-zero positive), but at
-    w ≈ 0 rounding may pick opposite signs, so ±q count as equal."""
+    """
+    Compare quaternions up to sign.
+
+    Quaternions: both canonical (w > 0, at w = 0 the first non-zero positive), but at
+    w ≈ 0 rounding may pick opposite signs, so ±q count as equal.
+    """
     return float(np.minimum(np.abs(a - b).max(axis=-1), np.abs(a + b).max(axis=-1)).max())
 
 
@@ -129,7 +134,8 @@ def diff_rotvec(a, b):
 # -- 1. batch throughput ------------------------------------------------------------------
 
 def batch_cases(x):
-    """Return the batch cases as tuples.
+    """
+    Return the batch cases as tuples.
 
     Each is (name, rot_tools call, reference name, reference call, goal, compare, input
     arrays, note or None).
@@ -183,12 +189,12 @@ def run_batch(x, repeats):
             rt_out, ref_out = rt_call(), ref_call()  # warm-up and the results to compare
             times = benchlib.interleaved({'rt': rt_call, 'ref': ref_call}, repeats)
         t_rt, t_ref = benchlib.median(times['rt']), benchlib.median(times['ref'])
-        results.append(dict(
-            operation=name, reference=ref_name, rot_tools_s=t_rt, reference_s=t_ref,
-            ratio=t_rt / t_ref, goal=goal, max_diff=compare(rt_out, ref_out),
-            note=note(rt_out, ref_out) if note else None,
-            in_bytes=sum(a.nbytes for a in inputs), out_bytes=_nbytes(rt_out),
-            ref_call=ref_call, rt_call=rt_call))
+        results.append({
+            'operation': name, 'reference': ref_name, 'rot_tools_s': t_rt, 'reference_s': t_ref,
+            'ratio': t_rt / t_ref, 'goal': goal, 'max_diff': compare(rt_out, ref_out),
+            'note': note(rt_out, ref_out) if note else None,
+            'in_bytes': sum(a.nbytes for a in inputs), 'out_bytes': _nbytes(rt_out),
+            'ref_call': ref_call, 'rt_call': rt_call})
         del rt_out, ref_out
         gc.collect()
     return results
@@ -280,10 +286,10 @@ def single_cases():
     b = np.array([0.4, -1.0, 2.5])
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = R, b
-    g = dict(rt=rt, Rotation=Rotation, e=t3d_euler, aa=t3d_axangles, tq=t3d_quaternions,
-             pt=pt_transformations, a_tb=a_tb, a_pr=a_pr, f_tb=[float(v) for v in a_tb],
-             f_pr=[float(v) for v in a_pr], R=R, axis=axis, angle=angle, rotvec=rotvec, b=b,
-             T=T, q=q, q_wxyz=np.roll(q, 1))
+    g = {'rt': rt, 'Rotation': Rotation, 'e': t3d_euler, 'aa': t3d_axangles, 'tq': t3d_quaternions,
+         'pt': pt_transformations, 'a_tb': a_tb, 'a_pr': a_pr, 'f_tb': [float(v) for v in a_tb],
+         'f_pr': [float(v) for v in a_pr], 'R': R, 'axis': axis, 'angle': angle, 'rotvec': rotvec,
+         'b': b, 'T': T, 'q': q, 'q_wxyz': np.roll(q, 1)}
     sc, t3 = ('scipy', SINGLE_GOAL_SCIPY), ('transforms3d', SINGLE_GOAL_T3D)
     sc_rotvec, t3_shown = ('scipy (rotvec)', SINGLE_GOAL_SCIPY), ('transforms3d', None)
     return g, [
@@ -356,10 +362,11 @@ def run_single(repeats, target_s=0.02):
             {k: (lambda t=t, n=number[k]: t.timeit(n)) for k, t in timers.items()}, repeats)
         per_call = {k: benchlib.median(v) / number[k] for k, v in times.items()}
         for ref, goal in refs:
-            results.append(dict(
-                operation=operation, reference=ref, rot_tools_us=per_call['rot_tools'] * 1e6,
-                reference_us=per_call[ref] * 1e6, ratio=per_call['rot_tools'] / per_call[ref],
-                goal=goal, max_diff=diff_plain(outs['rot_tools'], outs[ref])))
+            results.append({'operation': operation, 'reference': ref,
+                            'rot_tools_us': per_call['rot_tools'] * 1e6,
+                            'reference_us': per_call[ref] * 1e6,
+                            'ratio': per_call['rot_tools'] / per_call[ref], 'goal': goal,
+                            'max_diff': diff_plain(outs['rot_tools'], outs[ref])})
     return results
 
 

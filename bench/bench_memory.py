@@ -1,4 +1,5 @@
-"""Memory of rotation_node under a long flood: its resident set at the start and the end.
+"""
+Memory of rotation_node under a long flood: its resident set at the start and the end.
 
 Starts ``rotation_node`` by its console script (defaults: markers on) in an isolated DDS
 domain, a subscriber to its outputs in this process (so every output is really sent), and
@@ -39,7 +40,8 @@ def rss_mb(pid):
 
 
 class Listener:
-    """This process's subscriber to the node's outputs, spun in a thread; counts ~/screw.
+    """
+    This process's subscriber to the node's outputs, spun in a thread; counts ~/screw.
 
     Raw subscriptions (no deserialisation), so that this process stays light.
     """
@@ -56,9 +58,10 @@ class Listener:
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
         self.node = rclpy.create_node('bench_memory_listener')
         self.screws = 0
-        outputs = dict(rotation_matrix=Float64MultiArray, quaternion=QuaternionStamped,
-                       axis_angle=Vector3Stamped, euler_angles=Vector3Stamped, rpy=Vector3Stamped,
-                       screw=TwistStamped, screw_axis=Marker, markers=MarkerArray)
+        outputs = {'rotation_matrix': Float64MultiArray, 'quaternion': QuaternionStamped,
+                   'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped,
+                   'rpy': Vector3Stamped, 'screw': TwistStamped, 'screw_axis': Marker,
+                   'markers': MarkerArray}
         for name, msg_type in outputs.items():
             cb = self._count if name == 'screw' else (lambda data: None)
             self.node.create_subscription(msg_type, f'/{NODE}/{name}', cb, QoSProfile(depth=10),
@@ -131,12 +134,12 @@ def measure(rate, seconds, logdir):
         node_log.close()
     half = [mb for t, mb in samples if t >= seconds / 2]
     growth_second_half = max(half) - half[0] if half else float('nan')
-    return dict(rate=rate, seconds=seconds, sent=result['sent'],
-                sent_rate=result['sent'] / result['elapsed'], delivered=delivered,
-                rss_start_mb=samples[0][1], rss_end_mb=samples[-1][1],
-                rss_max_mb=max(mb for _, mb in samples), rss_after_mb=after,
-                growth_second_half_mb=growth_second_half,
-                bounded=growth_second_half < BOUND_MB and alive, samples=samples)
+    return {'rate': rate, 'seconds': seconds, 'sent': result['sent'],
+            'sent_rate': result['sent'] / result['elapsed'], 'delivered': delivered,
+            'rss_start_mb': samples[0][1], 'rss_end_mb': samples[-1][1],
+            'rss_max_mb': max(mb for _, mb in samples), 'rss_after_mb': after,
+            'growth_second_half_mb': growth_second_half,
+            'bounded': growth_second_half < BOUND_MB and alive, 'samples': samples}
 
 
 def main(argv=None):

@@ -1,4 +1,5 @@
-"""Node benchmark: rotation_node against bare rclpy relays, flooded with PoseStamped.
+"""
+Node benchmark: rotation_node against bare rclpy relays, flooded with PoseStamped.
 
 Processes (all started here, all on the loopback of one isolated DDS domain):
 
@@ -106,7 +107,7 @@ node started by ``python -m`` instead of its console script (--module)."""
 
 
 def console_script(python, name):
-    """The console script ``name`` next to ``python``, else on PATH."""
+    """Return the console script ``name`` next to ``python``, else on PATH."""
     script = Path(python).parent / name
     if script.exists():
         return str(script)
@@ -164,9 +165,10 @@ class Measurer:
         # thread, so that the harness stops the processes it started.
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
         self.node = rclpy.create_node('bench_node_measurer')
-        types = dict(rotation_matrix=Float64MultiArray, quaternion=QuaternionStamped,
-                     axis_angle=Vector3Stamped, euler_angles=Vector3Stamped, rpy=Vector3Stamped,
-                     screw=TwistStamped, screw_axis=Marker, markers=MarkerArray)
+        types = {'rotation_matrix': Float64MultiArray, 'quaternion': QuaternionStamped,
+                 'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped,
+                 'rpy': Vector3Stamped, 'screw': TwistStamped, 'screw_axis': Marker,
+                 'markers': MarkerArray}
         qos = QoSProfile(depth=10)  # the outputs' QoS: reliable, keep last 10
         self.records = {t: [] for t in TARGETS}
         self.seen = {(t, o): 0 for t, target in TARGETS.items() for o in target.outputs}
@@ -286,12 +288,12 @@ class Harness:
         flooder_cpu, own_cpu = cpu_seconds(self.flooder.pid) - fl0, _own_cpu() - me0
         got = list(records)
         lat = sorted((recv - stamp) / 1e6 for recv, stamp in got)
-        return dict(target=target, rate=rate, sent=sent, sent_rate=sent / elapsed,
-                    received=len(got), delivered=len(got) / elapsed,
-                    loss=1.0 - len(got) / sent, p50=percentile(lat, 0.5),
-                    p99=percentile(lat, 0.99),
-                    cpu_us=cpu / max(1, len(got)) * 1e6, node_load=cpu / elapsed,
-                    flooder_load=flooder_cpu / elapsed, measurer_load=own_cpu / elapsed)
+        return {'target': target, 'rate': rate, 'sent': sent, 'sent_rate': sent / elapsed,
+                'received': len(got), 'delivered': len(got) / elapsed,
+                'loss': 1.0 - len(got) / sent, 'p50': percentile(lat, 0.5),
+                'p99': percentile(lat, 0.99), 'cpu_us': cpu / max(1, len(got)) * 1e6,
+                'node_load': cpu / elapsed, 'flooder_load': flooder_cpu / elapsed,
+                'measurer_load': own_cpu / elapsed}
 
     def stop(self):
         if self.flooder is not None and self.flooder.poll() is None:
@@ -316,7 +318,8 @@ class Harness:
 
 
 def summarise(trials, rates):
-    """Per (target, rate): the best round's delivery, the median of the other figures.
+    """
+    Per (target, rate): the best round's delivery, the median of the other figures.
 
     Delivered msg/s and loss are the best of the rounds (most delivered): what a process
     can do, with a round disturbed by other work on the machine left out. Latency and CPU
@@ -342,10 +345,10 @@ def compare(summary, rates, node, relay):
     both = [r for r in rates if max(summary[(t, r)]['loss'] for t in (node, relay)) <= LOSS_OK]
     p99 = {r: summary[(node, r)]['p99'] / summary[(relay, r)]['p99'] for r in both}
     cpu = [summary[(node, r)]['cpu_us'] / summary[(relay, r)]['cpu_us'] for r in rates]
-    return dict(node_msgs=best[node], relay_msgs=best[relay],
-                throughput_ratio=best[node] / best[relay], p99_ratios=p99,
-                p99_ratio_worst=max(p99.values()) if p99 else float('nan'),
-                cpu_ratio=benchlib.median(cpu))
+    return {'node_msgs': best[node], 'relay_msgs': best[relay],
+            'throughput_ratio': best[node] / best[relay], 'p99_ratios': p99,
+            'p99_ratio_worst': max(p99.values()) if p99 else float('nan'),
+            'cpu_ratio': benchlib.median(cpu)}
 
 
 def evaluate(summary, rates):
@@ -503,12 +506,13 @@ def main(argv=None):
     summary = summarise(trials, args.rates)
     ev = evaluate(summary, args.rates)
     print_results(summary, ev, args.rates, args.seconds, args.repeats)
-    benchlib.write_json(args.json, dict(
-        trials=trials, goals=[dict(figure=f, measured=v, goal=g, met=ok)
-                              for f, v, g, ok in goal_rows(ev)],
-        evaluation={k: {**v, 'p99_ratios': {str(r): x for r, x in v['p99_ratios'].items()}}
-                    if k != 'sustained_rate' else v for k, v in ev.items()},
-        summary={f'{t}@{r}': v for (t, r), v in summary.items()}))
+    goals = [{'figure': f, 'measured': v, 'goal': g, 'met': ok}
+             for f, v, g, ok in goal_rows(ev)]
+    evaluation = {k: {**v, 'p99_ratios': {str(r): x for r, x in v['p99_ratios'].items()}}
+                  if k != 'sustained_rate' else v for k, v in ev.items()}
+    benchlib.write_json(args.json, {
+        'trials': trials, 'goals': goals, 'evaluation': evaluation,
+        'summary': {f'{t}@{r}': v for (t, r), v in summary.items()}})
 
 
 if __name__ == '__main__':

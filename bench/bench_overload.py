@@ -1,4 +1,5 @@
-"""Overload: rotation_node under the fastest flood one publisher sends, for 60 s.
+"""
+Overload: rotation_node under the fastest flood one publisher sends, for 60 s.
 
 Processes (all started here, in a DDS domain of their own on the loopback):
 
@@ -91,9 +92,9 @@ def listen(node):
     rclpy.init()
     listener = rclpy.create_node('bench_overload_listener')
     count = [0]
-    outputs = dict(rotation_matrix=Float64MultiArray, quaternion=QuaternionStamped,
-                   axis_angle=Vector3Stamped, euler_angles=Vector3Stamped, rpy=Vector3Stamped,
-                   screw=TwistStamped, screw_axis=Marker, markers=MarkerArray)
+    outputs = {'rotation_matrix': Float64MultiArray, 'quaternion': QuaternionStamped,
+               'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped, 'rpy': Vector3Stamped,
+               'screw': TwistStamped, 'screw_axis': Marker, 'markers': MarkerArray}
     for name, msg_type in outputs.items():
         def on_output(data, screw=name == 'screw'):
             if screw:
@@ -326,22 +327,20 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
     for name in SERVICES:
         lat = calls[name]
         finite = [t for t in lat if math.isfinite(t)]
-        latency[name] = dict(calls=len(lat), unanswered=len(lat) - len(finite),
-                             wrong=wrong[name], p50=percentile(lat, 0.5),
-                             p99=percentile(lat, 0.99),
-                             max=max(lat) if lat else math.nan)
+        latency[name] = {'calls': len(lat), 'unanswered': len(lat) - len(finite),
+                         'wrong': wrong[name], 'p50': percentile(lat, 0.5),
+                         'p99': percentile(lat, 0.99), 'max': max(lat) if lat else math.nan}
     growth = max(mb for _, mb in samples) - rss_start
-    return dict(
-        executor=executor or 'node (console script)', seconds=seconds, after=after,
-        sent=sent, sent_rate=sent / elapsed, answered=answered, answered_rate=answered / elapsed,
-        rss_start_mb=rss_start, rss_end_mb=rss_end,
-        rss_max_mb=max(mb for _, mb in samples + after_samples), rss_after_mb=rss_after,
-        growth_mb=growth, latency=latency, samples=samples, after_samples=after_samples,
-        final_describe_s=final_call[0], alive=alive,
-        goals=dict(growth=growth <= GROWTH_GOAL_MB,
-                   returned=rss_after - rss_start <= RETURN_GOAL_MB,
-                   latency=all(v['p99'] <= LATENCY_GOAL_S for v in latency.values()),
-                   alive=alive))
+    return {'executor': executor or 'node (console script)', 'seconds': seconds, 'after': after,
+            'sent': sent, 'sent_rate': sent / elapsed, 'answered': answered,
+            'answered_rate': answered / elapsed, 'rss_start_mb': rss_start, 'rss_end_mb': rss_end,
+            'rss_max_mb': max(mb for _, mb in samples + after_samples), 'rss_after_mb': rss_after,
+            'growth_mb': growth, 'latency': latency, 'samples': samples,
+            'after_samples': after_samples, 'final_describe_s': final_call[0], 'alive': alive,
+            'goals': {'growth': growth <= GROWTH_GOAL_MB,
+                      'returned': rss_after - rss_start <= RETURN_GOAL_MB,
+                      'latency': all(v['p99'] <= LATENCY_GOAL_S for v in latency.values()),
+                      'alive': alive}}
 
 
 def print_results(m):

@@ -1,4 +1,5 @@
-"""Shared helpers of the bench/ scripts: interleaved timing, medians, result tables.
+"""
+Shared helpers of the bench/ scripts: interleaved timing, medians, result tables.
 
 Every figure the scripts report is a ratio of rot_tools to a reference measured side by side
 in one run: the repetitions of the candidates are interleaved (the order rotates from one
@@ -17,7 +18,8 @@ import time
 
 
 def interleaved(candidates, repeats):
-    """Time each zero-argument callable ``repeats`` times, interleaved; {name: [seconds]}.
+    """
+    Time each zero-argument callable ``repeats`` times, interleaved; {name: [seconds]}.
 
     Repetition r calls the candidates in the order rotated by r, so no candidate is always
     first (warm caches) or last.

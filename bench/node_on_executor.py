@@ -1,4 +1,5 @@
-"""rotation_node, unchanged, on an executor of choice: the evidence behind make_executor.
+"""
+rotation_node, unchanged, on an executor of choice: the evidence behind make_executor.
 
 RotationNode spun by the node's own loop (``serve``) on:
 
@@ -23,10 +24,9 @@ import weakref
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
-
 from rot_tools import runtime
-from rot_tools.runtime import make_executor, serve
 from rot_tools.rotation_node import RotationNode
+from rot_tools.runtime import make_executor, serve
 
 
 def events_executor(context=None):

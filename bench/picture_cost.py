@@ -1,4 +1,5 @@
-"""What one picture (~/markers + ~/screw_axis) costs rotation_node, next to an input's work.
+"""
+What one picture (~/markers + ~/screw_axis) costs rotation_node, next to an input's work.
 
 In-process, no transport: a RotationNode's ~/pose callback is called on 1000 random poses
 (unit quaternions, positions in [-2, 2]^3) with publish_markers off, then again with the

@@ -1,4 +1,5 @@
-"""Publisher process of bench_node.py: floods PoseStamped at a set rate, on command.
+"""
+Publisher process of bench_node.py: floods PoseStamped at a set rate, on command.
 
 Started by bench_node.py with the pose topics as arguments; publishes with the sensor-data
 QoS rotation_node subscribes with (best effort). Waits until every topic has a subscriber,

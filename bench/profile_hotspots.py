@@ -1,4 +1,5 @@
-"""Where the time goes: cProfile of rot_tools' single-call paths and of the node's callback.
+"""
+Where the time goes: cProfile of rot_tools' single-call paths and of the node's callback.
 
 Not a ratio benchmark: a tool for whoever optimises rot_tools. It prints
 
@@ -21,7 +22,6 @@ import sys
 import timeit
 
 import numpy as np
-
 import rot_tools as rt
 
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -1,4 +1,5 @@
-"""A bare rclpy relay: rotation_node's topics and QoS with constant content and no math.
+"""
+A bare rclpy relay: rotation_node's topics and QoS with constant content and no math.
 
 It subscribes ``~/pose`` (geometry_msgs/PoseStamped, sensor-data QoS: best effort) and, for
 every message, publishes rotation_node's six message outputs (reliable, depth 10):
@@ -30,12 +31,11 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from rot_tools import runtime
+from rot_tools.rotation_node import INPUTS
+from rot_tools.runtime import make_executor, serve
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from std_srvs.srv import Trigger
-
-from rot_tools import runtime
-from rot_tools.runtime import make_executor, serve
-from rot_tools.rotation_node import INPUTS
 
 
 class RelayNode(Node):

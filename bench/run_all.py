@@ -1,4 +1,5 @@
-"""Run every benchmark (``make bench``): math, first calls, node, memory, overload, goals.
+"""
+Run every benchmark (``make bench``): math, first calls, node, memory, overload, goals.
 
 Each script runs in its own process with this interpreter and prints its own tables; this
 script then collects their figures (JSON) and prints every goal with the figure measured

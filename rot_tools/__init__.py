@@ -1,4 +1,5 @@
-"""rot_tools: rotations and rigid motions without quaternions, for one item or a batch.
+"""
+rot_tools: rotations and rigid motions without quaternions, for one item or a batch.
 
 Plain NumPy (no ROS import anywhere in this package's math). Angles are radians, arrays
 float64, ``...`` any leading batch shape. Invalid input raises RotationError (a ValueError).

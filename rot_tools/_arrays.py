@@ -5,12 +5,12 @@ import math
 import numbers
 
 import numpy as np
-
 from rot_tools.errors import RotationError
 
 
 def as_float_array(x, tail, name):
-    """Return x as a float64 array whose shape ends in ``tail``, or raise RotationError.
+    """
+    Return x as a float64 array whose shape ends in ``tail``, or raise RotationError.
 
     Refused: what is not numeric, complex numbers (casting would drop the imaginary part),
     numbers beyond float64's range (Python ints, Fractions, long doubles), a wrong shape.
@@ -28,7 +28,8 @@ def as_float_array(x, tail, name):
 
 
 def _numeric_array(x, name):
-    """Return x as an array of real numbers within float64's range (any dtype), or raise.
+    """
+    Return x as an array of real numbers within float64's range (any dtype), or raise.
 
     For inputs that are not already a real NumPy array: nested lists of Python numbers,
     complex arrays, objects. NumPy's own cast would drop an imaginary part with only a
@@ -112,7 +113,8 @@ def finite_array(x, tail, name):
 
 
 def require_tolerance(value, name, below=math.inf, interval=''):
-    """Return ``value`` as a float if it is a real number in [0, below), else raise RotationError.
+    """
+    Return ``value`` as a float if it is a real number in [0, below), else raise RotationError.
 
     Any real numeric type is taken (int, float, Fraction, Decimal, NumPy scalars, a 0-d
     array); complex numbers, bools, NaN and numbers beyond float64 are refused. The message
@@ -136,7 +138,8 @@ def require_tolerance(value, name, below=math.inf, interval=''):
 
 
 def refuse_overflow(fits, what):
-    """Raise RotationError where the flag ``fits`` (bool or bool array) is false.
+    """
+    Raise RotationError where the flag ``fits`` (bool or bool array) is false.
 
     what: the quantity that left float64's range, e.g. 'R·p + b'; the message adds the
     first offending item of a batch.
@@ -150,7 +153,8 @@ def refuse_overflow(fits, what):
 
 
 def apart(big, small, digits=(3, 6)):
-    """Write (big, small) as text with digits[0] and digits[1] significant digits.
+    """
+    Write (big, small) as text with digits[0] and digits[1] significant digits.
 
     3 for a measured size, 6 = :g for a tolerance; more where fewer would not show
     big > small: not '|cos| = 1 > tol 1' for 1 > 0.99999999. Equal numbers (or NaN) keep the

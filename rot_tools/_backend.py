@@ -1,4 +1,5 @@
-"""One formula, two engines: Python floats for a single item, NumPy chunks for a batch.
+"""
+One formula, two engines: Python floats for a single item, NumPy chunks for a batch.
 
 Every conversion in rot_tools is written once as a *kernel*: a function of an ops namespace
 and of the entries of its inputs (a matrix as ``m[row][col]``, a vector as ``v[i]``, a scalar
@@ -31,7 +32,6 @@ import math
 import sys
 
 import numpy as np
-
 from rot_tools._arrays import as_float_array, require_finite
 from rot_tools._generated import CODE as GENERATED
 from rot_tools.errors import RotationError
@@ -47,8 +47,8 @@ class _FloatOps:
     sin = staticmethod(math.sin)
     cos = staticmethod(math.cos)
     tan = staticmethod(math.tan)
-    abs = staticmethod(abs)
-    any = rare = staticmethod(bool)
+    abs = staticmethod(abs)  # noqa: A003
+    any = rare = staticmethod(bool)  # noqa: A003
 
     @staticmethod
     def maximum(a, b):  # NaN if either is NaN, as NumPy's (max(x, nan) is x)
@@ -77,8 +77,8 @@ class _ArrayOps:
     sin = staticmethod(np.sin)
     cos = staticmethod(np.cos)
     tan = staticmethod(np.tan)
-    abs = staticmethod(np.abs)
-    any = rare = staticmethod(np.any)
+    abs = staticmethod(np.abs)  # noqa: A003
+    any = rare = staticmethod(np.any)  # noqa: A003
     maximum = staticmethod(np.maximum)
     minimum = staticmethod(np.minimum)
     where = staticmethod(np.where)
@@ -95,7 +95,8 @@ ARRAYS = _ArrayOps()
 
 
 def _columns(arr, tail):
-    """Return the entries of a chunk (m,) + tail as a flat list of contiguous arrays of m.
+    """
+    Return the entries of a chunk (m,) + tail as a flat list of contiguous arrays of m.
 
     A matrix's entries row-major. One transposing copy: an entry read straight from
     (m, 3, 3) is strided (one float in every 72 bytes), and a kernel reads each entry
@@ -107,7 +108,8 @@ def _columns(arr, tail):
 
 
 def _write_columns(out, entries, tail, dtype):
-    """Write the flat entries of one output into its chunk out (m,) + tail.
+    """
+    Write the flat entries of one output into its chunk out (m,) + tail.
 
     Through a contiguous buffer of the entries and one transposing copy.
     """
@@ -130,7 +132,7 @@ def nest(entries, tail):
 
 
 def flatten(value, tail):
-    """A kernel's output → its entries as a flat list (a matrix row-major)."""
+    """Return a kernel's output → its entries as a flat list (a matrix row-major)."""
     if not tail:
         return [value]
     if len(tail) == 1:
@@ -139,7 +141,7 @@ def flatten(value, tail):
 
 
 def _all_finite(values, rank):
-    """True when every float of a nested list (rank 0, 1 or 2) is finite."""
+    """Tell whether every float of a nested list (rank 0, 1 or 2) is finite."""
     if rank == 0:
         return math.isfinite(values)
     if rank == 1:
@@ -148,7 +150,8 @@ def _all_finite(values, rank):
 
 
 def apply(kernel, inputs, outputs):
-    """Run ``kernel(ops, *entries)`` on one item or on a batch.
+    """
+    Run ``kernel(ops, *entries)`` on one item or on a batch.
 
     inputs: sequence of (value, trailing shape, name, finite): each value is made a float64
     array with that trailing shape (RotationError naming it otherwise) and, when ``finite``,
@@ -207,7 +210,7 @@ def apply(kernel, inputs, outputs):
 
 
 def _batch(kernel, arrays, tails, outputs):
-    """The kernel on ARRAYS, chunk by chunk, over the broadcast batch of the arrays."""
+    """Return the kernel on ARRAYS, chunk by chunk, over the broadcast batch of the arrays."""
     batches = [a.shape[:a.ndim - len(t)] for a, t in zip(arrays, tails)]
     try:
         shape = np.broadcast_shapes(*batches)
@@ -261,7 +264,8 @@ RECORD = None
 
 
 def kernel_key(kernel):
-    """The name under which rot_tools/_generated.py lists a kernel object's function.
+    """
+    Return the name under which rot_tools/_generated.py lists a kernel object's function.
 
     ``module.qualname`` of a function, with the fixed arguments of a functools.partial in
     brackets; a kernel built by a helper (so3's checked kernels) carries its own
@@ -278,7 +282,7 @@ def kernel_key(kernel):
 
 
 def _find_code(kernel):
-    """(outputs, function) of a kernel from the generated module, remembered; else None."""
+    """Return (outputs, function) of a kernel from the generated module, or None."""
     code = GENERATED.get(kernel_key(kernel))
     if code is not None:
         _CODE_OF[kernel] = code
@@ -298,7 +302,7 @@ def dot(u, v):
 
 
 def cross(u, v):
-    """u × v of two 3-vectors given as entry lists."""
+    """Return u × v of two 3-vectors given as entry lists."""
     return [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
 
 
@@ -328,7 +332,8 @@ _LARGEST = sys.float_info.max
 
 
 def unit(ops, v):
-    """(v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector.
+    """
+    (v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector.
 
     Where |v|² overflows or underflows, v/|v| is taken from v scaled by max |v_i|: |v| itself
     may be inf (beyond 1.8e308) or a subnormal with few digits, the direction is exact.
@@ -349,7 +354,8 @@ def unit(ops, v):
 
 
 def in_range(ops, values):
-    """True where every entry of the flat list ``values`` is finite (±inf and NaN fail).
+    """
+    Tell where every entry of the flat list ``values`` is finite (±inf and NaN fail).
 
     Kernels return it beside results that can overflow float64 for finite inputs, and the
     caller refuses the flagged items (see _arrays.refuse_overflow).
@@ -361,7 +367,8 @@ def in_range(ops, values):
 
 
 def linear_in_range(ops, linear, *vectors):
-    """(linear(*vectors), in_range flag) of a function linear in its 3-vector entry lists.
+    """
+    (linear(*vectors), in_range flag) of a function linear in its 3-vector entry lists.
 
     Its partial sums may overflow float64 where the result fits (R·b beyond 1.8e308 with a
     translation bringing it back): such items are computed again on the inputs scaled by 1/4

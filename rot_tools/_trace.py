@@ -1,4 +1,5 @@
-"""The tracer: a kernel written out as straight-line Python source, ahead of time.
+"""
+The tracer: a kernel written out as straight-line Python source, ahead of time.
 
 A kernel (see _backend) is one formula, run by ``apply`` on Python floats for one item. Run
 that way it pays, on every call, for each ``ops.*`` attribute look-up, helper call, list and
@@ -23,7 +24,6 @@ import math
 import re
 
 import numpy as np
-
 from rot_tools._backend import flatten, nest
 
 
@@ -32,7 +32,8 @@ class TraceError(Exception):
 
 
 class _Sym:
-    """A value known only at run time: the variable that will hold it.
+    """
+    A value known only at run time: the variable that will hold it.
 
     ``real``: it is surely a float (an input entry, or arithmetic on floats), not a bool.
     """
@@ -67,7 +68,7 @@ class _Sym:
 
 
 def _real(x):
-    """True for a float (or int) that arithmetic keeps a float: a real symbol or a number."""
+    """Tell whether x is a float (or int) that arithmetic keeps a float."""
     if type(x) is _Sym:
         return x.real
     return type(x) is int or isinstance(x, float)
@@ -87,9 +88,13 @@ for _name, _symbol in (('add', '+'), ('sub', '-'), ('truediv', '/'), ('floordiv'
 
 
 def _condition(word, symbol, reflected=False):
-    """``a & b`` / ``a | b`` of conditions, written ``a and b`` / ``a or b``: on the bools of
+    """
+    Combine conditions with ``and`` / ``or``.
+
+    ``a & b`` / ``a | b`` of conditions, written ``a and b`` / ``a or b``: on the bools of
     one item the same value, and the right side is skipped when the left decides (a guard's
-    ``rare & nonzero`` costs one comparison on an ordinary item)."""
+    ``rare & nonzero`` costs one comparison on an ordinary item).
+    """
     def op(self, other):
         a, b = (other, self) if reflected else (self, other)
         template = f'{{}} {word} {{}}' if not (_real(a) or _real(b)) else f'{{}} {symbol} {{}}'
@@ -147,7 +152,10 @@ class _Trace:
         return sym
 
     def guard(self, condition):
-        """Return False, after a guard that leaves the items where ``condition`` holds to
+        """
+        Return False, after a guard.
+
+        Return False, after a guard that leaves the items where ``condition`` holds to
         the kernel itself (ops.rare).
 
         Past the guard the condition is known to be false, so later wheres on it are
@@ -199,7 +207,7 @@ class _TraceOps:
             return bool(cond)
         return self._trace.guard(cond)
 
-    any = rare  # (the older name of ops.rare)
+    any = rare  # (the older name of ops.rare)  # noqa: A003
 
     def __getattr__(self, name):
         fn = getattr(self._engine, name)
@@ -255,9 +263,13 @@ _ARRAY_DTYPES = {np.dtype(np.float64): ('d', '_f64'), np.dtype(np.bool_): ('?', 
 
 
 def _result_lines(values, outputs, packers):
-    """Statements that build the output arrays / scalars from their entries' source texts
+    """
+    Write the statements that build and return the outputs.
+
+    Statements that build the output arrays / scalars from their entries' source texts
     (``values``, one list per output) and return them; packers collects the struct formats
-    (e.g. '9d') whose pack_into the module must define."""
+    (e.g. '9d') whose pack_into the module must define.
+    """
     lines, results = [], []
     for k, (text, (tail, dtype)) in enumerate(zip(values, outputs)):
         if not tail:
@@ -287,7 +299,8 @@ _TEMPORARY = re.compile(r'\bt\d+\b')
 
 
 def _fold(statements, tails):
-    """Fold each temporary read once into the expression that reads it.
+    """
+    Fold each temporary read once into the expression that reads it.
 
     statements: [(name, text)] in order (guards included, never folded); tails: the texts
     after them that read names (the output entries). Returns both rewritten. Every
@@ -312,7 +325,7 @@ def _fold(statements, tails):
 
 
 def _statement_lines(statements, pad):
-    """Assignments, and guards written ``if cond: return None``."""
+    """Write assignments, and guards written ``if cond: return None``."""
     lines = []
     for name, text in statements:
         if name is _GUARD:
@@ -336,7 +349,8 @@ def _body(trace, flat, outputs, packers):
 
 
 def _input_lines(index, tail, first):
-    """Return the statements that read input ``index`` into a<first>, a<first + 1>, ...
+    """
+    Return the statements that read input ``index`` into a<first>, a<first + 1>, ...
 
     They take one item of ``tail``, or return None from the function (apply's generic path
     then deals with the input).
@@ -361,7 +375,8 @@ def _input_lines(index, tail, first):
 
 
 def function_source(name, kernel, floats, tails, outputs, packers):
-    """Source of ``def name(inputs)``: the kernel for one item, straight-line.
+    """
+    Source of ``def name(inputs)``: the kernel for one item, straight-line.
 
     The function takes apply's inputs, ((value, tail, name, finite), ...), with the trailing
     shapes ``tails``, and returns the outputs — arrays of the shapes of ``outputs``
@@ -406,7 +421,7 @@ _True, _False = _np.True_, _np.False_
 
 
 def op_lines(floats):
-    """Module lines binding ``_op_<name>`` to each public function of the float engine."""
+    """Write module lines binding ``_op_<name>`` to each function of the float engine."""
     lines = []
     for attr in sorted(dir(floats)):
         if attr.startswith('_') or attr in vars(_TraceOps):
@@ -423,13 +438,17 @@ def op_lines(floats):
 
 
 def packer_lines(packers):
-    """Module lines binding ``_pack_<fmt>`` for each struct format in packers."""
+    """Write module lines binding ``_pack_<fmt>`` for each struct format in packers."""
     return [f'_pack_{fmt} = _Struct({fmt!r}).pack_into' for fmt in sorted(packers)]
 
 
 def compile_kernel(kernel, floats, tails, outputs):
-    """The function of function_source, compiled in a namespace of its own (for tests and
-    for trying a kernel out; rot_tools itself only runs rot_tools/_generated.py)."""
+    """
+    Return the function of function_source, compiled in a namespace of its own.
+
+    Return the function of function_source, compiled in a namespace of its own (for tests and
+    for trying a kernel out; rot_tools itself only runs rot_tools/_generated.py).
+    """
     packers = set()
     body = function_source('traced', kernel, floats, tails, outputs, packers)
     source = '\n'.join([PRELUDE, *op_lines(floats), *packer_lines(packers), '', body])

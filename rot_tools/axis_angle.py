@@ -1,15 +1,17 @@
-"""Axis-angle: Rodrigues' formula and its robust inverse.
+"""
+Axis-angle: Rodrigues' formula and its robust inverse.
 
-A rotation by θ about the unit axis l̂ (right-hand rule) is (seed 000 eq. 7, seed 001 eq. 18)::
+A rotation by θ about the unit axis l̂ (right-hand rule) is (Jia, Rotation in the Space,
+eq. 7; Cayero, Relations between Rotation Matrix and Euler axis-angle parametrization,
+eq. 18)::
 
     Rot_l̂(θ) = cos θ·I + (1 − cos θ)·l̂l̂ᵀ + sin θ·[l̂]×
 
 The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit axis; (l̂, θ) and
-(−l̂, 2π − θ) — equivalently (−l̂, −θ) — describe the same rotation (seed 000 §3.3).
+(−l̂, 2π − θ) — equivalently (−l̂, −θ) — describe the same rotation (Jia §3.3).
 """
 
 import numpy as np
-
 from rot_tools._arrays import refuse_overflow
 from rot_tools._backend import apply, in_range, norm, unit
 from rot_tools.errors import RotationError
@@ -17,7 +19,8 @@ from rot_tools.so3 import apply_to_rotations
 
 
 def _rodrigues(ops, x, y, z, angle):
-    """Entries of cos θ·I + (1 − cos θ)·l̂l̂ᵀ + sin θ·[l̂]× for a unit (x, y, z).
+    """
+    Entries of cos θ·I + (1 − cos θ)·l̂l̂ᵀ + sin θ·[l̂]× for a unit (x, y, z).
 
     From the half angle: 1 − cos θ = 2 sin²(θ/2) keeps its relative precision near 0,
     sin θ = 2 sin(θ/2) cos(θ/2), cos θ = 1 − 2 sin²(θ/2).
@@ -38,7 +41,8 @@ def _axis_angle_kernel(ops, axis, angle):
 
 
 def axis_angle_to_matrix(axis, angle):
-    """Rodrigues (seed 000 eq. 7): axis (..., 3), angle (...) → (..., 3, 3), broadcasting.
+    """
+    Rodrigues (Jia, eq. 7): axis (..., 3), angle (...) → (..., 3, 3), broadcasting.
 
     The axis is normalised. A zero axis with a zero angle gives the identity; a zero axis with
     a non-zero angle raises RotationError.
@@ -62,7 +66,8 @@ def _rotvec_kernel(ops, v):
 
 
 def rotvec_to_matrix(rotvec):
-    """Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity.
+    """
+    Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity.
 
     RotationError where the angle |θ·l̂| itself overflows float64.
     """
@@ -73,14 +78,18 @@ def rotvec_to_matrix(rotvec):
 
 
 def skew_and_cos(m):
-    """(w, cos θ) of the rotation m: w = ½(r32 − r23, r13 − r31, r21 − r12) = sin θ·l̂ and
-    cos θ = (tr R − 1)/2, so that θ = atan2(|w|, cos θ) ∈ [0, π] (accurate at every angle)."""
+    """
+    Return (w, cos θ) of the rotation m.
+
+    (w, cos θ) of the rotation m: w = ½(r32 − r23, r13 − r31, r21 − r12) = sin θ·l̂ and
+    cos θ = (tr R − 1)/2, so that θ = atan2(|w|, cos θ) ∈ [0, π] (accurate at every angle).
+    """
     w = [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
     return w, 0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0)
 
 
 def axis_angle_kernel(ops, m):
-    """(unit axis, angle ∈ [0, π]) of the rotation m; see matrix_to_axis_angle."""
+    """Return (unit axis, angle ∈ [0, π]) of the rotation m; see matrix_to_axis_angle."""
     w, cos = skew_and_cos(m)
     skew_axis, sin = unit(ops, w)
     angle = ops.atan2(sin, cos)
@@ -105,9 +114,10 @@ def axis_angle_kernel(ops, m):
 
 
 def matrix_to_axis_angle(R, *, check=True):
-    """Axis and angle of R: returns (axis (..., 3) unit, angle (...) ∈ [0, π]).
+    """
+    Axis and angle of R: returns (axis (..., 3) unit, angle (...) ∈ [0, π]).
 
-    With w = ½(r32 − r23, r13 − r31, r21 − r12) = sin θ·l̂ (the negative half of seed 000
+    With w = ½(r32 − r23, r13 − r31, r21 − r12) = sin θ·l̂ (the negative half of Jia's
     eq. 11's l) and cos θ = (Tr R − 1)/2 (eq. 12): θ = atan2(|w|, cos θ), accurate to rounding
     at every angle (acos loses half the digits near 0 and π; eq. 13's square root too).
     The axis is w/|w| while cos θ ≥ 0. Near π the skew part vanishes with sin θ, so there the

@@ -1,4 +1,5 @@
-"""``rot-tools bag``: the orientations recorded in a bag, as a summary, a table and a plot.
+"""
+``rot-tools bag``: the orientations recorded in a bag, as a summary, a table and a plot.
 
 A topic's messages are read into NumPy columns (rot_tools.bag_read), pass the same boundary
 as rotation_node's inputs (rot_tools.boundary: same checks, same refusal reasons, counted
@@ -38,7 +39,6 @@ import time
 from types import SimpleNamespace
 
 import numpy as np
-
 from rot_tools import bag_read, boundary, csv_text
 from rot_tools.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
 from rot_tools.errors import RotationError
@@ -109,7 +109,7 @@ class Topic:
                 **{r: int(counts[k + 1]) for k, r in enumerate(boundary.REFUSAL_REASONS)}}
 
     def first_refusal(self):
-        """The sentence of the first refused message (what and by how much), or None."""
+        """Return the sentence of the first refused message (what and by how much), or None."""
         bad = np.flatnonzero(self.codes != boundary.ACCEPTED)
         if not len(bad):
             return None
@@ -131,7 +131,7 @@ def _unit(values, degrees):
 
 
 def topic_summary(t, degrees):
-    """The summary of one Topic as plain data (angles in degrees when ``degrees``)."""
+    """Return the summary of one Topic as plain data (angles in degrees when ``degrees``)."""
     c = t.columns
     out = {'type': t.msgtype, 'frame_ids': list(c.frame_ids)}
     if c.child_frame_ids is not None:
@@ -181,7 +181,7 @@ def topic_summary(t, degrees):
 
 
 def summary(path, storage, topics, degrees):
-    """The whole summary: the bag, then each topic."""
+    """Return the whole summary: the bag, then each topic."""
     return {'bag': str(path), 'storage': storage,
             'topics': {t.topic: topic_summary(t, degrees) for t in topics}}
 
@@ -191,7 +191,7 @@ def summary(path, storage, topics, degrees):
 
 
 def csv_header(seq):
-    """The CSV's column names."""
+    """Return the CSV's column names."""
     names = ['topic', 'stamp', 'frame_id', 'x', 'y', 'z', 'qx', 'qy', 'qz', 'qw',
              'roll', 'pitch', 'yaw']
     if seq:
@@ -200,7 +200,7 @@ def csv_header(seq):
 
 
 def _csv_quote(text):
-    """text as one CSV field (quoted only when it must be)."""
+    """Write text as one CSV field (quoted only when it must be)."""
     out = io.StringIO()
     csv.writer(out, lineterminator='').writerow([text])
     return out.getvalue()
@@ -222,7 +222,7 @@ def _number_text(value, precision):
 
 
 def _binary_writer(out):
-    """A function writing bytes to the text stream ``out`` (through its buffer if it has one)."""
+    """Return a function writing bytes to the text stream ``out`` (through its buffer if any)."""
     buffer = getattr(out, 'buffer', None)
     if buffer is None:
         return lambda data: out.write(data.decode('utf-8'))
@@ -231,7 +231,8 @@ def _binary_writer(out):
 
 
 def write_csv(out, topics, degrees, precision):
-    """Write the rows of every topic (topic by topic, in the bag's order) to ``out``.
+    """
+    Write the rows of every topic (topic by topic, in the bag's order) to ``out``.
 
     Numbers rounded to ``precision`` significant digits and ``precision`` decimal places (the
     rule of every number rot-tools prints), trailing zeros dropped, −0 as 0; the stamp
@@ -338,7 +339,8 @@ class Progress:
 
 
 def select_connections(reader, topics):
-    """The connections to read: every one of a supported type, or the topics asked for.
+    """
+    Return the connections to read: every one of a supported type, or the topics asked for.
 
     BagError for a topic not in the bag, of an unsupported type, or no topic to read.
     """
@@ -373,7 +375,8 @@ class _Chain:
 
 
 def tf_topic(reader, reference, body, tolerance, lo, hi):
-    """(Columns, _Chain) of BODY in REFERENCE from the bag's TFMessage topics.
+    """
+    (Columns, _Chain) of BODY in REFERENCE from the bag's TFMessage topics.
 
     Every transform passes the boundary's checks (refusals counted); the accepted ones feed a
     rot_tools.TransformTree (static ones whatever --start/--end say), which is looked up at
@@ -424,7 +427,7 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
             if frame not in tree.frames:
                 known = ', '.join(tree.frames) or 'none'
                 raise bag_read.BagError(
-                    f'--tf: frame {frame} never appears in the bag\'s TF (frames: {known})')
+                    f"--tf: frame {frame} never appears in the bag's TF (frames: {known})")
         chain = tree.chain(reference, body)
         times = [edge_stamps[f] for f in chain if f in edge_stamps
                  and tree.parent(f) in chain]
@@ -457,7 +460,8 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
 
 def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, seq=None,
             wrap=False, fast=True, progress_stream=None, tf=None):
-    """(storage name, [Topic]) of the bag at PATH; BagError for what cannot be read.
+    """
+    (storage name, [Topic]) of the bag at PATH; BagError for what cannot be read.
 
     tf: (REFERENCE, BODY) adds the TF chain between them (then topics are read only when
     asked for by name).

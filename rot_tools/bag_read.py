@@ -1,4 +1,5 @@
-"""Reading the orientation fields of recorded bags into NumPy columns, without ROS.
+"""
+Reading the orientation fields of recorded bags into NumPy columns, without ROS.
 
 The bags are read by the ``rosbags`` library (the optional ``bag`` extra): rosbag2 (sqlite3
 and MCAP) and ROS 1 bags. Its reader hands over each message's raw bytes; turning every one
@@ -71,7 +72,7 @@ class BagError(Exception):
 
 
 def rosbags_missing():
-    """The name of the missing module when rosbags cannot be imported, else None."""
+    """Return the name of the missing module when rosbags cannot be imported, else None."""
     try:
         import rosbags.highlevel  # noqa: F401
     except ImportError as exc:
@@ -103,7 +104,7 @@ def _one_line(exc):
 
 @contextmanager
 def open_bag(path):
-    """A rosbags AnyReader on PATH, open; BagError for what cannot be read."""
+    """Return a rosbags AnyReader on PATH, open; BagError for what cannot be read."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import get_typestore, Stores
     paths = _bag_paths(path)
@@ -263,7 +264,8 @@ def _put_strings(out, name, text, index):
 
 
 class Columns:
-    """The fields of one topic's messages, one row per message, in the bag's order.
+    """
+    The fields of one topic's messages, one row per message, in the bag's order.
 
     record: (N,) int64 ns, when the message was recorded; sec, nanosec: (N,) int64, its
     header stamp; frame_ids: list of str, frame: (N,) index into it; child_frame_ids/child
@@ -311,8 +313,12 @@ class Columns:
 
 
 def _join_strings(parts):
-    """(strings, index) of several (strings, index) chunks (bytes from the fast path, str
-    from rosbags' decoder: the same frame id is one string either way)."""
+    """
+    Join several (strings, index) chunks into one.
+
+    (strings, index) of several (strings, index) chunks (bytes from the fast path, str
+    from rosbags' decoder: the same frame id is one string either way).
+    """
     lookup, indices = {}, []
     for chunk_strings, chunk_index in parts:
         remap = np.array([lookup.setdefault(_text(s), len(lookup)) for s in chunk_strings],
@@ -356,7 +362,7 @@ def _get(obj, path):
 
 
 def fields_of_objects(messages, msgtype):
-    """The columns of deserialised message objects (the reference of the fast path)."""
+    """Return the columns of deserialised message objects (the reference of the fast path)."""
     wanted = {**_HEADER, **SUPPORTED[msgtype]}
     out = {}
     for name, path in wanted.items():
@@ -398,7 +404,7 @@ class _TopicReader:
         self.count += len(raw)
 
     def _fast(self, raw):
-        """The fields of raw messages by their layout, None if any group fails."""
+        """Return the fields of raw messages by their layout, None if any group fails."""
         n = len(raw)
         lengths = np.fromiter(map(len, raw), np.int64, n)
         pieces = {}
@@ -429,14 +435,15 @@ class _TopicReader:
 
 
 def _messages(reader, connections, start, stop):
-    """rosbags' message generator; one bag's own reader when there is one (no merge)."""
+    """Return rosbags' message generator; one bag's own reader when there is one."""
     if len(reader.readers) == 1:
         return reader.readers[0].messages(connections=connections, start=start, stop=stop)
     return reader.messages(connections=connections, start=start, stop=stop)
 
 
 def read_topics(reader, connections, start=None, stop=None, fast=True, progress=None):
-    """{topic: Columns} of the connections' messages between start and stop (ns, record time).
+    """
+    {topic: Columns} of the connections' messages between start and stop (ns, record time).
 
     ``fast=False`` decodes every message with rosbags (the reference). ``progress(n)`` is
     called now and then with the number of messages read so far.
@@ -475,7 +482,8 @@ def read_topics(reader, connections, start=None, stop=None, fast=True, progress=
 
 
 def read_tf(reader, connections, start=None, stop=None):
-    """The transforms of TFMessage connections as columns, in the order they were recorded.
+    """
+    Return the transforms of TFMessage connections as columns, in the order they were recorded.
 
     Returns a dict: static (N,) bool (from a /tf_static-like topic: its name ends in
     'static'), parent/child (N,) indices into frames (list), sec, nanosec (N,), position

@@ -1,4 +1,5 @@
-"""The inbound boundary: a message's fields → one rigid transform (R, b), or a refusal.
+"""
+The inbound boundary: a message's fields → one rigid transform (R, b), or a refusal.
 
 Every input — a message reaching rotation_node, or a message read from a recorded bag by
 ``rot-tools bag`` — passes the same checks, refused for the same reasons at the same
@@ -34,7 +35,6 @@ otherwise) and :func:`refusal_text` the sentence the per-message converter would
 import math
 
 import numpy as np
-
 from rot_tools.euler import euler_to_matrix
 from rot_tools.so3 import quaternion_to_matrix
 
@@ -66,9 +66,9 @@ class RefusedInput(ValueError):
 class _ScalarOps:
     isfinite = staticmethod(math.isfinite)
     sqrt = staticmethod(math.sqrt)
-    abs = staticmethod(abs)
+    abs = staticmethod(abs)  # noqa: A003
     maximum = staticmethod(max)
-    any = staticmethod(bool)
+    any = staticmethod(bool)  # noqa: A003
 
     @staticmethod
     def where(cond, a, b):
@@ -82,9 +82,9 @@ class _ScalarOps:
 class _ArrayOps:
     isfinite = staticmethod(np.isfinite)
     sqrt = staticmethod(np.sqrt)
-    abs = staticmethod(np.abs)
+    abs = staticmethod(np.abs)  # noqa: A003
     maximum = staticmethod(np.maximum)
-    any = staticmethod(np.any)
+    any = staticmethod(np.any)  # noqa: A003
     where = staticmethod(np.where)
 
     @staticmethod
@@ -100,7 +100,8 @@ _SAFE_SQUARES = (1e-290, 1e290)
 
 
 def quaternion_verdict(ops, x, y, z, w, tolerance):
-    """(code, norm) of the quaternion (x, y, z, w): the one rule of both engines.
+    """
+    (code, norm) of the quaternion (x, y, z, w): the one rule of both engines.
 
     code: ACCEPTED, or the code of non_finite (a component NaN/±Inf), zero_quaternion
     (‖q‖ = 0) or non_unit_quaternion (|‖q‖ − 1| > tolerance). ‖q‖ = sqrt(Σ q_i²), and
@@ -129,7 +130,8 @@ def quaternion_verdict(ops, x, y, z, w, tolerance):
 
 
 def refusal_text(code, name, components=None, norm=None, tolerance=None, fields='xyzw'):
-    """The sentence of a refusal: what was wrong, and by how much.
+    """
+    Return the sentence of a refusal: what was wrong, and by how much.
 
     name: the field ('orientation', 'pose.pose.position', ...); components: its values
     (the first non-finite one is named); norm and tolerance for non_unit_quaternion.
@@ -150,7 +152,7 @@ def refusal_text(code, name, components=None, norm=None, tolerance=None, fields=
 
 
 def lacks_orientation(covariance0):
-    """True where an Imu's orientation_covariance[0] says "no orientation" (== −1)."""
+    """Tell where an Imu's orientation_covariance[0] says "no orientation" (== −1)."""
     return covariance0 == -1.0
 
 
@@ -159,7 +161,8 @@ def lacks_orientation(covariance0):
 
 
 def _require_finite(prefix, fields, values):
-    """Raise RefusedInput(NON_FINITE) naming the first field (prefix.field) that is NaN or ±Inf.
+    """
+    Raise RefusedInput(NON_FINITE) naming the first field (prefix.field) that is NaN or ±Inf.
 
     (The names are built only for the refusal: this runs for every message.)
     """
@@ -169,7 +172,8 @@ def _require_finite(prefix, fields, values):
 
 
 def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
-    """Rotation matrix of a geometry_msgs/Quaternion (x, y, z, w), refused unless near unit.
+    """
+    Rotation matrix of a geometry_msgs/Quaternion (x, y, z, w), refused unless near unit.
 
     Refused (RefusedInput) when a component is NaN/Inf, when q = 0, or when
     |‖q‖ − 1| > ``tolerance``; within the tolerance q is normalised (R is exactly orthogonal).
@@ -197,7 +201,8 @@ def pose_stamped_to_transform(msg, settings):
 
 
 def pose_with_covariance_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/PoseWithCovarianceStamped: ``pose.pose``.
+    """
+    (header, R, b) of a geometry_msgs/PoseWithCovarianceStamped: ``pose.pose``.
 
     The covariance is not used (a NaN there does not refuse the message).
     """
@@ -206,7 +211,8 @@ def pose_with_covariance_stamped_to_transform(msg, settings):
 
 
 def odometry_to_transform(msg, settings):
-    """(header, R, b) of a nav_msgs/Odometry: ``pose.pose``, the body in header.frame_id.
+    """
+    (header, R, b) of a nav_msgs/Odometry: ``pose.pose``, the body in header.frame_id.
 
     The body is ``child_frame_id``; the twist and the covariances are not used.
     """
@@ -215,7 +221,8 @@ def odometry_to_transform(msg, settings):
 
 
 def imu_to_transform(msg, settings):
-    """(header, R, 0) of a sensor_msgs/Imu's ``orientation``.
+    """
+    (header, R, 0) of a sensor_msgs/Imu's ``orientation``.
 
     sensor_msgs/Imu marks "no orientation estimate" with orientation_covariance[0] = -1:
     such a message is refused (NO_ORIENTATION). Angular velocity, linear acceleration and
@@ -243,7 +250,8 @@ def transform_stamped_to_transform(msg, settings):
 
 
 def euler_stamped_to_transform(msg, settings):
-    """(header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3).
+    """
+    (header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3).
 
     The angles are of ``settings.euler_sequence``, in degrees when ``settings.degrees``,
     else radians.
@@ -274,7 +282,8 @@ converters name them in refusals; None: no position, b = 0)."""
 
 
 def check_batch(quaternions, tolerance, positions=None, covariance0=None):
-    """Reason codes (N,) int8 and norms (N,) of N messages' fields, in the converters' order.
+    """
+    Reason codes (N,) int8 and norms (N,) of N messages' fields, in the converters' order.
 
     quaternions (N, 4) as (x, y, z, w); positions (N, 3) or None; covariance0 (N,) — an
     Imu's orientation_covariance[0] — or None. The code of each item is what the
@@ -294,7 +303,7 @@ def check_batch(quaternions, tolerance, positions=None, covariance0=None):
 
 
 def batch_refusal_text(msgtype, code, quaternion, norm, tolerance, position=None):
-    """The sentence the per-message converter of ``msgtype`` raises for one refused item."""
+    """Return the sentence the per-message converter of ``msgtype`` raises for one refused item."""
     q_name, p_name = QUATERNION_FIELD[msgtype]
     if REFUSAL_REASONS[code - 1] == NON_FINITE and position is not None and not all(
             map(math.isfinite, position)):

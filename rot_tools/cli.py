@@ -1,4 +1,5 @@
-"""rot-tools: every representation of a rotation or rigid transform, on the command line.
+"""
+rot-tools: every representation of a rotation or rigid transform, on the command line.
 
 No ROS needed: argparse over rot_tools and rot_tools.report. Each subcommand reads one kind
 of input, turns it into (R, b) and prints ``transform_report`` (keys documented in
@@ -41,7 +42,6 @@ import re
 import sys
 
 import numpy as np
-
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, frame_to_matrix,
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
@@ -83,7 +83,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 class _CommandParser(_Parser):
-    """A command's parser: options may also come between its arguments (``euler ZYX --deg 30
+    """
+    Make a command's parser that takes options between its arguments.
+
+    A command's parser: options may also come between its arguments (``euler ZYX --deg 30
     20 10``), which plain argparse refuses once a ``nargs='*'`` argument has matched nothing.
     """
 
@@ -104,7 +107,7 @@ class _Version(argparse.Action):
     """--version: the installed distribution's version (setup.py's), looked up when asked."""
 
     def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
-                 help=None):
+                 help=None):  # noqa: A002
         super().__init__(option_strings, dest, nargs=0, default=default, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
@@ -184,7 +187,8 @@ def _tol(args, default):
 
 
 def _angle_in(args, values, size=None):
-    """Angles in radians; a hint when radians typed without --deg look like degrees.
+    """
+    Angles in radians; a hint when radians typed without --deg look like degrees.
 
     ``size`` is the angle the hint is about (default the largest |value|; a rotation
     vector's is its norm). The hint is printed after the report (see main).
@@ -359,7 +363,8 @@ _COMMANDS = {
         'rot-tools quaternion 0.7071 0 0 0.7071 --wxyz --deg\n'
         'rot-tools quaternion 0.1 -0.2 0.3 0.927 --tol 1e-2 --json'),
     'frame': (
-        _from_frame, "a frame's axes u, v, w written in the reference frame (seed 000 §4)",
+        _from_frame,
+        "a frame's axes u, v, w written in the reference frame (Jia, Rotation in the Space, §4)",
         'frame UX UY UZ VX VY VZ WX WY WZ [options]',
         'R = (û v̂ ŵ): the axes are the columns of R, each normalised. They must be\n'
         f'orthogonal within --tol (|cos| between any two, default {MATRIX_TOL:g}) and\n'
@@ -387,7 +392,8 @@ _COMMANDS = {
 
 
 def _add_common(parser, suppress):
-    """Options accepted before the command and after its arguments (one line each).
+    """
+    Options accepted before the command and after its arguments (one line each).
 
     They are added to the main parser (with their defaults) and to every command's parser
     (with SUPPRESS defaults, so a value given before the command is not overwritten).
@@ -427,7 +433,7 @@ def _add_common(parser, suppress):
                      'Rᵀ·(p − b)')
     out.add_argument('--plot', type=_plot_file, default=default(None), metavar='FILE',
                      help='also draw the motion in FILE (.png or .svg): both frames, the '
-                     "rotation or screw axis, the path of the origin; needs matplotlib (pip "
+                     'rotation or screw axis, the path of the origin; needs matplotlib (pip '
                      "install 'rot_tools[plot]')")
     out.add_argument('--version', action=_Version, help='print the version and exit')
 
@@ -448,20 +454,20 @@ _BAG_TEXT = (
     'Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags without ROS (the rosbags library: pip\n'
     "install 'rot_tools[bag]'). Topics of type PoseStamped, PoseWithCovarianceStamped,\n"
     'Odometry, Imu, QuaternionStamped and TransformStamped are read (default: all of\n'
-    'them). Each message passes the checks of rotation_node\'s inputs: a NaN/Inf, a zero or\n'
+    "them). Each message passes the checks of rotation_node's inputs: a NaN/Inf, a zero or\n"
     'non-unit quaternion (|q| off 1 by more than --tol, default 0.001), an Imu without\n'
     'orientation is refused and counted by reason.\n\n'
     'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
     'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
     'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
-    'from its gyro (RMS). roll, pitch, yaw are REP-103\'s (about the fixed X, Y, Z axes,\n'
+    "from its gyro (RMS). roll, pitch, yaw are REP-103's (about the fixed X, Y, Z axes,\n"
     'the extrinsic sequence xyz) and continuous along each topic (no jump at ±180°)\n'
     'unless --wrap. With --csv, one row per accepted message; with --plot, roll, pitch\n'
     'and yaw against time, one panel per topic.')
 
 
 def _add_bag(sub):
-    """The bag command: its own options, and the common ones that apply to it."""
+    """Return the bag command: its own options, and the common ones that apply to it."""
     p = sub.add_parser(
         'bag', help='the orientations recorded in a ROS bag: summary, CSV, plot',
         usage=f'{PROG} bag PATH [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] [--deg]\n'
@@ -477,7 +483,7 @@ def _add_bag(sub):
                    help='read this topic (repeat for more); default: every topic of a type '
                    'read')
     p.add_argument('--tf', nargs=2, metavar=('REFERENCE', 'BODY'),
-                   help='the transform of BODY in REFERENCE from the bag\'s /tf and '
+                   help="the transform of BODY in REFERENCE from the bag's /tf and "
                    '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree, at every '
                    'stamp of the dynamic transforms between them (a topic named '
                    'tf:REFERENCE->BODY); other topics then only with --topic')
@@ -490,9 +496,9 @@ def _add_bag(sub):
                    'vector rx, ry, rz, angle, body angular velocity wx, wy, wz from the '
                    'previous row of the topic (empty on its first row)')
     p.add_argument('--start', type=_seconds, metavar='S',
-                   help='only messages recorded S seconds or more after the bag\'s start')
+                   help="only messages recorded S seconds or more after the bag's start")
     p.add_argument('--end', type=_seconds, metavar='S',
-                   help='only messages recorded at most S seconds after the bag\'s start')
+                   help="only messages recorded at most S seconds after the bag's start")
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
     common.add_argument('--deg', action='store_true', default=suppress,

@@ -1,4 +1,5 @@
-"""Decimal text of many floats at once, with NumPy: the numbers of ``rot-tools bag --csv``.
+"""
+Decimal text of many floats at once, with NumPy: the numbers of ``rot-tools bag --csv``.
 
 Python's ``'%g' % x`` costs a few hundred nanoseconds a number, more than everything else
 ``rot-tools bag`` does for a message. Here the digits of a whole chunk of rows are made by
@@ -31,14 +32,14 @@ _POW10_INT = 10 ** np.arange(19, dtype=np.int64)
 
 
 def numbers_fit(values, precision):
-    """True when every finite value's digits at ``precision`` fit the int64 arithmetic."""
+    """Tell whether every finite value's digits at ``precision`` fit the int64 arithmetic."""
     values = np.asarray(values, dtype=np.float64).ravel()
     big = np.fmax.reduce(np.abs(values)) if values.size else 0.0  # NaN ignored, ±inf not
     return precision <= MAX_PRECISION and not big >= 1e15
 
 
 def _groups(v, count):
-    """The 4-digit groups (int) of integers v (int64, < 1e4**count), most significant first."""
+    """Return the 4-digit groups (int) of integers v (int64, < 1e4**count), highest first."""
     out = []
     for _ in range(count - 1):
         v, r = np.divmod(v, 10000)
@@ -65,7 +66,8 @@ def _digit_count(v, most):
 
 
 def number_cells(x, precision):
-    """(bytes (n, width) uint8, keep (n, width) bool) of the text of each value of x (n,).
+    """
+    (bytes (n, width) uint8, keep (n, width) bool) of the text of each value of x (n,).
 
     Each cell is sign, integer digits, '.', fraction digits; ``keep`` marks the bytes of the
     shortest text (no leading zeros, no trailing zeros, no '-' for 0, nothing for NaN).
@@ -134,7 +136,8 @@ def _stamps(sec, nanosec):
 
 
 def rows(topic, sec, nanosec, frames, frame, values, precision):
-    """CSV lines (bytes) ``topic,sec.nanosec,frame,v1,...,vk`` of m rows.
+    """
+    CSV lines (bytes) ``topic,sec.nanosec,frame,v1,...,vk`` of m rows.
 
     topic: bytes (already CSV-quoted); sec, nanosec (m,) ints; frames: list of bytes (quoted)
     indexed by frame (m,); values (m, k) float64 with numbers_fit(values, precision), NaN

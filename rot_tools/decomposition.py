@@ -1,4 +1,5 @@
-"""Every representation of one rigid motion (R, b), from the kernels of each.
+"""
+Every representation of one rigid motion (R, b), from the kernels of each.
 
 :func:`decompose` gives arrays (one item or a batch) for the report, the drawing and people;
 :func:`decompose_values` gives the numbers rotation_node publishes for one input, as plain
@@ -10,7 +11,6 @@ from functools import partial
 from typing import NamedTuple
 
 import numpy as np
-
 from rot_tools._backend import apply
 from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.euler import (
@@ -20,7 +20,8 @@ from rot_tools.so3 import apply_to_rotations, quaternion_of_matrix_kernel
 
 
 class Decomposition(NamedTuple):
-    """Every representation of one rigid motion p ↦ R·p + b, from one pass over R and b.
+    """
+    Every representation of one rigid motion p ↦ R·p + b, from one pass over R and b.
 
     axis, angle: as matrix_to_axis_angle; euler, degenerate: as matrix_to_euler for the
     sequence asked; screw: as screw_from_transform; twist: as screw_log. At θ = π all of them
@@ -36,8 +37,12 @@ class Decomposition(NamedTuple):
 
 
 def _motion_kernel(ops, m, b):
-    """Every representation but the Euler angles (those depend on the sequence: one kernel
-    per sequence, euler._ANGLES_KERNELS, run beside this one)."""
+    """
+    Compute every representation but the Euler angles.
+
+    Every representation but the Euler angles (those depend on the sequence: one kernel
+    per sequence, euler._ANGLES_KERNELS, run beside this one).
+    """
     axis, angle = axis_angle_kernel(ops, m)
     screw, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
     twist, twist_fits = twist_kernel(ops, axis, angle, b)
@@ -51,7 +56,8 @@ _ANGLES_OUTPUTS = [_VEC, ((), np.bool_)]
 
 
 def decompose(R, b, seq='ZYX', *, check=True):
-    """Decomposition of (R (..., 3, 3), b (..., 3)) with Euler angles of ``seq`` (radians).
+    """
+    Decomposition of (R (..., 3, 3), b (..., 3)) with Euler angles of ``seq`` (radians).
 
     One kernel run computes every representation but the Euler angles, and one more the
     angles, so the rot-tools report and each output of rotation_node come from the same
@@ -66,7 +72,8 @@ def decompose(R, b, seq='ZYX', *, check=True):
 
 
 class Values(NamedTuple):
-    """The numbers rotation_node publishes for one input, as plain Python floats.
+    """
+    The numbers rotation_node publishes for one input, as plain Python floats.
 
     matrix: R row-major (9); rotvec: θ·l̂ (3); euler: the Euler angles of the sequence asked,
     rad (3); twist: screw_log (6); quaternion: (x, y, z, w), as matrix_to_quaternion gives
@@ -105,7 +112,8 @@ _EULER_KERNELS = {seq: partial(_euler_kernel, spec=parse_sequence(seq))
 
 
 def decompose_values(R, b, seq='ZYX'):
-    """Return the Values of one rigid motion (R (3, 3), b (3,)), from three kernel passes.
+    """
+    Return the Values of one rigid motion (R (3, 3), b (3,)), from three kernel passes.
 
     R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist,
     quaternion, and roll, pitch, yaw (rad: the Euler kernel of 'xyz'). The same kernels

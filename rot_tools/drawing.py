@@ -1,18 +1,19 @@
-"""The geometry of a picture of one rigid motion, for every renderer (plain NumPy).
+"""
+The geometry of a picture of one rigid motion, for every renderer (plain NumPy).
 
 ``rot-tools --plot`` (rot_tools.plot, matplotlib) and rotation_node's ``~/markers``
 (rot_tools.messages, RViz) draw the same :class:`Picture`, computed here once. The motion
 p ↦ R·p + b has the Chasles screw (l̂, c, θ, d) and the twist ξ = screw_log(R, b); a picture
 of it holds, in the reference frame:
 
-- the moved frame: its axes are the columns of R (seed 000 §4), drawn from b with length
-  ``scale``;
+- the moved frame: its axes are the columns of R (Jia, Rotation in the Space, §4), drawn
+  from b with length ``scale``;
 - the screw axis: the line through c along l̂, as a segment from c + t_lo·l̂ to c + t_hi·l̂
   (pointing along +l̂: θ turns right-handed about it) that covers the projections onto the
   axis of the origin, the path and the moved frame, plus ``scale`` beyond each end;
 - the path: the constant-screw motion T(s) = exp(s·ξ), s ∈ [0, 1], applied to a point p0,
   p(s) = R(s)·p0 + b(s) — a helix about the axis of radius dist(p0, axis) that turns s·θ and
-  rises s·d (seed 000 §5, Chasles). p0 is the frame origin, whose path ends at b;
+  rises s·d (Jia §5, Chasles). p0 is the frame origin, whose path ends at b;
 - a label: θ (in degrees or radians), d and the screw pitch h = d/θ, placed LABEL_OFFSET·scale off
   the middle of the path, across its chord (towards +z, or +x when the chord is within 60° of
   z) — beside the motion, however far away its axis is (|c| grows like |b|/θ as θ → 0).
@@ -34,9 +35,8 @@ import math
 from typing import NamedTuple, Optional
 
 import numpy as np
-
-from rot_tools.errors import RotationError
 from rot_tools.decomposition import decompose
+from rot_tools.errors import RotationError
 from rot_tools.screw import Screw, screw_exp
 
 MAX_STEP_ANGLE = math.radians(3.0)
@@ -56,7 +56,8 @@ IDENTITY, ROTATION, TRANSLATION, SCREW = 'identity', 'rotation', 'translation', 
 
 
 class Picture(NamedTuple):
-    """What to draw of one rigid motion p ↦ R·p + b; see the module docstring.
+    """
+    What to draw of one rigid motion p ↦ R·p + b; see the module docstring.
 
     kind: IDENTITY, ROTATION, TRANSLATION or SCREW. origin: b (3,), where the moved frame
     is drawn; frame: R (3, 3), the moved axes x, y, z are its columns; scale: the length of
@@ -80,12 +81,13 @@ class Picture(NamedTuple):
 
 
 def _number(x):
-    """x to 4 significant digits, 'inf' for infinity, never '-0'."""
+    """Write x to 4 significant digits, 'inf' for infinity, never '-0'."""
     return f'{x + 0.0:.4g}'
 
 
 def label_text(screw, degrees=False):
-    """Return the label of a Screw: 'theta = 90 deg, d = 0.5, screw pitch = 0.3183 /rad'.
+    """
+    Return the label of a Screw: 'theta = 90 deg, d = 0.5, screw pitch = 0.3183 /rad'.
 
     ASCII. "screw pitch", not "pitch": next to the angles of an IMU, a bare pitch reads as
     the Euler (roll, pitch, yaw) one.
@@ -98,7 +100,8 @@ def label_text(screw, degrees=False):
 
 
 def path_segments(angle, radius, scale):
-    """Segments that keep each step ≤ MAX_STEP_ANGLE and each chord ≤ SAGITTA·scale off.
+    """
+    Segments that keep each step ≤ MAX_STEP_ANGLE and each chord ≤ SAGITTA·scale off.
 
     r·Δ²/8 ≤ SAGITTA·scale gives Δ ≤ √(8·SAGITTA·scale/r); one segment for a straight path
     (angle 0), at most MAX_SEGMENTS.
@@ -122,7 +125,8 @@ def _traced_point(kind, direction, scale):
 
 
 def label_point(path, scale):
-    """Where the label goes: m + LABEL_OFFSET·scale·n̂, m the middle of the path.
+    """
+    Where the label goes: m + LABEL_OFFSET·scale·n̂, m the middle of the path.
 
     m is the path's middle point (of its middle chord for an even count of points); n̂ is the
     unit vector across the chord k = p_last − p_0 towards +z, ẑ − (ẑ·k̂)k̂ normalised, or towards
@@ -140,7 +144,8 @@ def label_point(path, scale):
 
 
 def screw_path(R, b, twist, p0, segments):
-    """Points p(s) = R(s)·p0 + b(s) of exp(s·twist), s = 0, 1/n, ..., 1 ((n + 1, 3)).
+    """
+    Points p(s) = R(s)·p0 + b(s) of exp(s·twist), s = 0, 1/n, ..., 1 ((n + 1, 3)).
 
     The ends are set to p0 and R·p0 + b exactly (exp(twist) gives them to rounding).
     """
@@ -152,7 +157,8 @@ def screw_path(R, b, twist, p0, segments):
 
 
 def picture(R, b, scale=1.0, degrees=False, decomposition=None):
-    """The Picture of p ↦ R·p + b, R (3, 3) and b (3,); frame axes ``scale`` long.
+    """
+    Return the Picture of p ↦ R·p + b, R (3, 3) and b (3,); frame axes ``scale`` long.
 
     ``decomposition`` is rot_tools.decompose(R, b) when the caller has it already; the label
     gives θ in degrees when ``degrees``. R is validated (by decompose) when it is not given.

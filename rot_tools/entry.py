@@ -1,4 +1,5 @@
-"""Console-script entries of rotation_node and rotation_client (setup.py's console_scripts).
+"""
+Console-script entries of rotation_node and rotation_client (setup.py's console_scripts).
 
 Each names its program's module and hands it to rot_tools.runtime, which installs the signal
 handlers before the module (NumPy, rclpy) loads: see rot_tools.runtime.start. This module and

@@ -1,11 +1,13 @@
-"""Euler angles in all twelve axis sequences, intrinsic and extrinsic, with gimbal lock.
+"""
+Euler angles in all twelve axis sequences, intrinsic and extrinsic, with gimbal lock.
 
 A sequence is three axis letters, e.g. ``'ZYX'``, with no letter repeated twice in a row:
 six Tait–Bryan sequences (three different axes: XYZ XZY YXZ YZX ZXY ZYX) and six proper Euler
-sequences (first axis = third: XYX XZX YXY YZY ZXZ ZYZ) — seed 000 §1 counts them as 3·2·2.
+sequences (first axis = third: XYX XZX YXY YZY ZXZ ZYZ) — Jia, Rotation in the Space, §1,
+counts them as 3·2·2.
 
 Upper case is **intrinsic**: the rotations are about the body's moving axes, applied in the
-order written, so (seed 000 eq. 1 for Z-Y-X, yaw ϕ, pitch θ, roll ψ)::
+order written, so (Jia, eq. 1 for Z-Y-X, yaw ϕ, pitch θ, roll ψ)::
 
     'ZYX':  R = Rot_z(θ1) · Rot_y(θ2) · Rot_x(θ3)
 
@@ -28,7 +30,6 @@ from functools import partial
 import math
 
 import numpy as np
-
 from rot_tools._arrays import require_tolerance
 from rot_tools._backend import apply
 from rot_tools.errors import RotationError
@@ -58,7 +59,8 @@ _PARSED = {seq: _parse(seq) for seq in EULER_SEQUENCES}
 
 
 def parse_sequence(seq):
-    """Return (i, j, k, sigma, proper, extrinsic) for an Euler sequence name.
+    """
+    Return (i, j, k, sigma, proper, extrinsic) for an Euler sequence name.
 
     (i, j, k) are the axis indices of the equivalent *intrinsic* sequence Rot_i Rot_j Rot_?,
     with k the axis that is neither i nor j; sigma = +1 when (i, j, k) is a cyclic
@@ -73,9 +75,10 @@ def parse_sequence(seq):
 
 
 def _matrix_kernel(ops, a, spec):
-    """Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i (proper) or k (Tait–Bryan).
+    """
+    Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i (proper) or k (Tait–Bryan).
 
-    Derived by applying the three elementary rotations to the unit vectors; seed 000 eq. 1
+    Derived by applying the three elementary rotations to the unit vectors; Jia, eq. 1
     is the case (i, j, k) = (z, y, x), sigma = −1.
     """
     i, j, k, sig, proper, extrinsic = spec
@@ -99,7 +102,8 @@ def _matrix_kernel(ops, a, spec):
 
 
 def euler_to_matrix(angles, seq='ZYX'):
-    """Rotation matrix of Euler angles (θ1, θ2, θ3) in radians; (..., 3) → (..., 3, 3).
+    """
+    Rotation matrix of Euler angles (θ1, θ2, θ3) in radians; (..., 3) → (..., 3, 3).
 
     Intrinsic 'ABC': R = Rot_a(θ1)·Rot_b(θ2)·Rot_c(θ3); extrinsic 'abc': R = Rot_c(θ3)·Rot_b(θ2)·
     Rot_a(θ1). Any of the 24 names of EULER_SEQUENCES; another string raises RotationError.
@@ -156,7 +160,8 @@ def angles_kernel(ops, m, spec, lock_tol):
 
 
 def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
-    """Euler angles of R: returns (angles (..., 3), degenerate (...) bool).
+    """
+    Euler angles of R: returns (angles (..., 3), degenerate (...) bool).
 
     θ2 from the entries that do not involve θ1, θ3 (Tait–Bryan: R[i,k] = σ sin θ2 with
     |(R[k,k], R[j,k])| = |cos θ2|; proper: R[i,i] = cos θ2, |(R[j,i], R[k,i])| = sin θ2),

@@ -1,4 +1,5 @@
-"""The executor rot_tools' node runs on: one wait set, services first, bounded bursts.
+"""
+The executor rot_tools' node runs on: one wait set, services first, bounded bursts.
 
 rot_tools.runtime.make_executor returns a :class:`WaitSetExecutor`; this module is imported
 only then (it needs rclpy, which rot_tools.runtime loads late). Why this executor and not one
@@ -23,7 +24,8 @@ EVENT_PERIOD = 0.5
 
 
 class WaitSetExecutor(Executor):
-    """A lean single-threaded executor: one wait set, services first, bounded bursts.
+    """
+    A lean single-threaded executor: one wait set, services first, bounded bursts.
 
     Each spin_once waits on the subscriptions, services and timers of its nodes and on its
     own guard conditions (a new entity, a signal), and serves what is ready: timers, every

@@ -1,4 +1,5 @@
-"""Comparing, averaging, fitting and sampling rotations — quaternion-free.
+"""
+Comparing, averaging, fitting and sampling rotations — quaternion-free.
 
 - **Distance.** The geodesic distance of R1 and R2 is the angle of the rotation R1ᵀR2 that
   takes one to the other: θ ∈ [0, π], from atan2(|w|, (tr − 1)/2) as in matrix_to_axis_angle,
@@ -26,7 +27,6 @@ import numbers
 import os
 
 import numpy as np
-
 from rot_tools._arrays import finite_array, refuse_overflow, require_finite
 from rot_tools._backend import norm
 from rot_tools.axis_angle import axis_angle_to_matrix, skew_and_cos
@@ -57,7 +57,8 @@ def _distance_kernel(ops, m1, m2):
 
 
 def rotation_distance(R1, R2, *, check=True):
-    """Geodesic angle between rotations: the angle θ ∈ [0, π] of R1ᵀ·R2.
+    """
+    Geodesic angle between rotations: the angle θ ∈ [0, π] of R1ᵀ·R2.
 
     R1, R2 (..., 3, 3), broadcasting → (...). θ = atan2(|w|, (tr R1ᵀR2 − 1)/2) with w the
     skew part of R1ᵀR2: accurate to rounding at 0 and π. Symmetric, and θ(R1, R2) =
@@ -89,7 +90,8 @@ def _weights(weights, count, name):
 
 
 def _nearest_rotations(s, what, matrix, rank_one_below=UNIQUE_TOL):
-    """U·diag(1, 1, det UVᵀ)·Vᵀ maximising tr(Mᵀ·s) per item, and the rank-one flags.
+    """
+    U·diag(1, 1, det UVᵀ)·Vᵀ maximising tr(Mᵀ·s) per item, and the rank-one flags.
 
     RotationError when the maximiser is not unique (σ2 + det·σ3 ≤ UNIQUE_TOL·σ1) for an item
     not flagged; items with σ2 ≤ rank_one_below·σ1 are only flagged (the caller decides).
@@ -112,7 +114,8 @@ def _nearest_rotations(s, what, matrix, rank_one_below=UNIQUE_TOL):
 
 
 def mean_rotation(R, weights=None, *, check=True):
-    """Chordal L2 mean of rotations: the rotation nearest to Σ wᵢRᵢ (module docstring).
+    """
+    Chordal L2 mean of rotations: the rotation nearest to Σ wᵢRᵢ (module docstring).
 
     R (..., N, 3, 3) → (..., 3, 3); weights (N,) or (..., N), ≥ 0, not all 0 (default
     equal). RotationError when the mean is not unique (Σ wᵢRᵢ rank-deficient, e.g. two
@@ -161,7 +164,8 @@ def _unit_rows(x):
 
 
 def _smallest_rotation(b, a):
-    """Return the smallest rotation taking the unit vector b onto the unit vector a (..., 3).
+    """
+    Return the smallest rotation taking the unit vector b onto the unit vector a (..., 3).
 
     Axis b × a, angle atan2(|b × a|, b·a). Near the angle π, b × a is small and its
     rounding noise (~ε) is not ⊥ b; a half-turn about an axis tilted by τ off the plane ⊥ b
@@ -185,7 +189,8 @@ def _log_norms(x):
 
 
 def _rmsd(a, b, R, w):
-    """Return sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item.
+    """
+    Return sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) per item.
 
     Computed on a and b scaled by a common factor so that nothing overflows; RotationError if
     the rmsd itself does.
@@ -200,7 +205,8 @@ def _rmsd(a, b, R, w):
 
 
 def _fit_about_dominant(a, b, w, a_axis, b_axis):
-    """Return the best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
+    """
+    Return the best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
 
     R0, the smallest rotation taking b_axis onto a_axis, then the turn φ about a_axis that
     best fits the pairs: with c = R0·b and the parts a⊥, c⊥ of a and c ⊥ a_axis, the cost
@@ -251,7 +257,8 @@ ALONG_AXIS_SIN = 64 * np.finfo(float).eps
 
 
 def align_vectors(a, b, weights=None):
-    """Return the rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
+    """
+    Return the rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
 
     a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
     the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
@@ -305,7 +312,8 @@ def align_vectors(a, b, weights=None):
 
 
 def random_rotations(n=None, rng=None):
-    """Haar-uniform random rotations: (3, 3) for n=None, else (n, 3, 3).
+    """
+    Haar-uniform random rotations: (3, 3) for n=None, else (n, 3, 3).
 
     rng: a numpy.random.Generator, or a seed for numpy.random.default_rng (None: fresh
     entropy). Columns u = g1/|g1|, v = the unit part of g2 ⊥ u, w = u × v for Gaussian

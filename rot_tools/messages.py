@@ -1,4 +1,5 @@
-"""ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware helpers.
+"""
+ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware helpers.
 
 Inbound, every input message becomes one rigid transform ``(header, R, b)``: R a (3, 3)
 rotation, b a (3,) translation (b = 0 for an input that carries only an orientation). Every
@@ -25,9 +26,6 @@ from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, QuaternionSt
 from geometry_msgs.msg import TwistStamped, Vector3Stamped
 from nav_msgs.msg import Path
 import numpy as np
-from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
-from visualization_msgs.msg import Marker, MarkerArray
-
 from rot_tools.axis_angle import matrix_to_axis_angle
 # The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.boundary. Its
 # names are re-exported here, where rotation_node has always found them.
@@ -37,6 +35,8 @@ from rot_tools.boundary import (  # noqa: F401
     pose_to_rt, pose_with_covariance_stamped_to_transform, quaternion_msg_to_matrix,
     quaternion_stamped_to_transform, REFUSAL_REASONS, RefusedInput,
     transform_stamped_to_transform, ZERO_QUATERNION)
+from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
+from visualization_msgs.msg import Marker, MarkerArray
 
 
 def type_name(msg_type):
@@ -72,7 +72,8 @@ def new_rotation_matrix_msg():
 
 
 def matrix_values_msg(header, values, msg=None):
-    """std_msgs/Float64MultiArray of R given as its 9 values row-major (a list of floats).
+    """
+    std_msgs/Float64MultiArray of R given as its 9 values row-major (a list of floats).
 
     The signature of the stamped builders below; the type has no header (it is unused).
     """
@@ -117,7 +118,8 @@ SCREW_AXIS_NS = 'screw_axis'
 
 
 def screw_axis_marker(header, point, direction, scale, msg=None, ns=SCREW_AXIS_NS):
-    """visualization_msgs/Marker: an ARROW from ``point`` to ``point + scale·direction``.
+    """
+    visualization_msgs/Marker: an ARROW from ``point`` to ``point + scale·direction``.
 
     Points in ``header.frame_id``, identity pose (orientation.w = 1: RViz rejects q = 0),
     id 0 so each new axis replaces the last. scale.x/y/z are shaft diameter, head diameter
@@ -165,7 +167,7 @@ def _points(points):
 
 
 def _marker(header, marker_id, kind, color, size, points=None):
-    """An ADD Marker of ``kind`` in namespace MARKERS_NS with an identity pose."""
+    """Return an ADD Marker of ``kind`` in namespace MARKERS_NS with an identity pose."""
     msg = Marker(header=header, ns=MARKERS_NS, id=marker_id, type=kind, action=Marker.ADD,
                  color=color, points=_points(points) if points is not None else [])
     _set_xyz(msg.scale, size)
@@ -179,7 +181,8 @@ def delete_picture_markers(header):
 
 
 def picture_markers(header, picture):
-    """visualization_msgs/MarkerArray of a rot_tools.drawing.Picture (see MARKER_IDS).
+    """
+    visualization_msgs/MarkerArray of a rot_tools.drawing.Picture (see MARKER_IDS).
 
     In ``header.frame_id``, namespace MARKERS_NS: the moved frame's x, y, z axes as red,
     green and blue ARROWs from b (picture.scale long), the screw axis as an orange ARROW
@@ -210,7 +213,8 @@ def picture_markers(header, picture):
 
 
 def matrices_to_quaternions(R, first=None):
-    """Quaternions (n, 4) as (x, y, z, w) of rotations R (n, 3, 3), continuous in sign.
+    """
+    Quaternions (n, 4) as (x, y, z, w) of rotations R (n, 3, 3), continuous in sign.
 
     q = (sin(θ/2)·l̂, cos(θ/2)) from matrix_to_axis_angle. q and −q are the same rotation;
     each q is signed so that its dot product with the previous one (with ``first`` (4,) for
@@ -233,7 +237,8 @@ def pose_msg(position, quaternion):
 
 
 def path_msg(header, start, goal, R, b):
-    """nav_msgs/Path: ``start``, the poses (R[k], b[k]) in between, then ``goal``.
+    """
+    nav_msgs/Path: ``start``, the poses (R[k], b[k]) in between, then ``goal``.
 
     start and goal are PoseStamped copied as given; R (n, 3, 3) and b (n, 3) include both
     ends (only the inner n − 2 are converted); every inner pose gets ``header``.

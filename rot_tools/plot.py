@@ -1,4 +1,5 @@
-"""A 3-D picture of a rigid motion with matplotlib: what ``rot-tools ... --plot FILE`` draws.
+"""
+A 3-D picture of a rigid motion with matplotlib: what ``rot-tools ... --plot FILE`` draws.
 
 matplotlib is the optional ``plot`` extra (``pip install 'rot_tools[plot]'``); this module
 imports it, so rot-tools imports this module only when --plot is given. It uses no pyplot
@@ -28,7 +29,6 @@ import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 import numpy as np
-
 from rot_tools import drawing
 
 REFERENCE_GIDS = ('reference_x', 'reference_y', 'reference_z')
@@ -49,7 +49,8 @@ def _length(v):
 
 
 def default_scale(pic):
-    """Frame axes 1 long, or a quarter of the motion's reach if larger.
+    """
+    Frame axes 1 long, or a quarter of the motion's reach if larger.
 
     The reach is the farthest point of the path (of a Picture drawn at scale 1) from the
     origin, |b| at least; the screw axis, however far, does not count.
@@ -80,14 +81,15 @@ def _cube(points):
 
 
 def _set_equal_limits(ax, center, half):
-    """The cube centre ± half on x, y and z: equal scales."""
+    """Return the cube centre ± half on x, y and z: equal scales."""
     for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), center):
         setter(c - half, c + half)
     ax.set_box_aspect((1, 1, 1))
 
 
 def _draw_axis(ax, pic, drawn):
-    """Draw the screw axis of ``pic``; return the view's (centre, half-width).
+    """
+    Draw the screw axis of ``pic``; return the view's (centre, half-width).
 
     The view is _cube(drawn), grown to hold the axis segment when the axis is near: within
     AXIS_REACH·half of the centre m (distance |(m − c) × l̂|). Far: a dotted line from m to
@@ -112,7 +114,8 @@ def _draw_axis(ax, pic, drawn):
 
 
 def figure(R, b=None, degrees=False, scale=None):
-    """The matplotlib Figure of p ↦ R·p + b (b = 0 when None); see the module docstring.
+    """
+    Return the matplotlib Figure of p ↦ R·p + b (b = 0 when None); see the module docstring.
 
     R (3, 3) is validated (rot_tools.decompose); θ in the title is in degrees when
     ``degrees``; ``scale`` is the length of the frame axes (default: default_scale).
@@ -127,9 +130,9 @@ def figure(R, b=None, degrees=False, scale=None):
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(projection='3d')  # matplotlib.projections registers mplot3d
     drawn = _draw_frame(ax, np.zeros(3), scale * np.eye(3), REFERENCE_GIDS,
-                        dict(linestyle='--', linewidth=1.2, alpha=0.7), ('x', 'y', 'z'))
+                        {'linestyle': '--', 'linewidth': 1.2, 'alpha': 0.7}, ('x', 'y', 'z'))
     drawn += _draw_frame(ax, pic.origin, scale * pic.frame, MOVED_GIDS,
-                         dict(linewidth=2.5), ("x'", "y'", "z'"))
+                         {'linewidth': 2.5}, ("x'", "y'", "z'"))
     ax.plot([], [], [], color='gray', linestyle='--', label='reference frame')
     ax.plot([], [], [], color='gray', linewidth=2.5, label='moved frame (columns of R, at b)')
     drawn += [] if pic.path is None else list(pic.path)
@@ -151,7 +154,8 @@ SVG_STYLE = {'svg.fonttype': 'none', 'svg.hashsalt': 'rot_tools'}
 
 
 def save(R, b, path, degrees=False):
-    """Write figure(R, b, degrees) to ``path``, in the format its extension names.
+    """
+    Write figure(R, b, degrees) to ``path``, in the format its extension names.
 
     The file carries no date, so the same motion gives the same bytes.
     """

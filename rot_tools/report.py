@@ -1,4 +1,5 @@
-"""Every representation of one rigid transform (R, b) as plain data, and its YAML / JSON text.
+"""
+Every representation of one rigid transform (R, b) as plain data, and its YAML / JSON text.
 
 The data takes one path: (R, b) → :func:`transform_report` → :func:`to_yaml` or
 :func:`to_json`. The ``rot-tools`` command line and the node's ``~/describe`` service print
@@ -15,8 +16,9 @@ this order::
       angle:           θ ∈ [0, π], rad
       angle_deg:       θ in degrees
       rotation_vector: θ·l̂, rad
-      second_solution: the same rotation the other way round (seed 000 §3.3: about −l̂
-                       through −θ), as {axis: −l̂, angle: 2π − θ, angle_deg: 360 − θ°}
+      second_solution: the same rotation the other way round (Jia, Rotation in the Space,
+                       §3.3: about −l̂ through −θ), as
+                       {axis: −l̂, angle: 2π − θ, angle_deg: 360 − θ°}
     euler:
       sequence:        e.g. ZYX (upper case intrinsic, lower case extrinsic)
       unit:            rad | deg (``degrees``)
@@ -50,7 +52,7 @@ this order::
     point:             only when ``point`` p (3,) is given (b = 0 when b is not)
       p:               the point as given, in the reference frame
       image:           R·p + b, where the motion takes it (rot_tools.transform_points)
-      in_moved_frame:  Rᵀ·(p − b), its coordinates in the moved frame (seed 000 §4: q' = Rᵀq;
+      in_moved_frame:  Rᵀ·(p − b), its coordinates in the moved frame (Jia §4: q' = Rᵀq;
                        transform_points of invert_transform)
 
 ``degrees`` only switches the Euler angles (``euler.unit``); axis-angle and screw angles
@@ -77,7 +79,6 @@ import math
 import re
 
 import numpy as np
-
 from rot_tools.decomposition import decompose, RPY_SEQUENCE
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES, matrix_to_euler
@@ -113,7 +114,8 @@ _YPR_NAMES = {'ypr', 'yawpitchroll'}
 
 
 def sequence_hint(name):
-    """Return a hint for a sequence name that means roll, pitch, yaw ('RPY', 'YPR'), or ''.
+    """
+    Return a hint for a sequence name that means roll, pitch, yaw ('RPY', 'YPR'), or ''.
 
     No Euler sequence is spelt with the letters R, P, Y; people who type them mean
     REP 103's roll, pitch, yaw. For the messages that refuse such a name (rot-tools,
@@ -121,7 +123,7 @@ def sequence_hint(name):
     """
     key = ''.join(c for c in str(name).lower() if c.isalpha())
     if key in _RPY_NAMES:
-        return ("; roll, pitch, yaw (about the fixed x, y, z axes) are the extrinsic sequence "
+        return ('; roll, pitch, yaw (about the fixed x, y, z axes) are the extrinsic sequence '
                 "'xyz': every report prints them as rpy, and rotation_node publishes them on "
                 '~/rpy')
     if key in _YPR_NAMES:
@@ -132,7 +134,8 @@ def sequence_hint(name):
 
 
 def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, point=None):
-    """Every representation of the rotation R (3, 3), and of (R, b) when b (3,) is given.
+    """
+    Every representation of the rotation R (3, 3), and of (R, b) when b (3,) is given.
 
     R is validated as rot_tools.validate_rotation does (tol 1e-9); project a matrix typed
     with few digits with rot_tools.nearest_rotation first. ``point`` (3,) adds where the
@@ -254,7 +257,7 @@ def _yaml_string(text):
 
 
 def _json_string(text):
-    """``text`` as a JSON string: printable characters as themselves, the rest \\uXXXX."""
+    r"""Return ``text`` as a JSON string: printable characters as is, the rest \uXXXX."""
     return _ESCAPED.sub(lambda m: f'\\u{ord(m.group()):04x}',
                         json.dumps(text, ensure_ascii=False))
 

@@ -1,6 +1,7 @@
-"""Frames and rigid motions (seed 000 §4 and §5), one item or a batch.
+"""
+Frames and rigid motions (Jia, Rotation in the Space, §4 and §5), one item or a batch.
 
-**Frames** (seed 000 §4). A frame u-v-w turned from the reference frame x-y-z is the
+**Frames** (Jia §4). A frame u-v-w turned from the reference frame x-y-z is the
 rotation whose columns are its axes written in x-y-z::
 
     R = (û v̂ ŵ)
@@ -8,7 +9,7 @@ rotation whose columns are its axes written in x-y-z::
 A point rigidly attached to the frame, with coordinates p in u-v-w, has coordinates R·p in
 x-y-z; conversely a point q of x-y-z has coordinates q' = Rᵀ·q in u-v-w.
 
-**Rigid motions** (seed 000 §5). T(p) = R·p + b, a rotation followed by a translation::
+**Rigid motions** (Jia §5). T(p) = R·p + b, a rotation followed by a translation::
 
     T1∘T2 (T2 first)              = (R1·R2, R1·b2 + b1)
     a translation b, then R       = R then the translation R·b      (R(p + b) = R·p + R·b)
@@ -26,7 +27,6 @@ RotationError instead of returning inf.
 """
 
 import numpy as np
-
 from rot_tools._arrays import apart, as_float_array, refuse_overflow, require_tolerance
 from rot_tools._backend import apply, cross, dot, linear_in_range, unit
 from rot_tools.errors import RotationError
@@ -66,9 +66,10 @@ def _frame_kernel(ops, u, v, w):
 
 
 def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
-    """The rotation R = (û v̂ ŵ) of a frame whose axes u, v, w are written in x-y-z.
+    """
+    Return the rotation R = (û v̂ ŵ) of a frame whose axes u, v, w are written in x-y-z.
 
-    u, v, w (..., 3), broadcasting → (..., 3, 3); each axis is normalised (seed 000 §4).
+    u, v, w (..., 3), broadcasting → (..., 3, 3); each axis is normalised (Jia §4).
     RotationError names the defect: a zero axis; two axes whose unit vectors have
     |dot| > tol (which two, and the angle between them); a left-handed frame, (û × v̂)·ŵ < 0.
     With a tol above 1e-9 the result may miss validate_rotation's 1e-9: project it with
@@ -106,7 +107,8 @@ def _points_kernel(ops, m, b, p):
 
 
 def transform_points(R, b, p, *, check=True):
-    """The image R·p + b of points p under the rigid motion (R, b) (seed 000 §5).
+    """
+    Return the image R·p + b of points p under the rigid motion (R, b) (Jia §5).
 
     R (..., 3, 3), b (..., 3), p (..., 3), broadcasting: one motion over many points, many
     motions over one point, or one each. Returns (..., 3).
@@ -125,7 +127,8 @@ def _compose_kernel(ops, m1, m2, b1, b2):
 
 
 def compose_transforms(R1, b1, R2, b2, *, check=True):
-    """T1∘T2, T2 applied first: (R1·R2, R1·b2 + b1) (seed 000 §5).
+    """
+    T1∘T2, T2 applied first: (R1·R2, R1·b2 + b1) (Jia §5).
 
     R1, R2 (..., 3, 3), b1, b2 (..., 3), broadcasting → (R (..., 3, 3), b (..., 3)). Equal
     to the product of the homogeneous matrices T1·T2.
@@ -144,10 +147,11 @@ def _invert_kernel(ops, m, b):
 
 
 def invert_transform(R, b, *, check=True):
-    """T⁻¹ = (Rᵀ, −Rᵀ·b) of p ↦ R·p + b; (..., 3, 3), (..., 3) → (Rᵀ, −Rᵀ·b).
+    """
+    T⁻¹ = (Rᵀ, −Rᵀ·b) of p ↦ R·p + b; (..., 3, 3), (..., 3) → (Rᵀ, −Rᵀ·b).
 
     transform_points(*invert_transform(R, b), p) = Rᵀ·(p − b) are the coordinates of p in
-    the moved frame (seed 000 §4: q' = Rᵀ·q when b = 0).
+    the moved frame (Jia §4: q' = Rᵀ·q when b = 0).
     """
     Rt, back, fits = apply_to_rotations(_invert_kernel, R, check, [_MAT, _VEC, _OK],
                                         [(b, (3,), 'translation b', True)])
@@ -160,7 +164,7 @@ def _homogeneous_kernel(ops, m, b):
 
 
 def transform_to_homogeneous(R, b, *, check=True):
-    """The 4×4 matrix [[R, b], [0, 0, 0, 1]] of p ↦ R·p + b; broadcasting → (..., 4, 4)."""
+    """Return the 4×4 matrix [[R, b], [0, 0, 0, 1]] of p ↦ R·p + b; broadcasting → (..., 4, 4)."""
     (T,) = apply_to_rotations(_homogeneous_kernel, R, check, [((4, 4), np.float64)],
                               [(b, (3,), 'translation b', True)])
     return T
@@ -174,7 +178,8 @@ def _transform_of_homogeneous_kernel(ops, t):
 
 
 def homogeneous_to_transform(T, *, check=True):
-    """(R, b) of a homogeneous matrix T = [[R, b], [0, 0, 0, 1]]; (..., 4, 4) → (R, b).
+    """
+    (R, b) of a homogeneous matrix T = [[R, b], [0, 0, 0, 1]]; (..., 4, 4) → (R, b).
 
     RotationError when the last row differs from (0, 0, 0, 1) by more than
     HOMOGENEOUS_ROW_TOL = 1e-9 (always), and when R is not a rotation (unless check=False).

@@ -1,4 +1,5 @@
-"""rotation_client: send one input to a running rotation_node and print what it answered.
+"""
+rotation_client: send one input to a running rotation_node and print what it answered.
 
 ros2cli (``ros2 topic pub``/``echo``, ``ros2 service call``) is not on PyPI, so the pip-only
 quick start has this instead (doc/client.md is its manual)::
@@ -59,12 +60,11 @@ import sys
 import time
 
 import numpy as np
-import yaml
-
 from rot_tools import runtime
 from rot_tools.euler import EULER_SEQUENCES, euler_to_matrix, matrix_to_euler
 from rot_tools.report import to_json, to_yaml, transform_report
 from rot_tools.so3 import quaternion_to_matrix
+import yaml
 
 PROG = 'rotation_client'
 DEFAULT_NODE = '/rot_tools'
@@ -131,7 +131,7 @@ class _Version(argparse.Action):
     """--version: the installed distribution's version, printed without starting ROS."""
 
     def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
-                 help=None):
+                 help=None):  # noqa: A002
         super().__init__(option_strings, dest, nargs=0, default=default, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
@@ -155,7 +155,8 @@ def _positive(text):
 
 
 def _tolerance(text):
-    """A number whose meaning survives float32, the type of GetPlan's tolerance.
+    """
+    Return a number whose meaning survives float32, the type of GetPlan's tolerance.
 
     A positive value float32 turns into 0 would ask for the default 20 steps, one it turns
     into inf for a single step: both are refused. NaN, and values ≤ 0 (all mean 20 steps)
@@ -184,13 +185,14 @@ def _node_name(text):
     if len(name) + 1 + len(longest) > NAME_LIMIT:
         raise argparse.ArgumentTypeError(
             f'node name of {len(name)} characters is too long: its names such as '
-            f'{name[:12]}.../{longest} would exceed ROS\'s {NAME_LIMIT} characters (at most '
+            f"{name[:12]}.../{longest} would exceed ROS's {NAME_LIMIT} characters (at most "
             f'{NAME_LIMIT - 1 - len(longest)} for the node name)')
     return name
 
 
 def _options(parser, suppress):
-    """--node, --frame, --timeout, --json: before the command or after its arguments.
+    """
+    --node, --frame, --timeout, --json: before the command or after its arguments.
 
     The command parsers get them with SUPPRESS defaults, so a value given before the
     command is not overwritten by the default.
@@ -216,7 +218,8 @@ def _wxyz_option(parser, suppress):
 
 
 class Command:
-    """A command of the client: what it does, the numbers it takes, where its quaternions are.
+    """
+    A command of the client: what it does, the numbers it takes, where its quaternions are.
 
     ``quaternions``: the index in the numbers of each quaternion's QX (w last).
     """
@@ -232,7 +235,7 @@ _CHILD = ('\nThe body is --child-frame (default base_link), at position X Y Z wi
 COMMANDS_HELP = {
     'euler': Command(
         'send Euler angles to ~/euler', 'A1 A2 A3', (),
-        "A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n"
+        'A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n'
         "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, SEQ),"
         '\nthen matrix_to_euler(R, node sequence).'),
     'pose': Command('send a PoseStamped to ~/pose', _POSE, (3,),
@@ -320,7 +323,8 @@ def build_parser():
 
 
 def parse_args(argv):
-    """Parse the command line (without ROS arguments); one error line and exit 2 if bad.
+    """
+    Parse the command line (without ROS arguments); one error line and exit 2 if bad.
 
     With --wxyz the quaternions are reordered to the ROS order (w last) here.
     """
@@ -339,7 +343,8 @@ def parse_args(argv):
 
 
 def without_ros_args(argv):
-    """``argv`` without its ROS arguments: each ``--ros-args`` up to ``--`` or the end.
+    """
+    ``argv`` without its ROS arguments: each ``--ros-args`` up to ``--`` or the end.
 
     As rcl reads them; rclpy.init, given the whole command line, checks them.
     """
@@ -385,7 +390,8 @@ def _pose_data(pose):
 
 
 def describe_data(response):
-    """~/describe's YAML document as data: ``refused`` {total, reason: n}, ``last_refusals``.
+    """
+    Return ~/describe's YAML document as data: at least ``refused`` {total, reason: n}.
 
     The node writes one even before it has accepted an input (then ``success`` is false and
     ``note`` says so). Anything else is not a rotation_node's report: Unreachable.
@@ -407,7 +413,8 @@ def _counts(data):
 
 
 def refusal_text(data, before, source, stamps=None):
-    """Why the node refused what the client sent to ``source``, or '' if it did not.
+    """
+    Why the node refused what the client sent to ``source``, or '' if it did not.
 
     ``data`` is describe_data now, ``before`` the counts before sending. For each reason
     counted since, the node's sentence (what and by how much) from ``last_refusals`` when
@@ -491,7 +498,7 @@ class Client:
         return self.call(Trigger, 'describe', Trigger.Request())
 
     def parameters(self, names):
-        """{name: value} of the node's parameters (its ~/get_parameters service)."""
+        """Return {name: value} of the node's parameters, from its ~/get_parameters service."""
         from rcl_interfaces.srv import GetParameters
         from rclpy.parameter import parameter_value_to_python
         response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
@@ -515,7 +522,8 @@ class Client:
                 raise Unreachable(self.missing(f'publisher on {sub.topic_name}'))
 
     def send(self, name, msg, pictures):
-        """Publish ``msg`` on the node's ~/name until it answers; return (stamp, answer).
+        """
+        Publish ``msg`` on the node's ~/name until it answers; return (stamp, answer).
 
         The answer is {output: message}: the outputs stamped as one sent message, the
         ~/rotation_matrix whose content matches, and, when ``pictures``, the pictures of that
@@ -601,14 +609,14 @@ class Answers:
         return collect
 
     def complete(self):
-        """The stamp of a sent message with every one of STAMPED_OUTPUTS, or None."""
+        """Return the stamp of a sent message with every one of STAMPED_OUTPUTS, or None."""
         for stamp, answer in self.by_stamp.items():
             if set(STAMPED_OUTPUTS) <= set(answer):
                 return stamp
         return None
 
     def matrix(self, R):
-        """The latest ~/rotation_matrix equal to R (within MATRIX_MATCH), or None."""
+        """Return the latest ~/rotation_matrix equal to R (within MATRIX_MATCH), or None."""
         for m in reversed(self.matrices):
             if np.max(np.abs(np.reshape(m.data, (3, 3)) - R)) <= MATRIX_MATCH:
                 return m
@@ -633,7 +641,7 @@ def _marker_data(marker):
 
 
 def _answer_data(answer, parameters):
-    """The node's answer as plain data, keyed by output topic (relative to the node)."""
+    """Return the node's answer as plain data, keyed by output topic (relative to the node)."""
     twist = answer['screw'].twist
     data = {
         'rotation_matrix': np.reshape(answer['rotation_matrix'].data, (3, 3)).tolist(),
@@ -655,7 +663,8 @@ def _answer_data(answer, parameters):
 
 
 def node_angles(angles, sequence, degrees, node_sequence, node_degrees):
-    """Euler angles of ``sequence`` (degrees when ``degrees``) as the node reads ~/euler.
+    """
+    Euler angles of ``sequence`` (degrees when ``degrees``) as the node reads ~/euler.
 
     The same rotation R = euler_to_matrix(angles, sequence), as the angles of the node's
     euler_sequence (matrix_to_euler of R; at gimbal lock its choice of the pair) in its
@@ -709,7 +718,7 @@ def _input_message(args, parameters):
 
 
 def _input_command(client, args):
-    """An input (euler, pose, odometry, ...): send one message, return the answer's report."""
+    """Send one input message (euler, pose, odometry, ...); return the answer's report."""
     from rot_tools.messages import type_name
     parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
     msg, sent = _input_message(args, parameters)
@@ -793,11 +802,12 @@ COMMANDS = {'euler': _input_command, 'pose': _input_command, 'odometry': _input_
 
 
 def write(text, json_text=False):
-    """Print ``text`` on stdout, in its encoding even when that is not UTF-8.
+    r"""
+    Print ``text`` on stdout, in its encoding even when that is not UTF-8.
 
     Characters it cannot encode are escaped as YAML or JSON read them back: the report's
     writers put every non-ASCII character in a double-quoted string, where YAML reads
-    Python's backslash escapes, JSON \\uXXXX (surrogate pairs beyond U+FFFF).
+    Python's backslash escapes, JSON \uXXXX (surrogate pairs beyond U+FFFF).
     """
     try:
         text.encode(sys.stdout.encoding or 'utf-8')
@@ -852,4 +862,3 @@ def main(argv=None):
     else:
         write(to_yaml(result))
     return 0
-

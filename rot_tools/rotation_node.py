@@ -1,4 +1,5 @@
-"""rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
+"""
+rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
 
 Every input kind is one row of :data:`INPUTS` — topic, message type, converter — and every
 message becomes one rigid transform (header, R, b) at the boundary (rot_tools.messages).
@@ -42,17 +43,16 @@ from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
-from sensor_msgs.msg import Imu
-from std_msgs.msg import Float64MultiArray, Header
-from std_srvs.srv import Trigger
-from visualization_msgs.msg import Marker, MarkerArray
-
 from rot_tools import drawing, messages, runtime, tf_input
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
 from rot_tools.report import sequence_hint, to_yaml, transform_report
 from rot_tools.screw import screw_from_transform, screw_interpolate
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64MultiArray, Header
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker, MarkerArray
 
 FRAME_MISMATCH = 'frame_mismatch'
 BAD_TOLERANCE = 'bad_tolerance'
@@ -328,7 +328,7 @@ class RotationNode(Node):
         self._screw_path_name = self.resolve_service_name('~/screw_path')
         self.get_logger().info(
             f'decomposing {self._input_topics()} (euler_sequence '
-            f"{self._settings.euler_sequence}, angle_unit "
+            f'{self._settings.euler_sequence}, angle_unit '
             f"{'deg' if self._settings.degrees else 'rad'})")
 
     def _input_topics(self):
@@ -356,7 +356,8 @@ class RotationNode(Node):
 
     @staticmethod
     def _integers_as_doubles(parameters):
-        """Return the parameters, with an integer value of a double parameter made a double.
+        """
+        Return the parameters, with an integer value of a double parameter made a double.
 
         rclpy types a parameter by its value: ``marker_scale: 3`` in a YAML file, ``-p
         marker_scale:=3`` or ``ros2 param set ... marker_scale 3`` is an integer, which a
@@ -407,7 +408,8 @@ class RotationNode(Node):
                     if self._tf.following else f'not following frames on {self._tf.topic}')
 
     def _warn_about_unknown_overrides(self):
-        """Warn about each start-up override (-p, --params-file) that names no parameter.
+        """
+        Warn about each start-up override (-p, --params-file) that names no parameter.
 
         rclpy keeps the overrides it was given (command line, parameter files, the
         parameter_overrides argument) in Node._parameter_overrides and has no public
@@ -444,7 +446,7 @@ class RotationNode(Node):
         self._publish(source, header, R, b, values, settings)
 
     def _on_tf_transform(self, header, R, b):
-        """The followed frames have a new common time on /tf: publish every output."""
+        """Return the followed frames have a new common time on /tf: publish every output."""
         settings = self._settings
         try:
             values = decompose_values(R, b, settings.euler_sequence)
@@ -466,7 +468,8 @@ class RotationNode(Node):
         self._latest = Latest(source, header, R, b, settings)
 
     def _refuse(self, topic, reason, text, error=False, header=None):
-        """Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
+        """
+        Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
 
         Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
         stream (a raw IMU without orientation at 50 Hz) would silence every other one.
@@ -484,7 +487,8 @@ class RotationNode(Node):
     # -- markers -----------------------------------------------------------------------
 
     def _offer_picture(self, header, R, b, settings):
-        """Publish the picture of this input now, or when MARKER_RATE next allows it.
+        """
+        Publish the picture of this input now, or when MARKER_RATE next allows it.
 
         An input that arrives while the timer runs replaces the one waiting: the latest
         wins, and the last input is always drawn.
@@ -520,7 +524,8 @@ class RotationNode(Node):
             self._axis_marker))
 
     def _warm_up_picture(self):
-        """Draw one picture and build its messages, publishing nothing.
+        """
+        Draw one picture and build its messages, publishing nothing.
 
         The first drawing of a process pays for one-off work (NumPy's first calls, the type
         support of the marker messages): ~10 ms, paid here at start-up instead of inside the
@@ -540,7 +545,8 @@ class RotationNode(Node):
         self._marker_pub.publish(messages.delete_marker(header, messages.SCREW_AXIS_NS, 0))
 
     def _clear_picture(self):
-        """publish_markers was switched off: drop the picture waiting, delete the one shown.
+        """
+        publish_markers was switched off: drop the picture waiting, delete the one shown.
 
         The DELETEs go once, in the frame of the last picture drawn; nothing is sent when
         nothing is shown (none drawn yet, or the last input was the identity).
@@ -557,7 +563,8 @@ class RotationNode(Node):
         return {'total': sum(self._refused.values()), **self._refused}
 
     def last_refusals(self):
-        """{reason: {source, stamp, message}} of the latest refusal of each reason so far.
+        """
+        {reason: {source, stamp, message}} of the latest refusal of each reason so far.
 
         In REFUSAL_REASONS order, only the reasons counted; ``stamp`` only when the refused
         message had a header; ``message`` is the refusal's sentence (what and by how much),
@@ -578,7 +585,8 @@ class RotationNode(Node):
         return latest
 
     def _on_describe(self, request, response):
-        """YAML report of the latest input (rot_tools.report), with the refusals' data.
+        """
+        YAML report of the latest input (rot_tools.report), with the refusals' data.
 
         Always a YAML document ending in ``refused`` (the counts by reason) and
         ``last_refusals`` (last_refusals()). Before any accepted input ``success`` is false
@@ -608,7 +616,8 @@ class RotationNode(Node):
         return response
 
     def _on_screw_path(self, request, response):
-        """Constant-screw motion start → goal, poses at most ``tolerance`` apart.
+        """
+        Constant-screw motion start → goal, poses at most ``tolerance`` apart.
 
         Every failure is a refusal: counted by reason, logged (throttled per reason), and
         answered with an empty path. The reply is bounded in bytes before it is built.
@@ -649,7 +658,8 @@ class RotationNode(Node):
 
     @staticmethod
     def _path_steps(R0, b0, R1, b1, tolerance):
-        """Return the number of equal steps keeping consecutive poses ``tolerance`` apart.
+        """
+        Return the number of equal steps keeping consecutive poses ``tolerance`` apart.
 
         The relative motion T0⁻¹T1 is a screw: angle θ about an axis at distance r from the
         origin of the start frame, translation d along it. Split into n equal steps, each
@@ -673,7 +683,8 @@ class RotationNode(Node):
 
     @staticmethod
     def _reply_bytes(frame_id, poses):
-        """Return an upper bound of the serialised size of a GetPlan reply (CDR bytes).
+        """
+        Return an upper bound of the serialised size of a GetPlan reply (CDR bytes).
 
         The path's header and each of its ``poses`` carries a copy of ``frame_id``:
         REPLY_BYTES_PER_POSE plus the frame_id's UTF-8 bytes each (the Path's own header
@@ -684,7 +695,8 @@ class RotationNode(Node):
 
     @classmethod
     def _check_reply_bytes(cls, frame_id, poses):
-        """Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
+        """
+        Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
 
         Checked before anything is built: a 100 kB frame_id × 10,001 poses is a 1 GB
         reply, and the node would hold it twice (messages and their serialisation).
@@ -746,7 +758,8 @@ def usage():
 
 
 def main(args=None):
-    """Run the node until SIGINT / SIGTERM; exit status 0, or 2 for bad arguments.
+    """
+    Run the node until SIGINT / SIGTERM; exit status 0, or 2 for bad arguments.
 
     ``args``: the whole command line as rclpy.init takes it, program name first (sys.argv
     when None). ``--help`` and ``--version`` print and return 0 before anything ROS

@@ -1,4 +1,5 @@
-"""The process around rot_tools' ROS programs: start, signals, executor, spin, exit, errors.
+"""
+The process around rot_tools' ROS programs: start, signals, executor, spin, exit, errors.
 
 rotation_node.py is the Node and its ``main``; this module runs the process around it, and
 knows nothing of that node (rotation_node imports this module, never the other way round):
@@ -42,7 +43,8 @@ EXIT_USAGE = 2
 
 
 def _exit_cleanly(signum, frame):
-    """Exit 0 at once, unless rclpy's own signal handlers are installed.
+    """
+    Exit 0 at once, unless rclpy's own signal handlers are installed.
 
     rclpy.init installs handlers that shut the context down (the node's loop then ends and
     main returns) and then call this one. From then on raising SystemExit here would land
@@ -61,7 +63,8 @@ def _install_exit_handlers():
 
 
 def start(module, args=None):
-    """Run ``module``'s ``main(args)`` as this process, stopping cleanly on a signal; no return.
+    """
+    Run ``module``'s ``main(args)`` as this process, stopping cleanly on a signal; no return.
 
     ``module`` is a module name (e.g. 'rot_tools.rotation_node'), imported only after the
     SIGINT / SIGTERM handlers are installed. The process ends with main's status through
@@ -92,7 +95,8 @@ def start_command(module, args=None):
 
 
 def exit_now(status):
-    """End the process with ``status`` once a node's main has returned.
+    """
+    End the process with ``status`` once a node's main has returned.
 
     Destroys rclpy's default context (if rclpy was loaded), flushes stdout and stderr, and
     skips the interpreter's teardown (see the module docstring).
@@ -125,7 +129,8 @@ _FORMS = {'-p': ' (the form is -p NAME:=VALUE)', '-r': ' (the form is -r FROM:=T
 
 
 def ros_argument_error(exc):
-    """Return one line saying what is wrong in the ROS arguments, or None.
+    """
+    Return one line saying what is wrong in the ROS arguments, or None.
 
     ``exc`` is an exception raised by rclpy.init (rcl could not parse a ``--params-file``, a
     ``-p`` or a ``-r``; an unknown ``--ros-args`` flag) or while a node was built from the
@@ -159,7 +164,8 @@ def ros_argument_error(exc):
 
 
 def user_arguments(argv):
-    """Return the arguments of ``argv`` (program name first) outside its ROS arguments.
+    """
+    Return the arguments of ``argv`` (program name first) outside its ROS arguments.
 
     ROS arguments run from each ``--ros-args`` to the next ``--`` or the end, as rcl reads
     them; unlike rclpy.utilities.remove_ros_args this does not parse them (a bad one is
@@ -192,7 +198,8 @@ def _missing_params_files(args):
 
 
 def init_ros(program, args=None, **kwargs):
-    """rclpy.init(args=args, **kwargs), or one line on stderr and SystemExit(2).
+    """
+    rclpy.init(args=args, **kwargs), or one line on stderr and SystemExit(2).
 
     For bad ROS arguments (see ros_argument_error) the line is ``program: what is wrong``;
     rcl's own log line about them ("Failed to parse global arguments") is not printed.
@@ -234,7 +241,8 @@ SPIN_TIMEOUT = 0.1
 
 
 def make_executor(context=None):
-    """Return the executor rotation_node runs on: rot_tools.executor.WaitSetExecutor.
+    """
+    Return the executor rotation_node runs on: rot_tools.executor.WaitSetExecutor.
 
     Chosen on measurement (bench/README.md, bench/bench_overload.py): under a flood beyond
     the node's pace rclpy's EventsExecutor queued an event per message without bound (RSS
@@ -250,7 +258,8 @@ def make_executor(context=None):
 
 
 def _guarded(callback, node, what, service=False):
-    """Wrap ``callback``: an exception it raises is logged (with its traceback) instead.
+    """
+    Wrap ``callback``: an exception it raises is logged (with its traceback) instead.
 
     A subscription or timer callback then returns None; a service callback (``service``)
     returns the response it was given, unfilled, so that the client gets a reply. Once the
@@ -274,7 +283,8 @@ def _guarded(callback, node, what, service=False):
 
 
 def guard_callbacks(node):
-    """Wrap every subscription, timer and service callback of ``node`` in _guarded.
+    """
+    Wrap every subscription, timer and service callback of ``node`` in _guarded.
 
     A callback that raises is then logged and the node keeps serving, on any executor (the
     executors would otherwise end the spin; the EventsExecutor would also lose the
@@ -289,7 +299,8 @@ def guard_callbacks(node):
 
 
 def spin(node, executor):
-    """Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
+    """
+    Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
 
     The node's callbacks are guarded first (guard_callbacks). rclpy.init installs handlers
     that shut the context down on SIGINT and SIGTERM; the loop then ends within one
@@ -309,7 +320,8 @@ def spin(node, executor):
 
 
 def serve(make_node, executor_factory=make_executor):
-    """Build a node, spin it until a signal, destroy it and shut rclpy down.
+    """
+    Build a node, spin it until a signal, destroy it and shut rclpy down.
 
     The node is make_node(), the executor executor_factory(); rclpy.init is the caller's.
     A signal during the build is a normal stop; any other exception of the build (an

@@ -1,18 +1,19 @@
-"""Chasles' screw decomposition of rigid motions, and its exponential coordinates.
+"""
+Chasles' screw decomposition of rigid motions, and its exponential coordinates.
 
-A rigid motion T(p) = R·p + b (seed 000 §5) is a rotation by θ about a line — the screw axis,
-direction l̂ through the point c — followed by a translation d along that same line
-(Chasles' theorem)::
+A rigid motion T(p) = R·p + b (Jia, Rotation in the Space, §5) is a rotation by θ about a
+line — the screw axis, direction l̂ through the point c — followed by a translation d along
+that same line (Chasles' theorem)::
 
     T(p) = R·(p − c) + c + d·l̂,      so  b = (I − R)·c + d·l̂
 
 The axis is reported in Plücker coordinates (l̂, m) with the moment m = c × l̂, and the pitch
-h = d/θ (metres per radian). Seed 000 §5 finds c from (I − R)⁻¹·b⊥, but I − R is singular
+h = d/θ (metres per radian). Jia (§5) finds c from (I − R)⁻¹·b⊥, but I − R is singular
 along l̂; c is instead solved in the plane ⊥ l̂, where the 2-D rotation by θ is invertible::
 
     c = ½·(b⊥ + cot(θ/2)·l̂ × b⊥),     b⊥ = b − (b·l̂)·l̂,   d = b·l̂
 
-(seed 000's moment −(Rᵀ + I)·b⊥ of eqs. 17–18 is −2 sin θ times this m: its l is −2 sin θ·l̂).
+(Jia's moment −(Rᵀ + I)·b⊥ of eqs. 17–18 is −2 sin θ times this m: its l is −2 sin θ·l̂).
 
 Exponential coordinates (a twist, screw_log / screw_exp) are the 6-vector (θ·l̂, θ·v) with
 v = −l̂ × c + h·l̂, so that T = exp(θ·[l̂, v]). Written with b instead of c they need no
@@ -33,7 +34,6 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-
 from rot_tools._arrays import finite_array, refuse_overflow
 from rot_tools._backend import apply, cross, dot, in_range, linear_in_range, unit
 from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
@@ -49,7 +49,8 @@ it the screw axis is computed, however far away (|c| grows like |b|/θ).
 
 
 class Screw(NamedTuple):
-    """Chasles decomposition of (R, b); each field has the input's batch shape (...).
+    """
+    Chasles decomposition of (R, b); each field has the input's batch shape (...).
 
     direction: unit l̂ (..., 3); point: the axis point closest to the origin, ⊥ l̂ (..., 3);
     moment: point × direction (..., 3); angle: θ ∈ [0, π]; translation: d along l̂ (signed);
@@ -70,8 +71,12 @@ def _apply_rigid(kernel, R, b, check, outputs):
 
 
 def screw_of_axis_kernel(ops, axis, angle, b):
-    """The Screw of (Rot_axis(angle), b), axis and angle as axis_angle_kernel gives them,
-    and a flag: false where its point, moment, translation or pitch overflowed float64."""
+    """
+    Return the Screw of (Rot_axis(angle), b) and an in-range flag.
+
+    Return the Screw of (Rot_axis(angle), b), axis and angle as axis_angle_kernel gives them,
+    and a flag: false where its point, moment, translation or pitch overflowed float64.
+    """
     b_dir, b_norm = unit(ops, b)
     translating = angle < PURE_TRANSLATION_ANGLE
     direction = [ops.where(translating, p, q) for p, q in zip(b_dir, axis)]
@@ -93,8 +98,12 @@ def screw_of_axis_kernel(ops, axis, angle, b):
 
 
 def refuse_far_axis(fits, angle, b):
-    """RotationError where fits is false: the screw's point, moment or pitch (~|b|/θ)
-    overflowed float64, or the translation |b| did."""
+    """
+    Raise RotationError where fits is false.
+
+    RotationError where fits is false: the screw's point, moment or pitch (~|b|/θ)
+    overflowed float64, or the translation |b| did.
+    """
     if fits.ndim == 0 and fits or fits.all():
         return
     index = tuple(int(i) for i in np.argwhere(~fits)[0]) if fits.ndim else ()
@@ -120,7 +129,8 @@ def _screw_kernel(ops, m, b):
 
 
 def screw_from_transform(R, b, *, check=True):
-    """Chasles decomposition of p ↦ R·p + b as a Screw (formulas in the module docstring).
+    """
+    Chasles decomposition of p ↦ R·p + b as a Screw (formulas in the module docstring).
 
     R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ as matrix_to_axis_angle gives them;
     then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
@@ -132,7 +142,8 @@ def screw_from_transform(R, b, *, check=True):
 
 
 def twist_kernel(ops, axis, angle, b):
-    """Exponential coordinates (θ·l̂, θ·v) of (Rot_axis(angle), b) and an in_range flag.
+    """
+    Exponential coordinates (θ·l̂, θ·v) of (Rot_axis(angle), b) and an in_range flag.
 
     θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂ (= −θ·l̂ × c + d·l̂ of the Screw), with
     (θ/2)·cot(θ/2) → 1 at θ = 0: no threshold, no division by a small θ.
@@ -155,7 +166,8 @@ def _log_kernel(ops, m, b):
 
 
 def screw_log(R, b, *, check=True):
-    """Exponential coordinates (θ·l̂, θ·v), v = −l̂ × c + h·l̂, of p ↦ R·p + b; (..., 6).
+    """
+    Exponential coordinates (θ·l̂, θ·v), v = −l̂ × c + h·l̂, of p ↦ R·p + b; (..., 6).
 
     θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂; θ·l̂ is the rotation vector for every θ
     (no pure-translation threshold: the identity rotation gives (0, b)). Inverse of
@@ -186,7 +198,8 @@ def _exp_kernel(ops, twist):
 
 
 def screw_exp(twist):
-    """Rigid motion (R, b) = exp of the twist (ω, u) = (θ·l̂, θ·v); (..., 6) → (R, b).
+    """
+    Rigid motion (R, b) = exp of the twist (ω, u) = (θ·l̂, θ·v); (..., 6) → (R, b).
 
     R = Rot_l̂(θ) (Rodrigues) and b = (I − R)·c + d·l̂ with c = l̂ × u/θ, d = l̂·u, i.e.
     b = (sin θ/θ)·u⊥ + ((1 − cos θ)/θ)·l̂ × u + (l̂·u)·l̂, which is smooth at θ = 0 (b = u).
@@ -211,7 +224,8 @@ def _transform_of_screw_kernel(ops, direction, point, angle, translation):
 
 
 def transform_from_screw(direction, point, angle, translation):
-    """Rigid motion (R, b) of a screw: R = Rot_l̂(θ), b = (I − R)·point + d·l̂.
+    """
+    Rigid motion (R, b) of a screw: R = Rot_l̂(θ), b = (I − R)·point + d·l̂.
 
     direction (..., 3) is normalised (zero raises RotationError); point (..., 3) may be any
     point of the axis; angle, translation (...); broadcasting. Inverse of
@@ -229,7 +243,8 @@ def transform_from_screw(direction, point, angle, translation):
 
 
 def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
-    """The constant-screw motion from T0 = (R0, b0) to T1 = (R1, b1) at fractions s (...).
+    """
+    Return the constant-screw motion from T0 = (R0, b0) to T1 = (R1, b1) at fractions s (...).
 
     T(s) = T0 · exp(s · log(T0⁻¹ T1)): every point moves along one helix about the relative
     screw axis; T(0) = T0 and T(1) = T1, and s outside [0, 1] continues the same motion.

@@ -1,12 +1,13 @@
-"""Rotation matrices: elementary rotations, the skew matrix, validity checks, quaternions.
+"""
+Rotation matrices: elementary rotations, the skew matrix, validity checks, quaternions.
 
 Quaternions appear only at the boundary (messages, people pasting them), always in the ROS
 message order (x, y, z, w): quaternion_to_matrix and its twin matrix_to_quaternion. The
 rest of rot_tools never uses them.
 
 Conventions used throughout rot_tools: column vectors, active rotations, ``p' = R p``;
-a rotation matrix R is 3x3 orthogonal with det R = +1 (seed 000, Theorem 1). Every function
-takes one item or a batch with any leading shape ``...``.
+a rotation matrix R is 3x3 orthogonal with det R = +1 (Jia, Rotation in the Space,
+Theorem 1). Every function takes one item or a batch with any leading shape ``...``.
 
 Functions that take R validate it as validate_rotation does, unless called with
 ``check=False``: for callers that built R as a rotation themselves (the node, the report),
@@ -20,7 +21,6 @@ from functools import lru_cache
 import math
 
 import numpy as np
-
 from rot_tools._arrays import apart, as_float_array, finite_array, require_tolerance
 from rot_tools._backend import apply, kernel_key
 from rot_tools.errors import RotationError
@@ -59,7 +59,7 @@ def rot_z(a):
 
 
 def skew(v):
-    """[v]× = [[0, −v3, v2], [v3, 0, −v1], [−v2, v1, 0]], so skew(v) @ w == cross(v, w)."""
+    """Return [v]× = [[0, −v3, v2], [v3, 0, −v1], [−v2, v1, 0]], so [v]× @ w == v × w."""
     v = finite_array(v, (3,), 'v')
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
     out = np.zeros(v.shape[:-1] + (3, 3))
@@ -70,8 +70,12 @@ def skew(v):
 
 
 def defects_kernel(ops, m):
-    """(max|RᵀR − I|, det R) of the entries m: the six distinct entries of the Gram matrix
-    RᵀR, and the triple product of the rows. NaN entries propagate to NaN (never ≤ tol)."""
+    """
+    Return (max|RᵀR − I|, det R) of the entries m.
+
+    (max|RᵀR − I|, det R) of the entries m: the six distinct entries of the Gram matrix
+    RᵀR, and the triple product of the rows. NaN entries propagate to NaN (never ≤ tol).
+    """
     (a, b, c), (d, e, f), (g, h, i) = m
     err = ops.max_of(
         ops.abs(a * a + d * d + g * g - 1.0), ops.abs(b * b + e * e + h * h - 1.0),
@@ -90,7 +94,8 @@ def _defects(R):
 
 
 def is_rotation(R, tol=ROTATION_TOL):
-    """True where max|RᵀR − I| ≤ tol and |det R − 1| ≤ tol; False for non-finite items.
+    """
+    Tell where max|RᵀR − I| ≤ tol and |det R − 1| ≤ tol; False for non-finite items.
 
     R is (..., 3, 3); the result is a bool, or a bool array of shape (...). A shape that is
     not (..., 3, 3) raises RotationError.
@@ -105,7 +110,8 @@ def is_rotation(R, tol=ROTATION_TOL):
 
 
 def validate_rotation(R, tol=ROTATION_TOL):
-    """Return R as a float64 array, or raise RotationError naming the defect.
+    """
+    Return R as a float64 array, or raise RotationError naming the defect.
 
     Checked in order: shape (..., 3, 3), finite entries, orthogonality max|RᵀR − I| ≤ tol
     (the message gives the size), det R = +1 (det −1 is a reflection).
@@ -117,7 +123,8 @@ def validate_rotation(R, tol=ROTATION_TOL):
 
 
 def refuse_defects(err, det, tol, name='R'):
-    """Raise RotationError for the worst item whose (max|RᵀR − I|, det R) is out of tol.
+    """
+    Raise RotationError for the worst item whose (max|RᵀR − I|, det R) is out of tol.
 
     name: how the message calls the matrix: 'R', 'R2', 'R (T[:3, :3])'.
     """
@@ -144,8 +151,12 @@ def refuse_defects(err, det, tol, name='R'):
 
 @lru_cache(maxsize=256)
 def _checking(kernel, count=1):
-    """kernel with the defects of its first ``count`` inputs (rotations) appended to its
-    outputs; one object per (kernel, count), with a key of its own for the generated code."""
+    """
+    Return the kernel with the defects of its first ``count`` inputs appended.
+
+    kernel with the defects of its first ``count`` inputs (rotations) appended to its
+    outputs; one object per (kernel, count), with a key of its own for the generated code.
+    """
     def checked(ops, *entries):
         defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
         return (*kernel(ops, *entries), *defects)
@@ -154,7 +165,8 @@ def _checking(kernel, count=1):
 
 
 def apply_to_rotations(kernel, R, check, outputs, extra=()):
-    """apply(kernel, [R, *extra], outputs) with R (..., 3, 3), validated in the same pass.
+    """
+    apply(kernel, [R, *extra], outputs) with R (..., 3, 3), validated in the same pass.
 
     With check, R must pass validate_rotation (tol ROTATION_TOL): its defects are computed
     beside the kernel's outputs, which are dropped if R is refused. (The one-rotation case
@@ -169,7 +181,8 @@ def apply_to_rotations(kernel, R, check, outputs, extra=()):
 
 
 def apply_to_named_rotations(kernel, rotations, check, outputs, extra=()):
-    """apply_to_rotations for several rotations: rotations = [(R1, 'R1'), (R2, 'R2'), ...].
+    """
+    apply_to_rotations for several rotations: rotations = [(R1, 'R1'), (R2, 'R2'), ...].
 
     The kernel takes their entries first, then those of extra; with check each rotation is
     validated under its name.
@@ -192,7 +205,8 @@ def checked_rotation(R, check):
 
 
 def nearest_rotation(R):
-    """The rotation closest to R in the Frobenius norm: U·diag(1, 1, det UVᵀ)·Vᵀ from R = USVᵀ.
+    """
+    Return the rotation closest to R in the Frobenius norm: U·diag(1, 1, det UVᵀ)·Vᵀ from R = USVᵀ.
 
     For matrices typed with a few significant digits; a reflection (det R < 0) is refused,
     since its nearest rotation is not what anyone meant.
@@ -207,7 +221,8 @@ def nearest_rotation(R):
 
 
 def quaternion_to_matrix(q, *, tol=None):
-    """Rotation matrix of q = (x, y, z, w) — the ROS message order; q is normalised first.
+    """
+    Rotation matrix of q = (x, y, z, w) — the ROS message order; q is normalised first.
 
     With s = 2/|q|²: R = I − s·[[y²+z², −(xy−zw), −(xz+yw)], ...] (the unit-quaternion
     matrix scaled so that any non-zero q gives a rotation). (..., 4) → (..., 3, 3). The only
@@ -227,7 +242,7 @@ def quaternion_to_matrix(q, *, tol=None):
 
 
 def _refuse_non_unit(q, tol):
-    """RotationError for the worst q (..., 4) with ||q| − 1| > tol."""
+    """Raise RotationError for the worst q (..., 4) with ||q| − 1| > tol."""
     tol = require_tolerance(tol, 'tol')
     big = np.abs(q).max(axis=-1)  # |q| = big·|q/big|: |q|² cannot overflow
     scaled = np.linalg.norm(q / np.where(big > 0, big, 1.0)[..., None], axis=-1)
@@ -264,7 +279,7 @@ def _quaternion_kernel(ops, q):
 
 
 def quaternion_of_matrix_kernel(ops, m):
-    """Unit (x, y, z, w) of m, canonical sign; see matrix_to_quaternion."""
+    """Return the unit (x, y, z, w) of m, canonical sign; see matrix_to_quaternion."""
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = m
     # M = 4·q·qᵀ in the order (x, y, z, w): its diagonal and off-diagonal entries.
     dx, dy = 1.0 + r00 - r11 - r22, 1.0 - r00 + r11 - r22
@@ -289,7 +304,8 @@ def quaternion_of_matrix_kernel(ops, m):
 
 
 def matrix_to_quaternion(R, *, check=True):
-    """Unit quaternion (x, y, z, w) — the ROS message order — of R; (..., 3, 3) → (..., 4).
+    """
+    Return the unit quaternion (x, y, z, w) — the ROS order — of R; (..., 3, 3) → (..., 4).
 
     Canonical sign: w > 0, and at w = 0 (half turns) the first non-zero of x, y, z is
     positive. From M = 4·q·qᵀ, whose entries are sums and differences of entries of R

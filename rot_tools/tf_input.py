@@ -1,4 +1,5 @@
-"""/tf and /tf_static into a TransformTree, and the transform between two frames out.
+"""
+/tf and /tf_static into a TransformTree, and the transform between two frames out.
 
 The ROS side of rot_tools.transform_tree, shared by rotation_node (its parameters
 ``tf_reference_frame`` and ``tf_body_frame``) and ``rotation_client tf``. A
@@ -28,11 +29,10 @@ from types import SimpleNamespace
 
 from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from std_msgs.msg import Header
-
 from rot_tools import boundary
 from rot_tools.transform_tree import (
     TransformLookupError, TransformTree, TransformTreeError)
+from std_msgs.msg import Header
 
 TF_TOPIC = '/tf'
 TF_STATIC_TOPIC = '/tf_static'
@@ -68,7 +68,8 @@ TYPE_NAME = 'tf2_msgs/msg/TFMessage'
 
 
 def tf2_msgs_missing():
-    """'' when tf2_msgs.msg.TFMessage imports, else one line saying how to get it.
+    """
+    '' when tf2_msgs.msg.TFMessage imports, else one line saying how to get it.
 
     tf2_msgs is not on PyPI: ``make`` builds the project's own copy into .venv, and a ROS
     install brings the system's. Imported only when frames are followed, so that the rest
@@ -93,7 +94,8 @@ MAX_FRAMES = 1_000
 
 
 class TfFollower:
-    """A TransformTree fed from /tf and /tf_static; the pair (reference, body) looked up.
+    """
+    A TransformTree fed from /tf and /tf_static; the pair (reference, body) looked up.
 
     node: the rclpy node to subscribe with. on_transform(header, R, b): called with each new
     lookup. on_refused(topic, reason, text): called with each refusal. The subscriptions
@@ -117,14 +119,15 @@ class TfFollower:
 
     @property
     def following(self):
-        """True when both frames are set."""
+        """Tell whether both frames are set."""
         return bool(self.reference and self.body)
 
     def set_quaternion_tolerance(self, tolerance):
         self._settings = SimpleNamespace(quaternion_tolerance=tolerance)
 
     def follow(self, reference, body):
-        """Follow body in reference from now on ('' for either: follow nothing).
+        """
+        Follow body in reference from now on ('' for either: follow nothing).
 
         Subscribes on the first pair, unsubscribes when a frame is cleared (the tree is
         kept); the current tree is looked up at once. RuntimeError (one line) when tf2_msgs
@@ -153,7 +156,7 @@ class TfFollower:
     # -- stamps ----------------------------------------------------------------------
 
     def seconds(self, stamp):
-        """A builtin_interfaces/Time as float seconds since the epoch."""
+        """Return a builtin_interfaces/Time as float seconds since the epoch."""
         if self._epoch is None:
             self._epoch = stamp.sec or int(time.time())
         return (stamp.sec - self._epoch) + stamp.nanosec * 1e-9
@@ -187,9 +190,7 @@ class TfFollower:
         return True
 
     def lookup(self):
-        """(header, R, b) of body in reference at the latest common time, or
-        TransformLookupError.
-        """
+        """Return (header, R, b) of body in reference at the latest common time."""
         R, b, stamp = self.tree.lookup(self.reference, self.body)
         return Header(frame_id=self.reference, stamp=self.time_msg(stamp)), R, b
 

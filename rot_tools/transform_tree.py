@@ -1,4 +1,5 @@
-"""A tree of coordinate frames joined by rigid motions, looked up at any time (TF's job).
+"""
+A tree of coordinate frames joined by rigid motions, looked up at any time (TF's job).
 
 Each frame but a root has one parent, and its edge is the rigid motion from the child to the
 parent, ``p_parent = R·p_child + b`` — a ROS TransformStamped with header.frame_id = parent
@@ -59,7 +60,6 @@ import numbers
 import threading
 
 import numpy as np
-
 from rot_tools._arrays import as_float_array
 from rot_tools.errors import RotationError
 from rot_tools.screw import screw_interpolate
@@ -99,7 +99,8 @@ class TransformTreeError(RotationError):
 
 
 class TransformLookupError(TransformTreeError):
-    """A lookup that cannot be answered; ``reason`` is one of LOOKUP_REASONS.
+    """
+    A lookup that cannot be answered; ``reason`` is one of LOOKUP_REASONS.
 
     For ``extrapolation``, ``edge`` is the (parent, child) pair whose data does not reach the
     time asked, and ``seconds`` (> 0) how far outside its data that time is; both are None
@@ -120,14 +121,15 @@ def _frame_name(frame, what):
 
 
 def _number(value, name):
-    """A real number as a float (bools refused), or RotationError."""
+    """Return a real number as a float (bools refused), or RotationError."""
     if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
         return float(value)
     raise RotationError(f'{name} must be a number, got {value!r}')
 
 
 class _Edge:
-    """One frame's edge to its parent: samples sorted by stamp, in a window of arrays.
+    """
+    One frame's edge to its parent: samples sorted by stamp, in a window of arrays.
 
     The samples are stamps[start:end], R[start:end], b[start:end]; a static edge has one.
     Appending in time order writes at ``end`` (amortised O(1), no reallocation per sample);
@@ -246,7 +248,10 @@ class _Edge:
         return R, b
 
     def at_one(self, t, child, query):
-        """(R (3, 3), b (3,)) of the edge at one time t (a float): the per-message path,
+        """
+        Return (R (3, 3), b (3,)) of the edge at one time t (a float).
+
+        (R (3, 3), b (3,)) of the edge at one time t (a float): the per-message path,
         through the one-item functions (a batch of one costs several times more).
         """
         if self.static:
@@ -278,7 +283,8 @@ class _Edge:
 
 
 class TransformTree:
-    """Frames joined by static and dynamic rigid motions; lookups at any time, across the tree.
+    """
+    Frames joined by static and dynamic rigid motions; lookups at any time, across the tree.
 
     cache_seconds: how long a dynamic edge keeps its samples (before its newest), > 0, inf
     allowed (a bag read whole). max_samples: the most samples a dynamic edge keeps.
@@ -307,7 +313,8 @@ class TransformTree:
     # -- feeding ------------------------------------------------------------------------
 
     def set_transform(self, parent, child, R, b, stamp, static=False):
-        """Set the edge child → parent: p_parent = R·p_child + b at ``stamp`` (seconds).
+        """
+        Set the edge child → parent: p_parent = R·p_child + b at ``stamp`` (seconds).
 
         R (3, 3) and b (3,) for one sample, or R (n, 3, 3), b (n, 3) and stamp (n,) for many
         samples of one dynamic edge. A static edge holds at every time (its stamp is kept for
@@ -392,7 +399,7 @@ class TransformTree:
             return sorted(self._frames)
 
     def parent(self, frame):
-        """The parent of ``frame``, None for a root; TransformLookupError for an unknown frame."""
+        """Return the parent of ``frame`` (None for a root); TransformLookupError if unknown."""
         with self._lock:
             self._require_known(frame)
             edge = self._edges.get(frame)
@@ -407,7 +414,10 @@ class TransformTree:
                 UNKNOWN_FRAME, f'frame {frame!r} is unknown (known frames: {known})')
 
     def _path(self, reference, body):
-        """(up, down): the frames from reference and from body up to (not including) their
+        """
+        Return the frames from reference and from body up to their common ancestor.
+
+        (up, down): the frames from reference and from body up to (not including) their
         common ancestor.
         """
         self._require_known(reference)
@@ -436,7 +446,10 @@ class TransformTree:
         return up, down
 
     def chain(self, reference, body):
-        """The frames from ``reference`` to ``body`` through their common ancestor, both ends
+        """
+        Return the frames from ``reference`` to ``body``, both ends included.
+
+        Return the frames from ``reference`` to ``body`` through their common ancestor, both ends
         included (['odom', 'base_link', 'camera']; [frame] for a frame in itself).
         """
         with self._lock:
@@ -445,7 +458,10 @@ class TransformTree:
             return up + [common] + down[::-1]
 
     def time_range(self, reference, body):
-        """(first, last): the times at which the chain can be looked up, every dynamic edge
+        """
+        Return (first, last): the times at which the chain can be looked up.
+
+        (first, last): the times at which the chain can be looked up, every dynamic edge
         having data; (-inf, inf) for a chain of static edges only.
         """
         with self._lock:
@@ -456,7 +472,7 @@ class TransformTree:
             return max(e.oldest for e in dynamic), min(e.newest for e in dynamic)
 
     def latest_common_time(self, reference, body):
-        """The time ``lookup(reference, body)`` answers at (see the module docstring)."""
+        """Return the time ``lookup(reference, body)`` answers at (see the module docstring)."""
         with self._lock:
             return self._latest(*self._path(reference, body), reference)
 
@@ -473,7 +489,8 @@ class TransformTree:
     # -- lookups -------------------------------------------------------------------------
 
     def lookup(self, reference, body, stamp=None):
-        """(R, b, stamp): the pose of ``body`` in ``reference``, p_reference = R·p_body + b.
+        """
+        (R, b, stamp): the pose of ``body`` in ``reference``, p_reference = R·p_body + b.
 
         stamp: seconds (float) or an array of them (then R (..., 3, 3), b (..., 3) and the
         stamps (...) come back as arrays); None for the latest common time. Each dynamic
@@ -514,7 +531,10 @@ class TransformTree:
         return R, b
 
     def _compose(self, frames, t, query):
-        """T_common_x of the first frame x of ``frames`` (x's chain up to the common ancestor)
+        """
+        Return T_common_x of the first frame x of ``frames`` at times t (n,).
+
+        T_common_x of the first frame x of ``frames`` (x's chain up to the common ancestor)
         at times t (n,): E(x_k)···E(x); the identity for no frames.
         """
         R = np.broadcast_to(_IDENTITY, t.shape + (3, 3))

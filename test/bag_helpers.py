@@ -10,7 +10,7 @@ REAL = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'jackal_
 
 
 def convert_real(dst, storage):
-    """The real recording as a rosbag2 bag (storage 'sqlite3' or 'mcap'), by rosbags."""
+    """Return the real recording as a rosbag2 bag (storage 'sqlite3' or 'mcap'), by rosbags."""
     from rosbags.convert import convert
     convert([REAL], Path(dst), storage, 8, None, 'file', None, None, [], [], [], [])
     return Path(dst)
@@ -101,7 +101,7 @@ class Builder:
 
 
 def write_bag(dst, messages, storage='sqlite3'):
-    """A rosbag2 bag of [(topic, msgtype, record time ns, message object)] (in that order)."""
+    """Return a rosbag2 bag of [(topic, msgtype, record time ns, message object)]."""
     from rosbags.rosbag2 import StoragePlugin, Writer
     typestore = store()
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
@@ -115,7 +115,8 @@ def write_bag(dst, messages, storage='sqlite3'):
 
 
 def tf_chain_messages(n=40, bad_at=7):
-    """[(topic, type, t, msg)] of a TF tree map → odom → base_link → imu, plus odom → wheel.
+    """
+    [(topic, type, t, msg)] of a TF tree map → odom → base_link → imu, plus odom → wheel.
 
     map → odom and odom → base_link are dynamic, sampled together at 10 Hz; base_link → imu
     is static (on /tf_static); odom → wheel has a zero quaternion at sample ``bad_at``. Returns

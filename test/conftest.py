@@ -1,4 +1,5 @@
-"""Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
+"""
+Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
 
 Node tests use real DDS on the loopback. To keep test runs (and anything else on the
 machine) apart, this module sets, before rclpy is first initialised, a ROS_DOMAIN_ID of its
@@ -54,7 +55,8 @@ _namespaces = itertools.count(1)
 
 
 def console_script(name, module):
-    """Return the command of console script ``name``: next to this Python, on PATH, or -m.
+    """
+    Return the command of console script ``name``: next to this Python, on PATH, or -m.
 
     Without an installed package it is ``python -m module``, run from this checkout.
     """
@@ -72,7 +74,8 @@ def script_env(command):
 
 
 def run_delay(pid, tid=None):
-    """Return the seconds thread ``tid`` of process ``pid`` has waited for a CPU, or None.
+    """
+    Return the seconds thread ``tid`` of process ``pid`` has waited for a CPU, or None.
 
     The kernel's scheduler statistics (/proc/PID/task/TID/schedstat, second field: time
     spent runnable on a run queue, not running); None where they are not available. ``tid``
@@ -90,7 +93,8 @@ def _delta(after, before):
 
 
 def node_seconds(wall, node_wait, own_wait):
-    """Return a process's part of ``wall`` seconds from a signal to its end.
+    """
+    Return a process's part of ``wall`` seconds from a signal to its end.
 
     ``node_wait``: the seconds its main thread waited for a CPU meanwhile; ``own_wait``:
     those this thread (the test, asleep until the end, then runnable) waited before it saw
@@ -103,7 +107,8 @@ def node_seconds(wall, node_wait, own_wait):
 
 
 class NodeProcess:
-    """rotation_node in a child process, in a namespace of this run; stdout / stderr in files.
+    """
+    rotation_node in a child process, in a namespace of this run; stdout / stderr in files.
 
     ``name`` is the node's fully qualified name (/RUN/pN/rot_tools).
     """
@@ -119,7 +124,8 @@ class NodeProcess:
             self.process = subprocess.Popen(args, stdout=out, stderr=err, env=script_env(args))
 
     def stop(self, signum=signal.SIGTERM):
-        """Send ``signum``; return (exit status, the node's seconds to exit, stderr).
+        """
+        Send ``signum``; return (exit status, the node's seconds to exit, stderr).
 
         The node's seconds are those from the signal to the end of the process (see
         :func:`node_seconds`) less the time the machine kept the node waiting for a CPU: a
@@ -172,7 +178,8 @@ class NodeProcess:
 
 
 class Tester:
-    """A test-side rclpy node in ``context`` that an executor spins on demand.
+    """
+    A test-side rclpy node in ``context`` that an executor spins on demand.
 
     Nodes under test may be added to the same executor (in-process tests) or live in another
     process (end-to-end tests). Every wait is bounded by ``timeout`` and fails the test.
@@ -196,7 +203,8 @@ class Tester:
         self.node.destroy_node()
 
     def add_node(self, node):
-        """Spin ``node`` (a node under test, usually in another context) with the tester.
+        """
+        Spin ``node`` (a node under test, usually in another context) with the tester.
 
         A node of another context (another DDS participant) gets an executor of its own —
         the kind rotation_node runs on (rot_tools.runtime.make_executor), so that every node
@@ -285,7 +293,8 @@ class Tester:
     # -- services ----------------------------------------------------------------------
 
     def call(self, srv_type, name, request, timeout=2.0, attempts=5):
-        """Call a service with a bounded wait per attempt and retries; return the response.
+        """
+        Call a service with a bounded wait per attempt and retries; return the response.
 
         A reply that does not come within ``timeout`` is abandoned (the pending request is
         removed) and the request sent again: Fast DDS can drop the first reply to a new
@@ -308,7 +317,8 @@ class Tester:
             self.node.destroy_client(client)
 
     def set_parameters(self, node_name, parameters):
-        """Set parameters of node ``node_name`` through its ~/set_parameters service.
+        """
+        Set parameters of node ``node_name`` through its ~/set_parameters service.
 
         ``parameters`` are rclpy.parameter.Parameter objects; returns the list of
         rcl_interfaces/SetParametersResult, one per parameter.
@@ -350,7 +360,8 @@ def namespace():
 
 @pytest.fixture
 def node_process(tmp_path):
-    """Start rotation_node processes, each in a namespace of its own; kill them after the test.
+    """
+    Start rotation_node processes, each in a namespace of its own; kill them after the test.
 
     start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args.
     """

@@ -1,4 +1,5 @@
-"""Find the example blocks of README.md and doc/*.md, so tests can compare them with real output.
+"""
+Find the example blocks of README.md and doc/*.md, so tests can compare them with real output.
 
 How a block of the docs is kept true (test/test_docs.py enforces it):
 

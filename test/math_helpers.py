@@ -1,4 +1,5 @@
-"""Independent reference helpers for the math tests.
+"""
+Independent reference helpers for the math tests.
 
 Everything here is written from the formulas of SPEC §2 and the seeds, with plain NumPy, and
 never calls rot_tools: the tests compare rot_tools against these constructions, not against
@@ -20,7 +21,7 @@ INTRINSIC = TAIT_BRYAN + PROPER
 ALL_SEQUENCES = INTRINSIC + tuple(s.lower() for s in INTRINSIC)
 
 # Deterministic, bounded hypothesis settings for every property test.
-HYPOTHESIS_SETTINGS = dict(derandomize=True, max_examples=60, deadline=None, database=None)
+HYPOTHESIS_SETTINGS = {'derandomize': True, 'max_examples': 60, 'deadline': None, 'database': None}
 
 
 def max_abs(x):
@@ -43,7 +44,8 @@ def ref_elementary(axis, angle):
 
 
 def ref_euler(angles, seq):
-    """Explicit product of elementary rotations (SPEC §2).
+    """
+    Explicit product of elementary rotations (SPEC §2).
 
     Intrinsic (upper case): R = Rot_a1(t1) Rot_a2(t2) Rot_a3(t3).
     Extrinsic (lower case): R = Rot_a3(t3) Rot_a2(t2) Rot_a1(t1).
@@ -98,7 +100,8 @@ def seed_rodrigues_eq18(u, phi):
 
 
 def expm(a, squarings=None):
-    """Matrix exponential by scaling and squaring of a Taylor series (no eigen-decomposition).
+    """
+    Matrix exponential by scaling and squaring of a Taylor series (no eigen-decomposition).
 
     The squaring runs on E = exp(A / 2^s) - I, E <- 2E + E E, which keeps the small part
     exact instead of rounding it against the identity.  For an se(3) 4x4 matrix the series
@@ -133,7 +136,8 @@ def expm_twist(twist):
 
 
 def rotate_minus_identity(axis, angle, p):
-    """(R - I) p for R = Rodrigues(axis, angle), accurate for tiny angles and huge |p|.
+    """
+    (R - I) p for R = Rodrigues(axis, angle), accurate for tiny angles and huge |p|.
 
     (R - I) p = sin(t) l x p - 2 sin^2(t/2) (p - (p.l) l); no matrix entry is rounded to 1.
     """
@@ -157,7 +161,8 @@ def ref_quaternion_to_matrix(q):
 
 
 def cube_rotations():
-    """Return the 24 rotations that map the cube onto itself, exact signed permutations.
+    """
+    Return the 24 rotations that map the cube onto itself, exact signed permutations.
 
     Their entries are exactly 0 and +/-1 (with -0.0 where a product of signs gives it), which
     puts them at gimbal locks, at angle pi and at the +/-pi boundaries of the Euler ranges.

@@ -1,4 +1,5 @@
-"""rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 and MCAP).
+"""
+rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 and MCAP).
 
 Every value is checked against an independent computation from the messages as rosbags
 decodes them: scipy's Rotation (from_quat, as_euler('xyz'), as_rotvec, mean), numpy.unwrap,
@@ -11,14 +12,13 @@ import io
 import json
 import math
 
+import bag_helpers as bh
 import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from scipy.spatial.transform import Rotation  # noqa: E402
-
-import bag_helpers as bh  # noqa: E402
 from rot_tools import bag, bag_read, cli  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 
@@ -72,7 +72,7 @@ def reference():
 
 @pytest.fixture(scope='module')
 def converted(tmp_path_factory):
-    """The real recording as rosbag2 sqlite3 and MCAP bags (converted by rosbags)."""
+    """Return the real recording as rosbag2 sqlite3 and MCAP bags (converted by rosbags)."""
     tmp = tmp_path_factory.mktemp('converted')
     return {s: bh.convert_real(tmp / s, s) for s in ('sqlite3', 'mcap')}
 
@@ -88,7 +88,7 @@ def log_map(R):
 
 
 def canonical(q):
-    """q with w > 0 (none of the real bag's quaternions has w = 0)."""
+    """Return q with w > 0 (none of the real bag's quaternions has w = 0)."""
     return q * np.where(q[:, 3] < 0, -1.0, 1.0)[:, None]
 
 
@@ -293,8 +293,12 @@ def _no_decoding(raw, msgtype):
 
 
 def test_fast_columns_with_strings_of_many_lengths(tmp_path):
-    """Frame ids of different lengths, and of the same total length in different places:
-    the layout is split by the strings' lengths, and gives rosbags' columns exactly."""
+    """
+    Test frame ids of different lengths, and of one total length in different places.
+
+    Frame ids of different lengths, and of the same total length in different places:
+    the layout is split by the strings' lengths, and gives rosbags' columns exactly.
+    """
     b = bh.Builder()
     q = Rotation.random(24, random_state=5).as_quat()
     frames = [('a', 'bbb'), ('bbb', 'a'), ('cc', 'dd'), ('', 'child'), ('xy', 'zw'), ('a', 'bbb')]
@@ -328,7 +332,7 @@ def test_fast_columns_with_strings_of_many_lengths(tmp_path):
 
 
 def test_frame_ids_of_fast_and_decoded_chunks_are_one_list(monkeypatch, capsys):
-    """A topic read partly by the fast path (bytes) and partly by rosbags (str): one frame."""
+    """Check a topic read partly by the fast path (bytes), partly by rosbags (str)."""
     real_read = bag_read._Layout.read
     calls = []
 

@@ -1,6 +1,10 @@
-"""rot_tools.boundary: one boundary for the node and for bags — the batch checks give every
+"""
+Test rot_tools.boundary: one boundary for the node and for bags.
+
+rot_tools.boundary: one boundary for the node and for bags — the batch checks give every
 item the reason (and the rotation) the per-message converter gives it. ROS-free: messages are
-SimpleNamespaces with the ROS field names."""
+SimpleNamespaces with the ROS field names.
+"""
 
 import math
 from types import SimpleNamespace
@@ -8,10 +12,9 @@ from types import SimpleNamespace
 from hypothesis import example, given, settings as hsettings, strategies as st
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
-
 from rot_tools import boundary
 from rot_tools.boundary import RefusedInput
+from scipy.spatial.transform import Rotation
 
 TOL = 1e-3
 SETTINGS = SimpleNamespace(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False)

@@ -14,7 +14,7 @@ from rot_tools.bag import _number_text
 
 
 def exact(value, precision):
-    """value rounded to precision significant digits and decimal places (Decimal, exact)."""
+    """Return value rounded to precision significant digits and decimal places (exact)."""
     digits = len('%d' % abs(value)) if abs(value) >= 1 else 0
     return round(Decimal(value), max(0, precision - digits))
 

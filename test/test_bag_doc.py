@@ -5,11 +5,11 @@ from pathlib import Path
 import subprocess
 import sys
 
+from doc_blocks import console_steps, doc_block, matches
 import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from doc_blocks import console_steps, doc_block, matches  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -32,7 +32,7 @@ def test_doc_example_is_real_output(tag):
 
 
 def test_doc_plot_is_what_the_command_draws(tmp_path):
-    """The picture in the doc is redrawn; pixels compared where matplotlib draws the same."""
+    """Check that the picture in the doc is what the command draws (pixels compared)."""
     matplotlib = pytest.importorskip('matplotlib')
     from matplotlib.image import imread
     doc = (REPO / 'doc' / 'bags.md').read_text()

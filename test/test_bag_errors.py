@@ -1,4 +1,5 @@
-"""rot-tools bag on bad input: refusals counted by reason, or one line and exit status 2.
+"""
+rot-tools bag on bad input: refusals counted by reason, or one line and exit status 2.
 
 Bags with bad messages are written here (rosbags' writer): zero quaternions on every message
 (as a public ROS 1 bag's odometry has), NaN/Inf, non-unit quaternions, Imu messages without
@@ -14,15 +15,14 @@ import math
 import os
 import subprocess
 
+import bag_helpers as bh
+from conftest import console_script, script_env
 import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from scipy.spatial.transform import Rotation  # noqa: E402
-
-import bag_helpers as bh  # noqa: E402
-from conftest import console_script, script_env  # noqa: E402
 from rot_tools import cli  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
 
 TOL = 1e-3
 RNG = np.random.default_rng(18)
@@ -35,7 +35,7 @@ def unit_quaternions(n):
 
 
 def expected_reason(q, p=None, cov0=0.0):
-    """What rotation_node refuses a message for, decided here without rot_tools."""
+    """Return what rotation_node refuses a message for, decided without rot_tools."""
     if cov0 == -1.0:
         return 'no_orientation'
     if p is not None and not np.isfinite(p).all():
@@ -216,7 +216,7 @@ def test_damaged_bags(script, damaged, which):
 
 
 def test_a_message_that_does_not_decode(script, tmp_path):
-    """A message whose bytes are cut short: the fast path refuses its layout, rosbags too."""
+    """Check a message cut short: the fast path refuses its layout, rosbags too."""
     from rosbags.rosbag2 import Writer
     b = bh.Builder()
     path = tmp_path / 'cut'

@@ -1,4 +1,5 @@
-"""rot-tools bag --tf REFERENCE BODY: a TF chain recorded in a bag, through TransformTree.
+"""
+rot-tools bag --tf REFERENCE BODY: a TF chain recorded in a bag, through TransformTree.
 
 The bag (written here) holds map → odom and odom → base_link, dynamic and sampled together,
 and base_link → imu on /tf_static; the lookups at the samples' stamps are exact compositions,
@@ -9,15 +10,14 @@ import csv
 import io
 import json
 
+import bag_helpers as bh
 import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 pytest.importorskip('rot_tools.transform_tree', reason='TransformTree has not landed')
-from scipy.spatial.transform import Rotation  # noqa: E402
-
-import bag_helpers as bh  # noqa: E402
 from rot_tools import cli  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
 
 
 @pytest.fixture(scope='module', params=['sqlite3', 'mcap'])

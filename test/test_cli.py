@@ -1,4 +1,5 @@
-"""rot-tools as a user runs it: the installed console script, in a subprocess.
+"""
+rot-tools as a user runs it: the installed console script, in a subprocess.
 
 Output values are parsed (JSON with the standard library, YAML with PyYAML when present) and
 compared with the math module; the printed precision is 12 digits, so values agree to
@@ -16,13 +17,12 @@ import sys
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
-
 import rot_tools
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_axis_angle,
     matrix_to_euler, nearest_rotation, rot_x, rot_y, rot_z, screw_from_transform,
     transform_from_screw)
+from scipy.spatial.transform import Rotation
 
 PRINTED = {'rtol': 1e-11, 'atol': 1e-11}  # what 12 printed digits allow
 
@@ -115,7 +115,7 @@ def check_rpy(printed, R, deg=False):
 
 
 def check_quaternion(printed, R):
-    """The printed {x, y, z, w} is scipy's canonical quaternion of R (up to sign at π)."""
+    """Return the printed {x, y, z, w} is scipy's canonical quaternion of R (up to sign at π)."""
     assert list(printed) == ['x', 'y', 'z', 'w']
     q = np.array(list(printed.values()))
     reference = Rotation.from_matrix(R).as_quat(canonical=True)  # (x, y, z, w)
@@ -280,7 +280,7 @@ def test_yaml_and_json_carry_the_same_report(script):
 
 
 def _four_digits(q):
-    """q typed with four significant digits, as a person copies it."""
+    """Return q typed with four significant digits, as a person copies it."""
     return [float(f'{x:.4g}') for x in q]
 
 

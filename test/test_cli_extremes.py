@@ -1,4 +1,5 @@
-"""rot-tools on extreme numbers: a report, or exactly one error line, and no warning ever.
+"""
+rot-tools on extreme numbers: a report, or exactly one error line, and no warning ever.
 
 `rot-tools matrix 1e308 0 0 0 1e308 0 0 0 1e308` printed NumPy's 'overflow encountered in
 det' warning (two lines) before its error line. Here every command and option is fed the

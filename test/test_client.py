@@ -1,4 +1,5 @@
-"""rotation_client as a separate process against rotation_node processes, over DDS.
+"""
+rotation_client as a separate process against rotation_node processes, over DDS.
 
 One node process (a namespace of this run) serves the tests of this module; each runs the
 installed ``rotation_client`` script (``python -m rot_tools.rotation_client`` without an
@@ -15,22 +16,22 @@ import subprocess
 import sys
 import time
 
+from conftest import console_script, NodeProcess, REPO, RUN, script_env
+from doc_blocks import assert_doc_output
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 import yaml
 
-from conftest import console_script, NodeProcess, REPO, RUN, script_env
-from doc_blocks import assert_doc_output
-
 CLIENT = console_script('rotation_client', 'rot_tools.rotation_client')
-DIGITS = dict(rel=1e-11, abs=1e-12)
+DIGITS = {'rel': 1e-11, 'abs': 1e-12}
 """Tolerance of a printed number (12 significant digits and decimal places)."""
 
 
 def run(*args, timeout=60, **env):
-    """Run rotation_client with ``args`` (and ``env`` added to its environment).
+    """
+    Run rotation_client with ``args`` (and ``env`` added to its environment).
 
     Return the CompletedProcess, its output read as UTF-8 text.
     """
@@ -48,7 +49,7 @@ def answered(*args, **env):
 
 
 def one_line_error(result, status):
-    """The one stderr line of a failed run, after checking status and output."""
+    """Return the one stderr line of a failed run, after checking status and output."""
     assert result.returncode == status, (result.stdout, result.stderr)
     assert result.stdout == ''
     lines = result.stderr.splitlines()
@@ -58,7 +59,8 @@ def one_line_error(result, status):
 
 @pytest.fixture(scope='module')
 def node(tmp_path_factory):
-    """A rotation_node process (default parameters) for this module; its name.
+    """
+    Return a rotation_node process (default parameters) for this module; its name.
 
     It has accepted one input, so ~/describe always has a report.
     """
@@ -73,7 +75,8 @@ def approx(values):
 
 
 def check_answer(answer, rotation, b=(0.0, 0.0, 0.0), drawn=True):
-    """The printed answer of the node to an input with rotation ``rotation`` and position b.
+    """
+    Return the printed answer of the node to an input with rotation ``rotation`` and position b.
 
     ``drawn``: the node drew this input (nothing else reached it in between), so its
     pictures must be there; else they are checked if they are.
@@ -133,7 +136,8 @@ def test_euler_in_radians_with_options_first(node):
 
 
 def test_pose_half_turn_is_a_screw(node):
-    """Half a turn about z at (1, 0, 0.5) is a screw along the vertical through (0.5, 0, 0).
+    """
+    Half a turn about z at (1, 0, 0.5) is a screw along the vertical through (0.5, 0, 0).
 
     The translation along it is 0.5, so the twist is (0, 0, π; θ·v) with
     v = −l̂ × c + (d/θ)·l̂ = (0, −0.5, 0.5/π).
@@ -204,7 +208,7 @@ def test_odometry_child_frame(node):
     ('imu', 'sensor_msgs/msg/Imu'),
 ])
 def test_orientation_like_verbs(node, verb, topic_type):
-    """orientation and imu send QX QY QZ QW; --wxyz reads QW QX QY QZ."""
+    """Test that orientation and imu send QX QY QZ QW; --wxyz reads QW QX QY QZ."""
     q = np.array([0.6, -0.3, 0.2, -0.7])
     q /= np.linalg.norm(q)
     out = answered(verb, *q, '--node', node)
@@ -229,7 +233,8 @@ def test_screw_path_wxyz(node):
 
 
 def test_answer_is_matched_among_other_inputs(node, tester):
-    """The answer to the client's input, while another publisher streams other orientations.
+    """
+    Check the answer to the client's input, while another publisher streams others.
 
     Same frame: the outputs are told apart by stamp, the matrix by content.
     """
@@ -274,7 +279,8 @@ def test_describe_reports_the_input_just_sent(node):
 
 @pytest.mark.parametrize('encoding', ['utf-8', 'ascii'])
 def test_frame_id_beyond_ascii_round_trips(node, encoding):
-    """An emoji (beyond U+FFFF) and an accent in frame_id: sent, reported, printed as such.
+    """
+    Check that an emoji (beyond U+FFFF) and an accent in frame_id: sent, reported, printed as such.
 
     Over DDS to the node and back in ~/describe's YAML, then printed by the client. On a
     UTF-8 stdout the characters are printed as themselves; on an ASCII one as escapes that
@@ -345,7 +351,7 @@ def test_refused_input(node, args, why):
 
 
 def test_refused_input_before_any_accepted_one(node_process):
-    """A fresh node: ~/describe has no report yet, but its refusals (counts and sentences)."""
+    """Check a fresh node: ~/describe has no report yet, but its refusals (counts, sentences)."""
     process = node_process()
     line = one_line_error(run('orientation', 0, 0, 0, 0, '--node', process.name), 2)
     assert line == (f'rotation_client: node {process.name} refused the input on '
@@ -363,7 +369,7 @@ def test_refused_input_before_any_accepted_one(node_process):
     ('yxz', (-170.0, 89.9, 45.0), '--deg'),
 ])
 def test_euler_of_another_sequence_is_converted(node, sequence, angles, unit):
-    """The node reads ~/euler as ZYX (radians): the same rotation arrives as ZYX angles."""
+    """Check that the node reads ~/euler as ZYX (radians): the same rotation arrives."""
     out = answered('euler', sequence, *angles, *filter(None, [unit]), '--node', node)
     rotation = Rotation.from_euler(sequence, angles, degrees=unit == '--deg')
     zyx = rotation.as_euler('ZYX')
@@ -391,7 +397,7 @@ def test_unreachable_node(node):
 
 
 def test_unreachable_topic(node_process):
-    """The node runs but its ~/pose is remapped away: the client names the topic."""
+    """Check that the node runs but its ~/pose is remapped away: the client names the topic."""
     process = node_process('-r', f'~/pose:=/{RUN}/elsewhere')
     # Once it runs (on a loaded machine its start-up alone can take the client's timeout);
     # the timeout also bounds the client's discovery of it.
@@ -439,7 +445,8 @@ def test_bad_arguments(args, message):
 @pytest.mark.parametrize('tolerance, poses', [
     ('3.4e38', 2), ('-1e-300', 21), ('-1e39', 21), ('2e-45', 'path_too_long')])
 def test_tolerances_float32_keeps_are_sent(node, tolerance, poses):
-    """Tolerances whose meaning float32 keeps are sent as given.
+    """
+    Tolerances whose meaning float32 keeps are sent as given.
 
     3.4e38 (below float32's largest) is one step; -1e-300 and -1e39 become -0 and -inf,
     still <= 0: 20 steps; 2e-45 becomes 1.4e-45, not 0: 1 m in such steps is too many.
@@ -516,7 +523,8 @@ def test_interrupt_exits_promptly_and_quietly(tester):
 
 
 def console(*commands, names=()):
-    """The transcript of rotation_client ``commands`` as doc/client.md shows it.
+    """
+    Return the transcript of rotation_client ``commands`` as doc/client.md shows it.
 
     Each command is (shown, extra): the arguments shown after ``$ rotation_client``, and
     those added to run it here (this run's node). ``names`` are (real, shown) node names,
@@ -601,7 +609,8 @@ def must_escape(c):
     'nul\x00 bel\x07 esc\x1b del\x7f', 'c1\x85\x9f', 'ls\u2028 ps\u2029', 'bom\ufeff',
     '\ufffe\uffff', 'lone \ud83d and \ude00', 'quote " backslash \\'])
 def test_report_strings_round_trip(text):
-    """Every string reads back the same from the YAML and the JSON report (PyYAML, json).
+    """
+    Every string reads back the same from the YAML and the JSON report (PyYAML, json).
 
     Printable characters are written as themselves, the rest escaped. Before, an emoji
     became a surrogate pair, which YAML reads as two lone surrogates.

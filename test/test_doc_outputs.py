@@ -1,4 +1,5 @@
-"""The node and client outputs shown in doc/node.md and doc/client.md, produced for real.
+"""
+The node and client outputs shown in doc/node.md and doc/client.md, produced for real.
 
 Each tagged block (``<!-- output: NAME -->``, see doc_blocks.py) is run against a
 rotation_node process of this run: its ``$ rotation_client ...`` lines with ``--node`` set to

@@ -1,4 +1,5 @@
-"""Every example output in README.md and doc/*.md is produced here or by a named test.
+"""
+Every example output in README.md and doc/*.md is produced here or by a named test.
 
 The rules (test/doc_blocks.py says how to follow them):
 - console blocks of ``$ rot-tools ...`` commands are run, and their output compared;
@@ -34,7 +35,8 @@ DOCTESTS = [b for b in BLOCKS if b.lang in ('pycon', 'python') and '>>>' in b.te
 
 
 def _scratch(tmp_path):
-    """Make a working directory that looks like the repository (doc/ writable, ../shared).
+    """
+    Make a working directory that looks like the repository (doc/ writable, ../shared).
 
     Commands run from the repository root as the docs show them; files they write (a
     ``--plot doc/screw.svg``) land in the scratch copy, never in the clone.
@@ -93,7 +95,8 @@ def test_console_block_shows_the_real_output(block, tmp_path):
 
 
 def _rewrite(block, text):
-    """Replace the body of ``block`` in its file (ROT_TOOLS_UPDATE_DOCS=1).
+    """
+    Replace the body of ``block`` in its file (ROT_TOOLS_UPDATE_DOCS=1).
 
     The block is found again by its text: an earlier rewrite may have moved its lines.
     """

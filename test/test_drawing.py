@@ -1,4 +1,5 @@
-"""rot_tools.drawing: the geometry both renderers draw, against independent closed forms.
+"""
+rot_tools.drawing: the geometry both renderers draw, against independent closed forms.
 
 Motions are built here from a screw chosen by the test (l̂, c, θ, d) with scipy's Rotation:
 R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the helix
@@ -9,10 +10,9 @@ import math
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
-
 from rot_tools import drawing, RotationError
 from rot_tools.drawing import picture
+from scipy.spatial.transform import Rotation
 
 RNG = np.random.default_rng(1010)
 
@@ -35,7 +35,7 @@ def helix(direction, point, angle, d, p0, s):
 
 
 def perpendicular(direction, point):
-    """The component of point ⊥ direction (the axis point closest to the origin)."""
+    """Return the component of point ⊥ direction (the axis point closest to the origin)."""
     u = unit(direction)
     return point - (point @ u) * u
 

@@ -1,4 +1,5 @@
-"""How rotation_node and rotation_client start: the process runtime (rot_tools.runtime).
+"""
+How rotation_node and rotation_client start: the process runtime (rot_tools.runtime).
 
 Both ways of starting the node — its console script and ``python -m rot_tools.rotation_node``
 (the benchmarks use the latter) — stop cleanly on a signal even while NumPy and rclpy load,

@@ -442,7 +442,7 @@ def test_bad_gimbal_lock_tolerance(lock_tol):
 
 @pytest.mark.parametrize('tol', [-1e-9, float('nan'), '1e-9', None, True, [1e-9]])
 def test_bad_rotation_tolerance(tol):
-    """A tolerance of another type is refused like a negative one (not a TypeError)."""
+    """Check that a tolerance of another type is refused like a negative one (not a TypeError)."""
     for check in (is_rotation, validate_rotation):
         with pytest.raises(RotationError, match=r'^tol must be a number ≥ 0, got '):
             check(np.eye(3), tol=tol)

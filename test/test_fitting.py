@@ -1,4 +1,5 @@
-"""Comparing, averaging, fitting and sampling rotations, against scipy and closed forms.
+"""
+Comparing, averaging, fitting and sampling rotations, against scipy and closed forms.
 
 References: scipy.spatial.transform.Rotation (magnitude of R1⁻¹R2, mean, align_vectors —
 quaternion-based, computed independently of rot_tools), scipy.stats.kstest for the Haar angle
@@ -567,7 +568,8 @@ def scipy_angle(R, ref):
 
 
 def scipy_primary(a, b, weights, primary):
-    """Return the rotation that aligns pair ``primary`` exactly and best fits the rest.
+    """
+    Return the rotation that aligns pair ``primary`` exactly and best fits the rest.
 
     The answer of an infinite weight on that pair (scipy ≥ 1.12 computes it, 1.11 cannot), by
     another road than rot_tools': scipy's rotations throughout, R1 the smallest rotation

@@ -1,4 +1,5 @@
-"""launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would.
+"""
+launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would.
 
 ros2 launch (launch_ros) is not on PyPI, so :func:`launch_command` reads the file the way
 launch_ros turns a ``<node>`` into a command line, for the few tags and substitutions the
@@ -48,7 +49,8 @@ def _allowed(element, attributes):
 
 
 def launch_command(overrides=None, share=REPO):
-    """(pkg, exec, ros_args) of the file's one node with launch arguments ``overrides``.
+    """
+    (pkg, exec, ros_args) of the file's one node with launch arguments ``overrides``.
 
     As launch_ros builds it: --ros-args, -r __node:=NAME, -r __ns:=/NS, --params-file for
     each <param from>, -r FROM:=TO for each <remap>. ``share`` stands for the package's

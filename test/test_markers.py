@@ -1,4 +1,5 @@
-"""rot_tools.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
+"""
+rot_tools.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
 
 Expected values are computed here from (R, b) and a screw chosen by the test (scipy's
 Rotation for R), never read back from rot_tools.drawing.
@@ -8,12 +9,11 @@ import math
 
 import numpy as np
 import pytest
+from rot_tools import messages
+from rot_tools.drawing import picture
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
-
-from rot_tools import messages
-from rot_tools.drawing import picture
 
 HEADER = Header(frame_id='odom')
 HEADER.stamp.sec = 42
@@ -28,7 +28,7 @@ def by_id(array):
 
 
 def check_common(array):
-    """Unique (ns, id), the input's header and unit quaternions on every marker."""
+    """Check unique (ns, id), the input's header and unit quaternions on every marker."""
     keys = [(m.ns, m.id) for m in array.markers]
     assert len(set(keys)) == len(keys) == 6
     assert {m.ns for m in array.markers} == {'rot_tools'}

@@ -8,21 +8,20 @@ from geometry_msgs.msg import QuaternionStamped, TransformStamped, Vector3Stampe
 from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
-from sensor_msgs.msg import Imu
-from std_msgs.msg import Header
-from visualization_msgs.msg import Marker
-
 from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
 from rot_tools import messages
 from rot_tools.messages import RefusedInput
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Header
+from visualization_msgs.msg import Marker
 
 ATOL = 1e-12
 RNG = np.random.default_rng(7)
 
 
 def settings(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False):
-    """What the converters read of rotation_node's Settings."""
+    """Return what the converters read of rotation_node's Settings."""
     return SimpleNamespace(quaternion_tolerance=quaternion_tolerance,
                            euler_sequence=euler_sequence, degrees=degrees)
 

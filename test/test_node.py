@@ -1,4 +1,5 @@
-"""In-process tests of rotation_node over real DDS.
+"""
+In-process tests of rotation_node over real DDS.
 
 The node under test lives in one rclpy context (one DDS participant), the test node in
 another, so every message crosses DDS as it would between processes; each test has a
@@ -21,18 +22,17 @@ from rcl_interfaces.msg import Log, ParameterType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, ReliabilityPolicy
+from rot_tools import (
+    euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
+    rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
+from rot_tools import messages, rotation_node
+from rot_tools.report import transform_report
+from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import Marker
 import yaml
-
-from rot_tools import (
-    euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
-    rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
-from rot_tools.report import transform_report
-from rot_tools import messages, rotation_node
-from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 
 ATOL = 1e-12
 INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped,
@@ -344,7 +344,7 @@ ROBOT_INPUTS = {  # kind: (build(q, p), carries a position)
 
 
 def check_against_scipy(out, q, b):
-    """The outputs of an input with orientation q and position b, against scipy."""
+    """Return the outputs of an input with orientation q and position b, against scipy."""
     rotation = Rotation.from_quat(q)  # normalises q; (x, y, z, w) order, as ROS
     np.testing.assert_allclose(np.reshape(out['rotation_matrix'].data, (3, 3)),
                                rotation.as_matrix(), rtol=0, atol=ATOL)
@@ -405,7 +405,7 @@ def test_rpy_whatever_the_euler_sequence(make_rig):
 
 
 def test_odometry_yaw_in_degrees(make_rig):
-    """The question users ask most: a robot's roll, pitch, yaw from its odometry."""
+    """Check that the question users ask most: a robot's roll, pitch, yaw from its odometry."""
     rig = make_rig(angle_unit='deg')
     yaw, pitch, roll = math.radians(30.0), math.radians(-10.0), math.radians(5.0)
     # q of Rot_z(yaw) Rot_y(pitch) Rot_x(roll), the product of the three half-angle forms
@@ -648,7 +648,8 @@ def test_burst_of_bad_input_throttles_warnings_and_keeps_serving(rig):
 
 
 def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
-    """A fast stream of bad IMU messages does not silence a slow bad odometry stream.
+    """
+    Check that a fast stream of bad IMU messages does not silence a slow bad odometry stream.
 
     The odometry is refused while the IMU's warning of this second has just been logged:
     a throttle shared by every input (rclpy's, per call site) would swallow its warning.
@@ -1051,7 +1052,7 @@ def test_marker_scale(make_rig):
 
 REFUSED_PARAMETERS = [  # (name, value, why)
     ('euler_sequence', 'ZZY', 'not a sequence'),
-    ('euler_sequence', 'RPY', "roll, pitch, yaw (about the fixed x, y, z axes) are the "
+    ('euler_sequence', 'RPY', 'roll, pitch, yaw (about the fixed x, y, z axes) are the '
      "extrinsic sequence 'xyz': every report prints them as rpy, and rotation_node "
      'publishes them on ~/rpy'),
     ('euler_sequence', 'zYx', 'not a sequence'),

@@ -1,4 +1,5 @@
-"""End-to-end: rotation_node as a separate process, driven over DDS from this one.
+"""
+End-to-end: rotation_node as a separate process, driven over DDS from this one.
 
 Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
 installed package, ``python -m rot_tools.rotation_node``) in a namespace unique to this test
@@ -13,6 +14,7 @@ import re
 import signal
 import time
 
+from conftest import OUTPUTS, REPO, RUN
 from geometry_msgs.msg import PoseStamped, TransformStamped, Vector3Stamped
 from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
@@ -20,15 +22,13 @@ import numpy as np
 import pytest
 from rcl_interfaces.srv import GetParameters
 from rclpy.parameter import Parameter, parameter_value_to_python
-from scipy.spatial.transform import Rotation
-from std_srvs.srv import Trigger
-import yaml
-
-from conftest import OUTPUTS, REPO, RUN
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix, screw_from_transform,
     screw_log)
 from rot_tools.rotation_node import PARAMETERS
+from scipy.spatial.transform import Rotation
+from std_srvs.srv import Trigger
+import yaml
 
 ATOL = 1e-12
 STOP_WITHIN = 1.0
@@ -80,7 +80,8 @@ class Remote:
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
     def send(self, kind, msg, marker=True):
-        """Publish msg until its outputs come back; return {output: message}.
+        """
+        Publish msg until its outputs come back; return {output: message}.
 
         Inputs are best effort: a first sample can race the node's side of discovery.
         """
@@ -218,7 +219,7 @@ def test_invalid_start_up_parameter(node_process, override):
 
 
 def test_remapped_odometry_in_degrees(tester, node_process):
-    """The README's "from a robot" line: -r '~/odometry:=/odom' -p angle_unit:=deg."""
+    """Check that the README's "from a robot" line: -r '~/odometry:=/odom' -p angle_unit:=deg."""
     odom = f'/{RUN}/odom'  # this run's /odom
     process = node_process('-r', f'~/odometry:={odom}', '-p', 'angle_unit:=deg')
     remote = Remote(tester, process.name, {odom: Odometry})

@@ -1,4 +1,5 @@
-"""The executor rotation_node runs on (rot_tools.runtime.make_executor), proved in use.
+"""
+The executor rotation_node runs on (rot_tools.runtime.make_executor), proved in use.
 
 It is rot_tools.executor.WaitSetExecutor, chosen over rclpy's EventsExecutor, whose event
 queue grows without bound under a flood beyond the node's pace and makes service calls wait
@@ -34,6 +35,7 @@ import sys
 import threading
 import time
 
+from conftest import RUN, TIMEOUT
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.srv import GetPlan
 import numpy as np
@@ -42,14 +44,12 @@ from rcl_interfaces.srv import GetParameters, SetParameters
 import rclpy
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile
-from std_srvs.srv import Trigger
-import yaml
-
-from conftest import RUN, TIMEOUT
 from rot_tools import runtime
 from rot_tools.executor import WaitSetExecutor
 from rot_tools.rotation_node import RotationNode
 from rot_tools.runtime import guard_callbacks, make_executor, spin
+from std_srvs.srv import Trigger
+import yaml
 
 SIGNALS_EACH = 20
 """Signals of each kind the node must survive cleanly (half idle, half under a flood)."""
@@ -131,7 +131,8 @@ except KeyboardInterrupt:
 
 
 class Flood:
-    """Publishes ``poses`` in turn on ``topic`` at about ``rate`` msg/s, from a process.
+    """
+    Publishes ``poses`` in turn on ``topic`` at about ``rate`` msg/s, from a process.
 
     A process of its own, so that the flood keeps its pace whatever this one does. ``rate``
     'max' publishes back to back, as fast as one publisher can; then ``count`` messages at
@@ -194,7 +195,7 @@ def wait_until_serving(tester, process):
 
 
 def describe(tester, name):
-    """The node's ~/describe report ({'stamp': {'sec': -1}} before any input)."""
+    """Return the node's ~/describe report ({'stamp': {'sec': -1}} before any input)."""
     response = tester.call(Trigger, f'{name}/describe', Trigger.Request())
     return yaml.safe_load(response.message) if response.success else {'stamp': {'sec': -1}}
 
@@ -285,7 +286,7 @@ def test_a_flood_of_bad_input_is_refused_and_the_node_keeps_serving(tester, node
 
 @pytest.fixture
 def own_context():
-    """A context of its own for a node spun by rot_tools.runtime.spin in a thread."""
+    """Return a context of its own for a node spun by rot_tools.runtime.spin in a thread."""
     context = rclpy.Context()
     rclpy.init(context=context)
     yield context
@@ -299,7 +300,7 @@ HELD_GROWTH_MB = 4.0
 
 
 def rss_mb():
-    """This process's resident set size in MB (/proc/self/status)."""
+    """Return this process's resident set size in MB (/proc/self/status)."""
     with open('/proc/self/status', encoding='ascii') as f:
         for line in f:
             if line.startswith('VmRSS:'):
@@ -309,7 +310,8 @@ def rss_mb():
 
 def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
         tester, own_context, namespace, monkeypatch):
-    """A flood beyond the node's pace costs lost inputs, never memory.
+    """
+    Check that a flood beyond the node's pace costs lost inputs, never memory.
 
     The node's loop is held in a callback (as by a node busy beyond its pace) while 100,000
     poses arrive. Whatever the machine's speed, the middleware keeps the input's last 10;
@@ -356,7 +358,8 @@ SERVED_WITHIN = 500
 
 
 def test_every_call_is_answered_promptly_under_a_back_to_back_flood(tester, node_process):
-    """A node saturated by the fastest flood one publisher sends still answers every call.
+    """
+    Check that a node saturated by the fastest flood one publisher sends still answers every call.
 
     Promptly is counted in inputs, not seconds, so that no machine's speed decides: the
     flood mixes good poses with bad ones, which the node counts as refused, and ~/describe
@@ -498,7 +501,7 @@ def _is_coroutine(callback):
 
 
 def test_a_qos_event_is_served_and_the_node_keeps_going(tester, node_process):
-    """An incompatible subscriber raises a QoS event on the node's publisher (a waitable)."""
+    """Check that an incompatible subscriber raises a QoS event on the node's publisher."""
     process = node_process()
     name = process.name
     wait_until_serving(tester, process)

@@ -1,4 +1,5 @@
-"""rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
+"""
+rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
 
 The node lives in its own rclpy context and namespace (test_node's Rig). Every expected
 value is computed here from the input alone, without rot_tools: R with scipy's Rotation,
@@ -14,13 +15,12 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+from rot_tools import rotation_node
+from rot_tools.rotation_node import MARKER_RATE
 from scipy.spatial.transform import Rotation
 from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
     euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)
 from visualization_msgs.msg import Marker
-
-from rot_tools import rotation_node
-from rot_tools.rotation_node import MARKER_RATE
 
 TRIAD, AXIS, PATH, LABEL = (0, 1, 2), 3, 4, 5
 COLORS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))  # x red, y green, z blue
@@ -43,7 +43,7 @@ def helix(u, c, theta, d, p0, n):
     return c + Rotation.from_rotvec(np.outer(s, theta * u)).apply(p0 - c) + np.outer(s * d, u)
 
 
-def markers_of(rig, stamp):
+def markers_of(rig, stamp):  # noqa: F811
     """Wait for the ~/markers array of the input stamped ``stamp``; return it."""
     def arrays():
         return [a for a in rig.received('markers') if a.markers[0].header.stamp.sec == stamp]
@@ -52,7 +52,7 @@ def markers_of(rig, stamp):
     return array
 
 
-def screw_axis_of(rig, stamp):
+def screw_axis_of(rig, stamp):  # noqa: F811
     """Wait for the ~/screw_axis Marker of the input stamped ``stamp``; return it."""
     def markers():
         return [m for m in rig.received('screw_axis') if m.header.stamp.sec == stamp]
@@ -62,7 +62,7 @@ def screw_axis_of(rig, stamp):
 
 
 def check_array(array, stamp, frame):
-    """Unique (ns, id) 0..5 in namespace rot_tools, the input's header, unit quaternions."""
+    """Check unique (ns, id) 0..5 in namespace rot_tools, the header, unit quaternions."""
     keys = [(m.ns, m.id) for m in array.markers]
     assert sorted(keys) == [('rot_tools', i) for i in range(6)]
     for m in array.markers:
@@ -91,10 +91,10 @@ POSES = {
 
 @pytest.mark.parametrize('case', POSES)
 @pytest.mark.parametrize('kind', ['pose', 'transform'])
-def test_markers_of_a_screw_motion(make_rig, case, kind):
+def test_markers_of_a_screw_motion(make_rig, case, kind):  # noqa: F811
     q, b, scale = POSES[case]
     q, b = np.array(q) / np.linalg.norm(q), np.array(b)
-    rig = make_rig(marker_scale=scale)
+    rig = make_rig(marker_scale=scale)  # noqa: F811
     build = pose_stamped if kind == 'pose' else transform_stamped
     stamp = rig.send(kind, build(q, b, frame='odom'))
     m = check_array(markers_of(rig, stamp), stamp, 'odom')
@@ -132,8 +132,8 @@ def test_markers_of_a_screw_motion(make_rig, case, kind):
     np.testing.assert_allclose(xyz(arrow.points[1]) - c, scale * u, rtol=0, atol=1e-12 * size)
 
 
-def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):
-    rig = make_rig(angle_unit='deg', marker_scale=2.0)
+def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):  # noqa: F811
+    rig = make_rig(angle_unit='deg', marker_scale=2.0)  # noqa: F811
     stamp = rig.send('euler', euler_stamped((90.0, 0.0, 0.0)))  # ZYX: 90° about z
     m = check_array(markers_of(rig, stamp), stamp, 'map')
     R = Rotation.from_rotvec([0.0, 0.0, math.pi / 2]).as_matrix()
@@ -148,7 +148,7 @@ def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):
     assert m[LABEL].text == 'theta = 90 deg, d = 0, screw pitch = 0 /rad\npath: x-axis tip'
 
 
-def test_identity_deletes_what_was_drawn_on_both_topics(rig):
+def test_identity_deletes_what_was_drawn_on_both_topics(rig):  # noqa: F811
     before = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
     markers_of(rig, before)
     screw_axis_of(rig, before)
@@ -164,7 +164,7 @@ def test_identity_deletes_what_was_drawn_on_both_topics(rig):
     assert screw_axis_of(rig, after).action == Marker.ADD
 
 
-def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):
+def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):  # noqa: F811
     before = rig.send('pose', pose_stamped((0.6, 0, 0, 0.8), (0, 1, 0)))
     markers_of(rig, before)
     b = np.array([1.0, -2.0, 2.0])
@@ -176,7 +176,7 @@ def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):
     assert m[LABEL].text == 'theta = 0 rad, d = 3, screw pitch = inf\npath: origin'
 
 
-def actions(rig):
+def actions(rig):  # noqa: F811
     """[(stamp, frame, actions)] of every ~/markers array and ~/screw_axis Marker received."""
     def of(markers):
         return (markers[0].header.stamp.sec, markers[0].header.frame_id,
@@ -185,8 +185,8 @@ def actions(rig):
             [of([m]) for m in rig.received('screw_axis')])
 
 
-def test_publish_markers_false_silences_both(make_rig):
-    rig = make_rig(publish_markers=False)
+def test_publish_markers_false_silences_both(make_rig):  # noqa: F811
+    rig = make_rig(publish_markers=False)  # noqa: F811
     for msg in (pose_stamped((0, 0, 1, 0), (1, 0, 0)), pose_stamped((0, 0, 0, 1))):
         rig.roundtrip('pose', msg, marker=False)
     assert set_one(rig.node, 'publish_markers', True).successful
@@ -204,14 +204,15 @@ def test_publish_markers_false_silences_both(make_rig):
 
 
 def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
-        make_rig, monkeypatch):
-    """A picture waits for its turn (a 2 s throttle here); switching off deletes, once.
+        make_rig, monkeypatch):  # noqa: F811
+    """
+    Check that a picture waits for its turn (a 2 s throttle here); switching off deletes, once.
 
     The DELETEs come in the frame of the picture shown, not of the one waiting, and the one
     waiting is not drawn, not even when the markers are switched on again.
     """
     monkeypatch.setattr(rotation_node, 'MARKER_RATE', 0.5)
-    rig = make_rig()
+    rig = make_rig()  # noqa: F811
     shown = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), frame='odom'))
     markers_of(rig, shown)
     screw_axis_of(rig, shown)
@@ -237,7 +238,7 @@ def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
     assert [m[1:] for m in actions(rig)[1][2:]] == [('map', [Marker.DELETE])]
 
 
-def test_markers_are_throttled_and_the_last_input_is_drawn(rig):
+def test_markers_are_throttled_and_the_last_input_is_drawn(rig):  # noqa: F811
     n = 60
     start = time.monotonic()
     for k in range(n):
@@ -257,8 +258,8 @@ def test_markers_are_throttled_and_the_last_input_is_drawn(rig):
     assert len(rig.received('screw')) > len(arrays)  # the other outputs are not throttled
 
 
-def test_a_picture_too_large_for_float64_deletes_and_warns(make_rig):
-    rig = make_rig(marker_scale=1e308)
+def test_a_picture_too_large_for_float64_deletes_and_warns(make_rig):  # noqa: F811
+    rig = make_rig(marker_scale=1e308)  # noqa: F811
     stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
     m = check_array(markers_of(rig, stamp), stamp, 'map')
     assert [m[i].action for i in range(6)] == [Marker.DELETE] * 6
@@ -271,7 +272,7 @@ def test_a_picture_too_large_for_float64_deletes_and_warns(make_rig):
     assert all(x.action == Marker.ADD for x in markers_of(rig, stamp).markers)
 
 
-def test_markers_qos(rig):
+def test_markers_qos(rig):  # noqa: F811
     (info,) = rig.tester.node.get_publishers_info_by_topic(rig.topic('markers'))
     assert info.qos_profile.reliability == ReliabilityPolicy.RELIABLE
     assert info.qos_profile.durability == DurabilityPolicy.VOLATILE

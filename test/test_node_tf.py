@@ -1,4 +1,5 @@
-"""rotation_node following two frames of /tf, and `rotation_client tf`, over real DDS.
+"""
+rotation_node following two frames of /tf, and `rotation_client tf`, over real DDS.
 
 A separate process (test/tf_publisher.py) publishes a chain of four frames, one edge static,
 the two dynamic edges stamped half a period apart (so the node interpolates one of them).
@@ -16,14 +17,13 @@ import re
 import subprocess
 import sys
 
+from conftest import console_script, REPO, RUN, script_env, TIMEOUT
+from doc_blocks import assert_doc_output
 import numpy as np
 import pytest
 from scipy.linalg import expm, logm
 from scipy.spatial.transform import Rotation
 import yaml
-
-from conftest import console_script, REPO, RUN, script_env, TIMEOUT
-from doc_blocks import assert_doc_output
 
 tf2_msgs = pytest.importorskip('tf2_msgs.msg', reason='tf2_msgs is built by make test-venv')
 
@@ -75,7 +75,7 @@ class Reference:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         self.samples = {}  # child: (parent, {stamp ns: 4×4})
         self.static = {}  # child: (parent, 4×4)
-        reliable = dict(reliability=ReliabilityPolicy.RELIABLE, depth=1000)
+        reliable = {'reliability': ReliabilityPolicy.RELIABLE, 'depth': 1000}
         tester.node.create_subscription(
             tf2_msgs.TFMessage, tf_topic, lambda msg: self._add(msg, False),
             QoSProfile(**reliable))
@@ -96,7 +96,10 @@ class Reference:
                 samples[nanoseconds(t.header.stamp)] = hom(t.transform)
 
     def edge(self, child, ns):
-        """(parent, T) of child's edge at stamp ns, or None when the samples around it are
+        """
+        Return (parent, T) of child's edge at stamp ns, or None.
+
+        (parent, T) of child's edge at stamp ns, or None when the samples around it are
         not both here (T0·expm(s·logm(T0⁻¹T1)) between them).
         """
         if child in self.static:
@@ -125,7 +128,7 @@ class Reference:
 
 
 def canonical(q):
-    """The quaternion (x, y, z, w) with w > 0."""
+    """Return the quaternion (x, y, z, w) with w > 0."""
     q = np.asarray(q, dtype=float)
     return -q if q[3] < 0 else q
 
@@ -142,7 +145,8 @@ def node_args(namespace, reference='odom', body='gimbal'):
 
 
 def wait_started(tester, topic):
-    """Wait until the node publishes ``topic`` (subscribed by the tester): it has started.
+    """
+    Wait until the node publishes ``topic`` (subscribed by the tester): it has started.
 
     A node process takes seconds to start on a loaded machine: up to 30 s here.
     """

@@ -9,9 +9,8 @@ import subprocess
 import sys
 
 from catkin_pkg.package import parse_package
-import pytest
-
 from conftest import RUN
+import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
@@ -222,7 +221,8 @@ def test_every_requirement_is_pinned_exactly():
 
 @pytest.mark.parametrize('where', ['beside_a_clone', 'parent', 'root'])
 def test_import_rot_tools_from_any_directory(tmp_path, where):
-    """Import the package, not a directory rot_tools without __init__.py beside it.
+    """
+    Import the package, not a directory rot_tools without __init__.py beside it.
 
     Such a directory (a clone, seen from its parent) is imported as an empty namespace
     package when the installed package is found only after the current directory's

@@ -1,4 +1,5 @@
-"""rot_tools.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files.
+"""
+rot_tools.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files.
 
 The figure is inspected through the gids of its lines; the helix is checked against the
 closed form p(s) = c + Rot(s·θ·l̂)(p0 − c) + s·d·l̂ with scipy's Rotation, from a screw chosen
@@ -14,9 +15,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
-
 from rot_tools import plot
+from scipy.spatial.transform import Rotation
 
 PNG_SIGNATURE = b'\x89PNG\r\n\x1a\n'
 SVG = '{http://www.w3.org/2000/svg}'

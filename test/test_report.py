@@ -8,12 +8,12 @@ import sys
 import numpy as np
 import pytest
 import rot_tools as rt
-from scipy.spatial.transform import Rotation
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
     rot_z, RotationError, screw_from_transform)
 from rot_tools.decomposition import decompose_values
 from rot_tools.report import round_number, to_json, to_yaml, transform_report
+from scipy.spatial.transform import Rotation
 
 TOL = 1e-12
 R0 = rot_z(0.3) @ rot_y(-0.7) @ rot_x(2.1)

@@ -1,4 +1,5 @@
-"""Frames and rigid motions (seed 000 §4, §5) against plain NumPy 4×4 products.
+"""
+Frames and rigid motions (seed 000 §4, §5) against plain NumPy 4×4 products.
 
 The references are built here with NumPy only: homogeneous matrices multiplied with ``@``,
 np.linalg.inv, einsum, and the seed's own statements (p' = p_u·û + p_v·v̂ + p_w·ŵ,
@@ -45,7 +46,7 @@ def scale_of(*vectors):
 
 
 def motions(rng, n):
-    """n random rigid motions with translations spread over 1e-3 … 1e3."""
+    """Return n random rigid motions with translations spread over 1e-3 … 1e3."""
     return random_rotations(rng, n), h.random_translations(rng, n)
 
 

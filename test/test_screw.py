@@ -1,4 +1,5 @@
-"""Chasles' screw decomposition, its inverse, exponential coordinates and interpolation.
+"""
+Chasles' screw decomposition, its inverse, exponential coordinates and interpolation.
 
 Transforms are built from known screws (direction l, axis point c perpendicular to l, angle,
 translation d) with R = Rodrigues(l, angle) and b = (I - R) c + d l, where (I - R) c is

@@ -1,4 +1,5 @@
-"""~/screw_path against a hostile caller: every failure counted, replies bounded in bytes.
+"""
+~/screw_path against a hostile caller: every failure counted, replies bounded in bytes.
 
 The node under test lives in one rclpy context, the caller in another (real DDS between,
 conftest's isolated domain and namespaces). The size of a reply is checked against
@@ -12,13 +13,12 @@ from nav_msgs.srv import GetPlan
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
-
 from rot_tools import rotation_node, runtime
 from rot_tools.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
 
 
 def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map'):
-    """A PoseStamped with orientation q = (x, y, z, w) and position p."""
+    """Return a PoseStamped with orientation q = (x, y, z, w) and position p."""
     msg = PoseStamped()
     msg.header.frame_id = frame
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
@@ -42,8 +42,12 @@ class Service:
         tester.subscribe_rosout()
 
     def call(self, start, goal, tolerance=0.0):
-        """The path of a request; a big reply (10,001 poses, 1 MB) may take long to come
-        on a loaded machine: 30 s an attempt."""
+        """
+        Return the path of a request, waiting up to 30 s an attempt.
+
+        Return the path of a request; a big reply (10,001 poses, 1 MB) may take long to come
+        on a loaded machine: 30 s an attempt.
+        """
         return self.tester.call(GetPlan, self.name, request(start, goal, tolerance),
                                 timeout=30.0, attempts=3).plan
 
@@ -78,7 +82,8 @@ def refused(node):
 
 @pytest.mark.parametrize('tolerance', [0.0, 0.5])
 def test_huge_positions_are_a_counted_refusal(service, tolerance):
-    """±1e308: b1 − b0 overflows float64, so there is no screw between them.
+    """
+    ±1e308: b1 − b0 overflows float64, so there is no screw between them.
 
     Unchecked, the overflow raised a RotationError inside the callback, with tolerance 0
     in the interpolation, with 0.5 already when the number of steps is worked out: the
@@ -107,7 +112,8 @@ def test_huge_positions_are_a_counted_refusal(service, tolerance):
 
 
 def test_reply_size_estimate_bounds_the_serialised_reply():
-    """The estimate is never below what rclpy serialises, and at most 12 bytes a pose above.
+    """
+    Check that the estimate is never below what rclpy serialises, at most 12 B a pose above.
 
     Serialised, a pose takes 69 to 76 bytes besides its frame_id (alignment), the Path's
     header and sequence length 21 to 24.
@@ -124,7 +130,8 @@ def test_reply_size_estimate_bounds_the_serialised_reply():
 
 
 def test_reply_bytes_bound_the_default_path(service):
-    """21 poses (tolerance 0) in the longest frame_id that fits: served, ≤ MAX_REPLY_BYTES.
+    """
+    21 poses (tolerance 0) in the longest frame_id that fits: served, ≤ MAX_REPLY_BYTES.
 
     One byte more of frame_id and the reply would not fit: refused as path_too_long before
     anything is built. Called in-process: the point is the bound, not DDS's large messages.
@@ -147,7 +154,7 @@ def test_reply_bytes_bound_the_default_path(service):
 
 
 def test_long_frame_id_times_many_poses_is_refused(service):
-    """A 2 kB frame_id × 10,001 poses (10,000 steps over 1 m) would be a 20.8 MB reply."""
+    """Check that a 2 kB frame_id × 10,001 poses (10,000 steps over 1 m) is 20.8 MB."""
     frame = 'f' * 2000
     tolerance = 1.0 / (MAX_PATH_STEPS - 0.5)
     start, goal = pose_stamped(frame=frame), pose_stamped(p=(1, 0, 0), frame=frame)
@@ -166,7 +173,8 @@ def test_long_frame_id_times_many_poses_is_refused(service):
 
 
 def test_errors_are_throttled_per_reason(service, monkeypatch):
-    """Refusals for different reasons each log; the same reason again (at once) does not.
+    """
+    Refusals for different reasons each log; the same reason again (at once) does not.
 
     The throttle period is made very long so that "at once" holds on a loaded machine too.
     """

@@ -1,4 +1,5 @@
-"""The seeds' worked examples as exact expectations, and their slips pinned numerically.
+"""
+The seeds' worked examples as exact expectations, and their slips pinned numerically.
 
 Seed 000: Yan-Bin Jia, "Rotation in the Space" (Com S 477/577 notes).
 Seed 001: Julen Cayero, "Relations between Rotation Matrix and Euler axis-angle".

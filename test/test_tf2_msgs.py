@@ -1,4 +1,5 @@
-"""tf2_msgs on the pip path: the TFMessage that tools/build_tf2_msgs.py builds from vendor/.
+"""
+tf2_msgs on the pip path: the TFMessage that tools/build_tf2_msgs.py builds from vendor/.
 
 Checks that it is the type every ROS 2 Jazzy /tf carries (its type hash, as DDS discovery
 announces it), that two processes exchange it over DDS, that the child needs no environment
@@ -12,9 +13,8 @@ import subprocess
 import sys
 import textwrap
 
-import pytest
-
 from conftest import REPO, RUN, TIMEOUT
+import pytest
 
 UPSTREAM_HASH = 'RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087'
 """The type hash of tf2_msgs/msg/TFMessage in ROS 2 Jazzy (tf2_msgs 0.36)."""

@@ -1,4 +1,5 @@
-"""TransformTree: lookups across a tree of frames, at any time, and its refusals.
+"""
+TransformTree: lookups across a tree of frames, at any time, and its refusals.
 
 References are independent of rot_tools: the pose of a frame is the product of 4×4
 homogeneous matrices from the root down (Jia, Rotation in the Space, §5), and an edge between
@@ -9,17 +10,16 @@ import math
 from pathlib import Path
 import re
 
+from doc_blocks import assert_doc_output
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import math_helpers as h
 import numpy as np
 import pytest
-from scipy.linalg import expm, logm
-from scipy.spatial.transform import Rotation
-
-from doc_blocks import assert_doc_output
-import math_helpers as h
 import rot_tools
 from rot_tools import RotationError, TransformLookupError, TransformTree, TransformTreeError
+from scipy.linalg import expm, logm
+from scipy.spatial.transform import Rotation
 
 TOL = 1e-12  # products of a few 4×4 matrices, translations of order 1–10
 INTERP_TOL = 1e-11  # against scipy's expm/logm of 4×4 matrices
@@ -39,7 +39,7 @@ def random_transform(seed, scale=3.0):
 
 
 def ref_interpolate(T0, T1, s):
-    """The constant-screw motion by scipy's matrix exponential and logarithm."""
+    """Return the constant-screw motion by scipy's matrix exponential and logarithm."""
     return T0 @ expm(s * np.real(logm(np.linalg.inv(T0) @ T1)))
 
 
@@ -79,7 +79,7 @@ FRAMES = ('map', 'odom', 'base_link', 'camera', 'lidar', 'optical')
 
 
 def motion(child, t):
-    """A smooth made-up motion of each dynamic edge (the samples' values at time t)."""
+    """Return a smooth made-up motion of each dynamic edge (the samples' values at time t)."""
     seed = FRAMES.index(child)
     R0, b0 = random_transform(seed)
     R = R0 @ h.ref_elementary('z', 0.4 * t) @ h.ref_elementary('x', 0.1 * t * (seed + 1))
@@ -87,7 +87,7 @@ def motion(child, t):
 
 
 def make_tree(stamps=np.arange(0.0, 5.01, 0.5), **kwargs):
-    """The tree above, its dynamic edges sampled at ``stamps``; returns (tree, statics)."""
+    """Return the tree above, its dynamic edges sampled at ``stamps``; returns (tree, statics)."""
     tree = TransformTree(**kwargs)
     statics = {}
     for i, (child, parent) in enumerate(sorted(STATIC.items())):
@@ -101,7 +101,10 @@ def make_tree(stamps=np.arange(0.0, 5.01, 0.5), **kwargs):
 
 
 def ref_edges_at(statics, t, stamps):
-    """Every edge's reference 4×4 at time t: statics as set, dynamic edges interpolated
+    """
+    Return every edge's reference 4×4 at time t.
+
+    Every edge's reference 4×4 at time t: statics as set, dynamic edges interpolated
     between the samples around t (T0·expm(s·logm(T0⁻¹T1))).
     """
     edges = dict(statics)

@@ -1,4 +1,5 @@
-"""A TF publisher for the tests, run as a separate process: a chain of four frames.
+"""
+A TF publisher for the tests, run as a separate process: a chain of four frames.
 
     odom ──(dynamic)── base_link ──(static)── camera ──(dynamic)── gimbal
 
@@ -32,13 +33,13 @@ STATIC = ('base_link', 'camera',
 
 
 def base_link(t):
-    """The edge odom → base_link at t (seconds): a turn about z with a wobble, on a circle."""
+    """Return the edge odom → base_link at t (seconds): a turn about z with a wobble."""
     R = Rotation.from_euler('ZX', [0.5 * t, 0.2 * math.sin(t)]).as_matrix()
     return R, np.array([math.cos(t), math.sin(t), 0.1 * (t % 100.0)])
 
 
 def gimbal(t):
-    """The edge camera → gimbal at t: a nod about x, 5 cm off the camera's origin."""
+    """Return the edge camera → gimbal at t: a nod about x, 5 cm off the camera's origin."""
     return Rotation.from_euler('X', [0.8 * math.sin(2.0 * t)]).as_matrix(), np.array(
         [0.0, 0.05, 0.0])
 

@@ -1,4 +1,5 @@
-"""Build vendor/tf2_msgs (TFMessage) into the running Python's environment, if it lacks one.
+"""
+Build vendor/tf2_msgs (TFMessage) into the running Python's environment, if it lacks one.
 
 PyPI carries the ROS 2 Jazzy wheels of rclpy and the common interfaces but no tf2_msgs. Run
 with a virtual environment's Python (`make run` and `make test` do it), this script:
