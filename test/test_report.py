@@ -412,8 +412,7 @@ def test_decompose_matches_the_separate_functions():
 
 def test_decompose_values_are_decompose_and_matrix_to_quaternion_as_floats():
     # The node's one-pass values: the same numbers as the public functions, bit for bit,
-    # as Python floats, single items on every path (π, identity, pure translation) and
-    # before and after the kernel is compiled (HOT_AFTER calls).
+    # as Python floats, single items on every path (π, identity, pure translation).
     rng = np.random.default_rng(8)
     R = np.concatenate([rt.rotvec_to_matrix(rng.normal(size=(20, 3))),
                         rt.axis_angle_to_matrix(rng.normal(size=(5, 3)), np.pi),
