@@ -30,15 +30,6 @@ BOUND_MB = 2.0
 NODE = 'bench_memory_rot_tools'
 
 
-def rss_mb(pid):
-    """Resident set size of a process in MB, from /proc (Linux)."""
-    with open(f'/proc/{pid}/status', encoding='ascii') as f:
-        for line in f:
-            if line.startswith('VmRSS:'):
-                return int(line.split()[1]) / 1024.0
-    raise RuntimeError(f'no VmRSS for pid {pid}')
-
-
 class Listener:
     """
     This process's subscriber to the node's outputs, spun in a thread; counts ~/screw.
@@ -108,7 +99,7 @@ def measure(rate, seconds, logdir):
             flood(flooder, 100, 0.5)
         flood(flooder, rate, 2.0)  # warm: kernels compiled, queues and pools at size
         time.sleep(1.0)
-        samples = [(0.0, rss_mb(node.pid))]
+        samples = [(0.0, benchlib.rss_mb(node.pid))]
         result = {}
         worker = threading.Thread(target=lambda: result.update(
             zip(('sent', 'elapsed'), flood(flooder, rate, seconds))))
@@ -116,10 +107,10 @@ def measure(rate, seconds, logdir):
         worker.start()
         while worker.is_alive():
             worker.join(timeout=1.0)
-            samples.append((time.monotonic() - start, rss_mb(node.pid)))
+            samples.append((time.monotonic() - start, benchlib.rss_mb(node.pid)))
         delivered = listener.screws - screws0
         time.sleep(2.0)
-        after = rss_mb(node.pid)
+        after = benchlib.rss_mb(node.pid)
         alive = node.poll() is None
     finally:
         if flooder is not None and flooder.poll() is None:

@@ -57,15 +57,6 @@ HEARTBEAT_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 """Fast DDS profile of the caller with --caller-heartbeat (the default period is 3 s)."""
 
 
-def rss_mb(pid):
-    """Resident set size of a process in MB, from /proc (Linux)."""
-    with open(f'/proc/{pid}/status', encoding='ascii') as f:
-        for line in f:
-            if line.startswith('VmRSS:'):
-                return int(line.split()[1]) / 1024.0
-    raise RuntimeError(f'no VmRSS for pid {pid}')
-
-
 def node_command(executor):
     """rotation_node by its console script, or on another executor (node_on_executor.py)."""
     ros_args = ['--ros-args', '-r', f'__node:={NODE}']
@@ -271,7 +262,7 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
                 if time.monotonic() > deadline:
                     raise RuntimeError(f'{name} never answered before the flood')
         time.sleep(1.0)
-        rss_start = rss_mb(node.pid)
+        rss_start = benchlib.rss_mb(node.pid)
         samples = [(0.0, rss_start)]
         calls = {name: [] for name in SERVICES}
         wrong = {name: 0 for name in SERVICES}
@@ -288,18 +279,18 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
                 calls[name].append(took)
                 wrong[name] += math.isfinite(took) and not ok
             while time.monotonic() >= next_sample:
-                samples.append((next_sample - start, rss_mb(node.pid)))
+                samples.append((next_sample - start, benchlib.rss_mb(node.pid)))
                 next_sample += 1.0
             time.sleep(0.05)
         sent, elapsed = flood_reply(flooder)
         end = time.monotonic()
-        rss_end = rss_mb(node.pid)
+        rss_end = benchlib.rss_mb(node.pid)
         samples.append((end - start, rss_end))
         answered = listener.poll() - count0
         after_samples = []
         while time.monotonic() - end < after:
             time.sleep(min(1.0, max(0.0, after - (time.monotonic() - end))))
-            after_samples.append((time.monotonic() - end, rss_mb(node.pid)))
+            after_samples.append((time.monotonic() - end, benchlib.rss_mb(node.pid)))
         final_call = caller.call('describe')
         alive = node.poll() is None
     finally:

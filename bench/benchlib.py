@@ -91,3 +91,12 @@ def spin_in_thread(rclpy, executor, timeout=0.05):
     thread = threading.Thread(target=spin, daemon=True)
     thread.start()
     return thread
+
+
+def rss_mb(pid):
+    """Resident set size of a process in MB, from /proc (Linux)."""
+    with open(f'/proc/{pid}/status', encoding='ascii') as f:
+        for line in f:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) / 1024.0
+    raise RuntimeError(f'no VmRSS for pid {pid}')

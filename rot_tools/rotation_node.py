@@ -48,10 +48,6 @@ from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
 from rot_tools.report import sequence_hint, to_yaml, transform_report
-# The process runtime's names, for callers written before rot_tools.runtime existed (the
-# benchmarks, test_node_executor.py): import them from rot_tools.runtime.
-from rot_tools.runtime import guard_callbacks, make_executor, serve, spin  # noqa: F401
-from rot_tools.runtime import SPIN_TIMEOUT  # noqa: F401
 from rot_tools.screw import screw_from_transform, screw_interpolate
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, Header

@@ -44,6 +44,11 @@ OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy',
 TIMEOUT = 5.0
 """Upper bound of every wait (discovery, message, service reply); never reached when well."""
 
+DISCOVERY_TIMEOUT = 4 * TIMEOUT
+"""Upper bound of a wait for the graph (a matched publisher or subscription, a service): it
+may include a node process's whole start-up (NumPy, rclpy, DDS), which took more than 5 s
+with the 2 cores shared by two busy processes and seven sessions' tests."""
+
 REPO = Path(__file__).resolve().parents[1]
 
 _namespaces = itertools.count(1)
@@ -202,7 +207,7 @@ class Tester:
         Spin ``node`` (a node under test, usually in another context) with the tester.
 
         A node of another context (another DDS participant) gets an executor of its own —
-        the kind rotation_node runs on (rotation_node.make_executor), so that every node
+        the kind rotation_node runs on (rot_tools.runtime.make_executor), so that every node
         test holds on it; both are spun in turn, in this thread.
         """
         from rot_tools.runtime import make_executor
@@ -270,13 +275,13 @@ class Tester:
         for topic in topics or self._subscriptions:
             sub = self._subscriptions[topic]
             self.spin_until(lambda sub=sub: sub.get_publisher_count() > 0,
-                            what=f'a publisher on {topic}')
+                            DISCOVERY_TIMEOUT, f'a publisher on {topic}')
 
     def publisher(self, topic, msg_type, qos=10):
         """Create a publisher on ``topic``; return it once a subscription has matched it."""
         pub = self.node.create_publisher(msg_type, topic, qos)
         self.spin_until(lambda: pub.get_subscription_count() > 0,
-                        what=f'a subscription on {topic}')
+                        DISCOVERY_TIMEOUT, f'a subscription on {topic}')
         return pub
 
     def wait_messages(self, topic, count=1, timeout=TIMEOUT):
@@ -297,7 +302,8 @@ class Tester:
         """
         client = self.node.create_client(srv_type, name)
         try:
-            self.spin_until(lambda: client.service_is_ready(), what=f'service {name}')
+            self.spin_until(lambda: client.service_is_ready(), DISCOVERY_TIMEOUT,
+                            f'service {name}')
             for _ in range(attempts):
                 future = client.call_async(request)
                 deadline = time.monotonic() + timeout

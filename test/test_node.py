@@ -46,7 +46,7 @@ ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 
 # Messages and expected values
 
 
-def pose_stamped(q, p=(0.0, 0.0, 0.0), frame='map'):
+def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map'):
     """Build a PoseStamped with quaternion q = (x, y, z, w) and position p."""
     msg = PoseStamped()
     msg.header.frame_id = frame

@@ -8,23 +8,13 @@ rclpy's own CDR serialisation of it, not against the node's estimate.
 
 import math
 
-from geometry_msgs.msg import PoseStamped
 from nav_msgs.srv import GetPlan
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
-from rot_tools import rotation_node
+from rot_tools import rotation_node, runtime
 from rot_tools.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
-
-
-def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map'):
-    """Return a PoseStamped with orientation q = (x, y, z, w) and position p."""
-    msg = PoseStamped()
-    msg.header.frame_id = frame
-    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
-    o = msg.pose.orientation
-    o.x, o.y, o.z, o.w = map(float, q)
-    return msg
+from test_node import pose_stamped
 
 
 def request(start, goal, tolerance=0.0):
@@ -66,7 +56,7 @@ class Service:
 @pytest.fixture
 def service(ros_context, tester, namespace):
     node = RotationNode(context=ros_context, namespace=namespace)
-    rotation_node.guard_callbacks(node)  # as rotation_node's spin() runs it
+    runtime.guard_callbacks(node)  # as the runtime's spin() runs it
     yield Service(tester, node)
     tester.remove_node(node)
     node.destroy_node()
