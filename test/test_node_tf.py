@@ -395,6 +395,11 @@ def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
     assert result.returncode == 0, result.stderr
     assert_doc_output('tf-client-once', '$ rotation_client tf odom gimbal --once --deg\n'
                       + result.stdout)
+    lines = result.stdout.splitlines(keepends=True)
+    rpy = next(i for i, line in enumerate(lines) if line.startswith('rpy:'))
+    end = next(i for i in range(rpy, len(lines)) if 'unit:' in lines[i])
+    command = "rotation_client tf odom gimbal --once --deg | sed -n '1,3p;/^rpy:/,/unit:/p'"
+    assert_doc_output('readme-tf', f'$ {command}\n' + ''.join(lines[:3] + lines[rpy:end + 1]))
     assert os.environ['ROS_DOMAIN_ID']  # the run's own domain (conftest)
 
 
