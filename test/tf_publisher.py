@@ -40,7 +40,7 @@ def base_link(t):
 
 def gimbal(t):
     """Return the edge camera → gimbal at t: a nod about x, 5 cm off the camera's origin."""
-    return Rotation.from_euler('X', [0.8 * math.sin(2.0 * t)]).as_matrix(), np.array(
+    return Rotation.from_euler('X', 0.8 * math.sin(2.0 * t)).as_matrix(), np.array(
         [0.0, 0.05, 0.0])
 
 
