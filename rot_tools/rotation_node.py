@@ -49,6 +49,7 @@ from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
 from rot_tools.report import sequence_hint, to_yaml, transform_report
 from rot_tools.screw import screw_from_transform, screw_interpolate
+from rot_tools.service_host import ServiceHost
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
@@ -269,8 +270,19 @@ PARAMETERS = {
 class RotationNode(Node):
     """Subscribes to every input of INPUTS and republishes their decompositions."""
 
-    def __init__(self, node_name='rot_tools', **kwargs):
+    def __init__(self, node_name='rot_tools', *, services_apart=False, **kwargs):
+        """
+        Build the node; ``services_apart``: serve its services from a participant of their own.
+
+        With ``services_apart`` (how ``main`` runs it) the services and parameter services
+        live on a hidden node of a second context (rot_tools.service_host), listed in
+        ``companions``: whoever spins this node spins those too (rot_tools.runtime.spin).
+        """
+        if services_apart:
+            kwargs['start_parameter_services'] = False
         super().__init__(node_name, **kwargs)
+        self._service_host = None
+        self.companions = ()
         try:
             self._declare_parameters()
         except Exception:
@@ -322,14 +334,24 @@ class RotationNode(Node):
                                      partial(self._on_input, source), qos_profile_sensor_data)
             self._sources.append(source)
 
-        self._describe_srv = self.create_service(Trigger, '~/describe', self._on_describe)
-        self._screw_path_srv = self.create_service(
-            GetPlan, '~/screw_path', self._on_screw_path)
+        host = self
+        if services_apart:
+            host = self._service_host = ServiceHost(self)
+            self.companions = (host.node,)
+        host.create_service(Trigger, '~/describe', self._on_describe)
+        host.create_service(GetPlan, '~/screw_path', self._on_screw_path)
         self._screw_path_name = self.resolve_service_name('~/screw_path')
         self.get_logger().info(
             f'decomposing {self._input_topics()} (euler_sequence '
             f'{self._settings.euler_sequence}, angle_unit '
             f"{'deg' if self._settings.degrees else 'rad'})")
+
+    def destroy_node(self):
+        """Destroy the node, and the hidden node serving its services apart (if any)."""
+        if self._service_host is not None:
+            self._service_host.destroy()
+            self._service_host = None
+        super().destroy_node()
 
     def _input_topics(self):
         """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
@@ -780,7 +802,7 @@ def main(args=None):
                      f'--ros-args; see {PROG} --help)')
     runtime.init_ros(PROG, argv)
     try:
-        runtime.serve(RotationNode)
+        runtime.serve(partial(RotationNode, services_apart=True))
     except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2
         text = runtime.ros_argument_error(exc)
         if text is None:

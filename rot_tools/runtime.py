@@ -302,14 +302,17 @@ def spin(node, executor):
     """
     Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
 
-    The node's callbacks are guarded first (guard_callbacks). rclpy.init installs handlers
-    that shut the context down on SIGINT and SIGTERM; the loop then ends within one
-    SPIN_TIMEOUT (rclpy.spin could hang on a signal).
+    The node's ``companions`` (further nodes it owns, in contexts of their own: the hidden
+    node serving its services apart, rot_tools.service_host) are spun with it, on the same
+    executor; the callbacks of all are guarded first (guard_callbacks). rclpy.init
+    installs handlers that shut the context down on SIGINT and SIGTERM; the loop then ends
+    within one SPIN_TIMEOUT (rclpy.spin could hang on a signal).
     """
     import rclpy
     from rclpy.executors import ExternalShutdownException
-    guard_callbacks(node)
-    executor.add_node(node)
+    for part in (node, *getattr(node, 'companions', ())):
+        guard_callbacks(part)
+        executor.add_node(part)
     try:
         while rclpy.ok(context=executor.context):
             executor.spin_once(timeout_sec=SPIN_TIMEOUT)

@@ -357,7 +357,8 @@ SERVED_WITHIN = 500
 """Most inputs the node may refuse between two answers of a flooded node (see below)."""
 
 
-def test_every_call_is_answered_promptly_under_a_back_to_back_flood(tester, node_process):
+def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
+        tester, node_process, own_context):
     """
     Check that a node saturated by the fastest flood one publisher sends still answers every call.
 
@@ -390,7 +391,14 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(tester, node
         assert response is not None, 'no answer from ~/describe'
         return yaml.safe_load(response.message)['refused']['total']
 
-    tester.subscribe(f'{name}/screw', TwistStamped)  # a subscriber on an output
+    # A subscriber on an output, as a user's RViz or recorder: in a participant of its own,
+    # as it would be. Sharing the caller's, the node's outputs at the flood's pace would fill
+    # its receive queues, and a reply dropped there comes again only at the node's next
+    # heartbeat (the caller's loss: no node can repair it).
+    listener = rclpy.create_node('listener', namespace=f'/{RUN}', context=own_context)
+    listener.create_subscription(TwistStamped, f'{name}/screw', lambda msg: None, 10)
+    tester.spin_until(lambda: tester.node.count_subscribers(f'{name}/screw') >= 1,
+                      timeout=4 * TIMEOUT, what='the listener on ~/screw')
     with Flood(f'{name}/pose', GOOD + BAD, rate='max'):
         deadline = time.monotonic() + 4 * TIMEOUT
         while (count := refused()) < 4 * SERVED_WITHIN:  # saturated for a while
@@ -402,9 +410,47 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(tester, node
                 assert response is not None, f'no answer from {client.srv_name}'
                 assert len(getattr(response, 'values', None) or response.results) == 1
                 counts.append(refused())
+    listener.destroy_node()
     lags = [b - a for a, b in zip(counts, counts[1:])]
     assert max(lags) <= SERVED_WITHIN, lags
     assert process.process.poll() is None
+    assert_clean_exit(*process.stop(signal.SIGTERM))
+
+
+def test_the_services_are_served_apart_from_the_inputs(tester, node_process):
+    """
+    Check that a flooded input and the services do not share a DDS participant.
+
+    Each rclpy context is one participant, whose receive queues every message for it goes
+    through: a flood fills them, and a request dropped there came again only at its
+    client's next heartbeat, 3 s later (the flood test above failed that way now and then).
+    The node serves its services and parameter services from a hidden node of a context of
+    its own, under the node's own service names; the node keeps its topics and parameters.
+    """
+    process = node_process('-p', 'angle_unit:=deg')
+    wait_until_serving(tester, process)
+    namespace, node = process.name.rsplit('/', 1)
+    hidden = f'_{node}_services'
+    graph = tester.node
+
+    def services_of(name):
+        return {s for s, _ in graph.get_service_names_and_types_by_node(name, namespace)}
+
+    tester.spin_until(lambda: (hidden, namespace) in graph.get_node_names_and_namespaces()
+                      and len(services_of(hidden)) >= 8, timeout=4 * TIMEOUT,
+                      what=f'the services of {hidden}')
+    names = {f'{process.name}/{s}' for s in (
+        'describe', 'screw_path', 'describe_parameters', 'get_parameter_types',
+        'get_parameters', 'list_parameters', 'set_parameters', 'set_parameters_atomically')}
+    assert names <= services_of(hidden)
+    assert not names & services_of(node)
+    assert f'{process.name}/pose' in {
+        t for t, _ in graph.get_subscriber_names_and_types_by_node(node, namespace)}
+    assert not graph.get_subscriber_names_and_types_by_node(hidden, namespace)
+    assert (node, namespace) in graph.get_node_names_and_namespaces()
+    values = tester.call(GetParameters, f'{process.name}/get_parameters',
+                         GetParameters.Request(names=['angle_unit'])).values
+    assert parameter_value_to_python(values[0]) == 'deg'  # the node's parameters
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
 
