@@ -278,8 +278,6 @@ class RotationNode(Node):
         live on a hidden node of a second context (rot_tools.service_host), listed in
         ``companions``: whoever spins this node spins those too (rot_tools.runtime.spin).
         """
-        if services_apart:
-            kwargs['start_parameter_services'] = False
         super().__init__(node_name, **kwargs)
         self._service_host = None
         self.companions = ()

@@ -14,34 +14,52 @@ queues carry nothing but requests.
 Names and behaviour are unchanged for callers: the services keep the names the node would
 give them (``~/describe`` resolved by the node, remappings included), the parameter
 services still act on the node's parameters, and the node itself stays in the graph (the
-hidden one, ``_<node>_services``, is listed only by ``ros2 node list -a``). The hidden node
+hidden one, ``<node>/_services``, is listed only by ``ros2 node list -a``). Its name is
+the node's name plus 10 characters, shorter than the node's own service names, so every
+name rclpy accepted for the node is valid for it. The hidden node
 is one of the node's ``companions``: rot_tools.runtime.spin guards its callbacks and spins
 it on the node's executor (one wait set takes entities of both contexts).
 """
 
+from rcl_interfaces.srv import DescribeParameters, GetParameters, GetParameterTypes
+from rcl_interfaces.srv import ListParameters, SetParameters, SetParametersAtomically
 import rclpy
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from rclpy.parameter_service import ParameterService
+from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
+
+PARAMETER_SERVICE_TYPES = (DescribeParameters, GetParameters, GetParameterTypes,
+                           ListParameters, SetParameters, SetParametersAtomically)
+"""The types of the six parameter services rclpy.parameter_service.ParameterService serves."""
+
+NO_TYPE_DESCRIPTION_SERVICE = Parameter(START_TYPE_DESCRIPTION_SERVICE_PARAM, value=False)
+"""The hidden node has no ~/get_type_description (the owner's describes the types)."""
 
 
 class ServiceHost:
     """
     Creates ``owner``'s services on a hidden node of a context of its own.
 
-    ``owner`` must be built with ``start_parameter_services=False``: the host serves them.
-    Everything else asked of the host is the owner's (the parameter services read and set
-    the owner's parameters through it).
+    The owner's parameter services, if rclpy started them (``start_parameter_services``,
+    whose names rclpy validates while building the node), are destroyed: the host serves
+    them. Everything else asked of the host is the owner's (the parameter services read and
+    set the owner's parameters through it).
     """
 
     def __init__(self, owner):
         self._owner = owner
+        for srv in list(owner.services):
+            if srv.srv_type in PARAMETER_SERVICE_TYPES:
+                owner.destroy_service(srv)
         self.context = rclpy.Context()
         rclpy.init(args=[], context=self.context)
         try:
             self.node = Node(
-                f'_{owner.get_name()}_services', namespace=owner.get_namespace(),
+                '_services', namespace=owner.get_fully_qualified_name(),
                 context=self.context, use_global_arguments=False,
-                start_parameter_services=False, enable_rosout=False)
+                start_parameter_services=False, enable_rosout=False,
+                parameter_overrides=[NO_TYPE_DESCRIPTION_SERVICE])
         except Exception:
             self.context.try_shutdown()
             raise

@@ -5,7 +5,8 @@ import pathlib
 import subprocess
 import sys
 
-ROS_AWARE = {'messages', 'rotation_node', 'rotation_client', 'executor', 'tf_input'}
+ROS_AWARE = {'messages', 'rotation_node', 'rotation_client', 'executor', 'service_host',
+             'tf_input'}
 
 # Runs in a fresh interpreter: a meta-path finder records (and refuses) every attempt to
 # import a ROS package, so even a guarded `try: import rclpy` is caught; then every math

@@ -430,23 +430,24 @@ def test_the_services_are_served_apart_from_the_inputs(tester, node_process):
     process = node_process('-p', 'angle_unit:=deg')
     wait_until_serving(tester, process)
     namespace, node = process.name.rsplit('/', 1)
-    hidden = f'_{node}_services'
+    hidden = (process.name, '_services')  # (namespace, name)
     graph = tester.node
 
-    def services_of(name):
+    def services_of(namespace, name):
         return {s for s, _ in graph.get_service_names_and_types_by_node(name, namespace)}
 
-    tester.spin_until(lambda: (hidden, namespace) in graph.get_node_names_and_namespaces()
-                      and len(services_of(hidden)) >= 8, timeout=4 * TIMEOUT,
+    tester.spin_until(lambda: hidden[::-1] in graph.get_node_names_and_namespaces()
+                      and len(services_of(*hidden)) >= 8, timeout=4 * TIMEOUT,
                       what=f'the services of {hidden}')
     names = {f'{process.name}/{s}' for s in (
         'describe', 'screw_path', 'describe_parameters', 'get_parameter_types',
         'get_parameters', 'list_parameters', 'set_parameters', 'set_parameters_atomically')}
-    assert names <= services_of(hidden)
-    assert not names & services_of(node)
+    assert services_of(*hidden) == names  # (and no ~/get_type_description of its own)
+    assert not names & services_of(namespace, node)
+    assert f'{process.name}/get_type_description' in services_of(namespace, node)
     assert f'{process.name}/pose' in {
         t for t, _ in graph.get_subscriber_names_and_types_by_node(node, namespace)}
-    assert not graph.get_subscriber_names_and_types_by_node(hidden, namespace)
+    assert not graph.get_subscriber_names_and_types_by_node(*hidden[::-1])
     assert (node, namespace) in graph.get_node_names_and_namespaces()
     values = tester.call(GetParameters, f'{process.name}/get_parameters',
                          GetParameters.Request(names=['angle_unit'])).values
