@@ -65,6 +65,39 @@ def _digit_count(v, most):
     return count
 
 
+def _product_error(a, b, p):
+    """
+    Return a·b − p exactly, for p = fl(a·b) (Dekker's two-product with Veltkamp's split).
+
+    Each factor is split into halves of 26 bits, x = xh + xl, whose products are exact.
+    """
+    def split(x):
+        c = 134217729.0 * x  # 2^27 + 1
+        high = c - (c - x)
+        return high, x - high
+    ah, al = split(a)
+    bh, bl = split(b)
+    return ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _rint_of_product(a, scale):
+    """
+    Return the exact a·scale rounded to an integer, ties to even (as Decimal and '%f' round).
+
+    fl(a·scale) is rounded once already; rounding being monotonic, only a product that
+    lands on a tie n + ½ is ambiguous (0.05 · 10 = 0.5 exactly, while 0.05 is
+    0.05000000000000000277…): there the rounding error's sign decides.
+    """
+    p = a * scale
+    r = np.rint(p)
+    tie = np.flatnonzero(np.abs(p - r) == 0.5)
+    if tie.size:
+        err = _product_error(a[tie], scale[tie], p[tie])
+        below = np.floor(p[tie])
+        r[tie] = np.where(err > 0, below + 1.0, np.where(err < 0, below, r[tie]))
+    return r
+
+
 def number_cells(x, precision):
     """
     (bytes (n, width) uint8, keep (n, width) bool) of the text of each value of x (n,).
@@ -80,7 +113,7 @@ def number_cells(x, precision):
     a[nan] = 0.0
     most = 16
     k = precision - np.minimum(_digit_count(a, most), precision)  # decimals of each value
-    scaled = np.rint(a * _POW10[k]).astype(np.int64)  # < 10^precision·(1 + rounding)
+    scaled = _rint_of_product(a, _POW10[k]).astype(np.int64)  # < 10^precision·(1 + …)
     ip, frac = np.divmod(scaled, _POW10_INT[k])
     frac_groups = -(-precision // 4)
     frac *= _POW10_INT[4 * frac_groups - k]  # left-aligned in the groups

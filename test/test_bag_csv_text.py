@@ -48,6 +48,15 @@ def test_any_number_is_rounded_exactly(value, precision):
     assert Decimal(texts([value], precision)[0]) == exact(value, precision)
 
 
+@pytest.mark.parametrize('value, precision, text', [
+    (0.05, 1, '0.1'), (-0.05, 1, '-0.1'),  # 0.05·10 rounds to the tie 0.5; 0.05 is above it
+    (0.15, 1, '0.1'), (0.35, 1, '0.3'),  # …and these below it
+    (0.25, 1, '0.2'), (0.375, 2, '0.38'),  # true ties (binary fractions): to even
+    (5e-13, 12, '0'), (2.5e-12, 12, '0.000000000002')])  # 12 decimals: both below
+def test_a_product_that_lands_on_a_tie_is_rounded_as_the_exact_value(value, precision, text):
+    assert texts([value], precision) == [text] == [_number_text(value, precision)]
+
+
 def test_nan_is_an_empty_field_and_zero_has_no_sign():
     assert texts([math.nan, -0.0, -1e-20, 0.0], 12) == ['', '0', '0', '0']
 
