@@ -14,11 +14,11 @@ queues carry nothing but requests.
 Names and behaviour are unchanged for callers: the services keep the names the node would
 give them (``~/describe`` resolved by the node, remappings included), the parameter
 services still act on the node's parameters, and the node itself stays in the graph (the
-hidden one, ``<node>/_services``, is listed only by ``ros2 node list -a``). Its name is
-the node's name plus 10 characters, shorter than the node's own service names, so every
-name rclpy accepted for the node is valid for it. The hidden node
-is one of the node's ``companions``: rot_tools.runtime.spin guards its callbacks and spins
-it on the node's executor (one wait set takes entities of both contexts).
+hidden one, ``<node>/_services``, is listed only by ``ros2 node list -a``). Its fully
+qualified name is the node's plus 10 characters, fewer than the node's parameter service
+names add, so every name rclpy accepted for the node is valid for it. The hidden node is
+one of the node's ``companions``: rot_tools.runtime.spin guards its callbacks and spins it
+on the node's executor (one wait set takes entities of both contexts).
 """
 
 from rcl_interfaces.srv import DescribeParameters, GetParameters, GetParameterTypes
