@@ -280,7 +280,6 @@ class RotationNode(Node):
         """
         super().__init__(node_name, **kwargs)
         self._service_host = None
-        self.companions = ()
         try:
             self._declare_parameters()
         except Exception:
@@ -335,7 +334,6 @@ class RotationNode(Node):
         host = self
         if services_apart:
             host = self._service_host = ServiceHost(self)
-            self.companions = (host.node,)
         host.create_service(Trigger, '~/describe', self._on_describe)
         host.create_service(GetPlan, '~/screw_path', self._on_screw_path)
         self._screw_path_name = self.resolve_service_name('~/screw_path')
@@ -343,6 +341,11 @@ class RotationNode(Node):
             f'decomposing {self._input_topics()} (euler_sequence '
             f'{self._settings.euler_sequence}, angle_unit '
             f"{'deg' if self._settings.degrees else 'rad'})")
+
+    @property
+    def companions(self):
+        """Return the nodes to spin with this one: the hidden node of its services, if any."""
+        return () if self._service_host is None else (self._service_host.node,)
 
     def destroy_node(self):
         """Destroy the node, and the hidden node serving its services apart (if any)."""
