@@ -76,7 +76,18 @@ BAD = [pose((math.nan, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 0.0, 0.0)),
 
 
 FLOODER = """
-import json, signal, sys, time
+import json, os, signal, sys, time
+# This process's stdout carries only its own lines ('ready', counts): Fast DDS logs to
+# stdout (e.g. a shared-memory port it could not lock, and then does without), so the
+# middleware's stdout is sent to stderr.
+protocol = os.fdopen(os.dup(1), 'w')
+os.dup2(2, 1)
+
+
+def say(line):
+    print(line, file=protocol, flush=True)
+
+
 # SIGINT ends the flood with KeyboardInterrupt even where this process was started with
 # SIGINT ignored (a background job of a non-interactive shell).
 signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -94,7 +105,7 @@ pub = node.create_publisher(PoseStamped, topic, qos_profile_sensor_data)
 deadline = time.monotonic() + float(sys.argv[5])
 while pub.get_subscription_count() < 1:
     if time.monotonic() > deadline:
-        print(f'no subscription on {pub.topic_name}', flush=True)
+        say(f'no subscription on {pub.topic_name}')
         sys.exit(1)
     time.sleep(0.01)
 messages = []
@@ -105,7 +116,7 @@ for (q, p, frame) in poses:
     o.x, o.y, o.z, o.w = q
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = p
     messages.append(msg)
-print('ready', flush=True)
+say('ready')
 sent, start = 0, time.monotonic()
 try:
     if rate == 'max':  # back to back, until SIGINT or ``count`` messages
@@ -114,7 +125,7 @@ try:
             msg.header.stamp.sec = 1_000_000 + sent
             pub.publish(msg)
             sent += 1
-        print(sent, flush=True)
+        say(sent)
         signal.pause()
     rate = float(rate)
     while True:
@@ -126,7 +137,7 @@ try:
             sent += 1
         time.sleep(0.002)
 except KeyboardInterrupt:
-    print(sent, flush=True)
+    say(sent)
 """
 
 
