@@ -17,13 +17,12 @@ rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_qu
 (canonical sign), and path poses write q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R,
 signed for continuity along the path.
 
-Outbound helpers build the node's messages from NumPy values: Float64MultiArray (row-major
-3x3), Vector3Stamped, QuaternionStamped, TwistStamped, the screw-axis Marker, poses and Path,
-and the MarkerArray of a rot_tools.drawing.Picture.
+Outbound helpers build the node's other messages from NumPy values: the screw-axis Marker,
+poses and Path, and the MarkerArray of a rot_tools.drawing.Picture (the per-input outputs
+are written as bytes, rot_tools.cdr; MATRIX_DIMS is ~/rotation_matrix's layout).
 """
 
-from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, QuaternionStamped
-from geometry_msgs.msg import TwistStamped, Vector3Stamped
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 import numpy as np
 from rot_tools.axis_angle import matrix_to_axis_angle
@@ -35,7 +34,7 @@ from rot_tools.boundary import (  # noqa: F401
     pose_to_rt, pose_with_covariance_stamped_to_transform, quaternion_msg_to_matrix,
     quaternion_stamped_to_transform, REFUSAL_REASONS, RefusedInput,
     transform_stamped_to_transform, ZERO_QUATERNION)
-from std_msgs.msg import ColorRGBA, Float64MultiArray, MultiArrayDimension, MultiArrayLayout
+from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 
@@ -47,69 +46,13 @@ def type_name(msg_type):
 # ---------------------------------------------------------------------------------------
 # Outbound: NumPy -> message
 
-MATRIX_LAYOUT = MultiArrayLayout(
-    dim=[MultiArrayDimension(label='rows', size=3, stride=9),
-         MultiArrayDimension(label='cols', size=3, stride=3)],
-    data_offset=0)
-"""Layout of a row-major 3x3 matrix in a std_msgs/MultiArray (std_msgs' own convention)."""
-
-
-# Each builder below fills ``msg`` in place when one is given (the node keeps one message per
-# output and reuses it: publish() serialises at once, and building a Marker costs more than
-# all of the math of one input), else a new message.
-
-
-def rotation_matrix_msg(R, msg=None):
-    """std_msgs/Float64MultiArray of R (3, 3): 9 values row-major, dims rows and cols."""
-    msg = Float64MultiArray(layout=MATRIX_LAYOUT) if msg is None else msg
-    msg.data = np.asarray(R, dtype=np.float64).ravel().tolist()
-    return msg
-
-
-def new_rotation_matrix_msg():
-    """Return an empty std_msgs/Float64MultiArray with the layout of a row-major 3x3 R."""
-    return Float64MultiArray(layout=MATRIX_LAYOUT)
-
-
-def matrix_values_msg(header, values, msg=None):
-    """
-    std_msgs/Float64MultiArray of R given as its 9 values row-major (a list of floats).
-
-    The signature of the stamped builders below; the type has no header (it is unused).
-    """
-    msg = new_rotation_matrix_msg() if msg is None else msg
-    msg.data = values
-    return msg
+MATRIX_DIMS = (('rows', 3, 9), ('cols', 3, 3))
+"""(label, size, stride) of the dimensions of a row-major 3x3 matrix in a std_msgs/MultiArray
+(std_msgs' own convention): ~/rotation_matrix's layout."""
 
 
 def _set_xyz(target, v):
     target.x, target.y, target.z = float(v[0]), float(v[1]), float(v[2])
-
-
-def vector3_stamped_msg(header, v, msg=None):
-    """geometry_msgs/Vector3Stamped of a 3-vector, with the given header."""
-    msg = Vector3Stamped() if msg is None else msg
-    msg.header = header
-    _set_xyz(msg.vector, v)
-    return msg
-
-
-def quaternion_stamped_msg(header, q, msg=None):
-    """geometry_msgs/QuaternionStamped of q = (x, y, z, w), with the given header."""
-    msg = QuaternionStamped() if msg is None else msg
-    msg.header = header
-    o = msg.quaternion
-    o.x, o.y, o.z, o.w = float(q[0]), float(q[1]), float(q[2]), float(q[3])
-    return msg
-
-
-def twist_stamped_msg(header, twist, msg=None):
-    """geometry_msgs/TwistStamped of a 6-vector (angular (3), linear (3)) = screw_log order."""
-    msg = TwistStamped() if msg is None else msg
-    msg.header = header
-    _set_xyz(msg.twist.angular, twist[:3])
-    _set_xyz(msg.twist.linear, twist[3:])
-    return msg
 
 
 SCREW_AXIS_COLOR = ColorRGBA(r=1.0, g=0.5, b=0.0, a=1.0)
@@ -125,7 +68,7 @@ def screw_axis_marker(header, point, direction, scale, msg=None, ns=SCREW_AXIS_N
     id 0 so each new axis replaces the last. scale.x/y/z are shaft diameter, head diameter
     and head length, proportional to the arrow's length.
     """
-    if msg is None:
+    if msg is None:  # (the node refills one: building a Marker costs more than the math)
         msg = Marker(ns=ns, id=0, type=Marker.ARROW, action=Marker.ADD,
                      points=[Point(), Point()], color=SCREW_AXIS_COLOR)
         msg.pose.orientation.w = 1.0

@@ -43,7 +43,7 @@ from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
-from rot_tools import drawing, messages, runtime, tf_input
+from rot_tools import cdr, drawing, messages, runtime, tf_input
 from rot_tools.decomposition import decompose_values
 from rot_tools.errors import RotationError
 from rot_tools.euler import EULER_SEQUENCES
@@ -127,27 +127,28 @@ class OutputKind(NamedTuple):
     msg_type: type
     value: str
     """The field of rot_tools.decomposition.Values the message carries."""
-    build: Callable
-    """build(header, value, msg) -> msg, filled in place (rot_tools.messages)."""
+    encode: Callable
+    """encode(head, value) -> the message's serialised bytes (rot_tools.cdr; ``head`` is
+    cdr.header of the input's header)."""
     angles: bool = False
     """The value is angles, published in angle_unit (the Values are in radians)."""
-    new: Callable = None
-    """new() -> the message to reuse; None: msg_type()."""
 
 
+_VECTOR3_STAMPED = cdr.stamped(3)
 OUTPUTS = (
-    OutputKind('~/rotation_matrix', Float64MultiArray, 'matrix', messages.matrix_values_msg,
-               new=messages.new_rotation_matrix_msg),
-    OutputKind('~/quaternion', QuaternionStamped, 'quaternion', messages.quaternion_stamped_msg),
-    OutputKind('~/axis_angle', Vector3Stamped, 'rotvec', messages.vector3_stamped_msg),
-    OutputKind('~/euler_angles', Vector3Stamped, 'euler', messages.vector3_stamped_msg,
-               angles=True),
-    OutputKind('~/rpy', Vector3Stamped, 'rpy', messages.vector3_stamped_msg, angles=True),
-    OutputKind('~/screw', TwistStamped, 'twist', messages.twist_stamped_msg),
+    OutputKind('~/rotation_matrix', Float64MultiArray, 'matrix',
+               cdr.float64_multi_array(messages.MATRIX_DIMS)),
+    OutputKind('~/quaternion', QuaternionStamped, 'quaternion', cdr.stamped(4)),
+    OutputKind('~/axis_angle', Vector3Stamped, 'rotvec', _VECTOR3_STAMPED),
+    OutputKind('~/euler_angles', Vector3Stamped, 'euler', _VECTOR3_STAMPED, angles=True),
+    OutputKind('~/rpy', Vector3Stamped, 'rpy', _VECTOR3_STAMPED, angles=True),
+    OutputKind('~/screw', TwistStamped, 'twist', cdr.stamped(6, order=(3, 4, 5, 0, 1, 2))),
 )
 """Every output published for each accepted input, from one decompose_values pass; a new
-output is a row here and its field of Values (its kernel output). The pictures (~/markers,
-~/screw_axis) are not rows: they are drawn at most MARKER_RATE times a second."""
+output is a row here and its field of Values (its kernel output). The messages are written
+as bytes (rot_tools.cdr: a third of the cost of rclpy's conversion of a message object).
+The pictures (~/markers, ~/screw_axis) are not rows: they are drawn at most MARKER_RATE
+times a second."""
 
 
 class Source(NamedTuple):
@@ -296,12 +297,12 @@ class RotationNode(Node):
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
-        # For each output: its publish, build, the one message refilled for each input (see
-        # rot_tools.messages), its Values field getter and whether it is angles (the hot path).
+        # For each output: its publish, encode, its Values field getter and whether it is
+        # angles (the hot path).
         qos = QoSProfile(depth=10)
         self._outputs = tuple(
-            (self.create_publisher(kind.msg_type, kind.topic, qos).publish, kind.build,
-             (kind.new or kind.msg_type)(), attrgetter(kind.value), kind.angles)
+            (self.create_publisher(kind.msg_type, kind.topic, qos).publish, kind.encode,
+             attrgetter(kind.value), kind.angles)
             for kind in OUTPUTS)
         self._axis_marker = messages.screw_axis_marker(None, (0, 0, 0), (0, 0, 1), 1.0)
         self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
@@ -481,11 +482,13 @@ class RotationNode(Node):
     def _publish(self, source, header, R, b, values, settings):
         """Every output of one accepted input (header, R, b), ``values`` its decomposition."""
         degrees = settings.degrees
-        for publish, build, out, value_of, angles in self._outputs:
+        stamp = header.stamp
+        head = cdr.header(stamp.sec, stamp.nanosec, header.frame_id)
+        for publish, encode, value_of, angles in self._outputs:
             value = value_of(values)
             if angles and degrees:
                 value = tuple(map(math.degrees, value))
-            publish(build(header, value, out))
+            publish(encode(head, value))
         if settings.publish_markers:
             self._offer_picture(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)

@@ -22,10 +22,10 @@ from rcl_interfaces.msg import Log, ParameterType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, ReliabilityPolicy
+from rot_tools import cdr, rotation_node
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
     rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
-from rot_tools import messages, rotation_node
 from rot_tools.report import transform_report
 from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 from scipy.spatial.transform import Rotation
@@ -928,8 +928,8 @@ def test_every_output_row_is_published_with_its_type(rig):
 
 
 def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):
-    row = rotation_node.OutputKind('~/euler_again', Vector3Stamped, 'euler',
-                                   messages.vector3_stamped_msg, angles=True)
+    row = rotation_node.OutputKind('~/euler_again', Vector3Stamped, 'euler', cdr.stamped(3),
+                                   angles=True)
     monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (row,))
     tester.subscribe(f'{namespace}/rot_tools/euler_again', Vector3Stamped)
     rig = make_rig(angle_unit='deg')  # (discovery waits for the new topic's match too)

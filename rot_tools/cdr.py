@@ -1,0 +1,85 @@
+"""
+The serialised bytes of rotation_node's per-input outputs, written with one struct.pack.
+
+rclpy publishes a message object by converting it field by field to C and serialising it
+(~5 µs for a Vector3Stamped); a publisher also takes the serialised bytes themselves
+(``Publisher.publish(bytes)``, ~1.5 µs). Every output the node publishes for each input is
+a header and a few float64, so the node writes their bytes here: the same bytes as
+``rclpy.serialization.serialize_message`` of the message (test_cdr checks it), that is
+CDR as rmw_fastrtps writes it (OMG DDS-XTypes 1.3 §7.4.3, XCDR version 1, little endian):
+
+- a 4-byte encapsulation header ``00 01 00 00`` (CDR, little endian), then the payload;
+- every primitive aligned to its size (int32/uint32: 4, float64: 8), counted from the
+  payload's start, with zero padding;
+- a string is a uint32 length that counts a terminating NUL, its UTF-8 bytes, the NUL;
+- a sequence is a uint32 count, then its elements.
+
+ROS-free: the encoders take a header's stamp and frame_id, and plain floats.
+"""
+
+import struct
+
+ENCAPSULATION = b'\x00\x01\x00\x00'
+"""CDR_LE: plain CDR, little endian, no options."""
+
+_STAMP_AND_LENGTH = struct.Struct('<iII')
+
+
+def header(sec, nanosec, frame_id):
+    """
+    Return the encapsulation and a std_msgs/Header (stamp, frame_id), padded to 8 bytes.
+
+    Every stamped output starts so: header fields, then float64 (aligned to 8). The
+    frame_id ends at its first NUL, as rclpy's conversion of a str to a C string does.
+    """
+    name = frame_id.encode().partition(b'\0')[0] + b'\0'
+    body = _STAMP_AND_LENGTH.pack(sec, nanosec, len(name)) + name
+    return ENCAPSULATION + body + bytes(-len(body) % 8)
+
+
+def stamped(count, order=None):
+    """
+    Return encode(head, values) of a header (from :func:`header`) and ``count`` float64.
+
+    E.g. Vector3Stamped (3), QuaternionStamped (x, y, z, w: 4), TwistStamped (6).
+
+    ``order``: the message's field order as indices into ``values`` (TwistStamped holds
+    (linear, angular), the screw twist is (angular, linear)).
+    """
+    pack = struct.Struct(f'<{count}d').pack
+    if order is None:
+        return lambda head, values: head + pack(*values)
+    return lambda head, values: head + pack(*[values[i] for i in order])
+
+
+def _pad(payload, size):
+    """Zero bytes that align the next value of ``size`` bytes after ``payload``."""
+    return bytes(-len(payload) % size)
+
+
+def _uint32s(payload, *values):
+    """``payload`` followed by aligned uint32 values."""
+    return payload + _pad(payload, 4) + struct.pack(f'<{len(values)}I', *values)
+
+
+def _string(payload, text):
+    """``payload`` followed by a CDR string."""
+    raw = text.encode() + b'\0'
+    return _uint32s(payload, len(raw)) + raw
+
+
+def float64_multi_array(dims, data_offset=0):
+    """
+    Return encode(head, values) of a std_msgs/Float64MultiArray with a constant layout.
+
+    ``dims``: (label, size, stride) of each MultiArrayDimension; the number of values is
+    the first dimension's stride. The type has no header: ``head`` is not used.
+    """
+    payload = _uint32s(b'', len(dims))
+    for label, size, stride in dims:
+        payload = _uint32s(_string(payload, label), size, stride)
+    count = dims[0][2]
+    payload = _uint32s(payload, data_offset, count)
+    prefix = ENCAPSULATION + payload + _pad(payload, 8)
+    pack = struct.Struct(f'<{count}d').pack
+    return lambda head, values: prefix + pack(*values)
