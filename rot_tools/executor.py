@@ -61,14 +61,26 @@ class WaitSetExecutor(Executor):
         self._event_period = event_period
         self._events_due = 0.0  # time.monotonic() of the next look at the waitables
         self._wait_sets = {}  # sizes: a wait set of those sizes (reused)
+        self._entities = None  # (subscriptions, services, timers, waitables), None: stale
 
     def create_task(self, callback, *args, **kwargs):
         raise NotImplementedError(f'{type(self).__name__} runs no tasks')
 
-    def spin_once(self, timeout_sec=None):
-        """Wait at most ``timeout_sec`` for work; serve everything ready once."""
-        if self._is_shutdown:
-            return
+    def wake(self):
+        """Wake the executor: an entity of one of its nodes was created or destroyed."""
+        self._entities = None
+        super().wake()
+
+    def add_node(self, node):
+        self._entities = None
+        return super().add_node(node)
+
+    def remove_node(self, node):
+        self._entities = None
+        super().remove_node(node)
+
+    def _collect(self):
+        """Return the subscriptions, services, timers and waitables of every node."""
         subscriptions, services, timers, waitables = [], [], [], []
         for node in self.get_nodes():
             if list(node.clients) or list(node.guards):
@@ -78,15 +90,26 @@ class WaitSetExecutor(Executor):
             services.extend(node.services)
             timers.extend(node.timers)
             waitables.extend(node.waitables)
+        return subscriptions, services, timers, waitables
+
+    def spin_once(self, timeout_sec=None):
+        """Wait at most ``timeout_sec`` for work; serve everything ready once."""
+        if self._is_shutdown:
+            return
+        if self._entities is None:  # (collected again after a node's entities changed)
+            self._entities = self._collect()
+        subscriptions, services, timers, waitables = self._entities
         wait = max(0.0, self._events_due - time.monotonic())
         if timeout_sec is not None and timeout_sec >= 0:
             wait = min(wait, timeout_sec)
-        with ExitStack() as in_use:  # nothing is destroyed while the wait set holds it
-            subscriptions = _in_use(in_use, subscriptions)
-            services = _in_use(in_use, services)
-            timers = _in_use(in_use, timers)
-            guards = _in_use(in_use, [self._guard, self._sigint_gc])
-            in_use.enter_context(self._context.handle)
+        held = []  # the handles in use: nothing is destroyed while the wait set holds it
+        try:
+            subscriptions = _enter(held, subscriptions)
+            services = _enter(held, services)
+            timers = _enter(held, timers)
+            guards = _enter(held, (self._guard, self._sigint_gc))
+            self._context.handle.__enter__()
+            held.append(self._context.handle)
             wait_set = self._wait_set(len(subscriptions), len(guards), len(timers), 0,
                                       len(services), 0)
             for sub in subscriptions:
@@ -104,19 +127,26 @@ class WaitSetExecutor(Executor):
             if not self._context.ok():
                 raise ExternalShutdownException()
 
-            ready = set(wait_set.get_ready_entities('timer'))
-            for timer in timers:
-                if timer.handle.pointer in ready and timer.handle.is_timer_ready():
-                    timer.handle.call_timer()
-                    timer.callback()
-            ready = set(wait_set.get_ready_entities('service'))
-            for srv in services:
-                if srv.handle.pointer in ready:
-                    _serve_requests(srv)
+            ready = wait_set.get_ready_entities('timer')
+            if ready:
+                ready = set(ready)
+                for timer in timers:
+                    if timer.handle.pointer in ready and timer.handle.is_timer_ready():
+                        timer.handle.call_timer()
+                        timer.callback()
+            ready = wait_set.get_ready_entities('service')
+            if ready:
+                ready = set(ready)
+                for srv in services:
+                    if srv.handle.pointer in ready:
+                        _serve_requests(srv)
             ready = set(wait_set.get_ready_entities('subscription'))
             for sub in subscriptions:
                 if sub.handle.pointer in ready:
                     self._take_messages(sub)
+        finally:
+            for handle in reversed(held):
+                handle.__exit__(None, None, None)
         if waitables and time.monotonic() >= self._events_due:
             self._events_due = time.monotonic() + self._event_period
             self._serve_waitables(waitables)
@@ -166,14 +196,20 @@ class WaitSetExecutor(Executor):
                 callback(*taken)
 
 
-def _in_use(stack, entities):
-    """Return the entities whose handle could be entered on ``stack`` (not the destroyed)."""
+def _enter(held, entities):
+    """
+    Return the entities whose handle could be entered (not the destroyed ones).
+
+    The handles entered are appended to ``held``: the caller exits them.
+    """
     usable = []
     for entity in entities:
+        handle = entity.handle
         try:
-            stack.enter_context(entity.handle)
+            handle.__enter__()
         except InvalidHandle:
             continue
+        held.append(handle)
         usable.append(entity)
     return usable
 
