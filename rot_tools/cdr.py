@@ -14,10 +14,13 @@ CDR as rmw_fastrtps writes it (OMG DDS-XTypes 1.3 §7.4.3, XCDR version 1, littl
 - a string is a uint32 length that counts a terminating NUL, its UTF-8 bytes, the NUL;
 - a sequence is a uint32 count, then its elements.
 
-ROS-free: the encoders take a header's stamp and frame_id, and plain floats.
+ROS-free: the encoders take a header's stamp and frame_id, plain floats and NumPy arrays.
+:class:`Writer` writes messages of any shape, field by field (the node's Markers).
 """
 
 import struct
+
+import numpy as np
 
 ENCAPSULATION = b'\x00\x01\x00\x00'
 """CDR_LE: plain CDR, little endian, no options."""
@@ -83,3 +86,70 @@ def float64_multi_array(dims, data_offset=0):
     prefix = ENCAPSULATION + payload + _pad(payload, 8)
     pack = struct.Struct(f'<{count}d').pack
     return lambda head, values: prefix + pack(*values)
+
+
+class Writer:
+    """
+    A CDR payload written field by field, for messages of any shape (the node's Markers).
+
+    Each method appends one field, aligned from the payload's start; :meth:`data` returns
+    the encapsulation and the payload.
+    """
+
+    def __init__(self):
+        self._parts = [ENCAPSULATION]
+        self._size = 0  # payload bytes so far
+
+    def put(self, alignment, data):
+        """Append bytes already encoded, the first aligned to ``alignment``."""
+        pad = -self._size % alignment
+        if pad:
+            self._parts.append(bytes(pad))
+        self._parts.append(data)
+        self._size += pad + len(data)
+
+    def int32(self, *values):
+        """Append int32 values."""
+        self.put(4, struct.pack(f'<{len(values)}i', *values))
+
+    def uint32(self, *values):
+        """Append uint32 values (also a sequence's count)."""
+        self.put(4, struct.pack(f'<{len(values)}I', *values))
+
+    def float32(self, *values):
+        """Append float32 values."""
+        self.put(4, struct.pack(f'<{len(values)}f', *values))
+
+    def float64(self, *values):
+        """Append float64 values."""
+        self.put(8, struct.pack(f'<{len(values)}d', *values))
+
+    def boolean(self, value):
+        """Append a bool (one byte)."""
+        self.put(1, b'\x01' if value else b'\x00')
+
+    def string(self, text):
+        """Append a string: its length with the NUL, its UTF-8 bytes up to a NUL, the NUL."""
+        raw = text.encode().partition(b'\0')[0] + b'\0'
+        self.uint32(len(raw))
+        self.put(1, raw)
+
+    def header(self, header):
+        """Append a std_msgs/Header (anything with stamp.sec, stamp.nanosec, frame_id)."""
+        self.put(4, struct.pack('<iI', header.stamp.sec, header.stamp.nanosec))
+        self.string(header.frame_id)
+
+    def points(self, points):
+        """Append a sequence of geometry_msgs/Point: ``points`` (n, 3) float64."""
+        points = np.ascontiguousarray(points, dtype='<f8').reshape(-1, 3)
+        self.uint32(len(points))
+        if len(points):
+            self.put(8, points.tobytes())
+
+    def data(self):
+        """Return the message's bytes: the encapsulation, then the payload."""
+        return b''.join(self._parts)
+
+    def payload(self):
+        """Return the payload's bytes (to be put into another message)."""
+        return b''.join(self._parts[1:])

@@ -17,14 +17,19 @@ rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_qu
 (canonical sign), and path poses write q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R,
 signed for continuity along the path.
 
-Outbound helpers build the node's other messages from NumPy values: the screw-axis Marker,
-poses and Path, and the MarkerArray of a rot_tools.drawing.Picture (the per-input outputs
-are written as bytes, rot_tools.cdr; MATRIX_DIMS is ~/rotation_matrix's layout).
+Outbound helpers build the node's other messages from NumPy values: poses and Path
+(message objects), and the pictures — the screw-axis Marker and the MarkerArray of a
+rot_tools.drawing.Picture — as serialised bytes (rot_tools.cdr.Writer: ~60 µs for a picture's
+MarkerArray, where building the Marker objects and rclpy's conversion of them took ~200). MATRIX_DIMS is ~/rotation_matrix's
+layout (the per-input outputs are bytes too, rot_tools.cdr).
 """
+
+import struct
 
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 import numpy as np
+from rot_tools import cdr
 from rot_tools.axis_angle import matrix_to_axis_angle
 # The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.boundary. Its
 # names are re-exported here, where rotation_node has always found them.
@@ -34,8 +39,8 @@ from rot_tools.boundary import (  # noqa: F401
     pose_to_rt, pose_with_covariance_stamped_to_transform, quaternion_msg_to_matrix,
     quaternion_stamped_to_transform, REFUSAL_REASONS, RefusedInput,
     transform_stamped_to_transform, ZERO_QUATERNION)
-from std_msgs.msg import ColorRGBA
-from visualization_msgs.msg import Marker, MarkerArray
+from std_msgs.msg import Header
+from visualization_msgs.msg import Marker
 
 
 def type_name(msg_type):
@@ -51,44 +56,9 @@ MATRIX_DIMS = (('rows', 3, 9), ('cols', 3, 3))
 (std_msgs' own convention): ~/rotation_matrix's layout."""
 
 
-def _set_xyz(target, v):
-    target.x, target.y, target.z = float(v[0]), float(v[1]), float(v[2])
-
-
-SCREW_AXIS_COLOR = ColorRGBA(r=1.0, g=0.5, b=0.0, a=1.0)
+SCREW_AXIS_COLOR = (1.0, 0.5, 0.0, 1.0)
 SCREW_AXIS_NS = 'screw_axis'
 """Namespace of the ~/screw_axis Marker (id 0)."""
-
-
-def screw_axis_marker(header, point, direction, scale, msg=None, ns=SCREW_AXIS_NS):
-    """
-    visualization_msgs/Marker: an ARROW from ``point`` to ``point + scale·direction``.
-
-    Points in ``header.frame_id``, identity pose (orientation.w = 1: RViz rejects q = 0),
-    id 0 so each new axis replaces the last. scale.x/y/z are shaft diameter, head diameter
-    and head length, proportional to the arrow's length.
-    """
-    if msg is None:  # (the node refills one: building a Marker costs more than the math)
-        msg = Marker(ns=ns, id=0, type=Marker.ARROW, action=Marker.ADD,
-                     points=[Point(), Point()], color=SCREW_AXIS_COLOR)
-        msg.pose.orientation.w = 1.0
-    msg.header = header
-    px, py, pz = float(point[0]), float(point[1]), float(point[2])
-    tail, tip = msg.points
-    tail.x, tail.y, tail.z = px, py, pz
-    tip.x = px + scale * float(direction[0])
-    tip.y = py + scale * float(direction[1])
-    tip.z = pz + scale * float(direction[2])
-    _set_xyz(msg.scale, (0.05 * scale, 0.1 * scale, 0.2 * scale))
-    return msg
-
-
-def delete_marker(header, ns, marker_id):
-    """visualization_msgs/Marker that deletes marker (ns, marker_id) of ``header.frame_id``."""
-    msg = Marker(header=header, ns=ns, id=marker_id, action=Marker.DELETE)
-    msg.pose.orientation.w = 1.0
-    return msg
-
 
 MARKERS_NS = 'rot_tools'
 """Namespace of the ~/markers MarkerArray."""
@@ -99,60 +69,132 @@ the label. Each input sends every one of them (ADD or DELETE), so it replaces th
 
 MARKER_IDS = TRIAD_IDS + (AXIS_ID, PATH_ID, LABEL_ID)
 
-TRIAD_COLORS = (ColorRGBA(r=1.0, g=0.0, b=0.0, a=1.0), ColorRGBA(r=0.0, g=1.0, b=0.0, a=1.0),
-                ColorRGBA(r=0.0, g=0.0, b=1.0, a=1.0))
-PATH_COLOR = ColorRGBA(r=1.0, g=0.0, b=1.0, a=1.0)
-LABEL_COLOR = ColorRGBA(r=1.0, g=1.0, b=1.0, a=1.0)
+TRIAD_COLORS = ((1.0, 0.0, 0.0, 1.0), (0.0, 1.0, 0.0, 1.0), (0.0, 0.0, 1.0, 1.0))
+PATH_COLOR = (1.0, 0.0, 1.0, 1.0)
+LABEL_COLOR = (1.0, 1.0, 1.0, 1.0)
+"""Colours (r, g, b, a): the moved x, y, z axes red, green, blue; the path magenta; the
+label white (the screw axis orange)."""
 
 
-def _points(points):
-    return [Point(x=x, y=y, z=z) for x, y, z in np.asarray(points, dtype=np.float64).tolist()]
+def _payload(write):
+    """Return the payload ``write(writer)`` writes: constant fields, encoded once."""
+    w = cdr.Writer()
+    write(w)
+    return w.payload()
 
 
-def _marker(header, marker_id, kind, color, size, points=None):
-    """Return an ADD Marker of ``kind`` in namespace MARKERS_NS with an identity pose."""
-    msg = Marker(header=header, ns=MARKERS_NS, id=marker_id, type=kind, action=Marker.ADD,
-                 color=color, points=_points(points) if points is not None else [])
-    _set_xyz(msg.scale, size)
-    msg.pose.orientation.w = 1.0
-    return msg
+_COLOR_TO_FRAME_LOCKED = struct.Struct('<4f2i?')
+"""A Marker's color (float32 r, g, b, a), lifetime (sec, nanosec) and frame_locked."""
+
+_UNUSED_BEFORE_TEXT = _payload(lambda w: (
+    w.uint32(0), w.string(''), w.header(Header()), w.string(''), w.uint32(0), w.uint32(0)))
+"""A Marker's empty colors, texture_resource, texture (sensor_msgs/CompressedImage: header,
+format, data) and uv_coordinates: after a sequence of points, at an offset that is a
+multiple of 4, as everything in it is aligned to at most 4."""
+
+_UNUSED_AFTER_TEXT = _payload(lambda w: (
+    w.string(''), w.string(''), w.uint32(0), w.boolean(False)))
+"""A Marker's empty mesh_resource and mesh_file (filename, data), and
+mesh_use_embedded_materials false; put aligned to 4."""
+
+
+def _write_marker(w, header, ns, marker_id, kind=Marker.ARROW, action=Marker.ADD,
+                  position=(0.0, 0.0, 0.0), scale=(0.0, 0.0, 0.0),
+                  color=(0.0, 0.0, 0.0, 0.0), points=(), text=''):
+    """
+    Append a visualization_msgs/Marker to the rot_tools.cdr.Writer ``w``.
+
+    Its pose is ``position`` with the identity orientation (w = 1: RViz rejects q = 0); no
+    lifetime (0: until replaced), no colours per point, texture or mesh.
+    """
+    w.header(header)
+    w.string(ns)
+    w.int32(marker_id, kind, action)
+    w.float64(*position, 0.0, 0.0, 0.0, 1.0, *scale)
+    w.put(4, _COLOR_TO_FRAME_LOCKED.pack(*color, 0, 0, False))
+    w.points(points)
+    w.put(4, _UNUSED_BEFORE_TEXT)
+    w.string(text)
+    w.put(4, _UNUSED_AFTER_TEXT)
+
+
+def _marker(header, **fields):
+    """Return the bytes of one Marker (the arguments of _write_marker)."""
+    w = cdr.Writer()
+    _write_marker(w, header, **fields)
+    return w.data()
+
+
+def _marker_array(header, markers):
+    """Return the bytes of a MarkerArray; ``markers``: each one's fields for _write_marker."""
+    w = cdr.Writer()
+    w.uint32(len(markers))
+    for fields in markers:
+        _write_marker(w, header, **fields)
+    return w.data()
+
+
+def screw_axis_marker(header, point, direction, scale):
+    """
+    visualization_msgs/Marker bytes: an ARROW from ``point`` to ``point + scale·direction``.
+
+    Points in ``header.frame_id``, identity pose, id 0 so each new axis replaces the last.
+    scale.x/y/z are shaft diameter, head diameter and head length, proportional to the
+    arrow's length.
+    """
+    point = np.asarray(point, dtype=np.float64)
+    tip = point + scale * np.asarray(direction, dtype=np.float64)
+    return _marker(header, ns=SCREW_AXIS_NS, marker_id=0, color=SCREW_AXIS_COLOR,
+                   scale=(0.05 * scale, 0.1 * scale, 0.2 * scale), points=(point, tip))
+
+
+def delete_marker(header, ns, marker_id):
+    """visualization_msgs/Marker bytes that delete marker (ns, marker_id) of the frame."""
+    return _marker(header, ns=ns, marker_id=marker_id, action=Marker.DELETE)
+
+
+def _deletes(ids):
+    return [{'ns': MARKERS_NS, 'marker_id': i, 'action': Marker.DELETE} for i in ids]
 
 
 def delete_picture_markers(header):
-    """visualization_msgs/MarkerArray that deletes every marker of picture_markers."""
-    return MarkerArray(markers=[delete_marker(header, MARKERS_NS, i) for i in MARKER_IDS])
+    """visualization_msgs/MarkerArray bytes that delete every marker of picture_markers."""
+    return _marker_array(header, _deletes(MARKER_IDS))
 
 
 def picture_markers(header, picture):
     """
-    visualization_msgs/MarkerArray of a rot_tools.drawing.Picture (see MARKER_IDS).
+    visualization_msgs/MarkerArray bytes of a rot_tools.drawing.Picture (see MARKER_IDS).
 
     In ``header.frame_id``, namespace MARKERS_NS: the moved frame's x, y, z axes as red,
     green and blue ARROWs from b (picture.scale long), the screw axis as an orange ARROW
     along +l̂, the path as a magenta LINE_STRIP and the label as TEXT_VIEW_FACING text at
     picture.label_at. What the picture does not hold (the axis of a pure translation,
     everything of the identity) is a DELETE of its id. Every pose is the identity
-    (orientation.w = 1), the points carry the geometry; sizes are fractions of the scale.
+    (orientation.w = 1) but the label's position, the points carry the geometry; sizes are
+    fractions of the scale.
     """
     s = picture.scale
     if picture.path is None:
         return delete_picture_markers(header)
     tail = picture.origin
-    markers = [_marker(header, i, Marker.ARROW, color, (0.05 * s, 0.1 * s, 0.2 * s),
-                       (tail, tail + s * picture.frame[:, k]))
+    markers = [{'ns': MARKERS_NS, 'marker_id': i, 'color': color,
+                'scale': (0.05 * s, 0.1 * s, 0.2 * s),
+                'points': (tail, tail + s * picture.frame[:, k])}
                for k, (i, color) in enumerate(zip(TRIAD_IDS, TRIAD_COLORS))]
     if picture.axis is None:
-        markers.append(delete_marker(header, MARKERS_NS, AXIS_ID))
+        markers += _deletes((AXIS_ID,))
     else:
-        markers.append(_marker(header, AXIS_ID, Marker.ARROW, SCREW_AXIS_COLOR,
-                               (0.02 * s, 0.06 * s, 0.15 * s), picture.axis))
-    markers.append(_marker(header, PATH_ID, Marker.LINE_STRIP, PATH_COLOR,
-                           (0.02 * s, 0.0, 0.0), picture.path))
-    label = _marker(header, LABEL_ID, Marker.TEXT_VIEW_FACING, LABEL_COLOR, (0.0, 0.0, 0.15 * s))
-    label.text = f'{picture.label}\npath: {picture.traced}'
-    _set_xyz(label.pose.position, picture.label_at)
-    markers.append(label)
-    return MarkerArray(markers=markers)
+        markers.append({'ns': MARKERS_NS, 'marker_id': AXIS_ID, 'color': SCREW_AXIS_COLOR,
+                        'scale': (0.02 * s, 0.06 * s, 0.15 * s), 'points': picture.axis})
+    markers.append({'ns': MARKERS_NS, 'marker_id': PATH_ID, 'kind': Marker.LINE_STRIP,
+                    'color': PATH_COLOR, 'scale': (0.02 * s, 0.0, 0.0),
+                    'points': picture.path})
+    markers.append({'ns': MARKERS_NS, 'marker_id': LABEL_ID, 'kind': Marker.TEXT_VIEW_FACING,
+                    'color': LABEL_COLOR, 'scale': (0.0, 0.0, 0.15 * s),
+                    'position': tuple(map(float, picture.label_at)),
+                    'text': f'{picture.label}\npath: {picture.traced}'})
+    return _marker_array(header, markers)
 
 
 def matrices_to_quaternions(R, first=None):

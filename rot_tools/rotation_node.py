@@ -304,7 +304,6 @@ class RotationNode(Node):
             (self.create_publisher(kind.msg_type, kind.topic, qos).publish, kind.encode,
              attrgetter(kind.value), kind.angles)
             for kind in OUTPUTS)
-        self._axis_marker = messages.screw_axis_marker(None, (0, 0, 0), (0, 0, 1), 1.0)
         self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
         self._markers_pub = self.create_publisher(MarkerArray, '~/markers', qos)
         self._picture_due = None  # the arguments of the latest drawing not yet published
@@ -546,16 +545,14 @@ class RotationNode(Node):
         self._picture_shown = header
         self._markers_pub.publish(messages.picture_markers(header, picture))
         self._marker_pub.publish(messages.screw_axis_marker(
-            header, picture.screw.point, picture.screw.direction, settings.marker_scale,
-            self._axis_marker))
+            header, picture.screw.point, picture.screw.direction, settings.marker_scale))
 
     def _warm_up_picture(self):
         """
         Draw one picture and build its messages, publishing nothing.
 
-        The first drawing of a process pays for one-off work (NumPy's first calls, the type
-        support of the marker messages): ~10 ms, paid here at start-up instead of inside the
-        callback of the first input.
+        The first drawing of a process pays for one-off work (NumPy's first calls): a few
+        ms, paid here at start-up instead of inside the callback of the first input.
         """
         header = Header()
         picture = drawing.picture(WARM_UP_ROTATION, WARM_UP_TRANSLATION, 1.0, False)

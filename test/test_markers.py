@@ -7,16 +7,27 @@ Rotation for R), never read back from rot_tools.drawing.
 
 import math
 
+from geometry_msgs.msg import Point
 import numpy as np
 import pytest
+from rclpy.serialization import deserialize_message, serialize_message
 from rot_tools import messages
 from rot_tools.drawing import picture
 from scipy.spatial.transform import Rotation
-from std_msgs.msg import Header
-from visualization_msgs.msg import Marker
+from std_msgs.msg import ColorRGBA, Header
+from visualization_msgs.msg import Marker, MarkerArray
 
 HEADER = Header(frame_id='odom')
 HEADER.stamp.sec = 42
+
+
+def picture_markers(header, pic):
+    """Return the MarkerArray whose bytes messages.picture_markers writes."""
+    return deserialize_message(messages.picture_markers(header, pic), MarkerArray)
+
+
+def delete_marker(header, ns, marker_id):
+    return deserialize_message(messages.delete_marker(header, ns, marker_id), Marker)
 
 
 def xyz(v):
@@ -43,7 +54,7 @@ def test_screw_markers():
     R = Rotation.from_rotvec(theta * axis).as_matrix()
     b = (np.eye(3) - R) @ c + d * axis
     scale = 0.4
-    array = messages.picture_markers(HEADER, picture(R, b, scale=scale))
+    array = picture_markers(HEADER, picture(R, b, scale=scale))
     check_common(array)
     m = by_id(array)
     assert all(x.action == Marker.ADD for x in array.markers)
@@ -82,7 +93,7 @@ def test_a_small_turn_is_labelled_beside_the_motion(theta):
     # the chord from 0 to b within SAGITTA·scale, and the axis is a few marker_scale long.
     R = Rotation.from_rotvec([0.0, 0.0, theta]).as_matrix()
     b, scale = np.array([1.0, 0.0, 0.0]), 0.5
-    m = by_id(messages.picture_markers(HEADER, picture(R, b, scale=scale)))
+    m = by_id(picture_markers(HEADER, picture(R, b, scale=scale)))
     at = xyz(m[messages.LABEL_ID].pose.position)
     on_chord = np.clip(at @ b, 0.0, 1.0) * b
     assert np.linalg.norm(at - on_chord) <= 0.35 * scale
@@ -95,7 +106,7 @@ def test_a_small_turn_is_labelled_beside_the_motion(theta):
 
 
 def test_pure_translation_deletes_the_axis():
-    array = messages.picture_markers(HEADER, picture(np.eye(3), (0.0, 3.0, 4.0)))
+    array = picture_markers(HEADER, picture(np.eye(3), (0.0, 3.0, 4.0)))
     check_common(array)
     m = by_id(array)
     assert m[messages.AXIS_ID].action == Marker.DELETE
@@ -107,7 +118,7 @@ def test_pure_translation_deletes_the_axis():
 
 def test_pure_rotation_labels_the_traced_tip():
     R = Rotation.from_rotvec([0.0, 0.0, math.pi / 2]).as_matrix()
-    array = messages.picture_markers(HEADER, picture(R, np.zeros(3), degrees=True))
+    array = picture_markers(HEADER, picture(R, np.zeros(3), degrees=True))
     m = by_id(array)
     assert m[messages.LABEL_ID].text == ('theta = 90 deg, d = 0, screw pitch = 0 /rad\n'
                                          'path: x-axis tip')
@@ -115,12 +126,58 @@ def test_pure_rotation_labels_the_traced_tip():
 
 
 def test_identity_deletes_every_marker():
-    array = messages.picture_markers(HEADER, picture(np.eye(3), np.zeros(3)))
+    array = picture_markers(HEADER, picture(np.eye(3), np.zeros(3)))
     check_common(array)
     assert [m.action for m in array.markers] == [Marker.DELETE] * 6
 
 
 def test_delete_marker():
-    m = messages.delete_marker(HEADER, 'screw_axis', 0)
+    m = delete_marker(HEADER, 'screw_axis', 0)
     assert (m.ns, m.id, m.action, m.header.frame_id) == ('screw_axis', 0, Marker.DELETE, 'odom')
     assert m.pose.orientation.w == 1.0
+
+
+def reference_marker(header, ns, marker_id, kind, action, color=(0, 0, 0, 0), size=(0, 0, 0),
+                     points=(), position=(0, 0, 0), text=''):
+    """Return the Marker built with rclpy's message objects, field by field."""
+    msg = Marker(header=header, ns=ns, id=marker_id, type=kind, action=action,
+                 color=ColorRGBA(r=float(color[0]), g=float(color[1]), b=float(color[2]),
+                                 a=float(color[3])),
+                 points=[Point(x=float(x), y=float(y), z=float(z)) for x, y, z in points],
+                 text=text)
+    msg.scale.x, msg.scale.y, msg.scale.z = map(float, size)
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, position)
+    msg.pose.orientation.w = 1.0
+    return msg
+
+
+@pytest.mark.parametrize('frame_id', ['odom', 'base_link_3', ''])  # header ends mod 4: 0, 3, 1
+def test_the_bytes_are_those_of_rclpys_markers(frame_id):
+    header = Header(frame_id=frame_id)
+    header.stamp.sec, header.stamp.nanosec = -3, 4_000_000_000
+    R = Rotation.from_rotvec([0.3, -0.2, 1.1]).as_matrix()
+    pic = picture(R, np.array([0.5, -1.0, 2.0]), scale=0.7, degrees=True)
+    s, ADD, ARROW = pic.scale, Marker.ADD, Marker.ARROW
+    expected = [reference_marker(header, 'rot_tools', k, ARROW, ADD, color,
+                                 (0.05 * s, 0.1 * s, 0.2 * s),
+                                 (pic.origin, pic.origin + s * pic.frame[:, k]))
+                for k, color in enumerate(((1, 0, 0, 1), (0, 1, 0, 1), (0, 0, 1, 1)))]
+    expected += [
+        reference_marker(header, 'rot_tools', 3, ARROW, ADD, (1, 0.5, 0, 1),
+                         (0.02 * s, 0.06 * s, 0.15 * s), pic.axis),
+        reference_marker(header, 'rot_tools', 4, Marker.LINE_STRIP, ADD, (1, 0, 1, 1),
+                         (0.02 * s, 0, 0), pic.path),
+        reference_marker(header, 'rot_tools', 5, Marker.TEXT_VIEW_FACING, ADD, (1, 1, 1, 1),
+                         (0, 0, 0.15 * s), position=pic.label_at,
+                         text=f'{pic.label}\npath: {pic.traced}')]
+    for ours, reference in (
+            (messages.picture_markers(header, pic), MarkerArray(markers=expected)),
+            (messages.delete_picture_markers(header), MarkerArray(markers=[
+                reference_marker(header, 'rot_tools', i, ARROW, Marker.DELETE)
+                for i in range(6)])),
+            (messages.screw_axis_marker(header, (1, 2, 3), (0, 0.6, 0.8), 2.0),
+             reference_marker(header, 'screw_axis', 0, ARROW, ADD, (1, 0.5, 0, 1),
+                              (0.1, 0.2, 0.4), ((1, 2, 3), (1, 3.2, 4.6))))):
+        theirs = serialize_message(reference)
+        assert len(ours) == len(theirs)
+        assert deserialize_message(ours, type(reference)) == reference
