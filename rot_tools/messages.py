@@ -19,9 +19,10 @@ signed for continuity along the path.
 
 Outbound helpers build the node's other messages from NumPy values: poses and Path
 (message objects), and the pictures — the screw-axis Marker and the MarkerArray of a
-rot_tools.drawing.Picture — as serialised bytes (rot_tools.cdr.Writer: ~60 µs for a picture's
-MarkerArray, where building the Marker objects and rclpy's conversion of them took ~200). MATRIX_DIMS is ~/rotation_matrix's
-layout (the per-input outputs are bytes too, rot_tools.cdr).
+rot_tools.drawing.Picture — as serialised bytes (rot_tools.cdr.Writer: ~60 µs for a
+picture's MarkerArray, where building Marker objects and rclpy's conversion of them took
+~200 µs). MATRIX_DIMS is ~/rotation_matrix's layout (the per-input outputs are bytes too,
+rot_tools.cdr).
 """
 
 import struct
