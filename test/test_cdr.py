@@ -102,8 +102,9 @@ def test_every_output_row_encodes_its_type():
     values = (0.5, -0.25, 0.125, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
     sizes = {Float64MultiArray: 9, QuaternionStamped: 4, Vector3Stamped: 3, TwistStamped: 6}
     for kind in OUTPUTS:
-        msg = deserialize_message(kind.encode(head, values[:sizes[kind.msg_type]]),
-                                  kind.msg_type)
+        ours = kind.encode(head, values[:sizes[kind.msg_type]])
+        msg = deserialize_message(ours, kind.msg_type)
         assert isinstance(msg, kind.msg_type)
+        assert_same_message(ours, msg)  # the message read back is written as ours
         if kind.msg_type is not Float64MultiArray:
             assert (msg.header.stamp.sec, msg.header.frame_id) == (3, 'odom')
