@@ -1,9 +1,9 @@
 """
 Independent reference helpers for the math tests.
 
-Everything here is written from the formulas of SPEC §2 and the seeds, with plain NumPy, and
-never calls rot_tools: the tests compare rot_tools against these constructions, not against
-itself.
+Everything here is written from the API's definitions and the course notes (Jia; Cayero),
+with plain NumPy, and never calls rot_tools: the tests compare rot_tools against these
+constructions, not against itself.
 """
 
 import itertools
@@ -14,7 +14,7 @@ import numpy as np
 
 PI = np.pi
 
-# The 12 sequence names of SPEC §2; upper case intrinsic, lower case extrinsic.
+# The 12 sequence names; upper case intrinsic, lower case extrinsic.
 TAIT_BRYAN = ('XYZ', 'XZY', 'YXZ', 'YZX', 'ZXY', 'ZYX')
 PROPER = ('XYX', 'XZX', 'YXY', 'YZY', 'ZXZ', 'ZYZ')
 INTRINSIC = TAIT_BRYAN + PROPER
@@ -31,7 +31,7 @@ def max_abs(x):
 
 
 def ref_elementary(axis, angle):
-    """Return Rot_x / Rot_y / Rot_z (seed 000 §1) for `axis` in 'xyz', batched over `angle`."""
+    """Return Rot_x / Rot_y / Rot_z (Jia §1) for `axis` in 'xyz', batched over `angle`."""
     a = np.asarray(angle, dtype=float)
     c, s = np.cos(a), np.sin(a)
     one, zero = np.ones_like(a), np.zeros_like(a)
@@ -45,7 +45,7 @@ def ref_elementary(axis, angle):
 
 def ref_euler(angles, seq):
     """
-    Explicit product of elementary rotations (SPEC §2).
+    Explicit product of elementary rotations.
 
     Intrinsic (upper case): R = Rot_a1(t1) Rot_a2(t2) Rot_a3(t3).
     Extrinsic (lower case): R = Rot_a3(t3) Rot_a2(t2) Rot_a1(t1).
@@ -63,12 +63,12 @@ def singular_values(seq):
 
 
 def middle_range(seq):
-    """Return the closed range of the middle angle (SPEC §2)."""
+    """Return the closed range of the middle angle."""
     return (-PI / 2, PI / 2) if seq.upper() in TAIT_BRYAN else (0.0, PI)
 
 
 def ref_skew(v):
-    """Return [v]x of seed 001 eq. 17, batched."""
+    """Return [v]x of Cayero eq. 17, batched."""
     v = np.asarray(v, dtype=float)
     z = np.zeros(v.shape[:-1])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
@@ -78,7 +78,7 @@ def ref_skew(v):
 
 
 def seed_rodrigues_eq7(axis, angle):
-    """Rot_l(theta), seed 000 eq. 7, element by element as printed (axis must be unit)."""
+    """Rot_l(theta), Jia eq. 7, element by element as printed (axis must be unit)."""
     axis = np.asarray(axis, dtype=float)
     t = np.asarray(angle, dtype=float)
     lx, ly, lz = axis[..., 0], axis[..., 1], axis[..., 2]
@@ -92,7 +92,7 @@ def seed_rodrigues_eq7(axis, angle):
 
 
 def seed_rodrigues_eq18(u, phi):
-    """R(u, phi) = I cos(phi) + (1 - cos(phi)) u u^T + sin(phi) [u]x (seed 001 eq. 18)."""
+    """R(u, phi) = I cos(phi) + (1 - cos(phi)) u u^T + sin(phi) [u]x (Cayero eq. 18)."""
     u = np.asarray(u, dtype=float)
     phi = np.asarray(phi, dtype=float)[..., None, None]
     return (np.eye(3) * np.cos(phi) + (1.0 - np.cos(phi)) * (u[..., :, None] * u[..., None, :])

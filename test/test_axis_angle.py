@@ -110,7 +110,7 @@ def test_matrix_to_axis_angle_adversarial_angles():
 
 @pytest.mark.parametrize('angle', [1e-12, PI, PI - 1e-9])
 def test_accuracy_targets(angle):
-    # SPEC §2: angle and rotation vector accurate to 1e-14 (tiny angle, exactly pi, pi - 1e-9).
+    # angle and rotation vector accurate to 1e-14 (tiny angle, exactly pi, pi - 1e-9).
     rng = np.random.default_rng(25)
     axis = np.concatenate([SPECIAL_AXES / np.linalg.norm(SPECIAL_AXES, axis=-1)[:, None],
                            h.random_unit_vectors(rng, 200)])
@@ -278,7 +278,7 @@ def test_subnormal_and_tiny_angles(tiny):
 
 @pytest.mark.parametrize('size', [5e-324, 1e-310, 1e-200, 1e200, 1.7e308])
 def test_any_non_zero_axis_is_normalised_never_refused(size):
-    # A non-zero axis is normalised (SPEC §2): however small or large it is, the result is
+    # A non-zero axis is normalised: however small or large it is, the result is
     # its rotation, one by one and as a batch (no refusal, no NaN).
     for axis in ([size, 0.0, 0.0], [[size, 0.0, 0.0]] * 2):
         got = axis_angle_to_matrix(axis, 1.0)

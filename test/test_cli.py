@@ -132,7 +132,7 @@ def check_quaternion(printed, R):
 def test_euler_negative_angle_and_options_after_the_arguments(script, fmt):
     rep = ok(script, 'euler', 'ZYX', '-30', '20', '10', '--deg', *(['--json'] * (fmt == 'json')))
     a, b, c = np.radians([-30.0, 20.0, 10.0])
-    R = rot_z(a) @ rot_y(b) @ rot_x(c)  # seed 000 eq. 1
+    R = rot_z(a) @ rot_y(b) @ rot_x(c)  # Jia eq. 1
     check_rotation(rep, R, deg=True)
     close(rep['euler']['angles'], [-30.0, 20.0, 10.0])
     assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion']
@@ -356,7 +356,7 @@ def test_screw_from_a_ros_pose(script):
 
 
 # ---------------------------------------------------------------------------------------
-# Frames (seed 000 §4), homogeneous matrices, points (seed 000 §5)
+# Frames (Jia §4), homogeneous matrices, points (Jia §5)
 
 
 def _typed(values, digits=17):
@@ -364,7 +364,7 @@ def _typed(values, digits=17):
 
 
 def test_frame_of_the_tracking_example(script):
-    # Seed 000 example 3: the tracking frame's axes are the columns of
+    # Jia example 3: the tracking frame's axes are the columns of
     # Rot_z(α)·Rot_y(β), written out in closed form; a point q of the station's frame has
     # coordinates q' = Rᵀ·q in the tracking frame (§4).
     a, b = math.radians(30.0), math.radians(-20.0)

@@ -240,7 +240,7 @@ def test_wrong_skew_shape(shape):
 
 
 def test_non_finite_skew():
-    # SPEC §2: never a silent NaN.
+    # never a silent NaN.
     with pytest.raises(RotationError, match=NON_FINITE):
         skew([1.0, np.nan, 2.0])
 
@@ -564,7 +564,7 @@ def assert_finite_or_refused(call, *args):
 
 
 def test_no_function_returns_inf_or_nan_for_finite_input():
-    # SPEC §2.1: every function either answers with finite numbers or raises RotationError
+    # every function either answers with finite numbers or raises RotationError
     # (never a plain ValueError/OverflowError from math, never inf or NaN) — on single items
     # and on batches, for vectors of huge, tiny and subnormal entries.
     vectors = huge_vectors()

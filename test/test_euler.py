@@ -13,7 +13,7 @@ LOCK_OFFSETS = (0.0, 1e-9, -1e-9, 1e-7, -1e-7, 1e-5, -1e-5)
 
 
 def roundtrip_tolerance(distance, degenerate):
-    """SPEC §2: 1e-12, and about twice the distance to the lock when flagged."""
+    """1e-12, and about twice the distance to the lock when flagged."""
     return np.where(degenerate, 2.0 * np.abs(distance) + 1e-12, 1e-12)
 
 
@@ -237,7 +237,7 @@ def test_single_and_batch_shapes():
 
 def test_check_false_uses_the_matrix_as_given():
     # ZYX (i, j, k) = (z, y, x): θ1 = atan2(r21, r11) and θ2 = atan2(−r31, hypot(r11, r21))
-    # read the matrix as given (entries as printed in seed 000 eq. 1); θ3 is peeled from
+    # read the matrix as given (entries as printed in Jia eq. 1); θ3 is peeled from
     # Rot_z(θ1)ᵀ·R and stays within the perturbation of the true roll.
     r = h.ref_euler([0.1, 0.2, 0.3], 'ZYX')
     r[0, 0] += 1e-6

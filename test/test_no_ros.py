@@ -1,4 +1,4 @@
-"""Importing the math half of rot_tools pulls in no ROS (SPEC §1, §5)."""
+"""Importing the math half of rot_tools pulls in no ROS."""
 
 import os
 import pathlib

@@ -143,7 +143,7 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
     for name in ALWAYS[1:] + (('screw_axis',) if marker else ()):
         assert out[name].header.stamp.sec == stamp
         assert out[name].header.frame_id == frame
-    # scipy's canonical quaternion has SPEC §3.1's sign rule (w > 0, else first non-zero > 0)
+    # scipy's canonical quaternion has the node's sign rule (w > 0, else first non-zero > 0)
     np.testing.assert_allclose(quat(out['quaternion'].quaternion),
                                Rotation.from_matrix(R).as_quat(canonical=True),
                                rtol=0, atol=ATOL)

@@ -32,7 +32,7 @@ import yaml
 
 ATOL = 1e-12
 STOP_WITHIN = 1.0
-"""Seconds from the signal to the exit (SPEC §3: within a second)."""
+"""Seconds from the signal to the exit (within a second)."""
 PARAMETER_FILE = REPO / 'config' / 'rot_tools.yaml'
 
 

@@ -19,7 +19,7 @@ CONSOLE_SCRIPTS = {
     'rotation_client': 'rot_tools.entry:rotation_client',
     'rot-tools': 'rot_tools.cli:main',
 }
-# exec_depends the contract (SPEC §3) needs whatever the code happens to import today.
+# exec_depends the node needs whatever the code happens to import today.
 REQUIRED_EXEC_DEPENDS = {
     'rclpy', 'geometry_msgs', 'std_msgs', 'std_srvs', 'nav_msgs', 'sensor_msgs',
     'visualization_msgs', 'rcl_interfaces', 'builtin_interfaces', 'python3-numpy', 'tf2_msgs',

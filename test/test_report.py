@@ -134,7 +134,7 @@ def test_point_image_and_coordinates_in_the_moved_frame(b):
         t = np.zeros(3) if b is None else b
         pt = transform_report(R0, b, point=p)['point']
         np.testing.assert_array_equal(pt['p'], p)
-        # Independent closed forms (seed 000 §5 and §4): R·p + b and Rᵀ·(p − b).
+        # Independent closed forms (Jia §5 and §4): R·p + b and Rᵀ·(p − b).
         np.testing.assert_allclose(pt['image'], R0 @ p + t, rtol=0, atol=1e-14)
         np.testing.assert_allclose(pt['in_moved_frame'], R0.T @ (p - t), rtol=0, atol=1e-14)
         # The 4×4 product agrees.

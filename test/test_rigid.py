@@ -1,8 +1,8 @@
 """
-Frames and rigid motions (seed 000 §4, §5) against plain NumPy 4×4 products.
+Frames and rigid motions (Jia §4, §5) against plain NumPy 4×4 products.
 
 The references are built here with NumPy only: homogeneous matrices multiplied with ``@``,
-np.linalg.inv, einsum, and the seed's own statements (p' = p_u·û + p_v·v̂ + p_w·ŵ,
+np.linalg.inv, einsum, and Jia's own statements (p' = p_u·û + p_v·v̂ + p_w·ŵ,
 q' = Rᵀq, R(p + b) = R·p + R·b, a rotation about a line through q is R(p − q) + q).
 """
 
@@ -50,7 +50,7 @@ def motions(rng, n):
     return random_rotations(rng, n), h.random_translations(rng, n)
 
 
-# ---- frames (seed 000 §4) ------------------------------------------------------------------
+# ---- frames (Jia §4) ------------------------------------------------------------------
 
 
 def test_frame_columns_are_the_normalised_axes():
@@ -83,7 +83,7 @@ def test_frame_point_coordinates_seed_000_sec4():
 
 
 def test_frame_of_the_tracking_example():
-    # Seed 000 example 3: after Rot_z(α)·Rot_y(β) the x'-axis points at the object,
+    # Jia example 3: after Rot_z(α)·Rot_y(β) the x'-axis points at the object,
     # (cos α cos β, sin α cos β, −sin β); y' = (−sin α, cos α, 0); z' = x' × y'.
     for alpha, beta in ((0.3, 0.2), (-2.0, 1.1), (PI, -PI / 2), (0.0, 0.0)):
         x1 = [np.cos(alpha) * np.cos(beta), np.sin(alpha) * np.cos(beta), -np.sin(beta)]
@@ -266,7 +266,7 @@ def test_compose_is_the_product_of_homogeneous_matrices():
 
 
 def test_a_chain_of_rotations_and_translations_is_one_motion():
-    # Seed 000 §5: any sequence of rotations and translations is one rotation followed by one
+    # Jia §5: any sequence of rotations and translations is one rotation followed by one
     # translation. Apply 20 random steps to points one by one, and compose them once.
     rng = np.random.default_rng(208)
     p = rng.normal(size=(100, 3))

@@ -4,7 +4,7 @@ Chasles' screw decomposition, its inverse, exponential coordinates and interpola
 Transforms are built from known screws (direction l, axis point c perpendicular to l, angle,
 translation d) with R = Rodrigues(l, angle) and b = (I - R) c + d l, where (I - R) c is
 evaluated in the vector form of math_helpers.rotate_minus_identity so that tiny angles with
-far-away axes stay exact. The checks are the defining properties of SPEC §2, not rot_tools.
+far-away axes stay exact. The checks are the defining properties of a screw, not rot_tools.
 """
 
 from hypothesis import given, settings
@@ -71,7 +71,7 @@ def transform_scale(b):
 
 
 def check_defining_properties(scr, axis0, angle0, r, b):
-    """SPEC §2 properties of `scr` for the transform (r, b) = screw(axis0, ., angle0, .)."""
+    """Check the defining properties of `scr` for (r, b) = screw(axis0, ., angle0, .)."""
     scale = transform_scale(b)
     u, c = scr.direction, scr.point
     # c is computed from b (b_perp = b - (b.l) l rounds at eps |b|), so its scale is |c| + |b|
@@ -391,7 +391,7 @@ def test_batches_larger_than_one_chunk():
 
 def test_check_false_uses_the_matrix_as_given():
     # θ and l̂ read from the perturbed matrix as given (skew part and trace), then the
-    # formulas of SPEC §2 with them: d = b·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), h = d/θ, and the
+    # defining formulas with them: d = b·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), h = d/θ, and the
     # twist (θ·l̂, −(θ/2)·l̂ × b + (θ/2)cot(θ/2)·b⊥ + d·l̂).
     r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
@@ -494,7 +494,7 @@ def test_tiny_angle_with_large_translation(angle):
     assert h.max_abs(r3 - r) <= 1e-12 and h.max_abs(b3 - b) <= 1e-12 * scale
 
 
-# ---- exponential coordinates have no threshold (SPEC §2.1 corrections) ----------------------
+# ---- exponential coordinates have no threshold (by definition) ----------------------
 
 TINY_ANGLES = (5e-324, 1e-300, 1e-15, 1e-14, 1e-13, 5e-13, PURE_TRANSLATION_ANGLE, 2e-12, 1e-10)
 

@@ -210,7 +210,7 @@ def test_single_items_match_the_batch():
 @pytest.mark.parametrize('scale', [5e-324, 1e-310, 1e-300, 1e-200, 1e-160, 1e-100, 1e100, 1e160,
                                    1e200, 1e300, 1.7e308])
 def test_quaternion_of_any_finite_scale_is_normalised_never_refused(scale):
-    # SPEC §2: q is normalised; only a zero or non-finite q is an error: a finite non-zero q
+    # q is normalised; only a zero or non-finite q is an error: a finite non-zero q
     # of any scale gives its rotation, one by one and as a batch (no refusal, no NaN).
     base = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.5], [0.3, -0.2, 0.9, 0.1]])
     if scale < 1e-300:  # subnormal: integer multiples of the scale are exact

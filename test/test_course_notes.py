@@ -1,9 +1,9 @@
 """
-The seeds' worked examples as exact expectations, and their slips pinned numerically.
+The course notes' worked examples as exact expectations, and their slips pinned numerically.
 
-Seed 000: Yan-Bin Jia, "Rotation in the Space" (Com S 477/577 notes).
-Seed 001: Julen Cayero, "Relations between Rotation Matrix and Euler axis-angle".
-Each formula below is typed in from the seed as printed; the slips are shown to be slips by
+Jia: Yan-Bin Jia, "Rotation in the Space" (Com S 477/577 notes).
+Cayero: Julen Cayero, "Relations between Rotation Matrix and Euler axis-angle".
+Each formula below is typed in from the notes as printed; the slips are shown to be slips by
 numbers, next to what the code (following the mathematics) does instead.
 """
 
@@ -19,7 +19,7 @@ PI = h.PI
 
 
 def seed_rot_zyx_eq1(phi, theta, psi):
-    """Seed 000 eq. 1, the closed form of Rot_z(phi) Rot_y(theta) Rot_x(psi) as printed."""
+    """Jia eq. 1, the closed form of Rot_z(phi) Rot_y(theta) Rot_x(psi) as printed."""
     cf, sf = np.cos(phi), np.sin(phi)
     ct, st = np.cos(theta), np.sin(theta)
     cp, sp = np.cos(psi), np.sin(psi)
@@ -31,7 +31,7 @@ def seed_rot_zyx_eq1(phi, theta, psi):
 
 
 def seed_tracking_matrix(alpha, beta):
-    """Seed 000 example 3: R = Rot_z(alpha) Rot_y(beta), closed form as printed."""
+    """Jia example 3: R = Rot_z(alpha) Rot_y(beta), closed form as printed."""
     ca, sa, cb, sb = np.cos(alpha), np.sin(alpha), np.cos(beta), np.sin(beta)
     zero = np.zeros_like(ca * cb)
     return np.stack([
@@ -42,7 +42,7 @@ def seed_tracking_matrix(alpha, beta):
 
 
 def seed_q_eq11(r):
-    """Seed 000 eq. 11: l = q = (r23 - r32, r31 - r13, r12 - r21)."""
+    """Jia eq. 11: l = q = (r23 - r32, r31 - r13, r12 - r21)."""
     return np.stack([r[..., 1, 2] - r[..., 2, 1], r[..., 2, 0] - r[..., 0, 2],
                      r[..., 0, 1] - r[..., 1, 0]], -1)
 
@@ -267,7 +267,7 @@ def test_000_eq15_divides_by_lz():
 
 
 def test_000_eq15_with_eq11_axis_gives_the_angle_two_pi_minus_theta():
-    # The seed's own pair (l = q / |q|, theta_seed from eqs. 12 and 15) is consistent: q points
+    # The notes' own pair (l = q / |q|, theta_seed from eqs. 12 and 15) is consistent: q points
     # along -l, eq. 15 then yields sin(theta_seed) = -sin(theta), i.e. theta_seed = 2 pi - theta.
     rng = np.random.default_rng(67)
     _, _, r = h.random_axis_angle(rng, 1000)
