@@ -4,8 +4,9 @@ The serialised bytes of rotation_node's per-input outputs, written with one stru
 rclpy publishes a message object by converting it field by field to C and serialising it
 (~5 µs for a Vector3Stamped); a publisher also takes the serialised bytes themselves
 (``Publisher.publish(bytes)``, ~1.5 µs). Every output the node publishes for each input is
-a header and a few float64, so the node writes their bytes here: the same bytes as
-``rclpy.serialization.serialize_message`` of the message (test_cdr checks it), that is
+a header and a few float64, so the node writes their bytes here: those
+``rclpy.serialization.serialize_message`` writes for the message, but for the padding
+(zero here, left unwritten there; test_cdr checks it), that is
 CDR as rmw_fastrtps writes it (OMG DDS-XTypes 1.3 §7.4.3, XCDR version 1, little endian):
 
 - a 4-byte encapsulation header ``00 01 00 00`` (CDR, little endian), then the payload;
@@ -25,18 +26,27 @@ import numpy as np
 ENCAPSULATION = b'\x00\x01\x00\x00'
 """CDR_LE: plain CDR, little endian, no options."""
 
-_STAMP_AND_LENGTH = struct.Struct('<iII')
+_STAMP = struct.Struct('<iI')
+_LENGTH = struct.Struct('<I')
+
+
+def _string(text):
+    """
+    Return a CDR string, aligned to 4: its length with the NUL, its UTF-8 bytes, the NUL.
+
+    The text ends at its first NUL, as rclpy's conversion of a str to a C string does.
+    """
+    raw = text.encode().partition(b'\0')[0] + b'\0'
+    return _LENGTH.pack(len(raw)) + raw
 
 
 def header(sec, nanosec, frame_id):
     """
     Return the encapsulation and a std_msgs/Header (stamp, frame_id), padded to 8 bytes.
 
-    Every stamped output starts so: header fields, then float64 (aligned to 8). The
-    frame_id ends at its first NUL, as rclpy's conversion of a str to a C string does.
+    Every stamped output starts so: header fields, then float64 (aligned to 8).
     """
-    name = frame_id.encode().partition(b'\0')[0] + b'\0'
-    body = _STAMP_AND_LENGTH.pack(sec, nanosec, len(name)) + name
+    body = _STAMP.pack(sec, nanosec) + _string(frame_id)
     return ENCAPSULATION + body + bytes(-len(body) % 8)
 
 
@@ -55,22 +65,6 @@ def stamped(count, order=None):
     return lambda head, values: head + pack(*[values[i] for i in order])
 
 
-def _pad(payload, size):
-    """Zero bytes that align the next value of ``size`` bytes after ``payload``."""
-    return bytes(-len(payload) % size)
-
-
-def _uint32s(payload, *values):
-    """``payload`` followed by aligned uint32 values."""
-    return payload + _pad(payload, 4) + struct.pack(f'<{len(values)}I', *values)
-
-
-def _string(payload, text):
-    """``payload`` followed by a CDR string."""
-    raw = text.encode() + b'\0'
-    return _uint32s(payload, len(raw)) + raw
-
-
 def float64_multi_array(dims, data_offset=0):
     """
     Return encode(head, values) of a std_msgs/Float64MultiArray with a constant layout.
@@ -78,12 +72,15 @@ def float64_multi_array(dims, data_offset=0):
     ``dims``: (label, size, stride) of each MultiArrayDimension; the number of values is
     the first dimension's stride. The type has no header: ``head`` is not used.
     """
-    payload = _uint32s(b'', len(dims))
+    w = Writer()
+    w.uint32(len(dims))
     for label, size, stride in dims:
-        payload = _uint32s(_string(payload, label), size, stride)
+        w.string(label)
+        w.uint32(size, stride)
     count = dims[0][2]
-    payload = _uint32s(payload, data_offset, count)
-    prefix = ENCAPSULATION + payload + _pad(payload, 8)
+    w.uint32(data_offset, count)
+    w.put(8, b'')  # the values' alignment
+    prefix = w.data()
     pack = struct.Struct(f'<{count}d').pack
     return lambda head, values: prefix + pack(*values)
 
@@ -116,10 +113,6 @@ class Writer:
         """Append uint32 values (also a sequence's count)."""
         self.put(4, struct.pack(f'<{len(values)}I', *values))
 
-    def float32(self, *values):
-        """Append float32 values."""
-        self.put(4, struct.pack(f'<{len(values)}f', *values))
-
     def float64(self, *values):
         """Append float64 values."""
         self.put(8, struct.pack(f'<{len(values)}d', *values))
@@ -130,13 +123,11 @@ class Writer:
 
     def string(self, text):
         """Append a string: its length with the NUL, its UTF-8 bytes up to a NUL, the NUL."""
-        raw = text.encode().partition(b'\0')[0] + b'\0'
-        self.uint32(len(raw))
-        self.put(1, raw)
+        self.put(4, _string(text))
 
     def header(self, header):
         """Append a std_msgs/Header (anything with stamp.sec, stamp.nanosec, frame_id)."""
-        self.put(4, struct.pack('<iI', header.stamp.sec, header.stamp.nanosec))
+        self.put(4, _STAMP.pack(header.stamp.sec, header.stamp.nanosec))
         self.string(header.frame_id)
 
     def points(self, points):
