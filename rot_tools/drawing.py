@@ -35,9 +35,8 @@ import math
 from typing import NamedTuple, Optional
 
 import numpy as np
-from rot_tools.decomposition import decompose
 from rot_tools.errors import RotationError
-from rot_tools.screw import Screw, screw_exp
+from rot_tools.screw import Screw, screw_from_transform
 
 MAX_STEP_ANGLE = math.radians(3.0)
 """Largest turn (rad) between two consecutive points of a path."""
@@ -133,26 +132,44 @@ def label_point(path, scale):
     +x when that is shorter than 1/2 (k within 60° of z). The chord of a path is never 0.
     """
     middle = (path[(len(path) - 1) // 2] + path[len(path) // 2]) / 2
-    chord = path[-1] - path[0]
-    chord = chord / np.abs(chord).max()  # no overflow in the norm
-    chord /= np.linalg.norm(chord)
-    for up in np.eye(3)[[2, 0]]:
-        side = up - (up @ chord) * chord
-        if np.linalg.norm(side) >= 0.5:
+    chord = (path[-1] - path[0]).tolist()
+    big = max(map(abs, chord))  # no overflow in the norm
+    chord = [k / big for k in chord]
+    length = math.hypot(*chord)
+    chord = [k / length for k in chord]
+    for up in _UPS:
+        along = sum(u * k for u, k in zip(up, chord))
+        side = [u - along * k for u, k in zip(up, chord)]
+        length = math.hypot(*side)
+        if length >= 0.5:
             break
-    return middle + LABEL_OFFSET * scale * side / np.linalg.norm(side)
+    return middle + (LABEL_OFFSET * scale / length) * np.array(side)
 
 
-def screw_path(R, b, twist, p0, segments):
+_UPS = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0))
+"""The directions label_point tries for its n̂, in order: +z, then +x."""
+
+
+def screw_path(screw, p0, end, scale):
     """
-    Points p(s) = R(s)·p0 + b(s) of exp(s·twist), s = 0, 1/n, ..., 1 ((n + 1, 3)).
+    Points p(s) of the constant-screw motion from p0, s = 0, 1/n, ..., 1 ((n + 1, 3)).
 
-    The ends are set to p0 and R·p0 + b exactly (exp(twist) gives them to rounding).
+    n = path_segments(θ, r, scale), r = |l̂ × u| the radius of the helix.
+    The motion turns s·θ about the axis (c, l̂) and rises s·d along it (Jia §5, Chasles):
+    p(s) = p0 + (I − Rot(s·θ))·u + s·d·l̂ with u = c − p0, where by Rodrigues
+    (I − Rot(φ))·u = 2 sin²(φ/2)·u⊥ − sin φ·l̂ × u and u⊥ = u − (u·l̂)·l̂: no cancellation
+    when the axis is far away (small θ). The ends are set to p0 and ``end`` = R·p0 + b exactly.
     """
-    s = np.linspace(0.0, 1.0, segments + 1)
-    Rs, bs = screw_exp(s[:, None] * np.asarray(twist, dtype=np.float64))
-    path = Rs @ p0 + bs
-    path[0], path[-1] = p0, R @ p0 + b
+    direction, angle, translation = screw.direction, float(screw.angle), float(screw.translation)
+    u = screw.point - p0
+    (x, y, z), (ux, uy, uz) = direction.tolist(), u.tolist()
+    across = np.array((y * uz - z * uy, z * ux - x * uz, x * uy - y * ux))  # l̂ × u
+    s = np.linspace(0.0, 1.0, path_segments(angle, math.hypot(*across), scale) + 1)
+    half = np.sin((0.5 * angle) * s)
+    path = (((2.0 * half) * half)[:, None] * (u - (x * ux + y * uy + z * uz) * direction)
+            - np.sin(angle * s)[:, None] * across + (translation * s)[:, None] * direction)
+    path += p0
+    path[0], path[-1] = p0, end
     return path
 
 
@@ -161,12 +178,13 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
     Return the Picture of p ↦ R·p + b, R (3, 3) and b (3,); frame axes ``scale`` long.
 
     ``decomposition`` is rot_tools.decompose(R, b) when the caller has it already; the label
-    gives θ in degrees when ``degrees``. R is validated (by decompose) when it is not given.
+    gives θ in degrees when ``degrees``. R is validated (by screw_from_transform) when it is
+    not given.
     """
     R = np.asarray(R, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    d = decompose(R, b) if decomposition is None else decomposition
-    screw = Screw(*(np.asarray(f, dtype=np.float64) for f in d.screw))
+    screw = (screw_from_transform(R, b) if decomposition is None
+             else Screw(*(np.asarray(f, dtype=np.float64) for f in decomposition.screw)))
     angle, translation = float(screw.angle), float(screw.translation)
     direction, point = screw.direction, screw.point
     kind = (IDENTITY if angle == 0.0 and translation == 0.0 else TRANSLATION if angle == 0.0
@@ -176,8 +194,7 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
         return Picture(kind, b, R, scale, None, None, '', label, b.copy(), screw)
     traced, p0 = _traced_point(kind, direction, scale)
     with np.errstate(over='ignore', invalid='ignore'):  # checked below
-        radius = float(np.linalg.norm(np.cross(p0 - point, direction)))
-        path = screw_path(R, b, d.twist, p0, path_segments(angle, radius, scale))
+        path = screw_path(screw, p0, R @ p0 + b, scale)
         # Where the origin, the path and the moved frame fall along the axis: t = (p − c)·l̂.
         drawn = np.concatenate([[np.zeros(3), b], path, b + scale * R.T])
         t = (drawn - point) @ direction

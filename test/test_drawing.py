@@ -186,6 +186,23 @@ def test_identity_has_nothing_to_draw():
     assert (pic.kind, pic.axis, pic.path, pic.traced) == (drawing.IDENTITY, None, None, '')
 
 
+@pytest.mark.parametrize('chord, across', [
+    ((1.0, 0.0, 1.0), (-1.0, 0.0, 1.0)),  # 45° from z: across it towards +z
+    ((0.0, -3.0, 2.0), (0.0, 2.0, 3.0)),  # 56° from z (|ẑ⊥| = 0.83)
+    ((0.0, 1.0, 2.0), (1.0, 0.0, 0.0)),  # 27° from z: towards +x instead
+    ((1.0, 0.0, -2.0), (4.0, 0.0, 2.0)),  # 27° from −z: +x, less its part along the chord
+    ((1e300, 0.0, 1e300), (-1.0, 0.0, 1.0)),  # |chord|² beyond float64
+])
+def test_label_direction(chord, across):
+    # A straight path of 3 points (middle point = the middle): the label goes
+    # LABEL_OFFSET·scale across the chord, towards +z unless within 60° of z.
+    chord, across = np.array(chord), unit(across)
+    path = np.array([np.zeros(3), chord / 2, chord])
+    np.testing.assert_allclose(drawing.label_point(path, 2.0),
+                               chord / 2 + 2.0 * drawing.LABEL_OFFSET * across,
+                               rtol=1e-15, atol=1e-15)
+
+
 def test_labels_of_the_worked_example():
     # 90° about z through (0.5, 0.5, 0), rising 0.5: pitch 0.5/(π/2) = 0.3183.
     R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, 0.5)
