@@ -158,6 +158,7 @@ def run_node(markers, n):
         import rclpy
         from geometry_msgs.msg import PoseStamped
         from rclpy.parameter import Parameter
+        from rclpy.serialization import serialize_message
         from rot_tools.rotation_node import RotationNode
     except ImportError as exc:
         return run_path_without_node(n, positions, quaternions, f'no node: {exc}')
@@ -173,7 +174,7 @@ def run_node(markers, n):
             msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = p
             o = msg.pose.orientation
             o.x, o.y, o.z, o.w = q
-            msgs.append(msg)
+            msgs.append(serialize_message(msg))  # the node subscribes raw: it gets the bytes
         clock, cpu = time.perf_counter_ns, time.thread_time_ns
         times, cpus = [], []
         for msg in msgs:
@@ -190,17 +191,15 @@ def run_node(markers, n):
 
 
 def run_path_without_node(n, positions, quaternions, why):
-    from types import SimpleNamespace as Msg
+    from types import SimpleNamespace
     from rot_tools import boundary
     from rot_tools.decomposition import decompose_values
-    settings = Msg(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False)
+    settings = SimpleNamespace(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False)
     clock, cpu = time.perf_counter_ns, time.thread_time_ns
     times, cpus = [], []
     for p, q in zip(positions, quaternions):
-        msg = Msg(header=None, pose=Msg(position=Msg(x=p[0], y=p[1], z=p[2]),
-                                        orientation=Msg(x=q[0], y=q[1], z=q[2], w=q[3])))
         c0, t0 = cpu(), clock()
-        _, R, b = boundary.pose_stamped_to_transform(msg, settings)
+        R, b = boundary.pose_fields_to_rt((*p, *q), settings)
         decompose_values(R, b, settings.euler_sequence)
         t1, c1 = clock(), cpu()
         times.append(t1 - t0)

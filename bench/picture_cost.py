@@ -19,7 +19,9 @@ import numpy as np
 
 
 def poses(n, seed=3):
+    """Return n random PoseStamped, serialised: rotation_node subscribes raw (the bytes)."""
     from geometry_msgs.msg import PoseStamped
+    from rclpy.serialization import serialize_message
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(n):
@@ -30,7 +32,7 @@ def poses(n, seed=3):
         o, p = msg.pose.orientation, msg.pose.position
         o.x, o.y, o.z, o.w = q.tolist()
         p.x, p.y, p.z = rng.uniform(-2.0, 2.0, 3).tolist()
-        out.append(msg)
+        out.append(serialize_message(msg))
     return out
 
 

@@ -73,6 +73,7 @@ def node_callback(top):
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.parameter import Parameter
+    from rclpy.serialization import deserialize_message, serialize_message
     from rot_tools.rotation_node import RotationNode
     sys.path.insert(0, HERE)
     from relay_node import RelayNode
@@ -92,15 +93,21 @@ def node_callback(top):
         o = msg.pose.orientation
         o.x, o.y, o.z, o.w = (float(c) for c in q)
         msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 0.4, -1.0, 2.5
-        candidates = {'rot_tools, markers off': on_pose[False],
-                      'rot_tools, markers on': on_pose[True], 'relay': relay._on_pose}
+        # What each callback is handed as the executor takes it from the middleware: the
+        # node subscribes raw (the bytes), the relay takes a message object (rclpy converts
+        # the C message to Python objects first: the last line, outside the callback).
+        data = serialize_message(msg)
+        candidates = {'rot_tools, markers off': partial(on_pose[False], data),
+                      'rot_tools, markers on': partial(on_pose[True], data),
+                      'relay': partial(relay._on_pose, msg),
+                      "relay's message object": partial(deserialize_message, data, PoseStamped)}
         for cb in candidates.values():
             for _ in range(100):  # warm (caches, first calls of NumPy and rclpy)
-                cb(msg)
+                cb()
         times = {}
         for _ in range(5):  # interleaved
             for name, cb in candidates.items():
-                t = min(timeit.repeat(lambda cb=cb: cb(msg), number=2000, repeat=1)) / 2000
+                t = min(timeit.repeat(cb, number=2000, repeat=1)) / 2000
                 times.setdefault(name, []).append(t)
         relay_us = min(times['relay']) * 1e6
         print('\n== ~/pose callback in-process (no subscribers, no transport; markers are '
@@ -109,8 +116,8 @@ def node_callback(top):
             us = min(times[name]) * 1e6
             print(f'   {name:24s} {us:6.1f} us ({us / relay_us:.2f}x the relay, '
                   f'{us - relay_us:+.1f} us)')
-        profile_calls('rotation_node ~/pose callback, markers off', lambda: on_pose[False](msg),
-                      5000, 2 * top, sort='cumulative')
+        profile_calls('rotation_node ~/pose callback, markers off',
+                      candidates['rot_tools, markers off'], 5000, 2 * top, sort='cumulative')
         for node in nodes.values():
             node.destroy_node()
         relay.destroy_node()

@@ -4,9 +4,9 @@ The inbound boundary: a message's fields → one rigid transform (R, b), or a re
 Every input — a message reaching rotation_node, or a message read from a recorded bag by
 ``rot-tools bag`` — passes the same checks, refused for the same reasons at the same
 thresholds, so that a count of refusals means the same thing wherever it is printed. This
-module holds those checks and imports no ROS: the messages are duck-typed (anything with
-the field names of the ROS message: an rclpy message, a ``rosbags`` message object, a
-SimpleNamespace), and the checks also come as batches over NumPy arrays of fields.
+module holds those checks and imports no ROS: the checks take the fields' values (and the
+few that take a message object duck-type it: anything with the field names of the ROS
+message), and they also come as batches over NumPy arrays of fields.
 
 Reasons (``RefusedInput.reason``, and the keys of the counts):
 
@@ -25,9 +25,11 @@ the same order, so a quaternion at the edge of the tolerance gets the same verdi
 way. Checks run in one order, which fixes the reason of a message with several defects:
 no orientation (Imu), then a non-finite position or translation, then the quaternion.
 
-Per message, every converter has the form ``convert(msg, settings)`` → ``(header, R, b)``
-(``settings`` is rotation_node's Settings: they read ``quaternion_tolerance``, and the Euler
-one ``euler_sequence`` and ``degrees``) and raises :class:`RefusedInput`. For a batch,
+Per message, every converter has the form ``convert(fields, settings)`` → ``(R, b)``:
+``fields`` are the floats it needs, in the message's order (rotation_node reads them from the
+message's bytes, rot_tools.cdr), ``settings`` is rotation_node's Settings (they read
+``quaternion_tolerance``, and the Euler one ``euler_sequence`` and ``degrees``); it raises
+:class:`RefusedInput`. For a batch,
 :func:`check_batch` gives each item's reason code (0 = accepted; ``REFUSAL_REASONS[code - 1]``
 otherwise) and :func:`refusal_text` the sentence the per-message converter would raise.
 """
@@ -171,14 +173,14 @@ def _require_finite(prefix, fields, values):
                                                     fields=fields))
 
 
-def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
+def quaternion_to_rotation(x, y, z, w, tolerance, name='orientation'):
     """
-    Rotation matrix of a geometry_msgs/Quaternion (x, y, z, w), refused unless near unit.
+    Rotation matrix of a geometry_msgs/Quaternion's fields, refused unless near unit.
 
     Refused (RefusedInput) when a component is NaN/Inf, when q = 0, or when
     |‖q‖ − 1| > ``tolerance``; within the tolerance q is normalised (R is exactly orthogonal).
+    ``name`` is the field's, for the refusal.
     """
-    x, y, z, w = q.x, q.y, q.z, q.w
     code, norm = quaternion_verdict(SCALAR, x, y, z, w, tolerance)
     if code:
         raise RefusedInput(REFUSAL_REASONS[code - 1],
@@ -186,82 +188,85 @@ def quaternion_msg_to_matrix(q, tolerance, name='orientation'):
     return quaternion_to_matrix((x / norm, y / norm, z / norm, w / norm))
 
 
+def rigid_of_fields(fields, tolerance, position, orientation):
+    """
+    (R, b) of a Pose's or a Transform's fields (px, py, pz, qx, qy, qz, qw).
+
+    b = the position, R from the quaternion; ``position`` and ``orientation`` are the
+    fields' names, for the refusal.
+    """
+    px, py, pz, qx, qy, qz, qw = fields
+    _require_finite(position, 'xyz', (px, py, pz))
+    return quaternion_to_rotation(qx, qy, qz, qw, tolerance, orientation), np.array((px, py, pz))
+
+
 def pose_to_rt(pose, tolerance, name='pose'):
     """(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
-    p = pose.position
-    _require_finite(f'{name}.position', 'xyz', (p.x, p.y, p.z))
-    R = quaternion_msg_to_matrix(pose.orientation, tolerance, f'{name}.orientation')
-    return R, np.array((p.x, p.y, p.z))
+    p, q = pose.position, pose.orientation
+    return rigid_of_fields((p.x, p.y, p.z, q.x, q.y, q.z, q.w), tolerance,
+                           f'{name}.position', f'{name}.orientation')
 
 
-def pose_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/PoseStamped."""
-    R, b = pose_to_rt(msg.pose, settings.quaternion_tolerance)
-    return msg.header, R, b
+def pose_fields_to_rt(fields, settings):
+    """(R, b) of a geometry_msgs/PoseStamped's ``pose`` (position, orientation)."""
+    return rigid_of_fields(fields, settings.quaternion_tolerance, 'pose.position',
+                           'pose.orientation')
 
 
-def pose_with_covariance_stamped_to_transform(msg, settings):
+def pose_pose_fields_to_rt(fields, settings):
     """
-    (header, R, b) of a geometry_msgs/PoseWithCovarianceStamped: ``pose.pose``.
+    (R, b) of the ``pose.pose`` of a PoseWithCovarianceStamped or an Odometry.
 
-    The covariance is not used (a NaN there does not refuse the message).
+    The covariance is not used (a NaN there does not refuse the message); an Odometry's
+    body is its ``child_frame_id``, its twist is not used.
     """
-    R, b = pose_to_rt(msg.pose.pose, settings.quaternion_tolerance, 'pose.pose')
-    return msg.header, R, b
+    return rigid_of_fields(fields, settings.quaternion_tolerance, 'pose.pose.position',
+                           'pose.pose.orientation')
 
 
-def odometry_to_transform(msg, settings):
+def transform_fields_to_rt(fields, settings):
+    """(R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
+    return rigid_of_fields(fields, settings.quaternion_tolerance, 'transform.translation',
+                           'transform.rotation')
+
+
+def transform_stamped_to_transform(msg, settings):
+    """(header, R, b) of a geometry_msgs/TransformStamped message object (the TF tree's)."""
+    t, q = msg.transform.translation, msg.transform.rotation
+    return (msg.header, *transform_fields_to_rt((t.x, t.y, t.z, q.x, q.y, q.z, q.w), settings))
+
+
+def imu_fields_to_rt(fields, settings):
     """
-    (header, R, b) of a nav_msgs/Odometry: ``pose.pose``, the body in header.frame_id.
-
-    The body is ``child_frame_id``; the twist and the covariances are not used.
-    """
-    R, b = pose_to_rt(msg.pose.pose, settings.quaternion_tolerance, 'pose.pose')
-    return msg.header, R, b
-
-
-def imu_to_transform(msg, settings):
-    """
-    (header, R, 0) of a sensor_msgs/Imu's ``orientation``.
+    (R, 0) of a sensor_msgs/Imu's (orientation x, y, z, w, orientation_covariance[0]).
 
     sensor_msgs/Imu marks "no orientation estimate" with orientation_covariance[0] = -1:
     such a message is refused (NO_ORIENTATION). Angular velocity, linear acceleration and
     the covariances are not used.
     """
-    if lacks_orientation(msg.orientation_covariance[0]):
+    x, y, z, w, covariance0 = fields
+    if lacks_orientation(covariance0):
         raise RefusedInput(NO_ORIENTATION, refusal_text(CODE[NO_ORIENTATION], 'orientation'))
-    R = quaternion_msg_to_matrix(msg.orientation, settings.quaternion_tolerance)
-    return msg.header, R, np.zeros(3)
+    return quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance), np.zeros(3)
 
 
-def quaternion_stamped_to_transform(msg, settings):
-    """(header, R, 0) of a geometry_msgs/QuaternionStamped."""
-    R = quaternion_msg_to_matrix(msg.quaternion, settings.quaternion_tolerance, 'quaternion')
-    return msg.header, R, np.zeros(3)
+def quaternion_fields_to_rt(fields, settings):
+    """(R, 0) of a geometry_msgs/QuaternionStamped's ``quaternion`` (x, y, z, w)."""
+    return (quaternion_to_rotation(*fields, settings.quaternion_tolerance, 'quaternion'),
+            np.zeros(3))
 
 
-def transform_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
-    t = msg.transform.translation
-    _require_finite('transform.translation', 'xyz', (t.x, t.y, t.z))
-    R = quaternion_msg_to_matrix(msg.transform.rotation, settings.quaternion_tolerance,
-                                 'transform.rotation')
-    return msg.header, R, np.array((t.x, t.y, t.z))
-
-
-def euler_stamped_to_transform(msg, settings):
+def euler_fields_to_rt(fields, settings):
     """
-    (header, R, 0) of a geometry_msgs/Vector3Stamped holding (θ1, θ2, θ3).
+    (R, 0) of a geometry_msgs/Vector3Stamped's ``vector`` holding (θ1, θ2, θ3).
 
     The angles are of ``settings.euler_sequence``, in degrees when ``settings.degrees``,
     else radians.
     """
-    v = msg.vector
-    angles = (v.x, v.y, v.z)
-    _require_finite('vector', 'xyz', angles)
+    _require_finite('vector', 'xyz', fields)
     if settings.degrees:
-        angles = tuple(math.radians(a) for a in angles)
-    return msg.header, euler_to_matrix(angles, settings.euler_sequence), np.zeros(3)
+        fields = tuple(math.radians(a) for a in fields)
+    return euler_to_matrix(fields, settings.euler_sequence), np.zeros(3)
 
 
 # ---------------------------------------------------------------------------------------

@@ -35,11 +35,9 @@ from rot_tools.axis_angle import matrix_to_axis_angle
 # The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.boundary. Its
 # names are re-exported here, where rotation_node has always found them.
 from rot_tools.boundary import (  # noqa: F401
-    euler_stamped_to_transform, imu_to_transform, NO_ORIENTATION, NON_FINITE,
-    NON_UNIT_QUATERNION, odometry_to_transform, pose_stamped_to_transform,
-    pose_to_rt, pose_with_covariance_stamped_to_transform, quaternion_msg_to_matrix,
-    quaternion_stamped_to_transform, REFUSAL_REASONS, RefusedInput,
-    transform_stamped_to_transform, ZERO_QUATERNION)
+    euler_fields_to_rt, imu_fields_to_rt, NO_ORIENTATION, NON_FINITE, NON_UNIT_QUATERNION,
+    pose_fields_to_rt, pose_pose_fields_to_rt, pose_to_rt, quaternion_fields_to_rt,
+    REFUSAL_REASONS, RefusedInput, transform_fields_to_rt, ZERO_QUATERNION)
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 

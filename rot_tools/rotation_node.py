@@ -59,8 +59,10 @@ FRAME_MISMATCH = 'frame_mismatch'
 BAD_TOLERANCE = 'bad_tolerance'
 PATH_TOO_LONG = 'path_too_long'
 NOT_DECOMPOSABLE = 'not_decomposable'
+MALFORMED = 'malformed'
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
-    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG) + tf_input.REFUSAL_REASONS
+    MALFORMED, NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
+) + tf_input.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
 DEFAULT_PATH_STEPS = 20
@@ -103,19 +105,26 @@ class InputKind(NamedTuple):
 
     topic: str
     msg_type: type
+    read: Callable
+    """read(data) -> (header, fields): the message's bytes read (rot_tools.cdr.stamped_reader:
+    the strings skipped and the float64 read after the header); raises cdr.Malformed."""
     convert: Callable
-    """convert(msg, settings) -> (header, R, b); raises messages.RefusedInput."""
+    """convert(fields, settings) -> (R, b); raises messages.RefusedInput."""
 
 
+_POSE = cdr.stamped_reader(0, 7)  # pose (position, orientation), from any Pose after the header
+_CHILD_AND_POSE = cdr.stamped_reader(1, 7)  # child_frame_id, then a Pose or a Transform
 INPUTS = (
-    InputKind('~/pose', PoseStamped, messages.pose_stamped_to_transform),
-    InputKind('~/euler', Vector3Stamped, messages.euler_stamped_to_transform),
-    InputKind('~/transform', TransformStamped, messages.transform_stamped_to_transform),
-    InputKind('~/pose_with_covariance', PoseWithCovarianceStamped,
-              messages.pose_with_covariance_stamped_to_transform),
-    InputKind('~/odometry', Odometry, messages.odometry_to_transform),
-    InputKind('~/imu', Imu, messages.imu_to_transform),
-    InputKind('~/orientation', QuaternionStamped, messages.quaternion_stamped_to_transform),
+    InputKind('~/pose', PoseStamped, _POSE, messages.pose_fields_to_rt),
+    InputKind('~/euler', Vector3Stamped, cdr.stamped_reader(0, 3), messages.euler_fields_to_rt),
+    InputKind('~/transform', TransformStamped, _CHILD_AND_POSE,
+              messages.transform_fields_to_rt),
+    InputKind('~/pose_with_covariance', PoseWithCovarianceStamped, _POSE,
+              messages.pose_pose_fields_to_rt),
+    InputKind('~/odometry', Odometry, _CHILD_AND_POSE, messages.pose_pose_fields_to_rt),
+    InputKind('~/imu', Imu, cdr.stamped_reader(0, 5), messages.imu_fields_to_rt),  # + cov[0]
+    InputKind('~/orientation', QuaternionStamped, cdr.stamped_reader(0, 4),
+              messages.quaternion_fields_to_rt),
 )
 """Every input of the node; each joins the one path (header, R, b) → outputs."""
 
@@ -152,10 +161,11 @@ times a second."""
 
 
 class Source(NamedTuple):
-    """An input subscription as the callbacks see it: resolved topic, type name, converter."""
+    """An input subscription as the callbacks see it: topic (resolved), type name, InputKind's."""
 
     topic: str
     type_name: str
+    read: Callable
     convert: Callable
 
 
@@ -319,16 +329,16 @@ class RotationNode(Node):
         # only when the chain has a new common time; rot_tools.tf_input).
         self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
                                        quaternion_tolerance=self._settings.quaternion_tolerance)
-        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None)
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None)
         self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
 
         self._sources = []
         for kind in INPUTS:
             source = Source(self.resolve_topic_name(kind.topic),
-                            messages.type_name(kind.msg_type),
-                            kind.convert)
-            self.create_subscription(kind.msg_type, kind.topic,
-                                     partial(self._on_input, source), qos_profile_sensor_data)
+                            messages.type_name(kind.msg_type), kind.read, kind.convert)
+            # raw: the callback gets the message's bytes (rot_tools.cdr reads what it needs)
+            self.create_subscription(kind.msg_type, kind.topic, partial(self._on_input, source),
+                                     qos_profile_sensor_data, raw=True)
             self._sources.append(source)
 
         host = self
@@ -451,20 +461,25 @@ class RotationNode(Node):
 
     # -- inputs ----------------------------------------------------------------------------
 
-    def _on_input(self, source, msg):
-        """Convert one message to (header, R, b) and publish every output, or refuse it."""
+    def _on_input(self, source, data):
+        """Read one message's bytes to (header, R, b) and publish every output, or refuse it."""
         settings = self._settings
         try:
-            header, R, b = source.convert(msg, settings)
+            header, fields = source.read(data)
+        except cdr.Malformed as exc:
+            self._refuse(source.topic, MALFORMED, f'not a {source.type_name}: {exc}')
+            return
+        try:
+            R, b = source.convert(fields, settings)
             # Every number published, as plain floats from the generated kernels (the hot
             # path: decompose's arrays cost more than the math); the picture's
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
             values = decompose_values(R, b, settings.euler_sequence)
         except messages.RefusedInput as exc:
-            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            self._refuse(source.topic, exc.reason, str(exc), header=header)
             return
         except RotationError as exc:
-            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=msg.header)
+            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
             return
         self._publish(source, header, R, b, values, settings)
 

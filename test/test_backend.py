@@ -18,7 +18,7 @@ import subprocess
 import sys
 import textwrap
 import traceback
-from types import SimpleNamespace as Msg
+from types import SimpleNamespace
 
 import math_helpers as h
 import numpy as np
@@ -189,14 +189,6 @@ def _ordinary_items(n=60):
     return list(R), list(b), list(e)
 
 
-def _xyz(v):
-    return Msg(x=float(v[0]), y=float(v[1]), z=float(v[2]))
-
-
-def _xyzw(q):
-    return Msg(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
-
-
 def test_every_public_function_and_the_node_path_run_generated_code(fallbacks):
     calls = _generate.ordinary_calls()
     public = {name for name in rt.__all__ if inspect.isfunction(getattr(rt, name))}
@@ -209,14 +201,13 @@ def test_every_public_function_and_the_node_path_run_generated_code(fallbacks):
     for R, b, e in zip(Rs, bs, es):
         q = rt.matrix_to_quaternion(R)
         for seq in rt.EULER_SEQUENCES:
-            # rotation_node's per-message path: a message in (duck-typed here: the boundary
-            # imports no ROS), its numbers out
-            settings = Msg(quaternion_tolerance=1e-6, euler_sequence=seq, degrees=False)
-            for msg, convert in (
-                    (Msg(header=None, pose=Msg(position=_xyz(b), orientation=_xyzw(q))),
-                     boundary.pose_stamped_to_transform),
-                    (Msg(header=None, vector=_xyz(e)), boundary.euler_stamped_to_transform)):
-                _, R1, b1 = convert(msg, settings)
+            # rotation_node's per-message path: a message's fields in (the boundary imports
+            # no ROS), its numbers out
+            settings = SimpleNamespace(quaternion_tolerance=1e-6, euler_sequence=seq,
+                                       degrees=False)
+            for fields, convert in (((*b.tolist(), *q.tolist()), boundary.pose_fields_to_rt),
+                                    (tuple(e.tolist()), boundary.euler_fields_to_rt)):
+                R1, b1 = convert(fields, settings)
                 decomposition.decompose_values(R1, b1, seq)
             rt.matrix_to_euler(R, seq)
             rt.decompose(R, b, seq)

@@ -2,8 +2,8 @@
 Test rot_tools.boundary: one boundary for the node and for bags.
 
 rot_tools.boundary: one boundary for the node and for bags — the batch checks give every
-item the reason (and the rotation) the per-message converter gives it. ROS-free: messages are
-SimpleNamespaces with the ROS field names.
+item the reason (and the rotation) the per-message converter gives it. ROS-free: the
+per-message converters take the fields' values, as rotation_node reads them from a message.
 """
 
 import math
@@ -20,14 +20,10 @@ TOL = 1e-3
 SETTINGS = SimpleNamespace(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False)
 
 
-def _q(x, y, z, w):
-    return SimpleNamespace(x=x, y=y, z=z, w=w)
-
-
 def _per_message(q, tol=TOL):
     """(code, R or None) of the per-message converter (what rotation_node runs)."""
     try:
-        R = boundary.quaternion_msg_to_matrix(_q(*q), tol)
+        R = boundary.quaternion_to_rotation(*q, tol)
     except RefusedInput as exc:
         return boundary.CODE[exc.reason], None
     return 0, R
@@ -94,16 +90,11 @@ def test_check_order_no_orientation_then_position_then_quaternion():
     names = [boundary.REFUSAL_REASONS[c - 1] for c in codes]
     assert names == ['no_orientation', 'no_orientation', 'non_finite', 'zero_quaternion']
     # the per-message converters agree
-    imu = SimpleNamespace(header=None, orientation=_q(0, 0, 0, 0.0),
-                          orientation_covariance=[-1.0] + [0.0] * 8)
     with pytest.raises(RefusedInput) as info:
-        boundary.imu_to_transform(imu, SETTINGS)
+        boundary.imu_fields_to_rt((0, 0, 0, 0.0, -1.0), SETTINGS)  # q, orientation_covariance[0]
     assert info.value.reason == 'no_orientation'
-    pose = SimpleNamespace(position=SimpleNamespace(x=math.nan, y=0.0, z=0.0),
-                           orientation=_q(0, 0, 0, 0.0))
-    odom = SimpleNamespace(header=None, pose=SimpleNamespace(pose=pose))
-    with pytest.raises(RefusedInput) as info:
-        boundary.odometry_to_transform(odom, SETTINGS)
+    with pytest.raises(RefusedInput) as info:  # Odometry's pose.pose: position, orientation
+        boundary.pose_pose_fields_to_rt((math.nan, 0.0, 0.0, 0, 0, 0, 0.0), SETTINGS)
     assert info.value.reason == 'non_finite'
     assert str(info.value) == boundary.batch_refusal_text(
         'nav_msgs/msg/Odometry', boundary.CODE['non_finite'], (0, 0, 0, 0.0), 0.0, TOL,
@@ -117,10 +108,8 @@ def test_check_order_no_orientation_then_position_then_quaternion():
      'pose.pose.orientation has norm 1.5, off 1 by 0.5 > quaternion_tolerance 0.001'),
 ])
 def test_batch_text_is_the_per_message_text(q, reason, text):
-    pose = SimpleNamespace(position=SimpleNamespace(x=0.0, y=0.0, z=0.0), orientation=_q(*q))
-    odom = SimpleNamespace(header=None, pose=SimpleNamespace(pose=pose))
     with pytest.raises(RefusedInput) as info:
-        boundary.odometry_to_transform(odom, SETTINGS)
+        boundary.pose_pose_fields_to_rt((0.0, 0.0, 0.0, *q), SETTINGS)
     codes, norms = boundary.check_batch([q], TOL, positions=[(0.0, 0.0, 0.0)])
     assert info.value.reason == reason == boundary.REFUSAL_REASONS[codes[0] - 1]
     assert str(info.value) == text == boundary.batch_refusal_text(

@@ -1,13 +1,25 @@
-"""rot_tools.cdr: the node's per-input outputs as bytes, checked against rclpy's own CDR."""
+"""
+rot_tools.cdr: the node's messages as bytes, checked against rclpy's own CDR.
 
-from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
+Outputs: our bytes are rclpy's serialisation of the message they hold. Inputs: what the
+node's INPUTS rows read from rclpy's serialisation of a message is that message's fields,
+and bytes that are not such a serialisation are Malformed, never misread.
+"""
+
+import math
+import struct
+
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
+from geometry_msgs.msg import TransformStamped, TwistStamped, Vector3Stamped
 from hypothesis import example, given, settings, strategies as st
 from math_helpers import HYPOTHESIS_SETTINGS
+from nav_msgs.msg import Odometry
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rot_tools import cdr
 from rot_tools.messages import MATRIX_DIMS
-from rot_tools.rotation_node import OUTPUTS
+from rot_tools.rotation_node import INPUTS, OUTPUTS
+from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, Header, MultiArrayDimension, MultiArrayLayout
 
 FLOATS = st.floats(allow_nan=False)  # (NaN != NaN would fail the comparison, not the bytes)
@@ -108,3 +120,120 @@ def test_every_output_row_encodes_its_type():
         assert_same_message(ours, msg)  # the message read back is written as ours
         if kind.msg_type is not Float64MultiArray:
             assert (msg.header.stamp.sec, msg.header.frame_id) == (3, 'odom')
+
+
+# -- inputs ---------------------------------------------------------------------------------
+
+
+def _xyz(v):
+    return [v.x, v.y, v.z]
+
+
+def _pose(p):
+    return _xyz(p.position) + _xyz(p.orientation) + [p.orientation.w]
+
+
+FIELDS = {  # each input type: its strings set, and the fields the node reads, from the object
+    PoseStamped: (lambda m, s: None, lambda m: _pose(m.pose)),
+    Vector3Stamped: (lambda m, s: None, lambda m: _xyz(m.vector)),
+    TransformStamped: (lambda m, s: setattr(m, 'child_frame_id', s),
+                       lambda m: _xyz(m.transform.translation) + _xyz(m.transform.rotation)
+                       + [m.transform.rotation.w]),
+    PoseWithCovarianceStamped: (lambda m, s: None, lambda m: _pose(m.pose.pose)),
+    Odometry: (lambda m, s: setattr(m, 'child_frame_id', s), lambda m: _pose(m.pose.pose)),
+    Imu: (lambda m, s: None,
+          lambda m: _xyz(m.orientation) + [m.orientation.w, m.orientation_covariance[0]]),
+    QuaternionStamped: (lambda m, s: None, lambda m: _xyz(m.quaternion) + [m.quaternion.w]),
+}
+
+
+def _message(kind, sec, nanosec, frame_id, child, values, fill):
+    """Return a message of the kind's type: header, child frame, every float field filled."""
+    msg = kind.msg_type()
+    msg.header = header_msg(sec, nanosec, frame_id)
+    FIELDS[kind.msg_type][0](msg, child)
+    numbers = iter(values)
+    _fill(msg, lambda: next(numbers, fill))
+    return msg
+
+
+def _fill(msg, number):
+    """Set every float64 field (and array element) of msg, depth first, from number()."""
+    for name, kind in msg.get_fields_and_field_types().items():
+        value = getattr(msg, name)
+        if kind == 'double':
+            setattr(msg, name, number())
+        elif kind.startswith('double['):
+            setattr(msg, name, [number() for _ in value])
+        elif hasattr(value, 'get_fields_and_field_types') and name != 'header':
+            _fill(value, number)
+
+
+def test_every_input_type_has_its_fields():
+    assert {kind.msg_type for kind in INPUTS} == set(FIELDS)
+
+
+NUMBERS = st.floats(allow_nan=False) | st.sampled_from([math.inf, -math.inf, -0.0, 5e-324])
+
+
+@settings(**HYPOTHESIS_SETTINGS)
+@given(st.sampled_from(INPUTS), SECONDS, NANOSECONDS, st.text(max_size=20),
+       st.text(max_size=20), st.lists(NUMBERS, min_size=60, max_size=60), NUMBERS)
+@example(INPUTS[0], 1, 2, 'a' * 4, '', [0.5] * 60, 0.25)  # the header ends on 8: no padding
+@example(INPUTS[2], 1, 2, 'map', 'b' * 5, [0.5] * 60, 0.25)  # the child frame ends on 8
+@example(INPUTS[4], 1, 2, 'odom\u00e9\u4e2d', 'base\U0001f600', [0.5] * 60, 0.25)
+def test_each_input_reads_its_messages_fields(kind, sec, nanosec, frame_id, child, values,
+                                              fill):
+    msg = _message(kind, sec, nanosec, frame_id, child, values, fill)
+    header, fields = kind.read(serialize_message(msg))
+    assert (header.stamp.sec, header.stamp.nanosec, header.frame_id) == (
+        sec, nanosec, msg.header.frame_id)
+    assert list(fields) == FIELDS[kind.msg_type][1](msg)
+
+
+def test_nan_is_read_as_nan_and_a_frame_id_ends_at_its_first_nul():
+    (pose,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
+    header, fields = pose.read(serialize_message(
+        _message(pose, 1, 2, 'map\0junk', '', [math.nan], 1.0)))
+    assert header.frame_id == 'map'
+    assert math.isnan(fields[0]) and fields[1:] == (1.0,) * 6
+
+
+def test_big_endian_cdr_is_read():
+    # PoseStamped written by hand, CDR_BE: stamp, frame_id 'odom' (5 bytes with the NUL,
+    # payload 12-17), padding to 24, then position and orientation.
+    values = (1.5, -2.0, 3.25, 0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5))
+    data = (b'\x00\x00\x00\x00' + struct.pack('>iII', -7, 9, 5) + b'odom\0'
+            + bytes(7) + struct.pack('>7d', *values))
+    (pose,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
+    assert pose.read(data) == (cdr.Header(cdr.Stamp(-7, 9), 'odom'), values)
+
+
+@pytest.mark.parametrize('kind', INPUTS, ids=lambda kind: kind.topic)
+def test_bytes_that_end_early_are_malformed(kind):
+    data = serialize_message(_message(kind, 3, 4, 'frame', 'child', [0.5] * 60, 0.25))
+    read_all = kind.read(data)
+    for end in range(len(data)):
+        try:
+            got = kind.read(data[:end])
+        except cdr.Malformed:
+            continue
+        assert got == read_all  # only the bytes after the fields read may be missing
+
+
+@pytest.mark.parametrize('data, why', [
+    (b'', 'encapsulation  is not CDR'),
+    (b'\x00\x07\x00\x00' + bytes(80), 'encapsulation 00 07 00 00 is not CDR'),  # XCDR2
+    (b'\x00\x01\x00\x00' + bytes(8) + struct.pack('<I', 0) + bytes(64),
+     'header.frame_id of 0 bytes does not end in a NUL'),
+    (b'\x00\x01\x00\x00' + bytes(8) + struct.pack('<I', 2**32 - 1) + bytes(64),
+     'header.frame_id of 4294967295 bytes does not end in a NUL within the 80 bytes'),
+    (b'\x00\x01\x00\x00' + bytes(8) + struct.pack('<I', 4) + b'odom' + bytes(60),
+     'does not end in a NUL'),
+    (b'\x00\x01\x00\x00' + bytes(8) + struct.pack('<I', 4) + b'map\0' + bytes(20),
+     'the message ends early: 40 bytes'),
+])
+def test_malformed_bytes_are_refused_with_what_is_wrong(data, why):
+    (pose,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
+    with pytest.raises(cdr.Malformed, match=why.replace('(', r'\(')):
+        pose.read(data)

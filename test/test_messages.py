@@ -1,4 +1,9 @@
-"""rot_tools.messages: the message <-> NumPy boundary of rotation_node (no DDS needed)."""
+"""
+rot_tools.messages: the message <-> NumPy boundary of rotation_node (no DDS needed).
+
+Inbound, a message goes the node's way: serialised by rclpy, its bytes read by its INPUTS
+row (rot_tools.cdr) and its fields converted.
+"""
 
 import math
 from types import SimpleNamespace
@@ -8,11 +13,12 @@ from geometry_msgs.msg import QuaternionStamped, TransformStamped, Vector3Stampe
 from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
+from rot_tools import boundary, messages
 from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
-from rot_tools import messages
 from rot_tools.messages import RefusedInput
+from rot_tools.rotation_node import INPUTS
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
@@ -25,6 +31,22 @@ def settings(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False):
     """Return what the converters read of rotation_node's Settings."""
     return SimpleNamespace(quaternion_tolerance=quaternion_tolerance,
                            euler_sequence=euler_sequence, degrees=degrees)
+
+
+def take(msg, given=None):
+    """(header, R, b) of msg as rotation_node takes it: its bytes read, its fields converted."""
+    kind, = (kind for kind in INPUTS if kind.msg_type is type(msg))
+    header, fields = kind.read(serialize_message(msg))
+    return (header, *kind.convert(fields, settings() if given is None else given))
+
+
+def same_header(read, msg):
+    return (read.stamp.sec, read.stamp.nanosec, read.frame_id) == (
+        msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id)
+
+
+def quaternion_fields(q):
+    return tuple(float(c) for c in q)
 
 
 def quaternion(q):
@@ -43,19 +65,19 @@ def unit(v):
 @pytest.mark.parametrize('q', [(0, 0, 0, 1), (1, 0, 0, 0), (0.5, 0.5, 0.5, 0.5),
                                tuple(unit(RNG.normal(size=4)))])
 def test_unit_quaternion(q):
-    R = messages.quaternion_msg_to_matrix(quaternion(q), 1e-3)
+    R = boundary.quaternion_to_rotation(*quaternion_fields(q), 1e-3)
     np.testing.assert_allclose(R, quaternion_to_matrix(q), rtol=0, atol=ATOL)
 
 
 def test_quaternion_order_is_x_y_z_w():
     half = math.sqrt(0.5)  # 90° about z: (x, y, z, w) = (0, 0, sin 45°, cos 45°)
-    R = messages.quaternion_msg_to_matrix(quaternion((0, 0, half, half)), 1e-3)
+    R = boundary.quaternion_to_rotation(*quaternion_fields((0, 0, half, half)), 1e-3)
     np.testing.assert_allclose(R, rot_z(math.pi / 2), rtol=0, atol=ATOL)
 
 
 def test_quaternion_within_tolerance_is_normalised():
     q = unit((0.3, -0.2, 0.9, 0.1)) * (1 - 0.99e-3)
-    R = messages.quaternion_msg_to_matrix(quaternion(q), 1e-3)
+    R = boundary.quaternion_to_rotation(*quaternion_fields(q), 1e-3)
     assert is_rotation(R, tol=1e-15)
     np.testing.assert_allclose(R, quaternion_to_matrix(unit(q)), rtol=0, atol=ATOL)
 
@@ -73,13 +95,13 @@ def test_quaternion_within_tolerance_is_normalised():
 ])
 def test_bad_quaternion_is_refused(q, tol, reason, match):
     with pytest.raises(RefusedInput, match=match) as info:
-        messages.quaternion_msg_to_matrix(quaternion(q), tol)
+        boundary.quaternion_to_rotation(*quaternion_fields(q), tol)
     assert info.value.reason == reason
     assert reason in messages.REFUSAL_REASONS
 
 
 def test_zero_tolerance_accepts_an_exactly_unit_quaternion():
-    R = messages.quaternion_msg_to_matrix(quaternion((0, 1, 0, 0)), 0.0)
+    R = boundary.quaternion_to_rotation(*quaternion_fields((0, 1, 0, 0)), 0.0)
     np.testing.assert_allclose(R, np.diag([-1.0, 1.0, -1.0]), rtol=0, atol=0)
 
 
@@ -88,8 +110,8 @@ def test_pose_stamped():
     msg.header.frame_id = 'map'
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 1.0, -2.0, 3.5
     msg.pose.orientation = quaternion(unit((1, 2, 3, 4)))
-    header, R, b = messages.pose_stamped_to_transform(msg, settings())
-    assert header is msg.header
+    header, R, b = take(msg)
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, quaternion_to_matrix((1, 2, 3, 4)), rtol=0, atol=ATOL)
     assert b.tolist() == [1.0, -2.0, 3.5]
 
@@ -100,7 +122,7 @@ def test_pose_with_non_finite_position_is_refused(field, value, match):
     msg = PoseStamped()
     setattr(msg.pose.position, field, value)
     with pytest.raises(RefusedInput, match=match) as info:
-        messages.pose_stamped_to_transform(msg, settings())
+        take(msg)
     assert info.value.reason == 'non_finite'
 
 
@@ -109,8 +131,8 @@ def test_transform_stamped():
     msg.header.frame_id = 'world'
     msg.transform.translation.x = 4.0
     msg.transform.rotation = quaternion((1, 0, 0, 0))
-    header, R, b = messages.transform_stamped_to_transform(msg, settings())
-    assert header is msg.header
+    header, R, b = take(msg)
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, rot_x(math.pi), rtol=0, atol=ATOL)
     assert b.tolist() == [4.0, 0.0, 0.0]
 
@@ -122,7 +144,7 @@ def test_transform_with_nan_is_refused(where, match):
     msg = TransformStamped()
     getattr(msg.transform, where).y = math.nan
     with pytest.raises(RefusedInput, match=match) as info:
-        messages.transform_stamped_to_transform(msg, settings())
+        take(msg)
     assert info.value.reason == 'non_finite'
 
 
@@ -130,7 +152,7 @@ def test_transform_with_zero_rotation_is_refused():
     msg = TransformStamped()
     msg.transform.rotation.w = 0.0
     with pytest.raises(RefusedInput, match='transform.rotation is the zero quaternion'):
-        messages.transform_stamped_to_transform(msg, settings())
+        take(msg)
 
 
 @pytest.mark.parametrize('seq', ['ZYX', 'xyz', 'ZXZ', 'yxy'])
@@ -140,9 +162,8 @@ def test_euler_stamped(seq, degrees):
     msg = Vector3Stamped()
     given = np.degrees(angles) if degrees else angles
     msg.vector.x, msg.vector.y, msg.vector.z = map(float, given)
-    header, R, b = messages.euler_stamped_to_transform(
-        msg, settings(euler_sequence=seq, degrees=degrees))
-    assert header is msg.header
+    header, R, b = take(msg, settings(euler_sequence=seq, degrees=degrees))
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, euler_to_matrix(angles, seq), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
 
@@ -151,7 +172,7 @@ def test_euler_stamped_with_inf_is_refused():
     msg = Vector3Stamped()
     msg.vector.z = math.inf
     with pytest.raises(RefusedInput, match=r'vector\.z is inf') as info:
-        messages.euler_stamped_to_transform(msg, settings())
+        take(msg)
     assert info.value.reason == 'non_finite'
 
 
@@ -161,13 +182,13 @@ def test_pose_with_covariance_stamped_ignores_the_covariance():
     msg.pose.pose.position.y = -1.5
     msg.pose.pose.orientation = quaternion((0, 1, 0, 0))
     msg.pose.covariance = [math.nan] * 36
-    header, R, b = messages.pose_with_covariance_stamped_to_transform(msg, settings())
-    assert header is msg.header
+    header, R, b = take(msg)
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, np.diag([-1.0, 1.0, -1.0]), rtol=0, atol=0)
     assert b.tolist() == [0.0, -1.5, 0.0]
     msg.pose.pose.orientation.w = 2.0
     with pytest.raises(RefusedInput, match=r'pose\.pose\.orientation has norm 2\.23606') as info:
-        messages.pose_with_covariance_stamped_to_transform(msg, settings())
+        take(msg)
     assert info.value.reason == 'non_unit_quaternion'
 
 
@@ -177,21 +198,21 @@ def test_odometry_is_its_pose_and_ignores_the_twist():
     msg.pose.pose.position.x = 3.0
     msg.pose.pose.orientation = quaternion((0, 0, math.sin(0.25), math.cos(0.25)))
     msg.twist.twist.angular.z = math.nan
-    header, R, b = messages.odometry_to_transform(msg, settings())
-    assert header is msg.header
+    header, R, b = take(msg)
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, rot_z(0.5), rtol=0, atol=ATOL)
     assert b.tolist() == [3.0, 0.0, 0.0]
     msg.pose.pose.position.z = math.inf
     with pytest.raises(RefusedInput, match=r'pose\.pose\.position\.z is inf'):
-        messages.odometry_to_transform(msg, settings())
+        take(msg)
 
 
 def test_imu_orientation():
     msg = Imu()
     msg.orientation = quaternion((math.sin(0.5), 0, 0, math.cos(0.5)))
     msg.linear_acceleration.x = math.inf  # not used
-    header, R, b = messages.imu_to_transform(msg, settings())
-    assert header is msg.header
+    header, R, b = take(msg)
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, rot_x(1.0), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
 
@@ -202,7 +223,7 @@ def test_imu_without_orientation_is_refused(q):
     msg.orientation = quaternion(q)
     msg.orientation_covariance[0] = -1.0
     with pytest.raises(RefusedInput, match=r'orientation_covariance\[0\] is -1') as info:
-        messages.imu_to_transform(msg, settings())
+        take(msg)
     assert info.value.reason == 'no_orientation'
     assert 'no_orientation' in messages.REFUSAL_REASONS
 
@@ -211,21 +232,21 @@ def test_imu_with_a_covariance_is_used():
     msg = Imu()
     msg.orientation = quaternion((0, 0, 0, 1))
     msg.orientation_covariance = [0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01]
-    np.testing.assert_array_equal(messages.imu_to_transform(msg, settings())[1], np.eye(3))
+    np.testing.assert_array_equal(take(msg)[1], np.eye(3))
     msg.orientation.w = 0.0
     with pytest.raises(RefusedInput, match='orientation is the zero quaternion'):
-        messages.imu_to_transform(msg, settings())
+        take(msg)
 
 
 def test_quaternion_stamped():
     msg = QuaternionStamped()
     msg.quaternion = quaternion(np.array([0.0, 0.0, 1.0, 1.0]) * math.sqrt(0.5) * (1 + 5e-4))
-    header, R, b = messages.quaternion_stamped_to_transform(msg, settings())
-    assert header is msg.header
+    header, R, b = take(msg)
+    assert same_header(header, msg)
     np.testing.assert_allclose(R, rot_z(math.pi / 2), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
     with pytest.raises(RefusedInput, match='quaternion has norm') as info:
-        messages.quaternion_stamped_to_transform(msg, settings(quaternion_tolerance=1e-4))
+        take(msg, settings(quaternion_tolerance=1e-4))
     assert info.value.reason == 'non_unit_quaternion'
 
 

@@ -22,6 +22,7 @@ from rcl_interfaces.msg import Log, ParameterType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, ReliabilityPolicy
+from rclpy.serialization import serialize_message
 from rot_tools import cdr, rotation_node
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
@@ -606,6 +607,23 @@ def test_bad_input_is_refused(rig, case):
     rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='the warning on /rosout')
     (warning,) = rig.node_logs(Log.WARN)
     assert why in warning.msg and reason in warning.msg and rig.topic(kind) in warning.msg
+
+
+@pytest.mark.parametrize('damage, why', [
+    (lambda data: data[:40], 'the message ends early: 40 bytes'),
+    (lambda data: b'\x00\x07' + data[2:], 'encapsulation 00 07 00 00 is not CDR'),
+    (lambda data: data[:12] + b'\xff' + data[13:], 'does not end in a NUL'),
+], ids=['truncated', 'xcdr2', 'frame_id_length'])
+def test_bytes_that_are_not_the_message_are_refused(rig, damage, why):
+    # The node reads its inputs' bytes (rot_tools.cdr): a publisher of raw bytes can send
+    # anything on ~/pose. Refused as malformed, counted, warned; the next message is served.
+    rig.pubs['pose'].publish(damage(serialize_message(GOOD_INPUTS['pose'])))
+    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1, what='the refusal')
+    rig.outputs(rig.send('pose', GOOD_INPUTS['pose']))
+    assert rig.report()['refused']['malformed'] == 1
+    rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='the warning on /rosout')
+    (warning,) = rig.node_logs(Log.WARN)
+    assert 'not a geometry_msgs/msg/PoseStamped: ' in warning.msg and why in warning.msg
 
 
 def test_quaternion_within_tolerance_is_normalised(rig):

@@ -332,11 +332,11 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
     held, release = threading.Event(), threading.Event()
     real = RotationNode._on_input
 
-    def on_input(self, source, msg):
-        if msg.header.frame_id == 'hold':
+    def on_input(self, source, data):
+        if source.read(data)[0].frame_id == 'hold':
             held.set()
             assert release.wait(8 * TIMEOUT)
-        return real(self, source, msg)
+        return real(self, source, data)
 
     monkeypatch.setattr(RotationNode, '_on_input', on_input)
     node = RotationNode(context=own_context, namespace=namespace)
@@ -482,10 +482,10 @@ def test_a_raising_callback_is_logged_and_costs_no_other_message(
         tester, ros_context, namespace, monkeypatch, capfd):
     real = RotationNode._on_input
 
-    def on_input(self, source, msg):
-        if msg.header.frame_id == 'boom':
+    def on_input(self, source, data):
+        if source.read(data)[0].frame_id == 'boom':
             raise RuntimeError('a bug in a callback')
-        return real(self, source, msg)
+        return real(self, source, data)
 
     monkeypatch.setattr(RotationNode, '_on_input', on_input)
     node = RotationNode(context=ros_context, namespace=namespace)
