@@ -1,8 +1,9 @@
 """
 rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
 
-Every input kind is one row of :data:`INPUTS` — topic, message type, converter — and every
-message becomes one rigid transform (header, R, b) at the boundary (rot_tools.messages).
+Every input kind is one row of :data:`INPUTS` — topic, message type, reader, converter — and
+every message becomes one rigid transform (header, R, b) at the boundary: its bytes read by
+rot_tools.cdr (a raw subscription), its fields converted by rot_tools.boundary.
 From there one path serves them all: one pass of the decomposition kernels
 (rot_tools.decomposition.decompose_values) gives every number published — rotation vector θ·l̂,
 Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, and the quaternion (matrix_to_quaternion
