@@ -9,12 +9,13 @@ nothing of rot_tools is warmed), then the 1,000 calls, each timed alone. Printed
 function: the first call, the median and the worst of the 1,000.
 
 The node: rotation_node's per-message path from its first message, in a fresh process —
-RotationNode's ``~/pose`` callback called directly with 10,000 different PoseStamped (it
-converts, decomposes and publishes its five outputs to topics nobody subscribes, DDS on the
-loopback in a domain of its own), markers off and, separately, on (a picture every
-1/30 s). Where the node cannot be built (no rclpy), the same path without the node:
-rot_tools.boundary's PoseStamped conversion, decomposition.decompose_values and the
-rot_tools.messages fill functions.
+RotationNode's ``~/pose`` callback called directly with the bytes of 10,000 different
+PoseStamped (it reads, converts, decomposes and publishes its six outputs to topics nobody
+subscribes, DDS on the loopback in a domain of its own), markers off and, separately, on;
+with markers on, the picture's timer callback too, whenever the callback has made a picture
+due (at most 30 a second), timed on its own. Where the node cannot be built (no rclpy), the
+same path without the node: rot_tools.boundary's PoseStamped conversion and
+decomposition.decompose_values.
 
 Run: ``.venv/bin/python bench/bench_first_calls.py [--calls N] [--messages N] [--skip-node]
 [--json PATH]``; ``--one NAME`` / ``--node MARKERS`` are the child processes' modes.
@@ -176,18 +177,30 @@ def run_node(markers, n):
             o.x, o.y, o.z, o.w = q
             msgs.append(serialize_message(msg))  # the node subscribes raw: it gets the bytes
         clock, cpu = time.perf_counter_ns, time.thread_time_ns
-        times, cpus = [], []
+        times, cpus, picture_times, picture_cpus = [], [], [], []
         for msg in msgs:
             c0, t0 = cpu(), clock()
             node._on_input(source, msg)
             t1, c1 = clock(), cpu()
             times.append(t1 - t0)
             cpus.append(c1 - c0)
+            soon, timer = node._picture_soon, node._picture_timer
+            if not soon.is_canceled() or (  # a timer the executor would call now
+                    not timer.is_canceled() and timer.time_until_next_call() <= 0):
+                c0, t0 = cpu(), clock()
+                node._publish_picture()
+                t1, c1 = clock(), cpu()
+                picture_times.append(t1 - t0)
+                picture_cpus.append(c1 - c0)
         node.destroy_node()
     finally:
         rclpy.try_shutdown()
-    return _summary(f'RotationNode ~/pose callback, markers {"on" if markers else "off"}',
-                    times, cpus)
+    out = [_summary(f'RotationNode ~/pose callback, markers {"on" if markers else "off"}',
+                    times, cpus)]
+    if picture_times:
+        out.append(_summary(f'RotationNode picture timer callback ({len(picture_times)} drawn)',
+                            picture_times, picture_cpus))
+    return out
 
 
 def run_path_without_node(n, positions, quaternions, why):
@@ -204,7 +217,7 @@ def run_path_without_node(n, positions, quaternions, why):
         t1, c1 = clock(), cpu()
         times.append(t1 - t0)
         cpus.append(c1 - c0)
-    return _summary(f'boundary + decompose_values ({why})', times, cpus)
+    return [_summary(f'boundary + decompose_values ({why})', times, cpus)]
 
 
 def _summary(label, times, cpus):
@@ -267,7 +280,7 @@ def main(argv=None):
     node = []
     if not args.skip_node:
         for markers in ('off', 'on'):
-            node.append(child(['--node', markers, '--messages', str(args.messages)]))
+            node.extend(child(['--node', markers, '--messages', str(args.messages)]))
         benchlib.print_table(
             f"rotation_node's per-message path, first {args.messages} messages, fresh process "
             '(µs)', ['path', 'first µs', 'median µs', 'worst µs (msg)', 'worst CPU µs (msg)',

@@ -65,7 +65,7 @@ def goal_rows(math, node, memory, first=None, overload=None):
         rows.append(['  (the same, wall clock)', f"worst: {wall['label']}",
                      f"{wall['worst_ms']:.3f} ms", '- (note)', '-'])
         for r in first['node']:
-            rows.append([f"first {r['calls']} messages: {r['label']}", 'worst message',
+            rows.append([f"first {r['calls']} calls: {r['label']}", 'worst call',
                          f"{r['worst_cpu_ms']:.3f} ms CPU, {r['worst_ms']:.2f} wall", '-',
                          '-'])
     if node:

@@ -133,6 +133,8 @@ def label_point(path, scale):
     """
     middle = (path[(len(path) - 1) // 2] + path[len(path) // 2]) / 2
     chord = (path[-1] - path[0]).tolist()
+    if not all(map(math.isfinite, chord)):
+        return middle + math.nan  # a path that overflowed: the picture is refused
     big = max(map(abs, chord))  # no overflow in the norm
     chord = [k / big for k in chord]
     length = math.hypot(*chord)

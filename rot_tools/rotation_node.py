@@ -13,7 +13,7 @@ parameters: doc/node.md, and ``rotation_node --help``.
 
 The pictures (~/markers and ~/screw_axis, rot_tools.drawing) cost several times the rest of
 an input's work, so they are throttled: at most MARKER_RATE a second, the latest input wins,
-and the last input is always drawn (a timer publishes it when its turn comes).
+and the last input is always drawn. A timer callback draws them, never an input's callback.
 """
 
 if __name__ == '__main__':
@@ -320,9 +320,14 @@ class RotationNode(Node):
         self._picture_due = None  # the arguments of the latest drawing not yet published
         self._picture_shown = None  # the header of the picture on show (ADDs), or None
         self._picture_sent = -math.inf  # time.monotonic() of the last one published
+        # Pictures are drawn by a timer callback, never inside an input's: the next one a
+        # MARKER_RATE period after the last (_picture_timer), or at once when that has
+        # passed (_picture_soon, period 0: due on the executor's next pass).
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._picture_timer = self.create_timer(
-            1.0 / MARKER_RATE, self._publish_picture,
-            clock=Clock(clock_type=ClockType.STEADY_TIME), autostart=False)
+            1.0 / MARKER_RATE, self._publish_picture, clock=steady, autostart=False)
+        self._picture_soon = self.create_timer(
+            0.0, self._publish_picture, clock=steady, autostart=False)
         self._warm_up_picture()
 
         # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
@@ -529,22 +534,23 @@ class RotationNode(Node):
 
     def _offer_picture(self, header, R, b, settings):
         """
-        Publish the picture of this input now, or when MARKER_RATE next allows it.
+        Have the picture of this input drawn next, as soon as MARKER_RATE allows it.
 
-        An input that arrives while the timer runs replaces the one waiting: the latest
+        An input that arrives while a drawing is due replaces the one waiting: the latest
         wins, and the last input is always drawn.
         """
         self._picture_due = (header, R, b, settings)
-        if not self._picture_timer.is_canceled():
+        if not (self._picture_timer.is_canceled() and self._picture_soon.is_canceled()):
             return
         if time.monotonic() - self._picture_sent >= 1.0 / MARKER_RATE:
-            self._publish_picture()
+            self._picture_soon.reset()  # due at once
         else:
             self._picture_timer.reset()  # fires one period from now
 
     def _publish_picture(self):
         """~/markers and ~/screw_axis of the input waiting (DELETEs for the identity)."""
         self._picture_timer.cancel()
+        self._picture_soon.cancel()
         due, self._picture_due = self._picture_due, None
         if due is None:  # dropped: publish_markers was switched off (_clear_picture)
             return
@@ -591,6 +597,7 @@ class RotationNode(Node):
         nothing is shown (none drawn yet, or the last input was the identity).
         """
         self._picture_timer.cancel()
+        self._picture_soon.cancel()
         self._picture_due = None
         if self._picture_shown is not None:
             self._delete_picture(self._picture_shown)

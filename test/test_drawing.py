@@ -8,6 +8,8 @@ p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ of the constant-screw motion,
 
 import math
 
+from hypothesis import example, given, settings, strategies as st
+from math_helpers import HYPOTHESIS_SETTINGS
 import numpy as np
 import pytest
 from rot_tools import drawing, RotationError
@@ -237,3 +239,36 @@ def test_a_picture_that_overflows_float64_is_refused():
     # The largest finite motions still draw (their axis 1e211 away; capped segments).
     pic = picture(*motion((0, 0, 1), np.zeros(3), 1e-11, 0.0)[:1], (0.0, 1e200, 0.0))
     assert len(pic.path) == drawing.MAX_SEGMENTS + 1 and np.isfinite(pic.path).all()
+
+
+@pytest.mark.parametrize('end', [(0.0, 0.0, math.nan), (math.inf, 1.0, 0.0),
+                                 (1.0, -math.inf, 1.0)])
+def test_the_label_of_a_path_that_overflowed_is_nan(end):
+    # (picture then refuses the motion: RotationError, not ZeroDivisionError)
+    path = np.array([np.zeros(3), np.ones(3), end])
+    assert np.isnan(drawing.label_point(path, 1.0)).all()
+
+
+HUGE = st.floats(allow_nan=False, allow_infinity=False) | st.sampled_from(
+    [1e308, -1.7e308, 1e200, 1e-300, 5e-324, 0.0])
+
+
+@settings(**HYPOTHESIS_SETTINGS)
+@given(st.tuples(HUGE, HUGE, HUGE), st.floats(0.0, 4.0), st.tuples(HUGE, HUGE, HUGE),
+       st.floats(1e-300, 1e308) | st.sampled_from([1.0, 1e308]))
+@example((0.0, 0.0, 1.0), 1e-11, (1.7e308, -1.7e308, 1.7e308), 1.0)
+@example((1.0, 1.0, 0.0), 3.0, (1e308, 1e308, 1e308), 1e308)
+@example((0.0, 0.0, 1.0), 1.0, (0.0, 0.0, 0.0), 1e308)
+def test_any_motion_draws_or_is_refused_with_a_rotation_error(direction, angle, b, scale):
+    # Whatever the floats, a picture is finite, or RotationError says it overflows.
+    if not any(direction):
+        direction = (0.0, 0.0, 1.0)
+    direction = np.array(direction) / np.abs(direction).max()
+    R = Rotation.from_rotvec(angle * unit(direction)).as_matrix()
+    try:
+        pic = picture(R, np.array(b), scale=scale)
+    except RotationError as exc:
+        assert 'overflows float64' in str(exc)
+        return
+    for part in (pic.path, pic.axis, pic.label_at):
+        assert part is None or np.isfinite(part).all()
