@@ -162,14 +162,21 @@ def screw_path(screw, p0, end, scale):
     (I − Rot(φ))·u = 2 sin²(φ/2)·u⊥ − sin φ·l̂ × u and u⊥ = u − (u·l̂)·l̂: no cancellation
     when the axis is far away (small θ). The ends are set to p0 and ``end`` = R·p0 + b exactly.
     """
-    direction, angle, translation = screw.direction, float(screw.angle), float(screw.translation)
-    u = screw.point - p0
-    (x, y, z), (ux, uy, uz) = direction.tolist(), u.tolist()
-    across = np.array((y * uz - z * uy, z * ux - x * uz, x * uy - y * ux))  # l̂ × u
-    s = np.linspace(0.0, 1.0, path_segments(angle, math.hypot(*across), scale) + 1)
+    angle, translation = float(screw.angle), float(screw.translation)
+    (x, y, z), (ux, uy, uz) = screw.direction.tolist(), (screw.point - p0).tolist()
+    across = (y * uz - z * uy, z * ux - x * uz, x * uy - y * ux)  # l̂ × u
+    along = x * ux + y * uy + z * uz
+    n = path_segments(angle, math.hypot(*across), scale)
+    s = np.arange(n + 1) / n
+    # p(s) − p0 = [2 sin²(sθ/2), sin sθ, s]·[u⊥; −l̂ × u; d·l̂], one row of the left per point
+    weights = np.empty((n + 1, 3))
     half = np.sin((0.5 * angle) * s)
-    path = (((2.0 * half) * half)[:, None] * (u - (x * ux + y * uy + z * uz) * direction)
-            - np.sin(angle * s)[:, None] * across + (translation * s)[:, None] * direction)
+    np.multiply(2.0 * half, half, out=weights[:, 0])
+    np.sin(angle * s, out=weights[:, 1])
+    weights[:, 2] = s
+    path = weights @ np.array(((ux - along * x, uy - along * y, uz - along * z),
+                               (-across[0], -across[1], -across[2]),
+                               (translation * x, translation * y, translation * z)))
     path += p0
     path[0], path[-1] = p0, end
     return path
@@ -197,12 +204,13 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
     traced, p0 = _traced_point(kind, direction, scale)
     with np.errstate(over='ignore', invalid='ignore'):  # checked below
         path = screw_path(screw, p0, R @ p0 + b, scale)
-        # Where the origin, the path and the moved frame fall along the axis: t = (p − c)·l̂.
-        drawn = np.concatenate([[np.zeros(3), b], path, b + scale * R.T])
-        t = (drawn - point) @ direction
-        lo, hi = t.min() - scale, t.max() + scale
-        axis = None if kind == TRANSLATION else point + np.outer((lo, hi), direction)
         label_at = label_point(path, scale)
+        # Where the path, b and the moved frame's tips fall along the axis, t = (p − c)·l̂
+        # (the origin is among them: the path starts there, or b = 0 for a pure rotation).
+        drawn = np.concatenate((path, b[None], b + scale * R.T))
+        t = drawn @ direction - float(point @ direction)
+        lo, hi = float(t.min()) - scale, float(t.max()) + scale
+        axis = None if kind == TRANSLATION else point + np.array(((lo,), (hi,))) * direction
     if not (np.isfinite(drawn).all() and np.isfinite(label_at).all()
             and (axis is None or np.isfinite(axis).all())):
         raise RotationError(
