@@ -169,6 +169,10 @@ def _fill(msg, number):
             _fill(value, number)
 
 
+(POSE,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
+"""~/pose's row of INPUTS."""
+
+
 def test_every_input_type_has_its_fields():
     assert {kind.msg_type for kind in INPUTS} == set(FIELDS)
 
@@ -192,9 +196,8 @@ def test_each_input_reads_its_messages_fields(kind, sec, nanosec, frame_id, chil
 
 
 def test_nan_is_read_as_nan_and_a_frame_id_ends_at_its_first_nul():
-    (pose,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
-    header, fields = pose.read(serialize_message(
-        _message(pose, 1, 2, 'map\0junk', '', [math.nan], 1.0)))
+    header, fields = POSE.read(serialize_message(
+        _message(POSE, 1, 2, 'map\0junk', '', [math.nan], 1.0)))
     assert header.frame_id == 'map'
     assert math.isnan(fields[0]) and fields[1:] == (1.0,) * 6
 
@@ -205,8 +208,7 @@ def test_big_endian_cdr_is_read():
     values = (1.5, -2.0, 3.25, 0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5))
     data = (b'\x00\x00\x00\x00' + struct.pack('>iII', -7, 9, 5) + b'odom\0'
             + bytes(7) + struct.pack('>7d', *values))
-    (pose,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
-    assert pose.read(data) == (cdr.Header(cdr.Stamp(-7, 9), 'odom'), values)
+    assert POSE.read(data) == (cdr.Header(cdr.Stamp(-7, 9), 'odom'), values)
 
 
 @pytest.mark.parametrize('kind', INPUTS, ids=lambda kind: kind.topic)
@@ -234,6 +236,5 @@ def test_bytes_that_end_early_are_malformed(kind):
      'the message ends early: 40 bytes'),
 ])
 def test_malformed_bytes_are_refused_with_what_is_wrong(data, why):
-    (pose,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
     with pytest.raises(cdr.Malformed, match=why.replace('(', r'\(')):
-        pose.read(data)
+        POSE.read(data)
