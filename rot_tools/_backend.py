@@ -38,6 +38,14 @@ from rot_tools.errors import RotationError
 
 CHUNK = 32768
 
+# An output's (trailing shape, dtype). Callers build their outputs from these and other
+# module-level constants, so that apply's check of them against the generated code's is
+# an identity check of each element.
+MATRIX = ((3, 3), np.float64)
+VECTOR = ((3,), np.float64)
+SCALAR = ((), np.float64)
+FLAG = ((), np.bool_)
+
 
 class _FloatOps:
     """Scalar engine: Python floats."""
@@ -167,10 +175,12 @@ def apply(kernel, inputs, outputs):
     arithmetic raises (x/0, sin(inf), sqrt(−1)) the item is run as a batch of one, so that
     one item gives the inf/NaN a batch gives.
     """
-    code = _CODE_OF.get(kernel) or _find_code(kernel)
-    if code is not None and (code[0] == outputs or code[0] == list(outputs)):
+    known = _CODE_OF.get(kernel)  # (outputs, function): equal at once where the caller's
+    # outputs are made of the same constants (the identity of each element decides)
+    one = known[1] if known is not None and known[0] == outputs else _find_code(kernel, outputs)
+    if one is not None:
         try:
-            result = code[1](inputs)
+            result = one(inputs)
         except _FLOAT_ERRORS:
             result = None  # the path below meets it again and answers as a batch
         if result is not None:  # else not one plain item, NaN/Inf in it, or a rare case
@@ -251,7 +261,7 @@ _FLOAT_ERRORS = (ArithmeticError, ValueError)
 """What Python's float arithmetic and math module raise where NumPy gives inf or NaN."""
 
 _CODE_OF = {}
-"""kernel object -> (outputs, its generated function), filled as kernels are first met."""
+"""kernel object -> (outputs as last met, its generated function for them or None)."""
 
 FALLBACKS = Counter()
 """kernel key -> one-item calls that ran the kernel itself on FLOATS (no generated function
@@ -281,12 +291,12 @@ def kernel_key(kernel):
     return f'{kernel.__module__}.{kernel.__qualname__}'
 
 
-def _find_code(kernel):
-    """Return (outputs, function) of a kernel from the generated module, or None."""
+def _find_code(kernel, outputs):
+    """Return the generated function of a kernel for these outputs, or None (remembered)."""
     code = GENERATED.get(kernel_key(kernel))
-    if code is not None:
-        _CODE_OF[kernel] = code
-    return code
+    one = code[1] if code is not None and code[0] == list(outputs) else None
+    _CODE_OF[kernel] = (outputs, one)  # (no caller changes its outputs after the call)
+    return one
 
 
 def _count_fallback(kernel, tails, outputs):
@@ -319,13 +329,33 @@ def _scaled(ops, v):
     return big, [vi / safe for vi in v]  # (not vi * (1 / big): 1 / big overflows if tiny)
 
 
+def _rescaled_norm(ops, v):
+    """|v| = max |v_i|·|v / max |v_i||: inf only where |v| itself is beyond 1.8e308."""
+    big, scaled = _scaled(ops, v)
+    return big * ops.sqrt(dot(scaled, scaled))
+
+
 def norm(ops, v):
     """|v| of a 3-vector entry list, without overflow or underflow of |v|² for any finite v."""
     n2 = dot(v, v)
-    if ops.rare(_rare(v, n2)):  # rescale by max |v_i|
-        big, scaled = _scaled(ops, v)
-        return big * ops.sqrt(dot(scaled, scaled))
+    if ops.rare(_rare(v, n2)):
+        return _rescaled_norm(ops, v)
     return ops.sqrt(n2)
+
+
+def norm_in_range(ops, v):
+    """
+    (|v|, in_range flag) of a 3-vector entry list: |v| is 0 where the flag is false.
+
+    Only a rescaled |v| can overflow (|v|² ≤ 1e290 off the rare path): the flag is True
+    there, without a test.
+    """
+    n2 = dot(v, v)
+    if ops.rare(_rare(v, n2)):
+        n = _rescaled_norm(ops, v)
+        fits = in_range(ops, [n])
+        return ops.where(fits, n, 0.0), fits
+    return ops.sqrt(n2), True
 
 
 _LARGEST = sys.float_info.max

@@ -276,7 +276,8 @@ def _result_lines(values, outputs, packers):
             if dtype not in DTYPE_NAMES:
                 raise TraceError(f'no scalar output for dtype {dtype}')
             if dtype is np.bool_:  # (NumPy's two bools are singletons: np.bool_(c) is one)
-                results.append(f'(_True if {text[0]} else _False)')
+                known = {'True': '_True', 'False': '_False'}.get(text[0])
+                results.append(known or f'(_True if {text[0]} else _False)')
             else:
                 results.append(f'{DTYPE_NAMES[dtype]}({text[0]})')
             continue

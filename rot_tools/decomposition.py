@@ -11,7 +11,7 @@ from functools import partial
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools._backend import apply
+from rot_tools._backend import apply, FLAG, SCALAR, VECTOR
 from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.euler import (
     _ANGLES_KERNELS, angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, parse_sequence)
@@ -49,10 +49,9 @@ def _motion_kernel(ops, m, b):
     return (axis, angle, *screw, twist, screw_fits & twist_fits)
 
 
-_VEC, _NUM = ((3,), np.float64), ((), np.float64)
-_MOTION_OUTPUTS = [_VEC, _NUM, _VEC, _VEC, _VEC, _NUM, _NUM, _NUM, ((6,), np.float64),
-                   ((), np.bool_)]
-_ANGLES_OUTPUTS = [_VEC, ((), np.bool_)]
+_MOTION_OUTPUTS = [VECTOR, SCALAR, VECTOR, VECTOR, VECTOR, SCALAR, SCALAR, SCALAR,
+                   ((6,), np.float64), FLAG]
+_ANGLES_OUTPUTS = [VECTOR, FLAG]
 
 
 def decompose(R, b, seq='ZYX', *, check=True):
@@ -106,7 +105,7 @@ def _euler_kernel(ops, m, spec):
 
 
 _FLOATS3 = ((3,), float)
-_VALUES_OUTPUTS = [_FLOATS3, ((6,), float), ((4,), float), _NUM, ((), np.bool_)]
+_VALUES_OUTPUTS = [_FLOATS3, ((6,), float), ((4,), float), SCALAR, FLAG]
 _EULER_KERNELS = {seq: partial(_euler_kernel, spec=parse_sequence(seq))
                   for seq in EULER_SEQUENCES}
 

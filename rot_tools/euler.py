@@ -29,9 +29,8 @@ angle (for lower-case sequences too).
 from functools import partial
 import math
 
-import numpy as np
 from rot_tools._arrays import require_tolerance
-from rot_tools._backend import apply
+from rot_tools._backend import apply, FLAG, MATRIX, VECTOR
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
 
@@ -111,7 +110,7 @@ def euler_to_matrix(angles, seq='ZYX'):
     kernel = _MATRIX_KERNELS.get(seq) if isinstance(seq, str) else None
     if kernel is None:
         parse_sequence(seq)  # raises the RotationError
-    (matrix,) = apply(kernel, [(angles, (3,), 'Euler angles', True)], [((3, 3), np.float64)])
+    (matrix,) = apply(kernel, [(angles, (3,), 'Euler angles', True)], [MATRIX])
     return matrix
 
 
@@ -177,7 +176,7 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
     kernel = _ANGLES_KERNELS[seq] if lock_tol == GIMBAL_LOCK_TOL else partial(
         angles_kernel, spec=spec, lock_tol=lock_tol)
-    return apply_to_rotations(kernel, R, check, [((3,), np.float64), ((), np.bool_)])
+    return apply_to_rotations(kernel, R, check, [VECTOR, FLAG])
 
 
 _ANGLES_KERNELS = {seq: partial(angles_kernel, spec=spec, lock_tol=GIMBAL_LOCK_TOL)

@@ -28,7 +28,7 @@ import os
 
 import numpy as np
 from rot_tools._arrays import finite_array, refuse_overflow, require_finite
-from rot_tools._backend import norm
+from rot_tools._backend import norm, SCALAR
 from rot_tools.axis_angle import axis_angle_to_matrix, skew_and_cos
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_named_rotations, checked_rotation
@@ -66,7 +66,7 @@ def rotation_distance(R1, R2, *, check=True):
     not rotations the angle means nothing and may be NaN (rot_tools.so3).
     """
     (theta,) = apply_to_named_rotations(_distance_kernel, [(R1, 'R1'), (R2, 'R2')], check,
-                                        [((), np.float64)])
+                                        [SCALAR])
     return theta
 
 

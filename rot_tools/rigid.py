@@ -28,7 +28,8 @@ RotationError instead of returning inf.
 
 import numpy as np
 from rot_tools._arrays import apart, as_float_array, refuse_overflow, require_tolerance
-from rot_tools._backend import apply, cross, dot, linear_in_range, unit
+from rot_tools._backend import apply, cross, dot, FLAG, linear_in_range, MATRIX, SCALAR, unit, \
+    VECTOR
 from rot_tools.errors import RotationError
 from rot_tools.so3 import (
     apply_to_named_rotations, apply_to_rotations, defects_kernel, refuse_defects, ROTATION_TOL)
@@ -36,8 +37,7 @@ from rot_tools.so3 import (
 HOMOGENEOUS_ROW_TOL = 1e-9
 """Largest deviation of a homogeneous matrix's last row from (0, 0, 0, 1) that is accepted."""
 
-_VEC, _MAT, _F64, _OK = ((3,), np.float64), ((3, 3), np.float64), ((), np.float64), (
-    (), np.bool_)
+_HOMOGENEOUS = ((4, 4), np.float64)
 
 
 def _item(flags):
@@ -78,7 +78,7 @@ def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
     tol = require_tolerance(tol, 'tol', 1.0, '[0, 1)')
     matrix, *norms, uv, uw, vw, handed = apply(
         _frame_kernel, [(u, (3,), 'frame axis u', True), (v, (3,), 'frame axis v', True),
-                        (w, (3,), 'frame axis w', True)], [_MAT] + [_F64] * 7)
+                        (w, (3,), 'frame axis w', True)], [MATRIX] + [SCALAR] * 7)
     for name, n in zip('uvw', norms):
         zero = n == 0
         if zero.any():
@@ -113,7 +113,7 @@ def transform_points(R, b, p, *, check=True):
     R (..., 3, 3), b (..., 3), p (..., 3), broadcasting: one motion over many points, many
     motions over one point, or one each. Returns (..., 3).
     """
-    q, fits = apply_to_rotations(_points_kernel, R, check, [_VEC, _OK], [
+    q, fits = apply_to_rotations(_points_kernel, R, check, [VECTOR, FLAG], [
         (b, (3,), 'translation b', True), (p, (3,), 'point p', True)])
     refuse_overflow(fits, 'R·p + b')
     return q
@@ -134,7 +134,7 @@ def compose_transforms(R1, b1, R2, b2, *, check=True):
     to the product of the homogeneous matrices T1·T2.
     """
     R, b, fits = apply_to_named_rotations(
-        _compose_kernel, [(R1, 'R1'), (R2, 'R2')], check, [_MAT, _VEC, _OK],
+        _compose_kernel, [(R1, 'R1'), (R2, 'R2')], check, [MATRIX, VECTOR, FLAG],
         [(b1, (3,), 'translation b1', True), (b2, (3,), 'translation b2', True)])
     refuse_overflow(fits, 'R1·b2 + b1')
     return R, b
@@ -153,7 +153,7 @@ def invert_transform(R, b, *, check=True):
     transform_points(*invert_transform(R, b), p) = Rᵀ·(p − b) are the coordinates of p in
     the moved frame (Jia §4: q' = Rᵀ·q when b = 0).
     """
-    Rt, back, fits = apply_to_rotations(_invert_kernel, R, check, [_MAT, _VEC, _OK],
+    Rt, back, fits = apply_to_rotations(_invert_kernel, R, check, [MATRIX, VECTOR, FLAG],
                                         [(b, (3,), 'translation b', True)])
     refuse_overflow(fits, '−Rᵀ·b')
     return Rt, back
@@ -165,7 +165,7 @@ def _homogeneous_kernel(ops, m, b):
 
 def transform_to_homogeneous(R, b, *, check=True):
     """Return the 4×4 matrix [[R, b], [0, 0, 0, 1]] of p ↦ R·p + b; broadcasting → (..., 4, 4)."""
-    (T,) = apply_to_rotations(_homogeneous_kernel, R, check, [((4, 4), np.float64)],
+    (T,) = apply_to_rotations(_homogeneous_kernel, R, check, [_HOMOGENEOUS],
                               [(b, (3,), 'translation b', True)])
     return T
 
@@ -185,7 +185,7 @@ def homogeneous_to_transform(T, *, check=True):
     HOMOGENEOUS_ROW_TOL = 1e-9 (always), and when R is not a rotation (unless check=False).
     """
     R, b, off, err, det = apply(_transform_of_homogeneous_kernel, [(T, (4, 4), 'T', True)],
-                                [_MAT, _VEC, _F64, _F64, _F64])
+                                [MATRIX, VECTOR, SCALAR, SCALAR, SCALAR])
     if not (off <= HOMOGENEOUS_ROW_TOL).all():
         worst, where = _worst(off)
         row = as_float_array(T, (4, 4), 'T')[worst][3].tolist()

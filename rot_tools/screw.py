@@ -35,8 +35,9 @@ from typing import NamedTuple
 
 import numpy as np
 from rot_tools._arrays import finite_array, refuse_overflow
-from rot_tools._backend import apply, cross, dot, in_range, linear_in_range, unit
-from rot_tools.axis_angle import _rodrigues, axis_angle_kernel
+from rot_tools._backend import apply, cross, dot, FLAG, in_range, linear_in_range, MATRIX, \
+    SCALAR, unit, VECTOR
+from rot_tools.axis_angle import _rodrigues, axis_angle_kernel, rodrigues_entries, sin_versin
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations, checked_rotation
 
@@ -119,8 +120,8 @@ def refuse_far_axis(fits, angle, b):
         f'max|b_i| = {size:.3g} at θ = {theta:.3g} rad{where}')
 
 
-_VEC, _SCALAR, _OK = ((3,), np.float64), ((), np.float64), ((), np.bool_)
-_SCREW = [_VEC] * 3 + [_SCALAR] * 3
+_SCREW = [VECTOR] * 3 + [SCALAR] * 3
+_TWIST = ((6,), np.float64)
 
 
 def _screw_kernel(ops, m, b):
@@ -136,7 +137,7 @@ def screw_from_transform(R, b, *, check=True):
     then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
     RotationError where c or h overflow float64 (|b|/θ beyond ~1e308).
     """
-    *screw, fits = _apply_rigid(_screw_kernel, R, b, check, _SCREW + [_OK])
+    *screw, fits = _apply_rigid(_screw_kernel, R, b, check, _SCREW + [FLAG])
     refuse_far_axis(fits, screw[3], b)
     return Screw(*screw)
 
@@ -173,7 +174,7 @@ def screw_log(R, b, *, check=True):
     (no pure-translation threshold: the identity rotation gives (0, b)). Inverse of
     screw_exp.
     """
-    twist, fits = _apply_rigid(_log_kernel, R, b, check, [((6,), np.float64), _OK])
+    twist, fits = _apply_rigid(_log_kernel, R, b, check, [_TWIST, FLAG])
     refuse_overflow(fits, 'θ·v of screw_log (|θ·v| ≤ π/2·|b|)')
     return twist
 
@@ -184,17 +185,16 @@ def _exp_kernel(ops, twist):
     theta = ops.where(turns, theta, 0.0)
     u = twist[3:]
     d = dot(axis, u)
-    half = 0.5 * theta
-    sh = ops.sin(half)
+    sin, versin = sin_versin(ops, theta)
     # sin θ/θ and (1 − cos θ)/θ; below 1e-8 rad their series 1 − θ²/6 and θ/2 − θ³/24 are
-    # 1 and θ/2 to double precision (and sin(θ/2) would underflow for denormal θ).
+    # 1 and θ/2 to double precision (and 1 − cos θ would underflow for denormal θ).
     small = theta < 1e-8
     safe = ops.where(small, 1.0, theta)
-    sinc = ops.where(small, 1.0, 2.0 * sh * ops.cos(half) / safe)
-    versinc = ops.where(small, half, 2.0 * sh * sh / safe)
+    sinc = ops.where(small, 1.0, sin / safe)
+    versinc = ops.where(small, 0.5 * theta, versin / safe)
     swing = cross(axis, u)
     b = [sinc * (ui - d * li) + versinc * si + d * li for ui, li, si in zip(u, axis, swing)]
-    return _rodrigues(ops, axis[0], axis[1], axis[2], theta), b, turns, in_range(ops, b)
+    return rodrigues_entries(*axis, sin, versin), b, turns, in_range(ops, b)
 
 
 def screw_exp(twist):
@@ -206,7 +206,7 @@ def screw_exp(twist):
     RotationError where |ω| or b overflow float64.
     """
     R, b, turns, fits = apply(_exp_kernel, [(twist, (6,), 'twist', True)],
-                              [((3, 3), np.float64), _VEC, _OK, _OK])
+                              [MATRIX, VECTOR, FLAG, FLAG])
     refuse_overflow(turns, 'the rotation angle |ω| of the twist')
     refuse_overflow(fits, 'b of screw_exp')
     return R, b
@@ -235,7 +235,7 @@ def transform_from_screw(direction, point, angle, translation):
     R, b, zero, fits = apply(_transform_of_screw_kernel, [
         (direction, (3,), 'direction', True), (point, (3,), 'point', True),
         (angle, (), 'angle', True), (translation, (), 'translation', True)],
-        [((3, 3), np.float64), _VEC, _OK, _OK])
+        [MATRIX, VECTOR, FLAG, FLAG])
     if zero.any():
         raise RotationError('screw direction must be non-zero, got |direction| = 0')
     refuse_overflow(fits, 'b = (I − R)·point + d·l̂ of transform_from_screw')

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 from rot_tools._arrays import apart, as_float_array, finite_array, require_tolerance
-from rot_tools._backend import apply, kernel_key
+from rot_tools._backend import apply, FLAG, kernel_key, MATRIX, SCALAR
 from rot_tools.errors import RotationError
 
 ROTATION_TOL = 1e-9
@@ -84,13 +84,13 @@ def defects_kernel(ops, m):
     return err, a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
-_F64 = ((), np.float64)
+_QUATERNION = ((4,), np.float64)
 _FLOAT = ((), float)  # (a Python float for one item: refuse_defects' quick path)
 
 
 def _defects(R):
     """Per item: (max|RᵀR − I|, det R)."""
-    return apply(defects_kernel, [(R, (3, 3), 'R', False)], [_F64, _F64])
+    return apply(defects_kernel, [(R, (3, 3), 'R', False)], [SCALAR, SCALAR])
 
 
 def is_rotation(R, tol=ROTATION_TOL):
@@ -232,7 +232,7 @@ def quaternion_to_matrix(q, *, tol=None):
     saying |q| and by how much (the worst item of a batch).
     """
     matrix, zero = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
-                         [((3, 3), np.float64), ((), np.bool_)])
+                         [MATRIX, FLAG])
     if zero.any() if zero.ndim else zero:
         where = f' (item {tuple(int(i) for i in np.argwhere(zero)[0])})' if zero.ndim else ''
         raise RotationError(f'quaternion (x, y, z, w) must be non-zero, got |q| = 0{where}')
@@ -314,5 +314,5 @@ def matrix_to_quaternion(R, *, check=True):
     result is accurate to rounding at every angle, 0 and π included. The boundary twin of
     quaternion_to_matrix, for messages and for people; never used inside the math.
     """
-    (q,) = apply_to_rotations(quaternion_of_matrix_kernel, R, check, [((4,), np.float64)])
+    (q,) = apply_to_rotations(quaternion_of_matrix_kernel, R, check, [_QUATERNION])
     return q
