@@ -115,19 +115,19 @@ def _columns(arr, tail):
     return list(np.ascontiguousarray(np.moveaxis(arr, 0, -1)).reshape(-1, arr.shape[0]))
 
 
-def _write_columns(out, entries, tail, dtype):
+def _write_columns(out, entries, buffer):
     """
-    Write the flat entries of one output into its chunk out (m,) + tail.
+    Write the flat entries of one output into its chunk out (m, size).
 
-    Through a contiguous buffer of the entries and one transposing copy.
+    Through ``buffer`` (size, ≥ m), the entries contiguous, and one transposing copy.
     """
-    if not tail:
-        out[...] = entries[0]
+    if len(entries) == 1:
+        out[:, 0] = entries[0]
         return
-    cols = np.empty((len(entries), out.shape[0]), dtype=dtype)
+    cols = buffer[:, :out.shape[0]]
     for k, entry in enumerate(entries):
         cols[k] = entry
-    out[...] = np.moveaxis(cols.reshape(tail + out.shape[:1]), -1, 0)
+    out[...] = cols.T
 
 
 def nest(entries, tail):
@@ -229,8 +229,11 @@ def _batch(kernel, arrays, tails, outputs):
                             ) from None
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in zip(arrays, tails)]
     n = flat[0].shape[0]
-    outs = [np.empty((n,) + t, dtype=dt) for t, dt in outputs]
     sizes = [math.prod(t) for t, _ in outputs]
+    outs = [np.empty((n, size), dtype=dt) for size, (_, dt) in zip(sizes, outputs)]
+    # One buffer per output for all chunks (a fresh 2 MB one per chunk costs page faults).
+    buffers = [np.empty((size, min(n, CHUNK)), dtype=dt) if size > 1 else None
+               for size, (_, dt) in zip(sizes, outputs)]
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
@@ -238,8 +241,8 @@ def _batch(kernel, arrays, tails, outputs):
             result = kernel(ARRAYS, *(nest(e, t) for e, t in zip(entries, tails)))
             values = [x for r, (t, _) in zip(result, outputs) for x in flatten(r, t)]
             k = 0
-            for out, size, (t, dt) in zip(outs, sizes, outputs):
-                _write_columns(out[chunk], values[k:k + size], t, dt)
+            for out, size, buffer in zip(outs, sizes, buffers):
+                _write_columns(out[chunk], values[k:k + size], buffer)
                 k += size
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
 

@@ -4362,33 +4362,25 @@ def so3__quaternion_kernel(inputs):
         return None
     if (a0 + a1 + a2 + a3) * 0.0 != 0.0:
         return None
-    t0 = _op_abs(a0)
-    t1 = _op_abs(a1)
-    t2 = t0 if t0 >= t1 or t0 != t0 else t1
-    t3 = _op_abs(a2)
-    t4 = _op_abs(a3)
-    t5 = t3 if t3 >= t4 or t3 != t3 else t4
-    t6 = t2 if t2 >= t5 or t2 != t2 else t5
-    t8 = t6 if (t6 > 0) else 1.0
-    t9 = a0 / t8
-    t10 = a1 / t8
-    t11 = a2 / t8
-    t12 = a3 / t8
-    t13 = t9 * t9
-    t14 = t10 * t10
-    t15 = t13 + t14
-    t16 = t11 * t11
-    t19 = (t15 + t16) + (t12 * t12)
-    t22 = 2.0 / (t19 if (t19 > 0) else 1.0)
-    t26 = t9 * t10
-    t27 = t11 * t12
-    t30 = t9 * t11
-    t31 = t10 * t12
-    t39 = t10 * t11
-    t40 = t9 * t12
+    t6 = (((a0 * a0) + (a1 * a1)) + (a2 * a2)) + (a3 * a3)
+    if ((t6 < 1e-290) or (t6 > 1e+290)):
+        return None  # rare: apply runs the kernel
+    t11 = 2.0 / t6
+    t12 = t11 * a0
+    t13 = t11 * a1
+    t14 = t11 * a2
+    t15 = t12 * a0
+    t16 = t13 * a1
+    t17 = t14 * a2
+    t18 = t12 * a1
+    t19 = t12 * a2
+    t20 = t13 * a2
+    t21 = t12 * a3
+    t22 = t13 * a3
+    t23 = t14 * a3
     o0 = _empty((3, 3), _f64)
-    _pack_9d(o0, 0, (1.0 - (t22 * (t14 + t16))), (t22 * (t26 - t27)), (t22 * (t30 + t31)), (t22 * (t26 + t27)), (1.0 - (t22 * (t13 + t16))), (t22 * (t39 - t40)), (t22 * (t30 - t31)), (t22 * (t39 + t40)), (1.0 - (t22 * t15)))
-    return (o0, (_True if (t6 == 0) else _False),)
+    _pack_9d(o0, 0, (1.0 - (t16 + t17)), (t18 - t23), (t19 + t22), (t18 + t23), (1.0 - (t15 + t17)), (t20 - t21), (t19 - t22), (t20 + t21), (1.0 - (t15 + t16)))
+    return (o0, _False,)
 
 
 # rot_tools.so3.defects_kernel

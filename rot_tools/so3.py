@@ -267,15 +267,22 @@ def _refuse_non_unit(q, tol):
 
 
 def _quaternion_kernel(ops, q):
-    big = ops.maximum(ops.maximum(ops.abs(q[0]), ops.abs(q[1])),
-                      ops.maximum(ops.abs(q[2]), ops.abs(q[3])))
-    safe = ops.where(big > 0, big, 1.0)  # q/max|q_i|: |q|² neither overflows nor underflows
-    x, y, z, w = q[0] / safe, q[1] / safe, q[2] / safe, q[3] / safe
+    x, y, z, w = q
     n2 = x * x + y * y + z * z + w * w
-    s = 2.0 / ops.where(n2 > 0, n2, 1.0)
-    return [[1.0 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
-            [s * (x * y + z * w), 1.0 - s * (x * x + z * z), s * (y * z - x * w)],
-            [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y)]], big == 0
+    zero = False
+    if ops.rare((n2 < 1e-290) | (n2 > 1e290)):  # |q|² underflowed or overflowed, or q = 0
+        big = ops.max_of(ops.abs(x), ops.abs(y), ops.abs(z), ops.abs(w))
+        zero = big == 0
+        safe = ops.where(zero, 1.0, big)  # q/max|q_i|: |q|² in [1, 4]
+        x, y, z, w = x / safe, y / safe, z / safe, w / safe
+        n2 = ops.where(zero, 1.0, x * x + y * y + z * z + w * w)
+    s = 2.0 / n2
+    sx, sy, sz = s * x, s * y, s * z
+    xx, yy, zz, xy, xz, yz = sx * x, sy * y, sz * z, sx * y, sx * z, sy * z
+    xw, yw, zw = sx * w, sy * w, sz * w
+    return [[1.0 - (yy + zz), xy - zw, xz + yw],
+            [xy + zw, 1.0 - (xx + zz), yz - xw],
+            [xz - yw, yz + xw, 1.0 - (xx + yy)]], zero
 
 
 def quaternion_of_matrix_kernel(ops, m):
