@@ -37,7 +37,7 @@ import numpy as np
 from rot_tools._arrays import finite_array, refuse_overflow
 from rot_tools._backend import apply, cross, dot, FLAG, in_range, linear_in_range, MATRIX, \
     SCALAR, unit, VECTOR
-from rot_tools.axis_angle import _rodrigues, axis_angle_kernel, rodrigues_entries, sin_versin
+from rot_tools.axis_angle import axis_angle_kernel, rodrigues_entries, sin_versin
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations, checked_rotation
 
@@ -214,13 +214,12 @@ def screw_exp(twist):
 
 def _transform_of_screw_kernel(ops, direction, point, angle, translation):
     axis, size = unit(ops, direction)
-    sh, ch = ops.sin(0.5 * angle), ops.cos(0.5 * angle)
-    sin, versin = 2.0 * sh * ch, 2.0 * sh * sh
+    sin, versin = sin_versin(ops, angle)
     along = dot(point, axis)
     swing = cross(axis, point)
     b = [versin * (ci - along * li) - sin * si + translation * li
          for ci, li, si in zip(point, axis, swing)]
-    return _rodrigues(ops, axis[0], axis[1], axis[2], angle), b, size == 0, in_range(ops, b)
+    return rodrigues_entries(*axis, sin, versin), b, size == 0, in_range(ops, b)
 
 
 def transform_from_screw(direction, point, angle, translation):
@@ -229,7 +228,7 @@ def transform_from_screw(direction, point, angle, translation):
 
     direction (..., 3) is normalised (zero raises RotationError); point (..., 3) may be any
     point of the axis; angle, translation (...); broadcasting. Inverse of
-    screw_from_transform. (I − R)·c = 2 sin²(θ/2)·c⊥ − sin θ·l̂ × c with c⊥ = c − (c·l̂)·l̂,
+    screw_from_transform. (I − R)·c = (1 − cos θ)·c⊥ − sin θ·l̂ × c with c⊥ = c − (c·l̂)·l̂,
     so tiny angles with far-away axes keep their digits.
     """
     R, b, zero, fits = apply(_transform_of_screw_kernel, [
