@@ -23,8 +23,8 @@ def sin_versin(ops, angle):
     (sin θ, 1 − cos θ) from t = tan(θ/2): 2t/(1 + t²) and t·sin θ.
 
     One tangent instead of a sine and a cosine (NumPy's tangent is vectorised, its sine and
-    cosine of float64 are not: ~8× faster in a batch); 1 − cos θ keeps its relative
-    precision near 0, where 1 − cos θ itself would cancel.
+    cosine of float64 are not: ~8× faster in a batch); t·sin θ keeps its relative precision
+    near 0, where 1 − cos θ subtracted from 1 would cancel.
     """
     t = ops.tan(0.5 * angle)
     s = 2.0 * t / (1.0 + t * t)
