@@ -345,8 +345,8 @@ def _body(trace, flat, outputs, packers):
     sizes = [len(v) for v in values]
     statements, texts = _fold(statements, [t for v in values for t in v])
     values = [texts[sum(sizes[:k]):sum(sizes[:k + 1])] for k in range(len(sizes))]
-    return _statement_lines(statements, '    ') + [
-        '    ' + line for line in _result_lines(values, outputs, packers)]
+    return _statement_lines(statements, '        ') + [
+        '        ' + line for line in _result_lines(values, outputs, packers)]
 
 
 def _input_lines(index, tail, first):
@@ -377,32 +377,31 @@ def _input_lines(index, tail, first):
 
 def function_source(name, kernel, floats, tails, outputs, packers):
     """
-    Source of ``def name(inputs)``: the kernel for one item, straight-line.
+    Source of ``def name(x0, x1, ...)``: the kernel for one item, straight-line.
 
-    The function takes apply's inputs, ((value, tail, name, finite), ...), with the trailing
-    shapes ``tails``, and returns the outputs — arrays of the shapes of ``outputs``
-    ((tail, dtype) each), dtype scalars for tail (), flat tuples of floats for dtype float —
-    when every value is one item given as a float64 ndarray of exactly its tail, a float
-    (a scalar) or a tuple / list of floats (a vector), and holds no NaN/Inf, and no
-    ops.rare condition holds. Otherwise it returns None and apply takes its generic path,
-    which coerces, checks and runs the kernel itself (the NaN/Inf test is a quick sum that
-    can also fire when the sum overflows, and never misses one). The names it uses besides
-    its own are PRELUDE's, ``_op_<name>`` for each function of ``floats``, and
-    ``_pack_<fmt>`` for each format added to ``packers``. Raises TraceError when the kernel
-    cannot be traced.
+    The function takes one value per input, with the trailing shapes ``tails``, and returns
+    the outputs — arrays of the shapes of ``outputs`` ((tail, dtype) each), dtype scalars for
+    tail (), flat tuples of floats for dtype float — when every value is one item given as a
+    float64 ndarray of exactly its tail, a float (a scalar) or a tuple / list of floats (a
+    vector), and holds no NaN/Inf, no ops.rare condition holds and Python's float arithmetic
+    raises nothing (x/0, sqrt(−1): NumPy gives inf/NaN there). Otherwise it returns None and
+    the caller takes apply's generic path, which coerces, checks and runs the kernel itself
+    (the NaN/Inf test is a quick sum that can also fire when the sum overflows, and never
+    misses one). The names it uses besides its own are PRELUDE's, ``_op_<name>`` for each
+    function of ``floats``, and ``_pack_<fmt>`` for each format added to ``packers``.
+    Raises TraceError when the kernel cannot be traced.
     """
     trace, flat = _run(kernel, floats, tails, outputs)
-    xs = ''.join(f'(x{i}, _, _, _), ' for i in range(len(tails)))
-    body = [f'if len(inputs) != {len(tails)}:', '    return None', f'{xs}= inputs']
-    count = 0
+    body, count = [], 0
     for i, tail in enumerate(tails):
         body += _input_lines(i, tail, count)
         count += math.prod(tail)
     if count:
         body += [f'if ({" + ".join(f"a{i}" for i in range(count))}) * 0.0 != 0.0:',
                  '    return None']
-    lines = [f'def {name}(inputs):']
-    lines += ['    ' + line for line in body] + _body(trace, flat, outputs, packers)
+    lines = [f'def {name}({", ".join(f"x{i}" for i in range(len(tails)))}):']
+    lines += ['    ' + line for line in body + ['try:']] + _body(trace, flat, outputs, packers)
+    lines += ['    except _FLOAT_ERRORS:', '        return None']
     return '\n'.join(lines) + '\n'
 
 
@@ -411,6 +410,7 @@ import math as _math
 from struct import Struct as _Struct
 
 import numpy as _np
+from rot_tools.errors import FLOAT_ERRORS as _FLOAT_ERRORS
 
 _empty, _ndarray = _np.empty, _np.ndarray
 _f64, _b1 = _np.dtype(_np.float64), _np.dtype(_np.bool_)

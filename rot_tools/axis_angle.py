@@ -13,7 +13,8 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 
 import numpy as np
 from rot_tools._arrays import refuse_overflow
-from rot_tools._backend import apply, FLAG, MATRIX, norm_in_range, SCALAR, unit, VECTOR
+from rot_tools._backend import (Conversion, FLAG, MATRIX, norm_in_range, SCALAR, unit,
+                                VECTOR)
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
 
@@ -51,6 +52,10 @@ def _axis_angle_kernel(ops, axis, angle):
     return _rodrigues(ops, x, y, z, angle), (n == 0) & (angle != 0)
 
 
+_AXIS_ANGLE = Conversion(_axis_angle_kernel, [((3,), 'axis', True), ((), 'angle', True)],
+                         [MATRIX, FLAG])
+
+
 def axis_angle_to_matrix(axis, angle):
     """
     Rodrigues (Jia, eq. 7): axis (..., 3), angle (...) → (..., 3, 3), broadcasting.
@@ -58,9 +63,7 @@ def axis_angle_to_matrix(axis, angle):
     The axis is normalised. A zero axis with a zero angle gives the identity; a zero axis with
     a non-zero angle raises RotationError.
     """
-    matrix, bad = apply(_axis_angle_kernel, [(axis, (3,), 'axis', True),
-                                             (angle, (), 'angle', True)],
-                        [MATRIX, FLAG])
+    matrix, bad = _AXIS_ANGLE.one(axis, angle) or _AXIS_ANGLE(axis, angle)
     if bad.any() if bad.ndim else bad:
         first = float(np.broadcast_to(np.asarray(angle, dtype=float), bad.shape)[bad].flat[0])
         raise RotationError(f'axis is zero but the angle is {first:g} rad: a rotation needs '
@@ -74,14 +77,16 @@ def _rotvec_kernel(ops, v):
     return _rodrigues(ops, v[0] / safe, v[1] / safe, v[2] / safe, angle), turns
 
 
+_ROTVEC = Conversion(_rotvec_kernel, [((3,), 'rotation vector', True)], [MATRIX, FLAG])
+
+
 def rotvec_to_matrix(rotvec):
     """
     Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity.
 
     RotationError where the angle |θ·l̂| itself overflows float64.
     """
-    matrix, turns = apply(_rotvec_kernel, [(rotvec, (3,), 'rotation vector', True)],
-                          [MATRIX, FLAG])
+    matrix, turns = _ROTVEC.one(rotvec) or _ROTVEC(rotvec)
     refuse_overflow(turns, 'the angle |θ·l̂| of the rotation vector')
     return matrix
 

@@ -11,7 +11,7 @@ from functools import partial
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools._backend import apply, FLAG, SCALAR, VECTOR
+from rot_tools._backend import Conversion, FLAG, SCALAR, VECTOR
 from rot_tools.axis_angle import axis_angle_kernel
 from rot_tools.euler import (
     _ANGLES_KERNELS, angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, parse_sequence)
@@ -105,9 +105,12 @@ def _euler_kernel(ops, m, spec):
 
 
 _FLOATS3 = ((3,), float)
-_VALUES_OUTPUTS = [_FLOATS3, ((6,), float), ((4,), float), SCALAR, FLAG]
-_EULER_KERNELS = {seq: partial(_euler_kernel, spec=parse_sequence(seq))
-                  for seq in EULER_SEQUENCES}
+_VALUES = Conversion(_values_kernel, [((3, 3), 'R', False), ((3,), 'translation b', True)],
+                     [_FLOATS3, ((6,), float), ((4,), float), SCALAR, FLAG])
+_EULER = {seq: Conversion(partial(_euler_kernel, spec=parse_sequence(seq)),
+                          [((3, 3), 'R', False)], [_FLOATS3])
+          for seq in EULER_SEQUENCES}
+_RPY = _EULER[RPY_SEQUENCE]
 
 
 def decompose_values(R, b, seq='ZYX'):
@@ -121,15 +124,13 @@ def decompose_values(R, b, seq='ZYX'):
     R is not validated (check=False: the node builds R itself); RotationError where the
     screw overflows float64, as decompose.
     """
-    euler_kernel = _EULER_KERNELS.get(seq) if isinstance(seq, str) else None
-    if euler_kernel is None:
+    euler = _EULER.get(seq) if isinstance(seq, str) else None
+    if euler is None:
         parse_sequence(seq)  # raises the RotationError of an unknown sequence
-    rotvec, twist, q, angle, fits = apply(
-        _values_kernel, [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)],
-        _VALUES_OUTPUTS)
+    rotvec, twist, q, angle, fits = _VALUES.one(R, b) or _VALUES(R, b)
     refuse_far_axis(fits, angle, b)
-    (euler,) = apply(euler_kernel, [(R, (3, 3), 'R', False)], [_FLOATS3])
-    (rpy,) = apply(_EULER_KERNELS[RPY_SEQUENCE], [(R, (3, 3), 'R', False)], [_FLOATS3])
+    (euler,) = euler.one(R) or euler(R)
+    (rpy,) = _RPY.one(R) or _RPY(R)
     R = np.asarray(R, dtype=np.float64)
     matrix = R.ravel().tolist() if R.ndim == 2 else R.reshape(R.shape[:-2] + (9,))
     return Values(matrix, rotvec, euler, twist, q, rpy)

@@ -30,7 +30,7 @@ from functools import partial
 import math
 
 from rot_tools._arrays import require_tolerance
-from rot_tools._backend import apply, FLAG, MATRIX, VECTOR
+from rot_tools._backend import Conversion, FLAG, MATRIX, VECTOR
 from rot_tools.errors import RotationError
 from rot_tools.so3 import apply_to_rotations
 
@@ -107,14 +107,16 @@ def euler_to_matrix(angles, seq='ZYX'):
     Intrinsic 'ABC': R = Rot_a(θ1)·Rot_b(θ2)·Rot_c(θ3); extrinsic 'abc': R = Rot_c(θ3)·Rot_b(θ2)·
     Rot_a(θ1). Any of the 24 names of EULER_SEQUENCES; another string raises RotationError.
     """
-    kernel = _MATRIX_KERNELS.get(seq) if isinstance(seq, str) else None
-    if kernel is None:
+    conversion = _TO_MATRIX.get(seq) if isinstance(seq, str) else None
+    if conversion is None:
         parse_sequence(seq)  # raises the RotationError
-    (matrix,) = apply(kernel, [(angles, (3,), 'Euler angles', True)], [MATRIX])
+    (matrix,) = conversion.one(angles) or conversion(angles)
     return matrix
 
 
-_MATRIX_KERNELS = {seq: partial(_matrix_kernel, spec=spec) for seq, spec in _PARSED.items()}
+_TO_MATRIX = {seq: Conversion(partial(_matrix_kernel, spec=spec),
+                              [((3,), 'Euler angles', True)], [MATRIX])
+              for seq, spec in _PARSED.items()}
 
 
 def _wrap(ops, angle):

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 from rot_tools._arrays import apart, as_float_array, finite_array, require_tolerance
-from rot_tools._backend import apply, FLAG, kernel_key, MATRIX, SCALAR
+from rot_tools._backend import apply, Conversion, FLAG, kernel_key, MATRIX, SCALAR
 from rot_tools.errors import RotationError
 
 ROTATION_TOL = 1e-9
@@ -231,8 +231,7 @@ def quaternion_to_matrix(q, *, tol=None):
     ≥ 0 also refuses q with ||q| − 1| > tol (a quaternion typed or sent as unit that is not),
     saying |q| and by how much (the worst item of a batch).
     """
-    matrix, zero = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
-                         [MATRIX, FLAG])
+    matrix, zero = _QUATERNION_TO_MATRIX.one(q) or _QUATERNION_TO_MATRIX(q)
     if zero.any() if zero.ndim else zero:
         where = f' (item {tuple(int(i) for i in np.argwhere(zero)[0])})' if zero.ndim else ''
         raise RotationError(f'quaternion (x, y, z, w) must be non-zero, got |q| = 0{where}')
@@ -283,6 +282,10 @@ def _quaternion_kernel(ops, q):
     return [[1.0 - (yy + zz), xy - zw, xz + yw],
             [xy + zw, 1.0 - (xx + zz), yz - xw],
             [xz - yw, yz + xw, 1.0 - (xx + yy)]], zero
+
+
+_QUATERNION_TO_MATRIX = Conversion(
+    _quaternion_kernel, [((4,), 'quaternion (x, y, z, w)', True)], [MATRIX, FLAG])
 
 
 def quaternion_of_matrix_kernel(ops, m):

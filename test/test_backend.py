@@ -243,6 +243,16 @@ def test_a_kernel_missing_from_the_generated_module_is_noticed(monkeypatch, fall
     assert fallbacks == {key: 1}
 
 
+def test_every_conversion_is_bound_to_its_generated_function():
+    # c.one(x) or c(x): a Conversion without its generated function would still answer
+    # through apply (slower, and no FALLBACKS would show it).
+    for name in rt.__all__:  # (rot_tools imports its modules on first use of a name)
+        getattr(rt, name)
+    unbound = [_backend.kernel_key(c.kernel) for c in _backend._CONVERSIONS
+               if c.one is not _backend.GENERATED[_backend.kernel_key(c.kernel)][1]]
+    assert len(_backend._CONVERSIONS) >= 56 and not unbound, unbound
+
+
 def test_no_compilation_or_tracing_happens_at_call_time():
     # A fresh process: import rot_tools, then forbid compile and exec, then make the first
     # call of every ordinary call (the node's path included). The tracer is never imported.
@@ -310,10 +320,10 @@ def test_one_item_gives_what_a_batch_gives_where_float_arithmetic_would_raise():
     assert [type(x) for x in one] == [np.float64] * 3
     assert one[0] == -math.inf and math.isnan(one[1]) and math.isnan(one[2])
     assert _bits(one) == _bits(tuple(x[0] for x in batch))
-    # The same through a generated function that raises.
+    # A generated function meets the raise itself and leaves the item to apply (None).
     compiled = compile_kernel(kernel, _backend.FLOATS, [(3,)], outputs)
-    with pytest.raises(ZeroDivisionError):
-        compiled([(item, (3,), 'v', True)])
+    assert compiled(item) is None
+    assert compiled(np.array([1.0, 2.0, 0.0])) == (0.5, 1.0, 0.0)
 
 
 def _weird_items():
@@ -497,11 +507,11 @@ def _compile(kernel, tails, outputs):
     single = compile_kernel(kernel, _backend.FLOATS, tails, outputs)
 
     def call(*entries):
-        inputs, start = [], 0
+        values, start = [], 0
         for tail in tails:
-            inputs.append((list(entries[start:start + tail[0]]), tail, 'v', True))
+            values.append(list(entries[start:start + tail[0]]))
             start += tail[0]
-        return single(inputs)
+        return single(*values)
     call.__source__ = single.__source__
     return call
 
@@ -581,7 +591,7 @@ def test_float_outputs_are_plain_floats_for_one_item_and_arrays_for_a_batch():
     assert batch[0].shape == (2, 2, 2) and batch[0].dtype == np.float64
     assert batch[0][1].tolist() == [[3.0, 2.0], [3.0, 7.0]] and batch[2].tolist() == [4.0, 9.0]
     compiled = compile_kernel(kernel, _backend.FLOATS, [(2, 2), ()], outputs)
-    assert compiled([(m, (2, 2), 'm', True), (2.0, (), 'a', True)]) == expected
+    assert compiled(m, 2.0) == expected
 
 
 def _unindented(text):
