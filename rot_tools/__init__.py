@@ -4,7 +4,7 @@ rot_tools: rotations and rigid motions without quaternions, for one item or a ba
 Plain NumPy (no ROS import anywhere in this package's math). Angles are radians, arrays
 float64, ``...`` any leading batch shape. Invalid input raises RotationError (a ValueError).
 
-The names below are imported from their modules on first use (PEP 562), so that
+The names below are imported from their modules on first use of one (PEP 562), so that
 ``import rot_tools.<module>`` stays light: the rotation_node console script must install its
 signal handlers before NumPy and rclpy load (see rot_tools.entry).
 """
@@ -38,14 +38,16 @@ __all__ = sorted(_MODULE_OF)
 
 
 def __getattr__(name):
-    """Import a public name from its module on first access."""
-    try:
-        module = _MODULE_OF[name]
-    except KeyError:
-        raise AttributeError(f'module {__name__!r} has no attribute {name!r}') from None
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+    """Import every public name from its module on the first access of one."""
+    if name not in _MODULE_OF:
+        raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
+    for module, names in _HOME.items():
+        loaded = importlib.import_module(module)
+        globals().update((n, getattr(loaded, n)) for n in names)
+    # The hook goes once everything is here: CPython does not cache attribute look-ups on a
+    # module that has one (``rt.name`` would cost ~20 ns more on every call).
+    del globals()['__getattr__']
+    return globals()[name]
 
 
 def __dir__():
