@@ -46,7 +46,7 @@ def __getattr__(name):
         globals().update((n, getattr(loaded, n)) for n in names)
     # The hook goes once everything is here: CPython does not cache attribute look-ups on a
     # module that has one (``rt.name`` would cost ~20 ns more on every call).
-    del globals()['__getattr__']
+    globals().pop('__getattr__', None)  # (None: another thread's first access did it)
     return globals()[name]
 
 

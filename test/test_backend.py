@@ -253,6 +253,27 @@ def test_every_conversion_is_bound_to_its_generated_function():
     assert len(_backend._CONVERSIONS) >= 56 and not unbound, unbound
 
 
+def test_public_names_become_plain_module_attributes_on_first_access():
+    # A module with __getattr__ gets no cached attribute look-ups from CPython: the hook
+    # loads every public name on the first access of one, then goes.
+    script = textwrap.dedent("""
+        import sys
+        import rot_tools as rt
+        assert '__getattr__' in vars(rt) and 'numpy' not in sys.modules
+        rt.rotvec_to_matrix
+        assert '__getattr__' not in vars(rt)
+        assert set(rt.__all__) <= set(vars(rt))
+        try:
+            rt.no_such_name
+        except AttributeError as exc:
+            print('ok', exc)
+    """)
+    done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                          timeout=120, cwd=REPO)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("ok module 'rot_tools' has no attribute 'no_such_name'")
+
+
 def test_no_compilation_or_tracing_happens_at_call_time():
     # A fresh process: import rot_tools, then forbid compile and exec, then make the first
     # call of every ordinary call (the node's path included). The tracer is never imported.
