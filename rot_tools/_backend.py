@@ -313,11 +313,11 @@ class Conversion:
     """
     A kernel with its inputs' checks and its outputs given once: apply's arguments, bound.
 
-    inputs: [(trailing shape, name, finite), ...]; ``conversion(*values)`` is
-    ``apply(kernel, [(value, *input), ...], outputs)``. ``conversion.one(*values)`` is the
-    kernel's generated function alone: the outputs for one plain item, or None (then call
-    the conversion). A public one-item function writes ``c.one(x) or c(x)``: its usual item
-    runs the generated code with nothing around it.
+    inputs: [(trailing shape, name, finite), ...]. ``conversion.one(*values)`` is the
+    kernel's generated function alone: the outputs for one plain item, or None; then
+    ``conversion(*values)`` takes apply's generic path (the kernel itself on one item, or a
+    batch) without trying the generated function again. A public function writes
+    ``c.one(x) or c(x)``: its usual item runs the generated code with nothing around it.
     """
 
     __slots__ = ('kernel', 'inputs', 'outputs', 'one')
@@ -332,7 +332,8 @@ class Conversion:
         self.one = _find_code(self.kernel, self.outputs) or _no_code
 
     def __call__(self, *values):
-        return apply(self.kernel, [(v, *i) for v, i in zip(values, self.inputs)], self.outputs)
+        return _generic(self.kernel, [(v, *i) for v, i in zip(values, self.inputs)],
+                        self.outputs)
 
 
 _CONVERSIONS = []
