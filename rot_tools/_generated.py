@@ -72,7 +72,7 @@ def axis_angle__axis_angle_kernel(x0, x1):
         t38 = t32 * t21
         t39 = t32 * t23
         t40 = t33 * t23
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t31 + (t32 * t19)), (t38 - t37), (t39 + t36), (t38 + t37), (t31 + (t33 * t21)), (t40 - t35), (t39 - t36), (t40 + t35), (t31 + ((t30 * t23) * t23)))
         return (o0, (_True if (t16 and (a3 != 0)) else _False),)
     except _FLOAT_ERRORS:
@@ -112,7 +112,7 @@ def axis_angle__rotvec_kernel(x0):
         t35 = t29 * t19
         t36 = t29 * t20
         t37 = t30 * t20
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t28 + (t29 * t18)), (t35 - t34), (t36 + t33), (t35 + t34), (t28 + (t30 * t19)), (t37 - t32), (t36 - t33), (t37 + t32), (t28 + ((t27 * t20) * t20)))
         return (o0, _True,)
     except _FLOAT_ERRORS:
@@ -160,7 +160,7 @@ def axis_angle__rotvec_of_matrix_kernel(x0):
         t78 = (t54 / t74) + 0.0
         t80 = 1.0 if t73 else (t56 / t74)
         t87 = -1.0 if ((((t76 * t1) + (t78 * t3)) + (t80 * t5)) < 0) else 1.0
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((((t87 * t76) + 0.0) if t35 else ((t1 / t27) + 0.0)) * t34), ((((t87 * t78) + 0.0) if t35 else ((t3 / t27) + 0.0)) * t34), ((((t87 * t80) + 0.0) if t35 else (1.0 if t26 else (t5 / t27))) * t34))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -218,7 +218,7 @@ def axis_angle__rotvec_of_matrix_kernel_checked(x0):
         t136 = (t112 / t132) + 0.0
         t138 = 1.0 if t131 else (t114 / t132)
         t145 = -1.0 if ((((t134 * t59) + (t136 * t61)) + (t138 * t63)) < 0) else 1.0
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((((t145 * t134) + 0.0) if t93 else ((t59 / t85) + 0.0)) * t92), ((((t145 * t136) + 0.0) if t93 else ((t61 / t85) + 0.0)) * t92), ((((t145 * t138) + 0.0) if t93 else (1.0 if t84 else (t63 / t85))) * t92))
         return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -265,7 +265,7 @@ def axis_angle_axis_angle_kernel(x0):
         t78 = (t54 / t74) + 0.0
         t80 = 1.0 if t73 else (t56 / t74)
         t87 = -1.0 if ((((t76 * t1) + (t78 * t3)) + (t80 * t5)) < 0) else 1.0
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, (((t87 * t76) + 0.0) if t35 else ((t1 / t27) + 0.0)), (((t87 * t78) + 0.0) if t35 else ((t3 / t27) + 0.0)), (((t87 * t80) + 0.0) if t35 else (1.0 if t26 else (t5 / t27))))
         return (o0, _float64((_op_atan2(t24, t9))),)
     except _FLOAT_ERRORS:
@@ -322,7 +322,7 @@ def axis_angle_axis_angle_kernel_checked(x0):
         t136 = (t112 / t132) + 0.0
         t138 = 1.0 if t131 else (t114 / t132)
         t145 = -1.0 if ((((t134 * t59) + (t136 * t61)) + (t138 * t63)) < 0) else 1.0
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, (((t145 * t134) + 0.0) if t93 else ((t59 / t85) + 0.0)), (((t145 * t136) + 0.0) if t93 else ((t61 / t85) + 0.0)), (((t145 * t138) + 0.0) if t93 else (1.0 if t84 else (t63 / t85))))
         return (o0, _float64((_op_atan2(t82, t67))), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -970,15 +970,15 @@ def decomposition__motion_kernel(x0, x1):
         t244 = (((_op_abs(t224)) <= 1.7976931348623157e+308) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t236)) <= 1.7976931348623157e+308)
         if (False if t244 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, t90, t93, t96)
-        o2 = _empty((3,), _f64)
+        o2 = _empty((3,))
         _pack_3d(o2, 0, t122, t123, t124)
-        o3 = _empty((3,), _f64)
+        o3 = _empty((3,))
         _pack_3d(o3, 0, t155, t159, t163)
-        o4 = _empty((3,), _f64)
+        o4 = _empty((3,))
         _pack_3d(o4, 0, t166, t169, t172)
-        o8 = _empty((6,), _f64)
+        o8 = _empty((6,))
         _pack_6d(o8, 0, (t34 * t90), (t34 * t93), (t34 * t96), t224, t230, t236)
         return (o0, _float64(t34), o2, o3, o4, _float64((0.0 if t121 else t34)), _float64((t130 + 0.0)), _float64((((_inf if (t111 > 0) else 0.0) if t121 else t173) + 0.0)), o8, (_True if ((((((((((_op_abs(t155)) <= 1.7976931348623157e+308) and ((_op_abs(t159)) <= 1.7976931348623157e+308)) and ((_op_abs(t163)) <= 1.7976931348623157e+308)) and ((_op_abs(t166)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t130)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t121 else t173))) <= 1.7976931348623157e+308)) and t244) else _False),)
     except _FLOAT_ERRORS:
@@ -1084,15 +1084,15 @@ def decomposition__motion_kernel_checked(x0, x1):
         t302 = (((_op_abs(t282)) <= 1.7976931348623157e+308) and ((_op_abs(t288)) <= 1.7976931348623157e+308)) and ((_op_abs(t294)) <= 1.7976931348623157e+308)
         if (False if t302 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, t148, t151, t154)
-        o2 = _empty((3,), _f64)
+        o2 = _empty((3,))
         _pack_3d(o2, 0, t180, t181, t182)
-        o3 = _empty((3,), _f64)
+        o3 = _empty((3,))
         _pack_3d(o3, 0, t213, t217, t221)
-        o4 = _empty((3,), _f64)
+        o4 = _empty((3,))
         _pack_3d(o4, 0, t224, t227, t230)
-        o8 = _empty((6,), _f64)
+        o8 = _empty((6,))
         _pack_6d(o8, 0, (t92 * t148), (t92 * t151), (t92 * t154), t282, t288, t294)
         return (o0, _float64(t92), o2, o3, o4, _float64((0.0 if t179 else t92)), _float64((t188 + 0.0)), _float64((((_inf if (t169 > 0) else 0.0) if t179 else t231) + 0.0)), o8, (_True if ((((((((((_op_abs(t213)) <= 1.7976931348623157e+308) and ((_op_abs(t217)) <= 1.7976931348623157e+308)) and ((_op_abs(t221)) <= 1.7976931348623157e+308)) and ((_op_abs(t224)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t188)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t179 else t231))) <= 1.7976931348623157e+308)) and t302) else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -1230,7 +1230,7 @@ def euler__matrix_kernel_XYX(x0):
         t5 = _op_sin(a2)
         t10 = t1 * t2
         t19 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, t2, (t3 * t5), (t3 * t4), (t1 * t3), ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1258,7 +1258,7 @@ def euler__matrix_kernel_XYZ(x0):
         t5 = _op_sin(a2)
         t10 = t1 * t3
         t19 = t0 * t3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t2 * t4), ((-t2) * t5), t3, ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1286,7 +1286,7 @@ def euler__matrix_kernel_XZX(x0):
         t5 = _op_sin(a2)
         t11 = t1 * t2
         t18 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, t2, ((-t3) * t4), (t3 * t5), (t0 * t3), ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t1 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1314,7 +1314,7 @@ def euler__matrix_kernel_XZY(x0):
         t5 = _op_sin(a2)
         t9 = -t0
         t15 = -t1
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t2 * t4), (-t3), (t2 * t5), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1342,7 +1342,7 @@ def euler__matrix_kernel_YXY(x0):
         t5 = _op_sin(a2)
         t11 = t1 * t2
         t18 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - (t11 * t5)), (t1 * t3), ((t0 * t5) + (t11 * t4)), (t3 * t5), t2, ((-t3) * t4), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t18 * t4) - (t1 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1370,7 +1370,7 @@ def euler__matrix_kernel_YXZ(x0):
         t5 = _op_sin(a2)
         t9 = -t0
         t15 = -t1
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), (t2 * t5), (t2 * t4), (-t3), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1398,7 +1398,7 @@ def euler__matrix_kernel_YZX(x0):
         t5 = _op_sin(a2)
         t10 = t1 * t3
         t19 = t0 * t3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t0 * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), t3, (t2 * t4), ((-t2) * t5), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1426,7 +1426,7 @@ def euler__matrix_kernel_YZY(x0):
         t5 = _op_sin(a2)
         t10 = t1 * t2
         t19 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t19 * t4) - (t1 * t5)), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), (t3 * t4), t2, (t3 * t5), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t0 * t4) - (t10 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1454,7 +1454,7 @@ def euler__matrix_kernel_ZXY(x0):
         t5 = _op_sin(a2)
         t10 = t1 * t3
         t19 = t0 * t3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2), ((t1 * t5) - (t19 * t4)), ((-t2) * t5), t3, (t2 * t4))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1482,7 +1482,7 @@ def euler__matrix_kernel_ZXZ(x0):
         t5 = _op_sin(a2)
         t10 = t1 * t2
         t19 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)), ((-t0) * t3), (t3 * t5), (t3 * t4), t2)
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1510,7 +1510,7 @@ def euler__matrix_kernel_ZYX(x0):
         t5 = _op_sin(a2)
         t9 = -t0
         t15 = -t1
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (-t3), (t2 * t5), (t2 * t4))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1538,7 +1538,7 @@ def euler__matrix_kernel_ZYZ(x0):
         t5 = _op_sin(a2)
         t11 = t1 * t2
         t18 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)), (t1 * t3), ((-t3) * t4), (t3 * t5), t2)
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1566,7 +1566,7 @@ def euler__matrix_kernel_xyx(x0):
         t5 = _op_sin(a0)
         t10 = t1 * t2
         t19 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, t2, (t3 * t5), (t3 * t4), (t1 * t3), ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1594,7 +1594,7 @@ def euler__matrix_kernel_xyz(x0):
         t5 = _op_sin(a0)
         t9 = -t0
         t15 = -t1
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (-t3), (t2 * t5), (t2 * t4))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1622,7 +1622,7 @@ def euler__matrix_kernel_xzx(x0):
         t5 = _op_sin(a0)
         t11 = t1 * t2
         t18 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, t2, ((-t3) * t4), (t3 * t5), (t0 * t3), ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t1 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1650,7 +1650,7 @@ def euler__matrix_kernel_xzy(x0):
         t5 = _op_sin(a0)
         t10 = t1 * t3
         t19 = t0 * t3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t0 * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), t3, (t2 * t4), ((-t2) * t5), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1678,7 +1678,7 @@ def euler__matrix_kernel_yxy(x0):
         t5 = _op_sin(a0)
         t11 = t1 * t2
         t18 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - (t11 * t5)), (t1 * t3), ((t0 * t5) + (t11 * t4)), (t3 * t5), t2, ((-t3) * t4), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t18 * t4) - (t1 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1706,7 +1706,7 @@ def euler__matrix_kernel_yxz(x0):
         t5 = _op_sin(a0)
         t10 = t1 * t3
         t19 = t0 * t3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t0 * t5) + (t10 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2), ((t1 * t5) - (t19 * t4)), ((-t2) * t5), t3, (t2 * t4))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1734,7 +1734,7 @@ def euler__matrix_kernel_yzx(x0):
         t5 = _op_sin(a0)
         t9 = -t0
         t15 = -t1
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t2 * t4), (-t3), (t2 * t5), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2), (((t0 * t3) * t5) + (t15 * t4)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), ((t0 * t4) - ((t15 * t3) * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1762,7 +1762,7 @@ def euler__matrix_kernel_yzy(x0):
         t5 = _op_sin(a0)
         t10 = t1 * t2
         t19 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t19 * t4) - (t1 * t5)), ((-t0) * t3), ((t19 * t5) + (t1 * t4)), (t3 * t4), t2, (t3 * t5), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t0 * t4) - (t10 * t5)))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1790,7 +1790,7 @@ def euler__matrix_kernel_zxy(x0):
         t5 = _op_sin(a0)
         t9 = -t0
         t15 = -t1
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - ((t15 * t3) * t5)), ((t9 * t5) + ((t1 * t3) * t4)), (t1 * t2), (t2 * t5), (t2 * t4), (-t3), (((t0 * t3) * t5) + (t15 * t4)), ((t1 * t5) - ((t9 * t3) * t4)), (t0 * t2))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1818,7 +1818,7 @@ def euler__matrix_kernel_zxz(x0):
         t5 = _op_sin(a0)
         t10 = t1 * t2
         t19 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t0 * t4) - (t10 * t5)), (-((t0 * t5) + (t10 * t4))), (t1 * t3), ((t19 * t5) + (t1 * t4)), ((t19 * t4) - (t1 * t5)), ((-t0) * t3), (t3 * t5), (t3 * t4), t2)
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1846,7 +1846,7 @@ def euler__matrix_kernel_zyx(x0):
         t5 = _op_sin(a0)
         t10 = t1 * t3
         t19 = t0 * t3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t2 * t4), ((-t2) * t5), t3, ((t0 * t5) + (t10 * t4)), ((t0 * t4) - (t10 * t5)), ((-t1) * t2), ((t1 * t5) - (t19 * t4)), ((t19 * t5) + (t1 * t4)), (t0 * t2))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1874,7 +1874,7 @@ def euler__matrix_kernel_zyz(x0):
         t5 = _op_sin(a0)
         t11 = t1 * t2
         t18 = t0 * t2
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, ((t18 * t4) - (t1 * t5)), (-((t18 * t5) + (t1 * t4))), (t0 * t3), ((t0 * t5) + (t11 * t4)), ((t0 * t4) - (t11 * t5)), (t1 * t3), ((-t3) * t4), (t3 * t5), t2)
         return (o0,)
     except _FLOAT_ERRORS:
@@ -1901,7 +1901,7 @@ def euler_angles_kernel_XYX(x0):
         t21 = _op_atan2((-((t12 * a5) + (t13 * a8))), ((t12 * a4) + (t13 * a7)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -1939,7 +1939,7 @@ def euler_angles_kernel_XYX_checked(x0):
         t78 = _op_atan2((-((t69 * a5) + (t70 * a8))), ((t69 * a4) + (t70 * a7)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -1965,7 +1965,7 @@ def euler_angles_kernel_XYZ(x0):
         t20 = _op_atan2(((t12 * a3) + (t13 * a6)), ((t12 * a4) + (t13 * a7)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2002,7 +2002,7 @@ def euler_angles_kernel_XYZ_checked(x0):
         t77 = _op_atan2(((t69 * a3) + (t70 * a6)), ((t69 * a4) + (t70 * a7)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2028,7 +2028,7 @@ def euler_angles_kernel_XZX(x0):
         t20 = _op_atan2(((t11 * a7) + (t14 * a4)), ((t11 * a8) + (t14 * a5)))
         if t7:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
         return (o0, (_True if t7 else _False),)
     except _FLOAT_ERRORS:
@@ -2066,7 +2066,7 @@ def euler_angles_kernel_XZX_checked(x0):
         t76 = _op_atan2(((t67 * a7) + (t70 * a4)), ((t67 * a8) + (t70 * a5)))
         if t63:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
         return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2091,7 +2091,7 @@ def euler_angles_kernel_XZY(x0):
         t22 = _op_atan2((-((t12 * a6) + (t15 * a3))), ((t12 * a8) + (t15 * a5)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2128,7 +2128,7 @@ def euler_angles_kernel_XZY_checked(x0):
         t78 = _op_atan2((-((t68 * a6) + (t71 * a3))), ((t68 * a8) + (t71 * a5)))
         if t64:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
         return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2154,7 +2154,7 @@ def euler_angles_kernel_YXY(x0):
         t20 = _op_atan2(((t11 * a2) + (t14 * a8)), ((t11 * a0) + (t14 * a6)))
         if t7:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
         return (o0, (_True if t7 else _False),)
     except _FLOAT_ERRORS:
@@ -2192,7 +2192,7 @@ def euler_angles_kernel_YXY_checked(x0):
         t76 = _op_atan2(((t67 * a2) + (t70 * a8)), ((t67 * a0) + (t70 * a6)))
         if t63:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
         return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2217,7 +2217,7 @@ def euler_angles_kernel_YXZ(x0):
         t22 = _op_atan2((-((t12 * a1) + (t15 * a7))), ((t12 * a0) + (t15 * a6)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2254,7 +2254,7 @@ def euler_angles_kernel_YXZ_checked(x0):
         t78 = _op_atan2((-((t68 * a1) + (t71 * a7))), ((t68 * a0) + (t71 * a6)))
         if t64:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
         return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2280,7 +2280,7 @@ def euler_angles_kernel_YZX(x0):
         t20 = _op_atan2(((t12 * a7) + (t13 * a1)), ((t12 * a8) + (t13 * a2)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2317,7 +2317,7 @@ def euler_angles_kernel_YZX_checked(x0):
         t77 = _op_atan2(((t69 * a7) + (t70 * a1)), ((t69 * a8) + (t70 * a2)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2344,7 +2344,7 @@ def euler_angles_kernel_YZY(x0):
         t21 = _op_atan2((-((t12 * a6) + (t13 * a0))), ((t12 * a8) + (t13 * a2)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2382,7 +2382,7 @@ def euler_angles_kernel_YZY_checked(x0):
         t78 = _op_atan2((-((t69 * a6) + (t70 * a0))), ((t69 * a8) + (t70 * a2)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2408,7 +2408,7 @@ def euler_angles_kernel_ZXY(x0):
         t20 = _op_atan2(((t12 * a2) + (t13 * a5)), ((t12 * a0) + (t13 * a3)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2445,7 +2445,7 @@ def euler_angles_kernel_ZXY_checked(x0):
         t77 = _op_atan2(((t69 * a2) + (t70 * a5)), ((t69 * a0) + (t70 * a3)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2472,7 +2472,7 @@ def euler_angles_kernel_ZXZ(x0):
         t21 = _op_atan2((-((t12 * a1) + (t13 * a4))), ((t12 * a0) + (t13 * a3)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2510,7 +2510,7 @@ def euler_angles_kernel_ZXZ_checked(x0):
         t78 = _op_atan2((-((t69 * a1) + (t70 * a4))), ((t69 * a0) + (t70 * a3)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2535,7 +2535,7 @@ def euler_angles_kernel_ZYX(x0):
         t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2572,7 +2572,7 @@ def euler_angles_kernel_ZYX_checked(x0):
         t78 = _op_atan2((-((t68 * a5) + (t71 * a2))), ((t68 * a4) + (t71 * a1)))
         if t64:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0))
         return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2598,7 +2598,7 @@ def euler_angles_kernel_ZYZ(x0):
         t20 = _op_atan2(((t11 * a3) + (t14 * a0)), ((t11 * a4) + (t14 * a1)))
         if t7:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0))
         return (o0, (_True if t7 else _False),)
     except _FLOAT_ERRORS:
@@ -2636,7 +2636,7 @@ def euler_angles_kernel_ZYZ_checked(x0):
         t76 = _op_atan2(((t67 * a3) + (t70 * a0)), ((t67 * a4) + (t70 * a1)))
         if t63:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0))
         return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2663,7 +2663,7 @@ def euler_angles_kernel_xyx(x0):
         t21 = _op_atan2((-((t12 * a5) + (t13 * a8))), ((t12 * a4) + (t13 * a7)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2701,7 +2701,7 @@ def euler_angles_kernel_xyx_checked(x0):
         t78 = _op_atan2((-((t69 * a5) + (t70 * a8))), ((t69 * a4) + (t70 * a7)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2726,7 +2726,7 @@ def euler_angles_kernel_xyz(x0):
         t22 = _op_atan2((-((t12 * a5) + (t15 * a2))), ((t12 * a4) + (t15 * a1)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2763,7 +2763,7 @@ def euler_angles_kernel_xyz_checked(x0):
         t78 = _op_atan2((-((t68 * a5) + (t71 * a2))), ((t68 * a4) + (t71 * a1)))
         if t64:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
         return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2789,7 +2789,7 @@ def euler_angles_kernel_xzx(x0):
         t20 = _op_atan2(((t11 * a7) + (t14 * a4)), ((t11 * a8) + (t14 * a5)))
         if t7:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
         return (o0, (_True if t7 else _False),)
     except _FLOAT_ERRORS:
@@ -2827,7 +2827,7 @@ def euler_angles_kernel_xzx_checked(x0):
         t76 = _op_atan2(((t67 * a7) + (t70 * a4)), ((t67 * a8) + (t70 * a5)))
         if t63:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
         return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2853,7 +2853,7 @@ def euler_angles_kernel_xzy(x0):
         t20 = _op_atan2(((t12 * a7) + (t13 * a1)), ((t12 * a8) + (t13 * a2)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -2890,7 +2890,7 @@ def euler_angles_kernel_xzy_checked(x0):
         t77 = _op_atan2(((t69 * a7) + (t70 * a1)), ((t69 * a8) + (t70 * a2)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2916,7 +2916,7 @@ def euler_angles_kernel_yxy(x0):
         t20 = _op_atan2(((t11 * a2) + (t14 * a8)), ((t11 * a0) + (t14 * a6)))
         if t7:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
         return (o0, (_True if t7 else _False),)
     except _FLOAT_ERRORS:
@@ -2954,7 +2954,7 @@ def euler_angles_kernel_yxy_checked(x0):
         t76 = _op_atan2(((t67 * a2) + (t70 * a8)), ((t67 * a0) + (t70 * a6)))
         if t63:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
         return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -2980,7 +2980,7 @@ def euler_angles_kernel_yxz(x0):
         t20 = _op_atan2(((t12 * a2) + (t13 * a5)), ((t12 * a0) + (t13 * a3)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -3017,7 +3017,7 @@ def euler_angles_kernel_yxz_checked(x0):
         t77 = _op_atan2(((t69 * a2) + (t70 * a5)), ((t69 * a0) + (t70 * a3)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3042,7 +3042,7 @@ def euler_angles_kernel_yzx(x0):
         t22 = _op_atan2((-((t12 * a6) + (t15 * a3))), ((t12 * a8) + (t15 * a5)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -3079,7 +3079,7 @@ def euler_angles_kernel_yzx_checked(x0):
         t78 = _op_atan2((-((t68 * a6) + (t71 * a3))), ((t68 * a8) + (t71 * a5)))
         if t64:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
         return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3106,7 +3106,7 @@ def euler_angles_kernel_yzy(x0):
         t21 = _op_atan2((-((t12 * a6) + (t13 * a0))), ((t12 * a8) + (t13 * a2)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -3144,7 +3144,7 @@ def euler_angles_kernel_yzy_checked(x0):
         t78 = _op_atan2((-((t69 * a6) + (t70 * a0))), ((t69 * a8) + (t70 * a2)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3169,7 +3169,7 @@ def euler_angles_kernel_zxy(x0):
         t22 = _op_atan2((-((t12 * a1) + (t15 * a7))), ((t12 * a0) + (t15 * a6)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t22 == -3.141592653589793) else t22) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -3206,7 +3206,7 @@ def euler_angles_kernel_zxy_checked(x0):
         t78 = _op_atan2((-((t68 * a1) + (t71 * a7))), ((t68 * a0) + (t71 * a6)))
         if t64:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t61 + 0.0), ((3.141592653589793 if (t65 == -3.141592653589793) else t65) + 0.0))
         return (o0, (_True if t64 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3233,7 +3233,7 @@ def euler_angles_kernel_zxz(x0):
         t21 = _op_atan2((-((t12 * a1) + (t13 * a4))), ((t12 * a0) + (t13 * a3)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t21 == -3.141592653589793) else t21) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -3271,7 +3271,7 @@ def euler_angles_kernel_zxz_checked(x0):
         t78 = _op_atan2((-((t69 * a1) + (t70 * a4))), ((t69 * a0) + (t70 * a3)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t78 == -3.141592653589793) else t78) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3297,7 +3297,7 @@ def euler_angles_kernel_zyx(x0):
         t20 = _op_atan2(((t12 * a3) + (t13 * a6)), ((t12 * a4) + (t13 * a7)))
         if t8:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t5 + 0.0), ((3.141592653589793 if (t9 == -3.141592653589793) else t9) + 0.0))
         return (o0, (_True if t8 else _False),)
     except _FLOAT_ERRORS:
@@ -3334,7 +3334,7 @@ def euler_angles_kernel_zyx_checked(x0):
         t77 = _op_atan2(((t69 * a3) + (t70 * a6)), ((t69 * a4) + (t70 * a7)))
         if t65:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t77 == -3.141592653589793) else t77) + 0.0), (t62 + 0.0), ((3.141592653589793 if (t66 == -3.141592653589793) else t66) + 0.0))
         return (o0, (_True if t65 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3360,7 +3360,7 @@ def euler_angles_kernel_zyz(x0):
         t20 = _op_atan2(((t11 * a3) + (t14 * a0)), ((t11 * a4) + (t14 * a1)))
         if t7:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t20 == -3.141592653589793) else t20) + 0.0), (t4 + 0.0), ((3.141592653589793 if (t8 == -3.141592653589793) else t8) + 0.0))
         return (o0, (_True if t7 else _False),)
     except _FLOAT_ERRORS:
@@ -3398,7 +3398,7 @@ def euler_angles_kernel_zyz_checked(x0):
         t76 = _op_atan2(((t67 * a3) + (t70 * a0)), ((t67 * a4) + (t70 * a1)))
         if t63:
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, ((3.141592653589793 if (t76 == -3.141592653589793) else t76) + 0.0), (t60 + 0.0), ((3.141592653589793 if (t64 == -3.141592653589793) else t64) + 0.0))
         return (o0, (_True if t63 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3502,9 +3502,9 @@ def rigid__compose_kernel(x0, x1, x2, x3):
         t70 = (((_op_abs(t60)) <= 1.7976931348623157e+308) and ((_op_abs(t61)) <= 1.7976931348623157e+308)) and ((_op_abs(t62)) <= 1.7976931348623157e+308)
         if (False if t70 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t60, t61, t62)
         return (o0, o1, (_True if t70 else _False),)
     except _FLOAT_ERRORS:
@@ -3564,9 +3564,9 @@ def rigid__compose_kernel_checked2(x0, x1, x2, x3):
         t186 = (((_op_abs(t176)) <= 1.7976931348623157e+308) and ((_op_abs(t177)) <= 1.7976931348623157e+308)) and ((_op_abs(t178)) <= 1.7976931348623157e+308)
         if (False if t186 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (((a0 * a9) + (a1 * a12)) + (a2 * a15)), (((a0 * a10) + (a1 * a13)) + (a2 * a16)), (((a0 * a11) + (a1 * a14)) + (a2 * a17)), (((a3 * a9) + (a4 * a12)) + (a5 * a15)), (((a3 * a10) + (a4 * a13)) + (a5 * a16)), (((a3 * a11) + (a4 * a14)) + (a5 * a17)), (((a6 * a9) + (a7 * a12)) + (a8 * a15)), (((a6 * a10) + (a7 * a13)) + (a8 * a16)), (((a6 * a11) + (a7 * a14)) + (a8 * a17)))
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t176, t177, t178)
         return (o0, o1, (_True if t186 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))), _float((t100 if t100 >= t96 or t100 != t100 else t96)), _float((((a9 * ((a13 * a17) - (a14 * a16))) - (a10 * ((a12 * a17) - (a14 * a15)))) + (a11 * ((a12 * a16) - (a13 * a15))))),)
     except _FLOAT_ERRORS:
@@ -3629,7 +3629,7 @@ def rigid__frame_kernel(x0, x1, x2):
         t67 = (a6 / t65) + 0.0
         t69 = (a7 / t65) + 0.0
         t71 = 1.0 if t64 else (a8 / t65)
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, t19, t43, t67, t21, t45, t69, t23, t47, t71)
         return (o0, _float64(t14), _float64(t38), _float64(t62), _float64((((t19 * t43) + (t21 * t45)) + (t23 * t47))), _float64((((t19 * t67) + (t21 * t69)) + (t23 * t71))), _float64((((t43 * t67) + (t45 * t69)) + (t47 * t71))), _float64((((((t21 * t47) - (t23 * t45)) * t67) + (((t23 * t43) - (t19 * t47)) * t69)) + (((t19 * t45) - (t21 * t43)) * t71))),)
     except _FLOAT_ERRORS:
@@ -3652,7 +3652,7 @@ def rigid__homogeneous_kernel(x0, x1):
     if (a0 + a1 + a2 + a3 + a4 + a5 + a6 + a7 + a8 + a9 + a10 + a11) * 0.0 != 0.0:
         return None
     try:
-        o0 = _empty((4, 4), _f64)
+        o0 = _empty((4, 4))
         _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
         return (o0,)
     except _FLOAT_ERRORS:
@@ -3685,7 +3685,7 @@ def rigid__homogeneous_kernel_checked(x0, x1):
         t40 = t39 if t39 >= t20 or t39 != t39 else t20
         t41 = t40 if t40 >= t26 or t40 != t40 else t26
         t42 = t41 if t41 >= t32 or t41 != t41 else t32
-        o0 = _empty((4, 4), _f64)
+        o0 = _empty((4, 4))
         _pack_16d(o0, 0, a0, a1, a2, a9, a3, a4, a5, a10, a6, a7, a8, a11, 0.0, 0.0, 0.0, 1.0)
         return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3714,9 +3714,9 @@ def rigid__invert_kernel(x0, x1):
         t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
         if (False if t25 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t15, t16, t17)
         return (o0, o1, (_True if t25 else _False),)
     except _FLOAT_ERRORS:
@@ -3755,9 +3755,9 @@ def rigid__invert_kernel_checked(x0, x1):
         t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
         if (False if t83 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, a0, a3, a6, a1, a4, a7, a2, a5, a8)
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t73, t74, t75)
         return (o0, o1, (_True if t83 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3794,7 +3794,7 @@ def rigid__points_kernel(x0, x1, x2):
         t25 = (((_op_abs(t15)) <= 1.7976931348623157e+308) and ((_op_abs(t16)) <= 1.7976931348623157e+308)) and ((_op_abs(t17)) <= 1.7976931348623157e+308)
         if (False if t25 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, t15, t16, t17)
         return (o0, (_True if t25 else _False),)
     except _FLOAT_ERRORS:
@@ -3841,7 +3841,7 @@ def rigid__points_kernel_checked(x0, x1, x2):
         t83 = (((_op_abs(t73)) <= 1.7976931348623157e+308) and ((_op_abs(t74)) <= 1.7976931348623157e+308)) and ((_op_abs(t75)) <= 1.7976931348623157e+308)
         if (False if t83 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, t73, t74, t75)
         return (o0, (_True if t83 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -3872,9 +3872,9 @@ def rigid__transform_of_homogeneous_kernel(x0):
         t48 = t47 if t47 >= t28 or t47 != t47 else t28
         t49 = t48 if t48 >= t34 or t48 != t48 else t34
         t50 = t49 if t49 >= t40 or t49 != t49 else t40
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, a0, a1, a2, a4, a5, a6, a8, a9, a10)
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, a3, a7, a11)
         return (o0, o1, _float64((t6 if t6 >= t4 or t6 != t6 else t4)), _float64((t50 if t50 >= t46 or t50 != t50 else t46)), _float64((((a0 * ((a5 * a10) - (a6 * a9))) - (a1 * ((a4 * a10) - (a6 * a8)))) + (a2 * ((a4 * a9) - (a5 * a8))))),)
     except _FLOAT_ERRORS:
@@ -3929,9 +3929,9 @@ def screw__exp_kernel(x0):
         t79 = t73 * t21
         t80 = t73 * t23
         t81 = t74 * t23
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t72 + (t73 * t19)), (t79 - t78), (t80 + t77), (t79 + t78), (t72 + (t74 * t21)), (t81 - t76), (t80 - t77), (t81 + t76), (t72 + ((t38 * t23) * t23)))
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t59, t65, t71)
         return (o0, o1, (_True if t25 else _False), (_True if ((((_op_abs(t59)) <= 1.7976931348623157e+308) and ((_op_abs(t65)) <= 1.7976931348623157e+308)) and ((_op_abs(t71)) <= 1.7976931348623157e+308)) else _False),)
     except _FLOAT_ERRORS:
@@ -4004,7 +4004,7 @@ def screw__log_kernel(x0, x1):
         t142 = (((_op_abs(t122)) <= 1.7976931348623157e+308) and ((_op_abs(t128)) <= 1.7976931348623157e+308)) and ((_op_abs(t134)) <= 1.7976931348623157e+308)
         if (False if t142 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((6,), _f64)
+        o0 = _empty((6,))
         _pack_6d(o0, 0, (t34 * t90), (t34 * t93), (t34 * t96), t122, t128, t134)
         return (o0, (_True if t142 else _False),)
     except _FLOAT_ERRORS:
@@ -4087,7 +4087,7 @@ def screw__log_kernel_checked(x0, x1):
         t200 = (((_op_abs(t180)) <= 1.7976931348623157e+308) and ((_op_abs(t186)) <= 1.7976931348623157e+308)) and ((_op_abs(t192)) <= 1.7976931348623157e+308)
         if (False if t200 else True):
             return None  # rare: apply runs the kernel
-        o0 = _empty((6,), _f64)
+        o0 = _empty((6,))
         _pack_6d(o0, 0, (t92 * t148), (t92 * t151), (t92 * t154), t180, t186, t192)
         return (o0, (_True if t200 else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -4169,11 +4169,11 @@ def screw__screw_kernel(x0, x1):
         t169 = (t163 * t122) - (t155 * t124)
         t172 = (t155 * t123) - (t159 * t122)
         t173 = t130 / t137
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, t122, t123, t124)
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t155, t159, t163)
-        o2 = _empty((3,), _f64)
+        o2 = _empty((3,))
         _pack_3d(o2, 0, t166, t169, t172)
         return (o0, o1, o2, _float64((0.0 if t121 else t34)), _float64((t130 + 0.0)), _float64((((_inf if (t111 > 0) else 0.0) if t121 else t173) + 0.0)), (_True if (((((((((_op_abs(t155)) <= 1.7976931348623157e+308) and ((_op_abs(t159)) <= 1.7976931348623157e+308)) and ((_op_abs(t163)) <= 1.7976931348623157e+308)) and ((_op_abs(t166)) <= 1.7976931348623157e+308)) and ((_op_abs(t169)) <= 1.7976931348623157e+308)) and ((_op_abs(t172)) <= 1.7976931348623157e+308)) and ((_op_abs(t130)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t121 else t173))) <= 1.7976931348623157e+308)) else _False),)
     except _FLOAT_ERRORS:
@@ -4265,11 +4265,11 @@ def screw__screw_kernel_checked(x0, x1):
         t227 = (t221 * t180) - (t213 * t182)
         t230 = (t213 * t181) - (t217 * t180)
         t231 = t188 / t195
-        o0 = _empty((3,), _f64)
+        o0 = _empty((3,))
         _pack_3d(o0, 0, t180, t181, t182)
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t213, t217, t221)
-        o2 = _empty((3,), _f64)
+        o2 = _empty((3,))
         _pack_3d(o2, 0, t224, t227, t230)
         return (o0, o1, o2, _float64((0.0 if t179 else t92)), _float64((t188 + 0.0)), _float64((((_inf if (t169 > 0) else 0.0) if t179 else t231) + 0.0)), (_True if (((((((((_op_abs(t213)) <= 1.7976931348623157e+308) and ((_op_abs(t217)) <= 1.7976931348623157e+308)) and ((_op_abs(t221)) <= 1.7976931348623157e+308)) and ((_op_abs(t224)) <= 1.7976931348623157e+308)) and ((_op_abs(t227)) <= 1.7976931348623157e+308)) and ((_op_abs(t230)) <= 1.7976931348623157e+308)) and ((_op_abs(t188)) <= 1.7976931348623157e+308)) and ((_op_abs((0.0 if t179 else t231))) <= 1.7976931348623157e+308)) else _False), _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:
@@ -4334,9 +4334,9 @@ def screw__transform_of_screw_kernel(x0, x1, x2, x3):
         t73 = t67 * t21
         t74 = t67 * t23
         t75 = t68 * t23
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (t66 + (t67 * t19)), (t73 - t72), (t74 + t71), (t73 + t72), (t66 + (t68 * t21)), (t75 - t70), (t74 - t71), (t75 + t70), (t66 + ((t30 * t23) * t23)))
-        o1 = _empty((3,), _f64)
+        o1 = _empty((3,))
         _pack_3d(o1, 0, t51, t58, t65)
         return (o0, o1, (_True if t16 else _False), (_True if ((((_op_abs(t51)) <= 1.7976931348623157e+308) and ((_op_abs(t58)) <= 1.7976931348623157e+308)) and ((_op_abs(t65)) <= 1.7976931348623157e+308)) else _False),)
     except _FLOAT_ERRORS:
@@ -4372,7 +4372,7 @@ def so3__quaternion_kernel(x0):
         t21 = t12 * a3
         t22 = t13 * a3
         t23 = t14 * a3
-        o0 = _empty((3, 3), _f64)
+        o0 = _empty((3, 3))
         _pack_9d(o0, 0, (1.0 - (t16 + t17)), (t18 - t23), (t19 + t22), (t18 + t23), (1.0 - (t15 + t17)), (t20 - t21), (t19 - t22), (t20 + t21), (1.0 - (t15 + t16)))
         return (o0, _False,)
     except _FLOAT_ERRORS:
@@ -4430,7 +4430,7 @@ def so3_quaternion_of_matrix_kernel(x0):
         t39 = t11 if t20 else (t12 if t25 else (t7 if t30 else t15))
         t42 = t13 if t20 else (t14 if t25 else (t15 if t30 else t9))
         t59 = (-1.0 if ((t42 if (t42 != 0) else (t33 if (t33 != 0) else (t36 if (t36 != 0) else t39))) < 0) else 1.0) / (_op_sqrt(((((t33 * t33) + (t36 * t36)) + (t39 * t39)) + (t42 * t42))))
-        o0 = _empty((4,), _f64)
+        o0 = _empty((4,))
         _pack_4d(o0, 0, ((t33 * t59) + 0.0), ((t36 * t59) + 0.0), ((t39 * t59) + 0.0), ((t42 * t59) + 0.0))
         return (o0,)
     except _FLOAT_ERRORS:
@@ -4475,7 +4475,7 @@ def so3_quaternion_of_matrix_kernel_checked(x0):
         t97 = t69 if t78 else (t70 if t83 else (t65 if t88 else t73))
         t100 = t71 if t78 else (t72 if t83 else (t73 if t88 else t67))
         t117 = (-1.0 if ((t100 if (t100 != 0) else (t91 if (t91 != 0) else (t94 if (t94 != 0) else t97))) < 0) else 1.0) / (_op_sqrt(((((t91 * t91) + (t94 * t94)) + (t97 * t97)) + (t100 * t100))))
-        o0 = _empty((4,), _f64)
+        o0 = _empty((4,))
         _pack_4d(o0, 0, ((t91 * t117) + 0.0), ((t94 * t117) + 0.0), ((t97 * t117) + 0.0), ((t100 * t117) + 0.0))
         return (o0, _float((t42 if t42 >= t38 or t42 != t42 else t38)), _float((((a0 * ((a4 * a8) - (a5 * a7))) - (a1 * ((a3 * a8) - (a5 * a6)))) + (a2 * ((a3 * a7) - (a4 * a6))))),)
     except _FLOAT_ERRORS:

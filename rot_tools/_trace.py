@@ -289,7 +289,8 @@ def _result_lines(values, outputs, packers):
             raise TraceError(f'no packed output for dtype {dtype}')
         fmt = f'{len(text)}{code[0]}'
         packers.add(fmt)
-        lines.append(f'o{k} = _empty({tail!r}, {code[1]})')
+        dtype_arg = '' if code[1] == '_f64' else f', {code[1]}'  # float64: np.empty's default
+        lines.append(f'o{k} = _empty({tail!r}{dtype_arg})')
         lines.append(f'_pack_{fmt}(o{k}, 0, {", ".join(text)})')
         results.append(f'o{k}')
     lines.append(f'return ({", ".join(results)},)')

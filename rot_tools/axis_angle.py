@@ -12,6 +12,7 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 """
 
 import numpy as np
+from numpy import False_, True_
 from rot_tools._arrays import refuse_overflow
 from rot_tools._backend import (Conversion, FLAG, MATRIX, norm_in_range, SCALAR, unit,
                                 VECTOR)
@@ -64,7 +65,7 @@ def axis_angle_to_matrix(axis, angle):
     a non-zero angle raises RotationError.
     """
     matrix, bad = _AXIS_ANGLE.one(axis, angle) or _AXIS_ANGLE(axis, angle)
-    if bad.any() if bad.ndim else bad:
+    if bad is not False_ and bad.any():  # (one item's flag is one of NumPy's two bools)
         first = float(np.broadcast_to(np.asarray(angle, dtype=float), bad.shape)[bad].flat[0])
         raise RotationError(f'axis is zero but the angle is {first:g} rad: a rotation needs '
                             'a direction (a zero axis is allowed only with angle 0)')
@@ -87,7 +88,8 @@ def rotvec_to_matrix(rotvec):
     RotationError where the angle |θ·l̂| itself overflows float64.
     """
     matrix, turns = _ROTVEC.one(rotvec) or _ROTVEC(rotvec)
-    refuse_overflow(turns, 'the angle |θ·l̂| of the rotation vector')
+    if turns is not True_:
+        refuse_overflow(turns, 'the angle |θ·l̂| of the rotation vector')
     return matrix
 
 

@@ -21,6 +21,7 @@ from functools import lru_cache
 import math
 
 import numpy as np
+from numpy import False_
 from rot_tools._arrays import apart, as_float_array, finite_array, require_tolerance
 from rot_tools._backend import apply, Conversion, FLAG, kernel_key, MATRIX, SCALAR
 from rot_tools.errors import RotationError
@@ -232,7 +233,7 @@ def quaternion_to_matrix(q, *, tol=None):
     saying |q| and by how much (the worst item of a batch).
     """
     matrix, zero = _QUATERNION_TO_MATRIX.one(q) or _QUATERNION_TO_MATRIX(q)
-    if zero.any() if zero.ndim else zero:
+    if zero is not False_ and zero.any():  # (one item's flag is one of NumPy's two bools)
         where = f' (item {tuple(int(i) for i in np.argwhere(zero)[0])})' if zero.ndim else ''
         raise RotationError(f'quaternion (x, y, z, w) must be non-zero, got |q| = 0{where}')
     if tol is not None:
