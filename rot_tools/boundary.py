@@ -188,11 +188,25 @@ def quaternion_to_rotation(x, y, z, w, tolerance, name='orientation'):
     return quaternion_to_matrix((x / norm, y / norm, z / norm, w / norm))
 
 
-def rigid_of_fields(fields, tolerance, position, orientation):
+FIELD_NAMES = {
+    'geometry_msgs/msg/PoseStamped': ('pose.orientation', 'pose.position'),
+    'geometry_msgs/msg/PoseWithCovarianceStamped': ('pose.pose.orientation',
+                                                    'pose.pose.position'),
+    'nav_msgs/msg/Odometry': ('pose.pose.orientation', 'pose.pose.position'),
+    'sensor_msgs/msg/Imu': ('orientation', None),
+    'geometry_msgs/msg/QuaternionStamped': ('quaternion', None),
+    'geometry_msgs/msg/TransformStamped': ('transform.rotation', 'transform.translation'),
+    'tf2_msgs/msg/TFMessage': ('transform.rotation', 'transform.translation'),  # each one
+}
+"""Per message type: the names of its orientation and position fields, as its refusals name
+them (None: no position, b = 0)."""
+
+
+def rigid_of_fields(fields, tolerance, orientation, position):
     """
     (R, b) of a Pose's or a Transform's fields (px, py, pz, qx, qy, qz, qw).
 
-    b = the position, R from the quaternion; ``position`` and ``orientation`` are the
+    b = the position, R from the quaternion; ``orientation`` and ``position`` are the
     fields' names, for the refusal.
     """
     px, py, pz, qx, qy, qz, qw = fields
@@ -204,13 +218,13 @@ def pose_to_rt(pose, tolerance, name='pose'):
     """(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
     p, q = pose.position, pose.orientation
     return rigid_of_fields((p.x, p.y, p.z, q.x, q.y, q.z, q.w), tolerance,
-                           f'{name}.position', f'{name}.orientation')
+                           f'{name}.orientation', f'{name}.position')
 
 
 def pose_fields_to_rt(fields, settings):
     """(R, b) of a geometry_msgs/PoseStamped's ``pose`` (position, orientation)."""
-    return rigid_of_fields(fields, settings.quaternion_tolerance, 'pose.position',
-                           'pose.orientation')
+    return rigid_of_fields(fields, settings.quaternion_tolerance,
+                           *FIELD_NAMES['geometry_msgs/msg/PoseStamped'])
 
 
 def pose_pose_fields_to_rt(fields, settings):
@@ -220,14 +234,14 @@ def pose_pose_fields_to_rt(fields, settings):
     The covariance is not used (a NaN there does not refuse the message); an Odometry's
     body is its ``child_frame_id``, its twist is not used.
     """
-    return rigid_of_fields(fields, settings.quaternion_tolerance, 'pose.pose.position',
-                           'pose.pose.orientation')
+    return rigid_of_fields(fields, settings.quaternion_tolerance,
+                           *FIELD_NAMES['nav_msgs/msg/Odometry'])  # (the same names)
 
 
 def transform_fields_to_rt(fields, settings):
     """(R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
-    return rigid_of_fields(fields, settings.quaternion_tolerance, 'transform.translation',
-                           'transform.rotation')
+    return rigid_of_fields(fields, settings.quaternion_tolerance,
+                           *FIELD_NAMES['geometry_msgs/msg/TransformStamped'])
 
 
 def transform_stamped_to_transform(msg, settings):
@@ -247,13 +261,14 @@ def imu_fields_to_rt(fields, settings):
     x, y, z, w, covariance0 = fields
     if lacks_orientation(covariance0):
         raise RefusedInput(NO_ORIENTATION, refusal_text(CODE[NO_ORIENTATION], 'orientation'))
-    return quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance), np.zeros(3)
+    name = FIELD_NAMES['sensor_msgs/msg/Imu'][0]
+    return quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance, name), np.zeros(3)
 
 
 def quaternion_fields_to_rt(fields, settings):
     """(R, 0) of a geometry_msgs/QuaternionStamped's ``quaternion`` (x, y, z, w)."""
-    return (quaternion_to_rotation(*fields, settings.quaternion_tolerance, 'quaternion'),
-            np.zeros(3))
+    name = FIELD_NAMES['geometry_msgs/msg/QuaternionStamped'][0]
+    return quaternion_to_rotation(*fields, settings.quaternion_tolerance, name), np.zeros(3)
 
 
 def euler_fields_to_rt(fields, settings):
@@ -271,19 +286,6 @@ def euler_fields_to_rt(fields, settings):
 
 # ---------------------------------------------------------------------------------------
 # Batches: arrays of fields -> reason codes, then (R, b) of the accepted items
-
-QUATERNION_FIELD = {
-    'geometry_msgs/msg/PoseStamped': ('pose.orientation', 'pose.position'),
-    'geometry_msgs/msg/PoseWithCovarianceStamped': ('pose.pose.orientation',
-                                                    'pose.pose.position'),
-    'nav_msgs/msg/Odometry': ('pose.pose.orientation', 'pose.pose.position'),
-    'sensor_msgs/msg/Imu': ('orientation', None),
-    'geometry_msgs/msg/QuaternionStamped': ('quaternion', None),
-    'geometry_msgs/msg/TransformStamped': ('transform.rotation', 'transform.translation'),
-    'tf2_msgs/msg/TFMessage': ('transform.rotation', 'transform.translation'),  # each one
-}
-"""Per message type: the names of its orientation and position fields (as the per-message
-converters name them in refusals; None: no position, b = 0)."""
 
 
 def check_batch(quaternions, tolerance, positions=None, covariance0=None):
@@ -309,7 +311,7 @@ def check_batch(quaternions, tolerance, positions=None, covariance0=None):
 
 def batch_refusal_text(msgtype, code, quaternion, norm, tolerance, position=None):
     """Return the sentence the per-message converter of ``msgtype`` raises for one refused item."""
-    q_name, p_name = QUATERNION_FIELD[msgtype]
+    q_name, p_name = FIELD_NAMES[msgtype]
     if REFUSAL_REASONS[code - 1] == NON_FINITE and position is not None and not all(
             map(math.isfinite, position)):
         return refusal_text(code, p_name, position, fields='xyz')
