@@ -461,16 +461,19 @@ def test_the_services_are_served_apart_from_the_inputs(tester, node_process):
     tester.spin_until(lambda: hidden[::-1] in graph.get_node_names_and_namespaces()
                       and len(services_of(*hidden)) >= 8, timeout=4 * TIMEOUT,
                       what=f'the services of {hidden}')
+    # The node itself is another participant, discovered on its own (the services above
+    # can be known before it is): wait for what it surely has before asking what it has not.
+    tester.spin_until(lambda: (node, namespace) in graph.get_node_names_and_namespaces()
+                      and f'{process.name}/get_type_description' in services_of(namespace, node)
+                      and f'{process.name}/pose' in {t for t, _ in (
+                          graph.get_subscriber_names_and_types_by_node(node, namespace))},
+                      timeout=4 * TIMEOUT, what=f'the node {process.name}')
     names = {f'{process.name}/{s}' for s in (
         'describe', 'screw_path', 'describe_parameters', 'get_parameter_types',
         'get_parameters', 'list_parameters', 'set_parameters', 'set_parameters_atomically')}
     assert services_of(*hidden) == names  # (and no ~/get_type_description of its own)
     assert not names & services_of(namespace, node)
-    assert f'{process.name}/get_type_description' in services_of(namespace, node)
-    assert f'{process.name}/pose' in {
-        t for t, _ in graph.get_subscriber_names_and_types_by_node(node, namespace)}
     assert not graph.get_subscriber_names_and_types_by_node(*hidden[::-1])
-    assert (node, namespace) in graph.get_node_names_and_namespaces()
     values = tester.call(GetParameters, f'{process.name}/get_parameters',
                          GetParameters.Request(names=['angle_unit'])).values
     assert parameter_value_to_python(values[0]) == 'deg'  # the node's parameters
