@@ -259,9 +259,9 @@ def imu_fields_to_rt(fields, settings):
     the covariances are not used.
     """
     x, y, z, w, covariance0 = fields
-    if lacks_orientation(covariance0):
-        raise RefusedInput(NO_ORIENTATION, refusal_text(CODE[NO_ORIENTATION], 'orientation'))
     name = FIELD_NAMES['sensor_msgs/msg/Imu'][0]
+    if lacks_orientation(covariance0):
+        raise RefusedInput(NO_ORIENTATION, refusal_text(CODE[NO_ORIENTATION], name))
     return quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance, name), np.zeros(3)
 
 
