@@ -11,6 +11,10 @@ Three tables, each measured side by side in one run (repetitions interleaved, me
    input and output arrays. scipy's figure is shown for comparison.
 3. Single-call latency: one rotation through the same public functions, Python call
    overhead included, against scipy and against transforms3d.
+4. The chunk code's gain: each batch conversion of table 1 with rot_tools' generated chunk
+   functions (rot_tools/_generated_chunks.py) against the same call with the kernels run on
+   NumPy arrays as they are (the chunk table emptied for the call): the chunk code is kept
+   only while this shows it pays.
 
 Both libraries get their defaults: rot_tools validates every matrix (check=True), scipy's
 from_matrix runs with assume_valid=False and pytransform3d's single-transform function with
@@ -30,6 +34,7 @@ import numpy as np
 import pytransform3d.trajectories as pt_trajectories
 import pytransform3d.transformations as pt_transformations
 import rot_tools as rt
+from rot_tools import _backend
 from scipy.spatial.transform import Rotation
 import transforms3d.axangles as t3d_axangles
 import transforms3d.euler as t3d_euler
@@ -223,6 +228,41 @@ def print_batch(results, n):
             print(f"  note: {r['note']}")
 
 
+# -- 4. the chunk code's gain -----------------------------------------------------------
+
+def _kernels_on_arrays(call):
+    """Return the call without chunk code: each chunk runs its kernel on NumPy arrays."""
+    def run():
+        saved = _backend.GENERATED_CHUNKS
+        _backend.GENERATED_CHUNKS = {}
+        try:
+            return call()
+        finally:
+            _backend.GENERATED_CHUNKS = saved
+    return run
+
+
+def run_chunks(batch, repeats):
+    """[(operation, seconds with chunk code, seconds without)] of each batch conversion."""
+    rows = []
+    for r in batch:
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            times = benchlib.interleaved(
+                {'chunk': r['rt_call'], 'kernel': _kernels_on_arrays(r['rt_call'])}, repeats)
+        rows.append((r['operation'], benchlib.median(times['chunk']),
+                     benchlib.median(times['kernel'])))
+        gc.collect()
+    return rows
+
+
+def print_chunks(rows, n):
+    benchlib.print_table(
+        f'Chunk code against the kernels on NumPy arrays, {n:,} items (medians, interleaved)',
+        ['operation', 'chunk code', 'kernel on arrays', 'ratio'],
+        [[op, f'{a * 1e3:.1f} ms', f'{b * 1e3:.1f} ms', f'{a / b:.3f}'] for op, a, b in rows])
+
+
 # -- 2. peak memory -----------------------------------------------------------------------
 
 def peak_allocated(call):
@@ -389,7 +429,8 @@ def main(argv=None):
                         help='interleaved repetitions of each batch timing (5)')
     parser.add_argument('--single-repeats', type=int, default=9,
                         help='interleaved samples of each single-call timing (9)')
-    parser.add_argument('--skip', choices=['batch', 'memory', 'single'], action='append',
+    parser.add_argument('--skip', choices=['batch', 'memory', 'single', 'chunks'],
+                        action='append',
                         default=[], help='leave a table out (repeatable)')
     parser.add_argument('--json', metavar='PATH', help='also write the figures as JSON')
     args = parser.parse_args(argv)
@@ -404,6 +445,11 @@ def main(argv=None):
         if 'memory' not in args.skip:
             run_memory(batch)
             print_memory(batch)
+        if 'chunks' not in args.skip and 'batch' not in args.skip:
+            chunks = run_chunks(batch, args.repeats)
+            print_chunks(chunks, args.n)
+            payload['chunks'] = [dict(zip(('operation', 'chunk_s', 'kernel_s'), c))
+                                 for c in chunks]
         payload['batch'] = [{k: v for k, v in r.items() if not k.endswith('_call')}
                             for r in batch]
         payload['n'] = args.n

@@ -34,9 +34,10 @@ import sys
 import numpy as np
 from rot_tools._arrays import as_float_array, require_finite
 from rot_tools._generated import CODE as GENERATED
+from rot_tools._generated_chunks import CHUNKS as GENERATED_CHUNKS
 from rot_tools.errors import FLOAT_ERRORS, RotationError
 
-CHUNK = 32768
+CHUNK = 8192
 
 # An output's (trailing shape, dtype). Callers build their outputs from these and other
 # module-level constants, so that apply's check of them against the generated code's is
@@ -102,17 +103,19 @@ FLOATS = _FloatOps()
 ARRAYS = _ArrayOps()
 
 
-def _columns(arr, tail):
+def _columns(arr, tail, buffer):
     """
-    Return the entries of a chunk (m,) + tail as a flat list of contiguous arrays of m.
+    Return the entries of a chunk (m,) + tail as the rows of a (size, m) array.
 
-    A matrix's entries row-major. One transposing copy: an entry read straight from
-    (m, 3, 3) is strided (one float in every 72 bytes), and a kernel reads each entry
-    several times.
+    A matrix's entries row-major, copied once, transposed, into ``buffer`` (size, ≥ m): an
+    entry read straight from (m, 3, 3) is strided (one float in every 72 bytes), and a kernel
+    reads each entry several times. A scalar's chunk is its only row, as it is.
     """
     if not tail:
-        return [arr]
-    return list(np.ascontiguousarray(np.moveaxis(arr, 0, -1)).reshape(-1, arr.shape[0]))
+        return arr[None]
+    block = buffer[:, :arr.shape[0]]
+    block[...] = arr.reshape(arr.shape[0], -1).T
+    return block
 
 
 def _write_columns(out, entries, buffer):
@@ -218,14 +221,18 @@ def _generic(kernel, inputs, outputs):
             else:
                 out.append(np.array(r, dtype=dt))
         return tuple(out)
-    for a, (_, _, name, finite) in zip(arrays, inputs):
-        if finite:
-            require_finite(a, name)
-    return _batch(kernel, arrays, tails, outputs)
+    checks = [(i, name) for i, (_, _, name, finite) in enumerate(inputs) if finite]
+    return _batch(kernel, arrays, tails, outputs, checks)
 
 
-def _batch(kernel, arrays, tails, outputs):
-    """Return the kernel on ARRAYS, chunk by chunk, over the broadcast batch of the arrays."""
+def _batch(kernel, arrays, tails, outputs, checks=()):
+    """
+    Return the kernel on ARRAYS, chunk by chunk, over the broadcast batch of the arrays.
+
+    checks: (index, name) of the arrays to refuse NaN/Inf in (require_finite's error), each
+    chunk's entries tested while they are in cache. A chunk runs the kernel's generated
+    chunk function where there is one (_ChunkCode), else the kernel itself.
+    """
     batches = [a.shape[:a.ndim - len(t)] for a, t in zip(arrays, tails)]
     try:
         shape = np.broadcast_shapes(*batches)
@@ -234,22 +241,78 @@ def _batch(kernel, arrays, tails, outputs):
                             ) from None
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in zip(arrays, tails)]
     n = flat[0].shape[0]
+    length = min(n, CHUNK)
     sizes = [math.prod(t) for t, _ in outputs]
     outs = [np.empty((n, size), dtype=dt) for size, (_, dt) in zip(sizes, outputs)]
-    # One buffer per output for all chunks (a fresh 2 MB one per chunk costs page faults).
-    buffers = [np.empty((size, min(n, CHUNK)), dtype=dt) if size > 1 else None
+    # One buffer per input and output for all chunks (a fresh one per chunk costs page faults).
+    ins = [_rows(math.prod(t), length) if t else None for t in tails]
+    buffers = [_rows(size, length, dt) if size > 1 else None
                for size, (_, dt) in zip(sizes, outputs)]
+    code = _ChunkCode(kernel, outputs, length)
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
-            entries = [_columns(f[chunk], t) for f, t in zip(flat, tails)]
-            result = kernel(ARRAYS, *(nest(e, t) for e, t in zip(entries, tails)))
+            entries = [_columns(f[chunk], t, b) for f, t, b in zip(flat, tails, ins)]
+            for i, name in checks:
+                if not np.isfinite(entries[i]).all():
+                    require_finite(arrays[i], name)
+            if code.run(entries, outs, buffers, chunk):
+                continue
+            CHUNK_FALLBACKS[code.key] += 1
+            result = kernel(ARRAYS, *(nest(list(e), t) for e, t in zip(entries, tails)))
             values = [x for r, (t, _) in zip(result, outputs) for x in flatten(r, t)]
             k = 0
             for out, size, buffer in zip(outs, sizes, buffers):
                 _write_columns(out[chunk], values[k:k + size], buffer)
                 k += size
     return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
+
+
+def _rows(count, length, dtype=np.float64):
+    """
+    Return an empty (count, length) array whose rows are 64 bytes apart, not adjacent.
+
+    NumPy 1.26 takes an output that ends where an input begins, or begins where it ends, for
+    an overlap and runs arctan2 (and others) in its scalar loop instead of its SIMD one,
+    which rounds differently: with rows apart, a chunk's results do not depend on which rows
+    its buffers happened to get.
+    """
+    pad = 64 // np.dtype(dtype).itemsize
+    return np.empty((count, length + pad), dtype)[:, :length]
+
+
+class _ChunkCode:
+    """
+    A kernel's chunk function in rot_tools/_generated.py, and the buffers it works in.
+
+    Made for one batch. ``run`` writes a chunk's outputs and returns True; it returns False
+    where there is no such function for this kernel and these outputs, and where an
+    ``ops.rare`` case in the chunk leaves the chunk to the kernel itself.
+    """
+
+    __slots__ = ('key', 'function', 'floats', 'bools')
+
+    def __init__(self, kernel, outputs, length):
+        self.key = kernel_key(kernel)
+        code = GENERATED_CHUNKS.get(self.key)
+        self.function = code[1] if code is not None and code[0] == list(outputs) else None
+        if self.function is not None:
+            self.floats, self.bools = _rows(code[2], length), _rows(code[3], length, np.bool_)
+
+    def run(self, entries, outs, buffers, chunk):
+        if self.function is None:
+            return False
+        m = entries[0].shape[1]
+        targets = []
+        for out, buffer in zip(outs, buffers):
+            targets.extend([out[chunk, 0]] if buffer is None else buffer[:, :m])
+        if not self.function([row for e in entries for row in e], targets,
+                             list(self.floats[:, :m]), list(self.bools[:, :m])):
+            return False
+        for out, buffer in zip(outs, buffers):
+            if buffer is not None:
+                out[chunk] = buffer[:, :m].T
+        return True
 
 
 def _one_as_batch(kernel, arrays, tails, outputs):
@@ -272,6 +335,10 @@ FALLBACKS = Counter()
 """kernel key -> one-item calls that ran the kernel itself on FLOATS (no generated function
 for it, an input that is not one plain item, NaN/Inf, or an ops.rare case). The test that
 every public kernel runs generated code on ordinary inputs reads it."""
+
+CHUNK_FALLBACKS = Counter()
+"""kernel key -> chunks of batches that ran on the kernel itself (no chunk code for it, or an
+ops.rare case in the chunk). The test that public batches run chunk code reads it."""
 
 RECORD = None
 """The generator's (rot_tools._generate): a dict it sets to collect kernel key ->

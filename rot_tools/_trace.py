@@ -126,6 +126,7 @@ class _Trace:
         self.statements = []  # (name or _GUARD, source text, names it reads)
         self.known = {}  # condition name -> False once a guard has left its items out
         self.seen = {}  # source text -> its symbol: each expression is computed once
+        self.forms = {}  # name -> (template, its arguments' source texts): for other writers
 
     def source(self, x):
         if type(x) is _Sym:
@@ -143,11 +144,13 @@ class _Trace:
 
     def emit(self, template, *args, real=None):
         """Return a new variable holding template filled with args (real if all args are)."""
-        text = template.format(*map(self.source, args))
+        sources = [self.source(a) for a in args]
+        text = template.format(*sources)
         if text in self.seen:  # every operation is pure: reuse the earlier result
             return self.seen[text]
         name = f't{len(self.statements)}'
         self.statements.append((name, text, {a.name for a in args if type(a) is _Sym}))
+        self.forms[name] = (template, sources)
         sym = self.seen[text] = _Sym(self, name, all(map(_real, args)) if real is None else real)
         return sym
 
