@@ -242,25 +242,38 @@ def _kernels_on_arrays(call):
     return run
 
 
-def run_chunks(batch, repeats):
-    """[(operation, seconds with chunk code, seconds without)] of each batch conversion."""
+def run_chunks(batch, repeats, small=100):
+    """
+    Per batch conversion: (operation, seconds with chunk code, without; the same of ``small``).
+
+    The large batch is table 1's, timed interleaved (medians); the small one each conversion
+    on ``small`` random items, timed with timeit (the best of ``repeats`` samples).
+    """
     rows = []
+    x_small = make_inputs(small)
+    small_calls = {case[0]: case[1] for case in batch_cases(x_small)}
     for r in batch:
         with warnings.catch_warnings():
             warnings.simplefilter('ignore')
             times = benchlib.interleaved(
                 {'chunk': r['rt_call'], 'kernel': _kernels_on_arrays(r['rt_call'])}, repeats)
+            call = small_calls[r['operation']]
+            small_times = [min(timeit.Timer(c).repeat(repeats, 200)) / 200
+                           for c in (call, _kernels_on_arrays(call))]
         rows.append((r['operation'], benchlib.median(times['chunk']),
-                     benchlib.median(times['kernel'])))
+                     benchlib.median(times['kernel']), *small_times))
         gc.collect()
     return rows
 
 
-def print_chunks(rows, n):
+def print_chunks(rows, n, small=100):
     benchlib.print_table(
-        f'Chunk code against the kernels on NumPy arrays, {n:,} items (medians, interleaved)',
-        ['operation', 'chunk code', 'kernel on arrays', 'ratio'],
-        [[op, f'{a * 1e3:.1f} ms', f'{b * 1e3:.1f} ms', f'{a / b:.3f}'] for op, a, b in rows])
+        f'Chunk code against the kernels on NumPy arrays, {n:,} and {small} items',
+        ['operation', 'chunk code', 'kernel on arrays', 'ratio', f'{small}: chunk code',
+         'kernel on arrays', 'ratio'],
+        [[op, f'{a * 1e3:.1f} ms', f'{b * 1e3:.1f} ms', f'{a / b:.3f}',
+          f'{c * 1e6:.0f} us', f'{d * 1e6:.0f} us', f'{c / d:.3f}']
+         for op, a, b, c, d in rows])
 
 
 # -- 2. peak memory -----------------------------------------------------------------------
@@ -448,8 +461,9 @@ def main(argv=None):
         if 'chunks' not in args.skip and 'batch' not in args.skip:
             chunks = run_chunks(batch, args.repeats)
             print_chunks(chunks, args.n)
-            payload['chunks'] = [dict(zip(('operation', 'chunk_s', 'kernel_s'), c))
-                                 for c in chunks]
+            payload['chunks'] = [
+                dict(zip(('operation', 'chunk_s', 'kernel_s', 'small_chunk_s', 'small_kernel_s'),
+                         c)) for c in chunks]
         payload['batch'] = [{k: v for k, v in r.items() if not k.endswith('_call')}
                             for r in batch]
         payload['n'] = args.n
