@@ -11,8 +11,11 @@ as itself), returning the entries of its outputs. ``apply`` runs a kernel
   ``python -m rot_tools._generate`` (the same operations without the bookkeeping around
   them, results equal bit for bit), or as the kernel itself where there is none; or
 - on a batch, in chunks of CHUNK items whose entries are contiguous NumPy arrays (each chunk
-  transposed once on the way in and once on the way out), so the temporaries stay in cache
-  and the memory used beyond the inputs and outputs stays small.
+  transposed once on the way in and once on the way out): as the kernel's function in
+  rot_tools/_generated_chunks.py, NumPy calls written from the kernel ahead of time into
+  buffers reused chunk after chunk (the same ufuncs, so the same bits), or as the kernel
+  itself on NumPy arrays where there is none. The temporaries stay in cache and the memory
+  used beyond the inputs and outputs stays small.
 
 Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
@@ -283,7 +286,7 @@ def _rows(count, length, dtype=np.float64):
 
 class _ChunkCode:
     """
-    A kernel's chunk function in rot_tools/_generated.py, and the buffers it works in.
+    A kernel's chunk function in rot_tools/_generated_chunks.py, and the buffers it works in.
 
     Made for one batch. ``run`` writes a chunk's outputs and returns True; it returns False
     where there is no such function for this kernel and these outputs, and where an

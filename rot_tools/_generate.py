@@ -2,15 +2,16 @@
 Write rot_tools/_generated.py and _generated_chunks.py: every kernel's one-item and chunk code.
 
 Run ``python -m rot_tools._generate`` after changing a kernel, or after adding a conversion
-(with its calls in ``ordinary_calls`` below); ``--check`` only says whether the file is up
-to date (test_backend does the same and fails when it is not).
+(with its calls in ``ordinary_calls`` below); ``--check`` only says whether the files are up
+to date (test_backend does the same and fails when one is not).
 
 How: every call of ``ordinary_calls`` — each public one-item function with ordinary inputs,
 every Euler sequence, with and without validation, and rotation_node's per-message path — is
 run once with no generated code, so that ``apply`` runs each kernel on Python floats and
 records it with its inputs' shapes and its outputs (``_backend.RECORD``). Each recorded
-kernel is then traced (rot_tools._trace) into one function of the generated module, named
-after the first call that met it, and listed in its CODE table under the kernel's key.
+kernel is then traced (rot_tools._trace) into one function of each generated module, named
+after the kernel: in _generated.py for one item (its CODE table), in _generated_chunks.py
+for a chunk of a batch (rot_tools._trace_batch; its CHUNKS table), under the kernel's key.
 """
 
 import argparse
