@@ -24,8 +24,10 @@ import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
-from rot_tools import _backend, _generate, _generated, _generated_chunks, boundary, decomposition
+from rot_tools import (_backend, _generate, _generated, _generated_chunks, _trace_batch, boundary,
+                       decomposition)
 from rot_tools._trace import compile_kernel, TraceError
+from rot_tools._trace_batch import chunk_source
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -650,6 +652,49 @@ def test_untraceable_kernels_are_refused_and_run_on_floats(fallbacks):
             out = _backend.apply(kernel, [(np.array([1.5, 2.0, 3.0]), (3,), 'v', True)], [_F])
         assert out == (1.5,) if kernel is branching else out == (1.0,)
         assert fallbacks[_backend.kernel_key(kernel)] == 3
+
+
+def _chunk_function(kernel, tails, outputs):
+    """Return the kernel written out for a chunk, compiled, and its numbers of buffers."""
+    text, floats, bools, ufuncs = chunk_source('chunk', kernel, _backend.ARRAYS, tails, outputs)
+    names = {'_np': np}
+    source = '\n'.join([_trace_batch.PRELUDE, *_trace_batch.ufunc_lines(ufuncs), text])
+    exec(compile(source, '<test chunk>', 'exec'), names)  # noqa: S102
+    return names['chunk'], floats, bools, text
+
+
+def test_chunk_code_reuses_buffers_and_leaves_rare_chunks_to_the_kernel():
+    def kernel(ops, v):
+        n2 = v[0] * v[0] + v[1] * v[1]
+        if ops.rare(n2 > 1e300):
+            n2 = ops.where(n2 > 1e300, 1e300, n2)
+        s = ops.sqrt(n2)
+        return [s * v[0], s * v[1] + 1.0], n2 == 0.0
+    outputs = [((2,), np.float64), ((), np.bool_)]
+    f, floats, bools, text = _chunk_function(kernel, [(2,)], outputs)
+    assert floats <= 3 and bools <= 1  # five float values, at most three alive at once
+    assert 'return None  # rare' in text and text.count('out=o') == 3  # outputs written direct
+    a = [np.array([3.0, 0.0, -1e-300]), np.array([4.0, 0.0, 2.0])]
+    o = [np.empty(3), np.empty(3), np.empty(3, bool)]
+    assert f(a, o, list(np.empty((floats, 3))), list(np.empty((bools, 3), bool)))
+    want = kernel(_backend.ARRAYS, a)
+    assert all(np.array_equal(x, y) for x, y in zip(o, [*want[0], want[1]]))
+    a[0][1] = 1e200  # a rare item: the chunk is the kernel's
+    with np.errstate(over='ignore'):
+        assert f(a, o, list(np.empty((floats, 3))), list(np.empty((bools, 3), bool))) is None
+
+
+def test_kernels_the_chunk_writer_cannot_write_are_refused():
+    def arithmetic_on_a_condition(ops, v):
+        return ((v[0] > 0) * 2.0,)
+
+    def integer_output(ops, v):
+        return (v[0] + v[1],)
+
+    with pytest.raises(TraceError, match='condition'):
+        _chunk_function(arithmetic_on_a_condition, [(2,)], [_F])
+    with pytest.raises(TraceError, match='dtype'):
+        _chunk_function(integer_output, [(2,)], [((), np.int64)])
 
 
 def test_values_read_once_are_folded_into_their_reader():
