@@ -367,9 +367,16 @@ def kernel_key(kernel):
 
 
 def _find_code(kernel, outputs):
-    """Return the generated function of a kernel for these outputs, or None (remembered)."""
+    """
+    Return the generated function of a kernel for these outputs, or None.
+
+    Remembered for a kernel the generated module lists (a fixed set); a kernel built per
+    call (matrix_to_euler with another lock_tol) is looked up again, not kept for ever.
+    """
     code = GENERATED.get(kernel_key(kernel))
-    one = code[1] if code is not None and code[0] == list(outputs) else None
+    if code is None:
+        return None
+    one = code[1] if code[0] == list(outputs) else None
     _CODE_OF[kernel] = (outputs, one)  # (no caller changes its outputs after the call)
     return one
 

@@ -390,6 +390,18 @@ def test_results_do_not_depend_on_call_history():
     assert not [n for n in dir(_backend) if 'HOT' in n or 'BATCH' in n or 'CALLS' in n]
 
 
+def test_kernels_built_per_call_are_not_kept():
+    # matrix_to_euler with another lock_tol builds its kernel per call: the engine must not
+    # keep each one (a node or a loop calling it would grow without bound).
+    R = ROTATIONS[5]
+    rt.matrix_to_euler(R, 'ZYX', lock_tol=1e-5)
+    before = len(_backend._CODE_OF)
+    for _ in range(50):
+        rt.matrix_to_euler(R, 'ZYX', lock_tol=1e-5)
+        rt.matrix_to_euler(R, 'zxz', lock_tol=2e-5, check=False)
+    assert len(_backend._CODE_OF) <= before + 1
+
+
 def test_apply_follows_its_outputs_argument_on_every_call():
     # (Once hot, the old engine returned the outputs of the first call's spec.)
     kernel = rt.axis_angle._rotvec_kernel
