@@ -118,6 +118,12 @@ _Sym.__abs__ = lambda self: self.trace.emit('abs({})', self)
 _GUARD = None
 """The name of a statement that is a guard (``if cond: return None``), not an assignment."""
 
+WHERE = '{} if {} else {}'
+"""The template of ops.where(c, a, b) (arguments a, c, b); rot_tools._trace_batch reads it."""
+PICKS = {'maximum': '{} if {} >= {} or {} != {} else {}',  # (arguments a, a, b, a, a, b)
+         'minimum': '{} if {} <= {} or {} != {} else {}'}
+"""The templates of ops.maximum and ops.minimum as the float engine computes them."""
+
 
 class _Trace:
     """One run of a kernel on symbols: its statements, in the order it evaluates them."""
@@ -186,24 +192,23 @@ class _TraceOps:
             return a if known else b
         if a is b:
             return a
-        return self._trace.emit('{} if {} else {}', a, cond, b, real=_real(a) and _real(b))
+        return self._trace.emit(WHERE, a, cond, b, real=_real(a) and _real(b))
 
     def maximum(self, a, b):  # written out as the float engine computes them
-        return self._pick(a, b, '>=', self._engine.maximum)
+        return self._pick(a, b, 'maximum', self._engine.maximum)
 
     def minimum(self, a, b):
-        return self._pick(a, b, '<=', self._engine.minimum)
+        return self._pick(a, b, 'minimum', self._engine.minimum)
 
     def max_of(self, first, *rest):
         for x in rest:
             first = self.maximum(first, x)
         return first
 
-    def _pick(self, a, b, compare, fn):
+    def _pick(self, a, b, name, fn):
         if type(a) is not _Sym and type(b) is not _Sym:
             return fn(a, b)
-        return self._trace.emit(f'{{}} if {{}} {compare} {{}} or {{}} != {{}} else {{}}',
-                                a, a, b, a, a, b, real=_real(a) and _real(b))
+        return self._trace.emit(PICKS[name], a, a, b, a, a, b, real=_real(a) and _real(b))
 
     def rare(self, cond):
         if type(cond) is not _Sym:

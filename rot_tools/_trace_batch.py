@@ -17,7 +17,7 @@ the caller then runs that chunk on the kernel itself.
 import math
 
 import numpy as np
-from rot_tools._trace import _GUARD, _live, _run, TraceError
+from rot_tools._trace import _GUARD, _live, _run, PICKS, TraceError, WHERE
 
 _UFUNC_OF_TEMPLATE = {
     '{} + {}': 'add', '{} - {}': 'subtract', '{} * {}': 'multiply', '{} / {}': 'divide',
@@ -31,9 +31,7 @@ _UFUNC_OF_TEMPLATE = {
 }
 _COMPARISONS = {'less', 'less_equal', 'greater', 'greater_equal', 'equal', 'not_equal'}
 _LOGICAL = {'bitwise_and', 'bitwise_or', 'bitwise_xor', 'invert'}  # (of conditions only)
-_PICKS = {'{} if {} >= {} or {} != {} else {}': 'maximum',  # (ops.maximum as _trace writes it)
-          '{} if {} <= {} or {} != {} else {}': 'minimum'}
-_WHERE = '{} if {} else {}'
+_UFUNC_OF_PICK = {template: name for name, template in PICKS.items()}  # maximum, minimum
 _FLOAT, _BOOL = 'f', 'b'
 
 
@@ -76,19 +74,20 @@ class _Writer:
         """Write one operation into ``target`` (None: a new buffer); (its kind, its place)."""
         args = [self.place.get(s, s) for s in sources]
         kinds = [self.kind_of(s) for s in sources]
-        if template == _WHERE:  # (a fresh array: NumPy's where has no out)
+        if template == WHERE:  # (a fresh array: NumPy's where has no out)
             a, cond, b = args
             kind = kinds[0]
             if kinds[2] != kind or kinds[1] != _BOOL:
                 raise TraceError('ops.where on a condition and values of two kinds')
             self.lines.append(f'{name} = _where({cond}, {a}, {b})')
             return kind, name
-        if template in _PICKS:
-            ufunc, args, kinds = _PICKS[template], [args[0], args[2]], [kinds[0], kinds[2]]
+        if template in _UFUNC_OF_PICK:
+            ufunc, args, kinds = _UFUNC_OF_PICK[template], [args[0], args[2]], [kinds[0], kinds[2]]
         elif template.startswith('_op_'):
-            ufunc = getattr(self.arrays, template[4:template.index('(')])
+            op = template[4:template.index('(')]
+            ufunc = getattr(self.arrays, op)
             if not isinstance(ufunc, np.ufunc):
-                raise TraceError(f'ops.{template[4:template.index("(")]} is not a NumPy ufunc')
+                raise TraceError(f'ops.{op} is not a NumPy ufunc')
             ufunc = ufunc.__name__
         elif template in _UFUNC_OF_TEMPLATE:
             ufunc = _UFUNC_OF_TEMPLATE[template]
@@ -132,7 +131,7 @@ def chunk_source(name, kernel, arrays, tails, outputs):
     for s in entries:
         last[s], uses[s] = len(statements), uses.get(s, 0) + 1
     direct = {s: f'o{j}' for j, s in enumerate(entries)
-              if uses[s] == 1 and s in trace.forms and trace.forms[s][0] != _WHERE}
+              if uses[s] == 1 and s in trace.forms and trace.forms[s][0] != WHERE}
     w = _Writer(arrays)
     inputs = sum(math.prod(t) for t in tails)
     w.kind.update({f'a{i}': _FLOAT for i in range(inputs)})
