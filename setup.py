@@ -5,7 +5,7 @@ package_name = 'rot_tools'
 setup(
     name=package_name,
     version='0.1.0',
-    packages=[package_name],
+    packages=[package_name] + [package_name + '.' + sub for sub in ('core', 'io', 'cli', 'ros')],
     data_files=[
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
@@ -27,9 +27,9 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-            'rotation_node = rot_tools.entry:rotation_node',
-            'rotation_client = rot_tools.entry:rotation_client',
-            'rot-tools = rot_tools.cli:main',
+            'rotation_node = rot_tools.ros.entry:rotation_node',
+            'rotation_client = rot_tools.ros.entry:rotation_client',
+            'rot-tools = rot_tools.cli.main:main',
         ],
     },
 )

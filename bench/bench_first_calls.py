@@ -14,7 +14,7 @@ PoseStamped (it reads, converts, decomposes and publishes its six outputs to top
 subscribes, DDS on the loopback in a domain of its own), markers off and, separately, on;
 with markers on, the picture's timer callback too, whenever the callback has made a picture
 due (at most 30 a second), timed on its own. Where the node cannot be built (no rclpy), the
-same path without the node: rot_tools.boundary's PoseStamped conversion and
+same path without the node: rot_tools.io.boundary's PoseStamped conversion and
 decomposition.decompose_values.
 
 Run: ``.venv/bin/python bench/bench_first_calls.py [--calls N] [--messages N] [--skip-node]
@@ -123,7 +123,7 @@ def run_one(label, n):
     import rot_tools as rt
     name, make, kwargs = cases()[label]
     if name == 'decompose_values':
-        from rot_tools.decomposition import decompose_values as fn
+        from rot_tools.core.decomposition import decompose_values as fn
     else:
         fn = getattr(rt, name)  # imports the function's module
     imported = time.perf_counter() - start
@@ -160,7 +160,7 @@ def run_node(markers, n):
         from geometry_msgs.msg import PoseStamped
         from rclpy.parameter import Parameter
         from rclpy.serialization import serialize_message
-        from rot_tools.rotation_node import RotationNode
+        from rot_tools.ros.rotation_node import RotationNode
     except ImportError as exc:
         return run_path_without_node(n, positions, quaternions, f'no node: {exc}')
     rclpy.init()
@@ -205,8 +205,8 @@ def run_node(markers, n):
 
 def run_path_without_node(n, positions, quaternions, why):
     from types import SimpleNamespace
-    from rot_tools import boundary
-    from rot_tools.decomposition import decompose_values
+    from rot_tools.core.decomposition import decompose_values
+    from rot_tools.io import boundary
     settings = SimpleNamespace(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False)
     clock, cpu = time.perf_counter_ns, time.thread_time_ns
     times, cpus = [], []

@@ -12,7 +12,7 @@ Three tables, each measured side by side in one run (repetitions interleaved, me
 3. Single-call latency: one rotation through the same public functions, Python call
    overhead included, against scipy and against transforms3d.
 4. The chunk code's gain: each batch conversion of table 1 with rot_tools' generated chunk
-   functions (rot_tools/_generated_chunks.py) against the same call with the kernels run on
+   functions (rot_tools/core/_generated_chunks.py) against the same call with the kernels run on
    NumPy arrays as they are (the chunk table emptied for the call): the chunk code is kept
    only while this shows it pays.
 
@@ -34,7 +34,7 @@ import numpy as np
 import pytransform3d.trajectories as pt_trajectories
 import pytransform3d.transformations as pt_transformations
 import rot_tools as rt
-from rot_tools import _backend
+from rot_tools.core import _backend
 from scipy.spatial.transform import Rotation
 import transforms3d.axangles as t3d_axangles
 import transforms3d.euler as t3d_euler

@@ -9,8 +9,8 @@ Processes (all started here, all on the loopback of one isolated DDS domain):
 - ``bench/relay_node.py`` twice: the same six message outputs, types and QoS with constant
   content and no math — rclpy's own messaging limit — ``bench_relay_default`` on rclpy's
   default SingleThreadedExecutor and ``bench_relay_node`` on the executor rotation_node
-  uses (rot_tools.runtime.make_executor); each relay is started, spun and stopped as the
-  node is (the node's loop, rot_tools.runtime.serve, and its exit) and flooded exactly as
+  uses (rot_tools.ros.runtime.make_executor); each relay is started, spun and stopped as the
+  node is (the node's loop, rot_tools.ros.runtime.serve, and its exit) and flooded exactly as
   the node is;
 - ``bench/pose_flooder.py``: publishes PoseStamped on ``~/pose`` of one of them at a set
   rate, stamping each message with the wall clock just before publishing;
@@ -68,7 +68,8 @@ class Target(NamedTuple):
     label: str
     program: str
     """'relay' (bench/relay_node.py), 'node' (rotation_node by its console script),
-    'node_module' (python -m rot_tools.rotation_node) or 'node_on' (bench/node_on_executor.py)."""
+    'node_module' (python -m rot_tools.ros.rotation_node) or 'node_on'
+    (bench/node_on_executor.py)."""
     args: tuple
     """Options of the program (before --ros-args)."""
     params: tuple
@@ -123,7 +124,7 @@ def target_command(python, target):
     if t.program == 'node':
         return [console_script(python, 'rotation_node'), *t.args, *ros_args]
     if t.program == 'node_module':
-        return [python, '-m', 'rot_tools.rotation_node', *t.args, *ros_args]
+        return [python, '-m', 'rot_tools.ros.rotation_node', *t.args, *ros_args]
     if t.program == 'node_on':
         return [python, str(BENCH / 'node_on_executor.py'), *t.args, *ros_args]
     return [python, str(BENCH / 'relay_node.py'), *t.args, *ros_args]
@@ -457,7 +458,7 @@ def main(argv=None):
                         'EventsExecutor (the executor before the WaitSetExecutor)')
     parser.add_argument('--module', action='store_true',
                         help='also measure rotation_node started by python -m '
-                        'rot_tools.rotation_node instead of its console script')
+                        'rot_tools.ros.rotation_node instead of its console script')
     parser.add_argument('--only', metavar='T,T', type=lambda v: v.split(','),
                         help='measure only these targets (a quick look; comparisons need both '
                         'sides): ' + ', '.join(TARGETS))

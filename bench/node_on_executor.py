@@ -24,9 +24,9 @@ import weakref
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
-from rot_tools import runtime
-from rot_tools.rotation_node import RotationNode
-from rot_tools.runtime import make_executor, serve
+from rot_tools.ros import runtime
+from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.runtime import make_executor, serve
 
 
 def events_executor(context=None):

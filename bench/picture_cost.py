@@ -54,7 +54,7 @@ def main(argv=None):
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
     from rclpy.parameter import Parameter
-    from rot_tools.rotation_node import MARKER_RATE, RotationNode
+    from rot_tools.ros.rotation_node import MARKER_RATE, RotationNode
 
     rclpy.init()
     node = RotationNode('bench_picture_cost',

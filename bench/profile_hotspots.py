@@ -74,7 +74,7 @@ def node_callback(top):
     from geometry_msgs.msg import PoseStamped
     from rclpy.parameter import Parameter
     from rclpy.serialization import deserialize_message, serialize_message
-    from rot_tools.rotation_node import RotationNode
+    from rot_tools.ros.rotation_node import RotationNode
     sys.path.insert(0, HERE)
     from relay_node import RelayNode
 

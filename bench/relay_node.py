@@ -31,9 +31,9 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
-from rot_tools import runtime
-from rot_tools.rotation_node import INPUTS
-from rot_tools.runtime import make_executor, serve
+from rot_tools.ros import runtime
+from rot_tools.ros.rotation_node import INPUTS
+from rot_tools.ros.runtime import make_executor, serve
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from std_srvs.srv import Trigger
 

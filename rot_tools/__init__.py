@@ -6,30 +6,30 @@ float64, ``...`` any leading batch shape. Invalid input raises RotationError (a 
 
 The names below are imported from their modules on first use of one (PEP 562), so that
 ``import rot_tools.<module>`` stays light: the rotation_node console script must install its
-signal handlers before NumPy and rclpy load (see rot_tools.entry).
+signal handlers before NumPy and rclpy load (see rot_tools.ros.entry).
 """
 
 import importlib
 
 _HOME = {
-    'rot_tools.axis_angle': (
+    'rot_tools.core.axis_angle': (
         'axis_angle_to_matrix', 'matrix_to_axis_angle', 'matrix_to_rotvec', 'rotvec_to_matrix'),
-    'rot_tools.errors': ('RotationError',),
-    'rot_tools.euler': (
+    'rot_tools.core.errors': ('RotationError',),
+    'rot_tools.core.euler': (
         'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'euler_to_matrix', 'matrix_to_euler'),
-    'rot_tools.fitting': (
+    'rot_tools.core.fitting': (
         'align_vectors', 'mean_rotation', 'random_rotations', 'rotation_distance', 'UNIQUE_TOL'),
-    'rot_tools.decomposition': ('Decomposition', 'decompose'),
-    'rot_tools.rigid': (
+    'rot_tools.core.decomposition': ('Decomposition', 'decompose'),
+    'rot_tools.core.rigid': (
         'compose_transforms', 'frame_to_matrix', 'homogeneous_to_transform', 'invert_transform',
         'transform_points', 'transform_to_homogeneous'),
-    'rot_tools.screw': (
+    'rot_tools.core.screw': (
         'PURE_TRANSLATION_ANGLE', 'Screw', 'screw_exp', 'screw_from_transform',
         'screw_interpolate', 'screw_log', 'transform_from_screw'),
-    'rot_tools.so3': (
+    'rot_tools.core.so3': (
         'ROTATION_TOL', 'is_rotation', 'matrix_to_quaternion', 'nearest_rotation',
         'quaternion_to_matrix', 'rot_x', 'rot_y', 'rot_z', 'skew', 'validate_rotation'),
-    'rot_tools.transform_tree': (
+    'rot_tools.core.transform_tree': (
         'TransformLookupError', 'TransformTree', 'TransformTreeError'),
 }
 _MODULE_OF = {name: module for module, names in _HOME.items() for name in names}

@@ -118,7 +118,7 @@ class NodeProcess:
         self.name = f'{namespace}/rot_tools'
         self.out_path = tmp_path / f'{namespace[1:].replace("/", "_")}.out'
         self.err_path = tmp_path / f'{namespace[1:].replace("/", "_")}.err'
-        args = console_script('rotation_node', 'rot_tools.rotation_node') + [
+        args = console_script('rotation_node', 'rot_tools.ros.rotation_node') + [
             '--ros-args', '-r', f'__ns:={namespace}', *ros_args]
         with open(self.out_path, 'w') as out, open(self.err_path, 'w') as err:
             self.process = subprocess.Popen(args, stdout=out, stderr=err, env=script_env(args))
@@ -207,10 +207,10 @@ class Tester:
         Spin ``node`` (a node under test, usually in another context) with the tester.
 
         A node of another context (another DDS participant) gets an executor of its own —
-        the kind rotation_node runs on (rot_tools.runtime.make_executor), so that every node
+        the kind rotation_node runs on (rot_tools.ros.runtime.make_executor), so that every node
         test holds on it; both are spun in turn, in this thread.
         """
-        from rot_tools.runtime import make_executor
+        from rot_tools.ros.runtime import make_executor
         if node.context is self.context:
             self.executors[0].add_node(node)
         else:

@@ -1,7 +1,7 @@
 """
-The engine: kernels run by rot_tools._backend.apply, and their generated one-item code.
+The engine: kernels run by rot_tools.core._backend.apply, and their generated one-item code.
 
-The generated function of a kernel (rot_tools/_generated.py) must give what the kernel
+The generated function of a kernel (rot_tools/core/_generated.py) must give what the kernel
 gives on Python floats, bit for bit (rescaled tiny/huge vectors, the near-π axis and gimbal
 lock run the kernel itself), with the same errors. It must be what the kernels give today
 (regenerated in memory and compared), run from the first call on, for every public function
@@ -24,10 +24,11 @@ import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
-from rot_tools import (_backend, _generate, _generated, _generated_chunks, _trace_batch, boundary,
-                       decomposition)
-from rot_tools._trace import compile_kernel, TraceError
-from rot_tools._trace_batch import chunk_source
+from rot_tools.core import (_backend, _generate, _generated, _generated_chunks, _trace_batch,
+                            decomposition)
+from rot_tools.core._trace import compile_kernel, TraceError
+from rot_tools.core._trace_batch import chunk_source
+from rot_tools.io import boundary
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -133,7 +134,7 @@ def engine(monkeypatch):
     Switch one-item calls between the kernels themselves and the generated code.
 
     engine('floats'): the kernels on Python floats; engine('generated'): as rot_tools runs
-    them, through rot_tools/_generated.py.
+    them, through rot_tools/core/_generated.py.
     """
     def use(name):
         monkeypatch.undo()
@@ -354,17 +355,17 @@ def test_no_compilation_or_tracing_happens_at_call_time():
         import builtins, sys
         import numpy as np
         import rot_tools as rt
-        from rot_tools import _backend, _generate
+        from rot_tools.core import _backend, _generate
         calls = _generate.ordinary_calls()
         for name in rt.__all__:  # (rot_tools imports its modules on first use of a name)
             getattr(rt, name)
-        assert 'rot_tools._trace' not in sys.modules
+        assert 'rot_tools.core._trace' not in sys.modules
         def forbidden(*args, **kwargs):
             raise AssertionError('compile or exec at call time')
         builtins.compile = builtins.exec = forbidden
         for label, name, call in calls:
             call()
-        assert 'rot_tools._trace' not in sys.modules
+        assert 'rot_tools.core._trace' not in sys.modules
         assert not _backend.FALLBACKS, dict(_backend.FALLBACKS)
         print('ok', len(calls))
     """)
@@ -753,8 +754,8 @@ def test_doc_engine_shows_real_code_and_names():
     sources = [_unindented(p.read_text(encoding='utf-8'))
                for p in (REPO / 'rot_tools').glob('*.py')]
     assert len(blocks) == 2 and all(any(b in s for s in sources) for b in blocks), blocks
-    assert 'python -m rot_tools._generate ' in doc and _generate.COMMAND.endswith(
-        'python -m rot_tools._generate')
+    assert 'python -m rot_tools.core._generate ' in doc and _generate.COMMAND.endswith(
+        'python -m rot_tools.core._generate')
     ops = {n for n in dir(_backend.FLOATS) if not n.startswith('_')}
     table = doc.split('## 2. The ops namespace')[1].split('\n## ')[0]
     assert ops - {'any'} <= set(re.findall(r'\b(\w+)\b', table)), ops

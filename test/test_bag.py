@@ -3,7 +3,7 @@ rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 an
 
 Every value is checked against an independent computation from the messages as rosbags
 decodes them: scipy's Rotation (from_quat, as_euler('xyz'), as_rotvec, mean), numpy.unwrap,
-and a log map written here. Runs the CLI in-process (rot_tools.cli.main), and as the console
+and a log map written here. Runs the CLI in-process (rot_tools.cli.main.main), and as the console
 script where the exit status and the exact stderr matter (test_bag_errors.py).
 """
 
@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools import bag, bag_read, cli  # noqa: E402
+from rot_tools.cli import bag, main as cli  # noqa: E402
+from rot_tools.io import bag_read  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'

@@ -1,7 +1,7 @@
 """
-Test rot_tools.boundary: one boundary for the node and for bags.
+Test rot_tools.io.boundary: one boundary for the node and for bags.
 
-rot_tools.boundary: one boundary for the node and for bags — the batch checks give every
+rot_tools.io.boundary: one boundary for the node and for bags — the batch checks give every
 item the reason (and the rotation) the per-message converter gives it. ROS-free: the
 per-message converters take the fields' values, as rotation_node reads them from a message.
 """
@@ -12,8 +12,8 @@ from types import SimpleNamespace
 from hypothesis import example, given, settings as hsettings, strategies as st
 import numpy as np
 import pytest
-from rot_tools import boundary
-from rot_tools.boundary import RefusedInput
+from rot_tools.io import boundary
+from rot_tools.io.boundary import RefusedInput
 from scipy.spatial.transform import Rotation
 
 TOL = 1e-3

@@ -1,4 +1,4 @@
-"""rot_tools.csv_text: the CSV's numbers made with NumPy, against exact decimal rounding."""
+"""rot_tools.io.csv_text: the CSV's numbers made with NumPy, against exact decimal rounding."""
 
 import csv
 from decimal import Decimal
@@ -9,8 +9,8 @@ from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
 
-from rot_tools import csv_text
-from rot_tools.bag import _number_text
+from rot_tools.cli.bag import _number_text
+from rot_tools.io import csv_text
 
 
 def exact(value, precision):

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools import cli  # noqa: E402
+from rot_tools.cli import main as cli  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 TOL = 1e-3
@@ -176,7 +176,7 @@ def test_tolerance_option(capsys, bad_bag):
 
 @pytest.fixture(scope='module')
 def script():
-    return console_script('rot-tools', 'rot_tools.cli')
+    return console_script('rot-tools', 'rot_tools.cli.main')
 
 
 def one_line_error(script, *args, env=None, contains=''):

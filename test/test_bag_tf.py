@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-pytest.importorskip('rot_tools.transform_tree', reason='TransformTree has not landed')
-from rot_tools import cli  # noqa: E402
+pytest.importorskip('rot_tools.core.transform_tree', reason='TransformTree has not landed')
+from rot_tools.cli import main as cli  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 

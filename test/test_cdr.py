@@ -1,5 +1,5 @@
 """
-rot_tools.cdr: the node's messages as bytes, checked against rclpy's own CDR.
+rot_tools.io.cdr: the node's messages as bytes, checked against rclpy's own CDR.
 
 Outputs: our bytes are rclpy's serialisation of the message they hold. Inputs: what the
 node's INPUTS rows read from rclpy's serialisation of a message is that message's fields,
@@ -16,9 +16,9 @@ from math_helpers import HYPOTHESIS_SETTINGS
 from nav_msgs.msg import Odometry
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from rot_tools import cdr
-from rot_tools.messages import MATRIX_DIMS
-from rot_tools.rotation_node import INPUTS, OUTPUTS
+from rot_tools.io import cdr
+from rot_tools.ros.messages import MATRIX_DIMS
+from rot_tools.ros.rotation_node import INPUTS, OUTPUTS
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, Header, MultiArrayDimension, MultiArrayLayout
 

@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 import pytest
-from rot_tools import cli
+from rot_tools.cli import main as cli
 
 EDGES = ['1e308', '-1e308', '1.7976931348623157e308', '-1.7976931348623157e308', '1e300',
          '1e154', '1e200', '5e-324', '-5e-324', '2.2e-308', '1e-300', '0', '-0', '1', '-1',
@@ -97,7 +97,7 @@ def test_extreme_numbers_give_a_report_or_one_error_line(chunk, capsys):
 
 def _script():
     found = shutil.which('rot-tools', path=str(Path(sys.executable).parent))
-    return [found] if found else [sys.executable, '-m', 'rot_tools.cli']
+    return [found] if found else [sys.executable, '-m', 'rot_tools.cli.main']
 
 
 @pytest.mark.parametrize('argv', ARGUMENT_LISTS[::97] + [

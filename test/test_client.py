@@ -2,7 +2,7 @@
 rotation_client as a separate process against rotation_node processes, over DDS.
 
 One node process (a namespace of this run) serves the tests of this module; each runs the
-installed ``rotation_client`` script (``python -m rot_tools.rotation_client`` without an
+installed ``rotation_client`` script (``python -m rot_tools.ros.rotation_client`` without an
 installed package) and reads its stdout, stderr and exit status. Expected values come from
 scipy.spatial.transform.Rotation and closed forms, not from rot_tools. The client prints 12
 significant digits, so numbers are compared to that.
@@ -24,7 +24,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 import yaml
 
-CLIENT = console_script('rotation_client', 'rot_tools.rotation_client')
+CLIENT = console_script('rotation_client', 'rot_tools.ros.rotation_client')
 DIGITS = {'rel': 1e-11, 'abs': 1e-12}
 """Tolerance of a printed number (12 significant digits and decimal places)."""
 
@@ -486,7 +486,7 @@ def test_version():
         "        if name.split('.')[0] in ('rclpy', 'rosidl_parser', 'std_srvs'):\n"
         "            raise ImportError('refused: ' + name)\n"
         'sys.meta_path.insert(0, RefuseRos())\n'
-        'from rot_tools.rotation_client import main\n'
+        'from rot_tools.ros.rotation_client import main\n'
         "main(['--version', '--ros-args', '-p', 'foo'])\n")
     command = [sys.executable, '-c', probe]
     result = subprocess.run(command, capture_output=True, text=True, timeout=60,
@@ -563,7 +563,7 @@ def test_doc_examples(node):
 
 
 def test_refusal_text_uses_the_nodes_sentence():
-    from rot_tools.rotation_client import refusal_text
+    from rot_tools.ros.rotation_client import refusal_text
     topic = '/rot_tools/orientation'
     data = {'refused': {'total': 3, 'non_finite': 1, 'non_unit_quaternion': 2},
             'last_refusals': {
@@ -593,7 +593,7 @@ def test_refusal_text_uses_the_nodes_sentence():
 
 
 # ---------------------------------------------------------------------------------------
-# Text beyond ASCII in the reports (rot_tools.report's YAML and JSON strings)
+# Text beyond ASCII in the reports (rot_tools.io.report's YAML and JSON strings)
 
 
 def must_escape(c):
@@ -615,7 +615,7 @@ def test_report_strings_round_trip(text):
     Printable characters are written as themselves, the rest escaped. Before, an emoji
     became a surrogate pair, which YAML reads as two lone surrogates.
     """
-    from rot_tools.report import to_json, to_yaml
+    from rot_tools.io.report import to_json, to_yaml
     data = {'frame_id': text, text: [text]}
     yaml_text, json_text = to_yaml(data), to_json(data)
     assert yaml.safe_load(yaml_text) == data

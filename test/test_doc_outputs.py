@@ -16,8 +16,8 @@ from conftest import console_script, NodeProcess, REPO, script_env
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import pytest
 
-CLIENT = console_script('rotation_client', 'rot_tools.rotation_client')
-NODE = console_script('rotation_node', 'rot_tools.rotation_node')
+CLIENT = console_script('rotation_client', 'rot_tools.ros.rotation_client')
+NODE = console_script('rotation_node', 'rot_tools.ros.rotation_node')
 
 
 def normalised(text, namespace):
@@ -98,7 +98,7 @@ def test_node_bad_parameter():
 def test_readme_bag():
     pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
     (command, _), = console_steps(doc_block('readme-bag'))
-    args = console_script('rot-tools', 'rot_tools.cli') + shlex.split(command)[1:]
+    args = console_script('rot-tools', 'rot_tools.cli.main') + shlex.split(command)[1:]
     done = subprocess.run(args, capture_output=True, text=True, timeout=120, cwd=REPO,
                           env=script_env(args), stdin=subprocess.DEVNULL)
     assert done.returncode == 0 and done.stderr == '', done.stderr

@@ -63,7 +63,7 @@ def _path_with_rot_tools(tmp_path):
         shim = tmp_path / 'bin'
         shim.mkdir()
         (shim / 'rot-tools').write_text(
-            f'#!/bin/sh\nexec "{sys.executable}" -m rot_tools.cli "$@"\n')
+            f'#!/bin/sh\nexec "{sys.executable}" -m rot_tools.cli.main "$@"\n')
         (shim / 'rot-tools').chmod(0o755)
         dirs.append(str(shim))
     return os.pathsep.join(dirs + [os.environ.get('PATH', '')])

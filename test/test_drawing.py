@@ -1,5 +1,5 @@
 """
-rot_tools.drawing: the geometry both renderers draw, against independent closed forms.
+rot_tools.io.drawing: the geometry both renderers draw, against independent closed forms.
 
 Motions are built here from a screw chosen by the test (l̂, c, θ, d) with scipy's Rotation:
 R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the helix
@@ -12,8 +12,9 @@ from hypothesis import example, given, settings, strategies as st
 from math_helpers import HYPOTHESIS_SETTINGS
 import numpy as np
 import pytest
-from rot_tools import drawing, RotationError
-from rot_tools.drawing import picture
+from rot_tools import RotationError
+from rot_tools.io import drawing
+from rot_tools.io.drawing import picture
 from scipy.spatial.transform import Rotation
 
 RNG = np.random.default_rng(1010)

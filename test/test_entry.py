@@ -1,7 +1,7 @@
 """
-How rotation_node and rotation_client start: the process runtime (rot_tools.runtime).
+How rotation_node and rotation_client start: the process runtime (rot_tools.ros.runtime).
 
-Both ways of starting the node — its console script and ``python -m rot_tools.rotation_node``
+Both ways of starting the node — its console script and ``python -m rot_tools.ros.rotation_node``
 (the benchmarks use the latter) — stop cleanly on a signal even while NumPy and rclpy load,
 and bad ROS arguments end them with one line and status 2. The runtime depends on nothing of
 the node: the modules' import graph has no cycle.
@@ -19,7 +19,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'rot_tools'
 
 LIGHT = """
 import sys
-import rot_tools.entry, rot_tools.runtime
+import rot_tools.ros.entry, rot_tools.ros.runtime
 heavy = sorted(m for m in ('numpy', 'rclpy') if m in sys.modules)
 print(','.join(heavy) or 'light')
 """
@@ -43,8 +43,8 @@ builtins.__import__ = _import_and_signal
 
 def node_commands():
     """Both commands that start rotation_node: the console script (when installed), -m."""
-    commands = {'python -m': [sys.executable, '-m', 'rot_tools.rotation_node']}
-    script = console_script('rotation_node', 'rot_tools.rotation_node')
+    commands = {'python -m': [sys.executable, '-m', 'rot_tools.ros.rotation_node']}
+    script = console_script('rotation_node', 'rot_tools.ros.rotation_node')
     if script[0] != sys.executable:
         commands['console script'] = script
     return commands
@@ -83,7 +83,7 @@ def test_signal_while_the_node_loads_exits_cleanly(tmp_path, how, sig):
 
 
 def test_signal_while_the_client_loads_exits_with_130(tmp_path):
-    command = console_script('rotation_client', 'rot_tools.rotation_client')
+    command = console_script('rotation_client', 'rot_tools.ros.rotation_client')
     if command[0] == sys.executable:
         pytest.skip('rotation_client is not installed: python -m has no early handler')
     proc = run(command, 'describe', env_extra=with_signal_hook(tmp_path, 'SIGINT'))
@@ -94,8 +94,8 @@ def test_signal_while_the_client_loads_exits_with_130(tmp_path):
 def test_console_scripts_use_the_light_entry():
     from importlib.metadata import entry_points
     scripts = {ep.name: ep.value for ep in entry_points(group='console_scripts')}
-    assert scripts['rotation_node'] == 'rot_tools.entry:rotation_node'
-    assert scripts['rotation_client'] == 'rot_tools.entry:rotation_client'
+    assert scripts['rotation_node'] == 'rot_tools.ros.entry:rotation_node'
+    assert scripts['rotation_client'] == 'rot_tools.ros.entry:rotation_client'
 
 
 def imports_of(module):
@@ -188,7 +188,7 @@ builtins.__import__ = _import
 @pytest.mark.parametrize('flag', ['--help', '-h', '--version'])
 def test_help_and_version_print_and_start_nothing(tmp_path, how, flag):
     from importlib.metadata import version
-    from rot_tools.rotation_node import INPUTS, OUTPUTS, PARAMETERS
+    from rot_tools.ros.rotation_node import INPUTS, OUTPUTS, PARAMETERS
     (tmp_path / 'sitecustomize.py').write_text(NO_RCLPY_INIT)
     proc = run(NODE_COMMANDS[how], flag, '--ros-args', '-p', 'angle_unit:=deg',
                env_extra={'PYTHONPATH': f'{tmp_path}:{PACKAGE.parent}'})
@@ -227,7 +227,7 @@ def test_arguments_outside_ros_args_are_one_line_and_status_2(args):
     ['prog', '--', '--ros-args', '-p', 'a:=1', '--', '--']])
 def test_user_arguments_are_what_rclpy_leaves(argv):
     from rclpy.utilities import remove_ros_args
-    from rot_tools.runtime import user_arguments
+    from rot_tools.ros.runtime import user_arguments
     assert user_arguments(argv) == remove_ros_args(argv)[1:]
 
 

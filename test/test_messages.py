@@ -1,8 +1,8 @@
 """
-rot_tools.messages: the message <-> NumPy boundary of rotation_node (no DDS needed).
+rot_tools.ros.messages: the message <-> NumPy boundary of rotation_node (no DDS needed).
 
 Inbound, a message goes the node's way: serialised by rclpy, its bytes read by its INPUTS
-row (rot_tools.cdr) and its fields converted.
+row (rot_tools.io.cdr) and its fields converted.
 """
 
 import math
@@ -14,11 +14,12 @@ from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from rot_tools import boundary, messages
 from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
-from rot_tools.messages import RefusedInput
-from rot_tools.rotation_node import INPUTS
+from rot_tools.io import boundary
+from rot_tools.ros import messages
+from rot_tools.ros.messages import RefusedInput
+from rot_tools.ros.rotation_node import INPUTS
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker

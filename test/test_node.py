@@ -23,12 +23,13 @@ from rclpy.exceptions import InvalidParameterValueException
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, ReliabilityPolicy
 from rclpy.serialization import serialize_message
-from rot_tools import cdr, rotation_node
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
     rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
-from rot_tools.report import transform_report
-from rot_tools.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
+from rot_tools.io import cdr
+from rot_tools.io.report import transform_report
+from rot_tools.ros import rotation_node
+from rot_tools.ros.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
 from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
@@ -615,7 +616,7 @@ def test_bad_input_is_refused(rig, case):
     (lambda data: data[:12] + b'\xff' + data[13:], 'does not end in a NUL'),
 ], ids=['truncated', 'xcdr2', 'frame_id_length'])
 def test_bytes_that_are_not_the_message_are_refused(rig, damage, why):
-    # The node reads its inputs' bytes (rot_tools.cdr): a publisher of raw bytes can send
+    # The node reads its inputs' bytes (rot_tools.io.cdr): a publisher of raw bytes can send
     # anything on ~/pose. Refused as malformed, counted, warned; the next message is served.
     rig.pubs['pose'].publish(damage(serialize_message(GOOD_INPUTS['pose'])))
     rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1, what='the refusal')

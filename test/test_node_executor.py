@@ -1,9 +1,9 @@
 """
-The executor rotation_node runs on (rot_tools.runtime.make_executor), proved in use.
+The executor rotation_node runs on (rot_tools.ros.runtime.make_executor), proved in use.
 
-It is rot_tools.executor.WaitSetExecutor, chosen over rclpy's EventsExecutor, whose event
+It is rot_tools.ros.executor.WaitSetExecutor, chosen over rclpy's EventsExecutor, whose event
 queue grows without bound under a flood beyond the node's pace and makes service calls wait
-behind it (bench/bench_overload.py). The node spins it through rot_tools.runtime.spin;
+behind it (bench/bench_overload.py). The node spins it through rot_tools.ros.runtime.spin;
 these tests show, on the real executor and (where a signal or the process matters) on the
 real console script:
 
@@ -44,10 +44,10 @@ from rcl_interfaces.srv import GetParameters, SetParameters
 import rclpy
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile
-from rot_tools import runtime
-from rot_tools.executor import WaitSetExecutor
-from rot_tools.rotation_node import RotationNode
-from rot_tools.runtime import guard_callbacks, make_executor, spin
+from rot_tools.ros import runtime
+from rot_tools.ros.executor import WaitSetExecutor
+from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.runtime import guard_callbacks, make_executor, spin
 from std_srvs.srv import Trigger
 import yaml
 
@@ -297,7 +297,7 @@ def test_a_flood_of_bad_input_is_refused_and_the_node_keeps_serving(tester, node
 
 @pytest.fixture
 def own_context():
-    """Return a context of its own for a node spun by rot_tools.runtime.spin in a thread."""
+    """Return a context of its own for a node spun by rot_tools.ros.runtime.spin in a thread."""
     context = rclpy.Context()
     rclpy.init(context=context)
     yield context

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
-from rot_tools import rotation_node
-from rot_tools.rotation_node import MARKER_RATE
+from rot_tools.ros import rotation_node
+from rot_tools.ros.rotation_node import MARKER_RATE
 from scipy.spatial.transform import Rotation
 from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
     euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)

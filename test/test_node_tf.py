@@ -313,7 +313,7 @@ def test_the_node_describe_shown_in_the_docs(node_process, tester, namespace, tf
 
 
 def run_client(*args, timeout=60):
-    command = console_script('rotation_client', 'rot_tools.rotation_client') + list(args)
+    command = console_script('rotation_client', 'rot_tools.ros.rotation_client') + list(args)
     return subprocess.run(command, env=script_env(command), capture_output=True, text=True,
                           timeout=timeout)
 
@@ -344,7 +344,7 @@ def test_client_tf_once_against_the_reference(tester, tf_publisher):
 def test_client_tf_prints_once_a_second_in_the_reference_frame(tester, namespace,
                                                                tf_publisher):
     tf_publisher(f'{namespace}/tf', f'{namespace}/tf_static')
-    command = console_script('rotation_client', 'rot_tools.rotation_client') + [
+    command = console_script('rotation_client', 'rot_tools.ros.rotation_client') + [
         'tf', 'base_link', 'gimbal', '--deg', '--timeout', '20', '--ros-args',
         '-r', f'/tf:={namespace}/tf', '-r', f'/tf_static:={namespace}/tf_static']
     process = subprocess.Popen(command, env=script_env(command), stdout=subprocess.PIPE,
@@ -410,7 +410,7 @@ def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
 def test_follower_refusals_and_stamps(ros_context):
     import rclpy
     from geometry_msgs.msg import TransformStamped
-    from rot_tools.tf_input import TfFollower
+    from rot_tools.ros.tf_input import TfFollower
     node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
     got, refused = [], []
     follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a),
@@ -472,9 +472,9 @@ def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
     fake.mkdir()
     (fake / '__init__.py').write_text("raise ImportError('no tf2_msgs here')\n")
     for command, status in [
-            (console_script('rotation_node', 'rot_tools.rotation_node')
+            (console_script('rotation_node', 'rot_tools.ros.rotation_node')
              + ['--ros-args', '-p', 'tf_reference_frame:=odom', '-p', 'tf_body_frame:=a'], 2),
-            (console_script('rotation_client', 'rot_tools.rotation_client')
+            (console_script('rotation_client', 'rot_tools.ros.rotation_client')
              + ['tf', 'odom', 'a'], 1)]:
         env = script_env(command)
         env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(tmp_path),

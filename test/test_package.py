@@ -15,9 +15,9 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
 CONSOLE_SCRIPTS = {
-    'rotation_node': 'rot_tools.entry:rotation_node',
-    'rotation_client': 'rot_tools.entry:rotation_client',
-    'rot-tools': 'rot_tools.cli:main',
+    'rotation_node': 'rot_tools.ros.entry:rotation_node',
+    'rotation_client': 'rot_tools.ros.entry:rotation_client',
+    'rot-tools': 'rot_tools.cli.main:main',
 }
 # exec_depends the node needs whatever the code happens to import today.
 REQUIRED_EXEC_DEPENDS = {

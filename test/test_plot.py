@@ -1,5 +1,5 @@
 """
-rot_tools.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files.
+rot_tools.cli.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files.
 
 The figure is inspected through the gids of its lines; the helix is checked against the
 closed form p(s) = c + Rot(s·θ·l̂)(p0 − c) + s·d·l̂ with scipy's Rotation, from a screw chosen
@@ -15,7 +15,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from rot_tools import plot
+from rot_tools.cli import plot
 from scipy.spatial.transform import Rotation
 
 PNG_SIGNATURE = b'\x89PNG\r\n\x1a\n'
@@ -135,7 +135,7 @@ def svg_text(path):
     (['screw', '--axis-angle', '0', '0', '1', '2', '--translation', '1', '0', '0', '--deg'],
      'θ = 2 deg, d = 0, screw pitch = 0 /rad')], ids=['deg', 'rad', 'screw_deg'])
 def test_plot_option_draws_theta_in_the_unit_asked(tmp_path, args, title):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     out = tmp_path / 'picture.svg'
     assert main(args + ['--plot', str(out)]) == 0
     assert title in svg_text(out)
@@ -143,7 +143,7 @@ def test_plot_option_draws_theta_in_the_unit_asked(tmp_path, args, title):
 
 
 def test_plot_option_says_where_a_far_axis_is(tmp_path):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     out = tmp_path / 'picture.svg'
     assert main(CASES['small_angle_screw'] + ['--plot', str(out)]) == 0
     check_svg(out, COMMON_GIDS + ('toward_axis',))
@@ -179,7 +179,8 @@ COMMON_GIDS = ('path', *plot.MOVED_GIDS, *plot.REFERENCE_GIDS)
 
 def rot_tools_cli(args, code=''):
     """Run rot-tools in a fresh interpreter (after ``code``); return the CompletedProcess."""
-    program = f'{code}\nimport sys\nfrom rot_tools.cli import main\nsys.exit(main(sys.argv[1:]))'
+    program = (f'{code}\nimport sys\nfrom rot_tools.cli.main import main\n'
+               'sys.exit(main(sys.argv[1:]))')
     return subprocess.run([sys.executable, '-c', program, *args], capture_output=True,
                           text=True, timeout=120)
 
@@ -187,7 +188,7 @@ def rot_tools_cli(args, code=''):
 @pytest.mark.parametrize('case', CASES)
 @pytest.mark.parametrize('ext', ['png', 'svg'])
 def test_plot_option_writes_the_file(tmp_path, case, ext):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     out = tmp_path / f'{case}.{ext}'
     assert main(CASES[case] + ['--plot', str(out)]) == 0
     if ext == 'png':
@@ -198,7 +199,7 @@ def test_plot_option_writes_the_file(tmp_path, case, ext):
 
 
 def test_plot_option_before_the_command_and_upper_case_extension(tmp_path, capsys):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     out = tmp_path / 'picture.PNG'
     assert main(['--plot', str(out)] + CASES['screw']) == 0
     check_png(out)
@@ -206,7 +207,7 @@ def test_plot_option_before_the_command_and_upper_case_extension(tmp_path, capsy
 
 
 def test_plot_option_is_listed_in_help(capsys):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     assert main(['--help']) == 0
     assert '--plot FILE' in capsys.readouterr().out
     assert main(['euler', '--help']) == 0
@@ -215,7 +216,7 @@ def test_plot_option_is_listed_in_help(capsys):
 
 @pytest.mark.parametrize('name', ['picture.jpg', 'picture', 'picture.png.txt'])
 def test_other_extensions_are_refused(tmp_path, capsys, name):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     assert main(CASES['rotation'] + ['--plot', str(tmp_path / name)]) == 2
     captured = capsys.readouterr()
     assert captured.out == ''
@@ -225,7 +226,7 @@ def test_other_extensions_are_refused(tmp_path, capsys, name):
 
 
 def test_unwritable_file_is_one_line(tmp_path, capsys):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     out = tmp_path / 'no' / 'such' / 'dir.png'
     assert main(CASES['rotation'] + ['--plot', str(out)]) == 2
     captured = capsys.readouterr()
@@ -234,7 +235,7 @@ def test_unwritable_file_is_one_line(tmp_path, capsys):
 
 
 def test_a_picture_too_large_for_float64_is_one_line(tmp_path, capsys):
-    from rot_tools.cli import main
+    from rot_tools.cli.main import main
     out = tmp_path / 'huge.png'
     assert main(['screw', '--translation', '1.7e308', '0', '0', '--plot', str(out)]) == 2
     captured = capsys.readouterr()

@@ -1,4 +1,4 @@
-"""rot_tools.report: the report's keys and values, and its YAML / JSON text."""
+"""rot_tools.io.report: the report's keys and values, and its YAML / JSON text."""
 
 import json
 import math
@@ -11,8 +11,8 @@ import rot_tools as rt
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
     rot_z, RotationError, screw_from_transform)
-from rot_tools.decomposition import decompose_values
-from rot_tools.report import round_number, to_json, to_yaml, transform_report
+from rot_tools.core.decomposition import decompose_values
+from rot_tools.io.report import round_number, to_json, to_yaml, transform_report
 from scipy.spatial.transform import Rotation
 
 TOL = 1e-12
@@ -377,7 +377,7 @@ def test_emitters_refuse_unknown_types():
 
 
 def test_cli_and_report_need_neither_yaml_nor_ros():
-    code = ('import sys, rot_tools.cli, rot_tools.report; '
+    code = ('import sys, rot_tools.cli.main, rot_tools.io.report; '
             'print(sorted(m for m in ("yaml", "rclpy") if m in sys.modules))')
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
                          check=True, timeout=60).stdout

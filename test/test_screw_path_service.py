@@ -12,8 +12,8 @@ from nav_msgs.srv import GetPlan
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
-from rot_tools import rotation_node, runtime
-from rot_tools.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
+from rot_tools.ros import rotation_node, runtime
+from rot_tools.ros.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
 from test_node import pose_stamped
 
 

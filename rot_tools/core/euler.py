@@ -1,0 +1,185 @@
+"""
+Euler angles in all twelve axis sequences, intrinsic and extrinsic, with gimbal lock.
+
+A sequence is three axis letters, e.g. ``'ZYX'``, with no letter repeated twice in a row:
+six Tait–Bryan sequences (three different axes: XYZ XZY YXZ YZX ZXY ZYX) and six proper Euler
+sequences (first axis = third: XYX XZX YXY YZY ZXZ ZYZ) — Jia, Rotation in the Space, §1,
+counts them as 3·2·2.
+
+Upper case is **intrinsic**: the rotations are about the body's moving axes, applied in the
+order written, so (Jia, eq. 1 for Z-Y-X, yaw ϕ, pitch θ, roll ψ)::
+
+    'ZYX':  R = Rot_z(θ1) · Rot_y(θ2) · Rot_x(θ3)
+
+Lower case is **extrinsic**: the rotations are about the fixed world axes, the first written
+applied first, so the matrix product is reversed::
+
+    'zyx':  R = Rot_x(θ3) · Rot_y(θ2) · Rot_z(θ1)
+
+This is scipy's naming. An extrinsic sequence equals the reversed intrinsic one with the angles
+reversed ('zyx' (a, b, c) is 'XYZ' (c, b, a)). R maps body coordinates to world coordinates.
+
+Ranges returned by matrix_to_euler: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] for Tait–Bryan and
+[0, π] for proper Euler sequences. Gimbal lock: when θ2 is within ``lock_tol`` of ±π/2
+(Tait–Bryan) or of 0 or π (proper), the first and third axes line up and only θ1 ± θ3 is
+defined; the result is flagged ``degenerate``, θ3 is set to 0 and θ1 carries the whole free
+angle (for lower-case sequences too).
+"""
+
+from functools import partial
+import math
+
+from rot_tools.core._arrays import require_tolerance
+from rot_tools.core._backend import Conversion, FLAG, MATRIX, VECTOR
+from rot_tools.core.errors import RotationError
+from rot_tools.core.so3 import apply_to_rotations
+
+_AXES = 'XYZ'
+EULER_SEQUENCES = tuple(
+    a + b + c for a in _AXES for b in _AXES for c in _AXES if a != b and b != c)
+EULER_SEQUENCES = EULER_SEQUENCES + tuple(s.lower() for s in EULER_SEQUENCES)
+"""The 24 accepted names: 12 intrinsic (upper case) and 12 extrinsic (lower case)."""
+
+GIMBAL_LOCK_TOL = 1e-6
+"""Default distance (rad) of θ2 from its singular value below which a result is degenerate."""
+
+
+def _parse(seq):
+    axes = ['XYZ'.index(a) for a in seq.upper()]
+    extrinsic = seq.islower()
+    if extrinsic:
+        axes.reverse()
+    i, j, last = axes
+    sigma = 1.0 if j == (i + 1) % 3 else -1.0
+    return i, j, 3 - i - j, sigma, last == i, extrinsic
+
+
+_PARSED = {seq: _parse(seq) for seq in EULER_SEQUENCES}
+
+
+def parse_sequence(seq):
+    """
+    Return (i, j, k, sigma, proper, extrinsic) for an Euler sequence name.
+
+    (i, j, k) are the axis indices of the equivalent *intrinsic* sequence Rot_i Rot_j Rot_?,
+    with k the axis that is neither i nor j; sigma = +1 when (i, j, k) is a cyclic
+    permutation of (0, 1, 2), else −1; proper is true for i-j-i sequences.
+    """
+    try:
+        return _PARSED[seq]
+    except (KeyError, TypeError):
+        raise RotationError(
+            f'unknown Euler sequence {seq!r}: use one of {", ".join(EULER_SEQUENCES[:12])} '
+            '(intrinsic) or the same in lower case (extrinsic)') from None
+
+
+def _matrix_kernel(ops, a, spec):
+    """
+    Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i (proper) or k (Tait–Bryan).
+
+    Derived by applying the three elementary rotations to the unit vectors; Jia, eq. 1
+    is the case (i, j, k) = (z, y, x), sigma = −1.
+    """
+    i, j, k, sig, proper, extrinsic = spec
+    t1, t2, t3 = (a[2], a[1], a[0]) if extrinsic else a
+    c1, s1, c2, s2, c3, s3 = (
+        ops.cos(t1), ops.sin(t1), ops.cos(t2), ops.sin(t2), ops.cos(t3), ops.sin(t3))
+    m = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]  # every entry is set below
+    if proper:
+        m[i][i], m[i][j], m[i][k] = c2, s2 * s3, sig * s2 * c3
+        m[j][i], m[j][j], m[j][k] = (
+            s1 * s2, c1 * c3 - s1 * c2 * s3, -sig * (c1 * s3 + s1 * c2 * c3))
+        m[k][i], m[k][j], m[k][k] = (
+            -sig * c1 * s2, sig * (c1 * c2 * s3 + s1 * c3), c1 * c2 * c3 - s1 * s3)
+    else:
+        m[i][i], m[i][j], m[i][k] = c2 * c3, -sig * c2 * s3, sig * s2
+        m[j][i], m[j][j], m[j][k] = (
+            sig * c1 * s3 + s1 * s2 * c3, c1 * c3 - sig * s1 * s2 * s3, -sig * s1 * c2)
+        m[k][i], m[k][j], m[k][k] = (
+            s1 * s3 - sig * c1 * s2 * c3, c1 * s2 * s3 + sig * s1 * c3, c1 * c2)
+    return (m,)
+
+
+def euler_to_matrix(angles, seq='ZYX'):
+    """
+    Rotation matrix of Euler angles (θ1, θ2, θ3) in radians; (..., 3) → (..., 3, 3).
+
+    Intrinsic 'ABC': R = Rot_a(θ1)·Rot_b(θ2)·Rot_c(θ3); extrinsic 'abc': R = Rot_c(θ3)·Rot_b(θ2)·
+    Rot_a(θ1). Any of the 24 names of EULER_SEQUENCES; another string raises RotationError.
+    """
+    conversion = _TO_MATRIX.get(seq) if isinstance(seq, str) else None
+    if conversion is None:
+        parse_sequence(seq)  # raises the RotationError
+    (matrix,) = conversion.one(angles) or conversion(angles)
+    return matrix
+
+
+_TO_MATRIX = {seq: Conversion(partial(_matrix_kernel, spec=spec),
+                              [((3,), 'Euler angles', True)], [MATRIX])
+              for seq, spec in _PARSED.items()}
+
+
+def _wrap(ops, angle):
+    """Map −π to +π (and −0 to +0) so that outer angles lie in (−π, π]."""
+    return ops.where(angle == -math.pi, math.pi, angle) + 0.0
+
+
+def angles_kernel(ops, m, spec, lock_tol):
+    """Euler angles of m; see matrix_to_euler for the method."""
+    i, j, k, sig, proper, extrinsic = spec
+    if proper:  # R[i,i] = cos θ2, (R[j,i], −σR[k,i]) = sin θ2·(sin θ1, cos θ1)
+        y1, x1 = m[j][i], -sig * m[k][i]
+        rho = ops.sqrt(y1 * y1 + x1 * x1)
+        t2 = ops.atan2(rho, m[i][i])
+        lock = ops.minimum(t2, math.pi - t2) <= lock_tol
+        sign3, other = -sig, k
+    else:  # R[i,k] = σ sin θ2, (−σR[j,k], R[k,k]) = cos θ2·(sin θ1, cos θ1)
+        y1, x1 = -sig * m[j][k], m[k][k]
+        rho = ops.sqrt(y1 * y1 + x1 * x1)
+        t2 = ops.atan2(sig * m[i][k], rho)
+        lock = math.pi / 2 - ops.abs(t2) <= lock_tol
+        sign3, other = sig, i
+    t1 = ops.atan2(y1, x1)
+    safe = ops.where(rho > 0, rho, 1.0)
+    c1, s1 = x1 / safe, y1 / safe
+    # Peel: row j of Rot_i(θ1)ᵀ·R = c1·R[j] + σ s1·R[k] is row j of Rot_m(θ3), m the last
+    # axis, whose entries are cos θ3 at column j and sign3·sin θ3 at column `other`.
+    t3 = ops.atan2(sign3 * (c1 * m[j][other] + sig * s1 * m[k][other]),
+                   c1 * m[j][j] + sig * s1 * m[k][j])
+    if extrinsic:
+        # Solved as the reversed intrinsic sequence: its first angle is the extrinsic θ3,
+        # the one to zero at lock; its last then comes from the peel with θ1 = 0.
+        t1, t3 = t3, t1
+    if ops.rare(lock):  # (an item, or a batch chunk, without lock skips the extra atan2)
+        if extrinsic:
+            free = ops.atan2(sign3 * m[j][other], m[j][j])
+        else:
+            # At lock R·e_j = Rot_i(θ1)·e_j = cos θ1·e_j + σ sin θ1·e_k carries the free angle.
+            free = ops.atan2(sig * m[k][j], m[j][j])
+        t1, t3 = ops.where(lock, free, t1), ops.where(lock, 0.0, t3)
+    return [_wrap(ops, t1), t2 + 0.0, _wrap(ops, t3)], lock
+
+
+def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
+    """
+    Euler angles of R: returns (angles (..., 3), degenerate (...) bool).
+
+    θ2 from the entries that do not involve θ1, θ3 (Tait–Bryan: R[i,k] = σ sin θ2 with
+    |(R[k,k], R[j,k])| = |cos θ2|; proper: R[i,i] = cos θ2, |(R[j,i], R[k,i])| = sin θ2),
+    each as an atan2 so it is accurate at every angle. θ1 from the column that carries it.
+    θ3 is then *peeled*: row j of Rot_i(θ1)ᵀ·R is row j of Rot_m(θ3), so θ3 absorbs any
+    rounding of θ1 and euler_to_matrix reproduces R to rounding even a hair from gimbal lock
+    (two separate atan2, as in textbooks, lose digits there). At lock (degenerate: θ2 within
+    lock_tol of ±π/2 or of 0, π) θ3 = 0 and θ1 is the free angle. Lower-case sequences are
+    solved as the reversed intrinsic sequence with its *first* angle zeroed, then read back.
+    Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
+    """
+    spec = parse_sequence(seq)
+    lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
+    kernel = _ANGLES_KERNELS[seq] if lock_tol == GIMBAL_LOCK_TOL else partial(
+        angles_kernel, spec=spec, lock_tol=lock_tol)
+    return apply_to_rotations(kernel, R, check, [VECTOR, FLAG])
+
+
+_ANGLES_KERNELS = {seq: partial(angles_kernel, spec=spec, lock_tol=GIMBAL_LOCK_TOL)
+                   for seq, spec in _PARSED.items()}

@@ -1,0 +1,547 @@
+"""
+A tree of coordinate frames joined by rigid motions, looked up at any time (TF's job).
+
+Each frame but a root has one parent, and its edge is the rigid motion from the child to the
+parent, ``p_parent = R·p_child + b`` — a ROS TransformStamped with header.frame_id = parent
+and child_frame_id = child. An edge is **static** (one value, true at every time) or
+**dynamic** (samples in time: the last ``cache_seconds`` of them are kept).
+
+``lookup(reference, body, t)`` composes the edges on the path between the two frames: up
+from ``body`` to the common ancestor, then down to ``reference`` (each edge walked down is
+inverted)::
+
+    T_reference_body = T_common_referenceᵀ · T_common_body,
+    T_common_x = E(x_k) ··· E(x_1)·E(x)      (E(y) = (R, b) of y's edge to its parent)
+
+so that ``p_reference = R·p_body + b``, with the 4×4 homogeneous matrices of Jia, Rotation in
+the Space, §5 multiplied in that order.
+
+**Time.** At time t every dynamic edge is evaluated between its two samples around t, T0 at
+t0 ≤ t and T1 at t1 ≥ t, by the constant-screw motion (rot_tools.screw_interpolate)::
+
+    T(t) = T0 · exp(s · log(T0⁻¹·T1)),     s = (t − t0) / (t1 − t0)
+
+every point of the child frame moving along one helix at constant speed: exact in SE(3),
+where tf2 interpolates the translation linearly and the rotation by slerp, separately (the
+two agree for a pure rotation about the child's origin or a pure translation). A t at a
+sample's stamp gives that sample exactly. A t outside an edge's samples is refused
+(extrapolation) — a dynamic edge with one sample answers only at its stamp.
+
+``lookup(reference, body)`` (no time) answers at the **latest common time**: the newest time
+at which every dynamic edge of the chain has data (the smallest of their newest stamps; tf2's
+"time 0"). A chain of static edges only has no such time: it answers with the newest stamp its
+static edges were set with (tf2 gives 0 there), and a frame looked up in itself with the
+newest stamp of its own edge (0 for a root, as tf2).
+
+**Refusals.** A lookup that cannot be answered raises TransformLookupError (a RotationError)
+whose ``reason`` is one of ``unknown_frame``, ``not_connected`` (no common ancestor: two
+trees) or ``extrapolation`` (the message names the edge, the data it has and by how many
+seconds t is outside it; ``edge`` and ``seconds`` carry them). ``set_transform`` refuses
+with a TransformTreeError (the parent class, also a RotationError) whose reason is
+``bad_frame`` (an empty or non-string frame name), ``loop`` (the child is the parent or one
+of its ancestors: a loop published by mistake), ``too_many_frames`` (beyond ``max_frames``),
+``non_finite`` (NaN/Inf in R, b or the stamp), ``not_rotation`` (R fails validate_rotation)
+or ``bad_value`` (a shape or type that is not a transform).
+
+**Memory.** Samples of a dynamic edge older than ``cache_seconds`` before its newest are
+dropped, and at most ``max_samples`` (the newest) are kept, so a flood cannot grow the tree
+without bound; nor can frames beyond ``max_frames``. A sample older than the window is not
+stored (set_transform returns 0); a sample at the stamp of a stored one replaces it. A frame
+that gets a new parent, or an edge that turns static or dynamic, replaces its old edge and
+forgets its samples. Frames once seen stay known.
+
+Batches: ``set_transform`` takes many samples of one edge at once (stamps (n,), R (n, 3, 3),
+b (n, 3)) and ``lookup`` many stamps at once (t (...) → R (..., 3, 3), b (..., 3), t (...)),
+each edge interpolated as one NumPy batch. The tree is safe to share between threads.
+"""
+
+import math
+import numbers
+import threading
+
+import numpy as np
+from rot_tools.core._arrays import as_float_array
+from rot_tools.core.errors import RotationError
+from rot_tools.core.screw import screw_interpolate
+from rot_tools.core.so3 import validate_rotation
+
+UNKNOWN_FRAME = 'unknown_frame'
+NOT_CONNECTED = 'not_connected'
+EXTRAPOLATION = 'extrapolation'
+LOOKUP_REASONS = (UNKNOWN_FRAME, NOT_CONNECTED, EXTRAPOLATION)
+"""Reasons a lookup is refused for (TransformLookupError.reason)."""
+
+BAD_FRAME = 'bad_frame'
+LOOP = 'loop'
+NON_FINITE = 'non_finite'
+NOT_ROTATION = 'not_rotation'
+BAD_VALUE = 'bad_value'
+TOO_MANY_FRAMES = 'too_many_frames'
+SET_REASONS = (BAD_FRAME, LOOP, NON_FINITE, NOT_ROTATION, BAD_VALUE, TOO_MANY_FRAMES)
+"""Reasons set_transform refuses a transform for (TransformTreeError.reason)."""
+
+DEFAULT_MAX_SAMPLES = 100_000
+"""Samples kept per dynamic edge at most: 10 s at 10 kHz (9.6 MB per edge when full)."""
+
+DEFAULT_MAX_FRAMES = 10_000
+"""Frames a tree holds at most (a few kB each); a transform that would add more is refused."""
+
+_IDENTITY = np.eye(3)
+_ZERO = np.zeros(3)
+
+
+class TransformTreeError(RotationError):
+    """A refusal of the transform tree; ``reason`` is a short key for counting."""
+
+    def __init__(self, reason, message):
+        super().__init__(message)
+        self.reason = reason
+
+
+class TransformLookupError(TransformTreeError):
+    """
+    A lookup that cannot be answered; ``reason`` is one of LOOKUP_REASONS.
+
+    For ``extrapolation``, ``edge`` is the (parent, child) pair whose data does not reach the
+    time asked, and ``seconds`` (> 0) how far outside its data that time is; both are None
+    for the other reasons.
+    """
+
+    def __init__(self, reason, message, edge=None, seconds=None):
+        super().__init__(reason, message)
+        self.edge = edge
+        self.seconds = seconds
+
+
+def _frame_name(frame, what):
+    if not isinstance(frame, str) or not frame:
+        raise TransformTreeError(
+            BAD_FRAME, f'{what} frame must be a non-empty string, got {frame!r}')
+    return frame
+
+
+def _number(value, name):
+    """Return a real number as a float (bools refused), or RotationError."""
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
+        return float(value)
+    raise RotationError(f'{name} must be a number, got {value!r}')
+
+
+class _Edge:
+    """
+    One frame's edge to its parent: samples sorted by stamp, in a window of arrays.
+
+    The samples are stamps[start:end], R[start:end], b[start:end]; a static edge has one.
+    Appending in time order writes at ``end`` (amortised O(1), no reallocation per sample);
+    the window slides forward as old samples expire.
+    """
+
+    __slots__ = ('parent', 'static', 'stamps', 'R', 'b', 'start', 'end')
+
+    def __init__(self, parent, static, capacity):
+        self.parent = parent
+        self.static = static
+        self.stamps = np.empty(capacity)
+        self.R = np.empty((capacity, 3, 3))
+        self.b = np.empty((capacity, 3))
+        self.start = self.end = 0
+
+    @property
+    def count(self):
+        return self.end - self.start
+
+    @property
+    def oldest(self):
+        return float(self.stamps[self.start])
+
+    @property
+    def newest(self):
+        return float(self.stamps[self.end - 1])
+
+    def _room(self, needed):
+        """Make room for ``needed`` more samples after ``end``."""
+        capacity = len(self.stamps)
+        if self.end + needed <= capacity:
+            return
+        count = self.count
+        if count + needed > capacity // 2:
+            capacity = max(2 * capacity, count + needed)
+        window = slice(self.start, self.end)
+        stamps, R, b = self.stamps[window], self.R[window], self.b[window]
+        if capacity != len(self.stamps):
+            self.stamps = np.empty(capacity)
+            self.R = np.empty((capacity, 3, 3))
+            self.b = np.empty((capacity, 3))
+        # Moving to the front of the same arrays: the regions may overlap, so copy first.
+        self.stamps[:count], self.R[:count], self.b[:count] = stamps.copy(), R.copy(), b.copy()
+        self.start, self.end = 0, count
+
+    def add(self, stamp, R, b, cache_seconds, max_samples):
+        """Store one sample; 0 if it is older than the cache window, else 1."""
+        if self.count and stamp <= self.newest:
+            if stamp < self.newest - cache_seconds:
+                return 0
+            i = self.start + int(np.searchsorted(self.stamps[self.start:self.end], stamp))
+            if self.stamps[i] != stamp:  # out of order: shift the newer samples by one
+                self._room(1)
+                i = self.start + int(np.searchsorted(self.stamps[self.start:self.end], stamp))
+                for array in (self.stamps, self.R, self.b):
+                    array[i + 1:self.end + 1] = array[i:self.end].copy()
+                self.end += 1
+        else:
+            self._room(1)
+            i = self.end
+            self.end += 1
+        self.stamps[i], self.R[i], self.b[i] = stamp, R, b
+        self._expire(cache_seconds, max_samples)
+        return 1
+
+    def add_many(self, stamps, R, b, cache_seconds, max_samples):
+        """Store samples (any order; at equal stamps the last given wins); the number kept."""
+        window = slice(self.start, self.end)
+        old = self.count
+        all_stamps = np.concatenate([self.stamps[window], stamps])
+        order = np.argsort(all_stamps, kind='stable')
+        all_stamps = all_stamps[order]
+        last = np.append(all_stamps[1:] != all_stamps[:-1], True)  # last of each equal run
+        keep = order[last]
+        merged = all_stamps[last]
+        kept = int(np.count_nonzero(keep[merged >= merged[-1] - cache_seconds][-max_samples:]
+                                    >= old))
+        all_R = np.concatenate([self.R[window], R])[keep]
+        all_b = np.concatenate([self.b[window], b])[keep]
+        self.start = self.end = 0
+        self._room(len(merged))
+        n = len(merged)
+        self.stamps[:n], self.R[:n], self.b[:n] = merged, all_R, all_b
+        self.end = n
+        self._expire(cache_seconds, max_samples)
+        return kept
+
+    def _expire(self, cache_seconds, max_samples):
+        cutoff = self.stamps[self.end - 1] - cache_seconds
+        if self.stamps[self.start] < cutoff:
+            self.start += int(np.searchsorted(self.stamps[self.start:self.end], cutoff))
+        self.start = max(self.start, self.end - max_samples)
+
+    def at(self, t, child, query):
+        """(R, b) of the edge at times t (a float64 array), interpolated; or refused."""
+        if self.static:
+            shape = t.shape
+            return (np.broadcast_to(self.R[self.start], shape + (3, 3)),
+                    np.broadcast_to(self.b[self.start], shape + (3,)))
+        stamps = self.stamps[self.start:self.end]
+        low, high = t.min(), t.max()
+        if low < stamps[0] or high > stamps[-1]:
+            self._refuse(low, high, child, query)
+        Rs, bs = self.R[self.start:self.end], self.b[self.start:self.end]
+        i1 = np.searchsorted(stamps, t)  # stamps[i1] ≥ t, and i1 > 0 unless t = stamps[0]
+        exact = stamps[i1] == t
+        R, b = Rs[i1], bs[i1]
+        if not exact.all():
+            between = ~exact
+            j = i1[between]
+            t0, t1 = stamps[j - 1], stamps[j]
+            R[between], b[between] = screw_interpolate(
+                Rs[j - 1], bs[j - 1], Rs[j], bs[j], (t[between] - t0) / (t1 - t0),
+                check=False)
+        return R, b
+
+    def at_one(self, t, child, query):
+        """
+        Return (R (3, 3), b (3,)) of the edge at one time t (a float).
+
+        (R (3, 3), b (3,)) of the edge at one time t (a float): the per-message path,
+        through the one-item functions (a batch of one costs several times more).
+        """
+        if self.static:
+            return self.R[self.start], self.b[self.start]
+        stamps = self.stamps[self.start:self.end]
+        if not stamps[0] <= t <= stamps[-1]:
+            self._refuse(t, t, child, query)
+        i = self.start + int(np.searchsorted(stamps, t))
+        t1 = self.stamps[i]
+        if t1 == t:
+            return self.R[i], self.b[i]
+        t0 = self.stamps[i - 1]
+        return screw_interpolate(self.R[i - 1], self.b[i - 1], self.R[i], self.b[i],
+                                 (t - t0) / (t1 - t0), check=False)
+
+    def _refuse(self, low, high, child, query):
+        first, last = self.oldest, self.newest
+        if low < first:
+            seconds, side, asked = first - low, 'before the oldest sample', low
+        else:
+            seconds, side, asked = high - last, 'after the newest sample', high
+        held = (f'it has one sample, at {first:.9g} s' if self.count == 1
+                else f'it has samples from {first:.9g} to {last:.9g} s')
+        raise TransformLookupError(
+            EXTRAPOLATION,
+            f'{query} at t = {asked:.9g} s would extrapolate {seconds:.6g} s {side} of the '
+            f'edge {self.parent!r} → {child!r} ({held})',
+            edge=(self.parent, child), seconds=float(seconds))
+
+
+class TransformTree:
+    """
+    Frames joined by static and dynamic rigid motions; lookups at any time, across the tree.
+
+    cache_seconds: how long a dynamic edge keeps its samples (before its newest), > 0, inf
+    allowed (a bag read whole). max_samples: the most samples a dynamic edge keeps.
+    max_frames: the most frames the tree holds (a transform adding more is refused).
+    See the module docstring for the conventions, the time rules and the refusals.
+    """
+
+    def __init__(self, cache_seconds=10.0, *, max_samples=DEFAULT_MAX_SAMPLES,
+                 max_frames=DEFAULT_MAX_FRAMES):
+        cache_seconds = _number(cache_seconds, 'cache_seconds')
+        if not cache_seconds > 0:
+            raise RotationError(f'cache_seconds must be > 0, got {cache_seconds!r}')
+        if (not isinstance(max_samples, numbers.Integral) or isinstance(max_samples, bool)
+                or max_samples < 2):
+            raise RotationError(f'max_samples must be an integer ≥ 2, got {max_samples!r}')
+        if (not isinstance(max_frames, numbers.Integral) or isinstance(max_frames, bool)
+                or max_frames < 2):
+            raise RotationError(f'max_frames must be an integer ≥ 2, got {max_frames!r}')
+        self.max_frames = int(max_frames)
+        self.cache_seconds = cache_seconds
+        self.max_samples = int(max_samples)
+        self._edges = {}  # child -> _Edge
+        self._frames = set()
+        self._lock = threading.RLock()
+
+    # -- feeding ------------------------------------------------------------------------
+
+    def set_transform(self, parent, child, R, b, stamp, static=False):
+        """
+        Set the edge child → parent: p_parent = R·p_child + b at ``stamp`` (seconds).
+
+        R (3, 3) and b (3,) for one sample, or R (n, 3, 3), b (n, 3) and stamp (n,) for many
+        samples of one dynamic edge. A static edge holds at every time (its stamp is kept for
+        the latest common time of all-static chains). Returns the number of samples stored
+        (0 for samples older than the edge's cache window). Raises TransformTreeError with
+        reason bad_frame, loop, non_finite, not_rotation or bad_value; the tree is then
+        unchanged.
+        """
+        parent = _frame_name(parent, 'parent')
+        child = _frame_name(child, 'child')
+        try:
+            R = as_float_array(R, (3, 3), 'R')
+            b = as_float_array(b, (3,), 'translation b')
+            stamps = as_float_array(stamp, (), 'stamp')
+        except RotationError as exc:
+            raise TransformTreeError(BAD_VALUE, str(exc)) from None
+        many = stamps.ndim > 0
+        if R.ndim != 2 + many or b.ndim != 1 + many or stamps.ndim > 1 or (
+                many and not len(R) == len(b) == len(stamps) > 0):
+            raise TransformTreeError(BAD_VALUE, (
+                'set_transform takes R (3, 3), b (3,) and a stamp, or R (n, 3, 3), b (n, 3) '
+                f'and stamps (n,) with n > 0; got R {R.shape}, b {b.shape}, stamp '
+                f'{stamps.shape}'))
+        if many and static:
+            raise TransformTreeError(BAD_VALUE, 'a static edge takes one transform, not '
+                                                f'{len(stamps)}')
+        for name, value in (('R', R), ('translation b', b), ('stamp', stamps)):
+            finite = np.isfinite(value)
+            if not finite.all():
+                first = tuple(int(i) for i in np.argwhere(~finite)[0])
+                raise TransformTreeError(
+                    NON_FINITE, f'the transform {parent!r} → {child!r} is not finite: {name} '
+                    f'has {value[first]} at index {first}')
+        try:
+            validate_rotation(R)
+        except RotationError as exc:
+            raise TransformTreeError(
+                NOT_ROTATION, f'the transform {parent!r} → {child!r}: {exc}') from None
+        with self._lock:
+            self._refuse_loop(parent, child)
+            new = len({parent, child} - self._frames)
+            if new and len(self._frames) + new > self.max_frames:
+                raise TransformTreeError(
+                    TOO_MANY_FRAMES, f'the transform {parent!r} → {child!r} would add '
+                    f'{new} frame(s) to a tree that holds {len(self._frames)}, at most '
+                    f'max_frames = {self.max_frames}')
+            edge = self._edges.get(child)
+            if edge is None or edge.parent != parent or edge.static != bool(static):
+                edge = _Edge(parent, bool(static), 1 if static else 16)
+            if static:
+                edge.stamps[0], edge.R[0], edge.b[0] = stamps, R, b
+                edge.end = 1
+                stored = 1
+            elif many:
+                stored = edge.add_many(stamps, R, b, self.cache_seconds, self.max_samples)
+            else:
+                stored = edge.add(float(stamps), R, b, self.cache_seconds, self.max_samples)
+            if edge.count:
+                self._edges[child] = edge
+                self._frames.update((parent, child))
+            return stored
+
+    def _refuse_loop(self, parent, child):
+        frame, path = parent, [parent]
+        while frame != child:
+            edge = self._edges.get(frame)
+            if edge is None:
+                return
+            frame = edge.parent
+            path.append(frame)
+        cycle = ' → '.join(repr(f) for f in [child] + path)
+        raise TransformTreeError(
+            LOOP, f'the transform {parent!r} → {child!r} would make {child!r} its own '
+            f'ancestor (a loop: {cycle}); refused')
+
+    # -- the shape of the tree ---------------------------------------------------------
+
+    @property
+    def frames(self):
+        """Every frame seen so far, sorted."""
+        with self._lock:
+            return sorted(self._frames)
+
+    def parent(self, frame):
+        """Return the parent of ``frame`` (None for a root); TransformLookupError if unknown."""
+        with self._lock:
+            self._require_known(frame)
+            edge = self._edges.get(frame)
+            return None if edge is None else edge.parent
+
+    def _require_known(self, frame):
+        if not isinstance(frame, str):
+            raise RotationError(f'a frame name must be a string, got {frame!r}')
+        if frame not in self._frames:
+            known = ', '.join(repr(f) for f in sorted(self._frames)[:20]) or 'none yet'
+            raise TransformLookupError(
+                UNKNOWN_FRAME, f'frame {frame!r} is unknown (known frames: {known})')
+
+    def _path(self, reference, body):
+        """
+        Return the frames from reference and from body up to their common ancestor.
+
+        (up, down): the frames from reference and from body up to (not including) their
+        common ancestor.
+        """
+        self._require_known(reference)
+        self._require_known(body)
+        ancestors = {}
+        frame = reference
+        while True:
+            ancestors[frame] = len(ancestors)
+            edge = self._edges.get(frame)
+            if edge is None:
+                break
+            frame = edge.parent
+        down = []
+        frame = body
+        while frame not in ancestors:
+            down.append(frame)
+            edge = self._edges.get(frame)
+            if edge is None:
+                root = next(reversed(ancestors))
+                raise TransformLookupError(
+                    NOT_CONNECTED, f'frames {reference!r} and {body!r} are not connected: '
+                    f'{reference!r} is in the tree of {root!r}, {body!r} in the tree of '
+                    f'{frame!r}')
+            frame = edge.parent
+        up = list(ancestors)[:ancestors[frame]]
+        return up, down
+
+    def chain(self, reference, body):
+        """
+        Return the frames from ``reference`` to ``body``, both ends included.
+
+        Return the frames from ``reference`` to ``body`` through their common ancestor, both ends
+        included (['odom', 'base_link', 'camera']; [frame] for a frame in itself).
+        """
+        with self._lock:
+            up, down = self._path(reference, body)
+            common = self._edges[up[-1]].parent if up else reference
+            return up + [common] + down[::-1]
+
+    def time_range(self, reference, body):
+        """
+        Return (first, last): the times at which the chain can be looked up.
+
+        (first, last): the times at which the chain can be looked up, every dynamic edge
+        having data; (-inf, inf) for a chain of static edges only.
+        """
+        with self._lock:
+            up, down = self._path(reference, body)
+            dynamic = [e for e in map(self._edges.get, up + down) if not e.static]
+            if not dynamic:
+                return -math.inf, math.inf
+            return max(e.oldest for e in dynamic), min(e.newest for e in dynamic)
+
+    def latest_common_time(self, reference, body):
+        """Return the time ``lookup(reference, body)`` answers at (see the module docstring)."""
+        with self._lock:
+            return self._latest(*self._path(reference, body), reference)
+
+    def _latest(self, up, down, frame):
+        edges = [self._edges[f] for f in up + down]
+        dynamic = [e.newest for e in edges if not e.static]
+        if dynamic:
+            return min(dynamic)
+        if edges:
+            return max(e.newest for e in edges)
+        edge = self._edges.get(frame)
+        return 0.0 if edge is None else edge.newest
+
+    # -- lookups -------------------------------------------------------------------------
+
+    def lookup(self, reference, body, stamp=None):
+        """
+        (R, b, stamp): the pose of ``body`` in ``reference``, p_reference = R·p_body + b.
+
+        stamp: seconds (float) or an array of them (then R (..., 3, 3), b (..., 3) and the
+        stamps (...) come back as arrays); None for the latest common time. Each dynamic
+        edge is interpolated by the constant-screw motion. TransformLookupError with reason
+        unknown_frame, not_connected or extrapolation.
+        """
+        with self._lock:
+            up, down = self._path(reference, body)
+            if stamp is None:
+                t = self._latest(up, down, reference)
+                times = np.array(t)
+            else:
+                times = as_float_array(stamp, (), 'stamp')
+                if not np.isfinite(times).all():
+                    raise RotationError(f'the lookup stamp must be finite, got {stamp!r}')
+                t = times.copy() if times.ndim else float(times)
+            query = f'lookup of {body!r} in {reference!r}'
+            if times.ndim == 0:
+                R_up, b_up = self._compose_one(up, t, query)
+                R_down, b_down = self._compose_one(down, t, query)
+                # T_reference_body = T_common_reference⁻¹ · T_common_body.
+                return R_up.T @ R_down, R_up.T @ (b_down - b_up), t
+            flat = times.reshape(-1)
+            R_up, b_up = self._compose(up, flat, query)
+            R_down, b_down = self._compose(down, flat, query)
+        Rt = np.swapaxes(R_up, -1, -2)
+        R = Rt @ R_down
+        b = np.einsum('...ij,...j->...i', Rt, b_down - b_up)
+        shape = times.shape
+        return R.reshape(shape + (3, 3)), b.reshape(shape + (3,)), t
+
+    def _compose_one(self, frames, t, query):
+        """_compose at one time t (a float): (R (3, 3), b (3,))."""
+        R, b = _IDENTITY, _ZERO
+        for frame in frames:
+            Re, be = self._edges[frame].at_one(t, frame, query)
+            R, b = Re @ R, Re @ b + be
+        return R, b
+
+    def _compose(self, frames, t, query):
+        """
+        Return T_common_x of the first frame x of ``frames`` at times t (n,).
+
+        T_common_x of the first frame x of ``frames`` (x's chain up to the common ancestor)
+        at times t (n,): E(x_k)···E(x); the identity for no frames.
+        """
+        R = np.broadcast_to(_IDENTITY, t.shape + (3, 3))
+        b = np.broadcast_to(_ZERO, t.shape + (3,))
+        for frame in frames:  # from x up: T ← E(y)·T
+            edge = self._edges[frame]
+            Re, be = edge.at(t, frame, query)
+            b = np.einsum('...ij,...j->...i', Re, b) + be
+            R = Re @ R
+        return R, b

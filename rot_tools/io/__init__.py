@@ -1,0 +1,1 @@
+"""ROS-free formats: the message boundary, reports, CSV text, bag reading, drawings."""

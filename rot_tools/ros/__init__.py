@@ -1,0 +1,1 @@
+"""Everything that imports rclpy: rotation_node, rotation_client, the TF input, the runtime."""

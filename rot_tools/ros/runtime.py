@@ -1,0 +1,353 @@
+"""
+The process around rot_tools' ROS programs: start, signals, executor, spin, exit, errors.
+
+rotation_node.py is the Node and its ``main``; this module runs the process around it, and
+knows nothing of that node (rotation_node imports this module, never the other way round):
+
+- :func:`start` is how a ROS program of this package starts — its console script (through
+  rot_tools.ros.entry) and ``python -m rot_tools.ros.rotation_node`` alike. Python's default
+  SIGTERM kills the process (status −15) and its SIGINT raises KeyboardInterrupt wherever the
+  interpreter is; importing NumPy and rclpy takes ~0.2 s. So :func:`start` installs
+  handlers that exit with status 0 *before* it imports the program's module, then runs its
+  ``main`` and ends the process with :func:`exit_now`. rclpy.init later installs its own
+  handlers, which shut the context down and let ``main`` return 0.
+  :func:`start_command` is the same for a command (rotation_client): Ctrl-C at any moment
+  ends it with the shell's status for it, 130, and no traceback.
+- :func:`exit_now`: once ``main`` has returned, everything ROS is shut down and destroyed
+  explicitly and the process ends with os._exit: the interpreter's own teardown of the
+  loaded extension modules and of the DDS library took 0.2–1.6 s on a busy 2-core machine,
+  and a node must be gone within a second of the signal, every time.
+- :func:`make_executor`, :func:`guard_callbacks`, :func:`spin`, :func:`serve`: the executor
+  the node runs on, and its loop.
+- :func:`init_ros`, :func:`ros_argument_error`, :func:`fail`: bad ROS arguments (a missing
+  or malformed ``--params-file``, a bad ``-p`` or ``-r``, an invalid node name) end the
+  program with exactly one line on stderr and exit status 2, not rcl's log line and a
+  traceback.
+- :func:`program_version`: the installed distribution's version, for ``--version``.
+
+This module is light at import (os, re, signal, sys): NumPy and rclpy are imported inside
+the functions that need them, so that :func:`start` runs before they load.
+"""
+
+import os
+import re
+import signal
+import sys
+
+EXIT_USAGE = 2
+"""Exit status of a program given bad arguments (ROS arguments included)."""
+
+
+# ---------------------------------------------------------------------------------------
+# Start and exit
+
+
+def _exit_cleanly(signum, frame):
+    """
+    Exit 0 at once, unless rclpy's own signal handlers are installed.
+
+    rclpy.init installs handlers that shut the context down (the node's loop then ends and
+    main returns) and then call this one. From then on raising SystemExit here would land
+    in whatever runs at that moment — inside a callback, through the executor's C++.
+    """
+    rclpy_signals = sys.modules.get('rclpy.signals')
+    if rclpy_signals is not None and (rclpy_signals.get_current_signal_handlers_options()
+                                      != rclpy_signals.SignalHandlerOptions.NO):
+        return
+    sys.exit(0)
+
+
+def _install_exit_handlers():
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, _exit_cleanly)
+
+
+def start(module, args=None):
+    """
+    Run ``module``'s ``main(args)`` as this process, stopping cleanly on a signal; no return.
+
+    ``module`` is a module name (e.g. 'rot_tools.ros.rotation_node'), imported only after the
+    SIGINT / SIGTERM handlers are installed. The process ends with main's status through
+    exit_now (a SystemExit's code likewise).
+    """
+    _install_exit_handlers()
+    try:
+        import importlib
+        status = importlib.import_module(module).main(args)
+    except SystemExit as exc:
+        status = exc.code
+    if not isinstance(status, int):
+        if status is not None:
+            print(status, file=sys.stderr)
+        status = 0 if status is None else 1
+    exit_now(status)
+
+
+def _interrupted(signum, frame):
+    sys.exit(130)
+
+
+def start_command(module, args=None):
+    """Return ``module``'s ``main(args)``; Ctrl-C at any moment ends it with status 130."""
+    signal.signal(signal.SIGINT, _interrupted)
+    import importlib
+    return importlib.import_module(module).main(args)
+
+
+def exit_now(status):
+    """
+    End the process with ``status`` once a node's main has returned.
+
+    Destroys rclpy's default context (if rclpy was loaded), flushes stdout and stderr, and
+    skips the interpreter's teardown (see the module docstring).
+    """
+    _install_exit_handlers()  # (an EventsExecutor leaves them default)
+    if 'rclpy' in sys.modules:
+        import rclpy
+        context = rclpy.get_default_context()
+        context.try_shutdown()
+        context.destroy()  # the DDS participant leaves the graph now, not at a lease timeout
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
+
+
+# ---------------------------------------------------------------------------------------
+# Command-line and ROS-argument errors: one line, exit 2
+
+
+def fail(program, text, status=EXIT_USAGE):
+    """Print ``program: text`` as one line on stderr and raise SystemExit(status)."""
+    print(f'{program}: {text}', file=sys.stderr)
+    raise SystemExit(status)
+
+
+# rcl's messages end in the C source locations of the failure (", at /src/x.c:271").
+_C_LOCATION = re.compile(r',? at [^,]*\.[ch](pp)?:\d+')
+_RCL_PARSE = re.compile(r"Couldn't parse (?P<what>.+?): '(?P<arg>.*)'\. Error: (?P<why>.*)", re.S)
+_FORMS = {'-p': ' (the form is -p NAME:=VALUE)', '-r': ' (the form is -r FROM:=TO)'}
+
+
+def ros_argument_error(exc):
+    """
+    Return one line saying what is wrong in the ROS arguments, or None.
+
+    ``exc`` is an exception raised by rclpy.init (rcl could not parse a ``--params-file``, a
+    ``-p`` or a ``-r``; an unknown ``--ros-args`` flag) or while a node was built from the
+    arguments (an invalid node name or namespace from ``-r __node:=`` / ``__ns:=``, a
+    parameter of the wrong type or an invalid value). None for any other exception.
+    """
+    from rclpy.exceptions import InvalidParameterValueException, NameValidationException
+    from rclpy.exceptions import ParameterException
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    if isinstance(exc, _rclpy.UnknownROSArgsError):
+        unknown = re.findall(r"'([^']*)'", str(exc)) or [str(exc)]
+        return 'unknown ROS argument ' + ', '.join(unknown) + ' (after --ros-args)'
+    if isinstance(exc, _rclpy.RCLError):
+        text = _C_LOCATION.sub('', str(exc).replace('failed to initialize rcl: ', ''))
+        parse = _RCL_PARSE.match(text.strip())
+        if parse is None:
+            return ' '.join(text.split())
+        arg, why = parse['arg'], ' '.join(parse['why'].split())
+        form = _FORMS.get(arg.split(' ', 1)[0], '')
+        return f"bad ROS argument '{arg}': not a valid {parse['what']}{form}: {why}"
+    if isinstance(exc, InvalidParameterValueException):
+        reason = re.search(r'Reason: (.*): [^:]*$', str(exc), re.S)
+        return 'invalid parameter value: ' + (reason[1] if reason else str(exc))
+    if isinstance(exc, ParameterException):  # its message ends in ": <parameter name>"
+        return str(exc).rsplit(': ', 1)[0]
+    if isinstance(exc, NameValidationException):
+        first = str(exc).splitlines()[0].rstrip(':')  # then the name and a caret line
+        return (f'{first} (names are built from the node name and namespace: '
+                '-r __node:=NAME, -r __ns:=/NAMESPACE)')
+    return None
+
+
+def user_arguments(argv):
+    """
+    Return the arguments of ``argv`` (program name first) outside its ROS arguments.
+
+    ROS arguments run from each ``--ros-args`` to the next ``--`` or the end, as rcl reads
+    them; unlike rclpy.utilities.remove_ros_args this does not parse them (a bad one is
+    init_ros's to report), so a program can answer --help before anything ROS starts.
+    """
+    found, inside = [], False
+    for arg in argv[1:]:
+        if arg == '--ros-args':
+            inside = True
+        elif inside and arg == '--':
+            inside = False
+        elif not inside:
+            found.append(arg)
+    return found
+
+
+def _missing_params_files(args):
+    """Return the ``--params-file`` arguments (after --ros-args) naming no readable file."""
+    missing = []
+    inside = False
+    for flag, value in zip(args, list(args[1:]) + [None]):
+        if flag == '--ros-args':
+            inside = True
+        elif flag == '--':
+            inside = False
+        elif inside and flag == '--params-file' and value is not None and not (
+                os.path.isfile(value) and os.access(value, os.R_OK)):
+            missing.append(value)
+    return missing
+
+
+def init_ros(program, args=None, **kwargs):
+    """
+    rclpy.init(args=args, **kwargs), or one line on stderr and SystemExit(2).
+
+    For bad ROS arguments (see ros_argument_error) the line is ``program: what is wrong``;
+    rcl's own log line about them ("Failed to parse global arguments") is not printed.
+    ``args`` is the whole command line as rclpy.init takes it (sys.argv when None).
+    """
+    import rclpy
+    from rclpy.logging import get_logger_level, LoggingSeverity, set_logger_level
+    argv = sys.argv if args is None else args
+    for path in _missing_params_files(argv):
+        fail(program, f'--params-file {path}: no such readable file')
+    level = get_logger_level('rcl')
+    set_logger_level('rcl', LoggingSeverity.FATAL)
+    try:
+        rclpy.init(args=args, **kwargs)
+    except Exception as exc:  # noqa: BLE001 - every bad ROS argument is one line
+        text = ros_argument_error(exc)
+        if text is None:
+            raise
+        fail(program, text)
+    finally:
+        if get_logger_level('rcl') == LoggingSeverity.FATAL:  # not set by --log-level
+            set_logger_level('rcl', level)
+
+
+def program_version(program):
+    """'program 0.1.0': the installed rot_tools distribution's version (setup.py's)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return f'{program} {version("rot_tools")}'
+    except PackageNotFoundError:
+        return f'{program} (rot_tools not installed: no distribution metadata)'
+
+
+# ---------------------------------------------------------------------------------------
+# Executor and spin loop
+
+SPIN_TIMEOUT = 0.1
+"""Seconds one spin_once waits at most: the longest a shutdown waits for the loop to notice."""
+
+
+def make_executor(context=None):
+    """
+    Return the executor rotation_node runs on: rot_tools.ros.executor.WaitSetExecutor.
+
+    Chosen on measurement (bench/README.md, bench/bench_overload.py): under a flood beyond
+    the node's pace rclpy's EventsExecutor queued an event per message without bound (RSS
+    +140–160 MB a minute, kept afterwards) and left service calls waiting behind the queue
+    for up to 16 s; rclpy's default executor is bounded and fair but costs up to 2 × the CPU
+    per message. The WaitSetExecutor is bounded and fair (services first, at most a burst of
+    messages per subscription per wake-up) at 1.0–1.3 × the EventsExecutor's cost.
+    test_node_executor.py proves signals, services under a flood, floods of bad input and
+    bounded memory on it.
+    """
+    from rot_tools.ros.executor import WaitSetExecutor
+    return WaitSetExecutor(context=context)
+
+
+def _guarded(callback, node, what, service=False):
+    """
+    Wrap ``callback``: an exception it raises is logged (with its traceback) instead.
+
+    A subscription or timer callback then returns None; a service callback (``service``)
+    returns the response it was given, unfilled, so that the client gets a reply. Once the
+    context is shut down (a signal: rclpy shuts it down from its handler, while a callback
+    may be publishing) a failure is the shutdown's and is not logged. The wrapper has the
+    callback's signature (rclpy inspects it).
+    """
+    import traceback
+    from functools import wraps
+
+    @wraps(callback)
+    def guarded(*args):
+        try:
+            return callback(*args)
+        except Exception:  # noqa: BLE001 - any bug: log it, keep serving
+            if node.context.ok():
+                node.get_logger().error(f'{what} callback raised; the node keeps serving:\n'
+                                        + traceback.format_exc(), throttle_duration_sec=1.0)
+            return args[-1] if service else None
+    return guarded
+
+
+def guard_callbacks(node):
+    """
+    Wrap every subscription, timer and service callback of ``node`` in _guarded.
+
+    A callback that raises is then logged and the node keeps serving, on any executor (the
+    executors would otherwise end the spin; the EventsExecutor would also lose the
+    subscription's other queued messages).
+    """
+    for sub in node.subscriptions:
+        sub.callback = _guarded(sub.callback, node, f'subscription {sub.topic_name}')
+    for timer in node.timers:
+        timer.callback = _guarded(timer.callback, node, 'timer')
+    for srv in node.services:
+        srv.callback = _guarded(srv.callback, node, f'service {srv.srv_name}', service=True)
+
+
+def spin(node, executor):
+    """
+    Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
+
+    The node's ``companions`` (further nodes it owns, in contexts of their own: the hidden
+    node serving its services apart, rot_tools.ros.service_host) are spun with it, on the same
+    executor; the callbacks of all are guarded first (guard_callbacks). rclpy.init
+    installs handlers that shut the context down on SIGINT and SIGTERM; the loop then ends
+    within one SPIN_TIMEOUT (rclpy.spin could hang on a signal).
+    """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    for part in (node, *getattr(node, 'companions', ())):
+        guard_callbacks(part)
+        executor.add_node(part)
+    try:
+        while rclpy.ok(context=executor.context):
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT)
+    except ExternalShutdownException:
+        pass  # the context shut down during spin_once: the normal end
+    finally:
+        executor.shutdown()
+
+
+def serve(make_node, executor_factory=make_executor):
+    """
+    Build a node, spin it until a signal, destroy it and shut rclpy down.
+
+    The node is make_node(), the executor executor_factory(); rclpy.init is the caller's.
+    A signal during the build is a normal stop; any other exception of the build (an
+    invalid parameter) is raised after the clean-up.
+    """
+    import gc
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    node = None
+    try:
+        node = make_node()
+        # What exists now (modules, the node) lives as long as the process: left out of
+        # the collector's full passes, which otherwise stall a message by ~15 ms every few
+        # seconds under load (the tail of the latency).
+        gc.freeze()
+        spin(node, executor_factory())
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception:
+        if rclpy.ok():
+            raise
+        # A signal shut the context down while the node was being built: a normal stop.
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
