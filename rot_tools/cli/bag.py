@@ -44,7 +44,7 @@ from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import matrix_to_euler
 from rot_tools.core.fitting import mean_rotation
 from rot_tools.core.so3 import matrix_to_quaternion
-from rot_tools.io import bag_read, boundary, csv_text
+from rot_tools.io import bag_read, boundary, csv_text, interface
 
 RPY = 'xyz'
 """REP-103 roll, pitch, yaw: about the fixed X, Y, Z axes."""
@@ -118,8 +118,10 @@ class Topic:
         code = int(self.codes[k])
         _, norm = boundary.check_batch(q[None], self.tolerance)
         position = c.position[k] if c.position is not None else None
-        return boundary.batch_refusal_text(self.msgtype, code, q, float(norm[0]),
-                                           self.tolerance, position)
+        fields = (interface.TF_FIELDS if self.chain is not None
+                  else bag_read.SUPPORTED[self.msgtype])
+        return boundary.batch_refusal_text(fields, code, q, float(norm[0]), self.tolerance,
+                                           position)
 
 
 def _stamp_seconds(sec, nanosec):

@@ -28,34 +28,20 @@ from operator import attrgetter
 from pathlib import Path
 
 import numpy as np
+from rot_tools.io import interface
 
-SUPPORTED = {
-    'geometry_msgs/msg/PoseStamped': {
-        'position': 'pose.position', 'orientation': 'pose.orientation'},
-    'geometry_msgs/msg/PoseWithCovarianceStamped': {
-        'position': 'pose.pose.position', 'orientation': 'pose.pose.orientation'},
-    'nav_msgs/msg/Odometry': {
-        'child_frame_id': 'child_frame_id', 'position': 'pose.pose.position',
-        'orientation': 'pose.pose.orientation'},
-    'sensor_msgs/msg/Imu': {
-        'orientation': 'orientation', 'covariance0': 'orientation_covariance',
-        'angular_velocity': 'angular_velocity'},
-    'geometry_msgs/msg/QuaternionStamped': {'orientation': 'quaternion'},
-    'geometry_msgs/msg/TransformStamped': {
-        'child_frame_id': 'child_frame_id', 'position': 'transform.translation',
-        'orientation': 'transform.rotation'},
-}
-"""The message types read, and where their fields are: column name → field path."""
+SUPPORTED = interface.recorded_inputs()
+"""The message types read — rotation_node's inputs with an orientation — and where their
+fields are: column (a role of rot_tools.io.interface.MEMBERS) → field path."""
 
 TF_TYPE = 'tf2_msgs/msg/TFMessage'
 """Read only with --tf (the transforms of /tf and /tf_static feed a transform tree)."""
 
 _HEADER = {'sec': 'header.stamp.sec', 'nanosec': 'header.stamp.nanosec',
            'frame_id': 'header.frame_id'}
-_VECTOR = ('x', 'y', 'z')
-_QUATERNION = ('x', 'y', 'z', 'w')
-_COLUMN_SHAPE = {'position': _VECTOR, 'orientation': _QUATERNION,
-                 'angular_velocity': _VECTOR}
+_COLUMN_SHAPE = {role: parts for role, parts in interface.MEMBERS.items()
+                 if parts is not None and len(parts) > 1}
+"""The columns of several components, and the field members of each (x, y, z, w)."""
 
 CHUNK = 1 << 15
 """Messages read at a time; each topic's among them are parsed together, then dropped."""

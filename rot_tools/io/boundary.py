@@ -25,11 +25,12 @@ the same order, so a quaternion at the edge of the tolerance gets the same verdi
 way. Checks run in one order, which fixes the reason of a message with several defects:
 no orientation (Imu), then a non-finite position or translation, then the quaternion.
 
-Per message, every converter has the form ``convert(fields, settings)`` → ``(R, b)``:
-``fields`` are the floats it needs, in the message's order (rotation_node reads them from the
-message's bytes, rot_tools.io.cdr), ``settings`` is rotation_node's Settings (they read
-``quaternion_tolerance``, and the Euler one ``euler_sequence`` and ``degrees``); it raises
-:class:`RefusedInput`. For a batch,
+Per message, every converter has the form ``convert(values, settings, fields)`` →
+``(R, b)``: ``values`` are the floats it needs, in the message's order (rotation_node reads
+them from the message's bytes, rot_tools.io.cdr), ``settings`` is rotation_node's Settings
+(they read ``quaternion_tolerance``, and the Euler one ``euler_sequence`` and ``degrees``),
+``fields`` the input's {role: path} (rot_tools.io.interface: the names a refusal gives); it
+raises :class:`RefusedInput`. For a batch,
 :func:`check_batch` gives each item's reason code (0 = accepted; ``REFUSAL_REASONS[code - 1]``
 otherwise) and :func:`refusal_text` the sentence the per-message converter would raise.
 """
@@ -188,28 +189,18 @@ def quaternion_to_rotation(x, y, z, w, tolerance, name='orientation'):
     return quaternion_to_matrix((x / norm, y / norm, z / norm, w / norm))
 
 
-FIELD_NAMES = {
-    'geometry_msgs/msg/PoseStamped': ('pose.orientation', 'pose.position'),
-    'geometry_msgs/msg/PoseWithCovarianceStamped': ('pose.pose.orientation',
-                                                    'pose.pose.position'),
-    'nav_msgs/msg/Odometry': ('pose.pose.orientation', 'pose.pose.position'),
-    'sensor_msgs/msg/Imu': ('orientation', None),
-    'geometry_msgs/msg/QuaternionStamped': ('quaternion', None),
-    'geometry_msgs/msg/TransformStamped': ('transform.rotation', 'transform.translation'),
-    'tf2_msgs/msg/TFMessage': ('transform.rotation', 'transform.translation'),  # each one
-}
-"""Per message type: the names of its orientation and position fields, as its refusals name
-them (None: no position, b = 0)."""
+TRANSFORM_FIELDS = {'position': 'transform.translation', 'orientation': 'transform.rotation'}
+"""The fields of a geometry_msgs/TransformStamped's rotation and translation, by role."""
 
 
-def rigid_of_fields(fields, tolerance, orientation, position):
+def rigid_of_fields(values, tolerance, orientation, position):
     """
     (R, b) of a Pose's or a Transform's fields (px, py, pz, qx, qy, qz, qw).
 
     b = the position, R from the quaternion; ``orientation`` and ``position`` are the
     fields' names, for the refusal.
     """
-    px, py, pz, qx, qy, qz, qw = fields
+    px, py, pz, qx, qy, qz, qw = values
     _require_finite(position, 'xyz', (px, py, pz))
     return quaternion_to_rotation(qx, qy, qz, qw, tolerance, orientation), np.array((px, py, pz))
 
@@ -221,67 +212,56 @@ def pose_to_rt(pose, tolerance, name='pose'):
                            f'{name}.orientation', f'{name}.position')
 
 
-def pose_fields_to_rt(fields, settings):
-    """(R, b) of a geometry_msgs/PoseStamped's ``pose`` (position, orientation)."""
-    return rigid_of_fields(fields, settings.quaternion_tolerance,
-                           *FIELD_NAMES['geometry_msgs/msg/PoseStamped'])
-
-
-def pose_pose_fields_to_rt(fields, settings):
+def pose_fields_to_rt(values, settings, fields):
     """
-    (R, b) of the ``pose.pose`` of a PoseWithCovarianceStamped or an Odometry.
+    (R, b) of a Pose's or a Transform's (position, orientation) values: b, R from q.
 
-    The covariance is not used (a NaN there does not refuse the message); an Odometry's
-    body is its ``child_frame_id``, its twist is not used.
+    ``fields``: {'position': path, 'orientation': path} of the message, for the refusal
+    (e.g. an Odometry's pose.pose.position; its covariance and twist are not used).
     """
-    return rigid_of_fields(fields, settings.quaternion_tolerance,
-                           *FIELD_NAMES['nav_msgs/msg/Odometry'])  # (the same names)
-
-
-def transform_fields_to_rt(fields, settings):
-    """(R, b) of a geometry_msgs/TransformStamped: R from rotation, b = translation."""
-    return rigid_of_fields(fields, settings.quaternion_tolerance,
-                           *FIELD_NAMES['geometry_msgs/msg/TransformStamped'])
+    return rigid_of_fields(values, settings.quaternion_tolerance, fields['orientation'],
+                           fields['position'])
 
 
 def transform_stamped_to_transform(msg, settings):
     """(header, R, b) of a geometry_msgs/TransformStamped message object (the TF tree's)."""
     t, q = msg.transform.translation, msg.transform.rotation
-    return (msg.header, *transform_fields_to_rt((t.x, t.y, t.z, q.x, q.y, q.z, q.w), settings))
+    return (msg.header, *pose_fields_to_rt((t.x, t.y, t.z, q.x, q.y, q.z, q.w), settings,
+                                           TRANSFORM_FIELDS))
 
 
-def imu_fields_to_rt(fields, settings):
+def imu_fields_to_rt(values, settings, fields):
     """
     (R, 0) of a sensor_msgs/Imu's (orientation x, y, z, w, orientation_covariance[0]).
 
     sensor_msgs/Imu marks "no orientation estimate" with orientation_covariance[0] = -1:
     such a message is refused (NO_ORIENTATION). Angular velocity, linear acceleration and
-    the covariances are not used.
+    the covariances are not used. ``fields['orientation']`` names the quaternion.
     """
-    x, y, z, w, covariance0 = fields
-    name = FIELD_NAMES['sensor_msgs/msg/Imu'][0]
+    x, y, z, w, covariance0 = values
+    name = fields['orientation']
     if lacks_orientation(covariance0):
         raise RefusedInput(NO_ORIENTATION, refusal_text(CODE[NO_ORIENTATION], name))
     return quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance, name), np.zeros(3)
 
 
-def quaternion_fields_to_rt(fields, settings):
-    """(R, 0) of a geometry_msgs/QuaternionStamped's ``quaternion`` (x, y, z, w)."""
-    name = FIELD_NAMES['geometry_msgs/msg/QuaternionStamped'][0]
-    return quaternion_to_rotation(*fields, settings.quaternion_tolerance, name), np.zeros(3)
+def quaternion_fields_to_rt(values, settings, fields):
+    """(R, 0) of a quaternion's (x, y, z, w); ``fields['orientation']`` names it."""
+    return quaternion_to_rotation(*values, settings.quaternion_tolerance,
+                                  fields['orientation']), np.zeros(3)
 
 
-def euler_fields_to_rt(fields, settings):
+def euler_fields_to_rt(values, settings, fields):
     """
-    (R, 0) of a geometry_msgs/Vector3Stamped's ``vector`` holding (θ1, θ2, θ3).
+    (R, 0) of Euler angles (θ1, θ2, θ3); ``fields['angles']`` names the Vector3 holding them.
 
     The angles are of ``settings.euler_sequence``, in degrees when ``settings.degrees``,
     else radians.
     """
-    _require_finite('vector', 'xyz', fields)
+    _require_finite(fields['angles'], 'xyz', values)
     if settings.degrees:
-        fields = tuple(math.radians(a) for a in fields)
-    return euler_to_matrix(fields, settings.euler_sequence), np.zeros(3)
+        values = tuple(math.radians(a) for a in values)
+    return euler_to_matrix(values, settings.euler_sequence), np.zeros(3)
 
 
 # ---------------------------------------------------------------------------------------
@@ -309,9 +289,13 @@ def check_batch(quaternions, tolerance, positions=None, covariance0=None):
     return code, norm
 
 
-def batch_refusal_text(msgtype, code, quaternion, norm, tolerance, position=None):
-    """Return the sentence the per-message converter of ``msgtype`` raises for one refused item."""
-    q_name, p_name = FIELD_NAMES[msgtype]
+def batch_refusal_text(fields, code, quaternion, norm, tolerance, position=None):
+    """
+    Return the sentence the per-message converter raises for one refused item.
+
+    ``fields``: {role: path} of the message's fields (rot_tools.io.interface), for the names.
+    """
+    q_name, p_name = fields['orientation'], fields.get('position')
     if REFUSAL_REASONS[code - 1] == NON_FINITE and position is not None and not all(
             map(math.isfinite, position)):
         return refusal_text(code, p_name, position, fields='xyz')

@@ -22,6 +22,8 @@ The other way, taking a message object costs rclpy ~18 µs (a PoseStamped: the C
 turned into six Python objects), taking its bytes (``create_subscription(..., raw=True)``)
 ~1 µs: :func:`stamped_reader` reads a stamped input's header and the float64 fields the
 node uses with one struct.unpack_from, in either byte order (CDR_LE or CDR_BE).
+:func:`input_reader` and :func:`output_writer` make them for a row of
+rot_tools.io.interface (the fields read or written).
 """
 
 import struct
@@ -115,19 +117,14 @@ def stamped_reader(strings, count):
     return read
 
 
-def stamped(count, order=None):
+def stamped(count):
     """
     Return encode(head, values) of a header (from :func:`header`) and ``count`` float64.
 
     E.g. Vector3Stamped (3), QuaternionStamped (x, y, z, w: 4), TwistStamped (6).
-
-    ``order``: the message's field order as indices into ``values`` (TwistStamped holds
-    (linear, angular), the screw twist is (angular, linear)).
     """
     pack = struct.Struct(f'<{count}d').pack
-    if order is None:
-        return lambda head, values: head + pack(*values)
-    return lambda head, values: head + pack(*[values[i] for i in order])
+    return lambda head, values: head + pack(*values)
 
 
 def float64_multi_array(dims, data_offset=0):
@@ -148,6 +145,26 @@ def float64_multi_array(dims, data_offset=0):
     prefix = w.data()
     pack = struct.Struct(f'<{count}d').pack
     return lambda head, values: prefix + pack(*values)
+
+
+def input_reader(row):
+    """
+    Return read(data) → (Header, values) of an input row (rot_tools.io.interface.Input).
+
+    Its string fields skipped, its float64 fields read (:func:`stamped_reader`).
+    """
+    return stamped_reader(len(row.strings()), len(row.floats()))
+
+
+def output_writer(row):
+    """
+    Return encode(head, values) of an output row (rot_tools.io.interface.Output).
+
+    A MultiArray of the row's layout, or a header and the row's float64 fields.
+    """
+    if row.layout:
+        return float64_multi_array(row.layout)
+    return stamped(len(row.fields))
 
 
 class Writer:

@@ -2,15 +2,13 @@
 ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware helpers.
 
 Inbound, every input message becomes one rigid transform ``(header, R, b)``: R a (3, 3)
-rotation, b a (3,) translation (b = 0 for an input that carries only an orientation). Every
-converter has the form ``convert(msg, settings)``, where ``settings`` is rotation_node's
-Settings: the converters read ``quaternion_tolerance``, and the Euler one
-``euler_sequence`` and ``degrees``. A message that cannot be one transform — a NaN/Inf in a
-field that is used, a zero quaternion, a quaternion whose norm is further than the tolerance
-from 1, an Imu that says it has no orientation — raises :class:`RefusedInput`, whose
-``reason`` is a short key for counting. The converters and their checks are ROS-free and
-live in rot_tools.io.boundary (``rot-tools bag`` runs the same checks on recorded messages, as
-batches); they are re-exported here.
+rotation, b a (3,) translation (b = 0 for an input that carries only an orientation), by
+its row's converter (rot_tools.io.interface). A message that cannot be one transform — a
+NaN/Inf in a field that is used, a zero quaternion, a quaternion whose norm is further than
+the tolerance from 1, an Imu that says it has no orientation — raises
+:class:`RefusedInput`, whose ``reason`` is a short key for counting. The converters and
+their checks are ROS-free and live in rot_tools.io.boundary (``rot-tools bag`` runs the same
+checks on recorded messages, as batches); the names the node uses are re-exported here.
 
 Quaternions are (x, y, z, w), the ROS message order. Inbound they go through
 rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_quaternion of R
@@ -21,10 +19,11 @@ Outbound helpers build the node's other messages from NumPy values: poses and Pa
 (message objects), and the pictures — the screw-axis Marker and the MarkerArray of a
 rot_tools.io.drawing.Picture — as serialised bytes (rot_tools.io.cdr.Writer: ~60 µs for a
 picture's MarkerArray, where building Marker objects and rclpy's conversion of them took
-~200 µs). MATRIX_DIMS is ~/rotation_matrix's layout (the per-input outputs are bytes too,
-rot_tools.io.cdr).
+~200 µs). The per-input outputs are bytes too (rot_tools.io.cdr, from the rows of
+rot_tools.io.interface).
 """
 
+import importlib
 import struct
 
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
@@ -35,9 +34,8 @@ from rot_tools.io import cdr
 # The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.io.boundary. Its
 # names are re-exported here, where rotation_node has always found them.
 from rot_tools.io.boundary import (  # noqa: F401
-    euler_fields_to_rt, imu_fields_to_rt, NO_ORIENTATION, NON_FINITE, NON_UNIT_QUATERNION,
-    pose_fields_to_rt, pose_pose_fields_to_rt, pose_to_rt, quaternion_fields_to_rt,
-    REFUSAL_REASONS, RefusedInput, transform_fields_to_rt, ZERO_QUATERNION)
+    NO_ORIENTATION, NON_FINITE, NON_UNIT_QUATERNION, pose_to_rt, REFUSAL_REASONS, RefusedInput,
+    ZERO_QUATERNION)
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 
@@ -47,12 +45,14 @@ def type_name(msg_type):
     return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
 
 
+def message_class(name):
+    """The message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
+    package, kind, class_name = name.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), class_name)
+
+
 # ---------------------------------------------------------------------------------------
 # Outbound: NumPy -> message
-
-MATRIX_DIMS = (('rows', 3, 9), ('cols', 3, 3))
-"""(label, size, stride) of the dimensions of a row-major 3x3 matrix in a std_msgs/MultiArray
-(std_msgs' own convention): ~/rotation_matrix's layout."""
 
 
 SCREW_AXIS_COLOR = (1.0, 0.5, 0.0, 1.0)

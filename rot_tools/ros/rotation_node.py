@@ -1,9 +1,10 @@
 """
 rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
 
-Every input kind is one row of :data:`INPUTS` — topic, message type, reader, converter — and
-every message becomes one rigid transform (header, R, b) at the boundary: its bytes read by
-rot_tools.io.cdr (a raw subscription), its fields converted by rot_tools.io.boundary.
+Every input and output is one row of rot_tools.io.interface — topic, message type, fields,
+formula — and every message becomes one rigid transform (header, R, b) at the boundary: its
+bytes read by rot_tools.io.cdr (a raw subscription, rot_tools.ros.topics), its fields
+converted by its row's formula (rot_tools.io.boundary).
 From there one path serves them all: one pass of the decomposition kernels
 (rot_tools.core.decomposition.decompose_values) gives every number published — rotation
 vector θ·l̂,
@@ -12,9 +13,8 @@ of R) — and the picture's decomposition runs the same kernels, so at θ = π a
 one input share the axis sign. Outputs carry the input's header. Topics, services and
 parameters: doc/node.md, and ``rotation_node --help``.
 
-The pictures (~/markers and ~/screw_axis, rot_tools.io.drawing) cost several times the rest of
-an input's work, so they are throttled: at most MARKER_RATE a second, the latest input wins,
-and the last input is always drawn. A timer callback draws them, never an input's callback.
+The pictures (~/markers and ~/screw_axis) are throttled: rot_tools.ros.pictures. The reply of
+~/screw_path: rot_tools.ros.screw_path.
 """
 
 if __name__ == '__main__':
@@ -27,20 +27,15 @@ if __name__ == '__main__':
 import difflib
 from functools import partial
 import math
-from operator import attrgetter
 import sys
 import textwrap
 import time
 from typing import Callable, NamedTuple
 
-from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
-from geometry_msgs.msg import TransformStamped, TwistStamped, Vector3Stamped
-from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -48,42 +43,21 @@ from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from rot_tools.core.decomposition import decompose_values
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
-from rot_tools.core.screw import screw_from_transform, screw_interpolate
-from rot_tools.io import cdr, drawing
+from rot_tools.io import cdr
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
-from rot_tools.ros import messages, runtime, tf_input
+from rot_tools.ros import messages, runtime, screw_path, tf_input
+from rot_tools.ros.pictures import MARKER_RATE, Pictures
+from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
+                                      PATH_TOO_LONG)
+from rot_tools.ros.topics import INPUTS, OUTPUTS  # noqa: F401 - the rows as subscribed
 from rot_tools.ros.service_host import ServiceHost
-from sensor_msgs.msg import Imu
-from std_msgs.msg import Float64MultiArray, Header
 from std_srvs.srv import Trigger
-from visualization_msgs.msg import Marker, MarkerArray
 
-FRAME_MISMATCH = 'frame_mismatch'
-BAD_TOLERANCE = 'bad_tolerance'
-PATH_TOO_LONG = 'path_too_long'
-NOT_DECOMPOSABLE = 'not_decomposable'
 MALFORMED = 'malformed'
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
     MALFORMED, NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
 ) + tf_input.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
-
-DEFAULT_PATH_STEPS = 20
-"""Steps of ~/screw_path when the request's tolerance is ≤ 0 (21 poses)."""
-
-MAX_PATH_STEPS = 10_000
-"""A tolerance that needs more steps than this is refused (the reply would be huge)."""
-
-MAX_REPLY_BYTES = 16_000_000
-"""Largest ~/screw_path reply (serialised bytes); beyond it the request is path_too_long."""
-
-REPLY_BYTES_PER_POSE = 80
-"""Serialised bytes of one PoseStamped of a reply, besides its frame_id: stamp 8, string
-length 4 and terminating NUL 1, alignment of the pose at most 7, pose 7 × 8 = 56 (76; the
-Path's header, sequence length and encapsulation fit in one more)."""
-
-MARKER_RATE = 30.0
-"""Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
 
 PROG = 'rotation_node'
 """The program's name in its messages."""
@@ -95,81 +69,18 @@ MIN_MARKER_SCALE = 1e-6
 """Smallest marker_scale (m): the arrows' shafts are 5 % of it, and RViz draws nothing of
 a zero width (5e-324 was accepted once)."""
 
-WARM_UP_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-WARM_UP_TRANSLATION = np.array([0.0, 0.0, 1.0])
-"""The screw motion drawn (and not published) at start-up: a quarter turn about z, 1 m up."""
-
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
 
 
-class InputKind(NamedTuple):
-    """One kind of input: where it arrives, its type, and how it becomes (header, R, b)."""
-
-    topic: str
-    msg_type: type
-    read: Callable
-    """read(data) -> (header, fields): the message's bytes read (rot_tools.io.cdr.stamped_reader:
-    the strings skipped and the float64 read after the header); raises cdr.Malformed."""
-    convert: Callable
-    """convert(fields, settings) -> (R, b); raises messages.RefusedInput."""
-
-
-_POSE = cdr.stamped_reader(0, 7)  # pose (position, orientation), from any Pose after the header
-_CHILD_AND_POSE = cdr.stamped_reader(1, 7)  # child_frame_id, then a Pose or a Transform
-INPUTS = (
-    InputKind('~/pose', PoseStamped, _POSE, messages.pose_fields_to_rt),
-    InputKind('~/euler', Vector3Stamped, cdr.stamped_reader(0, 3), messages.euler_fields_to_rt),
-    InputKind('~/transform', TransformStamped, _CHILD_AND_POSE,
-              messages.transform_fields_to_rt),
-    InputKind('~/pose_with_covariance', PoseWithCovarianceStamped, _POSE,
-              messages.pose_pose_fields_to_rt),
-    InputKind('~/odometry', Odometry, _CHILD_AND_POSE, messages.pose_pose_fields_to_rt),
-    InputKind('~/imu', Imu, cdr.stamped_reader(0, 5), messages.imu_fields_to_rt),  # + cov[0]
-    InputKind('~/orientation', QuaternionStamped, cdr.stamped_reader(0, 4),
-              messages.quaternion_fields_to_rt),
-)
-"""Every input of the node; each joins the one path (header, R, b) → outputs."""
-
-
-class OutputKind(NamedTuple):
-    """One output published for every accepted input: topic, type, and what fills it."""
-
-    topic: str
-    msg_type: type
-    value: str
-    """The field of rot_tools.core.decomposition.Values the message carries."""
-    encode: Callable
-    """encode(head, value) -> the message's serialised bytes (rot_tools.io.cdr; ``head`` is
-    cdr.header of the input's header)."""
-    angles: bool = False
-    """The value is angles, published in angle_unit (the Values are in radians)."""
-
-
-_VECTOR3_STAMPED = cdr.stamped(3)
-OUTPUTS = (
-    OutputKind('~/rotation_matrix', Float64MultiArray, 'matrix',
-               cdr.float64_multi_array(messages.MATRIX_DIMS)),
-    OutputKind('~/quaternion', QuaternionStamped, 'quaternion', cdr.stamped(4)),
-    OutputKind('~/axis_angle', Vector3Stamped, 'rotvec', _VECTOR3_STAMPED),
-    OutputKind('~/euler_angles', Vector3Stamped, 'euler', _VECTOR3_STAMPED, angles=True),
-    OutputKind('~/rpy', Vector3Stamped, 'rpy', _VECTOR3_STAMPED, angles=True),
-    OutputKind('~/screw', TwistStamped, 'twist', cdr.stamped(6, order=(3, 4, 5, 0, 1, 2))),
-)
-"""Every output published for each accepted input, from one decompose_values pass; a new
-output is a row here and its field of Values (its kernel output). The messages are written
-as bytes (rot_tools.io.cdr: a third of the cost of rclpy's conversion of a message object).
-The pictures (~/markers, ~/screw_axis) are not rows: they are drawn at most MARKER_RATE
-times a second."""
-
-
 class Source(NamedTuple):
-    """An input subscription as the callbacks see it: topic (resolved), type name, InputKind's."""
+    """An input as the callbacks see it: topic (resolved), type name, its row's read, convert."""
 
     topic: str
     type_name: str
     read: Callable
     convert: Callable
+    fields: dict
 
 
 class Settings(NamedTuple):
@@ -310,40 +221,28 @@ class RotationNode(Node):
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
-        # For each output: its publish, encode, its Values field getter and whether it is
-        # angles (the hot path).
+        # For each output published per input: its publish, encode, Values getter and whether
+        # it is angles (the hot path); the pictures' publishers by name.
         qos = QoSProfile(depth=10)
+        publishers = {kind.row.name: self.create_publisher(kind.msg_type, kind.topic, qos)
+                      for kind in OUTPUTS}
         self._outputs = tuple(
-            (self.create_publisher(kind.msg_type, kind.topic, qos).publish, kind.encode,
-             attrgetter(kind.value), kind.angles)
-            for kind in OUTPUTS)
-        self._marker_pub = self.create_publisher(Marker, '~/screw_axis', qos)
-        self._markers_pub = self.create_publisher(MarkerArray, '~/markers', qos)
-        self._picture_due = None  # the arguments of the latest drawing not yet published
-        self._picture_shown = None  # the header of the picture on show (ADDs), or None
-        self._picture_sent = -math.inf  # time.monotonic() of the last one published
-        # Pictures are drawn by a timer callback, never inside an input's: the next one a
-        # MARKER_RATE period after the last (_picture_timer), or at once when that has
-        # passed (_picture_soon, period 0: due on the executor's next pass).
-        steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self._picture_timer = self.create_timer(
-            1.0 / MARKER_RATE, self._publish_picture, clock=steady, autostart=False)
-        self._picture_soon = self.create_timer(
-            0.0, self._publish_picture, clock=steady, autostart=False)
-        self._warm_up_picture()
+            (publishers[kind.row.name].publish, kind.encode, kind.row.value, kind.row.angles)
+            for kind in OUTPUTS if kind.row.value is not None)
+        self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'])
 
         # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
         # needs a tree between messages, two topics with their own QoS, and gives an output
         # only when the chain has a new common time; rot_tools.ros.tf_input).
         self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
                                        quaternion_tolerance=self._settings.quaternion_tolerance)
-        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None)
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None, None)
         self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
 
         self._sources = []
         for kind in INPUTS:
-            source = Source(self.resolve_topic_name(kind.topic),
-                            messages.type_name(kind.msg_type), kind.read, kind.convert)
+            source = Source(self.resolve_topic_name(kind.topic), kind.row.type_name, kind.read,
+                            kind.row.convert, kind.row.fields)
             # raw: the callback gets the message's bytes (rot_tools.io.cdr reads what it needs)
             self.create_subscription(kind.msg_type, kind.topic, partial(self._on_input, source),
                                      qos_profile_sensor_data, raw=True)
@@ -438,7 +337,7 @@ class RotationNode(Node):
             was_drawing = self._settings.publish_markers
             old, self._settings = self._settings, self._read_settings()
             if was_drawing and not self._settings.publish_markers:
-                self._clear_picture()
+                self._pictures.clear()
             new = self._settings
             self._tf.set_quaternion_tolerance(new.quaternion_tolerance)
             frames = (new.tf_reference_frame, new.tf_body_frame)
@@ -473,12 +372,12 @@ class RotationNode(Node):
         """Read one message's bytes to (header, R, b) and publish every output, or refuse it."""
         settings = self._settings
         try:
-            header, fields = source.read(data)
+            header, values = source.read(data)
         except cdr.Malformed as exc:
             self._refuse(source.topic, MALFORMED, f'not a {source.type_name}: {exc}')
             return
         try:
-            R, b = source.convert(fields, settings)
+            R, b = source.convert(values, settings, source.fields)
             # Every number published, as plain floats from the generated kernels (the hot
             # path: decompose's arrays cost more than the math); the picture's
             # decomposition is left to the drawing, at most MARKER_RATE times a second.
@@ -512,7 +411,7 @@ class RotationNode(Node):
                 value = tuple(map(math.degrees, value))
             publish(encode(head, value))
         if settings.publish_markers:
-            self._offer_picture(header, R, b, settings)
+            self._pictures.offer(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
 
     def _refuse(self, topic, reason, text, error=False, header=None):
@@ -531,78 +430,6 @@ class RotationNode(Node):
             self._warned[topic, reason] = now
             log = self.get_logger().error if error else self.get_logger().warning
             log(f'refused input on {topic} ({reason}): {text}')
-
-    # -- markers -----------------------------------------------------------------------
-
-    def _offer_picture(self, header, R, b, settings):
-        """
-        Have the picture of this input drawn next, as soon as MARKER_RATE allows it.
-
-        An input that arrives while a drawing is due replaces the one waiting: the latest
-        wins, and the last input is always drawn.
-        """
-        self._picture_due = (header, R, b, settings)
-        if not (self._picture_timer.is_canceled() and self._picture_soon.is_canceled()):
-            return
-        if time.monotonic() - self._picture_sent >= 1.0 / MARKER_RATE:
-            self._picture_soon.reset()  # due at once
-        else:
-            self._picture_timer.reset()  # fires one period from now
-
-    def _publish_picture(self):
-        """~/markers and ~/screw_axis of the input waiting (DELETEs for the identity)."""
-        self._picture_timer.cancel()
-        self._picture_soon.cancel()
-        due, self._picture_due = self._picture_due, None
-        if due is None:  # dropped: publish_markers was switched off (_clear_picture)
-            return
-        header, R, b, settings = due
-        self._picture_sent = time.monotonic()
-        try:
-            picture = drawing.picture(R, b, settings.marker_scale, settings.degrees)
-        except RotationError as exc:  # e.g. a huge marker_scale: the old picture goes
-            self.get_logger().warning(f'no picture: {exc}', throttle_duration_sec=1.0)
-            picture = None
-        if picture is None or picture.kind == drawing.IDENTITY:
-            self._delete_picture(header)
-            return
-        self._picture_shown = header
-        self._markers_pub.publish(messages.picture_markers(header, picture))
-        self._marker_pub.publish(messages.screw_axis_marker(
-            header, picture.screw.point, picture.screw.direction, settings.marker_scale))
-
-    def _warm_up_picture(self):
-        """
-        Draw one picture and build its messages, publishing nothing.
-
-        The first drawing of a process pays for one-off work (NumPy's first calls): a few
-        ms, paid here at start-up instead of inside the callback of the first input.
-        """
-        header = Header()
-        picture = drawing.picture(WARM_UP_ROTATION, WARM_UP_TRANSLATION, 1.0, False)
-        messages.picture_markers(header, picture)
-        messages.screw_axis_marker(header, picture.screw.point, picture.screw.direction, 1.0)
-        messages.delete_picture_markers(header)
-        messages.delete_marker(header, messages.SCREW_AXIS_NS, 0)
-
-    def _delete_picture(self, header):
-        """DELETE every marker of ~/markers and ~/screw_axis, in ``header``'s frame."""
-        self._picture_shown = None
-        self._markers_pub.publish(messages.delete_picture_markers(header))
-        self._marker_pub.publish(messages.delete_marker(header, messages.SCREW_AXIS_NS, 0))
-
-    def _clear_picture(self):
-        """
-        publish_markers was switched off: drop the picture waiting, delete the one shown.
-
-        The DELETEs go once, in the frame of the last picture drawn; nothing is sent when
-        nothing is shown (none drawn yet, or the last input was the identity).
-        """
-        self._picture_timer.cancel()
-        self._picture_soon.cancel()
-        self._picture_due = None
-        if self._picture_shown is not None:
-            self._delete_picture(self._picture_shown)
 
     # -- services ----------------------------------------------------------------------
 
@@ -668,93 +495,19 @@ class RotationNode(Node):
         Constant-screw motion start → goal, poses at most ``tolerance`` apart.
 
         Every failure is a refusal: counted by reason, logged (throttled per reason), and
-        answered with an empty path. The reply is bounded in bytes before it is built.
+        answered with an empty path (rot_tools.ros.screw_path).
         """
-        start, goal = request.start, request.goal
-        response.plan.header = start.header
+        header = request.start.header
+        response.plan.header = header
         try:
-            if start.header.frame_id != goal.header.frame_id:
-                raise messages.RefusedInput(
-                    FRAME_MISMATCH, f'start is in frame {start.header.frame_id!r}, goal in '
-                    f'{goal.header.frame_id!r}')
-            q_tol = self._settings.quaternion_tolerance
-            R0, b0 = messages.pose_to_rt(start.pose, q_tol, 'start.pose')
-            R1, b1 = messages.pose_to_rt(goal.pose, q_tol, 'goal.pose')
-            with np.errstate(all='ignore'):
-                if not np.isfinite(R0.T @ (b1 - b0)).all():
-                    raise messages.RefusedInput(
-                        NOT_DECOMPOSABLE, 'start and goal are too far apart: goal.position '
-                        '− start.position overflows float64 (beyond ±1.8e308)')
-                steps = self._path_steps(R0, b0, R1, b1, request.tolerance)
-                self._check_reply_bytes(start.header.frame_id, steps + 1)
-                Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, steps + 1),
-                                           check=False)
-            if not (np.isfinite(Rs).all() and np.isfinite(bs).all()):
-                raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
-            plan = messages.path_msg(start.header, start, goal, Rs, bs)
+            response.plan = screw_path.screw_path(request, self._settings.quaternion_tolerance)
         except messages.RefusedInput as exc:
-            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True,
-                         header=start.header)
-            return response
+            self._refuse(self._screw_path_name, exc.reason, str(exc), error=True, header=header)
         except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
             self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
                          f'no screw motion from start to goal: {exc}', error=True,
-                         header=start.header)
-            return response
-        response.plan = plan
+                         header=header)
         return response
-
-    @staticmethod
-    def _path_steps(R0, b0, R1, b1, tolerance):
-        """
-        Return the number of equal steps keeping consecutive poses ``tolerance`` apart.
-
-        The relative motion T0⁻¹T1 is a screw: angle θ about an axis at distance r from the
-        origin of the start frame, translation d along it. Split into n equal steps, each
-        turns θ/n, and the origin moves along a helix by a chord ≤ √((rθ)² + d²)/n.
-        tolerance ≤ 0 means DEFAULT_PATH_STEPS; NaN, or one needing more than MAX_PATH_STEPS,
-        raises RefusedInput.
-        """
-        if math.isnan(tolerance):
-            raise messages.RefusedInput(BAD_TOLERANCE, 'tolerance is NaN')
-        if tolerance <= 0.0:
-            return DEFAULT_PATH_STEPS
-        screw = screw_from_transform(R0.T @ R1, R0.T @ (b1 - b0), check=False)
-        theta = float(screw.angle)
-        arc = math.hypot(float(np.linalg.norm(screw.point)) * theta, float(screw.translation))
-        need = max(theta, arc) / tolerance
-        if not need <= MAX_PATH_STEPS:
-            raise messages.RefusedInput(
-                PATH_TOO_LONG, f'tolerance {tolerance:g} needs {need:.3g} steps, more than '
-                f'{MAX_PATH_STEPS}')
-        return max(1, math.ceil(need - 1e-9))  # 4 + rounding noise is 4 steps, not 5
-
-    @staticmethod
-    def _reply_bytes(frame_id, poses):
-        """
-        Return an upper bound of the serialised size of a GetPlan reply (CDR bytes).
-
-        The path's header and each of its ``poses`` carries a copy of ``frame_id``:
-        REPLY_BYTES_PER_POSE plus the frame_id's UTF-8 bytes each (the Path's own header
-        and sequence length counted as one more pose).
-        """
-        size = len(frame_id.encode('utf-8', 'surrogatepass'))
-        return (poses + 1) * (size + REPLY_BYTES_PER_POSE)
-
-    @classmethod
-    def _check_reply_bytes(cls, frame_id, poses):
-        """
-        Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
-
-        Checked before anything is built: a 100 kB frame_id × 10,001 poses is a 1 GB
-        reply, and the node would hold it twice (messages and their serialisation).
-        """
-        size = cls._reply_bytes(frame_id, poses)
-        if size > MAX_REPLY_BYTES:
-            frame_bytes = len(frame_id.encode('utf-8', 'surrogatepass'))
-            raise messages.RefusedInput(
-                PATH_TOO_LONG, f'a reply of {poses} poses with a frame_id of {frame_bytes} '
-                f'bytes would take {size / 1e6:.3g} MB, more than {MAX_REPLY_BYTES / 1e6:g} MB')
 
 
 def _rows(rows, width=99):
@@ -772,12 +525,11 @@ def _default_text(value):
 
 
 def usage():
-    """Return the text of ``rotation_node --help``, from INPUTS, OUTPUTS and PARAMETERS."""
-    inputs = [(kind.topic, messages.type_name(kind.msg_type)) for kind in INPUTS]
-    outputs = [(kind.topic, messages.type_name(kind.msg_type)
-                + (' (in angle_unit)' if kind.angles else '')) for kind in OUTPUTS]
-    outputs += [('~/markers, ~/screw_axis', 'the picture of the motion (MarkerArray, Marker), '
-                 f'when publish_markers, at most {MARKER_RATE:g} a second')]
+    """Return the text of ``rotation_node --help``, from the interface's rows and PARAMETERS."""
+    inputs = [(kind.topic, f'{kind.row.type_name}: {kind.row.help}') for kind in INPUTS]
+    outputs = [(kind.topic, f'{kind.row.type_name}: {kind.row.help}'
+                + ('' if kind.row.value else f' (at most {MARKER_RATE:g} a second)'))
+               for kind in OUTPUTS]
     parameters = [(f'{name} = {_default_text(spec.default)}', spec.descriptor.description
                    + (f' ({spec.descriptor.additional_constraints})'
                       if spec.descriptor.additional_constraints else ''))
