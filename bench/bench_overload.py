@@ -1,12 +1,13 @@
 """
-Overload: rotation_node under the fastest flood one publisher sends, for 60 s.
+Overload: rotation_node under a 60 s flood of ~/pose, as fast as one publisher sends or at a rate.
 
 Processes (all started here, in a DDS domain of their own on the loopback):
 
 - ``rotation_node`` by its console script (next to this Python; defaults, markers on), or,
   with ``--executor NAME``, the same node on another executor (bench/node_on_executor.py);
 - ``bench/pose_flooder.py``: publishes PoseStamped on the node's ``~/pose`` back to back,
-  as fast as it can (``flood TOPIC max SECONDS``; ~57k msg/s on this machine);
+  as fast as it can (``--rate max``, the default: ``flood TOPIC max SECONDS``), or at
+  ``--rate`` msg/s (10000 for the service-latency goal);
 - a listener (this script with ``--listen``): subscribes every output of the node
   (reliable, depth 10, as a user's RViz or recorder would), counts ``~/screw``;
 - this process: calls ``~/describe``, ``~/get_parameters`` and ``~/set_parameters``
@@ -18,13 +19,15 @@ Timeline: warm-up (a slow flood until the outputs reach the listener, one answer
 each service), RSS at the start, the flood for ``--seconds`` (60), RSS at its end, then the
 calls stop and the RSS is sampled for ``--after`` (10) seconds more. Printed: RSS at the
 start, at the end, at most and ``--after`` s after; for each service the latency p50, p99
-and max during the flood and how many calls went unanswered. The goals: RSS grows by at
-most 50 MB and is back within 20 MB of the start 10 s after the flood; every service
-answers within 1 s at p99 during it (an unanswered call counts as infinitely late). Not a
-test: a script that prints what it measured.
+and max during the flood and how many calls went unanswered. The goals, flooded as fast as
+one publisher sends: RSS grows by at most 50 MB and is back within 20 MB of the start 10 s
+after the flood, every call is answered within 5 s (the call timeout), the node keeps
+publishing; flooded at 10,000 msg/s: every service answers with p99 <= 100 ms (an
+unanswered call counts as infinitely late). Not a test: a script that prints what it
+measured.
 
-Run: ``.venv/bin/python bench/bench_overload.py [--seconds 60] [--after 10]
-[--executor node|events|single|multi] [--caller-heartbeat SECONDS] [--json PATH]``.
+Run: ``.venv/bin/python bench/bench_overload.py [--rate max|MSG_PER_S] [--seconds 60]
+[--after 10] [--executor events|single|multi] [--caller-heartbeat SECONDS] [--json PATH]``.
 """
 
 import argparse
@@ -44,7 +47,10 @@ BENCH = Path(__file__).resolve().parent
 NODE = 'bench_overload_rot_tools'
 GROWTH_GOAL_MB = 50.0
 RETURN_GOAL_MB = 20.0
-LATENCY_GOAL_S = 1.0
+LATENCY_GOAL_S = 0.1
+"""Services' p99 under a flood at a set rate (--rate 10000)."""
+ANSWER_GOAL_S = 5.0
+"""Every call answered within this under the fastest flood (--rate max)."""
 SERVICES = ('describe', 'get_parameters', 'set_parameters')
 HEARTBEAT_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 <profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
@@ -238,7 +244,7 @@ class Listener:
         self.log.close()
 
 
-def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
+def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate='max'):
     node_log = open(os.path.join(logdir, 'node.log'), 'w')
     node = subprocess.Popen(node_command(executor), stdout=node_log, stderr=subprocess.STDOUT)
     listener = flooder = caller = None
@@ -268,7 +274,7 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
         wrong = {name: 0 for name in SERVICES}
         count0 = listener.poll()
         start = time.monotonic()
-        flood_command(flooder, f'flood /{NODE}/pose max {seconds}')
+        flood_command(flooder, f'flood /{NODE}/pose {rate} {seconds}')
         k = 0
         next_sample = start + 1.0
         while time.monotonic() - start < seconds:
@@ -322,16 +328,20 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None):
                          'wrong': wrong[name], 'p50': percentile(lat, 0.5),
                          'p99': percentile(lat, 0.99), 'max': max(lat) if lat else math.nan}
     growth = max(mb for _, mb in samples) - rss_start
-    return {'executor': executor or 'node (console script)', 'seconds': seconds, 'after': after,
+    goals = {'growth': growth <= GROWTH_GOAL_MB, 'alive': alive and answered > 0,
+             'returned': rss_after - rss_start <= RETURN_GOAL_MB}
+    if rate == 'max':
+        goals['answered'] = all(v['max'] <= ANSWER_GOAL_S for v in latency.values())
+    else:
+        goals['latency'] = all(v['p99'] <= LATENCY_GOAL_S for v in latency.values())
+    return {'executor': executor or 'node (console script)', 'rate': rate,
+            'seconds': seconds, 'after': after,
             'sent': sent, 'sent_rate': sent / elapsed, 'answered': answered,
             'answered_rate': answered / elapsed, 'rss_start_mb': rss_start, 'rss_end_mb': rss_end,
             'rss_max_mb': max(mb for _, mb in samples + after_samples), 'rss_after_mb': rss_after,
             'growth_mb': growth, 'latency': latency, 'samples': samples,
             'after_samples': after_samples, 'final_describe_s': final_call[0], 'alive': alive,
-            'goals': {'growth': growth <= GROWTH_GOAL_MB,
-                      'returned': rss_after - rss_start <= RETURN_GOAL_MB,
-                      'latency': all(v['p99'] <= LATENCY_GOAL_S for v in latency.values()),
-                      'alive': alive}}
+            'goals': goals}
 
 
 def print_results(m):
@@ -340,7 +350,8 @@ def print_results(m):
     rows.append([f"{m['samples'][-1][0]:.0f} (end)", f"{m['rss_end_mb']:.1f}"])
     rows += [[f'+{t:.0f} after', f'{mb:.1f}'] for t, mb in m['after_samples']]
     benchlib.print_table(
-        f"rotation_node ({m['executor']}) RSS (MB): ~/pose flooded back to back, "
+        f"rotation_node ({m['executor']}) RSS (MB): ~/pose flooded "
+        f"{'back to back' if m['rate'] == 'max' else 'at ' + m['rate'] + ' msg/s'}, "
         f"{m['sent_rate']:.0f} msg/s sent for {m['seconds']:.0f} s, {m['answered_rate']:.0f} "
         'answered per s (a subscriber on every output)', ['s', 'RSS MB'], rows)
     print(f"  RSS start {m['rss_start_mb']:.1f} MB, end {m['rss_end_mb']:.1f} MB, max "
@@ -361,11 +372,17 @@ def print_results(m):
         [f"RSS {m['after']:.0f} s after - start",
          f"{m['rss_after_mb'] - m['rss_start_mb']:+.1f} MB", f'<= {RETURN_GOAL_MB:g} MB',
          'yes' if g['returned'] else 'NO'],
-        ['worst service p99', f"{max(v['p99'] for v in m['latency'].values()):.3f} s",
-         f'<= {LATENCY_GOAL_S:g} s', 'yes' if g['latency'] else 'NO'],
-        ['node alive after the flood', 'yes' if m['alive'] else 'no', 'yes',
+        ['node publishing during the flood, alive after it',
+         f"{m['answered']} outputs, {'alive' if m['alive'] else 'dead'}", '> 0, alive',
          'yes' if g['alive'] else 'NO'],
     ]
+    if 'latency' in g:
+        rows.append(['worst service p99', f"{max(v['p99'] for v in m['latency'].values()):.3f} s",
+                     f'<= {LATENCY_GOAL_S:g} s', 'yes' if g['latency'] else 'NO'])
+    else:
+        rows.append(['slowest call', f"{max(v['max'] for v in m['latency'].values()):.3f} s",
+                     f'<= {ANSWER_GOAL_S:g} s (none unanswered)',
+                     'yes' if g['answered'] else 'NO'])
     benchlib.print_table('Overload goals', ['figure', 'measured', 'goal', 'met?'], rows)
 
 
@@ -376,9 +393,11 @@ def main(argv=None):
                         help='seconds of RSS samples after the flood (10)')
     parser.add_argument('--call-timeout', type=float, default=5.0,
                         help='seconds before a call counts as unanswered (5)')
-    parser.add_argument('--executor', choices=('node', 'events', 'single', 'multi'),
+    parser.add_argument('--rate', default='max',
+                        help="flood rate, msg/s, or 'max': back to back (max)")
+    parser.add_argument('--executor', choices=('events', 'single', 'multi'),
                         help='run rotation_node on this executor (bench/node_on_executor.py) '
-                        'instead of by its console script')
+                        'instead of by its console script; single is the one it uses')
     parser.add_argument('--caller-heartbeat', type=float, metavar='SECONDS',
                         help="the calling process's DDS writers heartbeat this often (Fast DDS: "
                         '3 s): a request the flooded node lost is sent again sooner')
@@ -396,7 +415,7 @@ def main(argv=None):
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as logdir:
         m = measure(args.seconds, args.after, args.executor, args.call_timeout, logdir,
-                    args.caller_heartbeat)
+                    args.caller_heartbeat, args.rate)
     print_results(m)
     benchlib.write_json(args.json, m)
     return 0

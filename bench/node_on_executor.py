@@ -3,9 +3,9 @@ rotation_node, unchanged, on an executor of choice: the evidence behind make_exe
 
 RotationNode spun by the node's own loop (``serve``) on:
 
-- ``node``: the executor rotation_node uses (``make_executor``);
+- ``single``: rclpy's ``SingleThreadedExecutor``, the one rotation_node uses
+  (``make_executor``);
 - ``events``: rclpy's ``rclpy.experimental.EventsExecutor``;
-- ``single``: rclpy's default ``SingleThreadedExecutor``;
 - ``multi``: rclpy's ``MultiThreadedExecutor`` (2 threads), the node's services — its own
   and the parameter services — moved to a callback group of their own, so that a service
   call need not wait for the subscriptions' group.
@@ -23,7 +23,7 @@ import weakref
 
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.executors import MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rot_tools.ros import runtime
 from rot_tools.ros.rotation_node import RotationNode
 from rot_tools.ros.runtime import make_executor, serve
@@ -46,9 +46,8 @@ def multi_threaded_node():
 
 
 EXECUTORS = {
-    'node': (RotationNode, make_executor),
+    'single': (RotationNode, make_executor),
     'events': (RotationNode, events_executor),
-    'single': (RotationNode, SingleThreadedExecutor),
     'multi': (multi_threaded_node, lambda context=None: MultiThreadedExecutor(2)),
 }
 

@@ -10,14 +10,14 @@ Their content is built once at start-up; each callback only copies the input's h
 the stamped ones. So its throughput and latency are rclpy's own messaging limit on this
 machine, the baseline bench_node.py measures rotation_node against.
 
-``--executor default`` spins it on rclpy's default SingleThreadedExecutor; ``--executor
-node`` on the executor rotation_node itself uses (make_executor); ``--executor events`` on
-rclpy's EventsExecutor. Either way the relay is started and stopped as rotation_node's
-console script runs the node: the node's own loop (serve), and the same exit.
-``--full-interface`` also creates rotation_node's other input subscriptions and its two
-services, idle: the same entities for the executor to watch, still no math.
+``--executor default`` spins it on rclpy's SingleThreadedExecutor (the executor
+rotation_node runs on); ``--executor events`` on rclpy's EventsExecutor. Either way the
+relay is started and stopped as rotation_node's console script runs the node: the node's
+own loop (serve), and the same exit. ``--full-interface`` also creates rotation_node's
+other input subscriptions and its two services, idle: the same entities for the executor
+to watch, still no math.
 
-Run: ``.venv/bin/python bench/relay_node.py [--executor default|node|events] [--full-interface]
+Run: ``.venv/bin/python bench/relay_node.py [--executor default|events] [--full-interface]
 [--ros-args -r __node:=NAME]`` (default node name ``relay``); SIGINT / SIGTERM end it.
 """
 
@@ -33,7 +33,7 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from rot_tools.ros import runtime
 from rot_tools.ros.rotation_node import INPUTS
-from rot_tools.ros.runtime import make_executor, serve
+from rot_tools.ros.runtime import serve
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from std_srvs.srv import Trigger
 
@@ -44,7 +44,7 @@ class RelayNode(Node):
     def __init__(self, node_name='relay', full_interface=False):
         super().__init__(node_name)
         if full_interface:
-            # rotation_node's other entities, idle here. rclpy's wait-set executor pays per
+            # rotation_node's other entities, idle here. rclpy's executor pays per
             # entity on every wake-up, so this variant separates that cost from the math's.
             self._idle = [self.create_subscription(kind.msg_type, kind.topic, lambda m: None,
                                                    qos_profile_sensor_data)
@@ -96,7 +96,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--executor', choices=EXECUTORS, default='default',
-                        help="rclpy's SingleThreadedExecutor, rotation_node's own, or rclpy's "
+                        help="rclpy's SingleThreadedExecutor (rotation_node's) or its "
                         'EventsExecutor')
     parser.add_argument('--full-interface', action='store_true')
     args, ros_args = parser.parse_known_args(argv)
@@ -110,8 +110,7 @@ def _events_executor(context=None):
     return EventsExecutor(context=context)
 
 
-EXECUTORS = {'default': SingleThreadedExecutor, 'node': make_executor,
-             'events': _events_executor}
+EXECUTORS = {'default': SingleThreadedExecutor, 'events': _events_executor}
 
 
 if __name__ == '__main__':

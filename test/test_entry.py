@@ -98,31 +98,36 @@ def test_console_scripts_use_the_light_entry():
     assert scripts['rotation_client'] == 'rot_tools.ros.entry:rotation_client'
 
 
+def module_names():
+    """Return {dotted name: path} of every module of rot_tools (__init__ as its package)."""
+    names = {}
+    for path in PACKAGE.rglob('*.py'):
+        parts = path.relative_to(PACKAGE.parent).with_suffix('').parts
+        names['.'.join(parts[:-1] if parts[-1] == '__init__' else parts)] = path
+    return names
+
+
 def imports_of(module):
-    """Return the rot_tools modules ``module`` imports anywhere (in functions too)."""
-    names = {path.stem for path in PACKAGE.glob('*.py')}
+    """Return the rot_tools modules ``module`` (dotted) imports anywhere (in functions too)."""
+    names = module_names()
     found = set()
-    for node in ast.walk(ast.parse((PACKAGE / f'{module}.py').read_text())):
-        if isinstance(node, ast.ImportFrom) and node.module == 'rot_tools':
-            found |= {alias.name for alias in node.names if alias.name in names}
-        elif isinstance(node, ast.ImportFrom) and (node.module or '').startswith('rot_tools.'):
-            found.add(node.module.split('.')[1])
+    for node in ast.walk(ast.parse(names[module].read_text())):
+        if isinstance(node, ast.ImportFrom) and (node.module or '').startswith('rot_tools'):
+            found.add(node.module)
+            found |= {f'{node.module}.{alias.name}' for alias in node.names} & names.keys()
         elif isinstance(node, ast.Import):
-            found |= {alias.name.split('.')[1] for alias in node.names
-                      if alias.name.startswith('rot_tools.')}
+            found |= {alias.name for alias in node.names if alias.name.startswith('rot_tools')}
     return found - {module}
 
 
 def test_the_runtime_depends_on_no_module_of_the_package():
-    # (but its executor, a module of its own that imports nothing of the package either)
-    assert imports_of('runtime') == {'executor'}
-    assert imports_of('executor') == set()
-    assert imports_of('entry') == {'runtime'}
-    assert 'runtime' in imports_of('rotation_node')
+    assert imports_of('rot_tools.ros.runtime') == set()
+    assert imports_of('rot_tools.ros.entry') == {'rot_tools.ros', 'rot_tools.ros.runtime'}
+    assert 'rot_tools.ros.runtime' in imports_of('rot_tools.ros.rotation_node')
 
 
 def test_the_package_import_graph_has_no_cycle():
-    graph = {path.stem: imports_of(path.stem) for path in PACKAGE.glob('*.py')}
+    graph = {name: imports_of(name) for name in module_names()}
     done, stack = set(), []
 
     def visit(module):

@@ -20,7 +20,7 @@ from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
 import numpy as np
 import pytest
-from rcl_interfaces.srv import GetParameters
+from rcl_interfaces.srv import GetParameters, ListParameters
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix, screw_from_transform,
@@ -244,9 +244,12 @@ def test_misspelt_parameter_is_warned_about(tester, node_process):
     (warning,) = [line for line in stderr.splitlines() if 'WARN' in line]
     assert ("parameter override 'euler_sequnce' is not a parameter of this node and is "
             "ignored: did you mean 'euler_sequence'?") in warning
-    # It runs, with the default sequence.
+    # It runs, with the default sequence, and the misspelt name is no parameter of it.
     assert Remote(tester, process.name).parameters(['euler_sequence']) == {
         'euler_sequence': 'ZYX'}
+    names = tester.call(ListParameters, f'{process.name}/list_parameters',
+                        ListParameters.Request()).result.names
+    assert 'euler_sequnce' not in names and 'euler_sequence' in names
     assert_clean_exit(*process.stop(signal.SIGINT))
 
 

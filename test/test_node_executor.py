@@ -1,11 +1,11 @@
 """
 The executor rotation_node runs on (rot_tools.ros.runtime.make_executor), proved in use.
 
-It is rot_tools.ros.executor.WaitSetExecutor, chosen over rclpy's EventsExecutor, whose event
-queue grows without bound under a flood beyond the node's pace and makes service calls wait
-behind it (bench/bench_overload.py). The node spins it through rot_tools.ros.runtime.spin;
-these tests show, on the real executor and (where a signal or the process matters) on the
-real console script:
+It is rclpy's SingleThreadedExecutor, chosen over rclpy's EventsExecutor, whose event queue
+grows without bound under a flood beyond the node's pace and makes service calls wait
+behind it (bench/bench_overload.py). The node spins it through rot_tools.ros.runtime.spin,
+in one context (one DDS participant) with its services; these tests show, on the real
+executor and (where a signal or the process matters) on the real console script:
 
 - SIGINT and SIGTERM, 20 times each, idle and under a flood of poses: exit status 0 within
   a second of the node's own time (what a loaded machine keeps it waiting for a CPU is
@@ -18,14 +18,13 @@ real console script:
   bursts of inputs (the EventsExecutor served them after the whole queue);
 - a flood of bad input is refused and counted, and the node keeps serving;
 - a callback that raises is logged and costs nothing else (the inputs sent with it are all
-  answered); the node creates nothing the executor cannot serve (no clients, guard
-  conditions or tasks), and the QoS events it does watch are served.
+  answered), and the QoS events the node watches are served;
+- the graph (what ``ros2 node info`` prints) lists the node's services as its own.
 
 The in-process node tests (test_node.py) run on the same executor: conftest's Tester spins
 nodes under test with make_executor.
 """
 
-import inspect
 import itertools
 import json
 import math
@@ -42,10 +41,10 @@ import numpy as np
 import pytest
 from rcl_interfaces.srv import GetParameters, SetParameters
 import rclpy
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile
 from rot_tools.ros import runtime
-from rot_tools.ros.executor import WaitSetExecutor
 from rot_tools.ros.rotation_node import RotationNode
 from rot_tools.ros.runtime import guard_callbacks, make_executor, spin
 from std_srvs.srv import Trigger
@@ -439,44 +438,41 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
 
-def test_the_services_are_served_apart_from_the_inputs(tester, node_process):
-    """
-    Check that a flooded input and the services do not share a DDS participant.
+PARAMETER_SERVICES = ('describe_parameters', 'get_parameter_types', 'get_parameters',
+                      'list_parameters', 'set_parameters', 'set_parameters_atomically')
 
-    Each rclpy context is one participant, whose receive queues every message for it goes
-    through: a flood fills them, and a request dropped there came again only at its
-    client's next heartbeat, 3 s later (the flood test above failed that way now and then).
-    The node serves its services and parameter services from a hidden node of a context of
-    its own, under the node's own service names; the node keeps its topics and parameters.
+
+def test_the_graph_lists_the_services_as_the_nodes_own(tester, node_process):
+    """
+    Check that the node's services are its own, as ``ros2 node info`` reports them.
+
+    ``ros2 node info`` prints Node.get_service_names_and_types_by_node: ~/describe,
+    ~/screw_path and the parameter services must be there, under the node's name, and no
+    other node (a hidden one of a second participant) may serve them.
     """
     process = node_process('-p', 'angle_unit:=deg')
     wait_until_serving(tester, process)
     namespace, node = process.name.rsplit('/', 1)
-    hidden = (process.name, '_services')  # (namespace, name)
     graph = tester.node
+    expected = {f'{process.name}/{s}': t for s, t in [
+        ('describe', 'std_srvs/srv/Trigger'), ('screw_path', 'nav_msgs/srv/GetPlan'),
+        *((s, 'rcl_interfaces/srv/' + ''.join(w.title() for w in s.split('_')))
+          for s in PARAMETER_SERVICES)]}
 
-    def services_of(namespace, name):
-        return {s for s, _ in graph.get_service_names_and_types_by_node(name, namespace)}
+    def services():
+        return {s: t for s, (t, *_) in graph.get_service_names_and_types_by_node(
+            node, namespace)}
 
-    tester.spin_until(lambda: hidden[::-1] in graph.get_node_names_and_namespaces()
-                      and len(services_of(*hidden)) >= 8, timeout=4 * TIMEOUT,
-                      what=f'the services of {hidden}')
-    # The node itself is another participant, discovered on its own (the services above
-    # can be known before it is): wait for what it surely has before asking what it has not.
-    tester.spin_until(lambda: (node, namespace) in graph.get_node_names_and_namespaces()
-                      and f'{process.name}/get_type_description' in services_of(namespace, node)
-                      and f'{process.name}/pose' in {t for t, _ in (
-                          graph.get_subscriber_names_and_types_by_node(node, namespace))},
-                      timeout=4 * TIMEOUT, what=f'the node {process.name}')
-    names = {f'{process.name}/{s}' for s in (
-        'describe', 'screw_path', 'describe_parameters', 'get_parameter_types',
-        'get_parameters', 'list_parameters', 'set_parameters', 'set_parameters_atomically')}
-    assert services_of(*hidden) == names  # (and no ~/get_type_description of its own)
-    assert not names & services_of(namespace, node)
-    assert not graph.get_subscriber_names_and_types_by_node(*hidden[::-1])
+    tester.spin_until(lambda: expected.items() <= services().items(), timeout=4 * TIMEOUT,
+                      what=f'the services of {process.name} in the graph')
+    assert f'{process.name}/pose' in {
+        t for t, _ in graph.get_subscriber_names_and_types_by_node(node, namespace)}
+    nodes = graph.get_node_names_and_namespaces()
+    assert [n for n in nodes if n[1].startswith(process.name)] == []  # no hidden node below
+    assert nodes.count((node, namespace)) == 1
     values = tester.call(GetParameters, f'{process.name}/get_parameters',
                          GetParameters.Request(names=['angle_unit'])).values
-    assert parameter_value_to_python(values[0]) == 'deg'  # the node's parameters
+    assert parameter_value_to_python(values[0]) == 'deg'
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
 
@@ -555,23 +551,6 @@ def test_a_raising_service_callback_still_replies(tester, own_context, namespace
     assert not thread.is_alive()
 
 
-def test_the_node_has_nothing_its_executor_cannot_serve(ros_context, namespace):
-    node = RotationNode(context=ros_context, namespace=namespace)
-    try:
-        # The WaitSetExecutor runs no tasks: clients bring futures and tasks, so do
-        # coroutine callbacks; it refuses guard conditions. Its waitables are QoS events.
-        assert not list(node.clients) and not list(node.guards)
-        assert {type(w).__name__ for w in node.waitables} <= {'EventHandler'}  # QoS events
-        for entity in [*node.subscriptions, *node.services, *node.timers]:
-            assert not _is_coroutine(entity.callback), entity
-    finally:
-        node.destroy_node()
-
-
-def _is_coroutine(callback):
-    return inspect.iscoroutinefunction(getattr(callback, 'func', callback))
-
-
 def test_a_qos_event_is_served_and_the_node_keeps_going(tester, node_process):
     """Check that an incompatible subscriber raises a QoS event on the node's publisher."""
     process = node_process()
@@ -585,37 +564,18 @@ def test_a_qos_event_is_served_and_the_node_keeps_going(tester, node_process):
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
 
-def test_the_executor_refuses_what_it_cannot_serve(ros_context, namespace):
-    node = RotationNode(context=ros_context, namespace=namespace)
-    executor = WaitSetExecutor(context=ros_context)
-    try:
-        executor.add_node(node)
-        with pytest.raises(NotImplementedError, match='runs no tasks'):
-            executor.create_task(lambda: None)
-        node.create_client(Trigger, '~/nobody')
-        with pytest.raises(RuntimeError, match='serves no clients'):
-            executor.spin_once(timeout_sec=0.0)
-    finally:
-        executor.shutdown()
-        node.destroy_node()
-
-
 def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkeypatch):
-    # The shutdown wakes the loop: with an hour-long wait per spin_once (and between two
-    # looks at the QoS events), a loop that only noticed at its next timeout would still be
-    # waiting when the join below gives up.
+    # The shutdown wakes the loop: with an hour-long wait per spin_once, a loop that only
+    # noticed at its next timeout would still be waiting when the join below gives up.
     monkeypatch.setattr(runtime, 'SPIN_TIMEOUT', 3600.0)
     node = RotationNode(context=own_context, namespace=namespace)
-    assert type(make_executor(own_context)) is WaitSetExecutor
-    executor = WaitSetExecutor(context=own_context, event_period=3600.0)
+    executor = make_executor(own_context)
+    assert type(executor) is SingleThreadedExecutor
     spinning = threading.Event()
     spin_once = executor.spin_once
-    calls = []
 
     def signalling_spin_once(timeout_sec=None):
-        calls.append(timeout_sec)
-        if len(calls) > 1:  # (the first does not wait: it looks at the QoS events)
-            spinning.set()
+        spinning.set()
         spin_once(timeout_sec)
 
     executor.spin_once = signalling_spin_once
@@ -623,6 +583,7 @@ def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkey
     thread.start()
     try:
         assert spinning.wait(4 * TIMEOUT)
+        time.sleep(0.2)  # (into its wait, most likely; a shutdown before it ends it too)
         own_context.try_shutdown()
         thread.join(timeout=4 * TIMEOUT)
         assert not thread.is_alive()

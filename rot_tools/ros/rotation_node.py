@@ -40,6 +40,8 @@ from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from rclpy.time_source import USE_SIM_TIME_NAME
+from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose_values
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
@@ -50,7 +52,6 @@ from rot_tools.ros.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
 from rot_tools.ros.topics import INPUTS, OUTPUTS  # noqa: F401 - the rows as subscribed
-from rot_tools.ros.service_host import ServiceHost
 from std_srvs.srv import Trigger
 
 MALFORMED = 'malformed'
@@ -191,26 +192,28 @@ PARAMETERS = {
 }
 """Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
+RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
+"""The parameters rclpy declares on every node (an override of one is no misspelling)."""
+
 
 class RotationNode(Node):
     """Subscribes to every input of INPUTS and republishes their decompositions."""
 
-    def __init__(self, node_name='rot_tools', *, services_apart=False, **kwargs):
+    def __init__(self, node_name='rot_tools', **kwargs):
         """
-        Build the node; ``services_apart``: serve its services from a participant of their own.
+        Build the node (``kwargs``: rclpy.node.Node's).
 
-        With ``services_apart`` (how ``main`` runs it) the services and parameter services
-        live on a hidden node of a second context (rot_tools.ros.service_host), listed in
-        ``companions``: whoever spins this node spins those too (rot_tools.ros.runtime.spin).
+        Every start-up override (-p, --params-file, ``parameter_overrides``) is declared by
+        rclpy as the node is built (automatically_declare_parameters_from_overrides): that
+        is how the node reads them; _declare_parameters keeps its own and reports the rest.
         """
-        super().__init__(node_name, **kwargs)
-        self._service_host = None
+        super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
+                         **kwargs)
         try:
             self._declare_parameters()
         except Exception:
             self.destroy_node()
             raise
-        self._warn_about_unknown_overrides()
         self._settings = self._read_settings()
         self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
@@ -248,28 +251,13 @@ class RotationNode(Node):
                                      qos_profile_sensor_data, raw=True)
             self._sources.append(source)
 
-        host = self
-        if services_apart:
-            host = self._service_host = ServiceHost(self)
-        host.create_service(Trigger, '~/describe', self._on_describe)
-        host.create_service(GetPlan, '~/screw_path', self._on_screw_path)
+        self.create_service(Trigger, '~/describe', self._on_describe)
+        self.create_service(GetPlan, '~/screw_path', self._on_screw_path)
         self._screw_path_name = self.resolve_service_name('~/screw_path')
         self.get_logger().info(
             f'decomposing {self._input_topics()} (euler_sequence '
             f'{self._settings.euler_sequence}, angle_unit '
             f"{'deg' if self._settings.degrees else 'rad'})")
-
-    @property
-    def companions(self):
-        """Return the nodes to spin with this one: the hidden node of its services, if any."""
-        return () if self._service_host is None else (self._service_host.node,)
-
-    def destroy_node(self):
-        """Destroy the node, and the hidden node serving its services apart (if any)."""
-        if self._service_host is not None:
-            self._service_host.destroy()
-            self._service_host = None
-        super().destroy_node()
 
     def _input_topics(self):
         """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
@@ -281,18 +269,47 @@ class RotationNode(Node):
     # -- parameters --------------------------------------------------------------------
 
     def _declare_parameters(self):
-        """Declare PARAMETERS; check the start-up overrides (InvalidParameterValueException)."""
-        overrides = getattr(self, '_parameter_overrides', {})  # (see the method below)
-        for name, override in overrides.items():  # `marker_scale: 3` in a file, -p ...:=3
+        """
+        Declare PARAMETERS, their start-up overrides taken; warn about any other override.
+
+        rclpy has declared every override as it stands (the Node was built with
+        automatically_declare_parameters_from_overrides): each of PARAMETERS is declared
+        again with its descriptor and default, then set to its override's value, if any
+        (an integer made a double for a double parameter: _integers_as_doubles); an
+        override that names no
+        parameter of the node is reported (a misspelt ``-p euler_sequnce:=xyz`` would
+        otherwise be silently ignored) and undeclared. Raises
+        InvalidParameterValueException for an invalid value.
+        """
+        overrides = {}
+        for name in self.list_parameters([], 0).names:
             if name in PARAMETERS:
-                (overrides[name],) = self._integers_as_doubles([override])
+                (overrides[name],) = self._integers_as_doubles([self.get_parameter(name)])
+                self.undeclare_parameter(name)
+            elif name not in RCLPY_PARAMETERS:
+                self._warn_about_unknown_override(name)
+                self.undeclare_parameter(name)
         for name, spec in PARAMETERS.items():
-            self.declare_parameter(name, spec.default, spec.descriptor)
+            self.declare_parameter(name, spec.default, spec.descriptor, ignore_override=True)
+            if name in overrides:  # (checked against the descriptor: type and range)
+                (result,) = self.set_parameters([overrides[name]])
+                if not result.successful:
+                    raise InvalidParameterValueException(
+                        name, overrides[name].value, f'{name}: {result.reason}')
         for name, spec in PARAMETERS.items():
             value = self.get_parameter(name).value
             reason = spec.check(value)
             if reason:
                 raise InvalidParameterValueException(name, value, reason)
+
+    def _warn_about_unknown_override(self, name):
+        """Warn that start-up override ``name`` is not a parameter of this node."""
+        close = difflib.get_close_matches(name, PARAMETERS, n=1)
+        hint = f": did you mean '{close[0]}'?" if close else (
+            ': its parameters are ' + ', '.join(PARAMETERS))
+        self.get_logger().warning(
+            f"parameter override '{name}' is not a parameter of this node and is "
+            f'ignored{hint}')
 
     @staticmethod
     def _integers_as_doubles(parameters):
@@ -346,25 +363,6 @@ class RotationNode(Node):
                 self.get_logger().info(
                     f'following {frames[1]!r} in {frames[0]!r} on {self._tf.topic}'
                     if self._tf.following else f'not following frames on {self._tf.topic}')
-
-    def _warn_about_unknown_overrides(self):
-        """
-        Warn about each start-up override (-p, --params-file) that names no parameter.
-
-        rclpy keeps the overrides it was given (command line, parameter files, the
-        parameter_overrides argument) in Node._parameter_overrides and has no public
-        accessor for them; without this a misspelt ``-p euler_sequnce:=xyz`` is silently
-        ignored.
-        """
-        for name in sorted(getattr(self, '_parameter_overrides', {})):
-            if self.has_parameter(name):
-                continue
-            close = difflib.get_close_matches(name, PARAMETERS, n=1)
-            hint = f": did you mean '{close[0]}'?" if close else (
-                ': its parameters are ' + ', '.join(PARAMETERS))
-            self.get_logger().warning(
-                f"parameter override '{name}' is not a parameter of this node and is "
-                f'ignored{hint}')
 
     # -- inputs ----------------------------------------------------------------------------
 
@@ -580,7 +578,7 @@ def main(args=None):
                      f'--ros-args; see {PROG} --help)')
     runtime.init_ros(PROG, argv)
     try:
-        runtime.serve(partial(RotationNode, services_apart=True))
+        runtime.serve(RotationNode)
     except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2
         text = runtime.ros_argument_error(exc)
         if text is None:

@@ -18,7 +18,7 @@ knows nothing of that node (rotation_node imports this module, never the other w
   loaded extension modules and of the DDS library took 0.2–1.6 s on a busy 2-core machine,
   and a node must be gone within a second of the signal, every time.
 - :func:`make_executor`, :func:`guard_callbacks`, :func:`spin`, :func:`serve`: the executor
-  the node runs on, and its loop.
+  the node runs on (rclpy's SingleThreadedExecutor), and its loop.
 - :func:`init_ros`, :func:`ros_argument_error`, :func:`fail`: bad ROS arguments (a missing
   or malformed ``--params-file``, a bad ``-p`` or ``-r``, an invalid node name) end the
   program with exactly one line on stderr and exit status 2, not rcl's log line and a
@@ -101,7 +101,7 @@ def exit_now(status):
     Destroys rclpy's default context (if rclpy was loaded), flushes stdout and stderr, and
     skips the interpreter's teardown (see the module docstring).
     """
-    _install_exit_handlers()  # (an EventsExecutor leaves them default)
+    _install_exit_handlers()  # (a signal during the teardown below: exit 0)
     if 'rclpy' in sys.modules:
         import rclpy
         context = rclpy.get_default_context()
@@ -139,11 +139,13 @@ def ros_argument_error(exc):
     """
     from rclpy.exceptions import InvalidParameterValueException, NameValidationException
     from rclpy.exceptions import ParameterException
-    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-    if isinstance(exc, _rclpy.UnknownROSArgsError):
+    # rcl's errors reach Python as RuntimeErrors of classes rclpy does not export: known by
+    # their names.
+    rcl_error = type(exc).__name__ if isinstance(exc, RuntimeError) else None
+    if rcl_error == 'UnknownROSArgsError':
         unknown = re.findall(r"'([^']*)'", str(exc)) or [str(exc)]
         return 'unknown ROS argument ' + ', '.join(unknown) + ' (after --ros-args)'
-    if isinstance(exc, _rclpy.RCLError):
+    if rcl_error == 'RCLError':
         text = _C_LOCATION.sub('', str(exc).replace('failed to initialize rcl: ', ''))
         parse = _RCL_PARSE.match(text.strip())
         if parse is None:
@@ -242,19 +244,18 @@ SPIN_TIMEOUT = 0.1
 
 def make_executor(context=None):
     """
-    Return the executor rotation_node runs on: rot_tools.ros.executor.WaitSetExecutor.
+    Return the executor rotation_node runs on: rclpy's SingleThreadedExecutor.
 
-    Chosen on measurement (bench/README.md, bench/bench_overload.py): under a flood beyond
-    the node's pace rclpy's EventsExecutor queued an event per message without bound (RSS
-    +140–160 MB a minute, kept afterwards) and left service calls waiting behind the queue
-    for up to 16 s; rclpy's default executor is bounded and fair but costs up to 2 × the CPU
-    per message. The WaitSetExecutor is bounded and fair (services first, at most a burst of
-    messages per subscription per wake-up) at 1.0–1.3 × the EventsExecutor's cost.
-    test_node_executor.py proves signals, services under a flood, floods of bad input and
-    bounded memory on it.
+    Chosen on measurement (bench/bench_overload.py, bench/bench_node.py): it waits only in
+    the middleware, whose keep-last queues bound what a flood costs (lost inputs, never
+    memory), and serves every ready service between two messages of each input. rclpy's
+    EventsExecutor queued an event per arriving message without bound (RSS +140–160 MB a
+    minute under a flood beyond the node's pace, kept afterwards; service calls waited
+    behind the queue for up to 16 s). test_node_executor.py proves signals, services under
+    a flood, floods of bad input and bounded memory on it.
     """
-    from rot_tools.ros.executor import WaitSetExecutor
-    return WaitSetExecutor(context=context)
+    from rclpy.executors import SingleThreadedExecutor
+    return SingleThreadedExecutor(context=context)
 
 
 def _guarded(callback, node, what, service=False):
@@ -302,17 +303,15 @@ def spin(node, executor):
     """
     Spin ``node`` on ``executor`` until the context shuts down (a signal), then stop it.
 
-    The node's ``companions`` (further nodes it owns, in contexts of their own: the hidden
-    node serving its services apart, rot_tools.ros.service_host) are spun with it, on the same
-    executor; the callbacks of all are guarded first (guard_callbacks). rclpy.init
-    installs handlers that shut the context down on SIGINT and SIGTERM; the loop then ends
-    within one SPIN_TIMEOUT (rclpy.spin could hang on a signal).
+    The node's callbacks are guarded first (guard_callbacks). rclpy.init installs handlers
+    that shut the context down on SIGINT and SIGTERM; the loop then ends within one
+    SPIN_TIMEOUT (rclpy.spin could hang on a signal), and an ExternalShutdownException
+    raised by spin_once meanwhile is the normal end.
     """
     import rclpy
     from rclpy.executors import ExternalShutdownException
-    for part in (node, *getattr(node, 'companions', ())):
-        guard_callbacks(part)
-        executor.add_node(part)
+    guard_callbacks(node)
+    executor.add_node(node)
     try:
         while rclpy.ok(context=executor.context):
             executor.spin_once(timeout_sec=SPIN_TIMEOUT)
