@@ -1,25 +1,26 @@
 """
 rot_tools.io.cdr: the node's messages as bytes, checked against rclpy's own CDR.
 
-Outputs: our bytes are rclpy's serialisation of the message they hold. Inputs: what the
-node's INPUTS rows read from rclpy's serialisation of a message is that message's fields,
-and bytes that are not such a serialisation are Malformed, never misread.
+Every row of rot_tools.io.interface is checked, so a new row is checked as it is added.
+Outputs: our bytes are rclpy's serialisation of the message they hold, its fields (by the
+row's paths) the values written. Inputs: what a row reads from rclpy's serialisation of a
+message is that message's fields (by the row's paths), and bytes that are not such a
+serialisation are Malformed, never misread.
 """
 
 import math
 import struct
+from types import SimpleNamespace
 
-from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
-from geometry_msgs.msg import TransformStamped, TwistStamped, Vector3Stamped
+from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
 from hypothesis import example, given, settings, strategies as st
 from math_helpers import HYPOTHESIS_SETTINGS
-from nav_msgs.msg import Odometry
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from rot_tools.io import cdr
-from rot_tools.ros.messages import MATRIX_DIMS
-from rot_tools.ros.rotation_node import INPUTS, OUTPUTS
-from sensor_msgs.msg import Imu
+from rot_tools.io import cdr, interface
+from rot_tools.io.interface import MATRIX_LAYOUT
+from rot_tools.ros.messages import field_value, message_class, type_name
+from rot_tools.ros.topics import INPUTS, OUTPUTS
 from std_msgs.msg import Float64MultiArray, Header, MultiArrayDimension, MultiArrayLayout
 
 FLOATS = st.floats(allow_nan=False)  # (NaN != NaN would fail the comparison, not the bytes)
@@ -65,8 +66,9 @@ def test_stamped_outputs_are_rclpys_bytes(sec, nanosec, frame_id, values):
 
 def test_the_screw_twist_is_angular_then_linear():
     (screw,) = [kind for kind in OUTPUTS if kind.topic == '~/screw']
-    twist = (0.0, 1.0, 2.0, 3.0, 4.0, 5.0)  # screw_log's order: (θ·l̂, θ·v)
-    msg = deserialize_message(screw.encode(cdr.header(5, 6, 'map'), twist), TwistStamped)
+    values = SimpleNamespace(twist=(0.0, 1.0, 2.0, 3.0, 4.0, 5.0))  # screw_log's (θ·l̂, θ·v)
+    data = screw.encode(cdr.header(5, 6, 'map'), screw.row.value(values))
+    msg = deserialize_message(data, TwistStamped)
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id) == (
         5, 6, 'map')
     t = msg.twist
@@ -88,7 +90,7 @@ def test_a_frame_id_ends_at_its_first_nul_as_in_rclpy():
 def test_the_rotation_matrix_is_rclpys_bytes(values):
     (matrix,) = [kind for kind in OUTPUTS if kind.topic == '~/rotation_matrix']
     layout = MultiArrayLayout(dim=[MultiArrayDimension(label=label, size=size, stride=stride)
-                                   for label, size, stride in MATRIX_DIMS])
+                                   for label, size, stride in MATRIX_LAYOUT])
     assert_same_message(matrix.encode(None, values),
                         Float64MultiArray(layout=layout, data=values))
 
@@ -109,49 +111,31 @@ def test_any_float64_multi_array_layout(dims, offset):
                         Float64MultiArray(layout=layout, data=values))
 
 
-def test_every_output_row_encodes_its_type():
+@pytest.mark.parametrize('kind', [kind for kind in OUTPUTS if kind.encode is not None],
+                         ids=lambda kind: kind.topic)
+def test_every_output_row_writes_its_fields(kind):
     head = cdr.header(3, 4, 'odom')
-    values = (0.5, -0.25, 0.125, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0)
-    sizes = {Float64MultiArray: 9, QuaternionStamped: 4, Vector3Stamped: 3, TwistStamped: 6}
-    for kind in OUTPUTS:
-        ours = kind.encode(head, values[:sizes[kind.msg_type]])
-        msg = deserialize_message(ours, kind.msg_type)
-        assert isinstance(msg, kind.msg_type)
-        assert_same_message(ours, msg)  # the message read back is written as ours
-        if kind.msg_type is not Float64MultiArray:
-            assert (msg.header.stamp.sec, msg.header.frame_id) == (3, 'odom')
+    values = tuple(0.5 + k for k in range(len(kind.row.fields)))
+    ours = kind.encode(head, values)
+    msg = deserialize_message(ours, kind.msg_type)
+    assert isinstance(msg, kind.msg_type)
+    assert_same_message(ours, msg)  # the message read back is written as ours
+    assert [field_value(msg, path) for path in kind.row.fields] == list(values)
+    if kind.row.stamped:
+        assert (msg.header.stamp.sec, msg.header.frame_id) == (3, 'odom')
+    else:
+        assert not hasattr(msg, 'header')
 
 
 # -- inputs ---------------------------------------------------------------------------------
-
-
-def _xyz(v):
-    return [v.x, v.y, v.z]
-
-
-def _pose(p):
-    return _xyz(p.position) + _xyz(p.orientation) + [p.orientation.w]
-
-
-FIELDS = {  # each input type: its strings set, and the fields the node reads, from the object
-    PoseStamped: (lambda m, s: None, lambda m: _pose(m.pose)),
-    Vector3Stamped: (lambda m, s: None, lambda m: _xyz(m.vector)),
-    TransformStamped: (lambda m, s: setattr(m, 'child_frame_id', s),
-                       lambda m: _xyz(m.transform.translation) + _xyz(m.transform.rotation)
-                       + [m.transform.rotation.w]),
-    PoseWithCovarianceStamped: (lambda m, s: None, lambda m: _pose(m.pose.pose)),
-    Odometry: (lambda m, s: setattr(m, 'child_frame_id', s), lambda m: _pose(m.pose.pose)),
-    Imu: (lambda m, s: None,
-          lambda m: _xyz(m.orientation) + [m.orientation.w, m.orientation_covariance[0]]),
-    QuaternionStamped: (lambda m, s: None, lambda m: _xyz(m.quaternion) + [m.quaternion.w]),
-}
 
 
 def _message(kind, sec, nanosec, frame_id, child, values, fill):
     """Return a message of the kind's type: header, child frame, every float field filled."""
     msg = kind.msg_type()
     msg.header = header_msg(sec, nanosec, frame_id)
-    FIELDS[kind.msg_type][0](msg, child)
+    for path in kind.row.strings():
+        setattr(msg, path, child)
     numbers = iter(values)
     _fill(msg, lambda: next(numbers, fill))
     return msg
@@ -169,12 +153,16 @@ def _fill(msg, number):
             _fill(value, number)
 
 
-(POSE,) = [kind for kind in INPUTS if kind.msg_type is PoseStamped]
+(POSE,) = [kind for kind in INPUTS if kind.topic == '~/pose']
 """~/pose's row of INPUTS."""
 
 
-def test_every_input_type_has_its_fields():
-    assert {kind.msg_type for kind in INPUTS} == set(FIELDS)
+BY_NAME = {kind.row.name: kind for kind in INPUTS}
+
+
+def test_every_row_names_a_message_type():
+    for row in interface.INPUTS + interface.OUTPUTS:
+        assert type_name(message_class(row.type_name)) == row.type_name
 
 
 NUMBERS = st.floats(allow_nan=False) | st.sampled_from([math.inf, -math.inf, -0.0, 5e-324])
@@ -183,16 +171,17 @@ NUMBERS = st.floats(allow_nan=False) | st.sampled_from([math.inf, -math.inf, -0.
 @settings(**HYPOTHESIS_SETTINGS)
 @given(st.sampled_from(INPUTS), SECONDS, NANOSECONDS, st.text(max_size=20),
        st.text(max_size=20), st.lists(NUMBERS, min_size=60, max_size=60), NUMBERS)
-@example(INPUTS[0], 1, 2, 'a' * 4, '', [0.5] * 60, 0.25)  # the header ends on 8: no padding
-@example(INPUTS[2], 1, 2, 'map', 'b' * 5, [0.5] * 60, 0.25)  # the child frame ends on 8
-@example(INPUTS[4], 1, 2, 'odom\u00e9\u4e2d', 'base\U0001f600', [0.5] * 60, 0.25)
+@example(BY_NAME['pose'], 1, 2, 'a' * 4, '', [0.5] * 60, 0.25)  # the header ends on 8
+@example(BY_NAME['transform'], 1, 2, 'map', 'b' * 5, [0.5] * 60, 0.25)  # child frame to 8
+@example(BY_NAME['odometry'], 1, 2, 'odom\u00e9\u4e2d', 'base\U0001f600', [0.5] * 60, 0.25)
 def test_each_input_reads_its_messages_fields(kind, sec, nanosec, frame_id, child, values,
                                               fill):
     msg = _message(kind, sec, nanosec, frame_id, child, values, fill)
-    header, fields = kind.read(serialize_message(msg))
+    data = serialize_message(msg)
+    header, fields = kind.read(data)
     assert (header.stamp.sec, header.stamp.nanosec, header.frame_id) == (
-        sec, nanosec, msg.header.frame_id)
-    assert list(fields) == FIELDS[kind.msg_type][1](msg)
+        sec, nanosec, deserialize_message(data, kind.msg_type).header.frame_id)
+    assert list(fields) == [field_value(msg, path) for path in kind.row.floats()]
 
 
 def test_nan_is_read_as_nan_and_a_frame_id_ends_at_its_first_nul():

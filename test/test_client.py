@@ -563,7 +563,7 @@ def test_doc_examples(node):
 
 
 def test_refusal_text_uses_the_nodes_sentence():
-    from rot_tools.ros.rotation_client import refusal_text
+    from rot_tools.ros.client_session import refusal_text
     topic = '/rot_tools/orientation'
     data = {'refused': {'total': 3, 'non_finite': 1, 'non_unit_quaternion': 2},
             'last_refusals': {

@@ -104,7 +104,7 @@ def setup_keywords():
 
 def test_the_launch_file_runs_this_package_s_node_with_the_shipped_parameter_file():
     from catkin_pkg.package import parse_package
-    from rot_tools.ros.rotation_node import INPUTS
+    from rot_tools.io.interface import INPUTS
     pkg, executable, ros_args = launch_command()
     assert pkg == parse_package(str(REPO / 'package.xml')).name == PACKAGE
     scripts = dict(entry.split(' = ') for entry in
@@ -205,16 +205,15 @@ def test_a_relative_namespace_is_made_absolute_as_launch_ros_does():
 
 
 def test_doc_node_md_lists_every_launch_argument_and_every_topic_and_parameter():
-    from rot_tools.ros.rotation_node import INPUTS, OUTPUTS, PARAMETERS
+    from rot_tools.io.interface import INPUTS, OUTPUTS
+    from rot_tools.ros.rotation_node import PARAMETERS
     doc = (REPO / 'doc' / 'node.md').read_text(encoding='utf-8')
     for arg in ElementTree.parse(LAUNCH_FILE).getroot().iter('arg'):
         assert f"`{arg.get('name')}`" in doc, arg.get('name')
     for kind in INPUTS:
-        assert f'| `{kind.topic}` (in) | {kind.msg_type.__module__.split(".")[0]}/msg/' \
-            f'{kind.msg_type.__name__} |' in doc, kind.topic
+        assert f'| `{kind.topic}` (in) | {kind.type_name} |' in doc, kind.topic
     for kind in OUTPUTS:
-        assert f'| `{kind.topic}` | {kind.msg_type.__module__.split(".")[0]}/msg/' \
-            f'{kind.msg_type.__name__} |' in doc, kind.topic
+        assert f'| `{kind.topic}` | {kind.type_name} |' in doc, kind.topic
     rows = {line.split(' | ')[0][3:-1]: line.split(' | ')[1] for line in doc.splitlines()
             if line.startswith('| `')}  # '| `name` | `default` | ...' (names may share a row)
     for name, spec in PARAMETERS.items():

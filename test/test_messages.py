@@ -19,7 +19,7 @@ from rot_tools import (
 from rot_tools.io import boundary
 from rot_tools.ros import messages
 from rot_tools.ros.messages import RefusedInput
-from rot_tools.ros.rotation_node import INPUTS
+from rot_tools.ros.topics import INPUTS
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
@@ -37,8 +37,9 @@ def settings(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False):
 def take(msg, given=None):
     """(header, R, b) of msg as rotation_node takes it: its bytes read, its fields converted."""
     kind, = (kind for kind in INPUTS if kind.msg_type is type(msg))
-    header, fields = kind.read(serialize_message(msg))
-    return (header, *kind.convert(fields, settings() if given is None else given))
+    header, values = kind.read(serialize_message(msg))
+    return (header, *kind.row.convert(values, settings() if given is None else given,
+                                      kind.row.fields))
 
 
 def same_header(read, msg):

@@ -10,6 +10,7 @@ significant digits, so its numbers are compared to that.
 """
 
 import math
+from operator import attrgetter
 import time
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -26,10 +27,12 @@ from rclpy.serialization import serialize_message
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
     rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
-from rot_tools.io import cdr
+from rot_tools.io import interface
 from rot_tools.io.report import transform_report
-from rot_tools.ros import rotation_node
-from rot_tools.ros.rotation_node import MAX_PATH_STEPS, REFUSAL_REASONS, RotationNode
+from rot_tools.ros import rotation_node, topics
+from rot_tools.ros.messages import message_class
+from rot_tools.ros.rotation_node import REFUSAL_REASONS, RotationNode
+from rot_tools.ros.screw_path import MAX_PATH_STEPS
 from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
@@ -37,9 +40,8 @@ from visualization_msgs.msg import Marker
 import yaml
 
 ATOL = 1e-12
-INPUTS = {'pose': PoseStamped, 'euler': Vector3Stamped, 'transform': TransformStamped,
-          'pose_with_covariance': PoseWithCovarianceStamped, 'odometry': Odometry, 'imu': Imu,
-          'orientation': QuaternionStamped}
+INPUTS = {row.name: message_class(row.type_name) for row in interface.INPUTS}
+"""Every input of the node, by name: its message class."""
 ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
 """Outputs published for every accepted input (screw_axis only for a non-identity one)."""
 
@@ -943,13 +945,13 @@ def test_every_output_row_is_published_with_its_type(rig):
     published = {pub.topic_name: pub.msg_type for pub in rig.node.publishers}
     for kind in rotation_node.OUTPUTS:
         assert published[rig.node.resolve_topic_name(kind.topic)] is kind.msg_type
-    assert [kind.topic[2:] for kind in rotation_node.OUTPUTS] == list(ALWAYS)
+    assert [kind.row.name for kind in rotation_node.OUTPUTS if kind.row.value] == list(ALWAYS)
 
 
 def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):
-    row = rotation_node.OutputKind('~/euler_again', Vector3Stamped, 'euler', cdr.stamped(3),
-                                   angles=True)
-    monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (row,))
+    row = interface.Output('euler_again', 'geometry_msgs/msg/Vector3Stamped',
+                           interface.members('vector', 'xyz'), attrgetter('euler'), angles=True)
+    monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (topics.published(row),))
     tester.subscribe(f'{namespace}/rot_tools/euler_again', Vector3Stamped)
     rig = make_rig(angle_unit='deg')  # (discovery waits for the new topic's match too)
     q, p = POSE_CASES['general']

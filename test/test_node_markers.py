@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
-from rot_tools.ros import rotation_node
-from rot_tools.ros.rotation_node import MARKER_RATE
+from rot_tools.ros import pictures
+from rot_tools.ros.pictures import MARKER_RATE
 from scipy.spatial.transform import Rotation
 from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
     euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)
@@ -211,7 +211,7 @@ def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
     The DELETEs come in the frame of the picture shown, not of the one waiting, and the one
     waiting is not drawn, not even when the markers are switched on again.
     """
-    monkeypatch.setattr(rotation_node, 'MARKER_RATE', 0.5)
+    monkeypatch.setattr(pictures, 'MARKER_RATE', 0.5)
     rig = make_rig()  # noqa: F811
     shown = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), frame='odom'))
     markers_of(rig, shown)

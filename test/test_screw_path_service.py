@@ -13,7 +13,7 @@ import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
 from rot_tools.ros import rotation_node, runtime
-from rot_tools.ros.rotation_node import MAX_PATH_STEPS, MAX_REPLY_BYTES, RotationNode
+from rot_tools.ros.screw_path import MAX_PATH_STEPS, MAX_REPLY_BYTES, reply_bytes
 from test_node import pose_stamped
 
 
@@ -55,7 +55,7 @@ class Service:
 
 @pytest.fixture
 def service(ros_context, tester, namespace):
-    node = RotationNode(context=ros_context, namespace=namespace)
+    node = rotation_node.RotationNode(context=ros_context, namespace=namespace)
     runtime.guard_callbacks(node)  # as the runtime's spin() runs it
     yield Service(tester, node)
     tester.remove_node(node)
@@ -115,7 +115,7 @@ def test_reply_size_estimate_bounds_the_serialised_reply():
             response.plan.header = start.header
             response.plan.poses = [start] + [pose_stamped(frame=frame)] * (n - 2) + [goal]
             size = len(serialize_message(response))
-            estimate = RotationNode._reply_bytes(frame, n)
+            estimate = reply_bytes(frame, n)
             assert size <= estimate <= size + 12 * n + 60, (frame, n, size, estimate)
 
 
@@ -126,10 +126,10 @@ def test_reply_bytes_bound_the_default_path(service):
     One byte more of frame_id and the reply would not fit: refused as path_too_long before
     anything is built. Called in-process: the point is the bound, not DDS's large messages.
     """
-    longest = MAX_REPLY_BYTES // 22 - RotationNode._reply_bytes('', 21) // 22
-    while RotationNode._reply_bytes('x' * (longest + 1), 21) <= MAX_REPLY_BYTES:
+    longest = MAX_REPLY_BYTES // 22 - reply_bytes('', 21) // 22
+    while reply_bytes('x' * (longest + 1), 21) <= MAX_REPLY_BYTES:
         longest += 1
-    while RotationNode._reply_bytes('x' * longest, 21) > MAX_REPLY_BYTES:
+    while reply_bytes('x' * longest, 21) > MAX_REPLY_BYTES:
         longest -= 1
     for length, fits in ((longest, True), (longest + 1, False)):
         frame = 'x' * length

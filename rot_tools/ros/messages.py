@@ -46,9 +46,19 @@ def type_name(msg_type):
 
 
 def message_class(name):
-    """The message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
+    """Return the message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
     package, kind, class_name = name.split('/')
     return getattr(importlib.import_module(f'{package}.{kind}'), class_name)
+
+
+def field_value(msg, path):
+    """Return the field at ``path`` of a message: 'pose.position', 'data[3]'."""
+    for name in path.split('.'):
+        name, _, index = name.partition('[')
+        msg = getattr(msg, name)
+        if index:
+            msg = msg[int(index[:-1])]
+    return msg
 
 
 # ---------------------------------------------------------------------------------------

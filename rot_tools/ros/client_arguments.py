@@ -1,0 +1,301 @@
+"""
+rotation_client's command line: its commands, their arguments and help, parsed without ROS.
+
+The input commands are the node's inputs (rot_tools.io.interface): a verb per input row, its
+numbers from the roles of the row's fields (a position X Y Z, an orientation QX QY QZ QW,
+Euler angles A1 A2 A3 of a sequence SEQ), ``--child-frame`` for a child_frame_id. Nothing
+here starts ROS: ``--help``, ``--version`` and bad arguments end before rclpy is imported.
+"""
+
+import argparse
+import math
+import re
+
+import numpy as np
+from rot_tools.core.euler import EULER_SEQUENCES
+from rot_tools.io import interface
+from rot_tools.ros import runtime
+
+PROG = 'rotation_client'
+DEFAULT_NODE = '/rot_tools'
+DEFAULT_TIMEOUT = 5.0
+DEFAULT_CHILD_FRAME = 'base_link'
+
+NAME_LIMIT = 247
+"""Most characters of a ROS topic or service name (rmw's limit, 255 − 8)."""
+
+SERVICES_USED = ('describe', 'screw_path', 'get_parameters')
+"""The node's services the client calls, relative to the node."""
+
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+FLOAT32_TINY = float(np.finfo(np.float32).smallest_subnormal)
+
+ARGUMENTS = {'position': 'X Y Z', 'orientation': 'QX QY QZ QW', 'angles': 'A1 A2 A3'}
+"""The numbers given for each role of an input's fields (the others are not given: an
+Imu's orientation_covariance is sent zero)."""
+
+EULER_TEXT = (
+    'A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n'
+    "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, SEQ),"
+    '\nthen matrix_to_euler(R, node sequence).')
+CHILD_TEXT = 'The body is --child-frame (default base_link).'
+POSE = 'X Y Z QX QY QZ QW'
+
+
+def names_used():
+    """Return the node's topics and services the client uses, relative to the node."""
+    return tuple(row.name for row in interface.INPUTS + interface.OUTPUTS) + SERVICES_USED
+
+
+class _Parser(argparse.ArgumentParser):
+    """Errors are one line on stderr (no usage block), exit status 2."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, formatter_class=argparse.RawDescriptionHelpFormatter,
+                         **kwargs)
+        # '-0.5', '-1e-3', '-inf' and '-nan' are values, not options.
+        self._negative_number_matcher = re.compile(r'^-(\d|\.\d|inf|nan)', re.IGNORECASE)
+
+    def error(self, message):
+        self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
+
+
+class _Version(argparse.Action):
+    """--version: the installed distribution's version, printed without starting ROS."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
+                 help=None):  # noqa: A002
+        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(runtime.program_version(PROG))
+        parser.exit(0)
+
+
+def _number(text):
+    """Any float, NaN and Inf included: the node, not the client, decides what it refuses."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+
+
+def _positive(text):
+    value = _number(text)
+    if not (math.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(f'must be a number > 0, got {text!r}')
+    return value
+
+
+def _tolerance(text):
+    """
+    Return a number whose meaning survives float32, the type of GetPlan's tolerance.
+
+    A positive value float32 turns into 0 would ask for the default 20 steps, one it turns
+    into inf for a single step: both are refused. NaN, and values ≤ 0 (all mean 20 steps)
+    are sent as given.
+    """
+    value = _number(text)
+    if math.isfinite(value) and value > 0.0:
+        with np.errstate(over='ignore', under='ignore'):
+            sent = float(np.float32(value))
+        if sent == 0.0:
+            raise argparse.ArgumentTypeError(
+                f'{text} is below the smallest float32, {FLOAT32_TINY:.2g}: the request '
+                'carries a float32, so the node would read 0 (the default 20 steps)')
+        if math.isinf(sent):
+            raise argparse.ArgumentTypeError(
+                f'{text} is above the largest float32, {FLOAT32_MAX:.4g}: the request '
+                'carries a float32, so the node would read inf (one step)')
+    return value
+
+
+def _node_name(text):
+    name = text if text.startswith('/') else '/' + text
+    if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
+        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text!r}')
+    longest = max(names_used(), key=len)
+    if len(name) + 1 + len(longest) > NAME_LIMIT:
+        raise argparse.ArgumentTypeError(
+            f'node name of {len(name)} characters is too long: its names such as '
+            f"{name[:12]}.../{longest} would exceed ROS's {NAME_LIMIT} characters (at most "
+            f'{NAME_LIMIT - 1 - len(longest)} for the node name)')
+    return name
+
+
+def _options(parser, suppress):
+    """
+    --node, --frame, --timeout, --json: before the command or after its arguments.
+
+    The command parsers get them with SUPPRESS defaults, so a value given before the
+    command is not overwritten by the default.
+    """
+    def default(value):
+        return argparse.SUPPRESS if suppress else value
+    parser.add_argument('--node', type=_node_name, default=default(DEFAULT_NODE),
+                        help=f'the rotation_node to talk to (default {DEFAULT_NODE})')
+    parser.add_argument('--frame', default=default('map'),
+                        help='frame_id of the message sent (default map)')
+    parser.add_argument('--timeout', type=_positive, default=default(DEFAULT_TIMEOUT),
+                        metavar='SECONDS', help='bound of every wait: discovery, an answer '
+                        f'(default {DEFAULT_TIMEOUT:g})')
+    parser.add_argument('--json', action='store_true', default=default(False),
+                        help='print JSON instead of YAML')
+
+
+def _wxyz_option(parser, suppress):
+    parser.add_argument('--wxyz', action='store_true',
+                        default=argparse.SUPPRESS if suppress else False,
+                        help='quaternions are given w first: QW QX QY QZ (default: the ROS '
+                        'order, QX QY QZ QW)')
+
+
+class Command:
+    """
+    A command of the client: what it does, the numbers it takes, where its quaternions are.
+
+    ``quaternions``: the index in the numbers of each quaternion's QX (w last); ``row``: the
+    node's input it sends to (rot_tools.io.interface.Input), or None.
+    """
+
+    def __init__(self, summary, numbers, quaternions=(), text='', row=None):
+        self.summary, self.numbers, self.quaternions, self.text, self.row = (
+            summary, numbers, quaternions, text, row)
+
+
+def input_command(row):
+    """
+    Return the Command sending to an input row: its numbers, role by role, and its help.
+
+    E.g. ~/pose: X Y Z QX QY QZ QW, "pose.position = X Y Z, pose.orientation = QX QY QZ QW".
+    """
+    given = [(role, path) for role, path in row.fields.items() if role in ARGUMENTS]
+    numbers, quaternions, offset = [], [], 0
+    for role, _ in given:
+        if role == 'orientation':
+            quaternions.append(offset)
+        numbers.append(ARGUMENTS[role])
+        offset += len(ARGUMENTS[role].split())
+    lines = [f'{row.topic}: {row.help}.',
+             ', '.join(f'{path} = {ARGUMENTS[role]}' for role, path in given) + '.']
+    if 'angles' in row.fields:
+        lines.append(EULER_TEXT)
+    if 'child_frame_id' in row.fields:
+        lines.append(CHILD_TEXT)
+    return Command(f'send a {row.type_name} to {row.topic}', ' '.join(numbers),
+                   tuple(quaternions), '\n'.join(lines), row)
+
+
+def commands():
+    """Return {name: Command}: a command per input of the node, then the others."""
+    return {
+        **{row.name: input_command(row) for row in interface.INPUTS},
+        'describe': Command("print ~/describe's report of the latest input", ''),
+        'screw-path': Command(
+            'call ~/screw_path from one pose to another', f'{POSE} {POSE}', (3, 10),
+            'The start pose, then the goal pose, each X Y Z QX QY QZ QW; --tolerance bounds '
+            'the\nstep between poses (rad and m; <= 0: 20 steps).'),
+        'tf': Command(
+            'print the transform of BODY in REFERENCE from /tf and /tf_static', '', (),
+            'No node needed: listens to /tf and /tf_static itself and prints the report of\n'
+            'the transform p_REFERENCE = R·p_BODY + b at its latest common time, once a '
+            'second\nuntil Ctrl-C, or once with --once (--node and --frame are not used).'),
+    }
+
+
+def build_parser():
+    """Build the rotation_client ArgumentParser (one subparser per command)."""
+    parser = _Parser(
+        prog=PROG, description='Send one input to a running rotation_node and print its '
+        'answer (YAML, or JSON with --json).\nOptions may come before COMMAND or after its '
+        'arguments. Quaternions are QX QY QZ QW (the ROS\norder), or QW QX QY QZ with '
+        '--wxyz.',
+        epilog='examples:\n  rotation_client euler ZYX 30 20 10 --deg\n'
+        "  rotation_client euler xyz 0.1 0.2 0.3     (sent as the node's euler_sequence)\n"
+        '  rotation_client pose 1 0 0.5  0 0 1 0\n'
+        '  rotation_client pose 1 0 0.5  0 0 0 1 --wxyz     (the same pose, w first)\n'
+        '  rotation_client odometry 2 1 0  0 0 0.3826834 0.9238795 --frame odom\n'
+        '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
+        '  rotation_client imu 0 0 0.7071068 0.7071068 --frame imu_link\n'
+        '  rotation_client describe --json\n'
+        '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n'
+        '  rotation_client tf odom base_link --once --deg\n\n'
+        'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
+        'within --timeout,\nor nothing to describe; 2 bad arguments or an input the node '
+        'refused.')
+    parser.add_argument('--version', action=_Version, help='print the version and exit')
+    _options(parser, suppress=False)
+    _wxyz_option(parser, suppress=False)
+    sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True,
+                                parser_class=_Parser)
+    for name, command in commands().items():
+        fields = command.row.fields if command.row is not None else {}
+        usage = ' '.join(filter(None, [PROG, name, 'SEQ' if 'angles' in fields else '',
+                                       'REFERENCE BODY' if name == 'tf' else '',
+                                       command.numbers, '[options]']))
+        summary = command.summary
+        p = sub.add_parser(name, help=summary, usage=usage,
+                           description=f'{summary[0].upper()}{summary[1:]}.\n'
+                           f'{command.text}'.strip())
+        if 'angles' in fields:
+            p.add_argument('sequence', choices=EULER_SEQUENCES, metavar='SEQ',
+                           help='one of the 24 sequences, upper case intrinsic')
+            p.add_argument('--deg', action='store_true', help='the angles are in degrees')
+        if 'child_frame_id' in fields:
+            p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
+                           help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
+        if name == 'screw-path':
+            p.add_argument('--tolerance', type=_tolerance, default=0.0,
+                           help='largest step between poses, rad and m (default 0: 20 steps)')
+        elif name == 'tf':
+            p.add_argument('reference', metavar='REFERENCE', help='the reference frame')
+            p.add_argument('body', metavar='BODY', help='the frame whose pose is printed')
+            p.add_argument('--once', action='store_true', help='print one report and exit')
+            p.add_argument('--seq', choices=EULER_SEQUENCES, default='ZYX', metavar='SEQ',
+                           help='Euler sequence of the report (default ZYX)')
+            p.add_argument('--deg', action='store_true', help='Euler angles in degrees')
+        if command.numbers:
+            p.add_argument('numbers', type=_number, nargs='*', metavar='NUMBER',
+                           help=command.numbers)
+        p.set_defaults(parser=p, expected=len(command.numbers.split()), row=command.row)
+        _options(p, suppress=True)
+        if command.quaternions:
+            _wxyz_option(p, suppress=True)
+    return parser
+
+
+def parse_args(argv):
+    """
+    Parse the command line (without ROS arguments); one error line and exit 2 if bad.
+
+    With --wxyz the quaternions are reordered to the ROS order (w last) here.
+    """
+    args = build_parser().parse_args(argv)
+    command = commands()[args.command]
+    if args.expected and len(args.numbers) != args.expected:
+        args.parser.error(f'{args.command} takes {args.expected} numbers '
+                          f'({command.numbers}), got {len(args.numbers)}')
+    if args.wxyz:
+        if not command.quaternions:
+            args.parser.error(f'--wxyz: {args.command} takes no quaternion')
+        for i in command.quaternions:
+            w, *xyz = args.numbers[i:i + 4]
+            args.numbers[i:i + 4] = [*xyz, w]
+    return args
+
+
+def without_ros_args(argv):
+    """
+    ``argv`` without its ROS arguments: each ``--ros-args`` up to ``--`` or the end.
+
+    As rcl reads them; rclpy.init, given the whole command line, checks them.
+    """
+    kept, ros = [], False
+    for arg in argv:
+        if ros:
+            ros = arg != '--'
+        elif arg == '--ros-args':
+            ros = True
+        else:
+            kept.append(arg)
+    return kept

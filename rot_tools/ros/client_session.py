@@ -1,0 +1,281 @@
+"""
+rotation_client's conversation with a node: a short-lived rclpy node, every wait bounded.
+
+It publishes one input until the node answers, and collects the answer output by output,
+by the output's name (rot_tools.io.interface.OUTPUTS): the outputs that carry a header are
+matched by the stamp sent, ``~/rotation_matrix`` (no header) by its content against the
+answer's quaternion. It calls the node's services, repeating a call whose reply Fast DDS
+dropped, and reads ~/describe's refusal counts to tell a refused input from a lost one.
+rclpy is imported only when a Client is made.
+"""
+
+from collections import deque
+import os
+import time
+
+import numpy as np
+from rot_tools.core.so3 import quaternion_to_matrix
+from rot_tools.io import interface
+import yaml
+
+RESEND = 0.5
+"""Seconds to wait for an answer before an input is sent again or a call repeated."""
+
+PICTURE_WAIT = 1.0
+"""Seconds to wait for the pictures of an answer (when the node drew that input)."""
+
+MATRIX_MATCH = 1e-9
+"""Largest |entry difference| between ~/rotation_matrix and R of the answer's quaternion."""
+
+
+class Unreachable(Exception):
+    """The node, a topic, a service or an answer could not be reached in time (exit 1)."""
+
+
+class Refused(Exception):
+    """The node refused the input (exit 2)."""
+
+
+def stamped_outputs():
+    """Return the names of the outputs published for every input with its header."""
+    return tuple(row.name for row in interface.OUTPUTS if row.value and row.stamped)
+
+
+def picture_outputs():
+    """Return the names of the pictures (published at a limited rate, the latest wins)."""
+    return tuple(row.name for row in interface.OUTPUTS if row.value is None)
+
+
+def matrix_output():
+    """Return the name of the output without a header, matched by content: the matrix."""
+    (name,) = [row.name for row in interface.OUTPUTS if row.value and not row.stamped]
+    return name
+
+
+def describe_data(response):
+    """
+    Return ~/describe's YAML document as data: at least ``refused`` {total, reason: n}.
+
+    The node writes one even before it has accepted an input (then ``success`` is false and
+    ``note`` says so). Anything else is not a rotation_node's report: Unreachable.
+    """
+    try:
+        data = yaml.safe_load(response.message)
+    except yaml.YAMLError:
+        data = None
+    if not (isinstance(data, dict) and isinstance(data.get('refused'), dict)):
+        text = ' '.join(response.message.split())
+        raise Unreachable(f'~/describe did not answer with a rotation_node report: '
+                          f'{text[:200]!r}')
+    return data
+
+
+def _counts(data):
+    """{reason: n} of describe_data's refusal counts (without the total)."""
+    return {reason: n for reason, n in data['refused'].items() if reason != 'total'}
+
+
+def refusal_text(data, before, source, stamps=None):
+    """
+    Why the node refused what the client sent to ``source``, or '' if it did not.
+
+    ``data`` is describe_data now, ``before`` the counts before sending. For each reason
+    counted since, the node's sentence (what and by how much) from ``last_refusals`` when
+    that refusal is of ``source`` — and of one of ``stamps`` (sent header stamps, (sec,
+    nanosec)), when given and the refusal has one — else the reason's name alone.
+    """
+    last = data.get('last_refusals') or {}
+    texts = []
+    for reason, n in _counts(data).items():
+        if n <= before.get(reason, 0):
+            continue
+        refusal = last.get(reason) or {}
+        stamp = refusal.get('stamp')
+        ours = refusal.get('source') == source and (
+            stamps is None or stamp is None or (stamp['sec'], stamp['nanosec']) in stamps)
+        texts.append(f"{refusal['message']} ({reason})" if ours and refusal.get('message')
+                     else reason)
+    return '; '.join(texts)
+
+
+class Client:
+    """A short-lived rclpy node that talks to one rotation_node, every wait bounded."""
+
+    def __init__(self, target, timeout):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        self.target = target
+        self.timeout = timeout
+        self.node = rclpy.create_node(f'rotation_client_{os.getpid()}',
+                                      start_parameter_services=False)
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(self.node)
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+
+    def topic(self, name):
+        return f'{self.target}/{name}'
+
+    def spin_until(self, done, seconds):
+        """Spin until done() or ``seconds`` have passed; return done()."""
+        deadline = time.monotonic() + seconds
+        while not done() and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+        return done()
+
+    def missing(self, what):
+        """One line for a ``what`` (topic, service) that did not appear in time."""
+        names = {f"{namespace.rstrip('/')}/{name}"
+                 for name, namespace in self.node.get_node_names_and_namespaces()}
+        if self.target not in names:
+            domain = os.environ.get('ROS_DOMAIN_ID') or '0'
+            return (f'cannot reach node {self.target}: not found within {self.timeout:g} s '
+                    f'(is rotation_node running, with ROS_DOMAIN_ID {domain}?)')
+        return f'node {self.target} has no {what} (waited {self.timeout:g} s)'
+
+    def call(self, srv_type, name, request):
+        """Call the node's service ``name``; the response, or Unreachable."""
+        service = self.topic(name)
+        client = self.node.create_client(srv_type, service)
+        try:
+            if not self.spin_until(client.service_is_ready, self.timeout):
+                raise Unreachable(self.missing(f'service {service}'))
+            deadline = time.monotonic() + self.timeout
+            while time.monotonic() < deadline:
+                future = client.call_async(request)
+                if self.spin_until(future.done, min(RESEND, deadline - time.monotonic())):
+                    return future.result()
+                client.remove_pending_request(future)  # the reply may have been dropped
+            raise Unreachable(f'no reply from service {service} within {self.timeout:g} s')
+        finally:
+            self.node.destroy_client(client)
+
+    def describe(self):
+        from std_srvs.srv import Trigger
+        return self.call(Trigger, 'describe', Trigger.Request())
+
+    def parameters(self, names):
+        """Return {name: value} of the node's parameters, from its ~/get_parameters service."""
+        from rcl_interfaces.srv import GetParameters
+        from rclpy.parameter import parameter_value_to_python
+        response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
+        return dict(zip(names, map(parameter_value_to_python, response.values)))
+
+    def refusal_counts(self):
+        """{reason: n} of the refusals the node has counted so far."""
+        return _counts(describe_data(self.describe()))
+
+    def refused(self, before, source, stamps=None):
+        """Why the node refused what was sent to ``source`` since ``before``, or ''."""
+        return refusal_text(describe_data(self.describe()), before, source, stamps)
+
+    def wait_for_match(self, pub, subs):
+        """Wait until the node subscribes to ``pub`` and publishes on every one of ``subs``."""
+        if not self.spin_until(lambda: pub.get_subscription_count() > 0, self.timeout):
+            raise Unreachable(self.missing(f'subscription on {pub.topic_name}'))
+        for sub in subs:
+            if not self.spin_until(lambda sub=sub: sub.get_publisher_count() > 0,
+                                   self.timeout):
+                raise Unreachable(self.missing(f'publisher on {sub.topic_name}'))
+
+    def send(self, name, msg, pictures):
+        """
+        Publish ``msg`` on the node's ~/name until it answers; return (stamp, answer).
+
+        The answer is {output: message}: the outputs stamped as one sent message, the
+        ~/rotation_matrix whose content matches, and, when ``pictures``, the pictures of that
+        message if the node draws them within PICTURE_WAIT. Refused when the node's refusal
+        counts rise instead.
+        """
+        from rclpy.qos import QoSProfile
+        from rot_tools.ros.messages import message_class
+        answers = Answers(msg.header.frame_id)
+        matrix = matrix_output()
+        qos = QoSProfile(depth=100)
+        wanted = stamped_outputs() + (picture_outputs() if pictures else ())
+        subs = [self.node.create_subscription(
+                    message_class(interface.output_named(name).type_name), self.topic(name),
+                    answers.collector(name), qos)
+                for name in wanted]
+        subs.append(self.node.create_subscription(
+            message_class(interface.output_named(matrix).type_name), self.topic(matrix),
+            answers.matrices.append, qos))
+        topic = self.topic(name)
+        pub = self.node.create_publisher(type(msg), topic, 10)
+        self.wait_for_match(pub, subs)
+        before = self.refusal_counts()
+        deadline = time.monotonic() + self.timeout
+        while True:
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            answers.sent.add(_key(msg.header.stamp))
+            pub.publish(msg)
+            if self.spin_until(answers.complete, min(RESEND, deadline - time.monotonic())):
+                break
+            refused = self.refused(before, topic, answers.sent)
+            if refused:
+                raise Refused(f'node {self.target} refused the input on {topic}: {refused}')
+            if time.monotonic() >= deadline:
+                raise Unreachable(f'no answer from node {self.target} to the input on {topic} '
+                                  f'within {self.timeout:g} s')
+        stamp = answers.complete()
+        answer = answers.by_stamp[stamp]
+        q = answer['quaternion'].quaternion
+        R = quaternion_to_matrix([q.x, q.y, q.z, q.w])
+        if not self.spin_until(lambda: answers.matrix(R), self.timeout):
+            raise Unreachable(f'no matching message on {self.topic(matrix)} '
+                              f'within {self.timeout:g} s')
+        # Kept now: while the pictures are awaited, another publisher's inputs may push it
+        # out of the latest matrices.
+        matrix_msg = answers.matrix(R)
+        if pictures:
+            self.spin_until(lambda: set(picture_outputs()) <= set(answer),
+                            min(PICTURE_WAIT, self.timeout))
+        return stamp, {**answer, matrix: matrix_msg}
+
+
+def _key(stamp):
+    return stamp.sec, stamp.nanosec
+
+
+class Answers:
+    """What the node published for the messages sent: stamped outputs by stamp, matrices."""
+
+    def __init__(self, frame_id):
+        self.frame_id = frame_id
+        self.sent = set()
+        """(sec, nanosec) of every message sent."""
+        self.by_stamp = {}
+        """(sec, nanosec): {output: message} of the stamped outputs."""
+        self.matrices = deque(maxlen=100)
+        """The latest ~/rotation_matrix messages (they carry no header)."""
+
+    def collector(self, output):
+        """Subscription callback keeping the ``output`` messages stamped as a sent one."""
+        def collect(msg):
+            if hasattr(msg, 'header'):
+                header = msg.header
+            elif msg.markers:  # a MarkerArray has no header: its markers carry it
+                header = msg.markers[0].header
+            else:
+                return
+            key = _key(header.stamp)
+            if key in self.sent and header.frame_id == self.frame_id:
+                self.by_stamp.setdefault(key, {})[output] = msg
+        return collect
+
+    def complete(self):
+        """Return the stamp of a sent message with every one of stamped_outputs(), or None."""
+        expected = set(stamped_outputs())
+        for stamp, answer in self.by_stamp.items():
+            if expected <= set(answer):
+                return stamp
+        return None
+
+    def matrix(self, R):
+        """Return the latest ~/rotation_matrix equal to R (within MATRIX_MATCH), or None."""
+        for m in reversed(self.matrices):
+            if np.max(np.abs(np.reshape(m.data, (3, 3)) - R)) <= MATRIX_MATCH:
+                return m
+        return None
