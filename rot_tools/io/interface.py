@@ -106,7 +106,7 @@ def _xyz(path):
 
 
 def _screw_twist(values):
-    """TwistStamped's (linear, angular) of the twist (θ·l̂, θ·v) = screw_log."""
+    """Return a TwistStamped's (linear, angular) of the twist (θ·l̂, θ·v) = screw_log."""
     return (*values.twist[3:], *values.twist[:3])
 
 

@@ -1,7 +1,8 @@
 """
-The reply of rotation_node's ~/screw_path (nav_msgs/srv/GetPlan): the constant-screw
-(Chasles) motion from start to goal, poses at most ``tolerance`` apart, bounded in steps and
-in bytes before anything is built.
+The reply of rotation_node's ~/screw_path (nav_msgs/srv/GetPlan).
+
+The constant-screw (Chasles) motion from start to goal, poses at most ``tolerance`` apart,
+bounded in steps and in bytes before anything is built.
 """
 
 import math

@@ -1,6 +1,8 @@
 """
-rotation_node's topics as rclpy takes them: each row of rot_tools.io.interface bound to its
-message class and to the reader or writer of its bytes (rot_tools.io.cdr).
+rotation_node's topics as rclpy takes them.
+
+Each row of rot_tools.io.interface bound to its message class and to the reader or writer
+of its bytes (rot_tools.io.cdr).
 
 The node subscribes raw (``create_subscription(..., raw=True)``: the callback gets the
 message's bytes) and publishes bytes (``publish(bytes)``), both public rclpy API; the bytes
@@ -23,7 +25,7 @@ class Subscribed(NamedTuple):
 
     @property
     def topic(self):
-        """Return the row's topic ('~/pose')."""
+        """Return the topic of the row, e.g. '~/pose'."""
         return self.row.topic
 
 
@@ -36,7 +38,7 @@ class Published(NamedTuple):
 
     @property
     def topic(self):
-        """Return the row's topic ('~/quaternion')."""
+        """Return the topic of the row, e.g. '~/quaternion'."""
         return self.row.topic
 
 
