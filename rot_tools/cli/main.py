@@ -575,7 +575,7 @@ def build_parser():
 def _write_plot(parser, path, R, b, degrees):
     """Draw (R, b) into ``path`` with rot_tools.cli.plot, imported only now (matplotlib)."""
     try:
-        from rot_tools.cli.main import plot
+        from rot_tools.cli import plot
     except ImportError as exc:
         if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
             raise
@@ -609,7 +609,7 @@ def _bag(args, parser):
                           ('--all-sequences', args.all_sequences)):
         if given:
             parser.error(f'{option} does not apply to bag')
-    from rot_tools.cli.main import bag
+    from rot_tools.cli import bag
     return bag.run(args, parser.error)
 
 
