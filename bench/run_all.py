@@ -44,8 +44,8 @@ def goal_rows(math, node, memory, first=None, overload=None):
         for r in math.get('batch', []):
             if 'memory_ratio' in r:
                 rows.append([f"memory {r['operation']}", 'peak / (in + out)',
-                             f"{r['memory_ratio']:.2f}", '<= 3', benchlib.verdict(
-                                 r['memory_ratio'], 3.0)])
+                             f"{r['memory_ratio']:.2f}", '<= 2', benchlib.verdict(
+                                 r['memory_ratio'], 2.0)])
         for r in math.get('batch', []):
             ok = r['max_diff'] <= 1e-12
             scipy = r['reference'].startswith('scipy')  # the equality goal is scipy's
