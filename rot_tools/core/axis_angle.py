@@ -11,13 +11,15 @@ The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit ax
 (−l̂, 2π − θ) — equivalently (−l̂, −θ) — describe the same rotation (Jia §3.3).
 """
 
+import math
+
 import numpy as np
 from numpy import False_, True_
 from rot_tools.core._arrays import refuse_overflow
-from rot_tools.core._backend import (Conversion, FLAG, MATRIX, norm_in_range, SCALAR, unit,
-                                     VECTOR)
+from rot_tools.core.engine import (apply, FLAG, MATRIX, norm_in_range, plain_item, SCALAR, unit,
+                                   VECTOR)
 from rot_tools.core.errors import RotationError
-from rot_tools.core.so3 import apply_to_rotations
+from rot_tools.core.so3 import apply_to_rotations, plain_rotation, run_on_floats
 
 
 def sin_versin(ops, angle):
@@ -53,10 +55,6 @@ def _axis_angle_kernel(ops, axis, angle):
     return _rodrigues(ops, x, y, z, angle), (n == 0) & (angle != 0)
 
 
-_AXIS_ANGLE = Conversion(_axis_angle_kernel, [((3,), 'axis', True), ((), 'angle', True)],
-                         [MATRIX, FLAG])
-
-
 def axis_angle_to_matrix(axis, angle):
     """
     Rodrigues (Jia, eq. 7): axis (..., 3), angle (...) → (..., 3, 3), broadcasting.
@@ -64,7 +62,13 @@ def axis_angle_to_matrix(axis, angle):
     The axis is normalised. A zero axis with a zero angle gives the identity; a zero axis with
     a non-zero angle raises RotationError.
     """
-    matrix, bad = _AXIS_ANGLE.one(axis, angle) or _AXIS_ANGLE(axis, angle)
+    v = plain_item(axis, (3,))
+    out = v and isinstance(angle, float) and math.isfinite(angle) and run_on_floats(
+        _axis_angle_kernel, v, float(angle))
+    if out and not out[1]:  # fast path: one plain item, the kernel on floats
+        return np.array(out[0])
+    matrix, bad = apply(_axis_angle_kernel, [(axis, (3,), 'axis', True),
+                                             (angle, (), 'angle', True)], [MATRIX, FLAG])
     if bad is not False_ and bad.any():  # (one item's flag is one of NumPy's two bools)
         first = float(np.broadcast_to(np.asarray(angle, dtype=float), bad.shape)[bad].flat[0])
         raise RotationError(f'axis is zero but the angle is {first:g} rad: a rotation needs '
@@ -78,16 +82,18 @@ def _rotvec_kernel(ops, v):
     return _rodrigues(ops, v[0] / safe, v[1] / safe, v[2] / safe, angle), turns
 
 
-_ROTVEC = Conversion(_rotvec_kernel, [((3,), 'rotation vector', True)], [MATRIX, FLAG])
-
-
 def rotvec_to_matrix(rotvec):
     """
     Rotation matrix of the rotation vector θ·l̂; (..., 3) → (..., 3, 3); zero → identity.
 
     RotationError where the angle |θ·l̂| itself overflows float64.
     """
-    matrix, turns = _ROTVEC.one(rotvec) or _ROTVEC(rotvec)
+    v = plain_item(rotvec, (3,))
+    out = v and run_on_floats(_rotvec_kernel, v)
+    if out and out[1]:  # fast path: one plain item, the kernel on floats
+        return np.array(out[0])
+    matrix, turns = apply(_rotvec_kernel, [(rotvec, (3,), 'rotation vector', True)],
+                          [MATRIX, FLAG])
     if turns is not True_:
         refuse_overflow(turns, 'the angle |θ·l̂| of the rotation vector')
     return matrix
@@ -141,8 +147,11 @@ def matrix_to_axis_angle(R, *, check=True):
     with the largest diagonal entry, normalised, with the sign of w (at exactly π the sign is
     free: the largest component is made positive). At θ = 0 the axis is (0, 0, 1).
     """
-    return apply_to_rotations(axis_angle_kernel, R, check,
-                              [VECTOR, SCALAR])
+    m = plain_rotation(R, check)
+    out = m and run_on_floats(axis_angle_kernel, m)
+    if out:  # fast path: one plain rotation, the kernel on floats
+        return np.array(out[0]), np.float64(out[1])
+    return apply_to_rotations(axis_angle_kernel, R, check, [VECTOR, SCALAR])
 
 
 def _rotvec_of_matrix_kernel(ops, m):
@@ -152,5 +161,9 @@ def _rotvec_of_matrix_kernel(ops, m):
 
 def matrix_to_rotvec(R, *, check=True):
     """Rotation vector θ·l̂ of R, θ ∈ [0, π]; (..., 3, 3) → (..., 3)."""
+    m = plain_rotation(R, check)
+    out = m and run_on_floats(_rotvec_of_matrix_kernel, m)
+    if out:  # fast path: one plain rotation, the kernel on floats
+        return np.array(out[0])
     (rotvec,) = apply_to_rotations(_rotvec_of_matrix_kernel, R, check, [VECTOR])
     return rotvec

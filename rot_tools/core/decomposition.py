@@ -7,14 +7,12 @@ Python floats. Both run the same kernels (axis-angle, Euler, screw, twist, quate
 at θ = π every representation of one input uses the same axis sign.
 """
 
-from functools import partial
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.core._backend import Conversion, FLAG, SCALAR, VECTOR
 from rot_tools.core.axis_angle import axis_angle_kernel
-from rot_tools.core.euler import (
-    _ANGLES_KERNELS, angles_kernel, EULER_SEQUENCES, GIMBAL_LOCK_TOL, parse_sequence)
+from rot_tools.core.engine import apply, FLAG, SCALAR, VECTOR
+from rot_tools.core.euler import angles_kernel, GIMBAL_LOCK_TOL, parse_sequence
 from rot_tools.core.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
 from rot_tools.core.so3 import apply_to_rotations, quaternion_of_matrix_kernel
 
@@ -40,8 +38,8 @@ def _motion_kernel(ops, m, b):
     """
     Compute every representation but the Euler angles.
 
-    Every representation but the Euler angles (those depend on the sequence: one kernel
-    per sequence, euler._ANGLES_KERNELS, run beside this one).
+    Every representation but the Euler angles (those depend on the sequence: angles_kernel,
+    run beside this one).
     """
     axis, angle = axis_angle_kernel(ops, m)
     screw, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
@@ -62,11 +60,12 @@ def decompose(R, b, seq='ZYX', *, check=True):
     angles, so the rot-tools report and each output of rotation_node come from the same
     numbers. RotationError where the screw overflows float64 (as screw_from_transform).
     """
-    parse_sequence(seq)  # raises the RotationError of an unknown sequence
+    spec = parse_sequence(seq)
     axis, angle, *screw, twist, fits = apply_to_rotations(
         _motion_kernel, R, check, _MOTION_OUTPUTS, [(b, (3,), 'translation b', True)])
     refuse_far_axis(fits, angle, b)
-    euler, lock = apply_to_rotations(_ANGLES_KERNELS[seq], R, False, _ANGLES_OUTPUTS)
+    euler, lock = apply_to_rotations(angles_kernel, R, False, _ANGLES_OUTPUTS,
+                                     params=(spec, GIMBAL_LOCK_TOL))
     return Decomposition(axis, angle, euler, lock, Screw(*screw), twist)
 
 
@@ -93,44 +92,37 @@ RPY_SEQUENCE = 'xyz'
 """Roll, pitch, yaw (REP 103): rotations about the fixed x, y, z axes, in that order."""
 
 
-def _values_kernel(ops, m, b):
+_RPY = parse_sequence(RPY_SEQUENCE)
+
+
+def _values_kernel(ops, m, b, spec):
     axis, angle, *_, twist, fits = _motion_kernel(ops, m, b)
     (q,) = quaternion_of_matrix_kernel(ops, m)
-    return [a * angle for a in axis], twist, q, angle, fits
-
-
-def _euler_kernel(ops, m, spec):
-    angles, _ = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
-    return (angles,)
+    euler, _ = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
+    rpy, _ = angles_kernel(ops, m, _RPY, GIMBAL_LOCK_TOL)
+    return [a * angle for a in axis], euler, twist, q, rpy, angle, fits
 
 
 _FLOATS3 = ((3,), float)
-_VALUES = Conversion(_values_kernel, [((3, 3), 'R', False), ((3,), 'translation b', True)],
-                     [_FLOATS3, ((6,), float), ((4,), float), SCALAR, FLAG])
-_EULER = {seq: Conversion(partial(_euler_kernel, spec=parse_sequence(seq)),
-                          [((3, 3), 'R', False)], [_FLOATS3])
-          for seq in EULER_SEQUENCES}
-_RPY = _EULER[RPY_SEQUENCE]
+_VALUES = [_FLOATS3, _FLOATS3, ((6,), float), ((4,), float), _FLOATS3, SCALAR, FLAG]
 
 
 def decompose_values(R, b, seq='ZYX'):
     """
-    Return the Values of one rigid motion (R (3, 3), b (3,)), from three kernel passes.
+    Return the Values of one rigid motion (R (3, 3), b (3,)), from one kernel pass.
 
     R row-major (as given), rotation vector, Euler angles of ``seq`` (rad), twist,
-    quaternion, and roll, pitch, yaw (rad: the Euler kernel of 'xyz'). The same kernels
+    quaternion, and roll, pitch, yaw (rad: the Euler angles of 'xyz'). The same kernels
     as decompose and matrix_to_quaternion (so the same numbers, the same axis sign at
     θ = π), without building an array for each: rotation_node calls it for every message.
     R is not validated (check=False: the node builds R itself); RotationError where the
     screw overflows float64, as decompose.
     """
-    euler = _EULER.get(seq) if isinstance(seq, str) else None
-    if euler is None:
-        parse_sequence(seq)  # raises the RotationError of an unknown sequence
-    rotvec, twist, q, angle, fits = _VALUES.one(R, b) or _VALUES(R, b)
+    spec = parse_sequence(seq)
+    rotvec, euler, twist, q, rpy, angle, fits = apply(
+        _values_kernel, [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)], _VALUES,
+        (spec,))
     refuse_far_axis(fits, angle, b)
-    (euler,) = euler.one(R) or euler(R)
-    (rpy,) = _RPY.one(R) or _RPY(R)
     R = np.asarray(R, dtype=np.float64)
     matrix = R.ravel().tolist() if R.ndim == 2 else R.reshape(R.shape[:-2] + (9,))
     return Values(matrix, rotvec, euler, twist, q, rpy)

@@ -26,13 +26,13 @@ defined; the result is flagged ``degenerate``, θ3 is set to 0 and θ1 carries t
 angle (for lower-case sequences too).
 """
 
-from functools import partial
 import math
 
+import numpy as np
 from rot_tools.core._arrays import require_tolerance
-from rot_tools.core._backend import Conversion, FLAG, MATRIX, VECTOR
+from rot_tools.core.engine import apply, FLAG, MATRIX, plain_item, VECTOR
 from rot_tools.core.errors import RotationError
-from rot_tools.core.so3 import apply_to_rotations
+from rot_tools.core.so3 import apply_to_rotations, plain_rotation, run_on_floats
 
 _AXES = 'XYZ'
 EULER_SEQUENCES = tuple(
@@ -107,16 +107,13 @@ def euler_to_matrix(angles, seq='ZYX'):
     Intrinsic 'ABC': R = Rot_a(θ1)·Rot_b(θ2)·Rot_c(θ3); extrinsic 'abc': R = Rot_c(θ3)·Rot_b(θ2)·
     Rot_a(θ1). Any of the 24 names of EULER_SEQUENCES; another string raises RotationError.
     """
-    conversion = _TO_MATRIX.get(seq) if isinstance(seq, str) else None
-    if conversion is None:
-        parse_sequence(seq)  # raises the RotationError
-    (matrix,) = conversion.one(angles) or conversion(angles)
+    spec = parse_sequence(seq)
+    a = plain_item(angles, (3,))
+    out = a and run_on_floats(_matrix_kernel, a, spec)
+    if out:  # fast path: one plain item, the kernel on floats without apply around it
+        return np.array(out[0])
+    (matrix,) = apply(_matrix_kernel, [(angles, (3,), 'Euler angles', True)], [MATRIX], (spec,))
     return matrix
-
-
-_TO_MATRIX = {seq: Conversion(partial(_matrix_kernel, spec=spec),
-                              [((3,), 'Euler angles', True)], [MATRIX])
-              for seq, spec in _PARSED.items()}
 
 
 def _wrap(ops, angle):
@@ -176,10 +173,8 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     """
     spec = parse_sequence(seq)
     lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
-    kernel = _ANGLES_KERNELS[seq] if lock_tol == GIMBAL_LOCK_TOL else partial(
-        angles_kernel, spec=spec, lock_tol=lock_tol)
-    return apply_to_rotations(kernel, R, check, [VECTOR, FLAG])
-
-
-_ANGLES_KERNELS = {seq: partial(angles_kernel, spec=spec, lock_tol=GIMBAL_LOCK_TOL)
-                   for seq, spec in _PARSED.items()}
+    m = plain_rotation(R, check)
+    out = m and run_on_floats(angles_kernel, m, spec, lock_tol)
+    if out:  # fast path: one plain rotation, the kernel on floats without apply around it
+        return np.array(out[0]), np.bool_(out[1])
+    return apply_to_rotations(angles_kernel, R, check, [VECTOR, FLAG], params=(spec, lock_tol))

@@ -28,8 +28,8 @@ import os
 
 import numpy as np
 from rot_tools.core._arrays import finite_array, refuse_overflow, require_finite
-from rot_tools.core._backend import norm, SCALAR
 from rot_tools.core.axis_angle import axis_angle_to_matrix, skew_and_cos
+from rot_tools.core.engine import norm, SCALAR
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import apply_to_named_rotations, checked_rotation
 

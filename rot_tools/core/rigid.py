@@ -28,8 +28,8 @@ RotationError instead of returning inf.
 
 import numpy as np
 from rot_tools.core._arrays import apart, as_float_array, refuse_overflow, require_tolerance
-from rot_tools.core._backend import (Conversion, cross, dot, FLAG, linear_in_range, MATRIX,
-                                     SCALAR, unit, VECTOR)
+from rot_tools.core.engine import (apply, cross, dot, FLAG, linear_in_range, MATRIX, SCALAR,
+                                   unit, VECTOR)
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import (
     apply_to_named_rotations, apply_to_rotations, defects_kernel, refuse_defects, ROTATION_TOL)
@@ -65,10 +65,6 @@ def _frame_kernel(ops, u, v, w):
             dot(cross(uh, vh), wh))
 
 
-_FRAME = Conversion(_frame_kernel, [((3,), f'frame axis {name}', True) for name in 'uvw'],
-                    [MATRIX] + [SCALAR] * 7)
-
-
 def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
     """
     Return the rotation R = (û v̂ ŵ) of a frame whose axes u, v, w are written in x-y-z.
@@ -80,7 +76,8 @@ def frame_to_matrix(u, v, w, tol=ROTATION_TOL):
     nearest_rotation before handing it on.
     """
     tol = require_tolerance(tol, 'tol', 1.0, '[0, 1)')
-    matrix, *norms, uv, uw, vw, handed = _FRAME.one(u, v, w) or _FRAME(u, v, w)
+    axes = [(x, (3,), f'frame axis {name}', True) for x, name in zip((u, v, w), 'uvw')]
+    matrix, *norms, uv, uw, vw, handed = apply(_frame_kernel, axes, [MATRIX] + [SCALAR] * 7)
     for name, n in zip('uvw', norms):
         zero = n == 0
         if zero.any():
@@ -179,10 +176,6 @@ def _transform_of_homogeneous_kernel(ops, t):
     return (m, [t[0][3], t[1][3], t[2][3]], off, *defects_kernel(ops, m))
 
 
-_OF_HOMOGENEOUS = Conversion(_transform_of_homogeneous_kernel, [((4, 4), 'T', True)],
-                             [MATRIX, VECTOR, SCALAR, SCALAR, SCALAR])
-
-
 def homogeneous_to_transform(T, *, check=True):
     """
     (R, b) of a homogeneous matrix T = [[R, b], [0, 0, 0, 1]]; (..., 4, 4) → (R, b).
@@ -190,7 +183,8 @@ def homogeneous_to_transform(T, *, check=True):
     RotationError when the last row differs from (0, 0, 0, 1) by more than
     HOMOGENEOUS_ROW_TOL = 1e-9 (always), and when R is not a rotation (unless check=False).
     """
-    R, b, off, err, det = _OF_HOMOGENEOUS.one(T) or _OF_HOMOGENEOUS(T)
+    R, b, off, err, det = apply(_transform_of_homogeneous_kernel, [(T, (4, 4), 'T', True)],
+                                [MATRIX, VECTOR, SCALAR, SCALAR, SCALAR])
     if not (off <= HOMOGENEOUS_ROW_TOL).all():
         worst, where = _worst(off)
         row = as_float_array(T, (4, 4), 'T')[worst][3].tolist()

@@ -35,9 +35,9 @@ from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core._arrays import finite_array, refuse_overflow
-from rot_tools.core._backend import Conversion, cross, dot, FLAG, in_range, linear_in_range, \
-    MATRIX, SCALAR, unit, VECTOR
 from rot_tools.core.axis_angle import axis_angle_kernel, rodrigues_entries, sin_versin
+from rot_tools.core.engine import (apply, cross, dot, FLAG, in_range, linear_in_range, MATRIX,
+                                   SCALAR, unit, VECTOR)
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import apply_to_rotations, checked_rotation
 
@@ -197,9 +197,6 @@ def _exp_kernel(ops, twist):
     return rodrigues_entries(*axis, sin, versin), b, turns, in_range(ops, b)
 
 
-_EXP = Conversion(_exp_kernel, [((6,), 'twist', True)], [MATRIX, VECTOR, FLAG, FLAG])
-
-
 def screw_exp(twist):
     """
     Rigid motion (R, b) = exp of the twist (ω, u) = (θ·l̂, θ·v); (..., 6) → (R, b).
@@ -208,7 +205,8 @@ def screw_exp(twist):
     b = (sin θ/θ)·u⊥ + ((1 − cos θ)/θ)·l̂ × u + (l̂·u)·l̂, which is smooth at θ = 0 (b = u).
     RotationError where |ω| or b overflow float64.
     """
-    R, b, turns, fits = _EXP.one(twist) or _EXP(twist)
+    R, b, turns, fits = apply(_exp_kernel, [(twist, (6,), 'twist', True)],
+                              [MATRIX, VECTOR, FLAG, FLAG])
     refuse_overflow(turns, 'the rotation angle |ω| of the twist')
     refuse_overflow(fits, 'b of screw_exp')
     return R, b
@@ -224,11 +222,6 @@ def _transform_of_screw_kernel(ops, direction, point, angle, translation):
     return rodrigues_entries(*axis, sin, versin), b, size == 0, in_range(ops, b)
 
 
-_OF_SCREW = Conversion(_transform_of_screw_kernel, [
-    ((3,), 'direction', True), ((3,), 'point', True), ((), 'angle', True),
-    ((), 'translation', True)], [MATRIX, VECTOR, FLAG, FLAG])
-
-
 def transform_from_screw(direction, point, angle, translation):
     """
     Rigid motion (R, b) of a screw: R = Rot_l̂(θ), b = (I − R)·point + d·l̂.
@@ -238,8 +231,10 @@ def transform_from_screw(direction, point, angle, translation):
     screw_from_transform. (I − R)·c = (1 − cos θ)·c⊥ − sin θ·l̂ × c with c⊥ = c − (c·l̂)·l̂,
     so tiny angles with far-away axes keep their digits.
     """
-    values = direction, point, angle, translation
-    R, b, zero, fits = _OF_SCREW.one(*values) or _OF_SCREW(*values)
+    R, b, zero, fits = apply(_transform_of_screw_kernel, [
+        (direction, (3,), 'direction', True), (point, (3,), 'point', True),
+        (angle, (), 'angle', True), (translation, (), 'translation', True)],
+        [MATRIX, VECTOR, FLAG, FLAG])
     if zero.any():
         raise RotationError('screw direction must be non-zero, got |direction| = 0')
     refuse_overflow(fits, 'b = (I − R)·point + d·l̂ of transform_from_screw')

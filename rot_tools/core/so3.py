@@ -17,14 +17,13 @@ result that means nothing — NaN or ±inf included (rotation_distance of two ma
 its SVD cannot take.
 """
 
-from functools import lru_cache
 import math
 
 import numpy as np
 from numpy import False_
 from rot_tools.core._arrays import apart, as_float_array, finite_array, require_tolerance
-from rot_tools.core._backend import apply, Conversion, FLAG, kernel_key, MATRIX, SCALAR
-from rot_tools.core.errors import RotationError
+from rot_tools.core.engine import apply, FLAG, FLOATS, MATRIX, plain_item, SCALAR
+from rot_tools.core.errors import FLOAT_ERRORS, RotationError
 
 ROTATION_TOL = 1e-9
 """Default tolerance of is_rotation / validate_rotation on max|RᵀR − I| and |det R − 1|."""
@@ -150,54 +149,75 @@ def refuse_defects(err, det, tol, name='R'):
             + where.format(tuple(map(int, worst))))
 
 
-@lru_cache(maxsize=256)
-def _checking(kernel, count=1):
+def _checked(ops, *args):
     """
-    Return the kernel with the defects of its first ``count`` inputs appended.
+    Return a kernel's outputs with the defects of its first ``count`` inputs appended.
 
-    kernel with the defects of its first ``count`` inputs (rotations) appended to its
-    outputs; one object per (kernel, count), with a key of its own for the generated code.
+    args: the kernel's entries, then (kernel, count, params), as apply_to_named_rotations
+    passes them: (max|RᵀR − I|, det R) of each rotation follow the kernel's outputs.
     """
-    def checked(ops, *entries):
-        defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
-        return (*kernel(ops, *entries), *defects)
-    checked.rot_tools_key = f'{kernel_key(kernel)} checked({count})'
-    return checked
+    *entries, kernel, count, params = args
+    defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
+    return (*kernel(ops, *entries, *params), *defects)
 
 
-def apply_to_rotations(kernel, R, check, outputs, extra=()):
+def apply_to_rotations(kernel, R, check, outputs, extra=(), params=()):
     """
-    apply(kernel, [R, *extra], outputs) with R (..., 3, 3), validated in the same pass.
+    apply(kernel, [R, *extra], outputs, params) with R (..., 3, 3), validated in the same pass.
 
     With check, R must pass validate_rotation (tol ROTATION_TOL): its defects are computed
-    beside the kernel's outputs, which are dropped if R is refused. (The one-rotation case
-    of apply_to_named_rotations, kept lean: it is on every conversion's single-item path.)
+    beside the kernel's outputs, which are dropped if R is refused.
     """
-    if not check:
-        return apply(kernel, [(R, (3, 3), 'R', False), *extra], outputs)
-    *results, err, det = apply(_checking(kernel), [(R, (3, 3), 'R', True), *extra],
-                               [*outputs, _FLOAT, _FLOAT])
-    refuse_defects(err, det, ROTATION_TOL)
-    return tuple(results)
+    return apply_to_named_rotations(kernel, [(R, 'R')], check, outputs, extra, params)
 
 
-def apply_to_named_rotations(kernel, rotations, check, outputs, extra=()):
+def apply_to_named_rotations(kernel, rotations, check, outputs, extra=(), params=()):
     """
     apply_to_rotations for several rotations: rotations = [(R1, 'R1'), (R2, 'R2'), ...].
 
-    The kernel takes their entries first, then those of extra; with check each rotation is
-    validated under its name.
+    The kernel takes their entries first, then those of extra, then params; with check each
+    rotation is validated under its name.
     """
     inputs = [(R, (3, 3), name, check) for R, name in rotations]
     if not check:
-        return apply(kernel, [*inputs, *extra], outputs)
+        return apply(kernel, [*inputs, *extra], outputs, params)
     count = len(rotations)
-    results = apply(_checking(kernel, count), [*inputs, *extra],
-                    [*outputs] + [_FLOAT, _FLOAT] * count)
+    results = apply(_checked, [*inputs, *extra], [*outputs] + [_FLOAT, _FLOAT] * count,
+                    (kernel, count, params))
     for i, (_, name) in enumerate(rotations):
         err, det = results[len(outputs) + 2 * i:len(outputs) + 2 * i + 2]
         refuse_defects(err, det, ROTATION_TOL, name)
     return tuple(results[:len(outputs)])
+
+
+def plain_rotation(R, check):
+    """
+    Return R's rows as Python floats for a fast path, or None (then apply's path decides).
+
+    Not None where R is one finite float64 (3, 3) array and, with check, a rotation within
+    ROTATION_TOL: the test of refuse_defects written out for plain floats (any defect, NaN
+    included, fails it, and the full path then raises the error that names it).
+    """
+    m = plain_item(R, (3, 3))
+    if m is None or not check:
+        return m
+    (a, b, c), (d, e, f), (g, h, i) = m
+    tol = ROTATION_TOL
+    if (abs(a * a + d * d + g * g - 1.0) <= tol and abs(b * b + e * e + h * h - 1.0) <= tol
+            and abs(c * c + f * f + i * i - 1.0) <= tol and abs(a * b + d * e + g * h) <= tol
+            and abs(a * c + d * f + g * i) <= tol and abs(b * c + e * f + h * i) <= tol
+            and abs(a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) - 1.0)
+            <= tol):
+        return m
+    return None
+
+
+def run_on_floats(kernel, *args):
+    """kernel(FLOATS, *args) of a fast path, or None where float arithmetic raises."""
+    try:
+        return kernel(FLOATS, *args)
+    except FLOAT_ERRORS:
+        return None
 
 
 def checked_rotation(R, check):
@@ -232,7 +252,12 @@ def quaternion_to_matrix(q, *, tol=None):
     ≥ 0 also refuses q with ||q| − 1| > tol (a quaternion typed or sent as unit that is not),
     saying |q| and by how much (the worst item of a batch).
     """
-    matrix, zero = _QUATERNION_TO_MATRIX.one(q) or _QUATERNION_TO_MATRIX(q)
+    v = plain_item(q, (4,))
+    out = v and tol is None and run_on_floats(_quaternion_kernel, v)
+    if out and not out[1]:  # fast path: one plain non-zero item, the kernel on floats
+        return np.array(out[0])
+    matrix, zero = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
+                         [MATRIX, FLAG])
     if zero is not False_ and zero.any():  # (one item's flag is one of NumPy's two bools)
         where = f' (item {tuple(int(i) for i in np.argwhere(zero)[0])})' if zero.ndim else ''
         raise RotationError(f'quaternion (x, y, z, w) must be non-zero, got |q| = 0{where}')
@@ -285,10 +310,6 @@ def _quaternion_kernel(ops, q):
             [xz - yw, yz + xw, 1.0 - (xx + yy)]], zero
 
 
-_QUATERNION_TO_MATRIX = Conversion(
-    _quaternion_kernel, [((4,), 'quaternion (x, y, z, w)', True)], [MATRIX, FLAG])
-
-
 def quaternion_of_matrix_kernel(ops, m):
     """Return the unit (x, y, z, w) of m, canonical sign; see matrix_to_quaternion."""
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = m
@@ -325,5 +346,9 @@ def matrix_to_quaternion(R, *, check=True):
     result is accurate to rounding at every angle, 0 and π included. The boundary twin of
     quaternion_to_matrix, for messages and for people; never used inside the math.
     """
+    m = plain_rotation(R, check)
+    out = m and run_on_floats(quaternion_of_matrix_kernel, m)
+    if out:  # fast path: one plain rotation, the kernel on floats without apply around it
+        return np.array(out[0])
     (q,) = apply_to_rotations(quaternion_of_matrix_kernel, R, check, [_QUATERNION])
     return q
