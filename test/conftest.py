@@ -28,6 +28,7 @@ import threading
 import time
 
 import pytest
+from rot_tools.io import interface
 
 os.environ['ROS_DOMAIN_ID'] = str(1 + os.getpid() % 101)
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
@@ -37,9 +38,8 @@ os.environ.pop('ROS_STATIC_PEERS', None)
 RUN = f'rt{os.getpid()}_{secrets.token_hex(4)}'
 """This test run's token: the namespaces of its nodes start with /RUN."""
 
-OUTPUTS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw',
-           'screw_axis', 'markers')
-"""Published topics of rotation_node, relative to its name."""
+OUTPUTS = tuple(row.name for row in interface.OUTPUTS)
+"""Published topics of rotation_node, relative to its name (rot_tools.io.interface)."""
 
 TIMEOUT = 5.0
 """Upper bound of every wait (discovery, message, service reply); never reached when well."""
@@ -254,13 +254,9 @@ class Tester:
 
     def subscribe_outputs(self, prefix):
         """Subscribe (reliable, depth 10, like the node) to the node's outputs."""
-        from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
-        from std_msgs.msg import Float64MultiArray
-        from visualization_msgs.msg import Marker, MarkerArray
-        types = (Float64MultiArray, QuaternionStamped, Vector3Stamped, Vector3Stamped,
-                 Vector3Stamped, TwistStamped, Marker, MarkerArray)
-        for name, msg_type in zip(OUTPUTS, types):
-            self.subscribe(f'{prefix}/{name}', msg_type)
+        from rot_tools.ros.messages import message_class
+        for row in interface.OUTPUTS:
+            self.subscribe(f'{prefix}/{row.name}', message_class(row.type_name))
 
     def subscribe_rosout(self):
         """Collect /rosout (reliable, transient local, like the rosout publishers)."""

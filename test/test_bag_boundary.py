@@ -12,12 +12,13 @@ from types import SimpleNamespace
 from hypothesis import example, given, settings as hsettings, strategies as st
 import numpy as np
 import pytest
-from rot_tools.io import boundary
+from rot_tools.io import boundary, interface
 from rot_tools.io.boundary import RefusedInput
 from scipy.spatial.transform import Rotation
 
 TOL = 1e-3
 SETTINGS = SimpleNamespace(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False)
+IMU, ODOMETRY = interface.input_named('imu'), interface.input_named('odometry')
 
 
 def _per_message(q, tol=TOL):
@@ -91,13 +92,13 @@ def test_check_order_no_orientation_then_position_then_quaternion():
     assert names == ['no_orientation', 'no_orientation', 'non_finite', 'zero_quaternion']
     # the per-message converters agree
     with pytest.raises(RefusedInput) as info:
-        boundary.imu_fields_to_rt((0, 0, 0, 0.0, -1.0), SETTINGS)  # q, orientation_covariance[0]
+        IMU.convert((0, 0, 0, 0.0, -1.0), SETTINGS, IMU.fields)  # q, orientation_covariance[0]
     assert info.value.reason == 'no_orientation'
     with pytest.raises(RefusedInput) as info:  # Odometry's pose.pose: position, orientation
-        boundary.pose_pose_fields_to_rt((math.nan, 0.0, 0.0, 0, 0, 0, 0.0), SETTINGS)
+        ODOMETRY.convert((math.nan, 0.0, 0.0, 0, 0, 0, 0.0), SETTINGS, ODOMETRY.fields)
     assert info.value.reason == 'non_finite'
     assert str(info.value) == boundary.batch_refusal_text(
-        'nav_msgs/msg/Odometry', boundary.CODE['non_finite'], (0, 0, 0, 0.0), 0.0, TOL,
+        ODOMETRY.fields, boundary.CODE['non_finite'], (0, 0, 0, 0.0), 0.0, TOL,
         (math.nan, 0.0, 0.0)) == 'pose.pose.position.x is nan'
 
 
@@ -109,11 +110,11 @@ def test_check_order_no_orientation_then_position_then_quaternion():
 ])
 def test_batch_text_is_the_per_message_text(q, reason, text):
     with pytest.raises(RefusedInput) as info:
-        boundary.pose_pose_fields_to_rt((0.0, 0.0, 0.0, *q), SETTINGS)
+        ODOMETRY.convert((0.0, 0.0, 0.0, *q), SETTINGS, ODOMETRY.fields)
     codes, norms = boundary.check_batch([q], TOL, positions=[(0.0, 0.0, 0.0)])
     assert info.value.reason == reason == boundary.REFUSAL_REASONS[codes[0] - 1]
     assert str(info.value) == text == boundary.batch_refusal_text(
-        'nav_msgs/msg/Odometry', int(codes[0]), q, float(norms[0]), TOL, (0.0, 0.0, 0.0))
+        ODOMETRY.fields, int(codes[0]), q, float(norms[0]), TOL, (0.0, 0.0, 0.0))
 
 
 @pytest.mark.parametrize('tol', [0.25, 0.5, 0.0])

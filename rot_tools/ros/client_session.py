@@ -201,7 +201,7 @@ class Client:
                 for name in wanted]
         subs.append(self.node.create_subscription(
             message_class(interface.output_named(matrix).type_name), self.topic(matrix),
-            answers.matrices.append, qos))
+            lambda m: answers.matrices.append(m), qos))
         topic = self.topic(name)
         pub = self.node.create_publisher(type(msg), topic, 10)
         self.wait_for_match(pub, subs)
