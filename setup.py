@@ -13,7 +13,7 @@ setup(
         ('share/' + package_name + '/config', ['config/rot_tools.yaml']),
         ('share/' + package_name + '/launch', ['launch/rot_tools.launch.xml']),
     ],
-    install_requires=['setuptools', 'numpy'],
+    install_requires=['setuptools', 'numpy', 'pyyaml'],
     extras_require={
         'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib', 'rosbags==0.11.9'],
         'plot': ['matplotlib'],

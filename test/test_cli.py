@@ -184,7 +184,7 @@ def test_axis_angle_in_degrees_prints_exact_values(script):
     proc = run(script, 'axis-angle', '0', '0', '1', '90', '--deg')
     assert proc.returncode == 0
     assert '-0.0' not in proc.stdout and 'e-1' not in proc.stdout  # no noise like 6e-17
-    assert '  - [0.0, -1.0, 0.0]\n  - [1.0, 0.0, 0.0]\n  - [0.0, 0.0, 1.0]\n' in proc.stdout
+    assert 'matrix:\n- [0.0, -1.0, 0.0]\n- [1.0, 0.0, 0.0]\n- [0.0, 0.0, 1.0]\n' in proc.stdout
     assert '  angle_deg: 90.0\n' in proc.stdout and '    angle_deg: 270.0\n' in proc.stdout
 
 

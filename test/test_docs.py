@@ -226,7 +226,7 @@ def test_links_between_the_docs_resolve():
 def test_the_console_runner_sees_a_wrong_output(tmp_path):
     # the comparison is not vacuous: a changed number or a missing line is caught
     (cmd, want, got), = run_console('$ rot-tools rotvec 0 0 0 | head -2\nmatrix:\n'
-                                    '  - [1.0, 0.0, 0.0]\n', tmp_path)
+                                    '- [1.0, 0.0, 0.0]\n', tmp_path)
     assert matches(want, got)
     assert not matches(want.replace('1.0', '2.0', 1), got)
     assert not matches(want + 'more\n', got)

@@ -59,19 +59,21 @@ this order::
 always come in both ``angle`` (rad) and ``angle_deg``.
 
 Text forms. Numbers are rounded to ``precision`` significant digits *and* decimal places
-(default 12), so rounding noise such as 6.1e-17 prints as 0.0; −0.0 prints as 0.0;
-``precision=None`` keeps full float precision.
+(default 12) before they are written, so rounding noise such as 6.1e-17 prints as 0.0; −0.0
+prints as 0.0; ``precision=None`` keeps full float precision. The writers are libraries:
 
-- :func:`to_yaml`: a small deterministic emitter (no PyYAML needed), readable by any YAML
-  1.1/1.2 parser. Mappings in block style, lists of scalars as flow lists
-  ``[0.0, 0.0, 1.0]``, a matrix as a block list of flow rows; a mapping nested two or more
-  levels deep whose values are all scalars or flat lists is written in flow style
-  (``{axis: [...], angle: ...}``). Floats always carry a dot (``1.0e-05``), infinities
-  and NaN are ``.inf``, ``-.inf``, ``.nan``; strings are quoted when YAML would read them
-  as something else.
-- :func:`to_json`: the same structure; JSON has no infinity, so ``inf``, ``-inf`` and
-  ``nan`` are written as the strings ``"inf"``, ``"-inf"``, ``"nan"`` (Python's
-  ``float()`` reads them back).
+- :func:`to_yaml`: PyYAML's safe dumper, keys in the report's order, mappings in block
+  style, lists of scalars in flow style ``[0.0, 0.0, 1.0]`` (a matrix is a list of flow
+  rows), one line per value; a mapping three or more levels deep whose values are scalars
+  or flat lists on one line too (``ZYX: {angles: [...], degenerate: false}``); infinities
+  and NaN are ``.inf``, ``-.inf``, ``.nan``; ``yaml.safe_load`` reads it back.
+- :func:`to_json`: the standard ``json`` module, indented by two. JSON has no infinity, so
+  ``inf``, ``-inf`` and ``nan`` are written as the strings ``"inf"``, ``"-inf"``, ``"nan"``
+  (Python's ``float()`` reads them back).
+
+Both write printable characters of a string as themselves (UTF-8) and escape the rest;
+YAML double-quotes a string with non-ASCII characters, so that the text still reads back
+the same when a terminal that cannot show them gets them as Python's backslash escapes.
 """
 
 import json
@@ -84,6 +86,7 @@ from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler
 from rot_tools.core.rigid import invert_transform, transform_points, transform_to_homogeneous
 from rot_tools.core.so3 import matrix_to_quaternion
+import yaml
 
 DEFAULT_PRECISION = 12
 """Significant digits and decimal places of printed numbers."""
@@ -200,7 +203,7 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, p
 
 
 # ---------------------------------------------------------------------------------------
-# Numbers
+# Numbers and text
 
 
 def round_number(x, precision=DEFAULT_PRECISION):
@@ -214,168 +217,93 @@ def round_number(x, precision=DEFAULT_PRECISION):
     return x + 0.0  # −0.0 + 0.0 == +0.0
 
 
-def _float_text(x):
-    """Return repr(x) with a dot in the mantissa (YAML 1.1 reads 1e-05 as text)."""
-    s = repr(x)
-    if 'e' in s and '.' not in s:
-        s = s.replace('e', '.0e')
-    return s
+class _OneLine(dict):
+    """A mapping three or more levels deep of scalars and flat lists: one line in YAML."""
 
 
-# ---------------------------------------------------------------------------------------
-# YAML
-
-_PLAIN = re.compile(r'[A-Za-z_/][A-Za-z0-9_./ -]*\Z')
-# Words YAML parsers read as booleans or null. A bare y or n stays a string for PyYAML
-# (which ros2cli uses) and is how `ros2 topic echo` writes a quaternion's y, so a report's
-# quaternion block pastes into `ros2 topic pub`.
-_YAML_WORDS = frozenset('yes no true false on off null ~'.split())
-
-# Characters of a string written escaped (YAML double-quoted scalar, JSON string): what
-# YAML does not allow printed (C0 and C1 controls, DEL, lone surrogates, U+FFFE, U+FFFF),
-# line and paragraph separators (YAML folds them) and the byte order mark. Everything else,
-# emoji and accents included, is written as itself: json.dumps's ASCII escapes write a
-# character beyond U+FFFF as a surrogate pair, which YAML reads as two lone surrogates.
-_ESCAPED = re.compile('[^\x20-\x7e\xa0-\ud7ff\ue000-\ufefe\uff00-\ufffd'
-                      '\U00010000-\U0010ffff]|[\u2028\u2029]')
-_YAML_ESCAPED = re.compile(_ESCAPED.pattern + '|["\\\\]')
-_SHORT_ESCAPES = {'"': '\\"', '\\': '\\\\', '\t': '\\t', '\n': '\\n', '\r': '\\r'}
+def _flat(x):
+    """Tell whether x is a scalar or a list of scalars."""
+    return not isinstance(x, dict) and not (
+        isinstance(x, list) and any(isinstance(v, (dict, list)) for v in x))
 
 
-def _escape(match):
-    c = match.group()
-    if c in _SHORT_ESCAPES:
-        return _SHORT_ESCAPES[c]
-    code = ord(c)
-    return f'\\x{code:02x}' if code < 0x100 else (
-        f'\\u{code:04x}' if code < 0x10000 else f'\\U{code:08x}')
+def _rounded(x, precision, non_finite, depth=0):
+    """
+    Return a copy of plain data ``x`` with every float rounded (:func:`round_number`).
 
-
-def _yaml_string(text):
-    """``text`` as a YAML double-quoted scalar: printable characters as themselves."""
-    return '"' + _YAML_ESCAPED.sub(_escape, text) + '"'
-
-
-def _json_string(text):
-    r"""Return ``text`` as a JSON string: printable characters as is, the rest \uXXXX."""
-    return _ESCAPED.sub(lambda m: f'\\u{ord(m.group()):04x}',
-                        json.dumps(text, ensure_ascii=False))
-
-
-def _yaml_scalar(x, precision):
-    if x is None:
-        return 'null'
+    ``non_finite`` maps ±inf and NaN (``float`` keeps them, ``str`` spells them for JSON).
+    NumPy scalars become Python ones; any other type is a TypeError. A mapping ``depth``
+    >= 3 levels deep whose values are flat becomes a :class:`_OneLine` (JSON sees a dict).
+    """
+    if isinstance(x, dict):
+        copy = {k: _rounded(v, precision, non_finite, depth + 1) for k, v in x.items()}
+        return _OneLine(copy) if depth >= 3 and all(map(_flat, copy.values())) else copy
+    if isinstance(x, (list, tuple)):
+        return [_rounded(v, precision, non_finite, depth + 1) for v in x]
     if isinstance(x, (bool, np.bool_)):
-        return 'true' if x else 'false'
+        return bool(x)
     if isinstance(x, (int, np.integer)):
-        return str(int(x))
+        return int(x)
     if isinstance(x, (float, np.floating)):
         x = round_number(x, precision)
-        if math.isnan(x):
-            return '.nan'
-        if math.isinf(x):
-            return '.inf' if x > 0 else '-.inf'
-        return _float_text(x)
-    if isinstance(x, str):
-        if _PLAIN.match(x) and not x.endswith(' ') and x.lower() not in _YAML_WORDS:
-            return x
-        return _yaml_string(x)
-    raise TypeError(f'to_yaml: cannot write {type(x).__name__} {x!r}')
+        return x if math.isfinite(x) else non_finite(x)
+    if x is None or isinstance(x, str):
+        return x
+    raise TypeError(f'cannot write {type(x).__name__} {x!r}')
 
 
-def _is_scalar(x):
-    return not isinstance(x, (dict, list, tuple))
+class _ReportDumper(yaml.SafeDumper):
+    """PyYAML's safe dumper: flat lists and deep small mappings in flow style, text quoted."""
 
 
-def _is_flat(x):
-    return isinstance(x, (list, tuple)) and all(_is_scalar(v) for v in x)
+def _represent_list(dumper, data):
+    return dumper.represent_sequence('tag:yaml.org,2002:seq', data, flow_style=_flat(data))
 
 
-def _yaml_flow(x, precision):
-    if isinstance(x, dict):
-        return '{' + ', '.join(
-            f'{_yaml_scalar(k, precision)}: {_yaml_flow(v, precision)}'
-            for k, v in x.items()) + '}'
-    if isinstance(x, (list, tuple)):
-        return '[' + ', '.join(_yaml_flow(v, precision) for v in x) + ']'
-    return _yaml_scalar(x, precision)
+def _represent_one_line(dumper, data):
+    return dumper.represent_mapping('tag:yaml.org,2002:map', data, flow_style=True)
 
 
-def _yaml_value(x, indent, depth, precision):
-    """(inline text, following block lines) of x as the value of a key or list item."""
-    if _is_scalar(x) or _is_flat(x) or not x:
-        return _yaml_flow(x, precision), []
-    if isinstance(x, dict) and depth >= 3 and all(
-            _is_scalar(v) or _is_flat(v) for v in x.values()):
-        return _yaml_flow(x, precision), []
-    return None, _yaml_block(x, indent, depth, precision)
+def _represent_str(dumper, text):
+    """
+    Represent non-ASCII text, and text with a backslash, as a double-quoted string.
+
+    Escapes of its characters (an ASCII terminal's) then read back as them, and every
+    backslash of the document is in a double-quoted string (see ``_ASTRAL_ESCAPE``).
+    """
+    style = '"' if not text.isascii() or '\\' in text else None
+    return dumper.represent_scalar('tag:yaml.org,2002:str', text, style=style)
 
 
-def _yaml_block(x, indent, depth, precision):
-    pad = '  ' * indent
-    lines = []
-    if isinstance(x, dict):
-        for k, v in x.items():
-            inline, block = _yaml_value(v, indent + 1, depth + 1, precision)
-            key = _yaml_scalar(k, precision)
-            lines.append(f'{pad}{key}: {inline}' if inline is not None else f'{pad}{key}:')
-            lines.extend(block)
-    else:
-        for v in x:
-            inline, block = _yaml_value(v, indent + 1, depth + 1, precision)
-            if inline is not None:
-                lines.append(f'{pad}- {inline}')
-            else:  # the nested block starts on the dash line
-                lines.append(f'{pad}- {block[0].lstrip()}')
-                lines.extend(block[1:])
-    return lines
+_ReportDumper.add_representer(list, _represent_list)
+_ReportDumper.add_representer(_OneLine, _represent_one_line)
+_ReportDumper.add_representer(str, _represent_str)
+
+
+# PyYAML escapes a character beyond U+FFFF in a double-quoted string (an emoji becomes
+# \U0001F600) although YAML prints it: such an escape, not preceded by an escaped backslash,
+# is written back as the character (only double-quoted strings hold backslashes).
+_ASTRAL_ESCAPE = re.compile(r'(?<!\\)((?:\\\\)*)\\U([0-9A-F]{8})')
 
 
 def to_yaml(data, precision=DEFAULT_PRECISION):
     """Return a YAML document (ending in a newline) of a dict of plain data; deterministic."""
     if not isinstance(data, dict):
         raise TypeError('to_yaml takes a dict')
-    if not data:
-        return '{}\n'
-    return '\n'.join(_yaml_block(data, 0, 0, precision)) + '\n'
+    text = yaml.dump(_rounded(data, precision, float), Dumper=_ReportDumper,
+                     default_flow_style=False, sort_keys=False, allow_unicode=True,
+                     width=math.inf)
+    return _ASTRAL_ESCAPE.sub(lambda m: m.group(1) + chr(int(m.group(2), 16)), text)
 
 
-# ---------------------------------------------------------------------------------------
-# JSON
-
-
-def _json_scalar(x, precision):
-    if isinstance(x, (float, np.floating)):
-        x = round_number(x, precision)
-        if not math.isfinite(x):
-            return json.dumps(str(x))  # "inf", "-inf", "nan"
-        return _float_text(x)
-    if isinstance(x, (bool, np.bool_)):
-        return 'true' if x else 'false'
-    if isinstance(x, (int, np.integer)):
-        return str(int(x))
-    if x is None:
-        return 'null'
-    if isinstance(x, str):
-        return _json_string(x)
-    raise TypeError(f'to_json: cannot write {type(x).__name__} {x!r}')
-
-
-def _json(x, indent, precision):
-    if _is_scalar(x):
-        return _json_scalar(x, precision)
-    if _is_flat(x) or not x:
-        inner = ', '.join(_json_scalar(v, precision) for v in x)
-        return '[' + inner + ']' if isinstance(x, (list, tuple)) else '{}'
-    pad = '  ' * (indent + 1)
-    if isinstance(x, dict):
-        items = [f'{pad}{_json_string(str(k))}: {_json(v, indent + 1, precision)}'
-                 for k, v in x.items()]
-        return '{\n' + ',\n'.join(items) + '\n' + '  ' * indent + '}'
-    items = [f'{pad}{_json(v, indent + 1, precision)}' for v in x]
-    return '[\n' + ',\n'.join(items) + '\n' + '  ' * indent + ']'
+# What json.dumps(ensure_ascii=False) leaves raw but is not printable, or not UTF-8 at all:
+# DEL and the C1 controls, lone surrogates, line and paragraph separators, the byte order
+# mark, U+FFFE and U+FFFF. They only occur inside strings, where \uXXXX reads back the same.
+_UNPRINTABLE = re.compile('[\x7f-\x9f\ud800-\udfff\u2028\u2029\ufeff\ufffe\uffff]')
 
 
 def to_json(data, precision=DEFAULT_PRECISION):
-    """Return a JSON document (ending in a newline); lists of numbers on one line."""
-    return _json(data, 0, precision) + '\n'
+    """Return a JSON document (ending in a newline), indented by two; non-finite as strings."""
+    text = json.dumps(_rounded(data, precision, str), indent=2, ensure_ascii=False,
+                      allow_nan=False)
+    return _UNPRINTABLE.sub(lambda m: f'\\u{ord(m.group()):04x}', text) + '\n'
