@@ -16,8 +16,8 @@ import math
 import numpy as np
 from numpy import False_, True_
 from rot_tools.core._arrays import refuse_overflow
-from rot_tools.core.engine import (apply, FLAG, MATRIX, norm_in_range, plain_item, SCALAR, unit,
-                                   VECTOR)
+from rot_tools.core.engine import (apply, dot, FLAG, FLOATS, MATRIX, norm_in_range, plain_item,
+                                   SCALAR, unit, VECTOR)
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import apply_to_rotations, plain_rotation, run_on_floats
 
@@ -63,10 +63,11 @@ def axis_angle_to_matrix(axis, angle):
     a non-zero angle raises RotationError.
     """
     v = plain_item(axis, (3,))
-    out = v and isinstance(angle, float) and math.isfinite(angle) and run_on_floats(
-        _axis_angle_kernel, v, float(angle))
-    if out and not out[1]:  # fast path: one plain item, the kernel on floats
-        return np.array(out[0])
+    if v is not None and isinstance(angle, float) and math.isfinite(angle):
+        n2 = dot(v, v)
+        if 1e-290 <= n2 <= 1e290:  # fast path: one plain item, |axis| not rescaled by unit
+            n = math.sqrt(n2)
+            return np.array(_rodrigues(FLOATS, v[0] / n, v[1] / n, v[2] / n, float(angle)))
     matrix, bad = apply(_axis_angle_kernel, [(axis, (3,), 'axis', True),
                                              (angle, (), 'angle', True)], [MATRIX, FLAG])
     if bad is not False_ and bad.any():  # (one item's flag is one of NumPy's two bools)

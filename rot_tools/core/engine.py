@@ -24,6 +24,7 @@ how to add a conversion.
 from itertools import chain
 import math
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 from rot_tools.core._arrays import as_float_array, require_finite
@@ -39,59 +40,46 @@ SCALAR = ((), np.float64)
 FLAG = ((), np.bool_)
 
 
-class FloatOps:
-    """Scalar engine: Python floats."""
-
-    atan2 = staticmethod(math.atan2)
-    sqrt = staticmethod(math.sqrt)
-    sin = staticmethod(math.sin)
-    cos = staticmethod(math.cos)
-    tan = staticmethod(math.tan)
-    abs = staticmethod(abs)  # noqa: A003
-    rare = staticmethod(bool)
-
-    @staticmethod
-    def maximum(a, b):  # NaN if either is NaN, as NumPy's (max(x, nan) is x)
-        return a if a >= b or a != a else b
-
-    @staticmethod
-    def minimum(a, b):
-        return a if a <= b or a != a else b
-
-    @staticmethod
-    def max_of(first, *rest):
-        for x in rest:
-            first = first if first >= x or first != first else x
-        return first
-
-    @staticmethod
-    def where(cond, a, b):
-        return a if cond else b
+def _maximum(a, b):
+    """max(a, b) of floats, NaN if either is NaN, as np.maximum (max(x, nan) is x)."""
+    return a if a >= b or a != a else b
 
 
-class ArrayOps:
-    """Batch engine: NumPy arrays (errors on the discarded branch of a where are silenced)."""
-
-    atan2 = staticmethod(np.arctan2)
-    sqrt = staticmethod(np.sqrt)
-    sin = staticmethod(np.sin)
-    cos = staticmethod(np.cos)
-    tan = staticmethod(np.tan)
-    abs = staticmethod(np.abs)  # noqa: A003
-    rare = staticmethod(np.any)
-    maximum = staticmethod(np.maximum)
-    minimum = staticmethod(np.minimum)
-    where = staticmethod(np.where)
-
-    @staticmethod
-    def max_of(first, *rest):
-        for x in rest:
-            first = np.maximum(first, x)
-        return first
+def _minimum(a, b):
+    """min(a, b) of floats, NaN if either is NaN, as np.minimum."""
+    return a if a <= b or a != a else b
 
 
-FLOATS = FloatOps()
-ARRAYS = ArrayOps()
+def _max_of(first, *rest):
+    """Return the largest of the floats, NaN if one is NaN."""
+    for x in rest:
+        first = first if first >= x or first != first else x
+    return first
+
+
+def _where(cond, a, b):
+    """Return a if cond else b (both already evaluated, as np.where's)."""
+    return a if cond else b
+
+
+def _array_max_of(first, *rest):
+    """np.maximum of several arrays."""
+    for x in rest:
+        first = np.maximum(first, x)
+    return first
+
+
+# The two ops namespaces (plain attributes: a kernel looks one up for every operation).
+FLOATS = SimpleNamespace(
+    atan2=math.atan2, sqrt=math.sqrt, sin=math.sin, cos=math.cos, tan=math.tan, abs=abs,
+    maximum=_maximum, minimum=_minimum, max_of=_max_of, where=_where, rare=bool)
+"""One item: Python floats and the math module."""
+
+ARRAYS = SimpleNamespace(
+    atan2=np.arctan2, sqrt=np.sqrt, sin=np.sin, cos=np.cos, tan=np.tan, abs=np.abs,
+    maximum=np.maximum, minimum=np.minimum, max_of=_array_max_of, where=np.where,
+    rare=np.any)
+"""A batch chunk: NumPy arrays (errors on the discarded side of a where are silenced)."""
 
 
 def apply(kernel, inputs, outputs, params=()):
@@ -111,7 +99,7 @@ def apply(kernel, inputs, outputs, params=()):
     """
     values = []
     for x, tail, name, finite in inputs:
-        if type(x) is np.ndarray and x.shape == tail and x.dtype == _FLOAT64:
+        if type(x) is np.ndarray and x.shape == tail and x.dtype == FLOAT64:
             v = x.tolist()  # (the usual one item: no array made, no shape to check)
         else:
             a = as_float_array(x, tail, name)
@@ -128,7 +116,7 @@ def apply(kernel, inputs, outputs, params=()):
     return tuple([_item(r, t, dt) for r, (t, dt) in zip(result, outputs)])
 
 
-_FLOAT64 = np.dtype(np.float64)
+FLOAT64 = np.dtype(np.float64)
 
 
 def plain_item(x, tail):
@@ -140,7 +128,7 @@ def plain_item(x, tail):
     run their kernel on FLOATS straight on it; anything else (a batch, another type, NaN/Inf)
     takes apply, which converts, refuses and raises as it always does.
     """
-    if type(x) is np.ndarray and x.dtype is _FLOAT64 and x.shape == tail:
+    if type(x) is np.ndarray and x.dtype is FLOAT64 and x.shape == tail:
         v = x.tolist()
     elif type(x) in (list, tuple) and len(tail) == 1 and len(x) == tail[0] and all(
             type(e) is float for e in x):

@@ -74,30 +74,35 @@ def parse_sequence(seq):
 
 
 def _matrix_kernel(ops, a, spec):
+    """Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i (proper) or k (Tait–Bryan)."""
+    t1, t2, t3 = (a[2], a[1], a[0]) if spec[5] else a  # (extrinsic: the reversed sequence)
+    return _matrix_of_trig(
+        ops.cos(t1), ops.sin(t1), ops.cos(t2), ops.sin(t2), ops.cos(t3), ops.sin(t3), spec),
+
+
+def _matrix_of_trig(c1, s1, c2, s2, c3, s3, spec):
     """
-    Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3), m = i (proper) or k (Tait–Bryan).
+    Entries of Rot_i(θ1)·Rot_j(θ2)·Rot_m(θ3) from the cosines and sines of the angles.
 
     Derived by applying the three elementary rotations to the unit vectors; Jia, eq. 1
     is the case (i, j, k) = (z, y, x), sigma = −1.
     """
-    i, j, k, sig, proper, extrinsic = spec
-    t1, t2, t3 = (a[2], a[1], a[0]) if extrinsic else a
-    c1, s1, c2, s2, c3, s3 = (
-        ops.cos(t1), ops.sin(t1), ops.cos(t2), ops.sin(t2), ops.cos(t3), ops.sin(t3))
+    i, j, k, sig, proper, _ = spec
     m = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]  # every entry is set below
+    ri, rj, rk = m[i], m[j], m[k]
     if proper:
-        m[i][i], m[i][j], m[i][k] = c2, s2 * s3, sig * s2 * c3
-        m[j][i], m[j][j], m[j][k] = (
+        ri[i], ri[j], ri[k] = c2, s2 * s3, sig * s2 * c3
+        rj[i], rj[j], rj[k] = (
             s1 * s2, c1 * c3 - s1 * c2 * s3, -sig * (c1 * s3 + s1 * c2 * c3))
-        m[k][i], m[k][j], m[k][k] = (
+        rk[i], rk[j], rk[k] = (
             -sig * c1 * s2, sig * (c1 * c2 * s3 + s1 * c3), c1 * c2 * c3 - s1 * s3)
     else:
-        m[i][i], m[i][j], m[i][k] = c2 * c3, -sig * c2 * s3, sig * s2
-        m[j][i], m[j][j], m[j][k] = (
+        ri[i], ri[j], ri[k] = c2 * c3, -sig * c2 * s3, sig * s2
+        rj[i], rj[j], rj[k] = (
             sig * c1 * s3 + s1 * s2 * c3, c1 * c3 - sig * s1 * s2 * s3, -sig * s1 * c2)
-        m[k][i], m[k][j], m[k][k] = (
+        rk[i], rk[j], rk[k] = (
             s1 * s3 - sig * c1 * s2 * c3, c1 * s2 * s3 + sig * s1 * c3, c1 * c2)
-    return (m,)
+    return m
 
 
 def euler_to_matrix(angles, seq='ZYX'):
@@ -109,9 +114,11 @@ def euler_to_matrix(angles, seq='ZYX'):
     """
     spec = parse_sequence(seq)
     a = plain_item(angles, (3,))
-    out = a and run_on_floats(_matrix_kernel, a, spec)
-    if out:  # fast path: one plain item, the kernel on floats without apply around it
-        return np.array(out[0])
+    if a is not None:  # fast path, one plain item: _matrix_kernel with math's cos and sin
+        t1, t2, t3 = (a[2], a[1], a[0]) if spec[5] else a  # (finite: they never raise)
+        return np.array(_matrix_of_trig(
+            math.cos(t1), math.sin(t1), math.cos(t2), math.sin(t2), math.cos(t3),
+            math.sin(t3), spec))
     (matrix,) = apply(_matrix_kernel, [(angles, (3,), 'Euler angles', True)], [MATRIX], (spec,))
     return matrix
 
@@ -172,7 +179,8 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
     """
     spec = parse_sequence(seq)
-    lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
+    if lock_tol is not GIMBAL_LOCK_TOL:  # (the default needs no check)
+        lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
     m = plain_rotation(R, check)
     out = m and run_on_floats(angles_kernel, m, spec, lock_tol)
     if out:  # fast path: one plain rotation, the kernel on floats without apply around it

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numpy import False_
 from rot_tools.core._arrays import apart, as_float_array, finite_array, require_tolerance
-from rot_tools.core.engine import apply, FLAG, FLOATS, MATRIX, plain_item, SCALAR
+from rot_tools.core.engine import apply, FLAG, FLOAT64, FLOATS, MATRIX, plain_item, SCALAR
 from rot_tools.core.errors import FLOAT_ERRORS, RotationError
 
 ROTATION_TOL = 1e-9
@@ -195,12 +195,14 @@ def plain_rotation(R, check):
     Return R's rows as Python floats for a fast path, or None (then apply's path decides).
 
     Not None where R is one finite float64 (3, 3) array and, with check, a rotation within
-    ROTATION_TOL: the test of refuse_defects written out for plain floats (any defect, NaN
-    included, fails it, and the full path then raises the error that names it).
+    ROTATION_TOL: the test of refuse_defects written out for plain floats (any defect fails
+    it, NaN and ±inf included, and the full path then raises the error that names it).
     """
-    m = plain_item(R, (3, 3))
-    if m is None or not check:
-        return m
+    if not check:
+        return plain_item(R, (3, 3))
+    if type(R) is not np.ndarray or R.dtype is not FLOAT64 or R.shape != (3, 3):
+        return None
+    m = R.tolist()
     (a, b, c), (d, e, f), (g, h, i) = m
     tol = ROTATION_TOL
     if (abs(a * a + d * d + g * g - 1.0) <= tol and abs(b * b + e * e + h * h - 1.0) <= tol
