@@ -184,11 +184,12 @@ def run_node(markers, n):
             t1, c1 = clock(), cpu()
             times.append(t1 - t0)
             cpus.append(c1 - c0)
-            soon, timer = node._picture_soon, node._picture_timer
+            pictures = node._pictures
+            soon, timer = pictures.soon, pictures.timer
             if not soon.is_canceled() or (  # a timer the executor would call now
                     not timer.is_canceled() and timer.time_until_next_call() <= 0):
                 c0, t0 = cpu(), clock()
-                node._publish_picture()
+                pictures.publish()
                 t1, c1 = clock(), cpu()
                 picture_times.append(t1 - t0)
                 picture_cpus.append(c1 - c0)

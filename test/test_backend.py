@@ -351,6 +351,26 @@ def test_fast_paths_to_a_matrix_give_the_batch_formula(axis, size, angle):
     _same_as_batch('axis_angle_to_matrix', np.append(v, angle), None)
 
 
+@settings(max_examples=150, deadline=None)
+@given(rotation=_rotation(), axis=_axes(), size=_size, seq=_sequence)
+@example(rotation=np.eye(3), axis=np.array([1.0, 0.0, 0.0]), size=1e100, seq='ZYX')
+@example(rotation=rt.axis_angle_to_matrix([0.0, 0.0, 1.0], 1e-12), axis=np.array([1.0, 0.0, 0.0]),
+         size=1e100, seq='ZYX')
+@example(rotation=rt.axis_angle_to_matrix([0.0, 0.0, 1.0], 1e-11), axis=np.array([1.0, 0.0, 0.0]),
+         size=1e300, seq='zxz')  # (the screw overflows: refused)
+def test_fast_path_of_the_node_gives_the_batch_formula(rotation, axis, size, seq):
+    # decompose_values skips the screw for max|b_i| ≤ ORDINARY_B, where it cannot overflow:
+    # the same numbers as the batch (which computes it), and no refusal the batch would make.
+    b = axis * size
+    one = _outcome(decomposition.decompose_values, rotation, b, seq)
+    batch = _outcome(decomposition.decompose_values, rotation[None], b[None], seq)
+    if isinstance(one, tuple) and one and one[0] is rt.RotationError:
+        assert batch == one
+        return
+    for field, a, c in zip(one._fields, one, batch):
+        assert _close(np.array(a), np.asarray(c)[0]), (field, a, c)
+
+
 @settings(max_examples=300, deadline=None)
 @given(rotation=_rotation(), entry=st.integers(0, 8),
        error=st.sampled_from([0.0, 1e-10, 9e-10, 1.1e-9, 1e-6, -2.0, math.nan]))

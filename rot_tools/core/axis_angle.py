@@ -117,9 +117,11 @@ def axis_angle_kernel(ops, m):
     skew_axis, sin = unit(ops, w)
     angle = ops.atan2(sin, cos)
     near_pi = cos < 0
+    if not ops.rare(near_pi):  # (an item, or a chunk, with every angle ≤ π/2)
+        return skew_axis, angle
     # Near π the skew part vanishes with sin θ: take the axis from the symmetric part
     # (R + Rᵀ)/2 − cos θ·I = (1 − cos θ)·l̂l̂ᵀ, its column with the largest diagonal entry
-    # (computed for every item, like both sides of any ops.where; used where near_pi).
+    # (computed for every item of the chunk; used where near_pi).
     d0, d1, d2 = m[0][0] - cos, m[1][1] - cos, m[2][2] - cos
     s01, s02, s12 = (
         0.5 * (m[0][1] + m[1][0]), 0.5 * (m[0][2] + m[2][0]), 0.5 * (m[1][2] + m[2][1]))

@@ -11,10 +11,10 @@ from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core.axis_angle import axis_angle_kernel
-from rot_tools.core.engine import apply, FLAG, SCALAR, VECTOR
+from rot_tools.core.engine import apply, FLAG, plain_item, SCALAR, VECTOR
 from rot_tools.core.euler import angles_kernel, GIMBAL_LOCK_TOL, parse_sequence
 from rot_tools.core.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
-from rot_tools.core.so3 import apply_to_rotations, quaternion_of_matrix_kernel
+from rot_tools.core.so3 import apply_to_rotations, quaternion_of_matrix_kernel, run_on_floats
 
 
 class Decomposition(NamedTuple):
@@ -96,15 +96,28 @@ _RPY = parse_sequence(RPY_SEQUENCE)
 
 
 def _values_kernel(ops, m, b, spec):
-    axis, angle, *_, twist, fits = _motion_kernel(ops, m, b)
+    """Values' numbers but the matrix, the angle, and whether screw and twist fit float64."""
+    values, axis, angle, twist_fits = _values_without_screw(ops, m, b, spec)
+    _, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
+    return (*values, angle, screw_fits & twist_fits)
+
+
+def _values_without_screw(ops, m, b, spec):
+    """(rotvec, euler, twist, q, rpy), axis, angle and the twist's in-range flag."""
+    axis, angle = axis_angle_kernel(ops, m)
+    twist, fits = twist_kernel(ops, axis, angle, b)
     (q,) = quaternion_of_matrix_kernel(ops, m)
     euler, _ = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
     rpy, _ = angles_kernel(ops, m, _RPY, GIMBAL_LOCK_TOL)
-    return [a * angle for a in axis], euler, twist, q, rpy, angle, fits
+    return ([a * angle for a in axis], euler, twist, q, rpy), axis, angle, fits
 
 
 _FLOATS3 = ((3,), float)
 _VALUES = [_FLOATS3, _FLOATS3, ((6,), float), ((4,), float), _FLOATS3, SCALAR, FLAG]
+
+ORDINARY_B = 1e100
+"""Below this max|b_i| the screw of any finite (R, b) fits float64: its point and pitch are
+at most ~|b|/θ with θ ≥ PURE_TRANSLATION_ANGLE = 1e-12 (below it: a pure translation)."""
 
 
 def decompose_values(R, b, seq='ZYX'):
@@ -119,6 +132,14 @@ def decompose_values(R, b, seq='ZYX'):
     screw overflows float64, as decompose.
     """
     spec = parse_sequence(seq)
+    m, v = plain_item(R, (3, 3)), plain_item(b, (3,))
+    if m is not None and v is not None and max(map(abs, v)) <= ORDINARY_B:
+        # fast path, one plain item whose screw cannot overflow: the same kernels on FLOATS
+        # without apply around them, and without the screw computed for its flag alone
+        out = run_on_floats(_values_without_screw, m, v, spec)
+        if out and out[3]:
+            matrix = [x for row in m for x in row]
+            return Values(matrix, *(tuple(x) for x in out[0]))
     rotvec, euler, twist, q, rpy, angle, fits = apply(
         _values_kernel, [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)], _VALUES,
         (spec,))

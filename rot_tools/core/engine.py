@@ -16,8 +16,8 @@ not divide by zero on the branch that is thrown away: guard divisors with ``ops.
 Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
 flag beside it and the caller refuses the flagged items (floating-point warnings of the
 batch engine are silenced). ``ops.rare(c)`` is the only data-dependent branch a kernel may
-take (true when c holds for the item, or for any item of a chunk): it marks the unusual side
-— a huge or tiny vector rescaled, gimbal lock — that most chunks skip. doc/engine.md tells
+take (true when c holds for the item, or for any item of a chunk): work that an item or a
+chunk without c skips — a huge or tiny vector rescaled, gimbal lock. doc/engine.md tells
 how to add a conversion.
 """
 
