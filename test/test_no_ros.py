@@ -3,6 +3,7 @@
 import ast
 import os
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -109,3 +110,19 @@ def test_imports_point_down_only(sub):
 def test_the_package_root_imports_only_core():
     for name in imported_modules(PACKAGE / '__init__.py'):
         assert not name.startswith(('rot_tools.io', 'rot_tools.cli', 'rot_tools.ros')), name
+
+
+def test_no_code_is_compiled_or_generated():
+    """What git grep -nE 'exec\\(|compile\\(|_generated' rot_tools/ finds: nothing."""
+    found = [f'{path.relative_to(PACKAGE.parent)}:{number}: {line.strip()}'
+             for path in sorted(PACKAGE.rglob('*.py'))
+             for number, line in enumerate(path.read_text().splitlines(), 1)
+             if re.search(r'exec\(|compile\(|_generated', line)]
+    assert found == []
+
+
+def test_no_module_is_longer_than_700_lines():
+    long = {str(path.relative_to(PACKAGE.parent)): count
+            for path in sorted(PACKAGE.rglob('*.py'))
+            if (count := len(path.read_text().splitlines())) > 700}
+    assert long == {}

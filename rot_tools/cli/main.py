@@ -38,7 +38,6 @@ only gets a one-line ``rot-tools: hint: ...`` on stderr (after the report; statu
 
 import argparse
 import math
-import re
 import sys
 
 import numpy as np
@@ -47,6 +46,7 @@ from rot_tools import (
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
 from rot_tools.core.errors import RotationError
+from rot_tools.io.arguments import negative_numbers_as_values
 from rot_tools.io.report import DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
 from rot_tools.io.report import transform_report
 
@@ -56,13 +56,6 @@ MATRIX_TOL = 1e-5
 two axes): six significant digits pass."""
 QUATERNION_TOL = 1e-3
 """Default tolerance on ||q| − 1| of a typed quaternion (four digits pass; as the node's)."""
-
-# argparse (3.11) reads '-30' and '-.5' as values but '-1e-3' or '-inf' as an unknown
-# option. Its (private, long-standing) _negative_number_matcher is set to this pattern, so
-# every negative number (and -inf/-nan, refused later with a clear message) is a value.
-# None of our options looks like a number, so nothing is shadowed; a test pins it.
-_NEGATIVE_NUMBER = re.compile(
-    r'^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$', re.IGNORECASE)
 
 _SEQUENCE_HELP = (
     'one of the 12 axis orders XYZ XZY YXZ YZX ZXY ZYX XYX XZX YXY YZY ZXZ ZYZ; '
@@ -75,7 +68,6 @@ class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
         kwargs.setdefault('formatter_class', argparse.RawDescriptionHelpFormatter)
         super().__init__(*args, **kwargs)
-        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):
         """Print ``rot-tools: error: message`` on one line and exit 2."""
@@ -128,16 +120,16 @@ def _number(text):
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+        raise argparse.ArgumentTypeError(f'not a number: {text.strip()!r}') from None
     if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f'not a finite number: {text!r}')
+        raise argparse.ArgumentTypeError(f'not a finite number: {text.strip()!r}')
     return value
 
 
 def _sequence(text):
     if text not in EULER_SEQUENCES:
         raise argparse.ArgumentTypeError(
-            f'unknown Euler sequence {text!r}: use {_SEQUENCE_HELP}{sequence_hint(text)}')
+            f'unknown Euler sequence {text.strip()!r}: use {_SEQUENCE_HELP}{sequence_hint(text)}')
     return text
 
 
@@ -147,13 +139,13 @@ def _precision(text):
     except ValueError:
         value = 0
     if not 1 <= value <= 17:
-        raise argparse.ArgumentTypeError(f'expected an integer 1..17, got {text!r}')
+        raise argparse.ArgumentTypeError(f'expected an integer 1..17, got {text.strip()!r}')
     return value
 
 
 def _plot_file(text):
     if not text.lower().endswith(('.png', '.svg')):
-        raise argparse.ArgumentTypeError(f'FILE must end in .png or .svg, got {text!r}')
+        raise argparse.ArgumentTypeError(f'FILE must end in .png or .svg, got {text.strip()!r}')
     return text
 
 
@@ -161,14 +153,14 @@ def _seconds(text):
     value = _number(text)
     if value < 0:
         raise argparse.ArgumentTypeError(
-            f"must be >= 0 seconds from the bag's start, got {text!r}")
+            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
     return value
 
 
 def _tolerance(text):
     value = _number(text)
     if value < 0:
-        raise argparse.ArgumentTypeError(f'must be >= 0, got {text!r}')
+        raise argparse.ArgumentTypeError(f'must be >= 0, got {text.strip()!r}')
     return value
 
 
@@ -617,7 +609,8 @@ def main(argv=None):
     """Run rot-tools on argv (default sys.argv[1:]); return the exit status."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(negative_numbers_as_values(
+            sys.argv[1:] if argv is None else argv))
         if args.command == 'bag':
             return _bag(args, parser)
         args.hints = []

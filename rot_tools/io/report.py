@@ -283,7 +283,7 @@ _ReportDumper.add_representer(str, _represent_str)
 # PyYAML escapes a character beyond U+FFFF in a double-quoted string (an emoji becomes
 # \U0001F600) although YAML prints it: such an escape, not preceded by an escaped backslash,
 # is written back as the character (only double-quoted strings hold backslashes).
-_ASTRAL_ESCAPE = re.compile(r'(?<!\\)((?:\\\\)*)\\U([0-9A-F]{8})')
+_ASTRAL_ESCAPE = r'(?<!\\)((?:\\\\)*)\\U([0-9A-F]{8})'
 
 
 def to_yaml(data, precision=DEFAULT_PRECISION):
@@ -293,17 +293,17 @@ def to_yaml(data, precision=DEFAULT_PRECISION):
     text = yaml.dump(_rounded(data, precision, float), Dumper=_ReportDumper,
                      default_flow_style=False, sort_keys=False, allow_unicode=True,
                      width=math.inf)
-    return _ASTRAL_ESCAPE.sub(lambda m: m.group(1) + chr(int(m.group(2), 16)), text)
+    return re.sub(_ASTRAL_ESCAPE, lambda m: m.group(1) + chr(int(m.group(2), 16)), text)
 
 
 # What json.dumps(ensure_ascii=False) leaves raw but is not printable, or not UTF-8 at all:
 # DEL and the C1 controls, lone surrogates, line and paragraph separators, the byte order
 # mark, U+FFFE and U+FFFF. They only occur inside strings, where \uXXXX reads back the same.
-_UNPRINTABLE = re.compile('[\x7f-\x9f\ud800-\udfff\u2028\u2029\ufeff\ufffe\uffff]')
+_UNPRINTABLE = '[\x7f-\x9f\ud800-\udfff\u2028\u2029\ufeff\ufffe\uffff]'
 
 
 def to_json(data, precision=DEFAULT_PRECISION):
     """Return a JSON document (ending in a newline), indented by two; non-finite as strings."""
     text = json.dumps(_rounded(data, precision, str), indent=2, ensure_ascii=False,
                       allow_nan=False)
-    return _UNPRINTABLE.sub(lambda m: f'\\u{ord(m.group()):04x}', text) + '\n'
+    return re.sub(_UNPRINTABLE, lambda m: f'\\u{ord(m.group()):04x}', text) + '\n'

@@ -14,6 +14,7 @@ import re
 import numpy as np
 from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.io import interface
+from rot_tools.io.arguments import negative_numbers_as_values
 from rot_tools.ros import runtime
 
 PROG = 'rotation_client'
@@ -53,8 +54,6 @@ class _Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
         super().__init__(*args, formatter_class=argparse.RawDescriptionHelpFormatter,
                          **kwargs)
-        # '-0.5', '-1e-3', '-inf' and '-nan' are values, not options.
-        self._negative_number_matcher = re.compile(r'^-(\d|\.\d|inf|nan)', re.IGNORECASE)
 
     def error(self, message):
         self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
@@ -77,13 +76,13 @@ def _number(text):
     try:
         return float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+        raise argparse.ArgumentTypeError(f'not a number: {text.strip()!r}') from None
 
 
 def _positive(text):
     value = _number(text)
     if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f'must be a number > 0, got {text!r}')
+        raise argparse.ArgumentTypeError(f'must be a number > 0, got {text.strip()!r}')
     return value
 
 
@@ -113,7 +112,7 @@ def _tolerance(text):
 def _node_name(text):
     name = text if text.startswith('/') else '/' + text
     if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
-        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text!r}')
+        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text.strip()!r}')
     longest = max(names_used(), key=len)
     if len(name) + 1 + len(longest) > NAME_LIMIT:
         raise argparse.ArgumentTypeError(
@@ -270,7 +269,7 @@ def parse_args(argv):
 
     With --wxyz the quaternions are reordered to the ROS order (w last) here.
     """
-    args = build_parser().parse_args(argv)
+    args = build_parser().parse_args(negative_numbers_as_values(argv))
     command = commands()[args.command]
     if args.expected and len(args.numbers) != args.expected:
         args.parser.error(f'{args.command} takes {args.expected} numbers '
