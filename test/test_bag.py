@@ -279,7 +279,8 @@ def test_plot_one_panel_per_topic(capsys, tmp_path):
     pytest.importorskip('matplotlib')
     svg = tmp_path / 'rpy.svg'
     status, _, err = run(capsys, 'bag', bh.REAL, '--plot', svg)
-    assert (status, err) == (0, '')
+    assert (status, err) == (0, f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {IMU}, '
+                                f'{ODOM}\n')
     text = svg.read_text()
     for topic in (IMU, ODOM):
         for angle in ('roll', 'pitch', 'yaw'):

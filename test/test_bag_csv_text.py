@@ -69,16 +69,20 @@ def test_numbers_fit():
 
 
 def test_rows_are_csv():
-    sec = np.array([0, 47, 1_700_000_000, 5])
-    nsec = np.array([1, 580_000_000, 123, 999_999_999])
-    values = RNG.normal(size=(4, 5))
+    ns = np.array([1, 47_580_000_000, 1_700_000_000_000_000_123, 5_999_999_999,
+                   -12345 * 10**9, -2 * 10**9, -5 * 10**8, -1, -(2**31) * 10**9])
+    values = RNG.normal(size=(len(ns), 5))
     values[0, 2:] = math.nan
     frames = [b'base_link', b'"a,b"']
-    text = csv_text.rows(b'/imu', sec, nsec, frames, np.array([0, 1, 1, 0]), values, 12)
+    frame = np.arange(len(ns)) % 3 % 2
+    text = csv_text.rows(b'/imu', ns, frames, frame, values, 12)
     rows = list(csv.reader(io.StringIO(text.decode())))
-    assert [r[1] for r in rows] == ['0.000000001', '47.580000000', '1700000000.000000123',
-                                    '5.999999999']
-    assert [r[2] for r in rows] == ['base_link', 'a,b', 'a,b', 'base_link']
+    want = ['0.000000001', '47.580000000', '1700000000.000000123', '5.999999999',
+            '-12345.000000000', '-2.000000000', '-0.500000000', '-0.000000001',
+            '-2147483648.000000000']
+    assert [r[1] for r in rows] == want == [csv_text.stamp_text(int(x)) for x in ns]
+    assert [Decimal(r[1]) * 10**9 for r in rows] == [Decimal(int(x)) for x in ns]
+    assert [r[2] for r in rows] == [['base_link', 'a,b'][f] for f in frame]
     assert all(r[0] == '/imu' and len(r) == 8 for r in rows)
     assert rows[0][5:] == ['', '', '']
     for r, v in zip(rows, values):

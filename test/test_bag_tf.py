@@ -90,3 +90,81 @@ def test_tf_frames_that_never_appear(capsys, tf_bag, frames, contains):
 def test_tf_in_a_bag_without_tf(capsys):
     status, _, err = run(capsys, 'bag', bh.REAL, '--tf', 'odom', 'base_link')
     assert status == 2 and 'no tf2_msgs/msg/TFMessage topic' in err and err.count('\n') == 1
+
+
+def tf_bag_of(tmp_path, samples):
+    """Return a bag of /tf messages: samples [(stamp ns, parent, child, q, t)], one each."""
+    b = bh.Builder()
+    messages = []
+    for k, (ns, parent, child, q, t) in enumerate(samples):
+        sec, nanosec = divmod(ns, 10**9)
+        tf = b.transform_stamped(0.0, t, q, parent, child)
+        tf.header.stamp.sec, tf.header.stamp.nanosec = sec, nanosec
+        messages.append(('/tf', 'tf2_msgs/msg/TFMessage', 10**9 + k, b.tf_message([tf])))
+    return bh.write_bag(tmp_path / 'bag', messages)
+
+
+def random_transforms(rng, n):
+    q = rng.normal(size=(n, 4))
+    return q / np.linalg.norm(q, axis=1)[:, None], rng.normal(size=(n, 3))
+
+
+def test_tf_an_empty_frame_and_a_loop_are_counted_and_the_rest_goes_on(capsys, tmp_path):
+    messages, truth, _ = bh.tf_chain_messages()
+    b = bh.Builder()
+    q = np.array([0.0, 0.0, 0.0, 1.0])
+    bad = [b.transform_stamped(1.05, (1, 2, 3), q, 'odom', ''),  # an empty child_frame_id
+           b.transform_stamped(1.05, (1, 2, 3), q, 'x', 'y'),
+           b.transform_stamped(1.06, (1, 2, 3), q, 'y', 'x')]  # x and y: a loop
+    messages.append(('/tf', 'tf2_msgs/msg/TFMessage', 1_050_000_000, b.tf_message(bad)))
+    path = bh.write_bag(tmp_path / 'bag', messages)
+    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'imu', '--json')
+    assert (status, err) == (0, '')
+    s = json.loads(out)['topics']['tf:map->imu']
+    assert s['refused'] == {'total': 3, 'non_finite': 0, 'zero_quaternion': 1,
+                            'non_unit_quaternion': 0, 'no_orientation': 0, 'bad_frame': 1,
+                            'loop': 1, 'too_many_frames': 0}
+    assert s['lookups'] == len(truth) and s['accepted'] == s['transforms'] - 3
+
+
+def test_tf_a_reparented_frame_is_used_under_each_parent(capsys, tmp_path):
+    """base_link under odom for 1.0–2.0 s, then straight under map for 2.1–3.0 s."""
+    rng = np.random.default_rng(3)
+    samples, truth = [], {}
+    q, t = random_transforms(rng, 60)
+    for k in range(21):
+        ns = 10**9 + k * 10**8
+        samples.append((ns, 'map', 'odom', q[k], t[k]))
+        parent = 'odom' if k <= 10 else 'map'
+        samples.append((ns, parent, 'base_link', q[30 + k], t[30 + k]))
+        T = homogeneous(q[30 + k], t[30 + k])
+        truth[ns] = homogeneous(q[k], t[k]) @ T if parent == 'odom' else T
+    path = tf_bag_of(tmp_path, samples)
+    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'base_link', '--json')
+    assert (status, err) == (0, '')
+    s = json.loads(out)['topics']['tf:map->base_link']
+    assert (s['accepted'], s['lookups']) == (42, 21)
+    assert s['chain'] == [['map', 'odom', 'base_link'], ['map', 'base_link']]
+    rows = list(csv.DictReader(io.StringIO(
+        run(capsys, 'bag', path, '--tf', 'map', 'base_link', '--csv', '-')[1])))
+    assert [r['stamp'] for r in rows] == [f'{ns // 10**9}.{ns % 10**9:09d}' for ns in truth]
+    for row, want in zip(rows, truth.values()):
+        np.testing.assert_allclose([float(row[c]) for c in 'xyz'], want[:3, 3], atol=1e-11)
+
+
+def test_tf_stamps_nanoseconds_apart_are_distinct_lookups(capsys, tmp_path):
+    rng = np.random.default_rng(4)
+    base = 1_700_000_000 * 10**9
+    offsets = [0, 1, 2, 3, 50, 100, 101, 200]
+    q, t = random_transforms(rng, len(offsets))
+    path = tf_bag_of(tmp_path, [(base + d, 'map', 'body', q[k], t[k])
+                                for k, d in enumerate(offsets)])
+    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'body', '--csv', '-')
+    assert (status, err) == (0, '')
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert [r['stamp'] for r in rows] == [f'1700000000.{d:09d}' for d in offsets]
+    for row, qk, tk in zip(rows, q, t):  # each lookup is its own sample, exactly
+        np.testing.assert_allclose([float(row[c]) for c in 'xyz'], tk, atol=1e-11)
+        qk = qk * np.sign(qk[3])
+        np.testing.assert_allclose([float(row[c]) for c in ('qx', 'qy', 'qz', 'qw')], qk,
+                                   atol=1e-11)

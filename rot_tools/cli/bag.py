@@ -34,11 +34,14 @@ import csv
 import io
 import math
 import os
+from pathlib import Path
 import sys
 import time
 from types import SimpleNamespace
 
 import numpy as np
+from rot_tools.cli import output_file
+from rot_tools.core import transform_tree
 from rot_tools.core.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import matrix_to_euler
@@ -72,9 +75,8 @@ class Topic:
             self.R = chain.R
         self.ok = ok
         n = len(self.R)
-        self.sec, self.nanosec, self.frame = c.sec[ok], c.nanosec[ok], c.frame[ok]
+        self.ns, self.frame = stamp_ns(c.sec[ok], c.nanosec[ok]), c.frame[ok]
         self.position = c.position[ok] if c.position is not None else np.zeros((n, 3))
-        self.stamp = self.sec + 1e-9 * self.nanosec
         self.quaternion = matrix_to_quaternion(self.R, check=False)
         self.rpy = self._angles(RPY, wrap)
         self.seq = seq
@@ -87,7 +89,7 @@ class Topic:
             D = np.einsum('nji,njk->nik', self.R[:-1], self.R[1:])
             step = matrix_to_rotvec(D, check=False)
             self.steps = np.linalg.norm(step, axis=1)
-            dt = (self.sec[1:] - self.sec[:-1]) + 1e-9 * (self.nanosec[1:] - self.nanosec[:-1])
+            dt = 1e-9 * np.diff(self.ns)
             good = dt > 0
             self.omega[1:][good] = step[good] / dt[good][:, None]
         self.gyro_rms = None
@@ -104,9 +106,10 @@ class Topic:
 
     def refused(self):
         """{'total': n, reason: n, ...} over every reason of the boundary."""
-        counts = np.bincount(self.codes, minlength=len(boundary.REFUSAL_REASONS) + 1)
+        reasons = boundary.REFUSAL_REASONS + (TF_REASONS if self.chain is not None else ())
+        counts = np.bincount(self.codes, minlength=len(reasons) + 1)
         return {'total': int(counts[1:].sum()),
-                **{r: int(counts[k + 1]) for k, r in enumerate(boundary.REFUSAL_REASONS)}}
+                **{r: int(counts[k + 1]) for k, r in enumerate(reasons)}}
 
     def first_refusal(self):
         """Return the sentence of the first refused message (what and by how much), or None."""
@@ -114,6 +117,8 @@ class Topic:
         if not len(bad):
             return None
         k, c = int(bad[0]), self.columns if self.chain is None else self.chain.transforms
+        if self.chain is not None and k in self.chain.texts:
+            return self.chain.texts[k]
         q = c.orientation[k]
         code = int(self.codes[k])
         _, norm = boundary.check_batch(q[None], self.tolerance)
@@ -124,8 +129,9 @@ class Topic:
                                            position)
 
 
-def _stamp_seconds(sec, nanosec):
-    return float(sec) + 1e-9 * float(nanosec)
+def stamp_ns(sec, nanosec):
+    """Return header stamps as int64 nanoseconds, sec·10⁹ + nanosec: exact, negative ones too."""
+    return np.asarray(sec, np.int64) * csv_text.NS_PER_S + np.asarray(nanosec, np.int64)
 
 
 def _unit(values, degrees):
@@ -152,12 +158,12 @@ def topic_summary(t, degrees):
     if refusal is not None:
         out['first_refusal'] = refusal
     if len(c):
-        first = int(np.argmin(c.sec * 1_000_000_000 + c.nanosec))
-        last = int(np.argmax(c.sec * 1_000_000_000 + c.nanosec))
-        start = _stamp_seconds(c.sec[first], c.nanosec[first])
-        end = _stamp_seconds(c.sec[last], c.nanosec[last])
-        out['start'], out['end'], out['duration'] = start, end, end - start
-        out['rate'] = (len(c) - 1) / (end - start) if end > start else None
+        ns = stamp_ns(c.sec, c.nanosec)
+        first, last = int(ns.min()), int(ns.max())
+        start, end = first / csv_text.NS_PER_S, last / csv_text.NS_PER_S
+        out['start'], out['end'] = start, end
+        out['duration'] = (last - first) / csv_text.NS_PER_S
+        out['rate'] = (len(c) - 1) / out['duration'] if last > first else None
     if not len(t.R):
         return out
     unit = 'deg' if degrees else 'rad'
@@ -201,11 +207,23 @@ def csv_header(seq):
     return names + ['rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz']
 
 
-def _csv_quote(text):
-    """Write text as one CSV field (quoted only when it must be)."""
+FORMULA_STARTS = ('=', '+', '-', '@', '\t', '\r')
+"""First characters that make a spreadsheet run a cell as a formula (OWASP, CSV injection)."""
+
+
+def csv_text_cell(text):
+    """
+    Write a text (never a number) as one CSV field, safe to open in a spreadsheet.
+
+    A text starting with one of FORMULA_STARTS gets a single quote before it (OWASP's rule:
+    ``=HYPERLINK("x")`` is written ``'=HYPERLINK(""x"")``, read as text); then the field is
+    quoted only where CSV needs it.
+    """
+    if text.startswith(FORMULA_STARTS):
+        text = "'" + text
     out = io.StringIO()
-    csv.writer(out, lineterminator='').writerow([text])
-    return out.getvalue()
+    csv.writer(out, lineterminator='\r\n').writerow([text])  # quotes a CR or LF inside
+    return out.getvalue()[:-2]
 
 
 ROWS_PER_CHUNK = 1024
@@ -238,7 +256,8 @@ def write_csv(out, topics, degrees, precision):
 
     Numbers rounded to ``precision`` significant digits and ``precision`` decimal places (the
     rule of every number rot-tools prints), trailing zeros dropped, −0 as 0; the stamp
-    exactly (sec.nanosec); ω empty on a topic's first row and where Δt ≤ 0. The text is
+    exactly (from integer nanoseconds); text cells by csv_text_cell; ω empty on a topic's
+    first row and where Δt ≤ 0. The text is
     made by rot_tools.io.csv_text for a chunk of rows at once (Python's formatting, one
     number at a time, where its arithmetic would not be exact: precision > 12, |x| ≥ 1e15).
     """
@@ -254,19 +273,20 @@ def write_csv(out, topics, degrees, precision):
         columns += [_unit(t.rotvec, degrees), _unit(t.angle, degrees)[:, None],
                     _unit(t.omega, degrees)]
         values = np.hstack(columns)
-        topic = _csv_quote(t.topic).encode()
-        frames = [_csv_quote(f).encode() for f in t.columns.frame_ids]
+        topic = csv_text_cell(t.topic).encode()
+        frames = [csv_text_cell(f).encode() for f in t.columns.frame_ids]
         fast = csv_text.numbers_fit(values, precision)
         for start in range(0, len(values), ROWS_PER_CHUNK):
             part = slice(start, start + ROWS_PER_CHUNK)
             if fast:
-                write(csv_text.rows(topic, t.sec[part], t.nanosec[part], frames,
-                                    t.frame[part], values[part], precision))
+                write(csv_text.rows(topic, t.ns[part], frames, t.frame[part], values[part],
+                                    precision))
                 continue
-            lines = [b'%s,%d.%09d,%s,%s\n' % (topic, sec, nsec, frames[f], ','.join(
-                _number_text(v, precision) for v in row).encode())
-                for sec, nsec, f, row in zip(t.sec[part].tolist(), t.nanosec[part].tolist(),
-                                             t.frame[part].tolist(), values[part].tolist())]
+            lines = [b'%s,%s,%s,%s\n' % (
+                topic, csv_text.stamp_text(ns).encode(), frames[f],
+                ','.join(_number_text(v, precision) for v in row).encode())
+                for ns, f, row in zip(t.ns[part].tolist(), t.frame[part].tolist(),
+                                      values[part].tolist())]
             write(b''.join(lines))
 
 
@@ -274,34 +294,62 @@ def write_csv(out, topics, degrees, precision):
 # Plot
 
 
+MAX_PLOTTED_TOPICS = 8
+"""Topics ``--plot`` draws at most (the first, in the summary's order); ``--topic`` chooses."""
+
+
+def plot_note(path, drawn, left_out):
+    """Return the line ``--plot`` writes on stderr: which topics are drawn, which left out."""
+    names = ', '.join(t.topic for t in drawn) or 'no topic'
+    note = f'rot-tools bag: --plot {path}: roll, pitch, yaw of {names}'
+    if left_out:
+        shown = ', '.join(t.topic for t in left_out[:20])
+        more = f' and {len(left_out) - 20} more' if len(left_out) > 20 else ''
+        note += (f'; left out, {len(left_out)} (at most {MAX_PLOTTED_TOPICS} topics are '
+                 f'drawn; choose them with --topic): {shown}{more}')
+    return note + '\n'
+
+
 def write_plot(path, topics, degrees):
-    """Roll, pitch and yaw (continuous) against time, one panel per topic (matplotlib)."""
+    """
+    Roll and pitch, then yaw (continuous), against time: two axes per topic (matplotlib).
+
+    Roll and pitch have an axis of their own: beside a yaw that turns through 2,000°, their
+    ±10° would be flat lines at 0. Every topic given is drawn (the caller bounds them); the
+    file is written whole or not at all (rot_tools.cli.output_file), in the format of its
+    extension.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     panels = max(1, len(topics))
-    fig = Figure(figsize=(9.0, 2.6 * panels + 0.6), layout='constrained')
+    fig = Figure(figsize=(9.0, 3.4 * panels + 0.6), layout='constrained')
     FigureCanvasAgg(fig)
-    axes = fig.subplots(panels, 1, sharex=True, squeeze=False)[:, 0]
-    starts = [t.stamp.min() for t in topics if len(t.stamp)]
-    t0 = min(starts) if starts else 0.0
+    axes = fig.subplots(2 * panels, 1, sharex=True, squeeze=False)[:, 0]
+    starts = [int(t.ns.min()) for t in topics if len(t.ns)]
+    ns0 = min(starts) if starts else 0
     unit = 'deg' if degrees else 'rad'
-    for ax, t in zip(axes, topics):
-        ax.set_title(f'{t.topic} ({t.msgtype})', fontsize=10, loc='left')
-        ax.set_ylabel(f'angle ({unit})')
-        ax.grid(True, alpha=0.3)
+    for k, t in enumerate(topics):
+        tilt, heading = axes[2 * k], axes[2 * k + 1]
+        tilt.set_title(f'{t.topic} ({t.msgtype})', fontsize=10, loc='left')
+        for ax in (tilt, heading):
+            ax.set_ylabel(f'angle ({unit})')
+            ax.grid(True, alpha=0.3)
         if not len(t.R):
-            ax.text(0.5, 0.5, 'no accepted message', transform=ax.transAxes, ha='center')
+            tilt.text(0.5, 0.5, 'no accepted message', transform=tilt.transAxes, ha='center')
             continue
-        angles = _unit(t.rpy, degrees)
-        for k, (name, color) in enumerate(zip(('roll', 'pitch', 'yaw'),
+        angles, time = _unit(t.rpy, degrees), 1e-9 * (t.ns - ns0)
+        for i, (name, color) in enumerate(zip(('roll', 'pitch', 'yaw'),
                                               ('tab:red', 'tab:green', 'tab:blue'))):
-            ax.plot(t.stamp - t0, angles[:, k], color=color, lw=1.0, label=name,
+            ax = heading if name == 'yaw' else tilt
+            ax.plot(time, angles[:, i], color=color, lw=1.0, label=name,
                     gid=f'{t.topic}:{name}')
-        ax.legend(loc='upper left', fontsize=8, ncols=3)
-    axes[-1].set_xlabel(f'time (s) from header stamp {t0:.3f}')
+        for ax in (tilt, heading):
+            ax.legend(loc='upper left', fontsize=8, ncols=2)
+    axes[-1].set_xlabel(f'time (s) from header stamp {csv_text.stamp_text(ns0)}')
     fig.suptitle('roll, pitch, yaw (REP-103, extrinsic xyz), continuous', fontsize=11)
-    fig.savefig(path)
+    with output_file.complete_or_nothing(path, 'wb') as out:
+        fig.savefig(out, format=os.path.splitext(str(path))[1][1:].lower() or 'png')
 
 
 # ---------------------------------------------------------------------------------------
@@ -369,28 +417,167 @@ def select_connections(reader, topics):
     return chosen
 
 
-class _Chain:
-    """The lookups of a TF chain: R (n, 3, 3), the frames, the TF transforms' reason codes."""
+TF_REASONS = (transform_tree.BAD_FRAME, transform_tree.LOOP, transform_tree.TOO_MANY_FRAMES)
+"""Refusals of a TF transform besides the boundary's: the tree's, counted as rotation_node
+counts them (an empty frame name, a loop, a tree full of frames), and the analysis goes on."""
 
-    def __init__(self, R, frames, codes, transforms):
+_TF_CODE = {reason: len(boundary.REFUSAL_REASONS) + 1 + k for k, reason in enumerate(TF_REASONS)}
+
+
+class _Chain:
+    """
+    The lookups of a TF chain, and what became of the transforms.
+
+    R (n, 3, 3); frames, the chain (or the list of the chains, in time order, when a frame
+    was re-parented); codes, every TF transform's reason code; texts {transform index: why
+    the tree refused it}.
+    """
+
+    def __init__(self, R, frames, codes, transforms, texts):
         self.R, self.frames, self.codes, self.transforms = R, frames, codes, transforms
+        self.texts = texts
+
+
+class _Run:
+    """Consecutive samples (by stamp) of one child under one parent: rows into the accepted."""
+
+    def __init__(self, child, parent, static, rows, ns):
+        self.child, self.parent, self.static = child, parent, static
+        self.rows, self.ns = rows, ns
+
+
+def _runs(parent, child, static, ns):
+    """
+    Return the runs of the accepted transforms ([_Run]).
+
+    Per child, in stamp order, a new run wherever its parent (or static) changes; a dynamic
+    run keeps the last recorded sample of each stamp.
+    """
+    runs = []
+    order = np.lexsort((np.arange(len(ns)), ns, child))  # by child, stamp, record order
+    key = np.stack([child[order], parent[order], static[order]], axis=1)
+    cuts = np.flatnonzero((key[1:] != key[:-1]).any(axis=1)) + 1
+    for rows in np.split(order, cuts):
+        if not len(rows):
+            continue
+        stamps = ns[rows]
+        if not static[rows[0]]:
+            last = np.append(stamps[1:] != stamps[:-1], True)  # the last of equal stamps
+            rows, stamps = rows[last], stamps[last]
+        runs.append(_Run(int(child[rows[0]]), int(parent[rows[0]]), bool(static[rows[0]]),
+                         rows, stamps))
+    return runs
+
+
+class _ChainLookups:
+    """
+    BODY in REFERENCE looked up over time while the tree's shape changes (re-parenting).
+
+    The bag's time is cut where a frame takes a new parent; within each segment every
+    child's run that holds there (the last that started at or before the segment's start)
+    feeds a fresh TransformTree — only its samples in the segment and one on each side, so
+    a segment costs what it holds — and the chain is looked up at every stamp of its dynamic
+    edges in the segment at which all of them have data (one batch). Stamps go to the tree
+    as seconds from the first stamp, ``(ns − ns₀)·10⁻⁹``: distinct to the nanosecond over
+    a bag of weeks, where seconds since 1970 collapse stamps closer than ~0.2 µs.
+    """
+
+    def __init__(self, frames, R, b, ns, runs):
+        self.frames, self.R, self.b, self.ns, self.runs = frames, R, b, ns, runs
+        self.origin = int(ns.min()) if len(ns) else 0
+        self.refused = {}  # accepted row -> (reason, text)
+
+    def seconds(self, ns):
+        return 1e-9 * (np.asarray(ns, np.int64) - self.origin)
+
+    def segments(self):
+        """[(lo, hi, [_Run])]: the runs that hold in [lo, hi) ns, segments in time order."""
+        first_of = {}
+        for run in self.runs:
+            first_of.setdefault(run.child, run)
+        switches = sorted({int(r.ns[0]) for r in self.runs if first_of[r.child] is not r})
+        bounds = [-math.inf] + switches + [math.inf]
+        out = []
+        for lo, hi in zip(bounds[:-1], bounds[1:]):
+            holding = {}
+            for run in self.runs:  # runs of a child are in stamp order
+                if run.child not in holding or run.ns[0] <= lo:
+                    holding[run.child] = run
+            out.append((lo, hi, sorted(holding.values(), key=lambda r: int(r.rows.min()))))
+        return out
+
+    def feed(self, tree, run, lo, hi):
+        """Set run's samples in [lo, hi) (and one on each side) in tree; refusals noted."""
+        names = self.frames[run.parent], self.frames[run.child]
+        try:
+            if run.static:
+                last = run.rows[-1]
+                tree.set_transform(*names, self.R[last], self.b[last],
+                                   float(self.seconds(run.ns[-1])), static=True)
+                return
+            i0 = max(0, int(np.searchsorted(run.ns, lo, 'right')) - 1)
+            i1 = min(len(run.ns), int(np.searchsorted(run.ns, hi, 'left')) + 1)
+            rows = run.rows[i0:i1]
+            tree.set_transform(*names, self.R[rows], self.b[rows], self.seconds(run.ns[i0:i1]))
+        except transform_tree.TransformTreeError as exc:
+            if exc.reason not in _TF_CODE:
+                raise
+            inside = (run.ns >= lo) & (run.ns < hi)
+            for row in run.rows[inside].tolist():
+                self.refused.setdefault(row, (exc.reason, str(exc)))
+
+    def segment(self, tree, holding, reference, body, lo, hi):
+        """(ns, R, b, chain) of the lookups in [lo, hi); TransformLookupError if none can be."""
+        chain = tree.chain(reference, body)
+        runs = {self.frames[r.child]: r for r in holding}
+        times = [runs[f].ns for f in chain
+                 if f in runs and not runs[f].static and tree.parent(f) in chain]
+        if times:
+            t = np.unique(np.concatenate(times))
+            t = t[(t >= lo) & (t < hi)]
+            first, last = tree.time_range(reference, body)
+            seconds = self.seconds(t)
+            t = t[(seconds >= first) & (seconds <= last)]
+        else:  # static edges only: one lookup, at the newest of their stamps
+            newest = max(int(runs[f].ns[-1]) for f in chain if f in runs
+                         and tree.parent(f) in chain) if len(chain) > 1 else self.origin
+            t = np.array([newest] if lo <= newest < hi or lo == -math.inf else [], np.int64)
+        R, b, _ = tree.lookup(reference, body, self.seconds(t))
+        return t, R.reshape(-1, 3, 3), b.reshape(-1, 3), chain
+
+    def lookup(self, reference, body):
+        """(ns, R, b, chains) of every lookup; BagError when there is none."""
+        parts, chains, why = [], [], None
+        for lo, hi, holding in self.segments():
+            tree = transform_tree.TransformTree(cache_seconds=math.inf)
+            for run in holding:
+                self.feed(tree, run, lo, hi)
+            try:
+                t, R, b, chain = self.segment(tree, holding, reference, body, lo, hi)
+            except transform_tree.TransformLookupError as exc:
+                why = exc
+                continue
+            if len(t):
+                parts.append((t, R, b))
+                if chain not in chains:
+                    chains.append(chain)
+        if not parts:
+            raise bag_read.BagError(f'--tf {reference} {body}: {why}' if why is not None else
+                                    f'--tf: no time at which every edge of {reference} → '
+                                    f'{body} has data')
+        ns, R, b = (np.concatenate(x) for x in zip(*parts))
+        return ns, R, b, chains
 
 
 def tf_topic(reader, reference, body, tolerance, lo, hi):
     """
     (Columns, _Chain) of BODY in REFERENCE from the bag's TFMessage topics.
 
-    Every transform passes the boundary's checks (refusals counted); the accepted ones feed a
-    rot_tools.TransformTree (static ones whatever --start/--end say), which is looked up at
-    every stamp of the chain's dynamic edges where all of them have data (one batch).
+    Every transform passes the boundary's checks, then the tree's (an empty frame name, a
+    loop): refusals are counted and the rest goes on. The accepted ones feed
+    rot_tools.TransformTree (static ones whatever --start/--end say); a frame's samples
+    under each of its parents are used while that parent holds (_ChainLookups).
     """
-    from rot_tools.core.errors import RotationError
-    try:
-        from rot_tools.core.transform_tree import TransformTree
-    except ImportError:  # pragma: no cover - a checkout older than the TF tree
-        raise bag_read.BagError('--tf needs rot_tools.TransformTree, not in this version'
-                                ) from None
-
     connections = [c for c in reader.connections if c.msgtype == bag_read.TF_TYPE]
     if not connections:
         raise bag_read.BagError('--tf: the bag has no tf2_msgs/msg/TFMessage topic')
@@ -399,65 +586,51 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
     parts = [bag_read.read_tf(reader, static)] if static else []
     parts += [bag_read.read_tf(reader, dynamic, lo, hi)] if dynamic else []
     tf = bag_read.join_tf(parts)
+    frames = tf['frames']
     codes, norms = boundary.check_batch(tf['orientation'], tolerance, tf['position'])
+    empty = np.array([not f for f in frames] or [False])
+    nameless = (codes == boundary.ACCEPTED) & (empty[tf['parent']] | empty[tf['child']])
+    codes[nameless] = _TF_CODE[transform_tree.BAD_FRAME]
+    texts = {int(k): 'an empty frame name: header.frame_id '
+             f"{frames[tf['parent'][k]]!r}, child_frame_id {frames[tf['child'][k]]!r}"
+             for k in np.flatnonzero(nameless)[:1]}
     ok = codes == boundary.ACCEPTED
     R = boundary.accepted_rotations(tf['orientation'], norms, codes)
-    b, parent, child = tf['position'][ok], tf['parent'][ok], tf['child'][ok]
-    sec, nanosec, is_static = tf['sec'][ok], tf['nanosec'][ok], tf['static'][ok]
-    stamps = sec + 1e-9 * nanosec
-    exact = dict(zip(stamps.tolist(), zip(sec.tolist(), nanosec.tolist())))
-    frames = tf['frames']
-    tree = TransformTree(cache_seconds=math.inf)
-    edge_stamps = {}
-    keys = np.stack([parent, child, is_static], axis=1) if len(parent) else np.zeros((0, 3))
-    order = np.unique(keys, axis=0, return_index=True)[1] if len(keys) else []
-    try:
-        for first in sorted(order):
-            p, ch, st = keys[first]
-            rows = np.flatnonzero((parent == p) & (child == ch) & (is_static == st))
-            if st:
-                last = rows[np.argmax(stamps[rows])]
-                tree.set_transform(frames[p], frames[ch], R[last], b[last], stamps[last],
-                                   static=True)
-                continue
-            rows = rows[np.argsort(stamps[rows], kind='stable')]
-            t_rows, keep = np.unique(stamps[rows][::-1], return_index=True)
-            rows = rows[::-1][keep]  # one sample per stamp: the last recorded
-            tree.set_transform(frames[p], frames[ch], R[rows], b[rows], stamps[rows])
-            edge_stamps[frames[ch]] = stamps[rows]
-        for frame in (reference, body):
-            if frame not in tree.frames:
-                known = ', '.join(tree.frames) or 'none'
-                raise bag_read.BagError(
-                    f"--tf: frame {frame} never appears in the bag's TF (frames: {known})")
-        chain = tree.chain(reference, body)
-        times = [edge_stamps[f] for f in chain if f in edge_stamps
-                 and tree.parent(f) in chain]
-        first, last = tree.time_range(reference, body)
-        if times:
-            t = np.unique(np.concatenate(times))
-            t = t[(t >= first) & (t <= last)]
-        else:  # static edges only: one lookup
-            t = np.array([tree.lookup(reference, body)[2]])
-        if not len(t):
-            raise bag_read.BagError(f'--tf: no time at which every edge of {reference} → '
-                                    f'{body} has data')
-        R_chain, b_chain, _ = tree.lookup(reference, body, t)
-    except RotationError as exc:  # TransformTreeError / TransformLookupError: one line
-        raise bag_read.BagError(f'--tf {reference} {body}: {exc}') from None
+    parent, child = tf['parent'][ok], tf['child'][ok]
+    ns = stamp_ns(tf['sec'][ok], tf['nanosec'][ok])
+    named = {frames[i] for i in np.concatenate([parent, child]).tolist()}
+    for frame in (reference, body):
+        if frame not in named:
+            known = ', '.join(sorted(named)) or 'none'
+            raise bag_read.BagError(
+                f"--tf: frame {frame} never appears in the bag's TF (frames: {known})")
+    lookups = _ChainLookups(frames, R, tf['position'][ok], ns,
+                            _runs(parent, child, tf['static'][ok], ns))
+    t, R_chain, b_chain, chains = lookups.lookup(reference, body)
+    accepted = np.flatnonzero(ok)
+    for row, (reason, text) in sorted(lookups.refused.items()):
+        codes[accepted[row]] = _TF_CODE[reason]
+        texts.setdefault(int(accepted[row]), text)
     columns = bag_read.Columns(f'tf:{reference}->{body}', bag_read.TF_TYPE)
-    pairs = [exact.get(x, (int(math.floor(x)), int(round((x - math.floor(x)) * 1e9))))
-             for x in t.tolist()]
     columns.record = np.zeros(len(t), np.int64)
-    columns.sec = np.array([p[0] for p in pairs], np.int64)
-    columns.nanosec = np.array([p[1] for p in pairs], np.int64)
+    columns.sec, columns.nanosec = np.divmod(t, csv_text.NS_PER_S)
     columns.frame_ids, columns.frame = [reference], np.zeros(len(t), np.intp)
     columns.child_frame_ids, columns.child = [body], np.zeros(len(t), np.intp)
     columns.position = np.asarray(b_chain, np.float64).reshape(-1, 3)
     columns.orientation = None
     columns.covariance0 = columns.angular_velocity = None
     transforms = SimpleNamespace(orientation=tf['orientation'], position=tf['position'])
-    return columns, _Chain(np.asarray(R_chain).reshape(-1, 3, 3), chain, codes, transforms)
+    return columns, _Chain(R_chain, chains[0] if len(chains) == 1 else chains, codes,
+                           transforms, texts)
+
+
+NS_MAX = 2 ** 63 - 1
+"""The latest record time a bag holds (int64 nanoseconds)."""
+
+
+def record_bound(bag_start, seconds):
+    """Return the record time ``seconds`` (≥ 0) after ``bag_start`` (ns), at most NS_MAX."""
+    return min(bag_start + int(round(min(seconds * 1e9, 2.0 ** 63))), NS_MAX - 1)
 
 
 def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, seq=None,
@@ -473,8 +646,8 @@ def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, 
             raise bag_read.BagError(f'{path}: the bag holds no messages')
         connections = select_connections(reader, topics) if topics or not tf else []
         bag_start = reader.start_time
-        lo = None if start is None else bag_start + int(round(start * 1e9))
-        hi = None if end is None else bag_start + int(round(end * 1e9)) + 1
+        lo = None if start is None else record_bound(bag_start, start)
+        hi = None if end is None else record_bound(bag_start, end) + 1
         progress = Progress(sum(c.msgcount for c in connections), progress_stream)
         try:
             columns = bag_read.read_topics(reader, connections, lo, hi, fast=fast,
@@ -489,6 +662,53 @@ def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, 
     return storage, out
 
 
+def refuse_overwriting(bag, outputs, error):
+    """
+    Call ``error`` if an output file is the bag: the same file, or a file in its directory.
+
+    outputs: [(option, path or None)]; ``-`` is the standard output. The bag is what
+    rot_tools.io.bag_read.bag_paths opens (a rosbag2 directory for a file inside one).
+    """
+    try:
+        inputs = [Path(p).resolve() for p in bag_read.bag_paths(bag)] + [Path(bag).resolve()]
+    except bag_read.BagError:
+        return  # the analysis says what is wrong with it
+    for option, path in outputs:
+        if path is None or path == '-':
+            continue
+        target = Path(path).resolve()
+        for source in inputs:
+            if (target == source or (source.is_dir() and target.is_relative_to(source))
+                    or (target.exists() and os.path.samefile(target, source))):
+                error(f'{option} {path} would overwrite the bag being read ({bag}): refused')
+
+
+def _release_stdout():
+    """Point the standard output at /dev/null: what could not be written is dropped."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+
+
+def _to_stdout(write, error):
+    """
+    Run ``write(sys.stdout)`` and flush it.
+
+    A closed pipe ends quietly (status 0, as ``| head`` expects); a full disk or a closed
+    standard output is one error line (status 2).
+    """
+    if sys.stdout is None:
+        error('cannot write to the standard output: it is closed')
+    try:
+        write(sys.stdout)
+        sys.stdout.flush()
+    except BrokenPipeError:  # `rot-tools bag ... --csv - | head`: the reader is done
+        _release_stdout()
+    except OSError as exc:
+        _release_stdout()
+        error(f'cannot write to the standard output: {exc.strerror or exc}')
+
+
 def run(args, error):
     """rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2."""
     from rot_tools.io.report import to_json, to_yaml
@@ -499,6 +719,7 @@ def run(args, error):
               "pip install 'rot_tools[bag]'")
     if args.start is not None and args.end is not None and args.end < args.start:
         error(f'--end {args.end:g} is before --start {args.start:g}')
+    refuse_overwriting(args.path, [('--csv', args.csv), ('--plot', args.plot)], error)
     try:
         storage, topics = analyse(args.path, args.topic or (), args.start, args.end,
                                   DEFAULT_TOLERANCE if args.tol is None else args.tol,
@@ -506,30 +727,27 @@ def run(args, error):
     except bag_read.BagError as exc:
         error(f'bag: {exc}')
     if args.plot:
+        drawn = topics[:MAX_PLOTTED_TOPICS]
         try:
-            write_plot(args.plot, topics, args.deg)
+            write_plot(args.plot, drawn, args.deg)
         except ImportError as exc:
             if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
                 raise
             error("--plot needs matplotlib, the 'plot' extra: pip install 'rot_tools[plot]'")
         except OSError as exc:
             error(f'--plot: cannot write {args.plot}: {exc.strerror or exc}')
+        sys.stderr.write(plot_note(args.plot, drawn, topics[MAX_PLOTTED_TOPICS:]))
+    if args.csv == '-':
+        _to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision), error)
+        return 0
     if args.csv is not None:
         try:
-            if args.csv == '-':
-                try:
-                    write_csv(sys.stdout, topics, args.deg, args.precision)
-                    sys.stdout.flush()
-                except BrokenPipeError:  # `rot-tools bag ... --csv - | head`: reader is done
-                    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-                    return 0
-            else:
-                with open(args.csv, 'w', encoding='utf-8', newline='') as out:
-                    write_csv(out, topics, args.deg, args.precision)
+            with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
+                                                 newline='') as out:
+                write_csv(out, topics, args.deg, args.precision)
         except OSError as exc:
             error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
-    if args.csv != '-':
-        data = summary(args.path, storage, topics, args.deg)
-        text = to_json if args.json else to_yaml
-        sys.stdout.write(text(data, precision=args.precision))
+    text = to_json if args.json else to_yaml
+    data = summary(args.path, storage, topics, args.deg)
+    _to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
     return 0

@@ -26,6 +26,7 @@ from contextlib import contextmanager
 from itertools import islice
 from operator import attrgetter
 from pathlib import Path
+import stat
 
 import numpy as np
 from rot_tools.io import interface
@@ -53,6 +54,10 @@ _KINDS = {'bool': 'u', 'byte': 'u', 'char': 'u', 'int8': 'i', 'uint8': 'u', 'int
           'uint64': 'u', 'float64': 'f'}
 
 
+BAG_SUFFIXES = ('.bag', '.db3', '.mcap')
+"""Files read as a bag outside a rosbag2 directory: ROS 1, and rosbag2's storage files."""
+
+
 class BagError(Exception):
     """A bag that cannot be read as asked: one line of text for the user."""
 
@@ -70,16 +75,34 @@ def rosbags_missing():
 # Opening a bag
 
 
-def _bag_paths(path):
+def bag_paths(path):
+    """
+    Return the paths rosbags opens for PATH: [a .bag file] or [a rosbag2 directory].
+
+    A file inside a rosbag2 directory stands for the directory. Anything else — missing, not
+    a regular file nor a directory (a FIFO would block the reader for ever), empty, a file
+    that is neither a ROS 1 bag nor in a rosbag2 directory — is a BagError, before opening.
+    """
     path = Path(path)
-    if not path.exists():
-        raise BagError(f'{path}: no such file or directory')
-    if path.is_file() and path.suffix != '.bag' and (path.parent / 'metadata.yaml').exists():
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        raise BagError(f'{path}: no such file or directory') from None
+    except OSError as exc:
+        raise BagError(f'{path}: cannot be read: {exc.strerror or exc}') from None
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise BagError(f'{path}: not a regular file or a directory')
+    if stat.S_ISDIR(mode):
+        if not (path / 'metadata.yaml').exists():
+            raise BagError(f'{path}: a directory without metadata.yaml is not a rosbag2 bag')
+        return [path]
+    if path.suffix != '.bag' and (path.parent / 'metadata.yaml').exists():
         return [path.parent]  # a rosbag2 storage file: its directory is the bag
-    if path.is_file() and path.stat().st_size == 0:
+    if path.stat().st_size == 0:
         raise BagError(f'{path}: the file is empty')
-    if path.is_dir() and not (path / 'metadata.yaml').exists():
-        raise BagError(f'{path}: a directory without metadata.yaml is not a rosbag2 bag')
+    if path.suffix not in BAG_SUFFIXES:
+        raise BagError(f'{path}: not a bag (a ROS 1 bag ends in .bag, a rosbag2 storage file '
+                       'in .db3 or .mcap; a rosbag2 bag is a directory with metadata.yaml)')
     return [path]
 
 
@@ -93,9 +116,9 @@ def open_bag(path):
     """Return a rosbags AnyReader on PATH, open; BagError for what cannot be read."""
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import get_typestore, Stores
-    paths = _bag_paths(path)
-    reader = AnyReader(paths, default_typestore=get_typestore(Stores.ROS2_JAZZY))
+    paths = bag_paths(path)
     try:
+        reader = AnyReader(paths, default_typestore=get_typestore(Stores.ROS2_JAZZY))
         reader.open()
     except Exception as exc:  # noqa: BLE001 - rosbags' errors vary by format and damage
         raise BagError(f'{path}: cannot read the bag: {_one_line(exc)}') from None

@@ -13,8 +13,8 @@ stay below 10^15, where float64 and int64 hold every integer: :func:`numbers_fit
 the numbers' size and ``precision`` (at most MAX_PRECISION) for that, and says when a chunk
 must go through Python's formatting instead.
 
-:func:`rows` returns the bytes of CSV lines: topic, stamp (sec.nanosec, exact), frame id,
-then the numbers, comma-separated.
+:func:`rows` returns the bytes of CSV lines: topic, stamp (exact, from integer nanoseconds:
+``-0.500000000`` for −0.5 s), frame id, then the numbers, comma-separated.
 """
 
 import numpy as np
@@ -150,29 +150,42 @@ def _strings(table, index):
     return padded[index], np.arange(width) < lengths[index][:, None]
 
 
-def _stamps(sec, nanosec):
-    """(bytes, keep) of header stamps 'sec.nanosec' (nanosec in 9 digits)."""
-    sec = np.asarray(sec, np.int64)
+NS_PER_S = 1_000_000_000
+
+
+def stamp_text(ns):
+    """Return the text of a stamp of ``ns`` (int) nanoseconds: '[-]s.nnnnnnnnn', exact."""
+    sec, nsec = divmod(abs(ns), NS_PER_S)
+    return '%s%d.%09d' % ('-' if ns < 0 else '', sec, nsec)
+
+
+def _stamps(ns):
+    """(bytes, keep) of stamps of ``ns`` (m,) int64 nanoseconds, as stamp_text writes them."""
+    ns = np.asarray(ns, np.int64)
+    sec, nanosec = np.divmod(np.abs(ns), NS_PER_S)
     n = len(sec)
     digits = len('%d' % sec.max()) if n else 1
     groups = max(1, -(-digits // 4))
-    width = 4 * groups + 1 + 12
+    width = 1 + 4 * groups + 1 + 12
     buf = np.empty((n, width), np.uint8)
-    _write_groups(buf, 0, _groups(sec, groups))
-    buf[:, 4 * groups] = ord('.')
-    _write_groups(buf, 4 * groups + 1, _groups(np.asarray(nanosec, np.int64), 3))
+    buf[:, 0] = ord('-')
+    _write_groups(buf, 1, _groups(sec, groups))
+    buf[:, 1 + 4 * groups] = ord('.')
+    _write_groups(buf, 2 + 4 * groups, _groups(nanosec, 3))
     keep = np.ones((n, width), bool)
+    keep[:, 0] = ns < 0
     shown = np.maximum(1, _digit_count(sec, 4 * groups))
-    keep[:, :4 * groups] = np.arange(4 * groups) >= (4 * groups - shown)[:, None]
-    keep[:, 4 * groups + 1:4 * groups + 4] = False  # 12 digits made, 9 shown
+    keep[:, 1:1 + 4 * groups] = np.arange(4 * groups) >= (4 * groups - shown)[:, None]
+    keep[:, 2 + 4 * groups:5 + 4 * groups] = False  # 12 digits made, 9 shown
     return buf, keep
 
 
-def rows(topic, sec, nanosec, frames, frame, values, precision):
+def rows(topic, ns, frames, frame, values, precision):
     """
-    CSV lines (bytes) ``topic,sec.nanosec,frame,v1,...,vk`` of m rows.
+    CSV lines (bytes) ``topic,stamp,frame,v1,...,vk`` of m rows.
 
-    topic: bytes (already CSV-quoted); sec, nanosec (m,) ints; frames: list of bytes (quoted)
+    topic: bytes (already CSV-quoted); ns (m,) int64 stamps in nanoseconds, written exactly
+    (stamp_text); frames: list of bytes (quoted)
     indexed by frame (m,); values (m, k) float64 with numbers_fit(values, precision), NaN
     an empty field.
     """
@@ -189,7 +202,7 @@ def rows(topic, sec, nanosec, frames, frame, values, precision):
     mask = mask.reshape(m, k * width)
     text[:, -1] = ord('\n')
     head = np.frombuffer(topic + b',', np.uint8)
-    stamp, stamp_keep = _stamps(sec, nanosec)
+    stamp, stamp_keep = _stamps(ns)
     name, name_keep = _strings(frames, frame)
     comma = np.full((m, 1), ord(','), np.uint8)
     parts = [np.broadcast_to(head, (m, len(head))), stamp, comma, name, comma, text]

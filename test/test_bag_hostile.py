@@ -1,0 +1,269 @@
+"""
+rot-tools bag against what a careless or hostile user gives it, each made here.
+
+Outputs that would overwrite the bag, writes that fail midway, negative stamps, files that
+are not bags (a FIFO among them), absurd --start, a full or closed standard output, frame
+ids a spreadsheet would run, and bags with more topics than a plot can hold.
+"""
+
+import csv
+import errno
+import io
+import json
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import xml.etree.ElementTree as ElementTree
+
+import bag_helpers as bh
+from conftest import console_script, script_env
+import numpy as np
+import pytest
+
+pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+from rot_tools.cli import bag as bag_cli  # noqa: E402
+from rot_tools.cli import main as cli  # noqa: E402
+from rot_tools.io import csv_text  # noqa: E402
+
+
+def run(capsys, *args):
+    status = cli.main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def one_error(capsys, *args, contains=''):
+    status, out, err = run(capsys, *args)
+    assert (status, out) == (2, ''), err
+    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
+    assert contains in err, err
+    return err
+
+
+def unit(q):
+    q = np.asarray(q, float)
+    return q / np.linalg.norm(q)
+
+
+def pose_bag(path, stamps, frames=('map',), topic='/pose', storage='sqlite3'):
+    """Return a rosbag2 bag of PoseStamped at ``stamps`` (seconds), frames in turn."""
+    b = bh.Builder()
+    rng = np.random.default_rng(5)
+    messages = [(topic, 'geometry_msgs/msg/PoseStamped', 1_000_000 * (k + 1),
+                 b.pose_stamped(s, -rng.random(3), unit(rng.normal(size=4)),
+                                frames[k % len(frames)]))
+                for k, s in enumerate(stamps)]
+    return bh.write_bag(path, messages, storage)
+
+
+@pytest.fixture(scope='module')
+def small_bag(tmp_path_factory):
+    return pose_bag(tmp_path_factory.mktemp('small') / 'bag', [1.0 + 0.1 * k for k in range(50)])
+
+
+# ---------------------------------------------------------------------------------------
+# Nothing lost
+
+
+def test_an_output_that_is_the_bag_is_refused(capsys, tmp_path, small_bag):
+    ros1 = tmp_path / 'run.bag'
+    shutil.copy(bh.REAL, ros1)
+    before = ros1.read_bytes()
+    (tmp_path / 'link.bag').symlink_to(ros1)
+    (tmp_path / 'link.png').symlink_to(ros1)
+    for args in (('--csv', ros1), ('--plot', tmp_path / 'link.png'),
+                 ('--csv', tmp_path / '.' / 'run.bag')):
+        one_error(capsys, 'bag', ros1, *args, contains='would overwrite the bag being read')
+    one_error(capsys, 'bag', tmp_path / 'link.bag', '--csv', ros1, contains='overwrite')
+    assert ros1.read_bytes() == before
+    folder = tmp_path / 'copy'
+    shutil.copytree(small_bag, folder)
+    db3 = next(folder.glob('*.db3'))
+    files = {p: p.read_bytes() for p in folder.iterdir()}
+    for given in (folder, db3):
+        for option, output in (('--csv', db3), ('--csv', folder / 'metadata.yaml'),
+                               ('--plot', folder / 'new.png')):
+            one_error(capsys, 'bag', given, option, output, contains=f'{option} {output} would')
+    assert {p: p.read_bytes() for p in folder.iterdir()} == files
+
+
+def test_a_failed_csv_write_leaves_the_old_file(capsys, tmp_path, monkeypatch):
+    out = tmp_path / 'imu.csv'
+    out.write_text('the old table\n')
+    monkeypatch.setattr(bag_cli, 'ROWS_PER_CHUNK', 100)
+    real_rows = csv_text.rows
+    calls = []
+
+    def rows_then_full(*args):
+        calls.append(1)
+        if len(calls) == 5:  # the disk fills up in the middle of the table
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_rows(*args)
+    monkeypatch.setattr(csv_text, 'rows', rows_then_full)
+    one_error(capsys, 'bag', bh.REAL, '--topic', '/imu/data', '--csv', out,
+              contains=f'--csv: cannot write {out}: No space left on device')
+    assert out.read_text() == 'the old table\n'
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['imu.csv']  # nothing left over
+    monkeypatch.setattr(csv_text, 'rows', real_rows)
+    assert run(capsys, 'bag', bh.REAL, '--csv', out)[0] == 0  # the real one, complete
+    assert len(out.read_text().splitlines()) == 1 + 3061 + 3060
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['imu.csv']
+
+
+def test_a_failed_plot_write_leaves_nothing(capsys, tmp_path, monkeypatch):
+    pytest.importorskip('matplotlib')
+    from matplotlib.figure import Figure
+    real_savefig = Figure.savefig
+
+    def half_then_full(fig, target, **kwargs):
+        """Write half the picture to the target, then fail as a full disk does."""
+        picture = io.BytesIO()
+        real_savefig(fig, picture, **{'format': 'png', **kwargs})
+        half = picture.getvalue()[:len(picture.getvalue()) // 2]
+        if hasattr(target, 'write'):
+            target.write(half)
+        else:
+            Path(target).write_bytes(half)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    monkeypatch.setattr(Figure, 'savefig', half_then_full)
+    png = tmp_path / 'rpy.png'
+    one_error(capsys, 'bag', bh.REAL, '--plot', png,
+              contains=f'--plot: cannot write {png}: No space left on device')
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_summary_on_a_full_or_closed_stdout(small_bag):
+    script = console_script('rot-tools', 'rot_tools.cli.main')
+    env = script_env(script)
+    for extra in ([], ['--csv', '-']):
+        with open('/dev/full', 'w') as full:
+            proc = subprocess.run(script + ['bag', str(small_bag)] + extra, stdout=full,
+                                  stderr=subprocess.PIPE, text=True, timeout=120, env=env)
+        assert proc.returncode == 2 and proc.stderr == (
+            'rot-tools: error: cannot write to the standard output: No space left on device\n')
+    proc = subprocess.run(script + ['bag', str(small_bag)], stdout=subprocess.DEVNULL,
+                          stderr=subprocess.PIPE, text=True, timeout=120, env=env,
+                          preexec_fn=lambda: os.close(1))
+    assert proc.returncode == 2 and proc.stderr == (
+        'rot-tools: error: cannot write to the standard output: it is closed\n')
+    with subprocess.Popen(script + ['bag', str(bh.REAL)], stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, env=env) as child:
+        child.stdout.close()  # the reader went away before the summary
+        err = child.stderr.read()
+    assert child.returncode == 0 and err == b''
+
+
+# ---------------------------------------------------------------------------------------
+# Stamps
+
+
+def test_negative_stamps_are_exact(capsys, tmp_path):
+    path = pose_bag(tmp_path / 'bag', [-12345.0, -2.0, -1.5, -0.5, -1e-9, 0.25])
+    status, out, err = run(capsys, 'bag', path, '--csv', '-')
+    assert (status, err) == (0, '')
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert [r['stamp'] for r in rows] == ['-12345.000000000', '-2.000000000', '-1.500000000',
+                                          '-0.500000000', '-0.000000001', '0.250000000']
+    assert float(rows[2]['wx'] or 0) != 0 or rows[2]['wx'] != ''  # Δt > 0: ω given
+    s = json.loads(run(capsys, 'bag', path, '--json')[1])['topics']['/pose']
+    assert (s['start'], s['end'], s['duration']) == (-12345.0, 0.25, 12345.25)
+    bag = next(iter(bag_cli.analyse(path)[1]))
+    assert bag.ns.tolist() == [-12345 * 10**9, -2 * 10**9, -15 * 10**8, -5 * 10**8, -1,
+                               25 * 10**7]
+
+
+def test_a_start_beyond_any_time_reads_nothing(capsys, small_bag):
+    status, out, err = run(capsys, 'bag', small_bag, '--start', '1e300', '--json')
+    assert (status, err) == (0, '')
+    assert json.loads(out)['topics']['/pose']['messages'] == 0
+
+
+# ---------------------------------------------------------------------------------------
+# Files that are not bags
+
+
+def test_files_that_are_not_bags(capsys, tmp_path):
+    for name in ('notes.txt', 'x.bag.active', 'README.md'):
+        (tmp_path / name).write_text('not a bag\n')
+        one_error(capsys, 'bag', tmp_path / name, contains=f'{name}: not a bag')
+    one_error(capsys, 'bag', Path(__file__).parents[1] / 'README.md', contains='not a bag')
+
+
+def test_a_fifo_is_refused_before_opening(tmp_path):
+    fifo = tmp_path / 'run.bag'
+    os.mkfifo(fifo)
+    script = console_script('rot-tools', 'rot_tools.cli.main')
+    proc = subprocess.run(script + ['bag', str(fifo)], capture_output=True, text=True,
+                          timeout=60, env=script_env(script))  # it hung for ever
+    assert (proc.returncode, proc.stdout) == (2, '')
+    assert proc.stderr == f'rot-tools: error: bag: {fifo}: not a regular file or a directory\n'
+
+
+# ---------------------------------------------------------------------------------------
+# What a spreadsheet would run
+
+
+def test_text_cells_a_spreadsheet_would_run_are_escaped(capsys, tmp_path):
+    frames = ('=HYPERLINK("x")', '+1', '-cmd', '@SUM(A1)', '\tx', '\rx', 'map', "'q")
+    path = pose_bag(tmp_path / 'bag', [1.0 + k for k in range(len(frames))], frames)
+    for fast in (True, False):
+        if not fast:  # the Python formatting path (precision > 12) escapes the same
+            out = run(capsys, 'bag', path, '--csv', '-', '--precision', '15')[1]
+        else:
+            out = run(capsys, 'bag', path, '--csv', '-')[1]
+        rows = list(csv.DictReader(io.StringIO(out)))
+        assert [r['frame_id'] for r in rows] == ["'" + f for f in frames[:6]] + ['map', "'q"]
+        numbers = [r[c] for r in rows for c in ('x', 'y', 'z')]
+        assert all(n.startswith('-') and float(n) < 0 for n in numbers)  # never numbers
+    assert bag_cli.csv_text_cell('=1+2') == "'=1+2"
+    assert bag_cli.csv_text_cell('=A,1') == '"\'=A,1"'
+
+
+# ---------------------------------------------------------------------------------------
+# The plot: bounded, and tilt beside a spinning yaw
+
+
+def spinning_bag(path, topics):
+    """Topics of QuaternionStamped: yaw through 2,000°, roll and pitch within ±10°."""
+    from scipy.spatial.transform import Rotation
+    b = bh.Builder()
+    t = np.linspace(0, 10, 200)
+    rpy = np.stack([np.radians(10) * np.sin(t), np.radians(8) * np.cos(2 * t),
+                    np.radians(200) * t], axis=1)
+    q = Rotation.from_euler('xyz', rpy).as_quat()
+    messages = [(topic, 'geometry_msgs/msg/QuaternionStamped', int(1e9 * (1 + s)) + k,
+                 b.quaternion_stamped(1 + s, qk))
+                for s, qk in zip(t, q) for k, topic in enumerate(topics)]
+    return bh.write_bag(path, messages)
+
+
+def axes_of(svg, gid):
+    """Return the id of the matplotlib Axes group that holds the element ``gid``."""
+    root = ElementTree.parse(svg).getroot()
+    parent = {child: node for node in root.iter() for child in node}
+    node = next(e for e in root.iter() if e.get('id') == gid)
+    while not (node.get('id') or '').startswith('axes_'):
+        node = parent[node]
+    return node.get('id')
+
+
+def test_the_plot_is_bounded_and_says_what_it_draws(capsys, tmp_path):
+    pytest.importorskip('matplotlib')
+    topics = [f'/t{k:02d}' for k in range(bag_cli.MAX_PLOTTED_TOPICS + 3)]
+    path = spinning_bag(tmp_path / 'bag', topics)
+    svg = tmp_path / 'rpy.svg'
+    status, _, err = run(capsys, 'bag', path, '--plot', svg, '--deg')
+    drawn, left = topics[:bag_cli.MAX_PLOTTED_TOPICS], topics[bag_cli.MAX_PLOTTED_TOPICS:]
+    assert status == 0 and err == (
+        f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {", ".join(drawn)}; left out, 3 '
+        f'(at most {len(drawn)} topics are drawn; choose them with --topic): '
+        f'{", ".join(left)}\n')
+    text = svg.read_text()
+    assert all(f'id="{t}:yaw"' in text for t in drawn)
+    assert not any(f'id="{t}:yaw"' in text for t in left)
+    # roll and pitch share an axis of their own; yaw (2,000°) has another
+    assert axes_of(svg, '/t00:roll') == axes_of(svg, '/t00:pitch') != axes_of(svg, '/t00:yaw')
+    status, _, err = run(capsys, 'bag', path, '--plot', svg, '--topic', left[0])
+    assert status == 0 and err == f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {left[0]}\n'
+    assert f'id="{left[0]}:roll"' in svg.read_text()
