@@ -9,8 +9,6 @@ The names below are imported from their modules on first use of one (PEP 562), s
 signal handlers before NumPy and rclpy load (see rot_tools.ros.entry).
 """
 
-import importlib
-
 _HOME = {
     'rot_tools.core.axis_angle': (
         'axis_angle_to_matrix', 'matrix_to_axis_angle', 'matrix_to_rotvec', 'rotvec_to_matrix'),
@@ -41,6 +39,7 @@ def __getattr__(name):
     """Import every public name from its module on the first access of one."""
     if name not in _MODULE_OF:
         raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
+    import importlib  # (here: a module attribute would show in dir(rot_tools))
     for module, names in _HOME.items():
         loaded = importlib.import_module(module)
         globals().update((n, getattr(loaded, n)) for n in names)

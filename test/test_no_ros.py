@@ -126,3 +126,16 @@ def test_no_module_is_longer_than_700_lines():
             for path in sorted(PACKAGE.rglob('*.py'))
             if (count := len(path.read_text().splitlines())) > 700}
     assert long == {}
+
+
+def test_dir_shows_the_public_names_and_the_sub_packages_only():
+    probe = ('import rot_tools as rt\nbefore = set(dir(rt))\nrt.rot_x(0.1)\n'
+             'print(" ".join(sorted(before)))\nprint(" ".join(sorted(dir(rt))))')
+    done = subprocess.run([sys.executable, '-c', probe], capture_output=True, text=True,
+                          cwd=PACKAGE.parent, timeout=60)
+    assert done.returncode == 0, done.stderr
+    import rot_tools
+    for line in done.stdout.splitlines():
+        shown = {n for n in line.split() if not n.startswith('_')}
+        assert shown <= set(rot_tools.__all__) | set(LAYERS), shown - set(rot_tools.__all__)
+    assert set(rot_tools.__all__) <= set(done.stdout.splitlines()[1].split())
