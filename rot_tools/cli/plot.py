@@ -24,11 +24,13 @@ centre to its edge points at it, with its distance in the legend.
 """
 
 import math
+import os
 
 import matplotlib
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 import numpy as np
+from rot_tools.cli import output_file
 from rot_tools.io import drawing
 
 REFERENCE_GIDS = ('reference_x', 'reference_y', 'reference_z')
@@ -157,9 +159,10 @@ def save(R, b, path, degrees=False):
     """
     Write figure(R, b, degrees) to ``path``, in the format its extension names.
 
-    The file carries no date, so the same motion gives the same bytes.
+    The file carries no date, so the same motion gives the same bytes; it is written whole or
+    not at all (rot_tools.cli.output_file).
     """
     fig = figure(R, b, degrees)
-    with matplotlib.rc_context(SVG_STYLE):
-        fig.savefig(path, metadata={'Date': None} if str(path).lower().endswith('.svg')
-                    else None)
+    kind = os.path.splitext(str(path))[1][1:].lower() or 'png'
+    with matplotlib.rc_context(SVG_STYLE), output_file.complete_or_nothing(path, 'wb') as out:
+        fig.savefig(out, format=kind, metadata={'Date': None} if kind == 'svg' else None)
