@@ -49,3 +49,20 @@ def test_doc_plot_is_what_the_command_draws(tmp_path):
     if matplotlib.__version__ != '3.11.2':  # the pinned one drew the doc's picture
         pytest.skip(f'matplotlib {matplotlib.__version__} draws text differently')
     assert np.mean(np.abs(new - old)) < 1e-3
+
+
+def test_make_run_installs_what_the_readme_bag_example_needs():
+    """`make run` then the README's bag example: the bag and plot extras come with run."""
+    import shutil
+    if shutil.which('make') is None:
+        pytest.skip('make is not installed')
+    done = subprocess.run(['make', '-n', '-B', 'run'], capture_output=True, text=True,
+                          cwd=REPO, timeout=60)
+    assert done.returncode == 0, done.stderr
+    installs = [line for line in done.stdout.splitlines() if ' install ' in line]
+    assert any('-c requirements-test.txt' in line and 'matplotlib' in line.split()
+               and 'rosbags' in line.split() for line in installs), installs
+    pins = (REPO / 'requirements-test.txt').read_text().splitlines()
+    assert {'matplotlib', 'rosbags'} <= {p.split('==')[0] for p in pins if '==' in p}
+    readme = (REPO / 'README.md').read_text()
+    assert "`make run` installs them" in readme.split('## Recorded bags')[1].split('```')[0]
