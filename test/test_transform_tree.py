@@ -540,6 +540,82 @@ def test_a_lookup_at_a_non_finite_stamp_is_refused():
         tree.lookup('map', 'optical', math.nan)
 
 
+def test_values_numpy_cannot_take_are_rotation_errors():
+    # A Python int beyond float64, an empty batch of stamps, batch shapes that do not
+    # broadcast: each a RotationError saying what, never NumPy's or Python's own exception.
+    with pytest.raises(RotationError, match="cache_seconds is beyond float64's range"):
+        TransformTree(cache_seconds=10**400)
+    tree, _ = make_tree()
+    for empty in (np.empty(0), np.empty((2, 0))):
+        with pytest.raises(RotationError, match=re.escape(f'empty (shape {empty.shape})')):
+            tree.lookup('map', 'optical', empty)
+    R = np.broadcast_to(np.eye(3), (2, 3, 3))
+    with pytest.raises(RotationError, match=r'do not broadcast together: \(2,\), \(2,\), '
+                                            r'\(3,\), \(3,\), \(\)'):
+        rot_tools.screw_interpolate(R, np.zeros((2, 3)), np.broadcast_to(np.eye(3), (3, 3, 3)),
+                                    np.zeros((3, 3)), 0.5)
+    with pytest.raises(RotationError, match='do not broadcast'):  # two items, three fractions
+        rot_tools.screw_interpolate(R, np.zeros((2, 3)), np.eye(3), np.ones(3), [0.1, 0.2, 0.3])
+
+
+def test_long_frame_names_are_refused_and_every_message_shows_names_cut_short():
+    tree = TransformTree()
+    long_name = 'x' * 10**6
+    with pytest.raises(TransformTreeError) as excinfo:
+        tree.set_transform('odom', long_name, np.eye(3), np.zeros(3), 0.0)
+    assert excinfo.value.reason == 'bad_frame'
+    assert 'has 1,000,000 characters, at most MAX_FRAME_NAME = 256' in str(excinfo.value)
+    assert len(str(excinfo.value)) < 200
+    # Names at the limit are taken; the unknown-frame message lists 20 of them, each cut.
+    for k in range(30):
+        tree.set_transform('odom', f'{k:03d}' + 'y' * 253, np.eye(3), np.zeros(3), 0.0)
+    with pytest.raises(TransformLookupError, match='unknown') as excinfo:
+        tree.lookup('odom', 'z' * 256)
+    text = str(excinfo.value)
+    assert len(text) < 20 * 45 + 100 and text.count('…') == 21
+    with pytest.raises(TransformTreeError, match='loop') as excinfo:
+        tree.set_transform('000' + 'y' * 253, 'odom', np.eye(3), np.zeros(3), 0.0)
+    assert len(str(excinfo.value)) < 300
+
+
+def test_a_forgotten_frame_is_unknown_and_frees_its_place():
+    tree = TransformTree(max_frames=4)
+    tree.set_transform('a', 'b', np.eye(3), np.zeros(3), 0.0)
+    tree.set_transform('b', 'c', np.eye(3), np.zeros(3), 0.0)
+    tree.set_transform('a', 'd', np.eye(3), np.zeros(3), 0.0, static=True)
+    with pytest.raises(TransformTreeError, match='max_frames'):
+        tree.set_transform('a', 'e', np.eye(3), np.zeros(3), 0.0)
+    tree.forget('b')  # b still names c's parent: it stays, as a root
+    assert tree.frames == ['a', 'b', 'c', 'd'] and tree.parent('b') is None
+    tree.forget('c')  # now b and c are named by no edge
+    assert tree.frames == ['a', 'd']
+    with pytest.raises(TransformLookupError) as excinfo:
+        tree.lookup('a', 'c')
+    assert excinfo.value.reason == 'unknown_frame'
+    tree.set_transform('a', 'e', np.eye(3), np.zeros(3), 0.0)
+    tree.forget('nowhere')  # nothing to forget: nothing happens
+    tree.forget('d')
+    assert tree.frames == ['a', 'e']
+
+
+def test_an_edges_memory_is_bounded_by_max_samples_and_given_back():
+    import tracemalloc
+    tree = TransformTree(cache_seconds=10.0, max_samples=10_000)
+    tracemalloc.start()
+    try:
+        for k in range(12_000):  # 1 kHz for 12 s: the newest 10,000 kept
+            tree.set_transform('a', 'b', np.eye(3), np.zeros(3), k * 1e-3)
+        full = tracemalloc.get_traced_memory()[0]
+        # 104 bytes a sample (stamp, R, b): at most max_samples + 1 of them, not 16,384.
+        assert full <= 10_001 * 104 + 20_000
+        for k in range(20):  # then 1 Hz: 10 samples in the window
+            tree.set_transform('a', 'b', np.eye(3), np.zeros(3), 12.0 + k)
+        assert tracemalloc.get_traced_memory()[0] <= 20_000
+    finally:
+        tracemalloc.stop()
+    assert tree.time_range('a', 'b') == (21.0, 31.0)
+
+
 # ---------------------------------------------------------------------------------------
 # The user documentation's example
 

@@ -241,6 +241,18 @@ def transform_from_screw(direction, point, angle, translation):
     return R, b
 
 
+def _require_broadcast(*shapes):
+    """Refuse batch shapes of screw_interpolate's inputs that do not broadcast together."""
+    if len(set(shapes)) == 1:  # the usual case, one item or equal batches: no test to pay
+        return
+    try:
+        np.broadcast_shapes(*shapes)
+    except ValueError:
+        raise RotationError(
+            'screw_interpolate: the batch shapes of R0, b0, R1, b1 and s do not broadcast '
+            f"together: {', '.join(map(str, shapes))}") from None
+
+
 def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
     """
     Return the constant-screw motion from T0 = (R0, b0) to T1 = (R1, b1) at fractions s (...).
@@ -252,6 +264,7 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
     R0, R1 = checked_rotation(R0, check), checked_rotation(R1, check)
     b0, b1 = finite_array(b0, (3,), 'translation b0'), finite_array(b1, (3,), 'translation b1')
     s = finite_array(s, (), 'fraction s')
+    _require_broadcast(R0.shape[:-2], b0.shape[:-1], R1.shape[:-2], b1.shape[:-1], s.shape)
     R0t = np.swapaxes(R0, -1, -2)
     rel_R = R0t @ R1
     with np.errstate(over='ignore', invalid='ignore'):

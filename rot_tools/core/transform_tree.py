@@ -36,19 +36,21 @@ newest stamp of its own edge (0 for a root, as tf2).
 **Refusals.** A lookup that cannot be answered raises TransformLookupError (a RotationError)
 whose ``reason`` is one of ``unknown_frame``, ``not_connected`` (no common ancestor: two
 trees) or ``extrapolation`` (the message names the edge, the data it has and by how many
-seconds t is outside it; ``edge`` and ``seconds`` carry them). ``set_transform`` refuses
-with a TransformTreeError (the parent class, also a RotationError) whose reason is
-``bad_frame`` (an empty or non-string frame name), ``loop`` (the child is the parent or one
-of its ancestors: a loop published by mistake), ``too_many_frames`` (beyond ``max_frames``),
-``non_finite`` (NaN/Inf in R, b or the stamp), ``not_rotation`` (R fails validate_rotation)
-or ``bad_value`` (a shape or type that is not a transform).
+seconds t is outside it; ``edge`` and ``seconds`` carry them). ``set_transform`` refuses with
+a TransformTreeError (the parent class, also a RotationError) whose reason is ``bad_frame``
+(an empty or non-string frame name, or one longer than MAX_FRAME_NAME), ``loop`` (the child is
+the parent or one of its ancestors: a loop published by mistake), ``too_many_frames`` (beyond
+``max_frames``), ``non_finite`` (NaN/Inf in R, b or the stamp), ``not_rotation`` (R fails
+validate_rotation) or ``bad_value`` (a shape or type that is not a transform).
 
 **Memory.** Samples of a dynamic edge older than ``cache_seconds`` before its newest are
 dropped, and at most ``max_samples`` (the newest) are kept, so a flood cannot grow the tree
 without bound; nor can frames beyond ``max_frames``. A sample older than the window is not
 stored (set_transform returns 0); a sample at the stamp of a stored one replaces it. A frame
 that gets a new parent, or an edge that turns static or dynamic, replaces its old edge and
-forgets its samples. Frames once seen stay known.
+forgets its samples. A frame stays known until ``forget`` drops its edge and no edge names
+it. An edge's arrays hold at most ``max_samples`` + 1 samples and shrink as it empties.
+Messages show frame names cut to SHOWN_NAME characters.
 
 Batches: ``set_transform`` takes many samples of one edge at once (stamps (n,), R (n, 3, 3),
 b (n, 3)) and ``lookup`` many stamps at once (t (...) → R (..., 3, 3), b (..., 3), t (...)),
@@ -86,6 +88,13 @@ DEFAULT_MAX_SAMPLES = 100_000
 DEFAULT_MAX_FRAMES = 10_000
 """Frames a tree holds at most (a few kB each); a transform that would add more is refused."""
 
+MAX_FRAME_NAME = 256
+"""Characters a frame name has at most (ROS frame names are a few dozen); longer: bad_frame."""
+
+SHOWN_NAME = 40
+"""Characters of a frame name shown in a message at most (a name may be long junk)."""
+
+_MIN_CAPACITY = 16
 _IDENTITY = np.eye(3)
 _ZERO = np.zeros(3)
 
@@ -113,17 +122,30 @@ class TransformLookupError(TransformTreeError):
         self.seconds = seconds
 
 
+def shown(frame):
+    """Return repr(frame) cut to SHOWN_NAME characters ('…' marking the cut): for messages."""
+    text = repr(frame)
+    return text if len(text) <= SHOWN_NAME else text[:SHOWN_NAME - 1] + '…'
+
+
 def _frame_name(frame, what):
     if not isinstance(frame, str) or not frame:
         raise TransformTreeError(
-            BAD_FRAME, f'{what} frame must be a non-empty string, got {frame!r}')
+            BAD_FRAME, f'{what} frame must be a non-empty string, got {shown(frame)}')
+    if len(frame) > MAX_FRAME_NAME:
+        raise TransformTreeError(
+            BAD_FRAME, f'{what} frame {shown(frame)} has {len(frame):,} characters, at most '
+            f'MAX_FRAME_NAME = {MAX_FRAME_NAME}')
     return frame
 
 
 def _number(value, name):
-    """Return a real number as a float (bools refused), or RotationError."""
+    """Return a real number as a float (bools and values beyond float64 refused)."""
     if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:
+            raise RotationError(f"{name} is beyond float64's range") from None
     raise RotationError(f'{name} must be a number, got {value!r}')
 
 
@@ -158,14 +180,24 @@ class _Edge:
     def newest(self):
         return float(self.stamps[self.end - 1])
 
-    def _room(self, needed):
-        """Make room for ``needed`` more samples after ``end``."""
+    def _room(self, needed, max_samples):
+        """
+        Make room for ``needed`` more samples after ``end``.
+
+        The arrays double as the edge grows, to max_samples + 1 at most (one over, for the
+        sample added before the oldest expires) unless more are needed at once.
+        """
         capacity = len(self.stamps)
         if self.end + needed <= capacity:
             return
+        wanted = self.count + needed
+        if wanted > capacity // 2:
+            capacity = max(wanted, min(2 * capacity, max_samples + 1))
+        self._move(capacity)
+
+    def _move(self, capacity):
+        """Move the samples to the front of arrays of ``capacity`` (new ones if it changes)."""
         count = self.count
-        if count + needed > capacity // 2:
-            capacity = max(2 * capacity, count + needed)
         window = slice(self.start, self.end)
         stamps, R, b = self.stamps[window], self.R[window], self.b[window]
         if capacity != len(self.stamps):
@@ -183,13 +215,13 @@ class _Edge:
                 return 0
             i = self.start + int(np.searchsorted(self.stamps[self.start:self.end], stamp))
             if self.stamps[i] != stamp:  # out of order: shift the newer samples by one
-                self._room(1)
+                self._room(1, max_samples)
                 i = self.start + int(np.searchsorted(self.stamps[self.start:self.end], stamp))
                 for array in (self.stamps, self.R, self.b):
                     array[i + 1:self.end + 1] = array[i:self.end].copy()
                 self.end += 1
         else:
-            self._room(1)
+            self._room(1, max_samples)
             i = self.end
             self.end += 1
         self.stamps[i], self.R[i], self.b[i] = stamp, R, b
@@ -211,7 +243,7 @@ class _Edge:
         all_R = np.concatenate([self.R[window], R])[keep]
         all_b = np.concatenate([self.b[window], b])[keep]
         self.start = self.end = 0
-        self._room(len(merged))
+        self._room(len(merged), max_samples)
         n = len(merged)
         self.stamps[:n], self.R[:n], self.b[:n] = merged, all_R, all_b
         self.end = n
@@ -223,6 +255,9 @@ class _Edge:
         if self.stamps[self.start] < cutoff:
             self.start += int(np.searchsorted(self.stamps[self.start:self.end], cutoff))
         self.start = max(self.start, self.end - max_samples)
+        capacity = len(self.stamps)
+        if capacity > _MIN_CAPACITY and self.count <= capacity // 4:  # give memory back
+            self._move(max(_MIN_CAPACITY, 2 * self.count))
 
     def at(self, t, child, query):
         """(R, b) of the edge at times t (a float64 array), interpolated; or refused."""
@@ -278,7 +313,7 @@ class _Edge:
         raise TransformLookupError(
             EXTRAPOLATION,
             f'{query} at t = {asked:.9g} s would extrapolate {seconds:.6g} s {side} of the '
-            f'edge {self.parent!r} → {child!r} ({held})',
+            f'edge {shown(self.parent)} → {shown(child)} ({held})',
             edge=(self.parent, child), seconds=float(seconds))
 
 
@@ -346,24 +381,25 @@ class TransformTree:
             if not finite.all():
                 first = tuple(int(i) for i in np.argwhere(~finite)[0])
                 raise TransformTreeError(
-                    NON_FINITE, f'the transform {parent!r} → {child!r} is not finite: {name} '
+                    NON_FINITE, f'the transform {shown(parent)} → {shown(child)} is not '
+                    f'finite: {name} '
                     f'has {value[first]} at index {first}')
         try:
             validate_rotation(R)
         except RotationError as exc:
             raise TransformTreeError(
-                NOT_ROTATION, f'the transform {parent!r} → {child!r}: {exc}') from None
+                NOT_ROTATION, f'the transform {shown(parent)} → {shown(child)}: {exc}') from None
         with self._lock:
             self._refuse_loop(parent, child)
             new = len({parent, child} - self._frames)
             if new and len(self._frames) + new > self.max_frames:
                 raise TransformTreeError(
-                    TOO_MANY_FRAMES, f'the transform {parent!r} → {child!r} would add '
+                    TOO_MANY_FRAMES, f'the transform {shown(parent)} → {shown(child)} would add '
                     f'{new} frame(s) to a tree that holds {len(self._frames)}, at most '
                     f'max_frames = {self.max_frames}')
             edge = self._edges.get(child)
             if edge is None or edge.parent != parent or edge.static != bool(static):
-                edge = _Edge(parent, bool(static), 1 if static else 16)
+                edge = _Edge(parent, bool(static), 1 if static else _MIN_CAPACITY)
             if static:
                 edge.stamps[0], edge.R[0], edge.b[0] = stamps, R, b
                 edge.end = 1
@@ -385,10 +421,27 @@ class TransformTree:
                 return
             frame = edge.parent
             path.append(frame)
-        cycle = ' → '.join(repr(f) for f in [child] + path)
+        cycle = ' → '.join(map(shown, [child] + path))
         raise TransformTreeError(
-            LOOP, f'the transform {parent!r} → {child!r} would make {child!r} its own '
+            LOOP, f'the transform {shown(parent)} → {shown(child)} would make '
+            f'{shown(child)} its own '
             f'ancestor (a loop: {cycle}); refused')
+
+    def forget(self, frame):
+        """
+        Drop the edge of ``frame`` to its parent, with its samples; nothing if it has none.
+
+        The frame, and its parent, stay known while an edge names them (a frame with
+        children stays, as a root); else they are forgotten (unknown_frame, and no longer
+        counted against max_frames).
+        """
+        with self._lock:
+            edge = self._edges.pop(frame, None)
+            if edge is None:
+                return
+            named = set(self._edges)
+            named.update(e.parent for e in self._edges.values())
+            self._frames.difference_update({frame, edge.parent} - named)
 
     # -- the shape of the tree ---------------------------------------------------------
 
@@ -407,11 +460,11 @@ class TransformTree:
 
     def _require_known(self, frame):
         if not isinstance(frame, str):
-            raise RotationError(f'a frame name must be a string, got {frame!r}')
+            raise RotationError(f'a frame name must be a string, got {shown(frame)}')
         if frame not in self._frames:
-            known = ', '.join(repr(f) for f in sorted(self._frames)[:20]) or 'none yet'
+            known = ', '.join(map(shown, sorted(self._frames)[:20])) or 'none yet'
             raise TransformLookupError(
-                UNKNOWN_FRAME, f'frame {frame!r} is unknown (known frames: {known})')
+                UNKNOWN_FRAME, f'frame {shown(frame)} is unknown (known frames: {known})')
 
     def _path(self, reference, body):
         """
@@ -438,9 +491,9 @@ class TransformTree:
             if edge is None:
                 root = next(reversed(ancestors))
                 raise TransformLookupError(
-                    NOT_CONNECTED, f'frames {reference!r} and {body!r} are not connected: '
-                    f'{reference!r} is in the tree of {root!r}, {body!r} in the tree of '
-                    f'{frame!r}')
+                    NOT_CONNECTED, f'frames {shown(reference)} and {shown(body)} are not '
+                    f'connected: {shown(reference)} is in the tree of {shown(root)}, '
+                    f'{shown(body)} in the tree of {shown(frame)}')
             frame = edge.parent
         up = list(ancestors)[:ancestors[frame]]
         return up, down
@@ -506,8 +559,10 @@ class TransformTree:
                 times = as_float_array(stamp, (), 'stamp')
                 if not np.isfinite(times).all():
                     raise RotationError(f'the lookup stamp must be finite, got {stamp!r}')
+                if times.size == 0:
+                    raise RotationError(f'the lookup stamps are empty (shape {times.shape})')
                 t = times.copy() if times.ndim else float(times)
-            query = f'lookup of {body!r} in {reference!r}'
+            query = f'lookup of {shown(body)} in {shown(reference)}'
             if times.ndim == 0:
                 R_up, b_up = self._compose_one(up, t, query)
                 R_down, b_down = self._compose_one(down, t, query)
