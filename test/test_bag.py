@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import bag, main as cli  # noqa: E402
+from rot_tools.cli import bag_output, main as cli  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
@@ -168,7 +168,7 @@ def test_summary_in_degrees_and_yaml(capsys):
 
 def test_csv_rows_of_the_real_bag(capsys, reference):
     rows = rows_of(capsys, 'bag', bh.REAL, '--seq', 'ZYX')
-    assert list(rows[0]) == bag.csv_header('ZYX') == [
+    assert list(rows[0]) == bag_output.csv_header('ZYX') == [
         'topic', 'stamp', 'frame_id', 'x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'roll', 'pitch',
         'yaw', 'ZYX_1', 'ZYX_2', 'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz']
     for topic in (IMU, ODOM):
@@ -354,7 +354,7 @@ def test_csv_beyond_twelve_digits_uses_python_formatting(capsys):
     fast = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU)
     slow = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '15')
     assert len(fast) == len(slow) == 3061
-    names = [n for n in bag.csv_header(None) if n not in ('topic', 'stamp', 'frame_id')]
+    names = [n for n in bag_output.csv_header(None) if n not in ('topic', 'stamp', 'frame_id')]
     assert [r['stamp'] for r in fast] == [r['stamp'] for r in slow]
     np.testing.assert_allclose(col(slow[1:], *names), col(fast[1:], *names), rtol=1e-11,
                                atol=1e-12)

@@ -9,7 +9,7 @@ from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
 
-from rot_tools.cli.bag import _number_text
+from rot_tools.cli.bag_output import _number_text
 from rot_tools.io import csv_text
 
 

@@ -65,4 +65,4 @@ def test_make_run_installs_what_the_readme_bag_example_needs():
     pins = (REPO / 'requirements-test.txt').read_text().splitlines()
     assert {'matplotlib', 'rosbags'} <= {p.split('==')[0] for p in pins if '==' in p}
     readme = (REPO / 'README.md').read_text()
-    assert "`make run` installs them" in readme.split('## Recorded bags')[1].split('```')[0]
+    assert '`make run` installs them' in readme.split('## Recorded bags')[1].split('```')[0]

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import bag as bag_cli  # noqa: E402
+from rot_tools.cli import bag as bag_cli, bag_output  # noqa: E402
 from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.io import csv_text  # noqa: E402
 
@@ -91,7 +91,7 @@ def test_an_output_that_is_the_bag_is_refused(capsys, tmp_path, small_bag):
 def test_a_failed_csv_write_leaves_the_old_file(capsys, tmp_path, monkeypatch):
     out = tmp_path / 'imu.csv'
     out.write_text('the old table\n')
-    monkeypatch.setattr(bag_cli, 'ROWS_PER_CHUNK', 100)
+    monkeypatch.setattr(bag_output, 'ROWS_PER_CHUNK', 100)
     real_rows = csv_text.rows
     calls = []
 
@@ -216,8 +216,8 @@ def test_text_cells_a_spreadsheet_would_run_are_escaped(capsys, tmp_path):
         assert [r['frame_id'] for r in rows] == ["'" + f for f in frames[:6]] + ['map', "'q"]
         numbers = [r[c] for r in rows for c in ('x', 'y', 'z')]
         assert all(n.startswith('-') and float(n) < 0 for n in numbers)  # never numbers
-    assert bag_cli.csv_text_cell('=1+2') == "'=1+2"
-    assert bag_cli.csv_text_cell('=A,1') == '"\'=A,1"'
+    assert bag_output.csv_text_cell('=1+2') == "'=1+2"
+    assert bag_output.csv_text_cell('=A,1') == '"\'=A,1"'
 
 
 # ---------------------------------------------------------------------------------------
@@ -250,11 +250,11 @@ def axes_of(svg, gid):
 
 def test_the_plot_is_bounded_and_says_what_it_draws(capsys, tmp_path):
     pytest.importorskip('matplotlib')
-    topics = [f'/t{k:02d}' for k in range(bag_cli.MAX_PLOTTED_TOPICS + 3)]
+    topics = [f'/t{k:02d}' for k in range(bag_output.MAX_PLOTTED_TOPICS + 3)]
     path = spinning_bag(tmp_path / 'bag', topics)
     svg = tmp_path / 'rpy.svg'
     status, _, err = run(capsys, 'bag', path, '--plot', svg, '--deg')
-    drawn, left = topics[:bag_cli.MAX_PLOTTED_TOPICS], topics[bag_cli.MAX_PLOTTED_TOPICS:]
+    drawn, left = topics[:bag_output.MAX_PLOTTED_TOPICS], topics[bag_output.MAX_PLOTTED_TOPICS:]
     assert status == 0 and err == (
         f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {", ".join(drawn)}; left out, 3 '
         f'(at most {len(drawn)} topics are drawn; choose them with --topic): '
