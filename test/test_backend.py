@@ -326,13 +326,51 @@ def _same_as_batch(name, x, seq):
 def test_fast_paths_from_a_matrix_give_the_batch_formula(rotation, seq):
     for name in ('matrix_to_axis_angle', 'matrix_to_rotvec', 'matrix_to_quaternion'):
         _same_as_batch(name, rotation, seq)
-    for name in ('matrix_to_euler', 'matrix_to_euler unchecked'):
-        (angles, lock) = FAST[name](rotation, seq)
-        (angles_b, lock_b) = FAST[name](rotation[None], seq)
-        assert lock == lock_b[0]
-        assert np.abs(angles - angles_b[0]).max() < (1e-12 if lock else 1e-6)
-        if not lock:  # (θ1, θ3 alone are ill-conditioned a hair from lock; R is not)
-            assert np.abs(rt.euler_to_matrix(angles, seq) - rotation).max() < 1e-14
+
+
+def _wrapped_difference(a, b):
+    """max |a − b| of angles, ±π and a hair inside counted as the same angle."""
+    d = np.abs(np.asarray(a) - np.asarray(b))
+    return float(np.minimum(d, 2 * math.pi - d).max())
+
+
+@st.composite
+def _euler_rotation(draw):
+    """(R, seq): any of the 24 sequences, its middle angle at, or 1e-9..1e-5 from, a lock."""
+    seq = draw(st.sampled_from(rt.EULER_SEQUENCES))
+    lock = h.singular_values(seq)[draw(st.integers(0, 1))]
+    near = draw(st.one_of(st.just(0.0), st.sampled_from([1e-9, 1e-7, 1e-6, 1e-5]),
+                          st.floats(1e-9, 1e-5)))
+    middle = lock - near if lock > 0 else lock + near  # (inside the range: θ2 is returned)
+    if draw(st.integers(0, 3)) == 0:  # also rotations far from any lock
+        middle = draw(st.floats(*h.middle_range(seq)))
+    return rt.euler_to_matrix([draw(_angle), middle, draw(_angle)], seq), seq
+
+
+_lock_tol = st.one_of(st.just(None), st.sampled_from([0.0, 1e-9, 1e-7, 1e-6, 1e-5, 1e-3]),
+                      st.floats(0.0, 0.78))
+
+
+@settings(max_examples=600, deadline=None)
+@given(rotation=_euler_rotation(), lock_tol=_lock_tol, check=st.booleans())
+@example(rotation=(rt.euler_to_matrix([0.4, h.PI / 2, -1.1], 'zyx'), 'zyx'), lock_tol=None,
+         check=True)
+@example(rotation=(rt.euler_to_matrix([2.0, 0.0, -1.1], 'XZX'), 'XZX'), lock_tol=0.0,
+         check=False)
+def test_fast_path_of_matrix_to_euler_gives_the_batch_formula(rotation, lock_tol, check):
+    # One plain rotation takes angles_kernel on FLOATS after so3.plain_rotation's check, a
+    # batch of one takes it on ARRAYS after apply's: the same lock flag, and the same angles
+    # to libm's and NumPy's last bit, in every sequence, at and near gimbal lock.
+    R, seq = rotation
+    options = {'check': check} if lock_tol is None else {'check': check, 'lock_tol': lock_tol}
+    angles, lock = rt.matrix_to_euler(R, seq, **options)
+    angles_b, lock_b = rt.matrix_to_euler(R[None], seq, **options)
+    assert type(angles) is np.ndarray and angles.shape == (3,) and type(lock) is np.bool_
+    assert lock == lock_b[0]
+    assert _wrapped_difference(angles, angles_b[0]) <= 1e-15, (angles, angles_b[0])
+    assert -math.pi < angles[0] <= math.pi and -math.pi < angles[2] <= math.pi
+    if lock:
+        assert angles[2] == 0.0
 
 
 @settings(max_examples=150, deadline=None)

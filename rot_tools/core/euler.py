@@ -30,9 +30,9 @@ import math
 
 import numpy as np
 from rot_tools.core._arrays import require_tolerance
-from rot_tools.core.engine import apply, FLAG, MATRIX, plain_item, VECTOR
+from rot_tools.core.engine import apply, FLAG, FLOATS, MATRIX, plain_item, VECTOR
 from rot_tools.core.errors import RotationError
-from rot_tools.core.so3 import apply_to_rotations, plain_rotation, run_on_floats
+from rot_tools.core.so3 import apply_to_rotations, plain_rotation
 
 _AXES = 'XYZ'
 EULER_SEQUENCES = tuple(
@@ -123,45 +123,48 @@ def euler_to_matrix(angles, seq='ZYX'):
     return matrix
 
 
-def _wrap(ops, angle):
-    """Map −π to +π (and −0 to +0) so that outer angles lie in (−π, π]."""
-    return ops.where(angle == -math.pi, math.pi, angle) + 0.0
+_HALF_PI, _TWO_PI = math.pi / 2, 2 * math.pi
+
+
+def _wrap(angle):
+    """Map −π to +π (and −0 to +0) so that outer angles lie in (−π, π]: −π + 2π is exact."""
+    return angle + (angle == -math.pi) * _TWO_PI
 
 
 def angles_kernel(ops, m, spec, lock_tol):
     """Euler angles of m; see matrix_to_euler for the method."""
     i, j, k, sig, proper, extrinsic = spec
+    mi, mj, mk = m[i], m[j], m[k]
     if proper:  # R[i,i] = cos θ2, (R[j,i], −σR[k,i]) = sin θ2·(sin θ1, cos θ1)
-        y1, x1 = m[j][i], -sig * m[k][i]
+        y1, x1 = mj[i], -sig * mk[i]
         rho = ops.sqrt(y1 * y1 + x1 * x1)
-        t2 = ops.atan2(rho, m[i][i])
-        lock = ops.minimum(t2, math.pi - t2) <= lock_tol
+        t2 = ops.atan2(rho, mi[i])
+        lock = (t2 <= lock_tol) | (math.pi - t2 <= lock_tol)
         sign3, other = -sig, k
     else:  # R[i,k] = σ sin θ2, (−σR[j,k], R[k,k]) = cos θ2·(sin θ1, cos θ1)
-        y1, x1 = -sig * m[j][k], m[k][k]
+        y1, x1 = -sig * mj[k], mk[k]
         rho = ops.sqrt(y1 * y1 + x1 * x1)
-        t2 = ops.atan2(sig * m[i][k], rho)
-        lock = math.pi / 2 - ops.abs(t2) <= lock_tol
+        t2 = ops.atan2(sig * mi[k], rho)
+        lock = _HALF_PI - ops.abs(t2) <= lock_tol
         sign3, other = sig, i
     t1 = ops.atan2(y1, x1)
     safe = ops.where(rho > 0, rho, 1.0)
-    c1, s1 = x1 / safe, y1 / safe
+    c1, s1 = x1 / safe, sig * y1 / safe
     # Peel: row j of Rot_i(θ1)ᵀ·R = c1·R[j] + σ s1·R[k] is row j of Rot_m(θ3), m the last
     # axis, whose entries are cos θ3 at column j and sign3·sin θ3 at column `other`.
-    t3 = ops.atan2(sign3 * (c1 * m[j][other] + sig * s1 * m[k][other]),
-                   c1 * m[j][j] + sig * s1 * m[k][j])
+    t3 = ops.atan2(sign3 * (c1 * mj[other] + s1 * mk[other]), c1 * mj[j] + s1 * mk[j])
     if extrinsic:
         # Solved as the reversed intrinsic sequence: its first angle is the extrinsic θ3,
         # the one to zero at lock; its last then comes from the peel with θ1 = 0.
         t1, t3 = t3, t1
     if ops.rare(lock):  # (an item, or a batch chunk, without lock skips the extra atan2)
         if extrinsic:
-            free = ops.atan2(sign3 * m[j][other], m[j][j])
+            free = ops.atan2(sign3 * mj[other], mj[j])
         else:
             # At lock R·e_j = Rot_i(θ1)·e_j = cos θ1·e_j + σ sin θ1·e_k carries the free angle.
-            free = ops.atan2(sig * m[k][j], m[j][j])
+            free = ops.atan2(sig * mk[j], mj[j])
         t1, t3 = ops.where(lock, free, t1), ops.where(lock, 0.0, t3)
-    return [_wrap(ops, t1), t2 + 0.0, _wrap(ops, t3)], lock
+    return [_wrap(t1), t2 + 0.0, _wrap(t3)], lock
 
 
 def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
@@ -182,7 +185,7 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     if lock_tol is not GIMBAL_LOCK_TOL:  # (the default needs no check)
         lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
     m = plain_rotation(R, check)
-    out = m and run_on_floats(angles_kernel, m, spec, lock_tol)
-    if out:  # fast path: one plain rotation, the kernel on floats without apply around it
-        return np.array(out[0]), np.bool_(out[1])
+    if m is not None:  # fast path: one plain rotation, the kernel on floats without apply
+        angles, lock = angles_kernel(FLOATS, m, spec, lock_tol)  # (finite m: nothing raises)
+        return np.array(angles), np.bool_(lock)
     return apply_to_rotations(angles_kernel, R, check, [VECTOR, FLAG], params=(spec, lock_tol))

@@ -204,11 +204,11 @@ def plain_rotation(R, check):
         return None
     m = R.tolist()
     (a, b, c), (d, e, f), (g, h, i) = m
-    tol = ROTATION_TOL
-    if (abs(a * a + d * d + g * g - 1.0) <= tol and abs(b * b + e * e + h * h - 1.0) <= tol
-            and abs(c * c + f * f + i * i - 1.0) <= tol and abs(a * b + d * e + g * h) <= tol
-            and abs(a * c + d * f + g * i) <= tol and abs(b * c + e * f + h * i) <= tol
-            and abs(a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) - 1.0)
+    low, tol = -ROTATION_TOL, ROTATION_TOL  # (low ≤ x ≤ tol: |x| ≤ tol, NaN fails it)
+    if (low <= a * a + d * d + g * g - 1.0 <= tol and low <= b * b + e * e + h * h - 1.0 <= tol
+            and low <= c * c + f * f + i * i - 1.0 <= tol and low <= a * b + d * e + g * h <= tol
+            and low <= a * c + d * f + g * i <= tol and low <= b * c + e * f + h * i <= tol
+            and low <= a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) - 1.0
             <= tol):
         return m
     return None
