@@ -18,7 +18,7 @@ executor and (where a signal or the process matters) on the real console script:
   bursts of inputs (the EventsExecutor served them after the whole queue);
 - a flood of bad input is refused and counted, and the node keeps serving;
 - a callback that raises is logged and costs nothing else (the inputs sent with it are all
-  answered), and the QoS events the node watches are served;
+  answered); the node's topics add no QoS event handlers to the wait set;
 - the graph (what ``ros2 node info`` prints) lists the node's services as its own.
 
 The in-process node tests (test_node.py) run on the same executor: conftest's Tester spins
@@ -33,6 +33,7 @@ import subprocess
 import sys
 import threading
 import time
+from xml.etree import ElementTree
 
 from conftest import RUN, TIMEOUT
 from geometry_msgs.msg import PoseStamped, TwistStamped
@@ -43,9 +44,9 @@ from rcl_interfaces.srv import GetParameters, SetParameters
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
-from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile
+from rclpy.qos import qos_profile_sensor_data, QoSProfile
 from rot_tools.ros import runtime
-from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.rotation_node import INPUTS, OUTPUTS, RotationNode
 from rot_tools.ros.runtime import guard_callbacks, make_executor, spin
 from std_srvs.srv import Trigger
 import yaml
@@ -551,17 +552,71 @@ def test_a_raising_service_callback_still_replies(tester, own_context, namespace
     assert not thread.is_alive()
 
 
-def test_a_qos_event_is_served_and_the_node_keeps_going(tester, node_process):
-    """Check that an incompatible subscriber raises a QoS event on the node's publisher."""
-    process = node_process()
-    name = process.name
-    wait_until_serving(tester, process)
-    qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    tester.node.create_subscription(TwistStamped, f'{name}/screw', lambda m: None, qos)
-    stderr = process.wait_for_stderr('incompatible QoS')
-    assert "topic '~/screw', requesting incompatible QoS" in stderr
-    wait_until_serving(tester, process)
-    assert_clean_exit(*process.stop(signal.SIGTERM))
+def test_the_node_adds_no_qos_event_handlers_to_the_wait_set(own_context, namespace):
+    """
+    Check that the node's topics carry no QoS event handlers: its waitables are any node's.
+
+    rclpy gives every publisher and subscription two by default (incompatible QoS, incompatible
+    type), each one more entity the executor waits on with every message; the node turns them
+    off for its own topics (the other side of a mismatch warns: doc/node.md).
+    """
+    node = RotationNode(context=own_context, namespace=namespace)
+    bare = rclpy.create_node('bare', namespace=namespace, context=own_context)
+    try:
+        assert len(list(node.subscriptions)) == len(INPUTS)
+        assert len(list(node.publishers)) == len(list(bare.publishers)) + len(OUTPUTS)
+        assert len(list(node.waitables)) == len(list(bare.waitables))
+    finally:
+        node.destroy_node()
+        bare.destroy_node()
+
+
+@pytest.mark.parametrize('setting', [
+    {'FASTRTPS_DEFAULT_PROFILES_FILE': '/etc/robot/fastdds.xml'},
+    {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/robot/fastdds.xml'},
+    {'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'},
+    {'SKIP_DEFAULT_XML': '1'},
+    {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'},
+    {'RMW_IMPLEMENTATION': 'rmw_zenoh_cpp'},
+])
+def test_the_users_own_middleware_settings_are_kept(setting, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    environ = dict(setting)
+    assert runtime.use_fast_dds_profile(environ) is None
+    assert environ == setting
+
+
+def test_a_profile_file_in_the_working_directory_is_kept(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / 'DEFAULT_FASTRTPS_PROFILES.xml').write_text('<profiles/>')
+    environ = {}
+    assert runtime.use_fast_dds_profile(environ) is None
+    assert environ == {}
+
+
+@pytest.mark.parametrize('rmw', [None, '', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp'])
+def test_fast_dds_gets_the_nodes_profile_when_the_user_set_none(rmw, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    environ = {} if rmw is None else {'RMW_IMPLEMENTATION': rmw}
+    assert runtime.use_fast_dds_profile(environ) == runtime.FAST_DDS_PROFILE
+    assert environ['FASTRTPS_DEFAULT_PROFILES_FILE'] == runtime.FAST_DDS_PROFILE
+
+
+def test_the_profile_keeps_the_builtin_transports_with_a_deeper_port():
+    """The profile is Fast DDS's default transports, shared memory and UDPv4, a port deeper."""
+    ns = {'p': 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'}
+    root = ElementTree.parse(runtime.FAST_DDS_PROFILE).getroot()
+    kinds = {d.findtext('p:transport_id', namespaces=ns): d
+             for d in root.iterfind('p:transport_descriptors/p:transport_descriptor', ns)}
+    assert sorted(d.findtext('p:type', namespaces=ns) for d in kinds.values()) == [
+        'SHM', 'UDPv4']
+    (participant,) = root.iterfind('p:participant', ns)
+    assert participant.get('is_default_profile') == 'true'
+    used = [t.text for t in participant.iterfind('p:rtps/p:userTransports/p:transport_id', ns)]
+    assert sorted(used) == sorted(kinds)
+    assert participant.findtext('p:rtps/p:useBuiltinTransports', namespaces=ns) == 'false'
+    (shm,) = [d for d in kinds.values() if d.findtext('p:type', namespaces=ns) == 'SHM']
+    assert int(shm.findtext('p:port_queue_capacity', namespaces=ns)) > 512  # Fast DDS's
 
 
 def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkeypatch):

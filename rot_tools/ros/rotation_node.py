@@ -36,6 +36,7 @@ from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -192,6 +193,13 @@ PARAMETERS = {
 }
 """Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
+NO_PUBLISHER_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
+NO_SUBSCRIPTION_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
+"""No QoS event handlers on the node's topics (rclpy adds two per publisher and subscription by
+default, each one more entity for the executor to wait on with every message): the warnings
+they would print are printed by the other side
+(doc/node.md, "Executor, services and the middleware")."""
+
 RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
 """The parameters rclpy declares on every node (an override of one is no misspelling)."""
 
@@ -227,8 +235,9 @@ class RotationNode(Node):
         # For each output published per input: its publish, encode, Values getter and whether
         # it is angles (the hot path); the pictures' publishers by name.
         qos = QoSProfile(depth=10)
-        publishers = {kind.row.name: self.create_publisher(kind.msg_type, kind.topic, qos)
-                      for kind in OUTPUTS}
+        publishers = {kind.row.name: self.create_publisher(
+            kind.msg_type, kind.topic, qos, event_callbacks=NO_PUBLISHER_EVENTS)
+            for kind in OUTPUTS}
         self._outputs = tuple(
             (publishers[kind.row.name].publish, kind.encode, kind.row.value, kind.row.angles)
             for kind in OUTPUTS if kind.row.value is not None)
@@ -248,7 +257,8 @@ class RotationNode(Node):
                             kind.row.convert, kind.row.fields)
             # raw: the callback gets the message's bytes (rot_tools.io.cdr reads what it needs)
             self.create_subscription(kind.msg_type, kind.topic, partial(self._on_input, source),
-                                     qos_profile_sensor_data, raw=True)
+                                     qos_profile_sensor_data, raw=True,
+                                     event_callbacks=NO_SUBSCRIPTION_EVENTS)
             self._sources.append(source)
 
         self.create_service(Trigger, '~/describe', self._on_describe)
@@ -576,6 +586,7 @@ def main(args=None):
     if options:
         runtime.fail(PROG, f'unknown argument {options[0]!r} (ROS arguments go after '
                      f'--ros-args; see {PROG} --help)')
+    runtime.use_fast_dds_profile()
     runtime.init_ros(PROG, argv)
     try:
         runtime.serve(RotationNode)

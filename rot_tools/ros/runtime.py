@@ -123,8 +123,8 @@ def fail(program, text, status=EXIT_USAGE):
 
 
 # rcl's messages end in the C source locations of the failure (", at /src/x.c:271").
-_C_LOCATION = re.compile(r',? at [^,]*\.[ch](pp)?:\d+')
-_RCL_PARSE = re.compile(r"Couldn't parse (?P<what>.+?): '(?P<arg>.*)'\. Error: (?P<why>.*)", re.S)
+_C_LOCATION = r',? at [^,]*\.[ch](pp)?:\d+'
+_RCL_PARSE = r"Couldn't parse (?P<what>.+?): '(?P<arg>.*)'\. Error: (?P<why>.*)"
 _FORMS = {'-p': ' (the form is -p NAME:=VALUE)', '-r': ' (the form is -r FROM:=TO)'}
 
 
@@ -146,8 +146,8 @@ def ros_argument_error(exc):
         unknown = re.findall(r"'([^']*)'", str(exc)) or [str(exc)]
         return 'unknown ROS argument ' + ', '.join(unknown) + ' (after --ros-args)'
     if rcl_error == 'RCLError':
-        text = _C_LOCATION.sub('', str(exc).replace('failed to initialize rcl: ', ''))
-        parse = _RCL_PARSE.match(text.strip())
+        text = re.sub(_C_LOCATION, '', str(exc).replace('failed to initialize rcl: ', ''))
+        parse = re.match(_RCL_PARSE, text.strip(), re.S)
         if parse is None:
             return ' '.join(text.split())
         arg, why = parse['arg'], ' '.join(parse['why'].split())
@@ -233,6 +233,37 @@ def program_version(program):
         return f'{program} {version("rot_tools")}'
     except PackageNotFoundError:
         return f'{program} (rot_tools not installed: no distribution metadata)'
+
+
+# ---------------------------------------------------------------------------------------
+# The middleware's profile
+
+FAST_DDS_PROFILE = os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                                'fastdds_profile.xml')
+"""rotation_node's Fast DDS profile: the builtin transports, a deeper shared-memory port."""
+
+_USER_FAST_DDS_SETTINGS = ('FASTRTPS_DEFAULT_PROFILES_FILE', 'FASTDDS_DEFAULT_PROFILES_FILE',
+                           'FASTDDS_BUILTIN_TRANSPORTS', 'SKIP_DEFAULT_XML')
+_USER_FAST_DDS_FILES = ('DEFAULT_FASTRTPS_PROFILES.xml', 'DEFAULT_FASTDDS_PROFILES.xml')
+
+
+def use_fast_dds_profile(environ=os.environ):
+    """
+    Point Fast DDS at FAST_DDS_PROFILE, unless the user configures the middleware; return it.
+
+    Only for Fast DDS (RMW_IMPLEMENTATION unset, ROS 2's default, or rmw_fastrtps_*), and
+    only when none of Fast DDS's own ways of being configured is in use: its profile
+    variables, FASTDDS_BUILTIN_TRANSPORTS, SKIP_DEFAULT_XML, a DEFAULT_FASTRTPS_PROFILES.xml
+    in the working directory. Returns the profile set, or None. Call before rclpy.init
+    (Fast DDS reads its profiles once, as the first participant is made).
+    """
+    rmw = environ.get('RMW_IMPLEMENTATION', '') or 'rmw_fastrtps_cpp'
+    if (not rmw.startswith('rmw_fastrtps_') or not os.path.isfile(FAST_DDS_PROFILE)
+            or any(name in environ for name in _USER_FAST_DDS_SETTINGS)
+            or any(os.path.exists(name) for name in _USER_FAST_DDS_FILES)):
+        return None
+    environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = FAST_DDS_PROFILE
+    return FAST_DDS_PROFILE
 
 
 # ---------------------------------------------------------------------------------------
