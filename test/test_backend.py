@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 import rot_tools as rt
 from rot_tools.core import decomposition, engine, so3
+from rot_tools.core.euler import GIMBAL_LOCK_TOL
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -366,7 +367,11 @@ def test_fast_path_of_matrix_to_euler_gives_the_batch_formula(rotation, lock_tol
     angles, lock = rt.matrix_to_euler(R, seq, **options)
     angles_b, lock_b = rt.matrix_to_euler(R[None], seq, **options)
     assert type(angles) is np.ndarray and angles.shape == (3,) and type(lock) is np.bool_
-    assert lock == lock_b[0]
+    if lock != lock_b[0]:  # θ2 a last bit from the lock's edge: libm's and NumPy's atan2 differ
+        edge = (math.pi / 2 - abs(angles[1]) if seq.upper() in h.TAIT_BRYAN else
+                min(angles[1], math.pi - angles[1]))
+        assert abs(edge - (GIMBAL_LOCK_TOL if lock_tol is None else lock_tol)) <= 1e-15
+        return
     assert _wrapped_difference(angles, angles_b[0]) <= 1e-15, (angles, angles_b[0])
     assert -math.pi < angles[0] <= math.pi and -math.pi < angles[2] <= math.pi
     if lock:

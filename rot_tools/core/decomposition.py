@@ -109,7 +109,8 @@ def _values_without_screw(ops, m, b, spec):
     (q,) = quaternion_of_matrix_kernel(ops, m)
     euler, _ = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
     rpy, _ = angles_kernel(ops, m, _RPY, GIMBAL_LOCK_TOL)
-    return ([a * angle for a in axis], euler, twist, q, rpy), axis, angle, fits
+    rotvec = [axis[0] * angle, axis[1] * angle, axis[2] * angle]
+    return (rotvec, euler, twist, q, rpy), axis, angle, fits
 
 
 _FLOATS3 = ((3,), float)
@@ -133,13 +134,14 @@ def decompose_values(R, b, seq='ZYX'):
     """
     spec = parse_sequence(seq)
     m, v = plain_item(R, (3, 3)), plain_item(b, (3,))
-    if m is not None and v is not None and max(map(abs, v)) <= ORDINARY_B:
+    if m is not None and v is not None and -ORDINARY_B <= min(v) and max(v) <= ORDINARY_B:
         # fast path, one plain item whose screw cannot overflow: the same kernels on FLOATS
         # without apply around them, and without the screw computed for its flag alone
         out = run_on_floats(_values_without_screw, m, v, spec)
         if out and out[3]:
-            matrix = [x for row in m for x in row]
-            return Values(matrix, *(tuple(x) for x in out[0]))
+            rotvec, euler, twist, q, rpy = out[0]
+            return Values(m[0] + m[1] + m[2], tuple(rotvec), tuple(euler), tuple(twist),
+                          tuple(q), tuple(rpy))
     rotvec, euler, twist, q, rpy, angle, fits = apply(
         _values_kernel, [(R, (3, 3), 'R', False), (b, (3,), 'translation b', True)], _VALUES,
         (spec,))

@@ -325,11 +325,8 @@ def quaternion_of_matrix_kernel(ops, m):
     use_x = (dx >= dy) & (dx >= dz) & (dx >= dw)
     use_y = (dy > dx) & (dy >= dz) & (dy >= dw)
     use_z = (dz > dx) & (dz > dy) & (dz >= dw)
-    row = [ops.where(use_x, dx, ops.where(use_y, xy, ops.where(use_z, xz, xw))),
-           ops.where(use_x, xy, ops.where(use_y, dy, ops.where(use_z, yz, yw))),
-           ops.where(use_x, xz, ops.where(use_y, yz, ops.where(use_z, dz, zw))),
-           ops.where(use_x, xw, ops.where(use_y, yw, ops.where(use_z, zw, dw)))]
-    x, y, z, w = row
+    x, y, z, w = ops.where(use_x, [dx, xy, xz, xw], ops.where(
+        use_y, [xy, dy, yz, yw], ops.where(use_z, [xz, yz, dz, zw], [xw, yw, zw, dw])))
     n = ops.sqrt(x * x + y * y + z * z + w * w)  # = 4·|q_i| ≥ 2 for a rotation
     # Canonical sign: w > 0; at w = 0 the first non-zero of x, y, z positive.
     lead = ops.where(w != 0, w, ops.where(x != 0, x, ops.where(y != 0, y, z)))
