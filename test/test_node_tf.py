@@ -395,11 +395,6 @@ def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
     assert result.returncode == 0, result.stderr
     assert_doc_output('tf-client-once', '$ rotation_client tf odom gimbal --once --deg\n'
                       + result.stdout)
-    lines = result.stdout.splitlines(keepends=True)
-    rpy = next(i for i, line in enumerate(lines) if line.startswith('rpy:'))
-    end = next(i for i in range(rpy, len(lines)) if 'unit:' in lines[i])
-    command = "rotation_client tf odom gimbal --once --deg | sed -n '1,3p;/^rpy:/,/unit:/p'"
-    assert_doc_output('readme-tf', f'$ {command}\n' + ''.join(lines[:3] + lines[rpy:end + 1]))
     assert os.environ['ROS_DOMAIN_ID']  # the run's own domain (conftest)
 
 
@@ -450,12 +445,6 @@ def test_follower_refusals_and_stamps(ros_context):
         follower.add(transform('a', 'b', 2.0, nanosec=123_456_790), False, '/tf')
         follower.update()
         assert len(got) == 2 and got[1][0].stamp.nanosec == 123_456_790
-        # Every stamp within days of the first keeps its nanoseconds through the tree's floats.
-        from builtin_interfaces.msg import Time
-        for sec in (1_700_000_000, 1_700_000_000 - 3600, 1_700_000_000 + 864_000):
-            for nanosec in [*range(0, 1_000_000_000, 7_777_777), 999_999_999]:
-                back = follower.time_msg(follower.seconds(Time(sec=sec, nanosec=nanosec)))
-                assert (back.sec, back.nanosec) == (sec, nanosec)
         refused.clear()
         follower.follow('a', 'nowhere')
         assert [r[1] for r in refused] == ['tf_unknown_frame']
@@ -463,6 +452,111 @@ def test_follower_refusals_and_stamps(ros_context):
     finally:
         follower.follow('', '')
         node.destroy_node()
+
+
+def make_transform(parent, child, x=0.0, q=(0.0, 0.0, 0.0, 1.0), sec=1_700_000_000,
+                   nanosec=123_456_789):
+    from geometry_msgs.msg import TransformStamped
+    msg = TransformStamped()
+    msg.header.frame_id, msg.child_frame_id = parent, child
+    msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+    msg.transform.translation.x = x
+    r = msg.transform.rotation
+    r.x, r.y, r.z, r.w = q
+    return msg
+
+
+@pytest.fixture
+def follower(ros_context):
+    """A TfFollower of an in-process node: (follower, outputs, refusals)."""
+    import rclpy
+    from rot_tools.ros.tf_input import TfFollower
+    node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
+    got, refused = [], []
+    follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a))
+    yield follower, got, refused
+    follower.follow('', '')
+    node.destroy_node()
+
+
+def test_follower_output_stamps_are_the_inputs_to_the_nanosecond(follower):
+    follower, got, refused = follower
+    follower.add(make_transform('a', 's', sec=0, nanosec=0), True, '/tf_static')
+    follower.follow('a', 'b')
+    refused.clear()  # b is unknown so far
+    stamps = [(100, 123_456_789), (102, 999_999_999), (103, 1), (1_700_000_000, 1),
+              (1_700_000_000, 2), (1_700_000_000, 3), (1_700_000_001, 999_999_999)]
+    for k, (sec, nanosec) in enumerate(stamps):
+        assert follower.add(make_transform('a', 'b', float(k), sec=sec, nanosec=nanosec),
+                            False, '/tf')
+        follower.update()
+        assert (got[-1][0].stamp.sec, got[-1][0].stamp.nanosec) == (sec, nanosec)
+    assert len(got) == len(stamps) and refused == []
+    # A static chain: its newest stamp, 0 here, exactly.
+    follower.follow('s', 'a')
+    assert (got[-1][0].stamp.sec, got[-1][0].stamp.nanosec) == (0, 0)
+
+
+def test_follower_refuses_future_stamps_and_starts_over_when_time_goes_back(follower):
+    follower, got, refused = follower
+    follower.follow('odom', 'base_link')
+    now = 1_800_000_000 * 1_000_000_000
+
+    def send(sec, nanosec=0):
+        follower.add(make_transform('odom', 'base_link', float(sec), sec=sec, nanosec=nanosec),
+                     False, '/tf', now)
+        follower.update()
+
+    for sec in range(1_000, 1_005):
+        send(sec)
+    send(2_000_000_000)  # the year 2033: refused, counted
+    assert [r[1] for r in refused] == ['tf_future_stamp']
+    assert "'odom' → 'base_link' stamped 200000000 s after the clock of the node" in refused[0][2]
+    send(1_800_000_000 + 59)  # within MAX_FUTURE_SECONDS of the clock: taken
+    for sec in range(1_005, 1_025):  # more than 10 s back: the edge starts over, counted once
+        send(sec, 7)
+    assert [r[1] for r in refused] == ['tf_future_stamp', 'tf_time_jump']
+    assert 'stamped 1.79999905e+09 s before its newest sample' in refused[1][2]
+    assert [(h.stamp.sec, h.stamp.nanosec) for h, _, _ in got[-21:]] == [
+        (1_800_000_059, 0)] + [(sec, 7) for sec in range(1_005, 1_025)]
+    assert follower.tree.time_range('odom', 'base_link') == (
+        follower.seconds(1_014 * 10**9 + 7), follower.seconds(1_024 * 10**9 + 7))
+    for sec in range(500, 503):  # a bag replayed from its start: the same
+        send(sec)
+    assert [r[1] for r in refused][2:] == ['tf_time_jump']
+    assert got[-1][0].stamp.sec == 502
+
+
+def test_follower_takes_at_most_max_transforms_a_message(follower):
+    from geometry_msgs.msg import TransformStamped
+    from rclpy.serialization import serialize_message
+    from rot_tools.ros import tf_input
+    follower, got, refused = follower
+    follower.follow('odom', 'base_link')
+    transforms = [make_transform('odom', 'base_link', float(k), sec=1_000 + k)
+                  for k in range(tf_input.MAX_TRANSFORMS_PER_MESSAGE + 500)]
+    data = serialize_message(tf2_msgs.TFMessage(transforms=transforms))
+    follower.on_message(data, False)
+    assert [r[1] for r in refused] == ['tf_too_many_transforms']
+    assert refused[0][2].startswith('a TFMessage of 1,500 transforms: the first 1,000 taken, '
+                                    '500 dropped')
+    assert len(got) == 1 and got[0][0].stamp.sec == 1_000 + 999
+    # Read from the bytes as rclpy reads them: names, stamps and values.
+    count, read = tf_input.read_tf_message(data, 3)
+    assert count == 1_500 and [tf_input.Transform.of(t) for t in transforms[:3]] == read
+    # Junk bytes and cut messages are malformed, names beyond MAX_FRAME_NAME are not read.
+    refused.clear()
+    small = serialize_message(tf2_msgs.TFMessage(transforms=transforms[:3]))
+    for junk in (b'\x00\x07\x00\x00' + small[4:], small[:-9], small[:60]):
+        follower.on_message(junk, False)
+    assert [r[1] for r in refused] == ['malformed'] * 3
+    refused.clear()
+    long = make_transform('odom', 'x' * 1_000_000)
+    follower.on_message(serialize_message(tf2_msgs.TFMessage(transforms=[long])), False)
+    assert [r[1] for r in refused] == ['tf_bad_frame']
+    assert "child_frame_id of 1,000,000 bytes, at most MAX_FRAME_NAME = 256" in refused[0][2]
+    assert len(refused[0][2]) < 200
+    assert isinstance(long, TransformStamped)
 
 
 def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):

@@ -14,24 +14,46 @@ time. When that time (or the chain itself) is new, it hands ``(header, R, b)`` o
 Refusals are handed on with a reason, for the node to count and warn about:
 ``tf_unknown_frame``, ``tf_not_connected``, ``tf_extrapolation`` (the lookup, after a message
 arrived while it cannot be answered), ``tf_loop`` (a transform that would make a frame its
-own ancestor), ``tf_bad_frame`` (an empty frame_id or child_frame_id), ``tf_too_many_frames``
-(a new frame beyond MAX_FRAMES), and the boundary's
-``non_finite``, ``zero_quaternion``, ``non_unit_quaternion``.
+own ancestor), ``tf_bad_frame`` (an empty frame_id or child_frame_id, or one longer than
+MAX_FRAME_NAME bytes), ``tf_too_many_frames`` (a new frame beyond MAX_FRAMES),
+``tf_future_stamp``, ``tf_time_jump`` and ``tf_too_many_transforms`` (below), the
+boundary's ``non_finite``, ``zero_quaternion``, ``non_unit_quaternion``, and ``malformed``
+(bytes that are not a TFMessage).
 
-Stamps. The tree holds float seconds. A header stamp (sec, nanosec) is kept as seconds since
-an epoch — the whole second of the first stamp heard (the wall clock's if that one is 0) —
-so that every stamp within days of it keeps its nanoseconds through the float and back
-(seconds since 1970 would lose up to a hundred).
+Time. A /tf sample stamped more than MAX_FUTURE_SECONDS after the node's clock is refused
+(``tf_future_stamp``: one stamp of the year 2033 would otherwise hold its edge's newest time
+and shut every good sample out of the cache window); the check is off while that clock reads
+0 (simulated time before the first /clock). A /tf sample more than CACHE_SECONDS older than
+its edge's newest means time went back — a bag replayed in a loop, a simulator restarted: the
+edge's samples are dropped and it starts again from this one, as tf2_ros clears its buffer
+when /clock jumps back, and the jump is counted (``tf_time_jump``). /tf_static stamps are
+not checked (tf2 ignores them; a static publisher often runs on another clock).
+
+Bounds. Messages arrive as bytes and are read here (read_tf_message): at most
+MAX_TRANSFORMS_PER_MESSAGE transforms of a TFMessage are taken, the rest dropped and the
+message counted once (``tf_too_many_transforms``), so one callback costs milliseconds and
+the services and signals are served between messages; a frame name is read only up to
+MAX_FRAME_NAME bytes. A dynamic edge not heard for CACHE_SECONDS is forgotten (its frames
+too, when no other edge names them): junk frames leave room for real ones again; static
+edges stay, as in tf2. Frame names in refusals are cut short (transform_tree.shown).
+
+Stamps. Header stamps are carried as integer nanoseconds: the tree holds float seconds
+since an epoch (the whole second of the first stamp that is not 0), and the follower keeps
+beside each edge the nanoseconds of its newest sample, so that the stamp handed on — always
+an edge's newest, at the latest common time — is an input's stamp exactly. (Interpolation
+uses the floats: exact to the nanosecond within weeks of the epoch.)
 """
 
+import struct
 import time
 from types import SimpleNamespace
+from typing import NamedTuple
 
 from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rot_tools.core.transform_tree import (
-    TransformLookupError, TransformTree, TransformTreeError)
-from rot_tools.io import boundary
+    MAX_FRAME_NAME, shown, SHOWN_NAME, TransformLookupError, TransformTree, TransformTreeError)
+from rot_tools.io import boundary, cdr
 from std_msgs.msg import Header
 
 TF_TOPIC = '/tf'
@@ -52,9 +74,15 @@ TF_EXTRAPOLATION = 'tf_extrapolation'
 TF_LOOP = 'tf_loop'
 TF_BAD_FRAME = 'tf_bad_frame'
 TF_TOO_MANY_FRAMES = 'tf_too_many_frames'
+TF_FUTURE_STAMP = 'tf_future_stamp'
+TF_TIME_JUMP = 'tf_time_jump'
+TF_TOO_MANY_TRANSFORMS = 'tf_too_many_transforms'
 REFUSAL_REASONS = (TF_UNKNOWN_FRAME, TF_NOT_CONNECTED, TF_EXTRAPOLATION, TF_LOOP, TF_BAD_FRAME,
-                   TF_TOO_MANY_FRAMES)
+                   TF_TOO_MANY_FRAMES, TF_FUTURE_STAMP, TF_TIME_JUMP, TF_TOO_MANY_TRANSFORMS)
 """The reasons of this input, besides the boundary's (rot_tools.io.boundary.REFUSAL_REASONS)."""
+
+MALFORMED = 'malformed'
+"""The node's reason for bytes that are not the message type of the topic."""
 
 _REASON = {'unknown_frame': TF_UNKNOWN_FRAME, 'not_connected': TF_NOT_CONNECTED,
            'extrapolation': TF_EXTRAPOLATION, 'loop': TF_LOOP, 'bad_frame': TF_BAD_FRAME,
@@ -87,10 +115,91 @@ DEFAULT_QUATERNION_TOLERANCE = 1e-3
 """|‖q‖ − 1| accepted when no node parameter says otherwise (rotation_client tf)."""
 
 CACHE_SECONDS = 10.0
-MAX_SAMPLES = 10_000
+MAX_SAMPLES = 2_000
 MAX_FRAMES = 1_000
-"""The follower's tree: 10 s of each edge (tf2's default), at most 10,000 samples an edge
-(1 kHz) and 1,000 frames, so that a flood on /tf holds a few MB at most."""
+"""The follower's tree: 10 s of each edge (tf2's default), at most 2,000 samples an edge (the
+newest: 200 Hz for the whole 10 s; the latest common time needs only the newest few) and
+1,000 frames: 210 kB an edge at most (104 bytes a sample)."""
+
+MAX_TRANSFORMS_PER_MESSAGE = 1_000
+"""Transforms taken from one TFMessage at most (tf2's largest, robot_state_publisher's,
+carry a few dozen); the rest are dropped, the message counted once."""
+
+MAX_FUTURE_SECONDS = 60.0
+"""How far after the node's clock a /tf stamp may be (clocks of two machines differ)."""
+
+SHOWN_FRAMES = 20
+"""Frames a message lists at most."""
+
+FORGET_PERIOD = 1.0
+"""Seconds between two looks for dynamic edges not heard for CACHE_SECONDS."""
+
+_NS = 1_000_000_000
+_ORDERS = {b'\x00\x01': '<', b'\x00\x00': '>'}
+"""Encapsulation identifier → struct byte order: CDR_LE, CDR_BE (XCDR version 1)."""
+
+
+class Transform(NamedTuple):
+    """One geometry_msgs/TransformStamped as read: names cut to MAX_FRAME_NAME + 1."""
+
+    sec: int
+    nanosec: int
+    frame_id: str
+    child_frame_id: str
+    values: tuple  # translation x, y, z, rotation x, y, z, w
+    oversize: str = ''  # 'child_frame_id of N bytes' when a name is longer than allowed
+
+    @classmethod
+    def of(cls, msg):
+        """Return the Transform of a geometry_msgs/TransformStamped message object."""
+        t, q = msg.transform.translation, msg.transform.rotation
+        long = [f'{what} of {len(name.encode()):,} bytes' for what, name in (
+            ('frame_id', msg.header.frame_id), ('child_frame_id', msg.child_frame_id))
+            if len(name) > MAX_FRAME_NAME]
+        return cls(msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id,
+                   msg.child_frame_id, (t.x, t.y, t.z, q.x, q.y, q.z, q.w), ', '.join(long))
+
+
+def read_tf_message(data, limit):
+    """
+    Return (count, [Transform]): a TFMessage's CDR bytes, its first ``limit`` transforms.
+
+    Each TransformStamped is a stamp (int32 sec, uint32 nanosec), two strings (uint32 length
+    with the NUL, 4-aligned) and seven float64 (8-aligned), alignment counted from the end
+    of the 4-byte encapsulation. A name is decoded only up to MAX_FRAME_NAME + 1 bytes, as
+    UTF-8 with an invalid byte replaced. Raises cdr.Malformed for another encapsulation,
+    a string without its NUL, or bytes that end early.
+    """
+    order = _ORDERS.get(bytes(data[:2]))
+    if order is None:
+        raise cdr.Malformed(f'encapsulation {bytes(data[:4]).hex(" ")} is not CDR '
+                            '(00 01 or 00 00, XCDR version 1)')
+    word, stamp, floats = (struct.Struct(order + f) for f in ('I', 'iI', '7d'))
+    try:
+        (count,) = word.unpack_from(data, 4)
+        pos, transforms = 4, []
+        for _ in range(min(count, limit)):
+            pos += -pos % 4
+            sec, nanosec = stamp.unpack_from(data, 4 + pos)
+            names, long, pos = [], [], pos + 8
+            for what in ('frame_id', 'child_frame_id'):
+                pos += -pos % 4
+                (size,) = word.unpack_from(data, 4 + pos)
+                start, pos = 4 + pos + 4, pos + 4 + size
+                if not size or 4 + pos > len(data) or data[4 + pos - 1]:
+                    raise cdr.Malformed(f'a {what} of {size} bytes does not end in a NUL '
+                                        f'within the {len(data)} bytes')
+                if size - 1 > MAX_FRAME_NAME:
+                    long.append(f'{what} of {size - 1:,} bytes')
+                name = data[start:start + min(size - 1, MAX_FRAME_NAME + 1)]
+                names.append(name.partition(b'\0')[0].decode('utf-8', 'replace'))
+            pos += -pos % 8
+            transforms.append(Transform(sec, nanosec, *names, floats.unpack_from(data, 4 + pos),
+                                        ', '.join(long)))
+            pos += 56
+    except struct.error:
+        raise cdr.Malformed(f'the message ends early: {len(data)} bytes') from None
+    return count, transforms
 
 
 class TfFollower:
@@ -115,7 +224,10 @@ class TfFollower:
         self._on_refused = on_refused
         self._subscriptions = ()
         self._published = None  # (chain, stamp) of the last lookup handed on
-        self._epoch = None  # set by the first stamp (seconds)
+        self._epoch = None  # ns: the whole second of the first stamp that is not 0
+        self._newest = {}  # child: (seconds, ns) of its edge's newest sample
+        self._heard = {}  # child of a dynamic edge: time.monotonic() of its latest sample
+        self._swept = time.monotonic()
 
     @property
     def following(self):
@@ -140,12 +252,14 @@ class TfFollower:
             if missing:
                 raise RuntimeError(missing)
             from tf2_msgs.msg import TFMessage
+            # raw: the callback gets the bytes, read_tf_message reads what it takes.
             self._subscriptions = (
                 self.node.create_subscription(
-                    TFMessage, TF_TOPIC, lambda msg: self._on_tf(msg, False), TF_QOS),
+                    TFMessage, TF_TOPIC, lambda data: self.on_message(data, False), TF_QOS,
+                    raw=True),
                 self.node.create_subscription(
-                    TFMessage, TF_STATIC_TOPIC, lambda msg: self._on_tf(msg, True),
-                    TF_STATIC_QOS))
+                    TFMessage, TF_STATIC_TOPIC, lambda data: self.on_message(data, True),
+                    TF_STATIC_QOS, raw=True))
         elif not self.following and self._subscriptions:
             for subscription in self._subscriptions:
                 self.node.destroy_subscription(subscription)
@@ -155,44 +269,109 @@ class TfFollower:
 
     # -- stamps ----------------------------------------------------------------------
 
-    def seconds(self, stamp):
-        """Return a builtin_interfaces/Time as float seconds since the epoch."""
-        if self._epoch is None:
-            self._epoch = stamp.sec or int(time.time())
-        return (stamp.sec - self._epoch) + stamp.nanosec * 1e-9
+    def seconds(self, ns):
+        """Return a stamp in integer nanoseconds as the tree's float seconds."""
+        if self._epoch is None and ns >= _NS:
+            self._epoch = ns - ns % _NS
+        return (ns - (self._epoch or 0)) / 1e9
 
-    def time_msg(self, seconds):
-        """Float seconds since the epoch as a builtin_interfaces/Time (to the nanosecond)."""
-        sec, nanosec = divmod(self._epoch * 1_000_000_000 + round(seconds * 1e9), 1_000_000_000)
-        return Time(sec=sec, nanosec=nanosec)
+    def stamp_ns(self, chain, seconds):
+        """
+        Return the nanoseconds of the tree's stamp ``seconds`` for the frames of ``chain``.
+
+        That stamp is the newest of an edge of the chain (the latest common time): its
+        nanoseconds as received. 0 for a root looked up in itself (tf2's time 0).
+        """
+        for frame in chain:
+            newest = self._newest.get(frame)
+            if newest is not None and newest[0] == seconds:
+                return newest[1]
+        return 0 if seconds == 0.0 else (self._epoch or 0) + round(seconds * 1e9)
 
     # -- messages ----------------------------------------------------------------------
 
-    def _on_tf(self, msg, static):
-        """Put every transform of a TFMessage into the tree; then look the pair up."""
+    def on_message(self, data, static):
+        """Put the transforms of a TFMessage's bytes into the tree; then look the pair up."""
         topic = self.static_topic if static else self.topic
-        for transform in msg.transforms:
-            self.add(transform, static, topic)
+        try:
+            count, transforms = read_tf_message(data, MAX_TRANSFORMS_PER_MESSAGE)
+        except cdr.Malformed as exc:
+            self._on_refused(topic, MALFORMED, f'not a {TYPE_NAME}: {exc}')
+            return
+        if count > len(transforms):
+            self._on_refused(topic, TF_TOO_MANY_TRANSFORMS, (
+                f'a TFMessage of {count:,} transforms: the first {len(transforms):,} taken, '
+                f'{count - len(transforms):,} dropped (at most MAX_TRANSFORMS_PER_MESSAGE = '
+                f'{MAX_TRANSFORMS_PER_MESSAGE:,} a message)'))
+        now = 0 if static else self.node.get_clock().now().nanoseconds
+        for transform in transforms:
+            self.add(transform, static, topic, now)
+        self._forget_unheard()
         self.update()
 
-    def add(self, transform, static, topic):
-        """One geometry_msgs/TransformStamped into the tree, or a refusal; True if stored."""
+    def add(self, transform, static, topic, now=0):
+        """
+        Put one transform into the tree, or refuse it; True if stored.
+
+        transform: a Transform or a geometry_msgs/TransformStamped. now: the node's clock
+        (ns) for the future-stamp check, 0 for none.
+        """
+        if not isinstance(transform, Transform):
+            transform = Transform.of(transform)
+        parent, child = transform.frame_id, transform.child_frame_id
+        edge = f'transform {shown(parent)} → {shown(child)}'
+        ns = transform.sec * _NS + transform.nanosec
+        if transform.oversize:
+            return self._refuse(topic, TF_BAD_FRAME, f'{edge}: {transform.oversize}, at most '
+                                f'MAX_FRAME_NAME = {MAX_FRAME_NAME}')
+        if now and ns > now + MAX_FUTURE_SECONDS * _NS:
+            return self._refuse(topic, TF_FUTURE_STAMP, (
+                f'{edge} stamped {(ns - now) / _NS:.9g} s after the clock of the node '
+                f'(at most MAX_FUTURE_SECONDS = {MAX_FUTURE_SECONDS:g})'))
         try:
-            header, R, b = boundary.transform_stamped_to_transform(transform, self._settings)
-            self.tree.set_transform(header.frame_id, transform.child_frame_id, R, b,
-                                    self.seconds(header.stamp), static=static)
+            R, b = boundary.pose_fields_to_rt(transform.values, self._settings,
+                                              boundary.TRANSFORM_FIELDS)
+            t = self.seconds(ns)
+            if not self.tree.set_transform(parent, child, R, b, t, static=static):
+                # More than the cache older than the edge's newest: time went back.
+                newest = self.tree.time_range(parent, child)[1]
+                self.tree.forget(child)
+                self.tree.set_transform(parent, child, R, b, t)
+                self._on_refused(topic, TF_TIME_JUMP, (
+                    f'{edge} stamped {newest - t:.9g} s before its newest sample, more than '
+                    f'the {CACHE_SECONDS:g} s cache: time went back (a bag replayed in a '
+                    'loop, a simulator restarted?); the samples of the edge were dropped'))
         except boundary.RefusedInput as exc:
-            self._on_refused(topic, exc.reason, f'{_edge_name(transform)}: {exc}')
-            return False
+            return self._refuse(topic, exc.reason, f'{edge}: {exc}')
         except TransformTreeError as exc:
-            self._on_refused(topic, _REASON[exc.reason], str(exc))
-            return False
+            return self._refuse(topic, _REASON[exc.reason], str(exc))
+        if static or self.tree.time_range(parent, child)[1] == t:
+            self._newest[child] = (t, ns)
+        if not static:
+            self._heard[child] = time.monotonic()
         return True
+
+    def _refuse(self, topic, reason, text):
+        self._on_refused(topic, reason, text)
+        return False
+
+    def _forget_unheard(self):
+        """Forget the dynamic edges not heard for CACHE_SECONDS (at most once a FORGET_PERIOD)."""
+        now = time.monotonic()
+        if now - self._swept < FORGET_PERIOD:
+            return
+        self._swept = now
+        for child, heard in list(self._heard.items()):
+            if now - heard > CACHE_SECONDS:
+                self.tree.forget(child)
+                del self._heard[child]
+                self._newest.pop(child, None)
 
     def lookup(self):
         """Return (header, R, b) of body in reference at the latest common time."""
         R, b, stamp = self.tree.lookup(self.reference, self.body)
-        return Header(frame_id=self.reference, stamp=self.time_msg(stamp)), R, b
+        ns = self.stamp_ns(self.tree.chain(self.reference, self.body), stamp)
+        return Header(frame_id=self.reference, stamp=Time(sec=ns // _NS, nanosec=ns % _NS)), R, b
 
     def update(self):
         """Hand on the pair's transform if the chain has a new common time (or is new)."""
@@ -200,7 +379,8 @@ class TfFollower:
             return
         try:
             chain = tuple(self.tree.chain(self.reference, self.body))
-            key = (chain, self.tree.latest_common_time(self.reference, self.body))
+            key = (chain, self.stamp_ns(
+                chain, self.tree.latest_common_time(self.reference, self.body)))
             if key == self._published:
                 return
             header, R, b = self.lookup()
@@ -213,14 +393,19 @@ class TfFollower:
     def why_not(self, seconds):
         """One line saying why the pair could not be looked up within ``seconds``."""
         topics = f'{self.topic} or {self.static_topic}'
-        missing = [f for f in (self.reference, self.body) if f not in self.tree.frames]
+        frames = self.tree.frames
+        missing = [f for f in (self.reference, self.body) if f not in frames]
         if missing:
-            seen = ', '.join(self.tree.frames) or 'none'
-            names = ' and '.join(repr(f) for f in missing)
+            seen = ', '.join(f if len(f) <= SHOWN_NAME else f[:SHOWN_NAME - 1] + '…'
+                             for f in frames[:SHOWN_FRAMES]) or 'none'
+            if len(frames) > SHOWN_FRAMES:
+                seen += f' and {len(frames) - SHOWN_FRAMES:,} more'
+            names = ' and '.join(map(shown, missing))
             frames = 'frame' if len(missing) == 1 else 'frames'
             return (f'{frames} {names} did not appear on {topics} within {seconds:g} s '
                     f'(frames seen: {seen})')
-        what = f'no transform of {self.body!r} in {self.reference!r} within {seconds:g} s'
+        what = (f'no transform of {shown(self.body)} in {shown(self.reference)} within '
+                f'{seconds:g} s')
         try:
             self.lookup()
         except TransformLookupError as exc:
@@ -235,7 +420,3 @@ class TfFollower:
             chain = f'none: {exc}'
         return {'source': self.topic, 'reference_frame': self.reference,
                 'body_frame': self.body, 'chain': chain}
-
-
-def _edge_name(transform):
-    return f'transform {transform.header.frame_id!r} → {transform.child_frame_id!r}'
