@@ -23,6 +23,7 @@ import timeit
 
 import numpy as np
 import rot_tools as rt
+from rot_tools.core.decomposition import decompose_values
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -62,6 +63,8 @@ def math_paths(top):
         ('screw_log(R, b)', lambda: rt.screw_log(R, b)),
         ('screw_from_transform(R, b, check=False)',
          lambda: rt.screw_from_transform(R, b, check=False)),
+        ("decompose_values(R, b, 'ZYX') (the node's numbers for one input)",
+         lambda: decompose_values(R, b, 'ZYX')),
     ]
     for label, fn in cases:
         profile_calls(label, fn, 20000, top)

@@ -139,7 +139,7 @@ def angles_kernel(ops, m, spec, lock_tol):
         y1, x1 = mj[i], -sig * mk[i]
         rho = ops.sqrt(y1 * y1 + x1 * x1)
         t2 = ops.atan2(rho, mi[i])
-        lock = (t2 <= lock_tol) | (math.pi - t2 <= lock_tol)
+        lock = ops.minimum(t2, math.pi - t2) <= lock_tol
         sign3, other = -sig, k
     else:  # R[i,k] = σ sin θ2, (−σR[j,k], R[k,k]) = cos θ2·(sin θ1, cos θ1)
         y1, x1 = -sig * mj[k], mk[k]

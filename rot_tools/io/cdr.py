@@ -26,6 +26,7 @@ node uses with one struct.unpack_from, in either byte order (CDR_LE or CDR_BE).
 rot_tools.io.interface (the fields read or written).
 """
 
+from functools import lru_cache
 import struct
 from typing import NamedTuple
 
@@ -54,8 +55,18 @@ def header(sec, nanosec, frame_id):
 
     Every stamped output starts so: header fields, then float64 (aligned to 8).
     """
-    body = _STAMP.pack(sec, nanosec) + _string(frame_id)
-    return ENCAPSULATION + body + bytes(-len(body) % 8)
+    return ENCAPSULATION + _STAMP.pack(sec, nanosec) + _frame_id(frame_id)
+
+
+@lru_cache(maxsize=256)
+def _frame_id(frame_id):
+    """
+    Return a header's frame_id as a CDR string, padded so that the header ends aligned to 8.
+
+    Cached: a stream's frame_id rarely changes, and rotation_node writes it for every input.
+    """
+    text = _string(frame_id)
+    return text + bytes(-(_STAMP.size + len(text)) % 8)
 
 
 class Stamp(NamedTuple):
