@@ -12,6 +12,9 @@ signal handlers before NumPy and rclpy load (see rot_tools.ros.entry).
 _HOME = {
     'rot_tools.core.axis_angle': (
         'axis_angle_to_matrix', 'matrix_to_axis_angle', 'matrix_to_rotvec', 'rotvec_to_matrix'),
+    'rot_tools.core.covariance': (
+        'change_covariance_frame', 'euler_covariance_to_rotvec', 'rotvec_covariance_to_euler',
+        'transform_pose_covariance'),
     'rot_tools.core.errors': ('RotationError',),
     'rot_tools.core.euler': (
         'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'euler_to_matrix', 'matrix_to_euler'),
@@ -29,6 +32,10 @@ _HOME = {
         'quaternion_to_matrix', 'rot_x', 'rot_y', 'rot_z', 'skew', 'validate_rotation'),
     'rot_tools.core.transform_tree': (
         'TransformLookupError', 'TransformTree', 'TransformTreeError'),
+    'rot_tools.core.trajectory': (
+        'ALIGNMENTS', 'HandEye', 'RotationErrors', 'TimeOffset', 'align_rotations',
+        'angular_speeds', 'delta_pairs', 'error_statistics', 'estimate_time_offset',
+        'hand_eye_rotation', 'interpolate_poses', 'nearest_stamps', 'rotation_errors'),
 }
 _MODULE_OF = {name: module for module, names in _HOME.items() for name in names}
 

@@ -1,0 +1,461 @@
+"""
+An orientation stream against ground truth: matching, time offset, alignment, mounting, errors.
+
+Two streams of poses, each stamps t (N,) strictly increasing in seconds, rotations R (N, 3, 3)
+and, where they exist, positions b (N, 3): the estimate (EST, P in the formulas) and the
+reference (REF, Q). R maps the body's coordinates to its reference frame's.
+
+- **Matching.** REF is evaluated at EST's stamps, either along the constant-screw motion
+  between the two REF poses around each stamp (interpolate_poses), or as the nearest REF pose
+  (nearest_stamps, as evo pairs poses). A time offset o is added to EST's stamps first.
+- **Time offset.** The angular speed |ω| of each stream, from consecutive rotations
+  (angle of R_kᵀR_{k+1} / Δt), does not depend on either frame: the offset is the shift that
+  best correlates the two speeds (estimate_time_offset).
+- **Alignment.** A constant rotation W between the two reference frames, R_ref ≈ W·R_est
+  (align_rotations): least squares on SO(3), about z only, or evo's Umeyama fit of positions.
+- **Mounting.** A constant rotation X between the two body frames, R_ref ≈ W·R_est·Xᵀ, shows
+  in the relative rotations A_k = Q_iᵀQ_j, B_k = P_iᵀP_j as A_k·X = X·B_k: the rotation part
+  of hand-eye calibration (hand_eye_rotation).
+- **Errors.** E = R_refᵀ·R_est per pair, its angle and its roll/pitch/yaw, and evo's relative
+  error over pairs of poses delta apart (rotation_errors).
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from rot_tools.core._arrays import finite_array, require_tolerance
+from rot_tools.core.axis_angle import matrix_to_rotvec
+from rot_tools.core.errors import RotationError
+from rot_tools.core.euler import matrix_to_euler
+from rot_tools.core.fitting import align_vectors, mean_rotation, rotation_distance
+from rot_tools.core.screw import screw_interpolate
+from rot_tools.core.so3 import checked_rotation, rot_z
+
+EXCITED_RATIO = 0.05
+"""σ_i/σ_1 of the stacked rotation vectors α_k at or above which axis i counts as excited.
+
+Below it the turn about the poorly excited axis is set by noise, not by the motion.
+"""
+
+MAX_GRID = 1 << 20
+"""Samples of the common grid of estimate_time_offset at most; a longer overlap coarsens it."""
+
+
+# ---- checks ------------------------------------------------------------------------------
+
+
+def _stamps(stamps, name, least):
+    """Stamps (N,) finite and strictly increasing, N ≥ least."""
+    t = finite_array(stamps, (), name)
+    if t.ndim != 1:
+        raise RotationError(f'{name} must have shape (N,), got {t.shape}')
+    if len(t) < least:
+        raise RotationError(f'{name} has {len(t)} stamp(s): at least {least} needed')
+    steps = np.diff(t)
+    if (steps <= 0).any():
+        k = int(np.argmax(steps <= 0))
+        raise RotationError(f'{name} must be strictly increasing: {name}[{k + 1}] = '
+                            f'{float(t[k + 1])!r} follows {name}[{k}] = {float(t[k])!r}')
+    return t
+
+
+def _rotations(R, name, count=None):
+    """Rotations (N, 3, 3) validated, N = count when given."""
+    R = checked_rotation(R, True)
+    if R.ndim != 3:
+        raise RotationError(f'{name} must have shape (N, 3, 3), got {R.shape}')
+    if count is not None and len(R) != count:
+        raise RotationError(f'{name} has {len(R)} rotations for {count} stamps')
+    return R
+
+
+def _positions(b, name, count):
+    """Positions (N, 3), finite."""
+    b = finite_array(b, (3,), name)
+    if b.shape != (count, 3):
+        raise RotationError(f'{name} must have shape ({count}, 3), one per stamp, got {b.shape}')
+    return b
+
+
+def _times(at, name):
+    at = finite_array(at, (), name)
+    if at.ndim != 1:
+        raise RotationError(f'{name} must have shape (M,), got {at.shape}')
+    return at
+
+
+def _pair_count(R_ref, R_est, least):
+    """Both batches of rotations, equal in count and ≥ least."""
+    R_ref, R_est = _rotations(R_ref, 'R_ref'), _rotations(R_est, 'R_est')
+    if len(R_ref) != len(R_est):
+        raise RotationError(f'R_ref has {len(R_ref)} rotations but R_est has {len(R_est)}: '
+                            'pairs are needed')
+    if len(R_ref) < least:
+        raise RotationError(f'{len(R_ref)} pair(s) of rotations: at least {least} needed')
+    return R_ref, R_est
+
+
+# ---- matching ----------------------------------------------------------------------------
+
+
+def interpolate_poses(stamps, R, b, at, max_gap=0.1):
+    """
+    REF poses at the times ``at``, along the constant-screw motion between their neighbours.
+
+    stamps (N,) strictly increasing, N ≥ 2; R (N, 3, 3); b (N, 3) or None (rotations only);
+    at (M,) any order. For t_k ≤ a ≤ t_{k+1}: T(a) = T_k·exp(s·log(T_k⁻¹T_{k+1})),
+    s = (a − t_k)/(t_{k+1} − t_k) (screw_interpolate; with b = 0 this is the slerp of R).
+    ``a`` is covered where both neighbours lie within max_gap (s) of it, or a stamp equals it.
+    Returns (R_at (K, 3, 3), b_at (K, 3) or None, covered (M,) bool) with K = covered.sum():
+    the poses at at[covered], in order.
+    """
+    t = _stamps(stamps, 'stamps', 2)
+    R = _rotations(R, 'R', len(t))
+    positions = np.zeros((len(t), 3)) if b is None else _positions(b, 'b', len(t))
+    at = _times(at, 'at')
+    gap = require_tolerance(max_gap, 'max_gap')
+    k = np.clip(np.searchsorted(t, at, side='right') - 1, 0, len(t) - 2)
+    before, after = at - t[k], t[k + 1] - at
+    exact = (before == 0) | (after == 0)
+    covered = exact | ((before >= 0) & (after >= 0) & (before <= gap) & (after <= gap))
+    k, before = k[covered], before[covered]
+    s = before / (t[k + 1] - t[k])
+    R_at, b_at = screw_interpolate(R[k], positions[k], R[k + 1], positions[k + 1], s,
+                                   check=False)
+    return R_at, None if b is None else b_at, covered
+
+
+def nearest_stamps(stamps, at, max_gap=0.01):
+    """
+    Index of the nearest stamp to each time ``at``, within max_gap (s), as evo pairs poses.
+
+    stamps (N,) strictly increasing; at (M,). A tie goes to the earlier stamp. Returns
+    (index (K,) into stamps, covered (M,) bool), K = covered.sum(). evo walks the stream with
+    fewer poses and looks each of its stamps up in the other: to reproduce its pairs, pass the
+    shorter stream as ``at``.
+    """
+    t = _stamps(stamps, 'stamps', 1)
+    at = _times(at, 'at')
+    gap = require_tolerance(max_gap, 'max_gap')
+    upper = np.searchsorted(t, at, side='right')
+    lower = np.maximum(upper - 1, 0)
+    upper = np.minimum(upper, len(t) - 1)
+    d_lower, d_upper = np.abs(at - t[lower]), np.abs(t[upper] - at)
+    index = np.where(d_upper < d_lower, upper, lower)
+    covered = np.minimum(d_lower, d_upper) <= gap
+    return index[covered], covered
+
+
+# ---- time offset -------------------------------------------------------------------------
+
+
+def angular_speeds(stamps, R, name='R'):
+    """
+    Angular speed |ω| (rad/s) between consecutive poses, at the midpoints of their stamps.
+
+    |ω_k| = θ(R_kᵀR_{k+1}) / (t_{k+1} − t_k), θ the geodesic angle (a turn of more than π
+    between two samples aliases). stamps (N,) strictly increasing, N ≥ 2; returns
+    (midpoints (N − 1,), speeds (N − 1,)).
+    """
+    t = _stamps(stamps, f'stamps of {name}', 2)
+    R = _rotations(R, name, len(t))
+    speeds = rotation_distance(R[:-1], R[1:], check=False) / np.diff(t)
+    return (t[:-1] + t[1:]) / 2, speeds
+
+
+def _on_grid(grid, t, v):
+    """v(t) linearly interpolated at grid, NaN outside [t_0, t_end]."""
+    out = np.interp(grid, t, v)
+    out[(grid < t[0]) | (grid > t[-1])] = np.nan
+    return out
+
+
+def _sliding_sums(a, b, lags):
+    """Σ_g a[g]·b[g + k] for k = 0 … 2·lags, by FFT (len(b) = len(a) + 2·lags)."""
+    size = len(b)
+    sums = np.fft.irfft(np.conj(np.fft.rfft(a, size)) * np.fft.rfft(b, size), size)
+    return sums[:2 * lags + 1]
+
+
+def _correlations(ref, est, lags):
+    """
+    Pearson correlation of ref[g] and est[g + lags − j] over their common samples, per lag j.
+
+    ref (n,), est (n + 2·lags,), NaN where a stream has no sample. Returns (r, count) for
+    j = −lags … lags; r is NaN where fewer than half the largest count overlap.
+    """
+    m_r, m_e = np.isfinite(ref), np.isfinite(est)
+    x, y = np.where(m_r, ref, 0.0), np.where(m_e, est, 0.0)
+    x = np.where(m_r, x - x[m_r].mean(), 0.0)  # centred: the sums below keep their digits
+    y = np.where(m_e, y - y[m_e].mean(), 0.0)
+    w_r, w_e = m_r.astype(float), m_e.astype(float)
+    count = np.rint(_sliding_sums(w_r, w_e, lags))
+    sx, sy = _sliding_sums(x, w_e, lags), _sliding_sums(w_r, y, lags)
+    sxx, syy = _sliding_sums(x * x, w_e, lags), _sliding_sums(w_r, y * y, lags)
+    sxy = _sliding_sums(x, y, lags)
+    enough = count >= max(3.0, count.max() / 2)
+    n = np.where(enough, count, 1.0)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        r = (sxy - sx * sy / n) / np.sqrt((sxx - sx * sx / n) * (syy - sy * sy / n))
+    r = np.where(enough & np.isfinite(r), r, np.nan)
+    return r[::-1], count[::-1]  # k = lags − j: reversed, index j + lags
+
+
+class TimeOffset(NamedTuple):
+    """The offset (s) to add to EST's stamps, and the correlation of the speeds there."""
+
+    offset: float
+    correlation: float
+
+
+def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
+    """
+    Time offset between two orientation streams, from their angular speeds.
+
+    Both speeds (angular_speeds) are put on one grid of step h = the shorter of the streams'
+    median sample periods (coarser when the overlap would exceed MAX_GRID samples), and the
+    Pearson correlation r(o) of |ω_ref|(t) with |ω_est|(t − o) is taken for o = j·h within
+    ±max_offset (s); the best j is refined below one sample by the parabola through r at
+    j − 1, j, j + 1: o = (j + ½(r₋ − r₊)/(r₋ − 2r₀ + r₊))·h. Returns TimeOffset(offset,
+    correlation): offset is the value to add to EST's stamps before matching (evo's
+    --t_offset), correlation r at the best sample, in [−1, 1]. RotationError when the streams
+    do not overlap within max_offset, a stream never turns, or the best offset is at
+    ±max_offset (the true one may lie beyond).
+    """
+    te, we = angular_speeds(stamps_est, R_est, 'R_est')
+    tr, wr = angular_speeds(stamps_ref, R_ref, 'R_ref')
+    reach = require_tolerance(max_offset, 'max_offset')
+    for name, speed in (('R_est', we), ('R_ref', wr)):
+        if np.ptp(speed) == 0:
+            raise RotationError(f'{name} turns at a constant speed ({speed[0]:.3g} rad/s): '
+                                'no feature to align in time')
+    lo, hi = max(tr[0], te[0] - reach), min(tr[-1], te[-1] + reach)
+    h = min(np.median(np.diff(te)), np.median(np.diff(tr)))
+    if hi - lo < 2 * h:
+        raise RotationError(
+            f'the streams do not overlap within max_offset = {reach:g} s: R_ref spans '
+            f'[{tr[0]:.6f}, {tr[-1]:.6f}] s, R_est [{te[0]:.6f}, {te[-1]:.6f}] s')
+    h = max(h, (hi - lo) / MAX_GRID, reach / MAX_GRID)
+    lags, n = math.ceil(reach / h - 1e-9), int((hi - lo) / h) + 1  # (0.2/0.01 = 20.000…04)
+    grid = lo + h * np.arange(-lags, n + lags)
+    r, _ = _correlations(_on_grid(grid[lags:lags + n], tr, wr), _on_grid(grid, te, we), lags)
+    if not np.isfinite(r).any():
+        raise RotationError('the angular speeds do not correlate at any offset within '
+                            f'±{reach:g} s (too little overlap, or a speed constant there)')
+    best = int(np.nanargmax(r))
+    if best in (0, 2 * lags):
+        raise RotationError(f'the best offset lies at the edge, {(best - lags) * h:+.6g} s: '
+                            f'the true one may lie beyond max_offset = {reach:g} s')
+    r_minus, r_0, r_plus = r[best - 1], r[best], r[best + 1]
+    curve = r_minus - 2 * r_0 + r_plus
+    step = 0.5 * (r_minus - r_plus) / curve if curve < 0 else 0.0  # NaN compares False: 0
+    return TimeOffset(float((best - lags + step) * h), float(r_0))
+
+
+# ---- alignment ---------------------------------------------------------------------------
+
+
+ALIGNMENTS = ('none', 'rotation', 'yaw', 'se3')
+"""The methods of align_rotations."""
+
+
+def align_rotations(R_ref, R_est, method='rotation', *, b_ref=None, b_est=None):
+    """
+    Constant motion (W, t) between the reference frames of two paired streams.
+
+    R_ref, R_est (N, 3, 3) paired; W·R_est is then compared with R_ref, and W·b_est + t with
+    b_ref. method:
+
+    - 'none': W = I, t = 0.
+    - 'rotation': W minimises Σ‖R_ref,k − W·R_est,k‖² (chordal L2): the rotation nearest to
+      S = Σ R_ref,k·R_est,kᵀ (mean_rotation of R_ref,k·R_est,kᵀ); t = 0.
+    - 'yaw': the same over W = Rot_z(ψ) only: ψ = atan2(S₁₀ − S₀₁, S₀₀ + S₁₁); t = 0.
+    - 'se3': Umeyama without scale on the positions, as evo's --align: W minimises
+      Σ‖(b_ref,k − b̄_ref) − W·(b_est,k − b̄_est)‖² (align_vectors), t = b̄_ref − W·b̄_est.
+      Needs b_ref, b_est (N, 3), N ≥ 3.
+
+    Returns (W (3, 3), t (3,)). RotationError for an unknown method, unpaired input and a
+    W that is not unique.
+    """
+    if method not in ALIGNMENTS:
+        raise RotationError(f'method must be one of {", ".join(ALIGNMENTS)}, got {method!r}')
+    R_ref, R_est = _pair_count(R_ref, R_est, 1)
+    zero = np.zeros(3)
+    if method == 'none':
+        return np.eye(3), zero
+    if method == 'se3':
+        return _umeyama(b_ref, b_est, len(R_ref))
+    if method == 'rotation':
+        return mean_rotation(R_ref @ np.swapaxes(R_est, -1, -2)), zero
+    S = np.einsum('nij,nkj->ik', R_ref, R_est)
+    cos, sin = S[0, 0] + S[1, 1], S[1, 0] - S[0, 1]
+    if math.hypot(cos, sin) <= 1e-9 * len(R_ref):
+        raise RotationError('the yaw alignment is not unique: every turn about z fits as well '
+                            f'(S₀₀ + S₁₁ = {cos:.3g}, S₁₀ − S₀₁ = {sin:.3g})')
+    return rot_z(math.atan2(sin, cos)), zero
+
+
+def _umeyama(b_ref, b_est, count):
+    if b_ref is None or b_est is None:
+        raise RotationError("method 'se3' fits positions: give b_ref and b_est")
+    if count < 3:
+        raise RotationError(f"method 'se3' needs at least 3 positions, got {count}")
+    b_ref, b_est = _positions(b_ref, 'b_ref', count), _positions(b_est, 'b_est', count)
+    mean_ref, mean_est = b_ref.mean(axis=0), b_est.mean(axis=0)
+    d_ref, d_est = b_ref - mean_ref, b_est - mean_est
+    if not d_ref.any() or not d_est.any():
+        raise RotationError("method 'se3' needs positions that move: "
+                            f"{'b_ref' if not d_ref.any() else 'b_est'} stands still")
+    keep = d_ref.any(axis=1) & d_est.any(axis=1)  # a pair at a centroid pulls nowhere
+    W, _ = align_vectors(d_ref[keep], d_est[keep])
+    return W, mean_ref - W @ mean_est
+
+
+# ---- mounting ----------------------------------------------------------------------------
+
+
+class HandEye(NamedTuple):
+    """
+    The mounting rotation X with A_k·X = X·B_k, and how well the motion determines it.
+
+    rotation: X (3, 3); residual: RMS over k of the angle of (A_k·X)ᵀ·X·B_k (rad);
+    singular_values: σ1 ≥ σ2 ≥ σ3 of the stacked α_k / √K (rad), the RMS turn per principal
+    axis; axes: how many σ_i ≥ EXCITED_RATIO·σ1; warning: '' or why X is not trustworthy.
+    """
+
+    rotation: np.ndarray
+    residual: float
+    singular_values: np.ndarray
+    axes: int
+    warning: str
+
+
+def hand_eye_rotation(A, B):
+    """
+    Rotation part of hand-eye calibration: X with A_k·X = X·B_k for every k.
+
+    A (K, 3, 3) relative rotations of the reference (Q_iᵀQ_j), B (K, 3, 3) those of the
+    estimate (P_iᵀP_j) over the same intervals. A_k = X·B_k·Xᵀ, so the rotation vectors
+    α_k = log A_k and β_k = log B_k satisfy α_k = X·β_k (Park and Martin); X minimises
+    Σ‖α_k − X·β_k‖² (align_vectors: their X = (MᵀM)^(−1/2)·Mᵀ with M = Σ β_k·α_kᵀ, kept a
+    rotation). Pairs in which either turn is 0 carry no information and are dropped. With
+    fewer than two excited axes (HandEye.axes < 2) the turn about the one excited axis is
+    set by noise, and HandEye.warning says so. RotationError for fewer than 2 pairs that turn.
+    """
+    A, B = _pair_count(A, B, 2)
+    alpha, beta = matrix_to_rotvec(A, check=False), matrix_to_rotvec(B, check=False)
+    turns = alpha.any(axis=1) & beta.any(axis=1)
+    if turns.sum() < 2:
+        raise RotationError(f'{int(turns.sum())} of {len(A)} relative rotations turn (in A '
+                            'and B both): the motion never turns enough for a mounting')
+    sigma = np.linalg.svd(alpha[turns], compute_uv=False) / math.sqrt(int(turns.sum()))
+    axes = int(np.sum(sigma >= EXCITED_RATIO * sigma[0]))
+    X, _ = align_vectors(alpha[turns], beta[turns])
+    residual = rotation_distance(A @ X, X @ B, check=False)
+    warning = ''
+    if axes < 2:
+        warning = (f'the motion excited {axes} rotation axis (σ2/σ1 = {sigma[1] / sigma[0]:.2g}'
+                   f' < {EXCITED_RATIO:g}): the turn of the mounting about it is not '
+                   'determined')
+    return HandEye(X, float(np.sqrt(np.mean(residual ** 2))), sigma, axes, warning)
+
+
+# ---- errors ------------------------------------------------------------------------------
+
+
+def delta_pairs(count, delta=1, unit='f', stamps=None):
+    """
+    Index pairs (i, j) for relative errors, consecutive and not overlapping, as evo's RPE.
+
+    unit 'f' (frames): i runs over 0, delta, 2·delta, … < count and j is the next one (evo's
+    filter_pairs_by_index without all_pairs). unit 's' (seconds, given stamps (count,)):
+    from i = 0, j is the first index with t_j − t_i ≥ delta (within rounding of the stamps),
+    then i = j. Returns an int array (K, 2); RotationError when no pair fits.
+    """
+    if unit == 'f':
+        if not _whole(delta):
+            raise RotationError(f'delta in frames must be an integer ≥ 1, got {delta!r}')
+        ids = np.arange(0, count, int(delta))
+        pairs = np.stack([ids[:-1], ids[1:]], axis=-1)
+    elif unit == 's':
+        if stamps is None:
+            raise RotationError("delta in seconds (unit 's') needs the stamps")
+        t = _stamps(stamps, 'stamps', 1)
+        if len(t) != count:
+            raise RotationError(f'stamps has {len(t)} entries for {count} poses')
+        step = require_tolerance(delta, 'delta')
+        if step == 0:
+            raise RotationError('delta in seconds must be > 0, got 0')
+        slack = 4 * np.finfo(float).eps * max(abs(t[0]), abs(t[-1]))
+        chain = [0]
+        while True:
+            j = int(np.searchsorted(t, t[chain[-1]] + step - slack, side='left'))
+            if j >= count:
+                break
+            chain.append(j)
+        ids = np.array(chain)
+        pairs = np.stack([ids[:-1], ids[1:]], axis=-1)
+    else:
+        raise RotationError(f"unit must be 'f' (frames) or 's' (seconds), got {unit!r}")
+    if not len(pairs):
+        raise RotationError(f'delta = {delta} {"frames" if unit == "f" else "s"} leaves no '
+                            f'pair among {count} poses')
+    return pairs
+
+
+def _whole(delta):
+    """Whether delta is a whole number ≥ 1 (an int, or a float such as 2.0)."""
+    try:
+        return not isinstance(delta, bool) and float(delta).is_integer() and delta >= 1
+    except (TypeError, ValueError, OverflowError):
+        return False
+
+
+def error_statistics(x):
+    """Return rmse √mean(x²), mean, median, std (population, as evo), min, max of x (K,)."""
+    x = np.asarray(x, dtype=float)
+    return {'rmse': float(np.sqrt(np.mean(x * x))), 'mean': float(np.mean(x)),
+            'median': float(np.median(x)), 'std': float(np.std(x)),
+            'min': float(np.min(x)), 'max': float(np.max(x))}
+
+
+class RotationErrors(NamedTuple):
+    """
+    Absolute and relative rotation errors of paired streams (rotation_errors).
+
+    angle (N,): θ(E_k) ∈ [0, π] of E_k = R_ref,kᵀ·R_est,k; rpy (N, 3): E_k's roll, pitch,
+    yaw (extrinsic 'xyz', each unwrapped along the stream); ape: error_statistics(angle);
+    pairs (K, 2): delta_pairs; rpe_angle (K,): the angle of (Q_iᵀQ_j)ᵀ(P_iᵀP_j);
+    rpe: error_statistics(rpe_angle). Radians.
+    """
+
+    angle: np.ndarray
+    rpy: np.ndarray
+    ape: dict
+    pairs: np.ndarray
+    rpe_angle: np.ndarray
+    rpe: dict
+
+
+def rotation_errors(R_ref, R_est, delta=1, unit='f', stamps=None):
+    """
+    Rotation errors of an estimate P against a reference Q, paired pose by pose, as evo's.
+
+    R_ref, R_est (N, 3, 3), N ≥ 2. Absolute: E_k = Q_kᵀ·P_k, its geodesic angle (accurate at 0
+    and π; evo's APE with --pose_relation angle_deg, in radians) and roll/pitch/yaw.
+    Relative (evo's RPE, --pose_relation angle_deg): for the pairs (i, j) of delta_pairs(N,
+    delta, unit, stamps) — by default (1 frame) every consecutive pair (k, k + 1) — the angle
+    of (Q_iᵀQ_j)ᵀ·(P_iᵀP_j). Returns RotationErrors.
+    """
+    R_ref, R_est = _pair_count(R_ref, R_est, 2)
+    pairs = delta_pairs(len(R_ref), delta, unit, stamps)
+    E = np.swapaxes(R_ref, -1, -2) @ R_est
+    angle = rotation_distance(R_ref, R_est, check=False)
+    rpy = np.unwrap(matrix_to_euler(E, 'xyz', check=False)[0], axis=0)
+    i, j = pairs[:, 0], pairs[:, 1]
+    rel_ref = np.swapaxes(R_ref[i], -1, -2) @ R_ref[j]
+    rel_est = np.swapaxes(R_est[i], -1, -2) @ R_est[j]
+    rpe_angle = rotation_distance(rel_ref, rel_est, check=False)
+    return RotationErrors(angle, rpy, error_statistics(angle), pairs, rpe_angle,
+                          error_statistics(rpe_angle))
