@@ -308,6 +308,107 @@ def test_the_node_describe_shown_in_the_docs(node_process, tester, namespace, tf
     assert_doc_output('tf-node-describe', shown)
 
 
+def tf_sender(tester, namespace):
+    """Return send(*transforms): one TFMessage on the namespace's /tf, matched by the node."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    pub = tester.publisher(f'{namespace}/tf', tf2_msgs.TFMessage,
+                           QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    return lambda *transforms: pub.publish(tf2_msgs.TFMessage(transforms=list(transforms)))
+
+
+def test_node_refuses_a_future_stamp_and_starts_over_when_time_goes_back(
+        node_process, tester, namespace):
+    from geometry_msgs.msg import QuaternionStamped
+    node = node_process(*node_args(namespace, 'odom', 'base_link'))
+    out = f'{node.name}/quaternion'
+    tester.subscribe(out, QuaternionStamped, qos=1000)
+    wait_started(tester, out)
+    send = tf_sender(tester, namespace)
+    sent = set()
+
+    def follow(seconds, nanosec):
+        for sec in seconds:
+            send(make_transform('odom', 'base_link', 0.1 * sec, sec=sec, nanosec=nanosec))
+            sent.add((sec, nanosec))
+        last = (seconds[-1], nanosec)
+        tester.spin_until(lambda: any((m.header.stamp.sec, m.header.stamp.nanosec) == last
+                                      for m in tester.received[out]), TIMEOUT * 2,
+                          f'an output stamped {last}')
+
+    follow(range(1_000, 1_005), 123_456_789)
+    send(make_transform('odom', 'base_link', sec=2_000_000_000, nanosec=0))  # the year 2033
+    follow(range(1_005, 1_025), 999_999_999)
+    _, data = describe(tester, node.name)
+    assert (data['stamp']['sec'], data['stamp']['nanosec']) == (1_024, 999_999_999)
+    assert data['refused']['tf_future_stamp'] == 1 and data['refused']['tf_time_jump'] == 0
+    follow(range(500, 503), 5)  # a bag replayed from its start
+    _, data = describe(tester, node.name)
+    assert data['refused']['tf_time_jump'] == 1
+    assert (data['stamp']['sec'], data['stamp']['nanosec']) == (502, 5)
+    # Every output carries an input's stamp, to the nanosecond.
+    assert {(m.header.stamp.sec, m.header.stamp.nanosec) for m in tester.received[out]} <= sent
+    warnings = node.wait_for_stderr('(tf_time_jump)')
+    assert "(tf_future_stamp): transform 'odom' → 'base_link' stamped" in warnings
+
+
+def test_large_tf_messages_are_cut_and_the_node_keeps_serving(node_process, tester, namespace):
+    from geometry_msgs.msg import QuaternionStamped
+    node = node_process(*node_args(namespace, 'odom', 'base_link'))
+    out = f'{node.name}/quaternion'
+    tester.subscribe(out, QuaternionStamped, qos=1000)
+    wait_started(tester, out)
+    send = tf_sender(tester, namespace)
+    # Three messages of 100,000 samples of the followed edge, newest first (out of order).
+    for k in range(3):
+        transforms = [make_transform('odom', 'base_link', 0.1, sec=1_000 + k * 100_000 + 99_999
+                                     - i, nanosec=0) for i in range(100_000)]
+        send(*transforms)
+    # Answered between the messages: a reply within the retries (5 of 2 s), where the node
+    # took 24-60 s reading every transform.
+    describe(tester, node.name)
+    send(make_transform('odom', 'base_link', 0.2, sec=400_000, nanosec=7))
+    tester.spin_until(lambda: any(m.header.stamp.sec == 400_000 for m in tester.received[out]),
+                      TIMEOUT * 6, 'the output of the sample after the flood')
+    _, data = describe(tester, node.name)
+    assert data['refused']['tf_too_many_transforms'] == 3
+    assert "(tf_too_many_transforms): a TFMessage of 100,000 transforms: the first 1,000 " \
+        'taken, 99,000 dropped' in node.wait_for_stderr('(tf_too_many_transforms)')
+
+
+def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
+        node_process, tester, namespace):
+    from geometry_msgs.msg import QuaternionStamped
+    node = node_process(*node_args(namespace, 'odom', 'base_link'))
+    out = f'{node.name}/quaternion'
+    tester.subscribe(out, QuaternionStamped, qos=1000)
+    wait_started(tester, out)
+    send = tf_sender(tester, namespace)
+    # 1,000 junk frames of 250-character names fill the tree (the last one refused) ...
+    send(*[make_transform('junk_root', f'junk_{k:04d}_' + 'j' * 240, sec=1_000)
+           for k in range(1_000)])
+    send(make_transform('odom', 'x' * 1_000_000))  # a name of 1 MB: refused, cut in the log
+    real = make_transform('odom', 'base_link', sec=2_000, nanosec=1)
+
+    def refused():
+        return yaml.safe_load(describe(tester, node.name)[0].message)['refused']
+
+    tester.spin_until(lambda: refused()['tf_bad_frame'] == 1, TIMEOUT * 2, 'tf_bad_frame')
+    send(real)
+    tester.spin_until(lambda: refused()['tf_too_many_frames'] >= 2, TIMEOUT * 2,
+                      'the real frames refused while the junk fills the tree')
+    # ... until they have not been heard for the 10 s cache: then the real frames get in.
+    for k in range(60):
+        real.header.stamp.sec = 2_001 + k
+        send(real)
+        tester.spin_for(0.5)
+        if tester.received[out]:
+            break
+    assert tester.received[out], 'the real frames never got in'
+    stderr = node.wait_for_stderr('(tf_bad_frame)')
+    assert '(tf_too_many_frames)' in stderr and '(tf_unknown_frame)' in stderr
+    assert max(map(len, stderr.splitlines())) < 2_000
+
+
 # ---------------------------------------------------------------------------------------
 # rotation_client tf
 
@@ -468,7 +569,7 @@ def make_transform(parent, child, x=0.0, q=(0.0, 0.0, 0.0, 1.0), sec=1_700_000_0
 
 @pytest.fixture
 def follower(ros_context):
-    """A TfFollower of an in-process node: (follower, outputs, refusals)."""
+    """Yield (follower, outputs, refusals): a TfFollower of an in-process node."""
     import rclpy
     from rot_tools.ros.tf_input import TfFollower
     node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
@@ -554,9 +655,29 @@ def test_follower_takes_at_most_max_transforms_a_message(follower):
     long = make_transform('odom', 'x' * 1_000_000)
     follower.on_message(serialize_message(tf2_msgs.TFMessage(transforms=[long])), False)
     assert [r[1] for r in refused] == ['tf_bad_frame']
-    assert "child_frame_id of 1,000,000 bytes, at most MAX_FRAME_NAME = 256" in refused[0][2]
+    assert 'child_frame_id of 1,000,000 bytes, at most MAX_FRAME_NAME = 256' in refused[0][2]
     assert len(refused[0][2]) < 200
     assert isinstance(long, TransformStamped)
+
+
+def test_the_start_up_refusals_are_those_the_docs_call_normal(follower):
+    follower, got, refused = follower
+    follower.follow('odom', 'gimbal')
+    # /tf before /tf_static, and one dynamic edge's first sample before the other's.
+    for transform, static in [(make_transform('odom', 'base_link', sec=10), False),
+                              (make_transform('camera', 'gimbal', sec=11), False),
+                              (make_transform('base_link', 'camera', sec=0), True),
+                              (make_transform('odom', 'base_link', sec=12), False)]:
+        assert follower.add(transform, static, '/tf')
+        follower.update()
+    assert [r[1] for r in refused] == ['tf_unknown_frame', 'tf_not_connected',
+                                       'tf_extrapolation']
+    assert len(got) == 1 and got[0][0].stamp.sec == 11
+    page = (REPO / 'doc' / 'tf.md').read_text(encoding='utf-8')
+    start_up = next(p for p in page.split('\n\n') if 'are normal' in p)
+    assert 'while the tree fills up at start-up' in start_up
+    for reason in {r[1] for r in refused}:
+        assert f'`{reason}`' in start_up
 
 
 def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
