@@ -136,6 +136,19 @@ def sequence_hint(name):
     return ''
 
 
+def angle_hint(angles):
+    """
+    Return a hint when angles typed in radians look like degrees (some |angle| > 2π), or ''.
+
+    For the commands that read angles in radians unless told ``--deg`` (rot-tools,
+    rotation_client): 'an angle of 30 rad is more than 2π: if it is in degrees, add --deg'.
+    """
+    size = float(np.max(np.abs(np.asarray(angles, dtype=np.float64))))
+    if not size > 2.0 * np.pi:
+        return ''
+    return f'an angle of {size:g} rad is more than 2π: if it is in degrees, add --deg'
+
+
 def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, point=None):
     """
     Every representation of the rotation R (3, 3), and of (R, b) when b (3,) is given.

@@ -3,8 +3,10 @@ rotation_client's command line: its commands, their arguments and help, parsed w
 
 The input commands are the node's inputs (rot_tools.io.interface): a verb per input row, its
 numbers from the roles of the row's fields (a position X Y Z, an orientation QX QY QZ QW,
-Euler angles A1 A2 A3 of a sequence SEQ), ``--child-frame`` for a child_frame_id. Nothing
-here starts ROS: ``--help``, ``--version`` and bad arguments end before rclpy is imported.
+Euler angles A1 A2 A3 of a sequence SEQ), ``--child-frame`` for a child_frame_id,
+``--topic`` for an input remapped away from ``~/NAME``. ``echo`` takes an output's name.
+Nothing here starts ROS: ``--help``, ``--version`` and bad arguments end before rclpy is
+imported.
 """
 
 import argparse
@@ -15,6 +17,7 @@ import numpy as np
 from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.io import interface
 from rot_tools.io.arguments import negative_numbers_as_values
+from rot_tools.io.report import angle_hint
 from rot_tools.ros import runtime
 
 PROG = 'rotation_client'
@@ -25,7 +28,8 @@ DEFAULT_CHILD_FRAME = 'base_link'
 NAME_LIMIT = 247
 """Most characters of a ROS topic or service name (rmw's limit, 255 − 8)."""
 
-SERVICES_USED = ('describe', 'screw_path', 'get_parameters')
+SERVICES_USED = ('describe', 'screw_path', 'get_parameters', 'describe_parameters',
+                 'set_parameters')
 """The node's services the client calls, relative to the node."""
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -41,6 +45,7 @@ EULER_TEXT = (
     '\nthen matrix_to_euler(R, node sequence).')
 CHILD_TEXT = 'The body is --child-frame (default base_link).'
 POSE = 'X Y Z QX QY QZ QW'
+TOPIC_TEXT = "the topic to send to, when the node's input is remapped (default NODE/{name})"
 
 
 def names_used():
@@ -109,6 +114,16 @@ def _tolerance(text):
     return value
 
 
+def _count(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be a whole number >= 1, got {text.strip()!r}')
+    return value
+
+
 def _node_name(text):
     name = text if text.startswith('/') else '/' + text
     if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
@@ -147,6 +162,10 @@ def _wxyz_option(parser, suppress):
                         default=argparse.SUPPRESS if suppress else False,
                         help='quaternions are given w first: QW QX QY QZ (default: the ROS '
                         'order, QX QY QZ QW)')
+
+
+USAGE = {'tf': 'REFERENCE BODY', 'echo': 'OUTPUT', 'set': 'NAME VALUE'}
+"""The words of a command other than its numbers, in its usage line."""
 
 
 class Command:
@@ -199,6 +218,19 @@ def commands():
             'No node needed: listens to /tf and /tf_static itself and prints the report of\n'
             'the transform p_REFERENCE = R·p_BODY + b at its latest common time, once a '
             'second\nuntil Ctrl-C, or once with --once (--node and --frame are not used).'),
+        'tf-demo': Command(
+            'publish a demo TF tree on /tf and /tf_static until Ctrl-C', '', (),
+            'map -> odom (static), odom -> base_link (a robot driving a circle: moving),\n'
+            'base_link -> camera (static, tilted down): for rotation_client tf and for a\n'
+            'rotation_node following two frames (--node and --frame are not used).'),
+        'echo': Command(
+            "print each message of one of the node's outputs until Ctrl-C", '', (),
+            'OUTPUT is the name of an output:\n' + ', '.join(r.name for r in interface.OUTPUTS)
+            + '.\nEach message is printed as it arrives, as the input commands print it.'),
+        'set': Command(
+            "set one of the node's parameters", '', (),
+            'VALUE is read as the type the node declares for NAME (its ~/describe_parameters);'
+            "\nthe node's answer is printed: success, or its reason for refusing (exit 1)."),
     }
 
 
@@ -218,10 +250,14 @@ def build_parser():
         '  rotation_client imu 0 0 0.7071068 0.7071068 --frame imu_link\n'
         '  rotation_client describe --json\n'
         '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n'
-        '  rotation_client tf odom base_link --once --deg\n\n'
+        '  rotation_client imu 0 0 0 1 --topic /robot/imu/data     (an input remapped)\n'
+        '  rotation_client tf odom base_link --once --deg\n'
+        '  rotation_client tf-demo --duration 60\n'
+        '  rotation_client echo rpy --count 3\n'
+        '  rotation_client set angle_unit deg\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
-        'within --timeout,\nor nothing to describe; 2 bad arguments or an input the node '
-        'refused.')
+        'within --timeout,\nnothing to describe, or a parameter the node did not set; 2 '
+        'bad arguments or an input\nthe node refused; 130 Ctrl-C.')
     parser.add_argument('--version', action=_Version, help='print the version and exit')
     _options(parser, suppress=False)
     _wxyz_option(parser, suppress=False)
@@ -230,7 +266,7 @@ def build_parser():
     for name, command in commands().items():
         fields = command.row.fields if command.row is not None else {}
         usage = ' '.join(filter(None, [PROG, name, 'SEQ' if 'angles' in fields else '',
-                                       'REFERENCE BODY' if name == 'tf' else '',
+                                       USAGE.get(name, ''),
                                        command.numbers, '[options]']))
         summary = command.summary
         p = sub.add_parser(name, help=summary, usage=usage,
@@ -240,6 +276,8 @@ def build_parser():
             p.add_argument('sequence', choices=EULER_SEQUENCES, metavar='SEQ',
                            help='one of the 24 sequences, upper case intrinsic')
             p.add_argument('--deg', action='store_true', help='the angles are in degrees')
+        if command.row is not None:
+            p.add_argument('--topic', metavar='TOPIC', help=TOPIC_TEXT.format(name=name))
         if 'child_frame_id' in fields:
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
@@ -253,6 +291,21 @@ def build_parser():
             p.add_argument('--seq', choices=EULER_SEQUENCES, default='ZYX', metavar='SEQ',
                            help='Euler sequence of the report (default ZYX)')
             p.add_argument('--deg', action='store_true', help='Euler angles in degrees')
+        elif name == 'tf-demo':
+            p.add_argument('--duration', type=_positive, metavar='SECONDS',
+                           help='stop after SECONDS (default: until Ctrl-C)')
+        elif name == 'echo':
+            p.add_argument('output', choices=[r.name for r in interface.OUTPUTS],
+                           metavar='OUTPUT', help="the output's name (~/OUTPUT)")
+            p.add_argument('--topic', metavar='TOPIC',
+                           help='the topic to listen to, when the output is remapped '
+                           '(default NODE/OUTPUT)')
+            p.add_argument('--once', action='store_true', help='print one message and exit')
+            p.add_argument('--count', type=_count, metavar='N',
+                           help='print N messages and exit')
+        elif name == 'set':
+            p.add_argument('name', metavar='NAME', help="the parameter's name")
+            p.add_argument('value', metavar='VALUE', help='its new value')
         if command.numbers:
             p.add_argument('numbers', type=_number, nargs='*', metavar='NUMBER',
                            help=command.numbers)
@@ -280,6 +333,9 @@ def parse_args(argv):
         for i in command.quaternions:
             w, *xyz = args.numbers[i:i + 4]
             args.numbers[i:i + 4] = [*xyz, w]
+    fields = command.row.fields if command.row is not None else {}
+    hint = angle_hint(args.numbers) if 'angles' in fields and not args.deg else ''
+    args.hints = [hint] if hint else []
     return args
 
 

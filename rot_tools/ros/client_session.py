@@ -163,6 +163,20 @@ class Client:
         response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
+    def parameter_type(self, name):
+        """Return the type the node declares for parameter ``name`` (ParameterType), or None."""
+        from rcl_interfaces.srv import DescribeParameters
+        descriptors = self.call(DescribeParameters, 'describe_parameters',
+                                DescribeParameters.Request(names=[name])).descriptors
+        return descriptors[0].type if descriptors else None
+
+    def set_parameter(self, parameter):
+        """Set one parameter (rcl_interfaces/Parameter); return the node's SetParametersResult."""
+        from rcl_interfaces.srv import SetParameters
+        request = SetParameters.Request(parameters=[parameter])
+        (result,) = self.call(SetParameters, 'set_parameters', request).results
+        return result
+
     def refusal_counts(self):
         """{reason: n} of the refusals the node has counted so far."""
         return _counts(describe_data(self.describe()))
@@ -180,9 +194,12 @@ class Client:
                                    self.timeout):
                 raise Unreachable(self.missing(f'publisher on {sub.topic_name}'))
 
-    def send(self, name, msg, pictures):
+    def send(self, name, msg, pictures, topic=None):
         """
-        Publish ``msg`` on the node's ~/name until it answers; return (stamp, answer).
+        Publish ``msg`` on the node's ~/name until it answers; return (topic, stamp, answer).
+
+        ``topic``: where the node reads ~/name when it is remapped (default NODE/name); the
+        topic returned is the one really used, after the client's own remappings.
 
         The answer is {output: message}: the outputs stamped as one sent message, the
         ~/rotation_matrix whose content matches, and, when ``pictures``, the pictures of that
@@ -202,8 +219,8 @@ class Client:
         subs.append(self.node.create_subscription(
             message_class(interface.output_named(matrix).type_name), self.topic(matrix),
             lambda m: answers.matrices.append(m), qos))
-        topic = self.topic(name)
-        pub = self.node.create_publisher(type(msg), topic, 10)
+        pub = self.node.create_publisher(type(msg), topic or self.topic(name), 10)
+        topic = pub.topic_name
         self.wait_for_match(pub, subs)
         before = self.refusal_counts()
         deadline = time.monotonic() + self.timeout
@@ -232,7 +249,7 @@ class Client:
         if pictures:
             self.spin_until(lambda: set(picture_outputs()) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
-        return stamp, {**answer, matrix: matrix_msg}
+        return topic, stamp, {**answer, matrix: matrix_msg}
 
 
 def _key(stamp):

@@ -14,23 +14,32 @@ quick start has this instead (doc/client.md is its manual)::
     rotation_client describe
     rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
     rotation_client tf REFERENCE BODY [--once] [--seq SEQ] [--deg]
+    rotation_client tf-demo [--duration S]
+    rotation_client echo OUTPUT [--once | --count N]
+    rotation_client set NAME VALUE
 
 Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
 
-An input command — one per input of the node, rot_tools.io.interface.INPUTS — publishes
-one message, stamped with the current time, on the node's input of that name (Euler angles
-of any sequence and unit are sent as the same rotation in the node's euler_sequence and
-angle_unit: :func:`node_angles`) and prints the node's answer on its output topics for that
-message, output by output by name
-(rot_tools.ros.client_session) — as YAML, or JSON with ``--json`` (rot_tools.io.report's
-writers). The command line is parsed by rot_tools.ros.client_arguments. The node draws pictures
-(``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so they are
-printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
-seconds. ``describe`` prints ~/describe's report; ``screw-path`` calls ~/screw_path and
-prints the path. ``tf`` needs no node: it listens to /tf and /tf_static itself
-(rot_tools.ros.tf_input) and prints the report of BODY in REFERENCE — tf2_echo's job, with every
-representation — once a second until Ctrl-C, or once with ``--once``; a frame that does not
-appear within ``--timeout`` is one line on stderr, exit status 1.
+An input command — one per input of the node, rot_tools.io.interface.INPUTS — publishes one
+message, stamped with the current time, on the node's input of that name (Euler angles of any
+sequence and unit are sent as the same rotation in the node's euler_sequence and angle_unit:
+:func:`node_angles`) and prints the node's answer on its output topics for that message, output
+by output by name (rot_tools.ros.client_session) — as YAML, or JSON with ``--json``
+(rot_tools.io.report's writers). ``--topic`` sends to an input remapped away from
+``NODE/NAME``; the topic printed is the one used. Euler angles typed in radians larger than 2π
+get rot-tools' hint on stderr (rot_tools.io.report.angle_hint). The command line is parsed by
+rot_tools.ros.client_arguments. The node draws pictures (``~/screw_axis``, ``~/markers``) at a
+limited rate, the latest input winning, so they are printed when the node drew this input: the
+client waits for them at most ``PICTURE_WAIT`` seconds. ``describe`` prints ~/describe's
+report; ``screw-path`` calls ~/screw_path and prints the path. ``tf`` needs no node: it listens
+to /tf and /tf_static itself (rot_tools.ros.tf_input) and prints the report of BODY in
+REFERENCE — tf2_echo's job, with every representation — once a second until Ctrl-C, or once
+with ``--once``; a frame that does not appear within ``--timeout`` is one line on stderr, exit
+status 1. ``tf-demo`` publishes a small moving tree (rot_tools.ros.tf_demo) until Ctrl-C or
+``--duration``. ``echo OUTPUT`` prints each message of that output as it arrives, as the input
+commands print it, until Ctrl-C, ``--once`` or ``--count N``. ``set NAME VALUE`` reads the type
+the node declares for NAME (~/describe_parameters), sends VALUE as that type (~/set_parameters)
+and prints the node's answer in one line: a refusal, with the node's reason, is exit status 1.
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -39,10 +48,11 @@ drop the reply to a brand-new service client, so a call is repeated after ``RESE
 seconds. Every wait is bounded by ``--timeout``.
 
 Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
-be reached within ``--timeout``, or ~/describe has nothing to report (one line on stderr
-naming what); 2 bad arguments, ROS arguments included, or the node refused the input (one
-line on stderr with the node's reason). rclpy is used here only, and only once the command
-line is known to be good: ``--help``, ``--version`` and bad arguments start nothing.
+be reached within ``--timeout``, or ~/describe has nothing to report, or the node did not
+set a parameter (one line on stderr naming what); 2 bad arguments, ROS arguments included,
+or the node refused the input (one line on stderr with the node's reason); 130 Ctrl-C.
+rclpy is used here only, and only once the command line is known to be good: ``--help``,
+``--version`` and bad arguments start nothing.
 ``rot-tools`` stays ROS-free.
 """
 
@@ -53,6 +63,8 @@ if __name__ == '__main__':
     from rot_tools.ros.runtime import start_command
     sys.exit(start_command('rot_tools.ros.rotation_client'))
 
+from collections import deque
+import math
 import re
 import sys
 import time
@@ -221,10 +233,10 @@ def _input_command(client, args):
     parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
     msg, sent = _input_message(args, parameters)
     msg.header.frame_id = args.frame
-    name = args.command
-    (sec, nanosec), answer = client.send(name, msg, parameters['publish_markers'])
+    topic, (sec, nanosec), answer = client.send(args.command, msg,
+                                                parameters['publish_markers'], args.topic)
     return {'node': client.target,
-            'input': {'topic': client.topic(name), 'type': args.row.type_name,
+            'input': {'topic': topic, 'type': args.row.type_name,
                       'frame_id': args.frame, 'stamp': {'sec': sec, 'nanosec': nanosec},
                       **sent},
             'answer': _answer_data(answer, parameters)}
@@ -293,9 +305,101 @@ def _tf_command(client, args):
         client.spin_until(lambda: time.monotonic() >= due, 1.0)
 
 
+def _tf_demo_command(client, args):
+    """tf-demo: publish the demo tree until Ctrl-C or --duration; nothing to print after."""
+    from rot_tools.ros import tf_demo, tf_input
+    missing = tf_input.tf2_msgs_missing()
+    if missing:
+        raise Unreachable(missing)
+    demo = tf_demo.TfDemo(client.node)
+    try:
+        until = 'until Ctrl-C' if args.duration is None else f'for {args.duration:g} s'
+        write(f'publishing {tf_demo.frames()} on {demo.tf.topic_name} and '
+              f'{demo.tf_static.topic_name} {until}\n')
+        sys.stdout.flush()
+        end = math.inf if args.duration is None else time.monotonic() + args.duration
+        while time.monotonic() < end:
+            client.spin_until(lambda: time.monotonic() >= end, 1.0)
+    finally:
+        demo.close()
+    return None
+
+
+def _echo_data(msg, row, parameters):
+    """One message of an output as plain data: its header's stamp and frame, and its values."""
+    data = {}
+    if hasattr(msg, 'header'):
+        stamp = msg.header.stamp
+        data = {'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
+                'frame_id': msg.header.frame_id}
+    return {**data, row.name: PRINTED.get(row.name, _values)(msg, row, parameters)}
+
+
+def _echo_command(client, args):
+    """echo: print each message of the node's output until Ctrl-C, --once or --count N."""
+    from rclpy.qos import QoSProfile
+    from rot_tools.ros.messages import message_class
+    row = interface.output_named(args.output)
+    parameters = client.parameters(['euler_sequence', 'angle_unit'])
+    received = deque()
+    sub = client.node.create_subscription(message_class(row.type_name),
+                                          args.topic or client.topic(row.name),
+                                          lambda m: received.append(m),
+                                          QoSProfile(depth=100))
+    if not client.spin_until(lambda: sub.get_publisher_count() > 0, args.timeout):
+        raise Unreachable(client.missing(f'publisher on {sub.topic_name}'))
+    left = 1 if args.once else args.count or math.inf
+    while left > 0:
+        client.spin_until(lambda: received, 1.0)
+        while received and left > 0:
+            data = _echo_data(received.popleft(), row, parameters)
+            if args.json:
+                write(to_json(data), json_text=True)
+            else:
+                write('---\n' + to_yaml(data))
+            sys.stdout.flush()
+            left -= 1
+    return None
+
+
+def _parameter_value(kind, text):
+    """
+    Return the ParameterValue of ``text`` as the node declares it: ``kind`` (ParameterType).
+
+    A string parameter takes the text as it is; the others read it as ``ros2 param set``
+    does (YAML: 2, 2.5, true, [1, 2]), an integer given for a double made a double. A value
+    of another type is sent as read: the node says why it refuses it.
+    """
+    from rcl_interfaces.msg import ParameterType, ParameterValue
+    from rclpy.parameter import get_parameter_value
+    if kind == ParameterType.PARAMETER_STRING:
+        return ParameterValue(type=kind, string_value=text)
+    value = get_parameter_value(text)
+    if kind == ParameterType.PARAMETER_DOUBLE and value.type == ParameterType.PARAMETER_INTEGER:
+        return ParameterValue(type=kind, double_value=float(value.integer_value))
+    return value
+
+
+def _set_command(client, args):
+    """set: set one parameter as the node declares it; its answer, or Unreachable."""
+    from rcl_interfaces.msg import Parameter, ParameterType
+    from rclpy.parameter import parameter_value_to_python
+    kind = client.parameter_type(args.name)
+    if kind in (None, ParameterType.PARAMETER_NOT_SET):
+        raise Unreachable(f'node {client.target} has no parameter {args.name!r}')
+    value = _parameter_value(kind, args.value)
+    result = client.set_parameter(Parameter(name=args.name, value=value))
+    shown = f'{args.name} = {parameter_value_to_python(value)!r}'
+    if not result.successful:
+        raise Unreachable(f'node {client.target} refused {shown}: '
+                          + ' '.join(result.reason.split()))
+    return f'node {client.target}: {shown}\n'
+
+
 COMMANDS = {**{row.name: _input_command for row in interface.INPUTS},
             'describe': _describe_command, 'screw-path': _screw_path_command,
-            'tf': _tf_command}
+            'tf': _tf_command, 'tf-demo': _tf_demo_command, 'echo': _echo_command,
+            'set': _set_command}
 """What runs each command: every input of the node is sent by _input_command."""
 
 
@@ -353,10 +457,15 @@ def main(argv=None):
         if client is not None:
             client.close()
         rclpy.try_shutdown()
-    if isinstance(result, str):  # describe's YAML, as the node wrote it
+    if result is None:  # printed as it went (echo, tf-demo)
+        pass
+    elif isinstance(result, str):  # describe's YAML as the node wrote it; set's line
         write(result)
     elif args.json:
         write(to_json(result), json_text=True)
     else:
         write(to_yaml(result))
+    for hint in args.hints:
+        sys.stdout.flush()
+        print(f'{PROG}: hint: {hint}', file=sys.stderr)
     return 0

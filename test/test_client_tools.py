@@ -1,0 +1,290 @@
+"""
+rotation_client's tools around the inputs: --topic, the angle hint, echo, set and tf-demo.
+
+Each runs the client as a process against rotation_node processes of this run (conftest's
+isolated domain and namespaces), over DDS; expected values come from closed forms and
+scipy, not from rot_tools.
+"""
+
+import json
+import math
+import re
+import signal
+import subprocess
+import sys
+
+from conftest import DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
+from doc_blocks import assert_doc_output
+import pytest
+from scipy.spatial.transform import Rotation
+from test_client import answered, approx, CLIENT, DIGITS, one_line_error, run
+import yaml
+
+HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in degrees, '
+        'add --deg\n')
+
+
+@pytest.fixture(scope='module')
+def node(tmp_path_factory):
+    """Return the name of a rotation_node process (default parameters) for this module."""
+    process = NodeProcess(tmp_path_factory.mktemp('tools'))
+    answered('orientation', 0, 0, 0, 1, '--node', process.name)
+    yield process.name
+    process.kill()
+
+
+def popen(*args):
+    command = CLIENT + [str(a) for a in args]
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=script_env(command), stdin=subprocess.DEVNULL)
+
+
+def wait_subscribed(tester, topic):
+    """Wait until something (the client under test) subscribes to ``topic``."""
+    tester.spin_until(lambda: tester.node.count_subscribers(topic) > 0, DISCOVERY_TIMEOUT,
+                      f'a subscription on {topic}')
+
+
+# ---------------------------------------------------------------------------------------
+# --topic: an input remapped away from ~/NAME
+
+
+def test_topic_reaches_a_remapped_input(node_process):
+    remapped = f'/{RUN}/robot/imu/data'
+    process = node_process('-r', f'~/imu:={remapped}')
+    q = [0.0, 0.0, math.sin(0.3), math.cos(0.3)]
+    out = answered('imu', *q, '--topic', remapped, '--node', process.name)
+    assert out['input']['topic'] == remapped
+    assert out['answer']['axis_angle'] == approx([0.0, 0.0, 0.6])
+    # A refusal of what was sent there is the node's sentence (matched by source).
+    line = one_line_error(run('imu', 0, 0, 0, 0, '--topic', remapped, '--node',
+                              process.name), 2)
+    assert line == (f'rotation_client: node {process.name} refused the input on {remapped}: '
+                    'orientation is the zero quaternion (zero_quaternion)')
+    # Remapped by the client's own ROS arguments: the topic printed is the one used.
+    out = answered('imu', *q, '--node', process.name, '--ros-args', '-r',
+                   f'{process.name}/imu:={remapped}')
+    assert out['input']['topic'] == remapped
+
+
+# ---------------------------------------------------------------------------------------
+# The angle hint
+
+
+@pytest.mark.parametrize('args, hint', [
+    (('ZYX', 30, 20, 10), HINT),
+    (('xyz', 10, -30, 20), HINT),
+    (('ZYX', 30, 20, 10, '--deg'), ''),
+    (('ZYX', 6.2, -6.2, 1), ''),
+])
+def test_angle_hint(node, args, hint):
+    """Radians typed beyond 2π: one hint line on stderr after the answer, status 0."""
+    result = run('euler', *args, '--node', node)
+    assert result.returncode == 0 and result.stderr == hint, result.stderr
+    assert yaml.safe_load(result.stdout)['answer']['euler_angles']['unit'] == 'rad'
+
+
+# ---------------------------------------------------------------------------------------
+# echo
+
+
+def test_echo_once_prints_the_answer(node, tester):
+    echo = popen('echo', 'rpy', '--once', '--json', '--node', node, '--timeout', 20)
+    wait_subscribed(tester, f'{node}/rpy')
+    sent = answered('orientation', 0, math.sin(0.2), 0, math.cos(0.2), '--node', node)
+    out, err = echo.communicate(timeout=60)
+    assert echo.returncode == 0 and err == '', err
+    data = json.loads(out)
+    assert data['frame_id'] == 'map' and set(data) == {'stamp', 'frame_id', 'rpy'}
+    assert data['stamp']['sec'] >= sent['input']['stamp']['sec']
+    assert data['rpy'] == {'roll': 0.0, 'pitch': pytest.approx(0.4, **DIGITS), 'yaw': 0.0,
+                           'unit': 'rad'}
+
+
+def test_echo_count_prints_each_message(node, tester):
+    echo = popen('echo', 'quaternion', '--count', 3, '--node', node, '--timeout', 20)
+    wait_subscribed(tester, f'{node}/quaternion')
+    for angle in (0.1, 0.2, 0.3):
+        answered('euler', 'ZYX', angle, 0, 0, '--node', node)
+    out, err = echo.communicate(timeout=60)
+    assert echo.returncode == 0 and err == '', err
+    documents = list(yaml.safe_load_all(out))
+    assert len(documents) == 3
+    # Each input is sent until answered, so one may come twice; the last is the last sent.
+    assert documents[-1]['quaternion'] == {'x': 0.0, 'y': 0.0, 'z': approx(math.sin(0.15)),
+                                           'w': approx(math.cos(0.15))}
+
+
+def test_echo_unknown_output_and_unreachable(node):
+    line = one_line_error(run('echo', 'nothing'), 2)
+    assert "argument OUTPUT: invalid choice: 'nothing'" in line
+    line = one_line_error(run('echo', 'rpy', '--count', '0'), 2)
+    assert "--count: must be a whole number >= 1, got '0'" in line
+    absent = f'/{RUN}/nobody/rot_tools'
+    line = one_line_error(run('echo', 'rpy', '--node', absent, '--timeout', 1), 1)
+    assert line.startswith(f'rotation_client: cannot reach node {absent}')
+
+
+# ---------------------------------------------------------------------------------------
+# set
+
+
+def set_line(result):
+    assert result.returncode == 0 and result.stderr == '', result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == 1
+    return lines[0]
+
+
+def test_set_types_values_as_the_node_declares_them(node_process):
+    process = node_process()
+    name = process.name
+    assert set_line(run('set', 'angle_unit', 'deg', '--node', name)) == (
+        f"node {name}: angle_unit = 'deg'")
+    # An integer for a double, digits for a string, 'false' for a bool.
+    assert set_line(run('set', 'quaternion_tolerance', '1', '--node', name)) == (
+        f'node {name}: quaternion_tolerance = 1.0')
+    assert set_line(run('set', 'euler_sequence', 'xyz', '--node', name)) == (
+        f"node {name}: euler_sequence = 'xyz'")
+    assert set_line(run('set', 'publish_markers', 'false', '--node', name)) == (
+        f'node {name}: publish_markers = False')
+    answer = answered('euler', 'xyz', 90, 0, 0, '--deg', '--node', name)
+    assert answer['input']['unit'] == 'deg' and answer['input']['sequence'] == 'xyz'
+    assert answer['answer']['euler_angles']['angles'] == approx([90, 0, 0])
+    assert 'markers' not in answer['answer']
+
+
+@pytest.mark.parametrize('args, why', [
+    (('angle_unit', 'degrees'), "refused angle_unit = 'degrees': angle_unit 'degrees' is not "
+     "'rad' or 'deg'"),
+    (('quaternion_tolerance', 'abc'), "refused quaternion_tolerance = 'abc': "),
+    (('nothing', '1'), "has no parameter 'nothing'"),
+])
+def test_set_refused_is_the_nodes_reason(node, args, why):
+    line = one_line_error(run('set', *args, '--node', node), 1)
+    assert line.startswith(f'rotation_client: node {node} {why}'), line
+
+
+# ---------------------------------------------------------------------------------------
+# tf-demo
+
+
+def remapped(namespace):
+    """Return the ROS arguments that move /tf and /tf_static into ``namespace``."""
+    return ('--ros-args', '-r', f'/tf:={namespace}/tf',
+            '-r', f'/tf_static:={namespace}/tf_static')
+
+
+def test_tf_demo_publishes_the_tree(tester, namespace):
+    from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
+    from tf2_msgs.msg import TFMessage
+    tester.subscribe(f'{namespace}/tf', TFMessage, TF_QOS)
+    tester.subscribe(f'{namespace}/tf_static', TFMessage, TF_STATIC_QOS)
+    demo = popen('tf-demo', *remapped(namespace))
+    try:
+        line = demo.stdout.readline()
+        assert line == (f'publishing map -> odom -> base_link -> camera on {namespace}/tf and '
+                        f'{namespace}/tf_static until Ctrl-C\n')
+        static = tester.wait_messages(f'{namespace}/tf_static', 1, DISCOVERY_TIMEOUT)[0]
+        edges = {(t.header.frame_id, t.child_frame_id): t.transform for t in static.transforms}
+        camera = edges['base_link', 'camera']
+        q = camera.rotation
+        assert Rotation.from_quat([q.x, q.y, q.z, q.w]).as_euler('ZYX', degrees=True) == approx(
+            [0, 15, 0])
+        assert set(edges) == {('map', 'odom'), ('base_link', 'camera')}
+        moving = tester.wait_messages(f'{namespace}/tf', 5, DISCOVERY_TIMEOUT)
+        for msg in moving:
+            (t,) = msg.transforms
+            assert (t.header.frame_id, t.child_frame_id) == ('odom', 'base_link')
+            q, b = t.transform.rotation, t.transform.translation
+            yaw = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_euler('ZYX')[0]
+            # On the circle of radius 1 about (0, 1, 0), facing along it.
+            assert [b.x, b.y, b.z] == pytest.approx([math.sin(yaw), 1 - math.cos(yaw), 0],
+                                                    abs=1e-12)
+        result = run('tf', 'map', 'camera', '--once', '--deg', '--timeout', 20,
+                     *remapped(namespace))
+        assert result.returncode == 0, result.stderr
+        report = yaml.safe_load(result.stdout)
+        assert report['chain'] == ['map', 'odom', 'base_link', 'camera']
+        assert (report['rpy']['roll'], report['rpy']['pitch']) == (0.0, 15.0)
+        command = "rotation_client tf map camera --once --deg | sed -n '1,3p;/^rpy:/,/pitch:/p'"
+        lines = result.stdout.splitlines(keepends=True)
+        rpy = lines.index('rpy:\n')
+        assert_doc_output('readme-tf', ('$ rotation_client tf-demo &\n' + line).replace(
+            namespace, '') + f'$ {command}\n' + ''.join(lines[:3] + lines[rpy:rpy + 3]))
+    finally:
+        demo.send_signal(signal.SIGINT)
+        out, err = demo.communicate(timeout=30)
+    assert demo.returncode == 130 and out == '' and err == '', err
+
+
+def test_tf_demo_for_a_duration(namespace):
+    demo = popen('tf-demo', '--duration', 1, *remapped(namespace))
+    out, err = demo.communicate(timeout=60)
+    assert demo.returncode == 0 and err == '', err
+    assert out.endswith(f'{namespace}/tf_static for 1 s\n')
+
+
+def test_tf_demo_without_tf2_msgs():
+    """One line and exit 1 when tf2_msgs does not import."""
+    probe = (
+        'import sys\n'
+        'class Refuse:\n'
+        '    def find_spec(self, name, path=None, target=None):\n'
+        "        if name.split('.')[0] == 'tf2_msgs':\n"
+        "            raise ImportError('refused: ' + name)\n"
+        'sys.meta_path.insert(0, Refuse())\n'
+        'from rot_tools.ros.rotation_client import main\n'
+        "sys.exit(main(['tf-demo']))\n")
+    command = [sys.executable, '-c', probe]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60,
+                            env=script_env(command), cwd=REPO)
+    assert result.returncode == 1 and result.stdout == ''
+    assert result.stderr.count('\n') == 1
+    assert result.stderr.startswith('rotation_client: tf2_msgs is not importable'), (
+        result.stderr)
+
+
+# ---------------------------------------------------------------------------------------
+# Ctrl-C
+
+
+def test_echo_interrupted_exits_130_quietly(node, tester):
+    echo = popen('echo', 'rpy', '--node', node, '--timeout', 20)
+    wait_subscribed(tester, f'{node}/rpy')
+    answered('orientation', 0, 0, 0, 1, '--node', node)
+    tester.spin_for(0.2)
+    echo.send_signal(signal.SIGINT)
+    out, err = echo.communicate(timeout=30)
+    assert echo.returncode == 130 and err == '', err
+    assert out.startswith('---\n')
+
+
+# ---------------------------------------------------------------------------------------
+# doc/client.md's examples of echo and set
+
+
+def test_doc_examples(node, tester):
+    shown = (node, '/rot_tools')
+    echo = popen('echo', 'rpy', '--once', '--node', node, '--timeout', 20)
+    wait_subscribed(tester, f'{node}/rpy')
+    answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node)
+    out, err = echo.communicate(timeout=60)
+    assert echo.returncode == 0, err
+    text = '$ rotation_client echo rpy --once\n' + out
+    assert_doc_output('client-echo', _stamps_elided(text))
+    lines = []
+    for args in (('set', 'angle_unit', 'deg'), ('set', 'angle_unit', 'degrees'),
+                 ('euler', 'ZYX', 30, 20, 10)):
+        result = run(*args, '--node', node)
+        lines.append(f'$ rotation_client {" ".join(map(str, args))}'
+                     + (' > /dev/null' if args[0] == 'euler' else '') + '\n')
+        lines.append(('' if args[0] == 'euler' else result.stdout) + result.stderr)
+        if result.returncode:
+            lines.append(f'$ echo $?\n{result.returncode}\n')
+    run('set', 'angle_unit', 'rad', '--node', node)
+    assert_doc_output('client-set', ''.join(lines).replace(*shown))
+
+
+def _stamps_elided(text):
+    return re.sub(r'(\n\s*sec: )\d+(\n\s*nanosec: )\d+', r'\1...\2...', text)
