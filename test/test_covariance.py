@@ -240,6 +240,8 @@ def test_nan_and_inf_are_refused(bad):
 
 @pytest.mark.parametrize('call, message', [
     (lambda: rotvec_covariance_to_euler(R0, np.eye(4)), r'cov must have shape \(\.\.\., 3, 3\)'),
+    (lambda: rotvec_covariance_to_euler(R0, [[1, 0], [0]]), r'cov must be numeric'),
+    (lambda: euler_covariance_to_rotvec([0, 0, 0], 'abc'), r'cov must be numeric'),
     (lambda: rotvec_covariance_to_euler(R0[:2], C0), r'R must have shape'),
     (lambda: euler_covariance_to_rotvec([0.1, 0.2], C0), r'Euler angles must have shape'),
     (lambda: transform_pose_covariance(R0, [0, 0, 0], C0), r'cov6 must have shape .*6, 6'),

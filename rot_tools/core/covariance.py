@@ -22,7 +22,7 @@ the sequences, §3 for the rotation vector.
 """
 
 import numpy as np
-from rot_tools.core._arrays import apart, finite_array
+from rot_tools.core._arrays import apart, as_float_array, finite_array
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence
 from rot_tools.core.so3 import rot_x, rot_y, rot_z, skew, validate_rotation
@@ -133,8 +133,8 @@ def _sandwich(M, C):
 
 def _rotation_covariance(cov):
     """Validate cov as a 3×3 rotation covariance or a 6×6 pose covariance (x, y, z, rx, ry, rz)."""
-    shape = np.shape(cov)
-    return validate_covariance(cov, 6 if shape[-2:] == (6, 6) else 3)
+    cov = as_float_array(cov, (), 'cov')
+    return validate_covariance(cov, 6 if cov.shape[-2:] == (6, 6) else 3)
 
 
 def _through(M, C, distance, seq, direction):
