@@ -40,8 +40,7 @@ def test_doc_plot_is_what_the_command_draws(tmp_path):
                    if line.startswith('rot-tools bag') and '--plot doc/bags.png' in line)
     done = _shell(command.replace('doc/bags.png', str(tmp_path / 'bags.png')))
     assert done.returncode == 0, done.stderr
-    said = next(line for line in doc.splitlines()  # the line on stderr, shown in the doc
-                if line.startswith('rot-tools bag: --plot doc/bags.png'))
+    said = doc_block('bag-plot-note').rstrip('\n')  # the line on stderr, shown in the doc
     assert done.stderr == said.replace('doc/bags.png', str(tmp_path / 'bags.png')) + '\n'
     assert '](bags.png)' in doc
     new, old = imread(tmp_path / 'bags.png'), imread(REPO / 'doc' / 'bags.png')
