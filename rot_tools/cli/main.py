@@ -47,7 +47,7 @@ from rot_tools import (
     validate_rotation)
 from rot_tools.core.errors import RotationError
 from rot_tools.io.arguments import negative_numbers_as_values
-from rot_tools.io.report import DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
+from rot_tools.io.report import angle_hint, DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
 from rot_tools.io.report import transform_report
 
 PROG = 'rot-tools'
@@ -188,10 +188,9 @@ def _angle_in(args, values, size=None):
     if args.deg:
         return np.radians(values)
     values = np.asarray(values, dtype=np.float64)
-    size = float(np.max(np.abs(values))) if size is None else size
-    if size > 2.0 * math.pi:
-        args.hints.append(f'an angle of {size:g} rad is more than 2π: if it is in degrees, '
-                          'add --deg')
+    hint = angle_hint(values if size is None else [size])
+    if hint:
+        args.hints.append(hint)
     return values
 
 
