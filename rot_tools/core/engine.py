@@ -123,10 +123,10 @@ def plain_item(x, tail):
     """
     Return x's entries as Python floats (nested as a kernel takes them), or None.
 
-    Not None only where x is one finite item of trailing shape ``tail``: a float64 array, or
-    for a vector a list or tuple of Python floats. The fast paths of the public functions
-    run their kernel on FLOATS straight on it; anything else (a batch, another type, NaN/Inf)
-    takes apply, which converts, refuses and raises as it always does.
+    Not None only where x is one finite item of trailing shape ``tail`` ((n,) or (3, 3)): a
+    float64 array, or for a vector a list or tuple of Python floats. The fast paths of the
+    public functions run their kernel on FLOATS straight on it; anything else (a batch,
+    another type, NaN/Inf) takes apply, which converts, refuses and raises as it always does.
     """
     if type(x) is np.ndarray and x.dtype is FLOAT64 and x.shape == tail:
         v = x.tolist()
