@@ -371,8 +371,8 @@ def test_large_tf_messages_are_cut_and_the_node_keeps_serving(node_process, test
                       TIMEOUT * 6, 'the output of the sample after the flood')
     _, data = describe(tester, node.name)
     assert data['refused']['tf_too_many_transforms'] == 3
-    assert "(tf_too_many_transforms): a TFMessage of 100,000 transforms: the first 1,000 " \
-        'taken, 99,000 dropped' in node.wait_for_stderr('(tf_too_many_transforms)')
+    assert ('(tf_too_many_transforms): a TFMessage of 100,000 transforms: the first 1,000 '
+            'taken, 99,000 dropped') in node.wait_for_stderr('(tf_too_many_transforms)')
 
 
 def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
@@ -626,6 +626,20 @@ def test_follower_refuses_future_stamps_and_starts_over_when_time_goes_back(foll
         send(sec)
     assert [r[1] for r in refused][2:] == ['tf_time_jump']
     assert got[-1][0].stamp.sec == 502
+
+
+def test_follower_forgets_dynamic_edges_not_heard_but_not_static_ones(follower, monkeypatch):
+    from rclpy.serialization import serialize_message
+    from rot_tools.ros import tf_input
+    follower, got, refused = follower
+    follower.add(make_transform('a', 'b'), False, '/tf')
+    follower.add(make_transform('a', 'b'), True, '/tf_static')  # b's edge turns static
+    follower.add(make_transform('a', 'd'), False, '/tf')
+    # Everything heard is now older than the cache, and the sweep is due.
+    monkeypatch.setattr(tf_input, 'CACHE_SECONDS', -1.0)
+    monkeypatch.setattr(tf_input, 'FORGET_PERIOD', 0.0)
+    follower.on_message(serialize_message(tf2_msgs.TFMessage()), False)
+    assert follower.tree.frames == ['a', 'b'] and refused == []
 
 
 def test_follower_takes_at_most_max_transforms_a_message(follower):

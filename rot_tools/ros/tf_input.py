@@ -303,10 +303,10 @@ class TfFollower:
                 f'a TFMessage of {count:,} transforms: the first {len(transforms):,} taken, '
                 f'{count - len(transforms):,} dropped (at most MAX_TRANSFORMS_PER_MESSAGE = '
                 f'{MAX_TRANSFORMS_PER_MESSAGE:,} a message)'))
+        self._forget_unheard()  # first: a new frame may need the place of a forgotten one
         now = 0 if static else self.node.get_clock().now().nanoseconds
         for transform in transforms:
             self.add(transform, static, topic, now)
-        self._forget_unheard()
         self.update()
 
     def add(self, transform, static, topic, now=0):
@@ -347,7 +347,9 @@ class TfFollower:
             return self._refuse(topic, _REASON[exc.reason], str(exc))
         if static or self.tree.time_range(parent, child)[1] == t:
             self._newest[child] = (t, ns)
-        if not static:
+        if static:
+            self._heard.pop(child, None)  # a static edge is never forgotten
+        else:
             self._heard[child] = time.monotonic()
         return True
 
