@@ -18,9 +18,11 @@ Processes (all started here, all on the loopback of one isolated DDS domain):
   the receive time minus the header stamp (the latency through the node).
 
 All run all the time; the trials go round them, rate by rate (500, 1000, 2000 and 5000
-msg/s offered for 3 s each by default), in two rounds, the order rotating. Delivered msg/s
-is the best round's (what the process can do; a round disturbed by other work on the
-machine is left out), latency and CPU the median. Before measuring, every output of each
+msg/s offered for 3 s each by default), in three rounds, the order rotating. Delivered
+msg/s is the best round's (what the process can do; a round disturbed by other work on the
+machine is left out), latency and CPU the median (of three rounds, one disturbed round is
+left out: with two, the median was their mean, and one round's stall on a shared machine
+swung a p99 ratio from 1.0 to 2.0 between runs). Before measuring, every output of each
 node is seen to arrive (discovery is awaited by subscription counts and by messages
 flowing, never by sleeping); during the trials only ``~/screw`` is subscribed, while each
 node still publishes all of its outputs for every input. Options add targets: the relay
@@ -432,9 +434,9 @@ def main(argv=None):
                         help='per trial, at least (3); longer where needed for --min-messages')
     parser.add_argument('--min-messages', type=int, default=1000,
                         help='messages per trial at least, so p99 rests on 10+ samples (1000)')
-    parser.add_argument('--repeats', type=int, default=2,
-                        help='interleaved rounds of every (node, rate) trial (2); delivery is '
-                        "the best round's")
+    parser.add_argument('--repeats', type=int, default=3,
+                        help='interleaved rounds of every (node, rate) trial (3); delivery is '
+                        "the best round's, latency and CPU the median")
     parser.add_argument('--full-relay', action='store_true',
                         help='also measure relay_node.py --full-interface (with '
                         "rotation_node's other entities, idle)")

@@ -1,7 +1,7 @@
 """
 A bare rclpy relay: rotation_node's topics and QoS with constant content and no math.
 
-It subscribes ``~/pose`` (geometry_msgs/PoseStamped, sensor-data QoS: best effort) and, for
+It subscribes ``~/pose`` (geometry_msgs/PoseStamped, rotation_node's INPUT_QOS) and, for
 every message, publishes rotation_node's six message outputs (reliable, depth 10):
 ``~/rotation_matrix`` (Float64MultiArray), ``~/quaternion`` (QuaternionStamped),
 ``~/axis_angle``, ``~/euler_angles`` and ``~/rpy`` (Vector3Stamped) and ``~/screw``
@@ -30,9 +30,9 @@ from nav_msgs.srv import GetPlan
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from rclpy.qos import QoSProfile
 from rot_tools.ros import runtime
-from rot_tools.ros.rotation_node import INPUTS
+from rot_tools.ros.rotation_node import INPUT_QOS, INPUTS
 from rot_tools.ros.runtime import serve
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 from std_srvs.srv import Trigger
@@ -47,7 +47,7 @@ class RelayNode(Node):
             # rotation_node's other entities, idle here. rclpy's executor pays per
             # entity on every wake-up, so this variant separates that cost from the math's.
             self._idle = [self.create_subscription(kind.msg_type, kind.topic, lambda m: None,
-                                                   qos_profile_sensor_data)
+                                                   INPUT_QOS)
                           for kind in INPUTS if kind.topic != '~/pose']
             self._idle += [self.create_service(Trigger, '~/describe', lambda req, res: res),
                            self.create_service(GetPlan, '~/screw_path', lambda req, res: res)]
@@ -59,7 +59,7 @@ class RelayNode(Node):
         self._rpy_pub = self.create_publisher(Vector3Stamped, '~/rpy', qos)
         self._screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
         self._pose_sub = self.create_subscription(
-            PoseStamped, '~/pose', self._on_pose, qos_profile_sensor_data)
+            PoseStamped, '~/pose', self._on_pose, INPUT_QOS)
 
         self._matrix = Float64MultiArray(
             layout=MultiArrayLayout(

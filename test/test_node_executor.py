@@ -44,7 +44,8 @@ from rcl_interfaces.srv import GetParameters, SetParameters
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter, parameter_value_to_python
-from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile
+from rclpy.qos import ReliabilityPolicy
 from rot_tools.ros import runtime
 from rot_tools.ros.rotation_node import INPUTS, OUTPUTS, RotationNode
 from rot_tools.ros.runtime import guard_callbacks, make_executor, spin
@@ -569,6 +570,20 @@ def test_the_node_adds_no_qos_event_handlers_to_the_wait_set(own_context, namesp
     finally:
         node.destroy_node()
         bare.destroy_node()
+
+
+def test_the_inputs_keep_a_burst_of_50(own_context, namespace):
+    """Check the inputs' QoS: best effort, volatile, keep last 50 (not sensor data's 5)."""
+    node = RotationNode(context=own_context, namespace=namespace)
+    try:
+        profiles = [sub.qos_profile for sub in node.subscriptions]
+        assert len(profiles) == len(INPUTS)
+        for profile in profiles:
+            assert profile.history == HistoryPolicy.KEEP_LAST and profile.depth == 50
+            assert profile.reliability == ReliabilityPolicy.BEST_EFFORT
+            assert profile.durability == DurabilityPolicy.VOLATILE
+    finally:
+        node.destroy_node()
 
 
 @pytest.mark.parametrize('setting', [
