@@ -6,6 +6,7 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=[package_name] + [package_name + '.' + sub for sub in ('core', 'io', 'cli', 'ros')],
+    package_data={package_name + '.ros': ['fastdds_profile.xml']},
     data_files=[
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
@@ -15,9 +16,11 @@ setup(
     ],
     install_requires=['setuptools', 'numpy', 'pyyaml'],
     extras_require={
-        'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib', 'rosbags==0.11.9'],
+        'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib', 'rosbags==0.11.9',
+                 'pyarrow==26.0.1', 'duckdb==2.0.0', 'dask[distributed]==2026.8.0'],
         'plot': ['matplotlib'],
-        'bag': ['rosbags==0.11.9'],
+        'bag': ['rosbags==0.11.9', 'pyarrow==26.0.1'],
+        'fleet': ['dask[distributed]==2026.8.0'],
     },
     zip_safe=True,
     maintainer='rot_tools maintainers',

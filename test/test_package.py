@@ -30,7 +30,7 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
 # Modules of an optional extra of setup.py that have no rosdep key: {module: extra}. They
 # are not exec_depends; rot_tools imports them only inside functions, so that everything
 # else works without them.
-OPTIONAL_EXTRAS = {'rosbags': 'bag'}
+OPTIONAL_EXTRAS = {'rosbags': 'bag', 'pyarrow': 'bag', 'dask': 'fleet'}
 # Packages the ROS wheels registered in this environment's ament index (sys.prefix/share).
 AMENT_INDEX = Path(sys.prefix, 'share', 'ament_index', 'resource_index', 'packages')
 COLCON_TIMEOUT = 300  # seconds; the build itself takes about 1 s
@@ -109,7 +109,8 @@ def test_package_xml_declares_every_package_the_code_imports(manifest):
 def test_optional_extras_name_their_modules():
     requires = importlib.metadata.distribution(PACKAGE).requires
     for module, extra in OPTIONAL_EXTRAS.items():
-        assert any(req.startswith(f'{module}==') and f'extra == "{extra}"' in req
+        assert any(req.startswith((f'{module}==', f'{module}['))
+                   and f'extra == "{extra}"' in req
                    for req in requires), (module, extra, requires)
 
 
@@ -277,3 +278,11 @@ def test_installed_cli_runs(colcon_install):
                                '--help')
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith('usage: rot-tools')
+
+
+def test_colcon_installs_the_nodes_fast_dds_profile(colcon_install):
+    """The node's middleware profile ships with the package (package_data), not only in git."""
+    found = list(colcon_install.glob('lib/python3*/site-packages/rot_tools/ros/'
+                                     'fastdds_profile.xml'))
+    assert len(found) == 1, f'no rot_tools/ros/fastdds_profile.xml under {colcon_install}'
+    assert found[0].read_text() == (REPO / 'rot_tools' / 'ros' / 'fastdds_profile.xml').read_text()
