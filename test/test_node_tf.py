@@ -712,3 +712,94 @@ def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
         assert result.returncode == status
         assert result.stderr.count('\n') == 1
         assert 'tf2_msgs is not importable (no tf2_msgs here): run make' in result.stderr
+
+
+# ---------------------------------------------------------------------------------------
+# Refusals of every kind, one after another
+
+
+def test_refusals_of_every_kind_in_sequence_are_logged_without_a_traceback(
+        node_process, tester, namespace):
+    """
+    Warnings (inputs, /tf) and errors (~/screw_path) alternate: each is its refusal line.
+
+    rclpy's logger keeps the severity of a call site's first message and raises at that
+    site for another one: one shared refusal line raised inside the callback (a traceback
+    in place of the refusal) from the second severity on.
+    """
+    from geometry_msgs.msg import PoseStamped, QuaternionStamped
+    from nav_msgs.srv import GetPlan
+    from rclpy.qos import qos_profile_sensor_data
+    from rclpy.serialization import serialize_message
+    from sensor_msgs.msg import Imu
+    node = node_process(*node_args(namespace, 'odom', 'base_link'))
+    tester.subscribe(f'{node.name}/quaternion', QuaternionStamped)
+    wait_started(tester, f'{node.name}/quaternion')
+    send_tf = tf_sender(tester, namespace)
+    pubs = {name: tester.publisher(f'{node.name}/{name}', msg_type, qos_profile_sensor_data)
+            for name, msg_type in (('pose', PoseStamped), ('imu', Imu))}
+
+    def pose(q, frame='map'):
+        msg = PoseStamped()
+        msg.header.frame_id = frame
+        o = msg.pose.orientation
+        o.x, o.y, o.z, o.w = q
+        return msg
+
+    no_orientation = Imu()
+    no_orientation.orientation_covariance[0] = -1.0
+    good = serialize_message(pose((0.0, 0.0, 0.0, 1.0)))
+    topic_inputs = [  # (reason, topic, send)
+        ('non_finite', 'pose', lambda: pubs['pose'].publish(pose((math.nan, 0., 0., 1.)))),
+        ('zero_quaternion', 'pose', lambda: pubs['pose'].publish(pose((0., 0., 0., 0.)))),
+        ('non_unit_quaternion', 'pose', lambda: pubs['pose'].publish(pose((0., 0., 0., 2.)))),
+        ('no_orientation', 'imu', lambda: pubs['imu'].publish(no_orientation)),
+        ('malformed', 'pose', lambda: pubs['pose'].publish(good[:40])),
+        ('tf_unknown_frame', 'tf', lambda: send_tf(make_transform('map', 'x'))),
+        ('tf_not_connected', 'tf', lambda: send_tf(make_transform('odom', 'a'),
+                                                   make_transform('b', 'base_link'))),
+        ('tf_bad_frame', 'tf', lambda: send_tf(make_transform('odom', ''))),
+        ('tf_loop', 'tf', lambda: send_tf(make_transform('c', 'd'), make_transform('d', 'c'))),
+        ('tf_future_stamp', 'tf', lambda: send_tf(make_transform('e', 'f', sec=2 ** 31 - 1))),
+        ('tf_time_jump', 'tf', lambda: send_tf(make_transform('g', 'h', sec=1_000),
+                                               make_transform('g', 'h', sec=500))),
+        ('tf_too_many_transforms', 'tf', lambda: send_tf(*[
+            make_transform('odom', 'a', sec=1_000, nanosec=k) for k in range(1_001)])),
+    ]
+    start, turned = pose((0.0, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 1.0, 0.0))
+    near, far = pose((0.0, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 1.0, 0.0))
+    near.pose.position.x, far.pose.position.x = -1e308, 1e308  # apart beyond float64
+    screw_paths = [  # (reason, start, goal, tolerance)
+        ('frame_mismatch', start, pose((0.0, 0.0, 1.0, 0.0), 'odom'), 0.0),
+        ('zero_quaternion', pose((0.0, 0.0, 0.0, 0.0)), turned, 0.0),
+        ('non_unit_quaternion', start, pose((0.0, 0.0, 2.0, 0.0)), 0.0),
+        ('non_finite', start, pose((0.0, 0.0, math.inf, 0.0)), 0.0),
+        ('bad_tolerance', start, turned, math.nan),
+        ('path_too_long', start, turned, 1e-6),
+        ('not_decomposable', near, far, 0.0),
+    ]
+
+    def refused():
+        return yaml.safe_load(describe(tester, node.name)[0].message)['refused']
+
+    expected = []
+    for k, (reason, topic, send) in enumerate(topic_inputs):
+        before = refused()[reason]
+        for _ in range(20):  # best effort: a message may be lost
+            send()
+            tester.spin_for(0.1)
+            if refused()[reason] > before:
+                break
+        assert refused()[reason] > before, f'{reason} on {topic} was not counted'
+        expected.append(f'refused input on {node.name}/{topic} ({reason}): '
+                        if topic != 'tf' else f'refused input on {namespace}/tf ({reason}): ')
+        if k < len(screw_paths):  # then an error: the other severity
+            reason, path_start, goal, tolerance = screw_paths[k]
+            request = GetPlan.Request(start=path_start, goal=goal, tolerance=tolerance)
+            reply = tester.call(GetPlan, f'{node.name}/screw_path', request)
+            assert reply.plan.poses == [], reason
+            expected.append(f'refused input on {node.name}/screw_path ({reason}): ')
+    stderr = node.wait_for_stderr(expected[-1])
+    assert 'Traceback' not in stderr and 'callback raised' not in stderr, stderr
+    missing = [line for line in expected if line not in stderr]
+    assert not missing, stderr

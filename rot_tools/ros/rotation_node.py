@@ -442,8 +442,13 @@ class RotationNode(Node):
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
             self._warned[topic, reason] = now
-            log = self.get_logger().error if error else self.get_logger().warning
-            log(f'refused input on {topic} ({reason}): {text}')
+            # One call site per severity: rclpy's logger keeps a call site's first severity
+            # and raises ValueError when that site logs at another one.
+            line = f'refused input on {topic} ({reason}): {text}'
+            if error:
+                self.get_logger().error(line)
+            else:
+                self.get_logger().warning(line)
 
     # -- services ----------------------------------------------------------------------
 
