@@ -1,11 +1,11 @@
 """
-Run every benchmark (``make bench``): math, first calls, node, memory, overload, goals.
+Run every benchmark (``make bench``): math, first calls, node, memory, overload, fleet, goals.
 
 Each script runs in its own process with this interpreter and prints its own tables; this
 script then collects their figures (JSON) and prints every goal with the figure measured
 and whether it is met. The whole run takes about 10 minutes on 2 cores.
 
-Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|first|node|memory|overload]
+Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|first|node|memory|overload|fleet]
 [--json-dir DIR]``. ``--quick`` is a smoke run (smaller batch, fewer repetitions and rates,
 a short flood): its figures are not the ones to quote.
 """
@@ -35,7 +35,7 @@ def run(script, args, json_path):
     return json.loads(json_path.read_text())
 
 
-def goal_rows(math, node, memory, first=None, overload=None):
+def goal_rows(math, node, memory, first=None, overload=None, fleet=None):
     rows = []
     if math:
         for r in math.get('batch', []):
@@ -91,13 +91,22 @@ def goal_rows(math, node, memory, first=None, overload=None):
         for name, v in overload['latency'].items():
             rows.append([f'overload: ~/{name} p99', f"{v['unanswered']} unanswered",
                          f"{v['p99']:.3f} s", '<= 1 s', 'yes' if v['p99'] <= 1.0 else 'NO'])
+    if fleet:
+        copies = f"{fleet['copies']} copies of the bag"
+        rows.append(['rot-tools bag --jobs 2 speed-up over --jobs 1', copies,
+                     f"{fleet['speedup']:.2f}", f">= {fleet['speedup_goal']:g}",
+                     'yes' if fleet['speedup'] >= fleet['speedup_goal'] else 'NO'])
+        rows.append(['rot-tools bag, one bag', 'bare rosbags read',
+                     f"{fleet['read_ratio']:.2f}", benchlib.fmt_goal(fleet['read_goal']),
+                     benchlib.verdict(fleet['read_ratio'], fleet['read_goal'])])
     return rows
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
-    parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory', 'overload'],
+    parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory', 'overload',
+                                           'fleet'],
                         action='append', default=[])
     parser.add_argument('--json-dir', help='keep the JSON figures here')
     args = parser.parse_args(argv)
@@ -110,11 +119,12 @@ def main(argv=None):
     memory_args = ['--seconds', '5'] if args.quick else []
     first_args = ['--messages', '2000'] if args.quick else []
     overload_args = ['--seconds', '5', '--after', '3'] if args.quick else []
+    fleet_args = ['--repeat', '1'] if args.quick else []
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as tmp:
         out = Path(args.json_dir or tmp)
         os.makedirs(out, exist_ok=True)
-        math = first = node = memory = overload = None
+        math = first = node = memory = overload = fleet = None
         if 'math' not in args.skip:
             math = run('bench_math.py', math_args, out / 'bench_math.json')
         if 'first' not in args.skip:
@@ -125,7 +135,9 @@ def main(argv=None):
             memory = run('bench_memory.py', memory_args, out / 'bench_memory.json')
         if 'overload' not in args.skip:
             overload = run('bench_overload.py', overload_args, out / 'bench_overload.json')
-        rows = goal_rows(math, node, memory, first, overload)
+        if 'fleet' not in args.skip:
+            fleet = run('bench_fleet.py', fleet_args, out / 'bench_fleet.json')
+        rows = goal_rows(math, node, memory, first, overload, fleet)
     benchlib.print_table(f'Goals (ratios rot_tools / reference, first calls in ms; '
                          f'{time.monotonic() - start:.0f} s in all)',
                          ['figure', 'against', 'measured', 'goal', 'met?'], rows)
@@ -134,7 +146,7 @@ def main(argv=None):
     tail = f'; missed: {", ".join(missed)}' if missed else ''
     print(f'\n{len(goals) - len(missed)} of {len(goals)} goals met{tail}')
     failed = [s for s, res in (('math', math), ('first', first), ('node', node),
-                               ('memory', memory), ('overload', overload))
+                               ('memory', memory), ('overload', overload), ('fleet', fleet))
               if s not in args.skip and res is None]
     if failed:
         print(f'run_all: {", ".join(failed)} benchmark failed (see above)', file=sys.stderr)

@@ -38,7 +38,7 @@ import time
 from types import SimpleNamespace
 
 import numpy as np
-from rot_tools.cli import output_file
+from rot_tools.cli import bag_parquet, output_file
 from rot_tools.cli.bag_output import in_unit, MAX_PLOTTED_TOPICS, plot_note, write_csv, write_plot
 from rot_tools.core import transform_tree
 from rot_tools.core.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
@@ -520,14 +520,14 @@ def refuse_overwriting(bag, outputs, error):
                 error(f'{option} {path} would overwrite the bag being read ({bag}): refused')
 
 
-def _release_stdout():
+def release_stdout():
     """Point the standard output at /dev/null: what could not be written is dropped."""
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, sys.stdout.fileno())
     os.close(devnull)
 
 
-def _to_stdout(write, error):
+def to_stdout(write, error):
     """
     Run ``write(sys.stdout)`` and flush it.
 
@@ -540,14 +540,20 @@ def _to_stdout(write, error):
         write(sys.stdout)
         sys.stdout.flush()
     except BrokenPipeError:  # `rot-tools bag ... --csv - | head`: the reader is done
-        _release_stdout()
+        release_stdout()
     except OSError as exc:
-        _release_stdout()
+        release_stdout()
         error(f'cannot write to the standard output: {exc.strerror or exc}')
 
 
 def run(args, error):
-    """rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2."""
+    """
+    rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2.
+
+    One bag given alone is analysed here; several (or a directory searched for bags) are
+    rot_tools.cli.fleet's.
+    """
+    from rot_tools.cli import fleet
     from rot_tools.io.report import to_json, to_yaml
 
     missing = bag_read.rosbags_missing()
@@ -556,7 +562,18 @@ def run(args, error):
               "pip install 'rot_tools[bag]'")
     if args.start is not None and args.end is not None and args.end < args.start:
         error(f'--end {args.end:g} is before --start {args.start:g}')
-    refuse_overwriting(args.path, [('--csv', args.csv), ('--plot', args.plot)], error)
+    if args.scheduler is not None and args.engine != 'dask':
+        error('--scheduler ADDRESS is the address of a Dask scheduler: it needs --engine dask')
+    try:
+        bags, searched = fleet.find_bags(args.path)
+    except bag_read.BagError as exc:
+        error(f'bag: {exc}')
+    if len(bags) > 1 or searched:
+        return fleet.run(args, bags, error)
+    args.path = bags[0]
+    fleet.check_extras(args, error)
+    refuse_overwriting(args.path, [('--csv', args.csv), ('--plot', args.plot),
+                                   ('--parquet', args.parquet)], error)
     try:
         storage, topics = analyse(args.path, args.topic or (), args.start, args.end,
                                   DEFAULT_TOLERANCE if args.tol is None else args.tol,
@@ -574,8 +591,16 @@ def run(args, error):
         except OSError as exc:
             error(f'--plot: cannot write {args.plot}: {exc.strerror or exc}')
         sys.stderr.write(plot_note(args.plot, drawn, topics[MAX_PLOTTED_TOPICS:]))
+    if args.parquet is not None:
+        fleet.parquet_directory(args.parquet, error)
+        target = os.path.join(args.parquet, bag_parquet.file_names([args.path])[0])
+        try:
+            bag_parquet.write(target, bag_parquet.table(topics, str(args.path), args.deg,
+                                                        args.seq))
+        except OSError as exc:
+            error(f'--parquet: cannot write {target}: {exc.strerror or exc}')
     if args.csv == '-':
-        _to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision), error)
+        to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision), error)
         return 0
     if args.csv is not None:
         try:
@@ -586,5 +611,5 @@ def run(args, error):
             error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
     text = to_json if args.json else to_yaml
     data = summary(args.path, storage, topics, args.deg)
-    _to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
+    to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
     return 0

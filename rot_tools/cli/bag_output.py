@@ -68,7 +68,7 @@ def _number_text(value, precision):
     return '0' if text in ('-0', '') else text
 
 
-def _binary_writer(out):
+def binary_writer(out):
     """Return a function writing bytes to the text stream ``out`` (through its buffer if any)."""
     buffer = getattr(out, 'buffer', None)
     if buffer is None:
@@ -77,7 +77,22 @@ def _binary_writer(out):
     return buffer.write
 
 
-def write_csv(out, topics, degrees, precision):
+def row_values(t, degrees):
+    """
+    Return the numbers of a Topic's rows, (n, k) float64 in csv_header's order after frame_id.
+
+    x, y, z, qx, qy, qz, qw, roll, pitch, yaw, the --seq angles, rx, ry, rz, angle, wx, wy,
+    wz; angles (and ω) in degrees when ``degrees``; ω NaN where it has no value.
+    """
+    columns = [t.position, t.quaternion, in_unit(t.rpy, degrees)]
+    if t.seq_angles is not None:
+        columns.append(in_unit(t.seq_angles, degrees))
+    columns += [in_unit(t.rotvec, degrees), in_unit(t.angle, degrees)[:, None],
+                in_unit(t.omega, degrees)]
+    return np.hstack(columns)
+
+
+def write_csv(out, topics, degrees, precision, bag=None, header=True):
     """
     Write the rows of every topic (topic by topic, in the bag's order) to ``out``.
 
@@ -87,20 +102,19 @@ def write_csv(out, topics, degrees, precision):
     first row and where Δt ≤ 0. The text is
     made by rot_tools.io.csv_text for a chunk of rows at once (Python's formatting, one
     number at a time, where its arithmetic would not be exact: precision > 12, |x| ≥ 1e15).
+    ``bag``: a first column ``bag`` holding this text on every row (a table of many bags);
+    ``header``: whether to write the line of column names.
     """
     seq = next((t.seq for t in topics if t.seq), None)
-    out.write(','.join(csv_header(seq)) + '\n')
-    write = _binary_writer(out)
+    if header:
+        out.write(','.join((['bag'] if bag is not None else []) + csv_header(seq)) + '\n')
+    first = b'' if bag is None else csv_text_cell(bag).encode() + b','
+    write = binary_writer(out)
     for t in topics:
         if not len(t.R):
             continue
-        columns = [t.position, t.quaternion, in_unit(t.rpy, degrees)]
-        if t.seq_angles is not None:
-            columns.append(in_unit(t.seq_angles, degrees))
-        columns += [in_unit(t.rotvec, degrees), in_unit(t.angle, degrees)[:, None],
-                    in_unit(t.omega, degrees)]
-        values = np.hstack(columns)
-        topic = csv_text_cell(t.topic).encode()
+        values = row_values(t, degrees)
+        topic = first + csv_text_cell(t.topic).encode()
         frames = [csv_text_cell(f).encode() for f in t.columns.frame_ids]
         fast = csv_text.numbers_fit(values, precision)
         for start in range(0, len(values), ROWS_PER_CHUNK):

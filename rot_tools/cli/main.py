@@ -157,6 +157,16 @@ def _seconds(text):
     return value
 
 
+def _jobs(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'expected an integer >= 1, got {text.strip()!r}')
+    return value
+
+
 def _tolerance(text):
     value = _number(text)
     if value < 0:
@@ -461,15 +471,20 @@ def _add_bag(sub):
     """Return the bag command: its own options, and the common ones that apply to it."""
     p = sub.add_parser(
         'bag', help='the orientations recorded in a ROS bag: summary, CSV, plot',
-        usage=f'{PROG} bag PATH [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] [--deg]\n'
-        '       [--wrap] [--csv FILE|-] [--json] [--plot FILE] [--start S] [--end S]',
+        usage=f'{PROG} bag PATH... [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] [--deg]\n'
+        '       [--wrap] [--csv FILE|-] [--json] [--plot FILE] [--start S] [--end S]\n'
+        '       [--jobs N] [--parquet DIR] [--engine dask [--scheduler ADDRESS]]',
         description=f'The orientations recorded in a ROS bag.\n\n{_BAG_TEXT}',
         epilog='examples:\n  rot-tools bag run.bag\n'
         '  rot-tools bag run.bag --topic /imu/data --csv imu.csv --deg\n'
-        '  rot-tools bag rosbag2_dir --plot rpy.png --start 10 --end 20')
+        '  rot-tools bag rosbag2_dir --plot rpy.png --start 10 --end 20\n'
+        '  rot-tools bag recordings/ --jobs 4 --parquet table/')
     p.set_defaults(handler=None)
-    p.add_argument('path', metavar='PATH',
-                   help='a ROS 1 .bag file, a rosbag2 directory, or a file in one')
+    p.add_argument('path', metavar='PATH', nargs='+',
+                   help='a ROS 1 .bag file, a rosbag2 directory, or a file in one; any other '
+                   'directory is searched for bags. Several bags: a summary per bag and '
+                   'for the fleet, a bag that cannot be read listed as failed (exit '
+                   'status 1), --csv one table with a bag column first')
     p.add_argument('--topic', action='append', metavar='T',
                    help='read this topic (repeat for more); default: every topic of a type '
                    'read')
@@ -490,6 +505,19 @@ def _add_bag(sub):
                    help="only messages recorded S seconds or more after the bag's start")
     p.add_argument('--end', type=_seconds, metavar='S',
                    help="only messages recorded at most S seconds after the bag's start")
+    p.add_argument('--jobs', type=_jobs, metavar='N',
+                   help='read the bags in N processes (default: one per CPU; 1: here, one '
+                   'after the other); the output is the same whatever N is')
+    p.add_argument('--parquet', metavar='DIR',
+                   help='write one Parquet file per bag in DIR: the --csv columns plus bag, '
+                   'stamp as int64 nanoseconds (needs pyarrow, the bag extra)')
+    p.add_argument('--engine', choices=('processes', 'dask'), default='processes',
+                   help='processes: --jobs N processes here (default); dask: each bag a '
+                   'task on a Dask cluster (the fleet extra), a local one of N workers '
+                   'unless --scheduler')
+    p.add_argument('--scheduler', metavar='ADDRESS',
+                   help='with --engine dask: the address of a running Dask scheduler '
+                   '(tcp://HOST:8786), whose workers must see the bags and DIR')
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
     common.add_argument('--deg', action='store_true', default=suppress,

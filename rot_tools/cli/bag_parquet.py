@@ -1,0 +1,80 @@
+"""
+``rot-tools bag --parquet DIR``: one Parquet file per bag, the ``--csv`` columns plus ``bag``.
+
+The columns are typed: ``bag``, ``topic`` and ``frame_id`` strings; ``stamp`` the header
+stamp as int64 nanoseconds (sec·10⁹ + nanosec, exact); every other column float64, in
+degrees with ``--deg``, and null where the CSV leaves a cell empty (ω on a topic's first
+row). A file is written under a temporary name that does not end in ``.parquet`` and renamed
+when complete (rot_tools.cli.output_file), so a killed run leaves no file that looks whole,
+and ``'DIR/*.parquet'`` (DuckDB) or ``pandas.read_parquet(DIR)`` reads the bags as one table.
+pyarrow is imported only here, when a table is made: it comes with the ``bag`` extra.
+"""
+
+from pathlib import Path
+import re
+
+import numpy as np
+from rot_tools.cli import output_file
+from rot_tools.cli.bag_output import csv_header, row_values
+
+TEXT_COLUMNS = ('bag', 'topic', 'frame_id')
+"""The columns of strings; ``stamp`` is int64 nanoseconds, every other column float64."""
+
+
+def schema(seq, degrees):
+    """Return the pyarrow schema of a bag's table (``--seq SEQ`` adds SEQ_1..3)."""
+    import pyarrow as pa
+    fields = [pa.field(name, pa.string() if name in TEXT_COLUMNS
+                       else pa.int64() if name == 'stamp' else pa.float64())
+              for name in ['bag'] + csv_header(seq)]
+    return pa.schema(fields, metadata={'stamp': 'int64 nanoseconds (sec * 10^9 + nanosec)',
+                                       'angles': 'deg' if degrees else 'rad'})
+
+
+def table(topics, bag, degrees, seq):
+    """Return the pyarrow Table of every accepted message of ``topics``, ``bag`` on each row."""
+    import pyarrow as pa
+    rows = [t for t in topics if len(t.R)]
+    names = schema(seq, degrees).names
+    width = len(names) - 4  # the numbers after bag, topic, stamp, frame_id
+    values = np.vstack([row_values(t, degrees) for t in rows] or [np.zeros((0, width))])
+    frames = [np.asarray(t.columns.frame_ids, object)[t.frame] for t in rows]
+    columns = {
+        'bag': pa.array([bag] * len(values), pa.string()),
+        'topic': pa.array([t.topic for t in rows for _ in range(len(t.R))], pa.string()),
+        'stamp': pa.array(np.concatenate([t.ns for t in rows] or [np.zeros(0, np.int64)]),
+                          pa.int64()),
+        'frame_id': pa.array(np.concatenate(frames or [np.zeros(0, object)]), pa.string()),
+    }
+    for k, name in enumerate(names[4:]):
+        column = np.ascontiguousarray(values[:, k])
+        columns[name] = pa.array(column, pa.float64(), mask=np.isnan(column))
+    return pa.table(columns, schema=schema(seq, degrees))
+
+
+def write(path, data):
+    """Write the Table ``data`` to ``path`` whole, or leave nothing under that name."""
+    import pyarrow.parquet as pq
+    with output_file.complete_or_nothing(path, 'wb') as out:
+        pq.write_table(data, out)
+
+
+def file_names(paths):
+    """
+    Return a Parquet file name for each bag path: its parts joined by ``_``, unique.
+
+    ``runs/day1/robot.bag`` is ``runs_day1_robot.bag.parquet``; ``.``, ``..`` and the root
+    are dropped, characters other than letters, digits, ``.``, ``-`` and ``_`` become ``_``,
+    and a name already taken (letter case aside) gets ``-2``, ``-3``, ... before its suffix.
+    """
+    names, taken = [], set()
+    for path in paths:
+        parts = [p for p in Path(path).parts if p not in ('.', '..', '/')]
+        stem = re.sub(r'[^\w.-]', '_', '_'.join(parts), flags=re.ASCII).lstrip('.') or 'bag'
+        name, k = stem, 1
+        while name.lower() in taken:
+            k += 1
+            name = f'{stem}-{k}'
+        taken.add(name.lower())
+        names.append(name + '.parquet')
+    return names
