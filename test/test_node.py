@@ -1163,3 +1163,30 @@ def test_double_parameters_take_integer_values(make_rig):
     # Only doubles: an integer is still not a string, nor a bool.
     assert not set_one(rig.node, 'euler_sequence', 3).successful
     assert not set_one(rig.node, 'publish_markers', 1).successful
+
+
+@pytest.mark.parametrize('service', ['set_parameters', 'set_parameters_atomically'])
+def test_a_parameter_of_unknown_type_or_without_a_name_is_refused(rig, service):
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+    from rcl_interfaces.srv import SetParameters, SetParametersAtomically
+    srv_type = {'set_parameters': SetParameters,
+                'set_parameters_atomically': SetParametersAtomically}[service]
+    good = Parameter('angle_unit', value='deg').to_parameter_msg()
+    cases = [(ParameterMsg(name='marker_scale', value=ParameterValue(type=99)),
+              "parameter 'marker_scale' has type 99, not a type of "
+              'rcl_interfaces/msg/ParameterType (0–9)'),
+             (Parameter('', value=1.0).to_parameter_msg(), 'a parameter name is empty')]
+    for bad, why in cases:
+        response = rig.call(srv_type, service, srv_type.Request(parameters=[bad, good]))
+        if service == 'set_parameters':  # one by one: the good one is set
+            assert [(r.successful, r.reason) for r in response.results] == [
+                (False, why), (True, '')]
+            assert rig.node.get_parameter('angle_unit').value == 'deg'
+            set_one(rig.node, 'angle_unit', 'rad')
+        else:  # all or nothing
+            assert (response.result.successful, response.result.reason) == (False, why)
+            assert rig.node.get_parameter('angle_unit').value == 'rad'
+    assert '' not in rig.node.list_parameters([], 0).names
+    assert rig.node.get_parameter('marker_scale').value == 1.0
+    assert not rig.node_logs(Log.ERROR)  # no traceback
+    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))  # and the node keeps serving

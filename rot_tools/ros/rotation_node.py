@@ -25,7 +25,7 @@ if __name__ == '__main__':
     start('rot_tools.ros.rotation_node')
 
 import difflib
-from functools import partial
+from functools import partial, wraps
 import math
 import sys
 import textwrap
@@ -36,6 +36,7 @@ from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.node import Node
@@ -145,6 +146,48 @@ def _any_value(value):
     return ''
 
 
+PARAMETER_TYPES = range(ParameterType.PARAMETER_NOT_SET, ParameterType.PARAMETER_STRING_ARRAY + 1)
+"""The values of rcl_interfaces/msg/ParameterType (0 not set, ..., 9 string array)."""
+
+
+def parameter_refusal(msg):
+    """Return why a SetParameters request's rcl_interfaces/Parameter is refused, or ''."""
+    if not msg.name:
+        return 'a parameter name is empty'
+    if msg.value.type not in PARAMETER_TYPES:
+        return (f'parameter {msg.name!r} has type {msg.value.type}, not a type of '
+                f'rcl_interfaces/msg/ParameterType ({PARAMETER_TYPES[0]}–{PARAMETER_TYPES[-1]})')
+    return ''
+
+
+def _checked_set_parameters(callback):
+    """
+    Wrap rclpy's SetParameters or SetParametersAtomically service ``callback``.
+
+    A parameter with no name or of an unknown type is refused (SetParametersResult
+    successful=False and why) instead of reaching rclpy, which accepted the empty name and
+    raised on the type (no reply). The other parameters of a SetParameters request are set
+    one by one, as rclpy does.
+    """
+    @wraps(callback)
+    def checked(request, response):
+        reasons = [parameter_refusal(msg) for msg in request.parameters]
+        if not any(reasons):
+            return callback(request, response)
+        if not hasattr(response, 'results'):  # atomically: all or nothing
+            reason = next(filter(None, reasons))
+            response.result = SetParametersResult(successful=False, reason=reason)
+            return response
+        for msg, reason in zip(request.parameters, reasons):
+            if reason:
+                response.results.append(SetParametersResult(successful=False, reason=reason))
+            else:
+                one = callback(type(request)(parameters=[msg]), type(response)())
+                response.results.extend(one.results)
+        return response
+    return checked
+
+
 class ParameterSpec(NamedTuple):
     """One parameter of the node: default, descriptor, and the check of its values."""
 
@@ -229,6 +272,9 @@ class RotationNode(Node):
             self.destroy_node()
             raise
         self._settings = self._read_settings()
+        for srv in self.services:
+            if srv.srv_type in (SetParameters, SetParametersAtomically):  # rclpy's services
+                srv.callback = _checked_set_parameters(srv.callback)
         self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
