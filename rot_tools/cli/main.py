@@ -14,6 +14,7 @@ rot_tools.io.report) as YAML, or JSON with ``--json``::
     rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1
     rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
     rot-tools bag run.bag --csv run.csv --plot rpy.png   (rot_tools.cli.bag: the 'bag' extra)
+    rot-tools compare est.tum gt.csv --align se3          (rot_tools.cli.compare)
 
 Every option is accepted before the command, after its arguments (``_add_common``) and
 between them (``_CommandParser``).
@@ -45,6 +46,7 @@ from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, frame_to_matrix,
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
+from rot_tools.cli import compare
 from rot_tools.core.errors import RotationError
 from rot_tools.io.arguments import negative_numbers_as_values
 from rot_tools.io.report import angle_hint, DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
@@ -588,6 +590,7 @@ def build_parser():
                            metavar=('X', 'Y', 'Z'), help='the translation b')
         _add_common(p, suppress=True)
     _add_bag(sub)
+    compare.add_parser(sub, _plot_file, _precision, _Version)
     return parser
 
 
@@ -640,6 +643,8 @@ def main(argv=None):
             sys.argv[1:] if argv is None else argv))
         if args.command == 'bag':
             return _bag(args, parser)
+        if args.command == 'compare':
+            return compare.run(args, parser.error)
         args.hints = []
         R, b, report = _report(args, parser)
         if args.plot:

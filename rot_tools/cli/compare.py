@@ -1,0 +1,437 @@
+"""
+``rot-tools compare EST REF``: an orientation stream against ground truth, and its mounting.
+
+Each side is read into stamps t (s), rotations R and positions b where it has them
+(rot_tools.io.trajectory_files for TUM and EuRoC files; a bag's topic or TF frame pair
+through rot_tools.cli.bag, whose messages pass the same checks as ``rot-tools bag``'s). Then,
+with the pieces of rot_tools.core.trajectory, in this order:
+
+1. **Time offset** o, added to EST's stamps: ``--offset SECONDS`` (default 0), or ``auto``:
+   the shift that best correlates the two angular speeds |ω| (estimate_time_offset); a
+   warning when that correlation is below LOW_CORRELATION.
+2. **Matching**: REF at each EST stamp t + o along the constant screw between its two
+   neighbours, each within ``--max-gap`` (interpolate_poses), or ``--match nearest``: the
+   nearest stamp within ``--max-gap``, as evo pairs poses (nearest_stamps, walking the stream
+   with fewer poses, EST when they are as long). Fewer than 3 pairs is an error.
+3. **Mounting** (``--mounting``): X with A_k·X = X·B_k for the relative rotations over
+   ``--delta`` of every pair k, A_k = Q_kᵀQ_{k+Δ}, B_k = P_kᵀP_{k+Δ} (hand_eye_rotation,
+   overlapping intervals); EST is then turned into REF's body frame, P_k → P_k·Xᵀ.
+4. **Alignment** W of the reference frames, R_ref ≈ W·R_est (align_rotations): none,
+   rotation, yaw or se3 (Umeyama on the positions, as evo's ``--align``).
+5. **Errors** of E_k = Q_kᵀ·W·P_k (rotation_errors): absolute (APE), relative over
+   ``--delta`` between non-overlapping pairs (evo's RPE), and E's roll, pitch, yaw.
+"""
+
+import argparse
+import math
+import os
+from pathlib import Path
+import sys
+from typing import NamedTuple
+
+import numpy as np
+from rot_tools.cli import output_file
+from rot_tools.core import trajectory
+from rot_tools.core.errors import RotationError
+from rot_tools.core.so3 import matrix_to_quaternion
+from rot_tools.io import bag_read
+from rot_tools.io.report import round_number, to_json, to_yaml
+from rot_tools.io.trajectory_files import Poses, read_text, TrajectoryFileError
+
+DEFAULT_GAP = {'interpolate': 0.1, 'nearest': 0.01}
+"""--max-gap (s) by --match: evo's 0.01 s for nearest."""
+
+LOW_CORRELATION = 0.5
+"""Correlation of the angular speeds below which an automatic offset gets a warning."""
+
+LEAST_PAIRS = 3
+"""Matched pairs needed (three positions fix an se3 alignment)."""
+
+TEXT = (
+    'EST and REF are each a bag (a topic with --est-topic/--ref-topic, or the transform of\n'
+    "BODY in REFERENCE from the bag's TF with --est-tf/--ref-tf; a bag with one topic of a\n"
+    "type 'rot-tools bag' reads needs neither), a TUM file (t x y z qx qy qz qw) or an\n"
+    'EuRoC ground-truth CSV (ns, x, y, z, qw, qx, qy, qz, ...).\n\n'
+    "The offset is added to EST's stamps; REF is then interpolated at each EST stamp\n"
+    '(along the constant screw between its neighbours, each within --max-gap, default\n'
+    '0.1 s) or, with --match nearest, its nearest stamp is taken (within --max-gap,\n'
+    'default 0.01 s, as evo). --mounting estimates the rotation X between the two body\n'
+    'frames (A_k X = X B_k over --delta) and compares EST turned by X. The alignment W\n'
+    '(R_ref = W R_est) is then fitted, and the error E = R_refᵀ W R_est reported: APE and\n'
+    "RPE angle statistics (rmse, mean, median, std, min, max; RPE as evo's, over --delta\n"
+    "between non-overlapping pairs) and E's roll, pitch, yaw (REP-103, continuous).\n"
+    'Angles in radians unless --deg. Needs rosbags for bags (the bag extra).')
+
+
+class CompareError(Exception):
+    """Input that compare cannot use (one line for the user)."""
+
+
+def _seconds(text, least=0.0):
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > least):
+        raise ValueError(text)
+    return value
+
+
+def _positive(text):
+    """Return a number of seconds (or frames) > 0."""
+    try:
+        return _seconds(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f'expected a number > 0, got {text.strip()!r}') from None
+
+
+def _offset(text):
+    """Return 'auto' or a finite number of seconds."""
+    if text.strip() == 'auto':
+        return 'auto'
+    try:
+        return _seconds(text, -math.inf)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected 'auto' or seconds, got {text.strip()!r}") from None
+
+
+def add_parser(sub, plot_file, precision, version):
+    """Add the compare command to ``sub``; the common option types come from rot_tools.cli."""
+    p = sub.add_parser(
+        'compare', help='an orientation against ground truth: errors, offset, mounting',
+        usage='rot-tools compare EST REF [--est-topic T] [--ref-topic T] [--est-tf A B]\n'
+        '       [--ref-tf A B] [--match interpolate|nearest] [--max-gap S]\n'
+        '       [--align none|rotation|yaw|se3] [--offset auto|SECONDS] [--max-offset S]\n'
+        '       [--mounting] [--delta D] [--delta-unit f|s] [--deg] [--json] [--csv FILE]\n'
+        '       [--plot FILE]',
+        description=f'An orientation against ground truth.\n\n{TEXT}',
+        epilog='examples:\n  rot-tools compare est.tum gt.csv --align se3 --deg\n'
+        '  rot-tools compare run.bag gt.tum --est-topic /imu/data --offset auto --mounting\n'
+        '  rot-tools compare est.tum ref.tum --match nearest --align se3 --deg --json')
+    p.set_defaults(handler=None)
+    for side, name in (('est', 'EST'), ('ref', 'REF')):
+        p.add_argument(side, metavar=name, help='a bag, a TUM file or an EuRoC CSV')
+        p.add_argument(f'--{side}-topic', metavar='T', help=f'the topic of {name} in its bag')
+        p.add_argument(f'--{side}-tf', nargs=2, metavar=('A', 'B'),
+                       help=f"{name} is the transform of frame B in frame A from its bag's TF")
+    p.add_argument('--match', choices=('interpolate', 'nearest'), default='interpolate',
+                   help='REF interpolated at EST stamps (default), or its nearest stamp')
+    p.add_argument('--max-gap', type=_positive, metavar='S',
+                   help='largest time (s) from an EST stamp to the REF stamps used (default '
+                   '0.1, or 0.01 with --match nearest)')
+    p.add_argument('--align', choices=trajectory.ALIGNMENTS, default='none',
+                   help='fit the rotation between the reference frames: none (default), '
+                   'rotation (least squares on SO(3)), yaw (about z), se3 (Umeyama on the '
+                   'positions, as evo)')
+    p.add_argument('--offset', type=_offset, default=0.0, metavar='auto|SECONDS',
+                   help="seconds added to EST's stamps (default 0), or auto: estimated from "
+                   'the angular speeds')
+    p.add_argument('--max-offset', type=_positive, default=1.0, metavar='S',
+                   help='search --offset auto within ±S seconds (default 1)')
+    p.add_argument('--mounting', action='store_true',
+                   help='estimate the rotation X between the two body frames (hand-eye, '
+                   'A X = X B), and compare EST turned by it')
+    p.add_argument('--delta', type=_positive, default=1, metavar='D',
+                   help='the interval of relative rotations (RPE, mounting): D frames '
+                   '(default 1) or seconds')
+    p.add_argument('--delta-unit', choices=('f', 's'), default='f',
+                   help='--delta in frames (f, default) or seconds (s)')
+    p.add_argument('--csv', metavar='FILE',
+                   help='write one row per match: stamp (s), angle, roll, pitch, yaw of E')
+    common = p.add_argument_group('common options')
+    suppress = argparse.SUPPRESS
+    common.add_argument('--deg', action='store_true', default=suppress,
+                        help='angles in degrees')
+    common.add_argument('--json', action='store_true', default=suppress,
+                        help='print JSON instead of YAML')
+    common.add_argument('--precision', type=precision, default=suppress, metavar='N',
+                        help='round numbers to N significant digits and N decimal places')
+    common.add_argument('--plot', type=plot_file, default=suppress, metavar='FILE',
+                        help='draw the error angle and its roll, pitch, yaw against time in '
+                        "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
+    common.add_argument('--version', action=version, help='print the version and exit')
+
+
+# ---- reading ------------------------------------------------------------------------------
+
+
+def _is_bag(path):
+    return Path(path).is_dir() or Path(path).suffix.lower() in bag_read.BAG_SUFFIXES
+
+
+def read_side(name, path, topic, tf):
+    """Poses of one side (name EST or REF): a bag's topic or TF chain, or a text file."""
+    if topic is None and tf is None and not _is_bag(path):
+        return read_text(path)
+    if topic is not None and tf is not None:
+        raise CompareError(f'{name}: give a topic or a TF frame pair, not both')
+    missing = bag_read.rosbags_missing()
+    if missing:
+        raise CompareError(f'{name}: reading a bag needs the rosbags library ({missing} is '
+                           "missing), the 'bag' extra: pip install 'rot_tools[bag]'")
+    from rot_tools.cli import bag
+    if tf is not None:
+        _, topics = bag.analyse(path, tf=tuple(tf))
+    else:
+        _, topics = bag.analyse(path, () if topic is None else (topic,))
+        if len(topics) > 1:
+            listed = ', '.join(t.topic for t in topics)
+            raise CompareError(f'{name}: the bag {path} has {len(topics)} topics ({listed}): '
+                               f'choose one with --{name.lower()}-topic')
+    t = topics[-1]
+    order = np.argsort(t.ns, kind='stable')
+    ns = t.ns[order]
+    if len(ns) and (np.diff(ns) == 0).any():
+        k = int(np.argmax(np.diff(ns) == 0))
+        raise CompareError(f'{name}: {t.topic} has two messages stamped {ns[k]} ns')
+    positions = t.chain is not None or t.columns.position is not None
+    return Poses(ns / 1e9, t.R[order], t.position[order] if positions else None, t.topic)
+
+
+# ---- the comparison -----------------------------------------------------------------------
+
+
+class Matched(NamedTuple):
+    """Matched pairs: stamps (K,) in REF's clock, REF's and EST's rotations and positions."""
+
+    stamps: np.ndarray
+    R_ref: np.ndarray
+    R_est: np.ndarray
+    b_ref: np.ndarray
+    b_est: np.ndarray
+
+
+def _rows(b, rows):
+    return None if b is None else b[rows]
+
+
+def match(est, ref, offset, how, max_gap):
+    """Pairs of EST (stamps shifted by offset) and REF: interpolated or nearest (Matched)."""
+    t_est = est.stamps + offset
+    lo, hi = max(t_est[0], ref.stamps[0]), min(t_est[-1], ref.stamps[-1])
+    if lo > hi + max_gap:
+        raise CompareError(
+            f'no overlap in time: EST spans [{t_est[0]:.6f}, {t_est[-1]:.6f}] s (offset '
+            f'{offset:g} s added), REF [{ref.stamps[0]:.6f}, {ref.stamps[-1]:.6f}] s')
+    if how == 'interpolate':
+        if len(ref.stamps) < 2:
+            raise CompareError('REF has 1 pose: at least 2 are needed to interpolate')
+        R, b, covered = trajectory.interpolate_poses(ref.stamps, ref.R, ref.b, t_est, max_gap)
+        pairs = Matched(t_est[covered], R, est.R[covered], b, _rows(est.b, covered))
+    elif len(est.stamps) <= len(ref.stamps):  # evo walks the stream with fewer poses
+        index, covered = trajectory.nearest_stamps(ref.stamps, t_est, max_gap)
+        pairs = Matched(t_est[covered], ref.R[index], est.R[covered], _rows(ref.b, index),
+                        _rows(est.b, covered))
+    else:
+        index, covered = trajectory.nearest_stamps(t_est, ref.stamps, max_gap)
+        pairs = Matched(ref.stamps[covered], ref.R[covered], est.R[index],
+                        _rows(ref.b, covered), _rows(est.b, index))
+    if len(pairs.stamps) < LEAST_PAIRS:
+        raise CompareError(
+            f'{len(pairs.stamps)} matched pair(s) within --max-gap {max_gap:g} s: at least '
+            f'{LEAST_PAIRS} needed (EST: {len(est.stamps)} poses, REF: {len(ref.stamps)})')
+    return pairs
+
+
+def overlapping_pairs(stamps, delta, unit):
+    """
+    Index pairs (k, j), one per start k: j = k + Δ frames, or the first t_j ≥ t_k + Δ s.
+
+    ≥ within rounding of the stamps, as delta_pairs decides.
+
+    The mounting averages over all of them (each pose starts one); RotationError if none fits.
+    """
+    if unit == 'f':
+        trajectory.delta_pairs(len(stamps), delta, unit)  # the same checks as the RPE's
+        k = np.arange(len(stamps) - int(delta))
+        j = k + int(delta)
+    else:
+        k = np.arange(len(stamps))
+        slack = 4 * np.finfo(float).eps * max(abs(stamps[0]), abs(stamps[-1]))  # as the RPE's
+        j = np.searchsorted(stamps, stamps + delta - slack, side='left')
+        k, j = k[j < len(stamps)], j[j < len(stamps)]
+    if len(k) < 2:
+        raise RotationError(f'--delta {delta:g} {unit} leaves {len(k)} relative rotation(s) '
+                            f'among {len(stamps)} pairs: at least 2 needed for a mounting')
+    return k, j
+
+
+def mounting(pairs, delta, unit):
+    """Return the mounting of the matched pairs over Δ (trajectory.hand_eye_rotation)."""
+    k, j = overlapping_pairs(pairs.stamps, delta, unit)
+    A = np.swapaxes(pairs.R_ref[k], 1, 2) @ pairs.R_ref[j]
+    B = np.swapaxes(pairs.R_est[k], 1, 2) @ pairs.R_est[j]
+    return trajectory.hand_eye_rotation(A, B)
+
+
+class Result(NamedTuple):
+    """What compare found: the report's pieces (radians) and the errors per pair."""
+
+    pairs: Matched
+    offset: trajectory.TimeOffset
+    W: np.ndarray
+    mount: trajectory.HandEye
+    errors: trajectory.RotationErrors
+
+
+def compare(est, ref, args):
+    """Run the comparison of Poses est and ref with the parsed options (Result)."""
+    if args.offset == 'auto':
+        found = trajectory.estimate_time_offset(est.stamps, est.R, ref.stamps, ref.R,
+                                                args.max_offset)
+    else:
+        found = trajectory.TimeOffset(args.offset, math.nan)
+    gap = DEFAULT_GAP[args.match] if args.max_gap is None else args.max_gap
+    pairs = match(est, ref, found.offset, args.match, gap)
+    mount = mounting(pairs, args.delta, args.delta_unit) if args.mounting else None
+    R_est = pairs.R_est if mount is None else pairs.R_est @ mount.rotation.T
+    if args.align == 'se3' and (pairs.b_ref is None or pairs.b_est is None):
+        side = 'REF' if pairs.b_ref is None else 'EST'
+        raise CompareError(f'--align se3 fits positions, and {side} has none (an Imu): use '
+                           '--align rotation or yaw')
+    W, _ = trajectory.align_rotations(pairs.R_ref, R_est, args.align, b_ref=pairs.b_ref,
+                                      b_est=pairs.b_est)
+    errors = trajectory.rotation_errors(pairs.R_ref, W @ R_est, args.delta, args.delta_unit,
+                                        pairs.stamps)
+    return Result(pairs, found, W, mount, errors)
+
+
+# ---- output -------------------------------------------------------------------------------
+
+
+def _unit(x, degrees):
+    return np.degrees(x) if degrees else x
+
+
+def _statistics(stats, degrees):
+    return {key: float(_unit(value, degrees)) for key, value in stats.items()}
+
+
+def _quaternion(R):
+    return [float(x) for x in matrix_to_quaternion(R, check=False)]
+
+
+def report(result, est, ref, args):
+    """Return the report as plain data (to_yaml / to_json)."""
+    degrees = args.deg
+    e = result.errors
+    out = {'est': {'source': str(args.est), 'read': est.name, 'poses': len(est.stamps)},
+           'ref': {'source': str(args.ref), 'read': ref.name, 'poses': len(ref.stamps)},
+           'match': args.match, 'pairs': len(result.pairs.stamps),
+           'offset': result.offset.offset}
+    if args.offset == 'auto':
+        out['offset_correlation'] = result.offset.correlation
+    out['alignment'] = args.align
+    out['alignment_quaternion'] = _quaternion(result.W)
+    out['unit'] = 'deg' if degrees else 'rad'
+    out['ape'] = _statistics(e.ape, degrees)
+    out['rpe'] = _statistics(e.rpe, degrees)
+    out['rpe_pairs'] = len(e.pairs)
+    rpy = [_statistics(trajectory.error_statistics(e.rpy[:, k]), degrees) for k in range(3)]
+    out['rpy'] = {key: [axis[key] for axis in rpy] for key in rpy[0]}  # [roll, pitch, yaw]
+    if result.mount is not None:
+        m = result.mount
+        out['mounting'] = {'quaternion': _quaternion(m.rotation),
+                           'residual': float(_unit(m.residual, degrees)),
+                           'axes': m.axes}
+        if m.warning:
+            out['mounting']['warning'] = m.warning
+    return out
+
+
+def warnings(result, args):
+    """Return the one-line warnings of a result (without the ``warning:`` prefix)."""
+    out = []
+    if args.offset == 'auto' and not result.offset.correlation >= LOW_CORRELATION:
+        out.append(f'the angular speeds correlate poorly at the offset found (r = '
+                   f'{result.offset.correlation:.2f} < {LOW_CORRELATION:g}): the offset '
+                   f'{result.offset.offset:+.6g} s may be wrong; give --offset SECONDS')
+    if result.mount is not None and result.mount.warning:
+        out.append(f'mounting: {result.mount.warning}')
+    return out
+
+
+def write_csv(path, result, degrees, precision):
+    """One row per pair: stamp (exact), angle, roll, pitch, yaw; written whole or not at all."""
+    e = result.errors
+    table = _unit(np.column_stack([e.angle, e.rpy]), degrees)
+    with output_file.complete_or_nothing(path, 'w', encoding='utf-8', newline='') as out:
+        out.write('stamp,angle,roll,pitch,yaw\n')
+        for stamp, row in zip(result.pairs.stamps.tolist(), table.tolist()):
+            cells = [repr(stamp)] + [repr(round_number(x, precision)) for x in row]
+            out.write(','.join(cells) + '\n')
+
+
+def write_plot(path, result, degrees):
+    """Draw the error angle, then its roll, pitch, yaw, against time (matplotlib)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    e, stamps = result.errors, result.pairs.stamps
+    time = stamps - stamps[0]
+    unit = 'deg' if degrees else 'rad'
+    fig = Figure(figsize=(9.0, 6.0), layout='constrained')
+    FigureCanvasAgg(fig)
+    total, parts = fig.subplots(2, 1, sharex=True)
+    total.plot(time, _unit(e.angle, degrees), color='black', lw=1.0, label='angle')
+    for k, (name, color) in enumerate(zip(('roll', 'pitch', 'yaw'),
+                                          ('tab:red', 'tab:green', 'tab:blue'))):
+        parts.plot(time, _unit(e.rpy[:, k], degrees), color=color, lw=1.0, label=name)
+    for ax in (total, parts):
+        ax.set_ylabel(f'error ({unit})')
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc='upper left', fontsize=8, ncols=3)
+    parts.set_xlabel(f'time (s) from {stamps[0]:.6f} s')
+    fig.suptitle('rotation error E = R_refᵀ·R_est: angle, and roll, pitch, yaw (REP-103)',
+                 fontsize=11)
+    with output_file.complete_or_nothing(path, 'wb') as out:
+        fig.savefig(out, format=os.path.splitext(str(path))[1][1:].lower())
+
+
+def _refuse_overwriting(args, error):
+    """Call error when --csv or --plot names EST or REF (or a file inside a bag directory)."""
+    inputs = [Path(p).resolve() for p in (args.est, args.ref)]
+    for option, path in (('--csv', args.csv), ('--plot', args.plot)):
+        if path is None:
+            continue
+        target = Path(path).resolve()
+        if any(target == source or target.is_relative_to(source) for source in inputs):
+            error(f'{option} {path} would overwrite an input: refused')
+
+
+def run(args, error):
+    """rot-tools compare with parsed ``args``; ``error(text)`` prints one line and exits 2."""
+    for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
+                          ('--all-sequences', args.all_sequences), ('--seq', args.seq),
+                          ('--tol', args.tol)):
+        if given:
+            error(f'{option} does not apply to compare')
+    _refuse_overwriting(args, error)
+    try:
+        est = read_side('EST', args.est, args.est_topic, args.est_tf)
+        ref = read_side('REF', args.ref, args.ref_topic, args.ref_tf)
+        result = compare(est, ref, args)
+    except (CompareError, TrajectoryFileError, bag_read.BagError, RotationError) as exc:
+        error(f'compare: {exc}')
+    if args.plot:
+        try:
+            write_plot(args.plot, result, args.deg)
+        except ImportError as exc:
+            if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
+                raise
+            error("--plot needs matplotlib, the 'plot' extra: pip install 'rot_tools[plot]'")
+        except OSError as exc:
+            error(f'--plot: cannot write {args.plot}: {exc.strerror or exc}')
+    if args.csv is not None:
+        try:
+            write_csv(args.csv, result, args.deg, args.precision)
+        except OSError as exc:
+            error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
+    data = report(result, est, ref, args)
+    text = to_json if args.json else to_yaml
+    sys.stdout.write(text(data, precision=args.precision))
+    for line in warnings(result, args):
+        sys.stderr.write(f'warning: {line}\n')
+    return 0

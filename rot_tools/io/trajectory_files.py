@@ -1,0 +1,108 @@
+"""
+Trajectory text files: TUM and EuRoC ground truth, read into stamps, rotations and positions.
+
+- **TUM** (``t x y z qx qy qz qw``): one pose a line, separated by spaces, t in seconds,
+  the quaternion in the ROS order (x, y, z, w); lines starting with ``#`` are comments.
+- **EuRoC** ground-truth CSV (``state_groundtruth_estimate0/data.csv`` and the like):
+  ``timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z[, …]``, comma separated, at least 8
+  columns (the rest, velocities and biases, ignored); lines starting with ``#`` are comments.
+  Stamps become seconds as t = ns / 10⁹ (as evo reads them).
+
+A quaternion q becomes R by rot_tools.quaternion_to_matrix after it is normalised; one whose
+norm is off 1 by more than QUATERNION_TOL (a typo, a zero) is refused. Stamps must increase
+strictly. Every refusal is a TrajectoryFileError naming the file, the line and the value.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+from rot_tools.core.so3 import quaternion_to_matrix
+
+QUATERNION_TOL = 1e-3
+"""Largest |‖q‖ − 1| of a quaternion read (rotation_node's quaternion_tolerance)."""
+
+
+class TrajectoryFileError(ValueError):
+    """A trajectory file that cannot be read: which file, which line, what is wrong."""
+
+
+class Poses(NamedTuple):
+    """A stream of poses: stamps (N,) s, R (N, 3, 3), b (N, 3) or None, and its format."""
+
+    stamps: np.ndarray
+    R: np.ndarray
+    b: np.ndarray
+    name: str
+
+
+def _data_lines(path):
+    """[(line number, text)] of the file's lines that are neither blank nor comments."""
+    try:
+        with open(path, encoding='utf-8-sig') as text:
+            lines = text.read().splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TrajectoryFileError(f'{path}: cannot read it: {getattr(exc, "strerror", exc)}')
+    return [(number, line) for number, line in enumerate(lines, 1)
+            if line.strip() and not line.lstrip().startswith('#')]
+
+
+def _table(path, lines, separator, least, exact):
+    """(line numbers, numbers (N, least)) of the data lines; TrajectoryFileError if one fails."""
+    rows, numbers = [], []
+    for number, line in lines:
+        cells = line.split(separator) if separator else line.split()
+        if len(cells) < least or (exact and len(cells) > least):
+            raise TrajectoryFileError(
+                f'{path}:{number}: {len(cells)} values, {least}{"" if exact else " or more"} '
+                f'expected: {line.strip()[:80]!r}')
+        try:
+            values = [float(c) for c in cells[:least]]
+        except ValueError:
+            raise TrajectoryFileError(
+                f'{path}:{number}: not a number in {line.strip()[:80]!r}') from None
+        if not np.isfinite(values).all():
+            raise TrajectoryFileError(f'{path}:{number}: NaN or Inf in {line.strip()[:80]!r}')
+        rows.append(number)
+        numbers.append(values)
+    if not numbers:
+        raise TrajectoryFileError(f'{path}: no pose in the file')
+    return np.array(rows), np.array(numbers, dtype=float)
+
+
+def _poses(path, rows, stamps, b, q, name):
+    """Poses of one file; its stamps increasing and its quaternions of unit norm checked."""
+    steps = np.diff(stamps)
+    if (steps <= 0).any():
+        k = int(np.argmax(steps <= 0)) + 1
+        raise TrajectoryFileError(
+            f'{path}:{rows[k]}: stamp {stamps[k]!r} does not follow {stamps[k - 1]!r} of line '
+            f'{rows[k - 1]}: stamps must increase')
+    norm = np.linalg.norm(q, axis=1)
+    off = np.abs(norm - 1)
+    if (off > QUATERNION_TOL).any():
+        k = int(np.argmax(off))
+        raise TrajectoryFileError(
+            f'{path}:{rows[k]}: quaternion of norm {norm[k]:.6g}, off 1 by more than '
+            f'{QUATERNION_TOL:g}')
+    return Poses(stamps, quaternion_to_matrix(q / norm[:, None]), b, name)
+
+
+def read_tum(path, lines=None):
+    """Poses of a TUM file (``t x y z qx qy qz qw``); lines: its _data_lines when read."""
+    rows, table = _table(path, lines or _data_lines(path), None, 8, True)
+    return _poses(path, rows, table[:, 0], table[:, 1:4], table[:, 4:8], 'TUM')
+
+
+def read_euroc(path, lines=None):
+    """Poses of an EuRoC ground-truth CSV (``ns, x, y, z, qw, qx, qy, qz, …``)."""
+    rows, table = _table(path, lines or _data_lines(path), ',', 8, False)
+    q = table[:, [5, 6, 7, 4]]  # w x y z → x y z w
+    return _poses(path, rows, table[:, 0] / 1e9, table[:, 1:4], q, 'EuRoC')
+
+
+def read_text(path):
+    """Poses of a TUM or EuRoC file: EuRoC when its first data line holds a comma."""
+    lines = _data_lines(path)
+    if not lines:
+        raise TrajectoryFileError(f'{path}: no pose in the file')
+    return read_euroc(path, lines) if ',' in lines[0][1] else read_tum(path, lines)

@@ -1,0 +1,400 @@
+"""
+rot-tools compare: evo's numbers, a recorded time offset, a simulated mounting, bad inputs.
+
+evo (GPL) is a test requirement only: its Python API (evo.tools.file_interface to read the
+same files and bags, evo.core.sync.associate_trajectories, PoseTrajectory3D.align,
+evo.core.metrics.APE/RPE with PoseRelation.rotation_angle_deg) is what ``evo_ape --align``
+and ``evo_rpe --align --pose_relation angle_deg`` run; where evo is not installed those tests
+skip and say so.
+"""
+
+import json
+from pathlib import Path
+import shlex
+
+import bag_helpers as bh
+from doc_blocks import assert_doc_output, console_steps, doc_block
+import numpy as np
+import pytest
+import rot_tools as rt
+from rot_tools.cli import main as cli
+
+STATS = ('rmse', 'mean', 'median', 'std', 'min', 'max')
+
+
+def run(capsys, *args):
+    """(status, stdout, stderr) of rot-tools with these words."""
+    status = cli.main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def turn(t):
+    """Return a motion about all three axes: R(t) = exp([v(t)]×)."""
+    v = np.stack([np.sin(1.3 * t), np.sin(0.7 * t + 1), np.sin(0.5 * t)], -1)
+    return rt.rotvec_to_matrix(v)
+
+
+def path_of(t):
+    """Return the positions of a helix."""
+    return np.stack([np.cos(0.3 * t), np.sin(0.3 * t), 0.05 * t], -1)
+
+
+def noisy(R, degrees, rng):
+    """R turned by a random rotation vector of σ = degrees per axis."""
+    return R @ rt.rotvec_to_matrix(rng.normal(scale=np.radians(degrees), size=(len(R), 3)))
+
+
+def write_tum(path, t, R, b):
+    np.savetxt(path, np.column_stack([t, b, rt.matrix_to_quaternion(R)]), fmt='%.9f',
+               header='t x y z qx qy qz qw')
+    return path
+
+
+def write_euroc(path, t, R, b):
+    q = rt.matrix_to_quaternion(R)[:, [3, 0, 1, 2]]
+    with open(path, 'w') as out:
+        out.write('#timestamp [ns], p_x [m], p_y [m], p_z [m], q_w [], q_x [], q_y [], q_z []\n')
+        for ns, row in zip(np.rint(t * 1e9).astype(np.int64), np.column_stack([b, q])):
+            out.write(f'{ns},' + ','.join(f'{x:.9f}' for x in row) + '\n')
+    return path
+
+
+def write_pose_bag(path, t, R, b, topic='/est/pose'):
+    builder = bh.Builder()
+    q = rt.matrix_to_quaternion(R)
+    messages = [(topic, 'geometry_msgs/msg/PoseStamped', int(round(s * 1e9)),
+                 builder.pose_stamped(s, p, qk)) for s, p, qk in zip(t, b, q)]
+    tf = [('/tf', 'tf2_msgs/msg/TFMessage', int(round(s * 1e9)),
+           builder.tf_message([builder.transform_stamped(s, p, qk, 'map', 'body')]))
+          for s, p, qk in zip(t, b, q)]
+    return bh.write_bag(path, messages + tf)
+
+
+def two_streams(rng, n_ref, n_est, duration=30.0):
+    """REF and EST (noisy, its world frame turned, positions drifting) at their own rates."""
+    t_ref = np.linspace(0.0, duration, n_ref)
+    t_est = np.linspace(0.0, duration, n_est) + rng.uniform(-0.004, 0.004, n_est)
+    t_est[0], t_est[-1] = 0.0, duration
+    W = rt.rotvec_to_matrix(np.array([0.1, -0.2, 0.7]))
+    R_ref, b_ref = turn(t_ref), path_of(t_ref)
+    R_est = W @ noisy(turn(t_est), 0.5, rng)
+    b_est = (W @ path_of(t_est)[..., None])[..., 0] + rng.normal(scale=0.01, size=(n_est, 3))
+    return (t_ref, R_ref, b_ref), (np.sort(t_est), R_est, b_est)
+
+
+# ---- evo's numbers ------------------------------------------------------------------------
+
+
+def evo_numbers(traj_ref, traj_est):
+    """APE and RPE (angle_deg, delta 1 frame) statistics as evo_ape/evo_rpe --align give them."""
+    sync = pytest.importorskip('evo.core.sync', reason='evo is not installed (a test '
+                               'requirement: requirements-test.txt)')
+    from evo.core import metrics
+    traj_ref, traj_est = sync.associate_trajectories(traj_ref, traj_est, max_diff=0.01)
+    traj_est.align(traj_ref, correct_scale=False)
+    out = {'pairs': traj_ref.num_poses}
+    ape = metrics.APE(metrics.PoseRelation.rotation_angle_deg)
+    ape.process_data((traj_ref, traj_est))
+    rpe = metrics.RPE(metrics.PoseRelation.rotation_angle_deg, delta=1,
+                      delta_unit=metrics.Unit.frames, all_pairs=False)
+    rpe.process_data((traj_ref, traj_est))
+    out['ape'], out['rpe'] = ape.get_all_statistics(), rpe.get_all_statistics()
+    return out
+
+
+def ours(capsys, *args):
+    status, out, err = run(capsys, 'compare', *args, '--match', 'nearest', '--offset', '0',
+                           '--align', 'se3', '--deg', '--json', '--precision', '17')
+    assert status == 0 and err == '', err
+    return json.loads(out)
+
+
+def assert_as_evo(mine, evo):
+    assert mine['pairs'] == evo['pairs'] and mine['alignment'] == 'se3'
+    for metric in ('ape', 'rpe'):
+        for key in STATS:
+            assert abs(mine[metric][key] - evo[metric][key]) <= 1e-6, (metric, key)
+
+
+@pytest.fixture(scope='module')
+def streams():
+    return two_streams(np.random.default_rng(5), 3001, 901)
+
+
+@pytest.mark.parametrize('longer', ['ref', 'est'])
+def test_tum_files_give_evos_numbers(capsys, tmp_path, streams, longer):
+    pytest.importorskip('evo', reason='evo is not installed (a test requirement)')
+    from evo.tools import file_interface
+    ref, est = streams if longer == 'ref' else streams[::-1]  # evo walks the shorter stream
+    ref_path = write_tum(tmp_path / 'ref.tum', *ref)
+    est_path = write_tum(tmp_path / 'est.tum', *est)
+    mine = ours(capsys, est_path, ref_path)
+    evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path),
+                      file_interface.read_tum_trajectory_file(est_path))
+    assert mine['pairs'] > 800
+    assert_as_evo(mine, evo)
+
+
+def test_euroc_file_gives_evos_numbers(capsys, tmp_path, streams):
+    pytest.importorskip('evo', reason='evo is not installed (a test requirement)')
+    from evo.tools import file_interface
+    ref_path = write_euroc(tmp_path / 'data.csv', *streams[0])
+    est_path = write_tum(tmp_path / 'est.tum', *streams[1])
+    mine = ours(capsys, est_path, ref_path)
+    evo = evo_numbers(file_interface.read_euroc_csv_trajectory(ref_path),
+                      file_interface.read_tum_trajectory_file(est_path))
+    assert mine['pairs'] > 800
+    assert_as_evo(mine, evo)
+
+
+def test_bag_topic_gives_evos_numbers_and_its_tf_the_same(capsys, tmp_path, streams):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    pytest.importorskip('evo', reason='evo is not installed (a test requirement)')
+    from evo.tools import file_interface
+    from rosbags.rosbag2 import Reader
+    bag = write_pose_bag(tmp_path / 'est_bag', *streams[1])
+    ref_path = write_tum(tmp_path / 'ref.tum', *streams[0])
+    mine = ours(capsys, bag, ref_path, '--est-topic', '/est/pose')
+    with Reader(bag) as reader:
+        est = file_interface.read_bag_trajectory(reader, '/est/pose')
+    evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path), est)
+    assert mine['pairs'] > 800
+    assert_as_evo(mine, evo)
+    by_tf = ours(capsys, bag, ref_path, '--est-tf', 'map', 'body')
+    for metric in ('ape', 'rpe'):
+        for key in STATS:
+            assert abs(by_tf[metric][key] - mine[metric][key]) <= 1e-9
+
+
+# ---- time offset, recorded -----------------------------------------------------------------
+
+
+def test_offset_of_the_recorded_imu_is_recovered_within_a_sample(capsys, tmp_path):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    if not bh.REAL.exists():
+        pytest.skip(f'the shared recording is not there: {bh.REAL}')
+    from rot_tools.cli import bag
+    _, (imu,) = bag.analyse(bh.REAL, ('/imu/data',))
+    shift = 0.137  # s, not a multiple of the 0.02 s period
+    builder = bh.Builder()
+    stamps = imu.ns / 1e9 + shift
+    bh.write_bag(tmp_path / 'late', [
+        ('/imu/data', 'sensor_msgs/msg/Imu', int(round(s * 1e9)), builder.imu(s, q))
+        for s, q in zip(stamps, imu.quaternion)])
+    status, out, err = run(capsys, 'compare', tmp_path / 'late', bh.REAL, '--est-topic',
+                           '/imu/data', '--ref-topic', '/imu/data', '--offset', 'auto',
+                           '--json')
+    assert status == 0 and err == '', err
+    found = json.loads(out)
+    period = float(np.median(np.diff(imu.ns))) / 1e9
+    assert abs(found['offset'] + shift) < period, found['offset']
+    assert found['offset_correlation'] > 0.99
+    assert found['ape']['rmse'] < np.radians(0.5)
+
+
+# ---- mounting, simulated -------------------------------------------------------------------
+
+
+def mounted(tmp_path, motion, X, rng):
+    """Files of a REF and of an EST mounted by X (R_est = R_ref·X), noisy, at other rates."""
+    t_ref, t_est = np.arange(0.0, 40.0, 0.01), np.arange(0.0, 40.0, 0.02)
+    W = rt.rot_z(0.5)
+    R_est = W @ noisy(motion(t_est), 0.02, rng) @ X
+    ref = write_tum(tmp_path / 'ref.tum', t_ref, motion(t_ref), path_of(t_ref))
+    est = write_tum(tmp_path / 'est.tum', t_est, R_est, path_of(t_est))
+    return est, ref
+
+
+def test_mounting_is_recovered_within_a_tenth_of_a_degree(capsys, tmp_path):
+    X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))
+    est, ref = mounted(tmp_path, turn, X, np.random.default_rng(8))
+    status, out, err = run(capsys, 'compare', est, ref, '--mounting', '--delta', '0.5',
+                           '--delta-unit', 's', '--align', 'rotation', '--json', '--deg')
+    assert status == 0 and err == '', err
+    found = json.loads(out)
+    got = rt.quaternion_to_matrix(np.array(found['mounting']['quaternion']))
+    assert np.degrees(rt.rotation_distance(got, X)) < 0.1
+    assert 'warning' not in found['mounting'] and found['mounting']['axes'] == 3
+    assert found['ape']['rmse'] < 0.1  # EST turned by X and aligned: the noise is left
+
+
+def test_motion_about_one_axis_gets_the_warning(capsys, tmp_path):
+    def yaw_only(t):
+        return rt.rot_z(np.sin(0.5 * t) * 2)
+    X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))
+    est, ref = mounted(tmp_path, yaw_only, X, np.random.default_rng(9))
+    status, out, err = run(capsys, 'compare', est, ref, '--mounting', '--delta', '0.5',
+                           '--delta-unit', 's', '--json')
+    assert status == 0
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith('warning: mounting: the motion excited 1')
+    assert 'not determined' in json.loads(out)['mounting']['warning']
+
+
+# ---- interpolation ------------------------------------------------------------------------
+
+
+def test_interpolated_matching_beats_nearest_at_two_rates(capsys, tmp_path):
+    t_ref = np.arange(0.0, 20.0, 1 / 30)
+    t_est = np.arange(0.0, 20.0, 1 / 47)
+    ref = write_tum(tmp_path / 'ref.tum', t_ref, turn(t_ref), path_of(t_ref))
+    est = write_tum(tmp_path / 'est.tum', t_est, turn(t_est), path_of(t_est))
+    rmse = {}
+    for how in ('interpolate', 'nearest'):
+        status, out, err = run(capsys, 'compare', est, ref, '--match', how, '--max-gap',
+                               '0.05', '--json')
+        assert status == 0 and err == '', err
+        rmse[how] = json.loads(out)['ape']['rmse']
+    assert rmse['interpolate'] < 0.05 * rmse['nearest'], rmse
+
+
+# ---- outputs ------------------------------------------------------------------------------
+
+
+def test_csv_has_one_row_per_pair_and_the_plot_is_drawn(capsys, tmp_path, streams):
+    ref = write_tum(tmp_path / 'ref.tum', *streams[0])
+    est = write_tum(tmp_path / 'est.tum', *streams[1])
+    args = ['compare', est, ref, '--align', 'se3', '--csv', tmp_path / 'e.csv', '--json']
+    matplotlib = None
+    try:
+        import matplotlib
+    except ImportError:
+        pass
+    if matplotlib is not None:
+        args += ['--plot', tmp_path / 'e.png']
+    status, out, err = run(capsys, *args)
+    assert status == 0 and err == '', err
+    found = json.loads(out)
+    rows = (tmp_path / 'e.csv').read_text().splitlines()
+    assert rows[0] == 'stamp,angle,roll,pitch,yaw' and len(rows) == found['pairs'] + 1
+    angles = np.array([float(r.split(',')[1]) for r in rows[1:]])
+    assert abs(np.sqrt(np.mean(angles ** 2)) - found['ape']['rmse']) < 1e-9
+    if matplotlib is not None:
+        assert (tmp_path / 'e.png').read_bytes()[:4] == b'\x89PNG'
+
+
+# ---- bad inputs ---------------------------------------------------------------------------
+
+
+def bad_inputs(tmp_path):
+    t = np.arange(0.0, 10.0, 0.05)
+    R, b = turn(t), path_of(t)
+    good = write_tum(tmp_path / 'good.tum', t, R, b)
+    (tmp_path / 'seven.tum').write_text('0 1 2 3 0 0 0\n')
+    (tmp_path / 'words.tum').write_text('0 1 2 3 0 0 0 one\n')
+    (tmp_path / 'zero.tum').write_text('0 1 2 3 0 0 0 0\n1 1 2 3 0 0 0 1\n')
+    (tmp_path / 'back.tum').write_text('1 0 0 0 0 0 0 1\n0 0 0 0 0 0 0 1\n')
+    (tmp_path / 'short.csv').write_text('#t,x\n1,2,3\n')
+    write_tum(tmp_path / 'later.tum', t + 1000.0, R, b)
+    write_tum(tmp_path / 'two.tum', t[:2], R[:2], b[:2])
+    write_tum(tmp_path / 'still.tum', t, np.broadcast_to(np.eye(3), R.shape), b)
+    write_tum(tmp_path / 'imu.tum', t, R, b)
+    return good
+
+
+@pytest.mark.parametrize('other, options, says', [
+    ('seven.tum', (), '7 values, 8 expected'),
+    ('words.tum', (), 'not a number'),
+    ('zero.tum', (), 'quaternion of norm 0'),
+    ('back.tum', (), 'stamps must increase'),
+    ('short.csv', (), '3 values, 8 or more expected'),
+    ('missing.tum', (), 'cannot read it'),
+    ('later.tum', (), 'no overlap in time'),
+    ('two.tum', (), '2 matched pair(s)'),
+    ('still.tum', ('--offset', 'auto'), 'turns at a constant speed'),
+    ('still.tum', ('--mounting',), 'never turns'),
+    ('good.tum', ('--delta', '1.5'), 'integer'),
+    ('good.tum', ('--max-gap', '-1'), 'expected a number > 0'),
+    ('good.tum', ('--offset', 'soon'), "expected 'auto' or seconds"),
+    ('good.tum', ('--csv', 'good.tum'), 'would overwrite an input'),
+    ('good.tum', ('--seq', 'ZYX'), 'unrecognized arguments: --seq ZYX'),
+])
+def test_bad_input_is_one_line_and_status_2(capsys, tmp_path, monkeypatch, other,
+                                            options, says):
+    bad_inputs(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(capsys, 'compare', other, 'good.tum', *options)
+    assert status == 2 and out == ''
+    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
+    assert says in err, err
+
+
+def test_an_option_of_the_other_commands_before_compare(capsys, tmp_path, monkeypatch):
+    bad_inputs(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    status, _, err = run(capsys, '--point', 1, 2, 3, 'compare', 'good.tum', 'good.tum')
+    assert status == 2 and err == 'rot-tools: error: --point does not apply to compare\n'
+
+
+def test_a_bag_of_several_topics_asks_for_one(capsys, tmp_path, streams):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    builder = bh.Builder()
+    t, R, b = streams[1]
+    q = rt.matrix_to_quaternion(R)
+    bag = bh.write_bag(tmp_path / 'two', [
+        (topic, 'geometry_msgs/msg/PoseStamped', int(s * 1e9), builder.pose_stamped(s, p, qk))
+        for topic in ('/a', '/b') for s, p, qk in zip(t[:5], b, q)])
+    ref = write_tum(tmp_path / 'ref.tum', *streams[0])
+    status, _, err = run(capsys, 'compare', bag, ref)
+    assert status == 2 and err.count('\n') == 1
+    assert '2 topics (/a, /b): choose one with --est-topic' in err
+    status, _, err = run(capsys, 'compare', bag, ref, '--est-topic', '/a', '--align', 'se3',
+                         '--est-tf', 'map', 'body')
+    assert status == 2 and 'not both' in err
+
+
+def test_se3_needs_positions(capsys, tmp_path):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    builder = bh.Builder()
+    t = np.arange(0.0, 5.0, 0.02)
+    q = rt.matrix_to_quaternion(turn(t))
+    bag = bh.write_bag(tmp_path / 'imu', [('/imu', 'sensor_msgs/msg/Imu', int(s * 1e9),
+                                           builder.imu(s, qk)) for s, qk in zip(t, q)])
+    ref = write_tum(tmp_path / 'ref.tum', t, turn(t), path_of(t))
+    status, _, err = run(capsys, 'compare', bag, ref, '--align', 'se3')
+    assert status == 2 and err.count('\n') == 1 and 'EST has none (an Imu)' in err
+
+
+# ---- the docs' examples -------------------------------------------------------------------
+
+
+def simulated_files(directory):
+    """
+    Write doc/compare.md's example: a sensor 0.25 s late, mounted by X, in a turned world.
+
+    REF at 100 Hz, EST at 50 Hz with its clock 0.25 s behind (it reports at t what REF saw
+    at t + 0.25), its body turned by X = exp([0.3, −0.5, 1.1]×) and its world by 30° of yaw,
+    with 0.05° of noise per axis.
+    """
+    rng = np.random.default_rng(2024)
+    t_ref, t_est = np.arange(0.0, 30.0, 0.01), np.arange(0.0, 30.0, 0.02)
+    X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))
+    R_est = rt.rot_z(np.radians(30)) @ noisy(turn(t_est + 0.25), 0.05, rng) @ X
+    write_tum(directory / 'ref.tum', t_ref, turn(t_ref), path_of(t_ref))
+    write_tum(directory / 'est.tum', t_est, R_est, path_of(t_est + 0.25))
+    return X
+
+
+def test_doc_example_is_real_output(capsys, tmp_path, monkeypatch):
+    X = simulated_files(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    ((command, _),) = console_steps(doc_block('compare-example'))
+    status, out, err = run(capsys, *shlex.split(command)[1:])
+    assert status == 0 and err == '', err
+    assert_doc_output('compare-example', f'$ {command}\n{out}')
+    found = json.loads(run(capsys, *shlex.split(command)[1:], '--json', '--precision', 12)[1])
+    assert abs(found['offset'] - 0.25) < 0.01  # the 0.02 s period: within a sample
+    got = rt.quaternion_to_matrix(np.array(found['mounting']['quaternion']))
+    assert np.degrees(rt.rotation_distance(got, X)) < 0.1
+
+
+def test_readme_example_is_real_output(capsys, monkeypatch):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    if not bh.REAL.exists():
+        pytest.skip(f'the shared recording is not there: {bh.REAL}')
+    monkeypatch.chdir(Path(__file__).resolve().parents[1])  # the README's commands' cwd
+    ((command, _),) = console_steps(doc_block('readme-compare'))
+    status, out, err = run(capsys, *shlex.split(command)[1:])
+    assert status == 0 and err == '', err
+    assert_doc_output('readme-compare', f'$ {command}\n{out}')
