@@ -113,7 +113,7 @@ class NodeProcess:
     ``name`` is the node's fully qualified name (/RUN/pN/rot_tools).
     """
 
-    def __init__(self, tmp_path, *ros_args):
+    def __init__(self, tmp_path, *ros_args, env_extra=None):
         namespace = f'/{RUN}/p{next(_namespaces)}'
         self.name = f'{namespace}/rot_tools'
         self.out_path = tmp_path / f'{namespace[1:].replace("/", "_")}.out'
@@ -121,7 +121,8 @@ class NodeProcess:
         args = console_script('rotation_node', 'rot_tools.ros.rotation_node') + [
             '--ros-args', '-r', f'__ns:={namespace}', *ros_args]
         with open(self.out_path, 'w') as out, open(self.err_path, 'w') as err:
-            self.process = subprocess.Popen(args, stdout=out, stderr=err, env=script_env(args))
+            self.process = subprocess.Popen(args, stdout=out, stderr=err,
+                                            env=dict(script_env(args), **(env_extra or {})))
 
     def stop(self, signum=signal.SIGTERM):
         """
@@ -359,12 +360,13 @@ def node_process(tmp_path):
     """
     Start rotation_node processes, each in a namespace of its own; kill them after the test.
 
-    start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args.
+    start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args;
+    start(..., env_extra={NAME: VALUE}) sets environment variables of the process.
     """
     started = []
 
-    def start(*ros_args):
-        started.append(NodeProcess(tmp_path, *ros_args))
+    def start(*ros_args, env_extra=None):
+        started.append(NodeProcess(tmp_path, *ros_args, env_extra=env_extra))
         return started[-1]
 
     yield start

@@ -11,7 +11,9 @@ shipped parameter file.
 
 import math
 import re
+import shutil
 import signal
+import tempfile
 import time
 
 from conftest import OUTPUTS, REPO, RUN
@@ -332,3 +334,31 @@ def test_double_parameters_take_integers_from_a_file_and_from_p(tester, node_pro
         assert [value.type for value in response.values] == [Parameter.Type.DOUBLE.value] * 2
         assert dict(zip(expected, map(parameter_value_to_python, response.values))) == expected
         assert_clean_exit(*process.stop(signal.SIGINT))
+
+
+def test_a_remap_the_shell_expanded_is_warned_about(node_process):
+    """-r ~/imu:=/x typed unquoted reaches the node as -r $HOME/imu:=/x: one warning line."""
+    home = tempfile.mkdtemp(prefix=f'{RUN}_home_')  # (a topic name may not hold a '-')
+    try:
+        process = node_process('-r', f'{home}/imu:=/x', '-r', '~/pose:=/y',
+                               env_extra={'HOME': home})
+        stderr = process.wait_for_stderr('decomposing')
+    finally:
+        shutil.rmtree(home, ignore_errors=True)
+    (warning,) = [line for line in stderr.splitlines() if 'WARN' in line]
+    assert warning.endswith(
+        f'remap -r {home}/imu:=/x starts with the home directory {home}: the shell expanded '
+        "an unquoted ~; quote it: -r '~/imu:=/x'")
+    assert_clean_exit(*process.stop(signal.SIGINT))
+
+
+@pytest.mark.parametrize('argv, found', [
+    (['p', '--ros-args', '-r', '/home/u/imu:=/x', '--remap', '/home/u:=/y'],
+     ['/home/u/imu:=/x', '/home/u:=/y']),
+    (['p', '--ros-args', '-r', '~/imu:=/x', '-r', '/home/user/imu:=/x', '-p', '/home/u/a:=1'],
+     []),
+    (['p', '-r', '/home/u/imu:=/x', '--ros-args', '--', '-r', '/home/u/imu:=/x'], []),
+])
+def test_home_remaps(argv, found):
+    from rot_tools.ros.runtime import home_remaps
+    assert home_remaps(argv, '/home/u/') == found

@@ -27,6 +27,7 @@ if __name__ == '__main__':
 import difflib
 from functools import partial, wraps
 import math
+import os
 import sys
 import textwrap
 import time
@@ -39,6 +40,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
+from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -645,6 +647,12 @@ def main(args=None):
                      f'--ros-args; see {PROG} --help)')
     runtime.use_fast_dds_profile()
     runtime.init_ros(PROG, argv)
+    home = os.path.expanduser('~')
+    for remap in runtime.home_remaps(argv, home):
+        quoted = "'~" + remap[len(home.rstrip('/')):] + "'"
+        get_logger(PROG).warning(
+            f'remap -r {remap} starts with the home directory {home}: the shell expanded an '
+            f'unquoted ~; quote it: -r {quoted}')
     try:
         runtime.serve(RotationNode)
     except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2

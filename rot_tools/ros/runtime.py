@@ -184,6 +184,27 @@ def user_arguments(argv):
     return found
 
 
+def home_remaps(argv, home=None):
+    """
+    Return the remaps of ``argv`` (``-r`` / ``--remap`` FROM:=TO) whose FROM is in ``home``.
+
+    An unquoted ``-r ~/imu:=/x`` reaches the program as ``-r /root/imu:=/x``: the shell
+    expanded the ``~`` to the home directory (``home``, default the user's) and the remap
+    names a topic nobody uses, silently.
+    """
+    home = (home or os.path.expanduser('~')).rstrip('/')
+    found, inside = [], False
+    for flag, value in zip(argv, list(argv[1:]) + [None]):
+        if flag == '--ros-args':
+            inside = True
+        elif flag == '--':
+            inside = False
+        elif inside and flag in ('-r', '--remap') and value and home and (
+                value.split(':=', 1)[0] + '/').startswith(home + '/'):
+            found.append(value)
+    return found
+
+
 def _missing_params_files(args):
     """Return the ``--params-file`` arguments (after --ros-args) naming no readable file."""
     missing = []
