@@ -12,6 +12,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 
 from conftest import DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
 from doc_blocks import assert_doc_output
@@ -113,6 +114,37 @@ def test_echo_count_prints_each_message(node, tester):
     # Each input is sent until answered, so one may come twice; the last is the last sent.
     assert documents[-1]['quaternion'] == {'x': 0.0, 'y': 0.0, 'z': approx(math.sin(0.15)),
                                            'w': approx(math.cos(0.15))}
+
+
+def test_echo_into_a_pipe_closed_early_ends_quietly(node, tester):
+    """rotation_client echo rpy | head -1: status 141 (SIGPIPE's), no traceback."""
+    from geometry_msgs.msg import QuaternionStamped
+    from rclpy.qos import qos_profile_sensor_data
+    echo = popen('echo', 'rpy', '--node', node, '--timeout', 20)
+    wait_subscribed(tester, f'{node}/rpy')
+    pub = tester.publisher(f'{node}/orientation', QuaternionStamped,
+                           qos_profile_sensor_data)
+    msg = QuaternionStamped()
+    msg.header.frame_id, msg.quaternion.w = 'map', 1.0
+
+    def publish_until(done):
+        for _ in range(200):
+            if done():
+                return
+            msg.header.stamp.sec += 1
+            pub.publish(msg)
+            tester.spin_for(0.05)
+
+    first = []
+    reader = threading.Thread(target=lambda: first.append(echo.stdout.readline()), daemon=True)
+    reader.start()
+    publish_until(lambda: first)
+    reader.join(timeout=30)
+    assert first == ['---\n']
+    echo.stdout.close()  # as head does once it has its lines
+    publish_until(lambda: echo.poll() is not None)
+    err = echo.stderr.read()
+    assert (echo.wait(timeout=30), err) == (141, '')
 
 
 def test_echo_unknown_output_and_unreachable(node):

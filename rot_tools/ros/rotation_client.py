@@ -65,7 +65,9 @@ if __name__ == '__main__':
 
 from collections import deque
 import math
+import os
 import re
+import signal
 import sys
 import time
 
@@ -453,6 +455,9 @@ def main(argv=None):
         return runtime.EXIT_USAGE
     except KeyboardInterrupt:
         return 130
+    except BrokenPipeError:  # the reader of stdout has gone (echo rpy | head -3): end quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # (the exit's flush)
+        return 128 + signal.SIGPIPE  # as a program killed by SIGPIPE: the shell's 141
     finally:
         if client is not None:
             client.close()
