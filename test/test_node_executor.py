@@ -661,3 +661,37 @@ def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkey
         own_context.try_shutdown()
         thread.join(timeout=4 * TIMEOUT)
         node.destroy_node()
+
+
+def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signal(
+        tester, node_process):
+    """
+    Ten ~/screw_path requests of MAX_PATH_STEPS + 1 poses each, queued, then ~/describe.
+
+    The executor serves each ready service in turn: describe's answer comes before the
+    tenth path (a queue served in arrival order answers it last), and SIGINT with ten more
+    queued ends the node within a second of its own time, cleanly.
+    """
+    from rot_tools.ros.screw_path import MAX_PATH_STEPS
+    process = node_process()
+    wait_until_serving(tester, process)
+    plan = tester.node.create_client(GetPlan, f'{process.name}/screw_path')
+    describe_client = tester.node.create_client(Trigger, f'{process.name}/describe')
+    for client in (plan, describe_client):
+        tester.spin_until(client.service_is_ready, what=f'service {client.srv_name}')
+    largest = GetPlan.Request(start=pose((0.0, 0.0, 0.0, 1.0)),
+                              goal=pose((0.0, 0.0, 1.0, 0.0)),
+                              tolerance=math.pi / (MAX_PATH_STEPS - 0.5))
+    while answer(tester, describe_client, Trigger.Request(), TIMEOUT / 5) is None:
+        pass  # (Fast DDS may drop a new client's first reply)
+    paths = [plan.call_async(largest) for _ in range(10)]
+    described = describe_client.call_async(Trigger.Request())
+    tester.spin_until(lambda: described.done() or all(p.done() for p in paths),
+                      4 * TIMEOUT, 'describe or the ten paths')
+    assert described.done() and not all(p.done() for p in paths)
+    tester.spin_until(lambda: all(p.done() for p in paths), 12 * TIMEOUT, 'the ten paths')
+    assert {len(p.result().plan.poses) for p in paths} == {MAX_PATH_STEPS + 1}
+    for _ in range(10):
+        plan.call_async(largest)
+    tester.spin_for(0.1)
+    assert_clean_exit(*process.stop(signal.SIGINT))
