@@ -99,6 +99,8 @@ def goal_rows(math, node, memory, first=None, overload=None, fleet=None):
         rows.append(['rot-tools bag, one bag', 'bare rosbags read',
                      f"{fleet['read_ratio']:.2f}", benchlib.fmt_goal(fleet['read_goal']),
                      benchlib.verdict(fleet['read_ratio'], fleet['read_goal'])])
+        rows.append(['  (the machine then: a CPU loop, 2 processes / 1)', 'no goal',
+                     f"{fleet['ceiling']:.2f}", '-', '-'])
     return rows
 
 

@@ -151,6 +151,17 @@ def test_one_bag_alone_keeps_its_rules(bags, capsys):
     assert alone.out.startswith(f'bag: {bh.REAL}\nstorage: rosbag1\ntopics:\n')
 
 
+def test_options_that_take_one_bag_or_a_count(bags, capsys):
+    root, paths = bags
+    status, out, err = rot_tools_bag(root, *paths, '--plot', 'rpy.png')
+    assert (status, out) == (2, '') and err.count('\n') == 1 and '--plot draws one bag' in err
+    assert not (root / 'rpy.png').exists()
+    for jobs in ('0', '-1', 'two'):
+        assert cli.main(['bag', str(bh.REAL), '--jobs', jobs]) == 2
+        captured = capsys.readouterr()
+        assert captured.out == '' and 'expected an integer >= 1' in captured.err
+
+
 def test_directories_are_searched_for_bags_in_path_order(bags, tmp_path):
     root, paths = bags
     tree = tmp_path / 'tree'

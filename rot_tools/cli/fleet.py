@@ -84,11 +84,12 @@ def read_bag(path, options, parquet=None):
     the bag's table to, or None. Returns an Outcome; a bag that cannot be read is one with
     the error's line (beginning with the bag's path).
     """
+    quiet = io.StringIO()  # not a terminal: no bar per bag, the fleet's line says how far
     try:
         storage, topics = bag.analyse(
             path, options.topic or (), options.start, options.end,
             bag.DEFAULT_TOLERANCE if options.tol is None else options.tol, options.seq,
-            options.wrap, progress_stream=io.StringIO(), tf=options.tf)
+            options.wrap, progress_stream=quiet, tf=options.tf)
     except bag_read.BagError as exc:
         text = str(exc)
         return Outcome(path, error=text if text.startswith(f'{path}:') else f'{path}: {text}')
@@ -113,12 +114,13 @@ def _processes(items, jobs):
     """
     Yield read_bag(*item) for each item, in order, from ``jobs`` processes.
 
-    The processes are forked from this one (single-threaded: the command's own process)
-    once the bag reader is imported, so each starts with the modules it needs loaded: on a
-    fleet of small bags, importing them again in every process costs as much as the reading.
+    The processes are forked from this one (the command's own process) once the bag reader
+    is imported and its type store built, so each starts with them loaded: on a fleet of
+    small bags, making them again in every process costs as much as the reading.
     """
     from concurrent.futures import ProcessPoolExecutor
-    import rosbags.highlevel  # noqa: F401 - loaded once, here, for every forked process
+    from rosbags.typesys import get_typestore, Stores
+    get_typestore(Stores.ROS2_JAZZY)  # rosbags keeps it: built once, here, for every process
     context = multiprocessing.get_context('fork')
     with ProcessPoolExecutor(min(jobs, len(items)), mp_context=context) as pool:
         yield from pool.map(read_bag, *zip(*items))
