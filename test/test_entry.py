@@ -12,7 +12,7 @@ from pathlib import Path
 import subprocess
 import sys
 
-from conftest import console_script, script_env
+from conftest import console_script, RUN, script_env
 import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'rot_tools'
@@ -80,6 +80,61 @@ def test_signal_while_the_node_loads_exits_cleanly(tmp_path, how, sig):
     proc = run(NODE_COMMANDS[how], env_extra=with_signal_hook(tmp_path, sig))
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ''
+
+
+# A sitecustomize that sends a signal to its own process at one moment of the start-up:
+# at the import of module {module!r} ('' for none), at the {nth}-th import statement
+# (0 for none) of a module of NumPy, rclpy or rot_tools, or just after rotation_node's
+# ready line (the end of RotationNode.__init__: {after_ready}). Imports are counted from
+# the moment the program has a SIGTERM handler: before it (the interpreter's start and the
+# console script importing rot_tools.ros.entry) a signal ends it as any Python program.
+SIGNAL_AT_A_MOMENT = """
+import builtins, os, signal, sys
+_real_import = builtins.__import__
+_seen = []
+def _signal():
+    if not _seen or _seen[-1] != 'sent':
+        _seen.append('sent')
+        os.kill(os.getpid(), signal.{sig})
+def _import(name, *args, **kwargs):
+    if (name.split('.')[0] in ('numpy', 'rclpy', 'rot_tools')
+            and signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
+        _seen.append(name)
+        if name == {module!r} or len(_seen) == {nth}:
+            _signal()
+    module = _real_import(name, *args, **kwargs)
+    node = getattr(sys.modules.get('rot_tools.ros.rotation_node'), 'RotationNode', None)
+    if {after_ready} and node is not None and 'patched' not in _seen:
+        _seen.append('patched')
+        build = node.__init__
+        def build_then_signal(self, *a, **k):
+            build(self, *a, **k)
+            _signal()
+        node.__init__ = build_then_signal
+    return module
+builtins.__import__ = _import
+"""
+
+START_UP_MOMENTS = {
+    **{f'import {n}': {'nth': n} for n in (1, 3, 10, 30, 60, 100, 200, 400, 800)},
+    # rclpy.signals half imported: rot_tools' handler looked up its function there.
+    'rclpy.signals half imported': {'module': 'rclpy.exceptions'},
+    # The context shut down before the executor was made: it failed half built.
+    'after the ready line': {'after_ready': True},
+}
+"""Moments of the start-up to signal at: 11 a signal, 22 with both signals."""
+
+
+@pytest.mark.parametrize('sig', ['SIGTERM', 'SIGINT'])
+@pytest.mark.parametrize('moment', sorted(START_UP_MOMENTS))
+def test_a_signal_at_any_moment_of_the_start_up_exits_0_quietly(tmp_path, moment, sig):
+    hook = dict({'module': '', 'nth': 0, 'after_ready': False}, **START_UP_MOMENTS[moment])
+    (tmp_path / 'sitecustomize.py').write_text(SIGNAL_AT_A_MOMENT.format(sig=sig, **hook))
+    command = NODE_COMMANDS.get('console script', NODE_COMMANDS['python -m'])
+    proc = run(command, '--ros-args', '-r', f'__ns:=/{RUN}/startup', timeout=30,
+               env_extra={'PYTHONPATH': f'{tmp_path}:{PACKAGE.parent}'})
+    shown = [line for line in proc.stderr.splitlines() if 'decomposing' not in line]
+    assert (proc.returncode, shown) == (0, []), proc.stderr
 
 
 def test_signal_while_the_client_loads_exits_with_130(tmp_path):

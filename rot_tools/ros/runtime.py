@@ -50,9 +50,10 @@ def _exit_cleanly(signum, frame):
     main returns) and then call this one. From then on raising SystemExit here would land
     in whatever runs at that moment — inside a callback, through the executor's C++.
     """
-    rclpy_signals = sys.modules.get('rclpy.signals')
-    if rclpy_signals is not None and (rclpy_signals.get_current_signal_handlers_options()
-                                      != rclpy_signals.SignalHandlerOptions.NO):
+    # (rclpy.signals may be in sys.modules half imported: a signal while it loads)
+    options = getattr(sys.modules.get('rclpy.signals'), 'get_current_signal_handlers_options',
+                      None)
+    if options is not None and options().name != 'NO':
         return
     sys.exit(0)
 
@@ -379,19 +380,24 @@ def serve(make_node, executor_factory=make_executor):
 
     The node is make_node(), the executor executor_factory(); rclpy.init is the caller's.
     A signal during the build is a normal stop; any other exception of the build (an
-    invalid parameter) is raised after the clean-up.
+    invalid parameter) is raised after the clean-up. The executor is made first, while the
+    context was running an instant before: an executor made on a context a signal has shut
+    down fails half built (rclpy then prints 'Exception ignored in Executor.__del__').
     """
     import gc
     import rclpy
     from rclpy.executors import ExternalShutdownException
     node = None
     try:
+        if not rclpy.ok():
+            return  # a signal during rclpy.init: a normal stop
+        executor = executor_factory()
         node = make_node()
         # What exists now (modules, the node) lives as long as the process: left out of
         # the collector's full passes, which otherwise stall a message by ~15 ms every few
         # seconds under load (the tail of the latency).
         gc.freeze()
-        spin(node, executor_factory())
+        spin(node, executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception:
