@@ -548,30 +548,13 @@ def to_stdout(write, error):
 
 def run(args, error):
     """
-    rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2.
+    rot-tools bag on the one bag ``args.path``; ``error(text)`` prints one line and exits 2.
 
-    One bag given alone is analysed here; several (or a directory searched for bags) are
-    rot_tools.cli.fleet's.
+    rot_tools.cli.fleet.command reads the command line's paths and checks the options first,
+    and hands one bag given alone to this function.
     """
-    from rot_tools.cli import fleet
     from rot_tools.io.report import to_json, to_yaml
 
-    missing = bag_read.rosbags_missing()
-    if missing:
-        error(f"bag needs the rosbags library ({missing} is missing), the 'bag' extra: "
-              "pip install 'rot_tools[bag]'")
-    if args.start is not None and args.end is not None and args.end < args.start:
-        error(f'--end {args.end:g} is before --start {args.start:g}')
-    if args.scheduler is not None and args.engine != 'dask':
-        error('--scheduler ADDRESS is the address of a Dask scheduler: it needs --engine dask')
-    try:
-        bags, searched = fleet.find_bags(args.path)
-    except bag_read.BagError as exc:
-        error(f'bag: {exc}')
-    if len(bags) > 1 or searched:
-        return fleet.run(args, bags, error)
-    args.path = bags[0]
-    fleet.check_extras(args, error)
     refuse_overwriting(args.path, [('--csv', args.csv), ('--plot', args.plot),
                                    ('--parquet', args.parquet)], error)
     try:
@@ -592,7 +575,7 @@ def run(args, error):
             error(f'--plot: cannot write {args.plot}: {exc.strerror or exc}')
         sys.stderr.write(plot_note(args.plot, drawn, topics[MAX_PLOTTED_TOPICS:]))
     if args.parquet is not None:
-        fleet.parquet_directory(args.parquet, error)
+        bag_parquet.directory(args.parquet, error)
         target = os.path.join(args.parquet, bag_parquet.file_names([args.path])[0])
         try:
             bag_parquet.write(target, bag_parquet.table(topics, str(args.path), args.deg,

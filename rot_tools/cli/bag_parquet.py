@@ -10,12 +10,24 @@ and ``'DIR/*.parquet'`` (DuckDB) or ``pandas.read_parquet(DIR)`` reads the bags 
 pyarrow is imported only here, when a table is made: it comes with the ``bag`` extra.
 """
 
+import os
 from pathlib import Path
 import re
 
 import numpy as np
 from rot_tools.cli import output_file
 from rot_tools.cli.bag_output import csv_header, row_values
+
+
+def directory(directory, error):
+    """Create the --parquet directory if needed; ``error`` if it cannot be written to."""
+    try:
+        os.makedirs(directory, exist_ok=True)
+    except OSError as exc:
+        error(f'--parquet: cannot create {directory}: {exc.strerror or exc}')
+    if not os.access(directory, os.W_OK | os.X_OK):
+        error(f'--parquet: cannot write in {directory}: permission denied')
+
 
 TEXT_COLUMNS = ('bag', 'topic', 'frame_id')
 """The columns of strings; ``stamp`` is int64 nanoseconds, every other column float64."""

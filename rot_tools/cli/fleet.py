@@ -202,16 +202,6 @@ def check_extras(args, error):
                   "pip install 'rot_tools[fleet]'")
 
 
-def parquet_directory(directory, error):
-    """Create the --parquet directory if needed; ``error`` if it cannot be written to."""
-    try:
-        os.makedirs(directory, exist_ok=True)
-    except OSError as exc:
-        error(f'--parquet: cannot create {directory}: {exc.strerror or exc}')
-    if not os.access(directory, os.W_OK | os.X_OK):
-        error(f'--parquet: cannot write in {directory}: permission denied')
-
-
 def _collect(items, args, out):
     """Run the jobs; write each bag's rows to ``out`` (or None) and its failure on stderr."""
     progress = FleetProgress(len(items))
@@ -247,6 +237,32 @@ def fleet_summary(done):
                                        'messages': sum(o.accepted for o in done)}}
 
 
+def command(args, error):
+    """
+    rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2.
+
+    One bag given alone is analysed by rot_tools.cli.bag.run as it always was; several (or a
+    directory searched for bags) by :func:`run`.
+    """
+    missing = bag_read.rosbags_missing()
+    if missing:
+        error(f"bag needs the rosbags library ({missing} is missing), the 'bag' extra: "
+              "pip install 'rot_tools[bag]'")
+    if args.start is not None and args.end is not None and args.end < args.start:
+        error(f'--end {args.end:g} is before --start {args.start:g}')
+    if args.scheduler is not None and args.engine != 'dask':
+        error('--scheduler ADDRESS is the address of a Dask scheduler: it needs --engine dask')
+    try:
+        bags, searched = find_bags(args.path)
+    except bag_read.BagError as exc:
+        error(f'bag: {exc}')
+    if len(bags) > 1 or searched:
+        return run(args, bags, error)
+    args.path = bags[0]
+    check_extras(args, error)
+    return bag.run(args, error)
+
+
 def run(args, bags, error):
     """rot-tools bag over many bags; returns the exit status (1 when a bag failed)."""
     if args.plot:
@@ -260,7 +276,7 @@ def run(args, bags, error):
                                error)
     names = [None] * len(bags)
     if args.parquet is not None:
-        parquet_directory(args.parquet, error)
+        bag_parquet.directory(args.parquet, error)
         names = [os.path.join(args.parquet, n) for n in bag_parquet.file_names(bags)]
     items = [(path, args, name) for path, name in zip(bags, names)]
     try:

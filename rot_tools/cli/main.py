@@ -626,13 +626,13 @@ def _report(args, parser):
 
 
 def _bag(args, parser):
-    """rot-tools bag: rot_tools.cli.bag (imported only now: it needs the 'bag' extra)."""
+    """rot-tools bag: rot_tools.cli.fleet, then bag (imported only now: the 'bag' extra)."""
     for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
                           ('--all-sequences', args.all_sequences)):
         if given:
             parser.error(f'{option} does not apply to bag')
-    from rot_tools.cli import bag
-    return bag.run(args, parser.error)
+    from rot_tools.cli import fleet
+    return fleet.command(args, parser.error)
 
 
 def main(argv=None):
