@@ -402,6 +402,9 @@ def test_fast_paths_to_a_matrix_give_the_batch_formula(axis, size, angle):
          size=1e100, seq='ZYX')
 @example(rotation=rt.axis_angle_to_matrix([0.0, 0.0, 1.0], 1e-11), axis=np.array([1.0, 0.0, 0.0]),
          size=1e300, seq='zxz')  # (the screw overflows: refused)
+@example(rotation=np.array([[-1.0, 0.0, 1.00021137e-12], [1.00021137e-18, 1.0, 1e-06],
+                           [-1.00021137e-12, 1e-06, -1.0]]),
+         axis=np.array([0.0, 0.0, 1.0]), size=0.0, seq='ZXZ')  # (θ2 at the lock's edge)
 def test_fast_path_of_the_node_gives_the_batch_formula(rotation, axis, size, seq):
     # decompose_values skips the screw for max|b_i| ≤ ORDINARY_B, where it cannot overflow:
     # the same numbers as the batch (which computes it), and no refusal the batch would make.
@@ -412,7 +415,16 @@ def test_fast_path_of_the_node_gives_the_batch_formula(rotation, axis, size, seq
         assert batch == one
         return
     for field, a, c in zip(one._fields, one, batch):
-        assert _close(np.array(a), np.asarray(c)[0]), (field, a, c)
+        a, c = np.array(a), np.asarray(c)[0]
+        if field in ('euler', 'rpy') and not _close(a, c):
+            # θ2 a last bit from the lock's edge: libm's and NumPy's atan2 differ there, and
+            # one side takes the lock's form (θ3 = 0) where the other does not
+            s = seq if field == 'euler' else decomposition.RPY_SEQUENCE
+            edge = (math.pi / 2 - abs(a[1]) if s.upper() in h.TAIT_BRYAN else
+                    min(a[1], math.pi - a[1]))
+            assert abs(edge - GIMBAL_LOCK_TOL) <= 1e-15, (field, a, c)
+            continue
+        assert _close(a, c), (field, a, c)
 
 
 @settings(max_examples=300, deadline=None)

@@ -10,6 +10,7 @@ shipped parameter file.
 """
 
 import math
+import os
 import re
 import shutil
 import signal
@@ -338,7 +339,9 @@ def test_double_parameters_take_integers_from_a_file_and_from_p(tester, node_pro
 
 def test_a_remap_the_shell_expanded_is_warned_about(node_process):
     """-r ~/imu:=/x typed unquoted reaches the node as -r $HOME/imu:=/x: one warning line."""
-    home = tempfile.mkdtemp(prefix=f'{RUN}_home_')  # (a topic name may not hold a '-')
+    # (a ROS name holds neither '-' nor '__': mkdtemp's random part may make either)
+    home = os.path.join(tempfile.gettempdir(), f'{RUN}_home')
+    os.makedirs(home, exist_ok=True)
     try:
         process = node_process('-r', f'{home}/imu:=/x', '-r', '~/pose:=/y',
                                env_extra={'HOME': home})
