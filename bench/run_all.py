@@ -73,7 +73,7 @@ def goal_rows(math, node, memory, first=None, overload=None, fleet=None):
             rows.append([g['figure'], 'markers off', f"{g['measured']:.2f}", g['goal'],
                          'yes' if g['met'] else 'NO'])
         ev = node['evaluation']
-        for key in ('rot_tools_markers vs relay_default', 'rot_tools_markers vs relay_node'):
+        for key in ('rot_tools_markers vs relay_default',):
             rows.append([f'node throughput, markers on ({key.split(" vs ")[1]})', 'no goal',
                          f"{ev[key]['throughput_ratio']:.2f}", '-', '-'])
     if memory:
