@@ -159,7 +159,7 @@ def test_options_that_take_one_bag_or_a_count(bags, capsys):
     for jobs in ('0', '-1', 'two'):
         assert cli.main(['bag', str(bh.REAL), '--jobs', jobs]) == 2
         captured = capsys.readouterr()
-        assert captured.out == '' and 'expected an integer >= 1' in captured.err
+        assert captured.out == '' and 'must be a whole number >= 1' in captured.err
 
 
 def test_directories_are_searched_for_bags_in_path_order(bags, tmp_path):

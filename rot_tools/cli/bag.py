@@ -565,14 +565,8 @@ def run(args, error):
         error(f'bag: {exc}')
     if args.plot:
         drawn = topics[:MAX_PLOTTED_TOPICS]
-        try:
-            write_plot(args.plot, drawn, args.deg)
-        except ImportError as exc:
-            if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
-                raise
-            error("--plot needs matplotlib, the 'plot' extra: pip install 'rot_tools[plot]'")
-        except OSError as exc:
-            error(f'--plot: cannot write {args.plot}: {exc.strerror or exc}')
+        output_file.write_figure(lambda: write_plot(args.plot, drawn, args.deg), args.plot,
+                                 error)
         sys.stderr.write(plot_note(args.plot, drawn, topics[MAX_PLOTTED_TOPICS:]))
     if args.parquet is not None:
         bag_parquet.directory(args.parquet, error)

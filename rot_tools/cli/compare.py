@@ -416,14 +416,8 @@ def run(args, error):
     except (CompareError, TrajectoryFileError, bag_read.BagError, RotationError) as exc:
         error(f'compare: {exc}')
     if args.plot:
-        try:
-            write_plot(args.plot, result, args.deg)
-        except ImportError as exc:
-            if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
-                raise
-            error("--plot needs matplotlib, the 'plot' extra: pip install 'rot_tools[plot]'")
-        except OSError as exc:
-            error(f'--plot: cannot write {args.plot}: {exc.strerror or exc}')
+        output_file.write_figure(lambda: write_plot(args.plot, result, args.deg), args.plot,
+                                 error)
     if args.csv is not None:
         try:
             write_csv(args.csv, result, args.deg, args.precision)

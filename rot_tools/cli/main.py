@@ -46,9 +46,9 @@ from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, frame_to_matrix,
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
-from rot_tools.cli import compare
+from rot_tools.cli import compare, output_file
 from rot_tools.core.errors import RotationError
-from rot_tools.io.arguments import negative_numbers_as_values
+from rot_tools.io.arguments import negative_numbers_as_values, whole_number
 from rot_tools.io.report import angle_hint, DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
 from rot_tools.io.report import transform_report
 
@@ -156,16 +156,6 @@ def _seconds(text):
     if value < 0:
         raise argparse.ArgumentTypeError(
             f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
-    return value
-
-
-def _jobs(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'expected an integer >= 1, got {text.strip()!r}')
     return value
 
 
@@ -507,7 +497,7 @@ def _add_bag(sub):
                    help="only messages recorded S seconds or more after the bag's start")
     p.add_argument('--end', type=_seconds, metavar='S',
                    help="only messages recorded at most S seconds after the bag's start")
-    p.add_argument('--jobs', type=_jobs, metavar='N',
+    p.add_argument('--jobs', type=whole_number, metavar='N',
                    help='read the bags in N processes (default: one per CPU; 1: here, one '
                    'after the other); the output is the same whatever N is')
     p.add_argument('--parquet', metavar='DIR',
@@ -596,17 +586,12 @@ def build_parser():
 
 def _write_plot(parser, path, R, b, degrees):
     """Draw (R, b) into ``path`` with rot_tools.cli.plot, imported only now (matplotlib)."""
-    try:
+    def draw():
         from rot_tools.cli import plot
-    except ImportError as exc:
-        if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
-            raise
-        parser.error("--plot needs matplotlib, the 'plot' extra: "
-                     "pip install 'rot_tools[plot]'")
-    try:
         plot.save(R, b, path, degrees)
-    except OSError as exc:
-        parser.error(f'--plot: cannot write {path}: {exc.strerror or exc}')
+
+    try:
+        output_file.write_figure(draw, path, parser.error)
     except ValueError as exc:  # RotationError: a picture too large for float64
         parser.error(f'--plot: {exc}')
 

@@ -42,3 +42,20 @@ def complete_or_nothing(path, mode='w', **open_args):
         with suppress(OSError):
             os.unlink(partial)
         raise
+
+
+def write_figure(draw, path, error):
+    """
+    Call ``draw()``, which writes the figure at ``path`` with matplotlib (the 'plot' extra).
+
+    ``error(text)`` prints one line and exits 2 when matplotlib is missing or the file
+    cannot be written.
+    """
+    try:
+        draw()
+    except ImportError as exc:
+        if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
+            raise
+        error("--plot needs matplotlib, the 'plot' extra: pip install 'rot_tools[plot]'")
+    except OSError as exc:
+        error(f'--plot: cannot write {path}: {exc.strerror or exc}')

@@ -1,5 +1,6 @@
 """Command-line words shared by rot-tools and rotation_client."""
 
+import argparse
 import re
 
 NEGATIVE_NUMBER = r'-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|-(inf|infinity|nan)'
@@ -21,3 +22,14 @@ def negative_numbers_as_values(argv):
         number = not rest and re.fullmatch(NEGATIVE_NUMBER, word, re.IGNORECASE)
         words.append(' ' + word if number else word)
     return words
+
+
+def whole_number(text):
+    """Read an integer ≥ 1 (argparse type of ``--jobs``, ``--count``), else say why not."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be a whole number >= 1, got {text.strip()!r}')
+    return value

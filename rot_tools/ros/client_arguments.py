@@ -16,7 +16,7 @@ import re
 import numpy as np
 from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.io import interface
-from rot_tools.io.arguments import negative_numbers_as_values
+from rot_tools.io.arguments import negative_numbers_as_values, whole_number
 from rot_tools.io.report import angle_hint
 from rot_tools.ros import runtime
 
@@ -111,16 +111,6 @@ def _tolerance(text):
             raise argparse.ArgumentTypeError(
                 f'{text} is above the largest float32, {FLOAT32_MAX:.4g}: the request '
                 'carries a float32, so the node would read inf (one step)')
-    return value
-
-
-def _count(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'must be a whole number >= 1, got {text.strip()!r}')
     return value
 
 
@@ -301,7 +291,7 @@ def build_parser():
                            help='the topic to listen to, when the output is remapped '
                            '(default NODE/OUTPUT)')
             p.add_argument('--once', action='store_true', help='print one message and exit')
-            p.add_argument('--count', type=_count, metavar='N',
+            p.add_argument('--count', type=whole_number, metavar='N',
                            help='print N messages and exit')
         elif name == 'set':
             p.add_argument('name', metavar='NAME', help="the parameter's name")
