@@ -15,6 +15,8 @@ and subscriptions, available services) with bounded timeouts, and retries servic
 since Fast DDS sometimes drops the reply to a brand-new client.
 """
 
+import errno
+import io
 import itertools
 import os
 from pathlib import Path
@@ -331,6 +333,25 @@ def _context():
     context = rclpy.Context()
     rclpy.init(context=context)
     return context
+
+
+@pytest.fixture
+def savefig_fills_the_disk(monkeypatch):
+    """Make matplotlib's Figure.savefig write half the picture, then fail as a full disk does."""
+    pytest.importorskip('matplotlib')
+    from matplotlib.figure import Figure
+    real_savefig = Figure.savefig
+
+    def half_then_full(fig, target, **kwargs):
+        picture = io.BytesIO()
+        real_savefig(fig, picture, **{'format': 'png', **kwargs})
+        half = picture.getvalue()[:len(picture.getvalue()) // 2]
+        if hasattr(target, 'write'):
+            target.write(half)
+        else:
+            Path(target).write_bytes(half)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    monkeypatch.setattr(Figure, 'savefig', half_then_full)
 
 
 @pytest.fixture(scope='session')
