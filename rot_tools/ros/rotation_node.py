@@ -55,10 +55,10 @@ from rot_tools.ros import messages, runtime, screw_path, tf_input
 from rot_tools.ros.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
+from rot_tools.ros.tf_input import MALFORMED
 from rot_tools.ros.topics import INPUTS, OUTPUTS  # noqa: F401 - the rows as subscribed
 from std_srvs.srv import Trigger
 
-MALFORMED = 'malformed'
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
     MALFORMED, NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
 ) + tf_input.REFUSAL_REASONS
