@@ -48,6 +48,20 @@ def _item(index):
     return f' (item {index})' if index else ''
 
 
+def covariance_defects(C):
+    """
+    Return (asymmetry, negativity, bound) per item of C (..., n, n), finite float64.
+
+    asymmetry = max|C − Cᵀ|, negativity = −(lowest eigenvalue of (C + Cᵀ)/2), bound =
+    COVARIANCE_TOL·max|C|: C is a covariance where both are ≤ bound.
+    """
+    scale = np.abs(C).max(axis=(-2, -1), initial=0.0)
+    asymmetry = np.abs(C - np.swapaxes(C, -1, -2)).max(axis=(-2, -1), initial=0.0)
+    S = 0.5 * (C + np.swapaxes(C, -1, -2))
+    lowest = np.linalg.eigvalsh(S)[..., 0] if S.size else np.zeros(S.shape[:-2])
+    return asymmetry, -lowest, COVARIANCE_TOL * scale
+
+
 def validate_covariance(cov, size=3, name='cov'):
     """
     Return the symmetric part of cov (..., size, size) as float64, or raise RotationError.
@@ -57,22 +71,19 @@ def validate_covariance(cov, size=3, name='cov'):
     how much, and for a batch names its worst item.
     """
     C = finite_array(cov, (size, size), name)
-    scale = np.abs(C).max(axis=(-2, -1), initial=0.0)
-    bound = COVARIANCE_TOL * scale
-    asymmetry = np.abs(C - np.swapaxes(C, -1, -2)).max(axis=(-2, -1), initial=0.0)
+    asymmetry, negativity, bound = covariance_defects(C)
+    scale = bound / COVARIANCE_TOL
     at = _worst(asymmetry, bound, scale)
     if at is not None:
         shown, tol = apart(asymmetry[at], bound[at])
         raise RotationError(f'{name} is not symmetric: max|C − Cᵀ| = {shown} > '
                             f'{COVARIANCE_TOL:g}·max|C| = {tol}{_item(at)}')
-    S = 0.5 * (C + np.swapaxes(C, -1, -2))
-    lowest = np.linalg.eigvalsh(S)[..., 0] if S.size else np.zeros(S.shape[:-2])
-    at = _worst(-lowest, bound, scale)
+    at = _worst(negativity, bound, scale)
     if at is not None:
-        shown, tol = apart(-lowest[at], bound[at])
+        shown, tol = apart(negativity[at], bound[at])
         raise RotationError(f'{name} is not positive semi-definite: its lowest eigenvalue is '
                             f'-{shown}, below -{COVARIANCE_TOL:g}·max|C| = -{tol}{_item(at)}')
-    return S
+    return 0.5 * (C + np.swapaxes(C, -1, -2))
 
 
 def _worst(excess, bound, scale):

@@ -56,6 +56,10 @@ class Input(NamedTuple):
     help: str  # noqa: A003
     bag_fields: dict = {}
     """{role: path} that only ``rot-tools bag`` reads (an Imu's gyro, for its check)."""
+    covariance: tuple = ()
+    """(path, size) of the float64 array holding the rotation's covariance, row-major (9: an
+    Imu's orientation_covariance; 36: a PoseWithCovariance's x, y, z, rx, ry, rz), or ()
+    (rot_tools.io.message_covariance reads it)."""
 
     @property
     def topic(self):
@@ -124,15 +128,18 @@ INPUTS = (
           boundary.pose_fields_to_rt,
           'rotation and translation of child_frame_id in header.frame_id'),
     Input('pose_with_covariance', 'geometry_msgs/msg/PoseWithCovarianceStamped', _POSE_POSE,
-          boundary.pose_fields_to_rt, 'pose.pose (the covariance is not used)'),
+          boundary.pose_fields_to_rt, 'pose.pose (the covariance is not used)',
+          covariance=('pose.covariance', 36)),
     Input('odometry', 'nav_msgs/msg/Odometry',
           {'child_frame_id': 'child_frame_id', **_POSE_POSE}, boundary.pose_fields_to_rt,
-          'pose.pose: the body child_frame_id in header.frame_id (the twist is not used)'),
+          'pose.pose: the body child_frame_id in header.frame_id (the twist is not used)',
+          covariance=('pose.covariance', 36)),
     Input('imu', 'sensor_msgs/msg/Imu',
           {'orientation': 'orientation', 'covariance0': 'orientation_covariance'},
           boundary.imu_fields_to_rt,
           'orientation (b = 0); refused when orientation_covariance[0] is -1 (no estimate)',
-          bag_fields={'angular_velocity': 'angular_velocity'}),
+          bag_fields={'angular_velocity': 'angular_velocity'},
+          covariance=('orientation_covariance', 9)),
     Input('orientation', 'geometry_msgs/msg/QuaternionStamped',
           {'orientation': 'quaternion'}, boundary.quaternion_fields_to_rt,
           'quaternion (b = 0)'),
