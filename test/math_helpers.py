@@ -239,11 +239,19 @@ def mentions_magnitude(message, value, factor=2.0):
     return any(value / factor <= abs(x) <= value * factor for x in numbers_in(message))
 
 
+def _not_tiny(v):
+    return np.linalg.norm(v) > 1e-3
+
+
+def _normalised(v):
+    return v / np.linalg.norm(v)
+
+
 def unit_vectors():
     """Hypothesis strategy: unit 3-vectors (rejecting near-zero draws)."""
     comp = st.floats(-1.0, 1.0, allow_nan=False)
-    return st.tuples(comp, comp, comp).map(np.array).filter(
-        lambda v: np.linalg.norm(v) > 1e-3).map(lambda v: v / np.linalg.norm(v))
+    # (named functions: the stock install's Hypothesis 6.98 re-reads a lambda's source per draw)
+    return st.tuples(comp, comp, comp).map(np.array).filter(_not_tiny).map(_normalised)
 
 
 def angles_in(lo, hi):
