@@ -24,8 +24,10 @@ PYTEST_ARGS ?=
 NODE_ARGS ?=
 # compat: a path entry for the checkout instead of an import hook, so that a directory named
 # rot_tools in the current directory (the clone itself, seen from its parent) cannot shadow
-# the package with an empty namespace package.
-EDITABLE := --no-build-isolation --config-settings editable_mode=compat -e .
+# the package with an empty namespace package. --use-pep517: without it pip 23.2 falls back
+# to `setup.py develop` whenever the `wheel` package is installed, and setup.cfg's [develop]
+# script_dir (for colcon) then puts the console scripts in lib/rot_tools instead of $(BIN).
+EDITABLE := --no-build-isolation --use-pep517 --config-settings editable_mode=compat -e .
 PACKAGING := setup.py setup.cfg package.xml Makefile
 TF2_MSGS := requirements-build.txt tools/build_tf2_msgs.py vendor/tf2_msgs/CMakeLists.txt \
 	vendor/tf2_msgs/package.xml vendor/tf2_msgs/msg/TFMessage.msg
