@@ -15,6 +15,7 @@ rot_tools.io.report) as YAML, or JSON with ``--json``::
     rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
     rot-tools bag run.bag --csv run.csv --plot rpy.png   (rot_tools.cli.bag: the 'bag' extra)
     rot-tools compare est.tum gt.csv --align se3          (rot_tools.cli.compare)
+    rot-tools covariance quaternion 0 0 0 1 --cov 1e-4 0 0 0 1e-4 0 0 0 1e-4 --from rotvec --to rpy
 
 Every option is accepted before the command, after its arguments (``_add_common``) and
 between them (``_CommandParser``).
@@ -46,7 +47,7 @@ from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, frame_to_matrix,
     homogeneous_to_transform, nearest_rotation, quaternion_to_matrix, rotvec_to_matrix,
     validate_rotation)
-from rot_tools.cli import compare, output_file
+from rot_tools.cli import compare, covariance, output_file
 from rot_tools.core.errors import RotationError
 from rot_tools.io.arguments import negative_numbers_as_values, whole_number
 from rot_tools.io.report import angle_hint, DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
@@ -84,11 +85,13 @@ class _CommandParser(_Parser):
     20 10``), which plain argparse refuses once a ``nargs='*'`` argument has matched nothing.
     """
 
+    intermixed = True
+    """False for a command with commands of its own (argparse cannot intermix those)."""
     _intermixing = False
 
     def parse_known_args(self, args=None, namespace=None):
         """parse_known_intermixed_args, which calls this method again for its two passes."""
-        if self._intermixing:
+        if self._intermixing or not self.intermixed:
             return super().parse_known_args(args, namespace)
         self._intermixing = True
         try:
@@ -305,7 +308,8 @@ def _from_screw(args, parser):
 
 
 def _reads_quaternion(args):
-    return args.command == 'quaternion' or getattr(args, 'quaternion', None) is not None
+    kind = getattr(args, 'input', args.command)  # covariance's input
+    return kind == 'quaternion' or getattr(args, 'quaternion', None) is not None
 
 
 # ---------------------------------------------------------------------------------------
@@ -384,51 +388,56 @@ _COMMANDS = {
 }
 
 
-def _add_common(parser, suppress):
+def _add_common(parser, suppress, only=None):
     """
     Options accepted before the command and after its arguments (one line each).
 
     They are added to the main parser (with their defaults) and to every command's parser
-    (with SUPPRESS defaults, so a value given before the command is not overwritten).
+    (with SUPPRESS defaults, so a value given before the command is not overwritten); only
+    those named in ``only`` when it is given.
     """
     def default(value):
         return argparse.SUPPRESS if suppress else value
-    out = parser.add_argument_group('common options') if suppress else parser
-    out.add_argument('--deg', action='store_true', default=default(False),
-                     help='angles in degrees, in and out (axis-angle and screw angles are '
-                     'printed in both units anyway)')
-    out.add_argument('--seq', type=_sequence, default=default(None), metavar='SEQ',
-                     help='Euler sequence of the output, any of the 24 (default: the input '
-                     'sequence for euler, else ZYX)')
-    out.add_argument('--all-sequences', action='store_true', default=default(False),
-                     help='also print the Euler angles in all 24 sequences, each with its '
-                     'gimbal-lock flag `degenerate`')
-    out.add_argument('--json', action='store_true', default=default(False),
-                     help='print JSON instead of YAML (an infinite pitch is the string "inf")')
-    out.add_argument('--precision', type=_precision, default=default(DEFAULT_PRECISION),
-                     metavar='N', help='round numbers to N significant digits and N decimal '
-                     f'places (default {DEFAULT_PRECISION}); -0.0 prints as 0.0')
-    out.add_argument('--tol', type=_tolerance, default=default(None), metavar='TOL',
-                     help='how far a typed input may be from exact before it is refused; '
-                     'within it, it is made exact. A matrix (matrix, screw --rotation): '
-                     f'max|RᵀR − I| and |det R − 1| ≤ TOL, default {MATRIX_TOL:g} (six '
-                     'significant digits pass), then the nearest rotation. A frame (frame, '
-                     'screw --frame): |cos| between two axes ≤ TOL, default '
-                     f'{MATRIX_TOL:g}. A quaternion (quaternion, screw --quaternion): '
-                     f'||q| − 1| ≤ TOL, default {QUATERNION_TOL:g} (four digits pass), then '
-                     'normalised')
-    out.add_argument('--wxyz', action='store_true', default=default(False),
-                     help='a typed quaternion is W X Y Z (w first) instead of the ROS order '
-                     'X Y Z W')
-    out.add_argument('--point', type=_number, nargs=3, default=default(None),
-                     metavar=('X', 'Y', 'Z'), help='also print where the motion takes the point '
-                     'p = (X, Y, Z), R·p + b, and its coordinates in the moved frame, '
-                     'Rᵀ·(p − b)')
-    out.add_argument('--plot', type=_plot_file, default=default(None), metavar='FILE',
-                     help='also draw the motion in FILE (.png or .svg): both frames, the '
-                     'rotation or screw axis, the path of the origin; needs matplotlib (pip '
-                     "install 'rot_tools[plot]')")
-    out.add_argument('--version', action=_Version, help='print the version and exit')
+
+    def add(option, **kwargs):
+        if only is None or option in only:
+            group.add_argument(option, **kwargs)
+    group = parser.add_argument_group('common options') if suppress else parser
+    add('--deg', action='store_true', default=default(False),
+        help='angles in degrees, in and out (axis-angle and screw angles are '
+        'printed in both units anyway)')
+    add('--seq', type=_sequence, default=default(None), metavar='SEQ',
+        help='Euler sequence of the output, any of the 24 (default: the input '
+        'sequence for euler, else ZYX)')
+    add('--all-sequences', action='store_true', default=default(False),
+        help='also print the Euler angles in all 24 sequences, each with its '
+        'gimbal-lock flag `degenerate`')
+    add('--json', action='store_true', default=default(False),
+        help='print JSON instead of YAML (an infinite pitch is the string "inf")')
+    add('--precision', type=_precision, default=default(DEFAULT_PRECISION),
+        metavar='N', help='round numbers to N significant digits and N decimal '
+        f'places (default {DEFAULT_PRECISION}); -0.0 prints as 0.0')
+    add('--tol', type=_tolerance, default=default(None), metavar='TOL',
+        help='how far a typed input may be from exact before it is refused; '
+        'within it, it is made exact. A matrix (matrix, screw --rotation): '
+        f'max|RᵀR − I| and |det R − 1| ≤ TOL, default {MATRIX_TOL:g} (six '
+        'significant digits pass), then the nearest rotation. A frame (frame, '
+        'screw --frame): |cos| between two axes ≤ TOL, default '
+        f'{MATRIX_TOL:g}. A quaternion (quaternion, screw --quaternion): '
+        f'||q| − 1| ≤ TOL, default {QUATERNION_TOL:g} (four digits pass), then '
+        'normalised')
+    add('--wxyz', action='store_true', default=default(False),
+        help='a typed quaternion is W X Y Z (w first) instead of the ROS order '
+        'X Y Z W')
+    add('--point', type=_number, nargs=3, default=default(None),
+        metavar=('X', 'Y', 'Z'), help='also print where the motion takes the point '
+        'p = (X, Y, Z), R·p + b, and its coordinates in the moved frame, '
+        'Rᵀ·(p − b)')
+    add('--plot', type=_plot_file, default=default(None), metavar='FILE',
+        help='also draw the motion in FILE (.png or .svg): both frames, the '
+        'rotation or screw axis, the path of the origin; needs matplotlib (pip '
+        "install 'rot_tools[plot]')")
+    add('--version', action=_Version, help='print the version and exit')
 
 
 # The numbers each command takes as arguments: (dest, metavar, help).
@@ -553,12 +562,7 @@ def build_parser():
             name, help=summary, usage=f'{PROG} {usage}',
             description=f'{summary[0].upper()}{summary[1:]}.\n\n{text}',
             epilog='examples:\n  ' + examples.replace('\n', '\n  '))
-        p.set_defaults(handler=handler)
-        if name == 'euler':
-            p.add_argument('sequence', type=_sequence, metavar='SEQ', help=_SEQUENCE_HELP)
-        if name in _NUMBERS:
-            dest, metavar, help_text = _NUMBERS[name]
-            p.add_argument(dest, type=_number, nargs='*', metavar=metavar, help=help_text)
+        _add_words(p, name)
         if name == 'screw':
             rotation = p.add_mutually_exclusive_group()
             rotation.add_argument('--rotation', type=_number, nargs=9,
@@ -581,7 +585,18 @@ def build_parser():
         _add_common(p, suppress=True)
     _add_bag(sub)
     compare.add_parser(sub, _plot_file, _precision, _Version)
+    covariance.add_parser(sub, _COMMANDS, _add_words, _add_common, _number)
     return parser
+
+
+def _add_words(p, name):
+    """Add the words of input ``name`` to its parser p (SEQ, the numbers), and its handler."""
+    p.set_defaults(handler=_COMMANDS[name][0])
+    if name == 'euler':
+        p.add_argument('sequence', type=_sequence, metavar='SEQ', help=_SEQUENCE_HELP)
+    if name in _NUMBERS:
+        dest, metavar, help_text = _NUMBERS[name]
+        p.add_argument(dest, type=_number, nargs='*', metavar=metavar, help=help_text)
 
 
 def _write_plot(parser, path, R, b, degrees):
@@ -596,13 +611,21 @@ def _write_plot(parser, path, R, b, degrees):
         parser.error(f'--plot: {exc}')
 
 
-def _report(args, parser):
-    """(R, b, report) of the parsed input; one ``rot-tools: error:`` line for bad input."""
+def _rotation(args, parser, command):
+    """(R, b, input sequence) of the typed rotation; one ``rot-tools: error:`` line if bad."""
     if args.wxyz and not _reads_quaternion(args):
         parser.error('--wxyz: there is no quaternion to read (it applies to quaternion and '
                      'screw --quaternion)')
     try:
-        R, b, input_seq = args.handler(args, parser)
+        return args.handler(args, parser)
+    except ValueError as exc:  # RotationError is a ValueError
+        parser.error(f'{command}: {exc}')
+
+
+def _report(args, parser):
+    """(R, b, report) of the parsed input; one ``rot-tools: error:`` line for bad input."""
+    R, b, input_seq = _rotation(args, parser, args.command)
+    try:
         return R, b, transform_report(R, b, seq=args.seq or input_seq or 'ZYX',
                                       degrees=args.deg, all_sequences=args.all_sequences,
                                       point=args.point)
@@ -630,6 +653,8 @@ def main(argv=None):
             return _bag(args, parser)
         if args.command == 'compare':
             return compare.run(args, parser.error)
+        if args.command == 'covariance':
+            return covariance.run(args, parser, _rotation)
         args.hints = []
         R, b, report = _report(args, parser)
         if args.plot:
