@@ -57,25 +57,29 @@ class Builder:
         return self.make('geometry_msgs/msg/PoseStamped', header=self.header(stamp, frame),
                          pose=self.pose(p, q))
 
-    def _covariance(self, p, q):
+    def _covariance(self, p, q, cov=None):
+        cov = np.zeros(36) if cov is None else np.asarray(cov, float).reshape(36)
         return self.make('geometry_msgs/msg/PoseWithCovariance', pose=self.pose(p, q),
-                         covariance=np.zeros(36))
+                         covariance=cov)
 
-    def pose_with_covariance_stamped(self, stamp, p, q, frame='map'):
+    def pose_with_covariance_stamped(self, stamp, p, q, frame='map', cov=None):
         return self.make('geometry_msgs/msg/PoseWithCovarianceStamped',
-                         header=self.header(stamp, frame), pose=self._covariance(p, q))
+                         header=self.header(stamp, frame), pose=self._covariance(p, q, cov))
 
-    def odometry(self, stamp, p, q, frame='odom', child='base_link'):
+    def odometry(self, stamp, p, q, frame='odom', child='base_link', cov=None):
         zero = self.vector((0, 0, 0))
         twist = self.make('geometry_msgs/msg/TwistWithCovariance',
                           twist=self.make('geometry_msgs/msg/Twist', linear=zero, angular=zero),
                           covariance=np.zeros(36))
         return self.make('nav_msgs/msg/Odometry', header=self.header(stamp, frame),
-                         child_frame_id=child, pose=self._covariance(p, q), twist=twist)
+                         child_frame_id=child, pose=self._covariance(p, q, cov), twist=twist)
 
-    def imu(self, stamp, q, gyro=(0, 0, 0), cov0=0.0, frame='imu'):
-        cov = np.zeros(9)
-        cov[0] = cov0
+    def imu(self, stamp, q, gyro=(0, 0, 0), cov0=0.0, frame='imu', cov=None):
+        """Return an Imu; its orientation_covariance ``cov`` (9 numbers), else 0 but [0] = cov0."""
+        if cov is None:
+            cov = np.zeros(9)
+            cov[0] = cov0
+        cov = np.asarray(cov, float).reshape(9)
         return self.make('sensor_msgs/msg/Imu', header=self.header(stamp, frame),
                          orientation=self.quaternion(q), orientation_covariance=cov,
                          angular_velocity=self.vector(gyro),
@@ -111,6 +115,19 @@ def write_bag(dst, messages, storage='sqlite3'):
             if topic not in conns:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=typestore)
             writer.write(conns[topic], t, typestore.serialize_cdr(msg, msgtype))
+    return Path(dst)
+
+
+def write_ros1_bag(dst, messages):
+    """Return a ROS 1 bag of [(topic, msgtype, record time ns, message object)]."""
+    from rosbags.rosbag1 import Writer
+    typestore = store()
+    with Writer(Path(dst)) as writer:
+        conns = {}
+        for topic, msgtype, t, msg in messages:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msgtype, typestore=typestore)
+            writer.write(conns[topic], t, typestore.serialize_ros1(msg, msgtype))
     return Path(dst)
 
 

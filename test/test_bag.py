@@ -170,7 +170,8 @@ def test_csv_rows_of_the_real_bag(capsys, reference):
     rows = rows_of(capsys, 'bag', bh.REAL, '--seq', 'ZYX')
     assert list(rows[0]) == bag_output.csv_header('ZYX') == [
         'topic', 'stamp', 'frame_id', 'x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'roll', 'pitch',
-        'yaw', 'ZYX_1', 'ZYX_2', 'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz']
+        'yaw', 'ZYX_1', 'ZYX_2', 'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz',
+        'roll_std', 'pitch_std', 'yaw_std']  # σ: test_bag_covariance.py
     for topic in (IMU, ODOM):
         ref = reference[topic]
         mine = [r for r in rows if r['topic'] == topic]
@@ -245,7 +246,7 @@ def test_fast_columns_equal_rosbags_decoding(converted, storage):
     for topic in fast:
         a, b = fast[topic], slow[topic]
         for name in ('record', 'sec', 'nanosec', 'frame', 'orientation', 'position',
-                     'covariance0', 'angular_velocity', 'child'):
+                     'covariance0', 'covariance', 'angular_velocity', 'child'):
             x, y = getattr(a, name), getattr(b, name)
             assert (x is None) == (y is None)
             if x is not None:

@@ -189,7 +189,8 @@ def test_parquet_schema_column_by_column(bags):
                                      '--csv', 'schema.csv')
     assert (status, err) == (0, '')
     floats = ['x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'roll', 'pitch', 'yaw', 'ZYX_1', 'ZYX_2',
-              'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz']
+              'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz', 'roll_std', 'pitch_std',
+              'yaw_std']
     want = [('bag', pa.string()), ('topic', pa.string()), ('stamp', pa.int64()),
             ('frame_id', pa.string())] + [(name, pa.float64()) for name in floats]
     rows = list(csv.DictReader(io.StringIO((root / 'schema.csv').read_text())))

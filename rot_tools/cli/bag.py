@@ -21,6 +21,11 @@ angles of the steps Rₖ₋₁ᵀ·Rₖ), the chordal mean orientation (rot_tool
 for an Imu the RMS of |ω − ω_gyro|, ω_gyro the mean of the gyro's angular_velocity at the
 step's two ends: a check of the IMU's own consistency.
 
+For the types that carry their orientation's covariance (Imu, PoseWithCovarianceStamped,
+Odometry), each message's standard deviations of roll, pitch and yaw, and per topic their
+median and the counts of unknown and bad covariances (rot_tools.cli.bag_covariance; read as
+``--input-covariance`` says, as rotation_node's parameter input_covariance).
+
 Messages are taken in the order they were recorded; ``--start``/``--end`` select them by
 record time, in seconds from the bag's start.
 
@@ -38,7 +43,7 @@ import time
 from types import SimpleNamespace
 
 import numpy as np
-from rot_tools.cli import bag_parquet, output_file
+from rot_tools.cli import bag_covariance, bag_parquet, output_file
 from rot_tools.cli.bag_output import in_unit, MAX_PLOTTED_TOPICS, plot_note, write_csv, write_plot
 from rot_tools.core import transform_tree
 from rot_tools.core.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
@@ -58,7 +63,7 @@ DEFAULT_TOLERANCE = 1e-3
 class Topic:
     """One topic's accepted messages and everything computed from them (radians)."""
 
-    def __init__(self, columns, tolerance, seq=None, wrap=False, chain=None):
+    def __init__(self, columns, tolerance, seq=None, wrap=False, chain=None, reading='rotvec'):
         self.columns = c = columns
         self.topic, self.msgtype = c.topic, c.msgtype
         self.tolerance = tolerance
@@ -98,6 +103,12 @@ class Topic:
             diff = diff[np.isfinite(self.omega[1:, 0])]
             if len(diff):
                 self.gyro_rms = float(np.sqrt(np.mean(np.sum(diff * diff, axis=1))))
+        self.reading = reading
+        self.rpy_std, self.covariance_status = np.full((n, 3), np.nan), None
+        if chain is None and c.covariance is not None:
+            self.covariance = c.covariance[ok]
+            self.rpy_std, self.covariance_status = bag_covariance.stddevs(
+                self.R, self.covariance, reading)
 
     def _angles(self, seq, wrap):
         angles, _ = matrix_to_euler(self.R, seq, check=False)
@@ -180,6 +191,9 @@ def topic_summary(t, degrees):
     if t.gyro_rms is not None:
         out['gyro_rms_difference'] = float(in_unit(t.gyro_rms, degrees))
         out['gyro_rms_difference_unit'] = f'{unit}/s'
+    if t.covariance_status is not None:
+        out.update(bag_covariance.summary(t.rpy_std, t.covariance_status, t.covariance,
+                                          t.reading, degrees))
     return out
 
 
@@ -455,7 +469,7 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
     columns.child_frame_ids, columns.child = [body], np.zeros(len(t), np.intp)
     columns.position = np.asarray(b_chain, np.float64).reshape(-1, 3)
     columns.orientation = None
-    columns.covariance0 = columns.angular_velocity = None
+    columns.covariance0 = columns.covariance = columns.angular_velocity = None
     transforms = SimpleNamespace(orientation=tf['orientation'], position=tf['position'])
     return columns, _Chain(R_chain, chains[0] if len(chains) == 1 else chains, codes,
                            transforms, texts)
@@ -471,12 +485,13 @@ def record_bound(bag_start, seconds):
 
 
 def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, seq=None,
-            wrap=False, fast=True, progress_stream=None, tf=None):
+            wrap=False, fast=True, progress_stream=None, tf=None, reading='rotvec'):
     """
     (storage name, [Topic]) of the bag at PATH; BagError for what cannot be read.
 
     tf: (REFERENCE, BODY) adds the TF chain between them (then topics are read only when
-    asked for by name).
+    asked for by name). reading: how a recorded covariance's rotation block is read,
+    'rotvec' or 'rpy' (rot_tools.io.message_covariance.READINGS).
     """
     with bag_read.open_bag(path) as reader:
         if not reader.connections or not sum(c.msgcount for c in reader.connections):
@@ -493,7 +508,8 @@ def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, 
             progress.done()
         chain = tf_topic(reader, tf[0], tf[1], tolerance, lo, hi) if tf else None
         storage = bag_read.storage_name(reader)
-    out = [Topic(columns[name], tolerance, seq, wrap) for name in sorted(columns)]
+    out = [Topic(columns[name], tolerance, seq, wrap, reading=reading)
+           for name in sorted(columns)]
     if chain is not None:
         out.append(Topic(chain[0], tolerance, seq, wrap, chain=chain[1]))
     return storage, out
@@ -560,7 +576,8 @@ def run(args, error):
     try:
         storage, topics = analyse(args.path, args.topic or (), args.start, args.end,
                                   DEFAULT_TOLERANCE if args.tol is None else args.tol,
-                                  args.seq, args.wrap, tf=args.tf)
+                                  args.seq, args.wrap, tf=args.tf,
+                                  reading=args.input_covariance)
     except bag_read.BagError as exc:
         error(f'bag: {exc}')
     if args.plot:

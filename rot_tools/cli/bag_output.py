@@ -31,7 +31,8 @@ def csv_header(seq):
              'roll', 'pitch', 'yaw']
     if seq:
         names += [f'{seq}_1', f'{seq}_2', f'{seq}_3']
-    return names + ['rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz']
+    return names + ['rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz', 'roll_std', 'pitch_std',
+                    'yaw_std']
 
 
 FORMULA_STARTS = ('=', '+', '-', '@', '\t', '\r')
@@ -82,13 +83,14 @@ def row_values(t, degrees):
     Return the numbers of a Topic's rows, (n, k) float64 in csv_header's order after frame_id.
 
     x, y, z, qx, qy, qz, qw, roll, pitch, yaw, the --seq angles, rx, ry, rz, angle, wx, wy,
-    wz; angles (and ω) in degrees when ``degrees``; ω NaN where it has no value.
+    wz, roll_std, pitch_std, yaw_std; angles (and ω, σ) in degrees when ``degrees``; ω NaN
+    where it has no value, σ where the message has no good covariance (or its type none).
     """
     columns = [t.position, t.quaternion, in_unit(t.rpy, degrees)]
     if t.seq_angles is not None:
         columns.append(in_unit(t.seq_angles, degrees))
     columns += [in_unit(t.rotvec, degrees), in_unit(t.angle, degrees)[:, None],
-                in_unit(t.omega, degrees)]
+                in_unit(t.omega, degrees), in_unit(t.rpy_std, degrees)]
     return np.hstack(columns)
 
 

@@ -89,7 +89,8 @@ def read_bag(path, options, parquet=None):
         storage, topics = bag.analyse(
             path, options.topic or (), options.start, options.end,
             bag.DEFAULT_TOLERANCE if options.tol is None else options.tol, options.seq,
-            options.wrap, progress_stream=quiet, tf=options.tf)
+            options.wrap, progress_stream=quiet, tf=options.tf,
+            reading=options.input_covariance)
     except bag_read.BagError as exc:
         text = str(exc)
         return Outcome(path, error=text if text.startswith(f'{path}:') else f'{path}: {text}')

@@ -50,6 +50,7 @@ from rot_tools import (
 from rot_tools.cli import compare, covariance, output_file
 from rot_tools.core.errors import RotationError
 from rot_tools.io.arguments import negative_numbers_as_values, whole_number
+from rot_tools.io.message_covariance import READINGS
 from rot_tools.io.report import angle_hint, DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
 from rot_tools.io.report import transform_report
 
@@ -474,7 +475,8 @@ def _add_bag(sub):
         'bag', help='the orientations recorded in a ROS bag: summary, CSV, plot',
         usage=f'{PROG} bag PATH... [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] [--deg]\n'
         '       [--wrap] [--csv FILE|-] [--json] [--plot FILE] [--start S] [--end S]\n'
-        '       [--jobs N] [--parquet DIR] [--engine dask [--scheduler ADDRESS]]',
+        '       [--input-covariance rotvec|rpy] [--jobs N] [--parquet DIR]\n'
+        '       [--engine dask [--scheduler ADDRESS]]',
         description=f'The orientations recorded in a ROS bag.\n\n{_BAG_TEXT}',
         epilog='examples:\n  rot-tools bag run.bag\n'
         '  rot-tools bag run.bag --topic /imu/data --csv imu.csv --deg\n'
@@ -501,7 +503,14 @@ def _add_bag(sub):
                    'which then gets no summary): topic, stamp (s), frame_id, x, y, z, qx, qy, '
                    'qz, qw (w ≥ 0), roll, pitch, yaw, the --seq angles SEQ_1..3, rotation '
                    'vector rx, ry, rz, angle, body angular velocity wx, wy, wz from the '
-                   'previous row of the topic (empty on its first row)')
+                   'previous row of the topic (empty on its first row), standard deviations '
+                   'roll_std, pitch_std, yaw_std from the covariance (empty where none is '
+                   'known)')
+    p.add_argument('--input-covariance', choices=READINGS, default='rotvec',
+                   help="how a recorded covariance's rotation block is read, as "
+                   "rotation_node's input_covariance: rotvec (default, ROS's "
+                   "PoseWithCovariance: rotations about the parent's fixed X, Y, Z) or rpy "
+                   '(already roll, pitch, yaw)')
     p.add_argument('--start', type=_seconds, metavar='S',
                    help="only messages recorded S seconds or more after the bag's start")
     p.add_argument('--end', type=_seconds, metavar='S',

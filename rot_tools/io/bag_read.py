@@ -35,6 +35,11 @@ SUPPORTED = interface.recorded_inputs()
 """The message types read — rotation_node's inputs with an orientation — and where their
 fields are: column (a role of rot_tools.io.interface.MEMBERS) → field path."""
 
+COVARIANCE = {row.type_name: row.covariance for row in interface.INPUTS
+              if row.covariance and row.type_name in SUPPORTED}
+"""The types read that carry their orientation's covariance: type name → (path, size) of
+the float64 array, read whole as the column ``covariance`` (N, size), row-major."""
+
 TF_TYPE = 'tf2_msgs/msg/TFMessage'
 """Read only with --tf (the transforms of /tf and /tf_static feed a transform tree)."""
 
@@ -43,6 +48,15 @@ _HEADER = {'sec': 'header.stamp.sec', 'nanosec': 'header.stamp.nanosec',
 _COLUMN_SHAPE = {role: parts for role, parts in interface.MEMBERS.items()
                  if parts is not None and len(parts) > 1}
 """The columns of several components, and the field members of each (x, y, z, w)."""
+
+
+def wanted_fields(msgtype):
+    """Return [(column, field path)] read from each message of msgtype, in no set order."""
+    out = list({**_HEADER, **SUPPORTED[msgtype]}.items())
+    if msgtype in COVARIANCE:
+        out.append(('covariance', COVARIANCE[msgtype][0]))
+    return out
+
 
 CHUNK = 1 << 15
 """Messages read at a time; each topic's among them are parsed together, then dropped."""
@@ -185,15 +199,21 @@ class _Layout:
     def __init__(self, typestore, typename, cdr):
         self.leaves = _leaves(typestore, typename)
         self.cdr = cdr
-        by_path = {path: name for name, path in {**_HEADER, **SUPPORTED[typename]}.items()}
-        self.wanted = {}  # leaf path -> (column, component index or None)
-        for path, _, _, _ in self.leaves:
+        by_path = {}  # field path -> the columns read from it
+        for name, path in wanted_fields(typename):
+            by_path.setdefault(path, []).append(name)
+        self.wanted = {}  # leaf path -> [(column, component index or None)]
+        for path, _, _, count in self.leaves:
             parent, _, last = path.rpartition('.')
             if path in by_path:
-                self.wanted[path] = (by_path[path], None)
-            elif parent in by_path and by_path[parent] in _COLUMN_SHAPE:
-                self.wanted[path] = (by_path[parent], _COLUMN_SHAPE[by_path[parent]].index(last))
-        missing = set(by_path.values()) - {name for name, _ in self.wanted.values()}
+                if 'covariance' in by_path[path] and count != COVARIANCE[typename][1]:
+                    raise _Unsupported(f'{path}: {count} numbers')
+                self.wanted[path] = [(name, None) for name in by_path[path]]
+            elif parent in by_path:
+                self.wanted[path] = [(name, _COLUMN_SHAPE[name].index(last))
+                                     for name in by_path[parent] if name in _COLUMN_SHAPE]
+        found = {name for columns in self.wanted.values() for name, _ in columns}
+        missing = {name for names in by_path.values() for name in names} - found
         if missing:
             raise _Unsupported(f'no field for {sorted(missing)}')
 
@@ -233,12 +253,11 @@ class _Layout:
                 end = pos + 4 + size
                 if end > length:
                     return False
-                wanted = self.wanted.get(path)
-                if wanted is not None:
+                for name, _ in self.wanted.get(path, ()):
                     text = rows[:, pos + 4:end]
                     if self.cdr and size:
                         text = text[:, :-1]  # the terminating NUL
-                    _put_strings(out, wanted[0], text, index)
+                    _put_strings(out, name, text, index)
                 pos = end
             else:
                 size = _SIZES[base]
@@ -247,11 +266,13 @@ class _Layout:
                 end = pos + size * count
                 if end > length:
                     return False
-                wanted = self.wanted.get(path)
-                if wanted is not None:
+                for name, part in self.wanted.get(path, ()):
                     dtype = np.dtype(f'<{_KINDS[base]}{size}')
-                    values = np.ascontiguousarray(rows[:, pos:pos + size]).view(dtype)[:, 0]
-                    out.setdefault(wanted[0], []).append((index, wanted[1], values))
+                    if name == 'covariance':  # the whole array: (n, count)
+                        values = np.ascontiguousarray(rows[:, pos:end]).view(dtype)
+                    else:  # a number, or an array's first (covariance0)
+                        values = np.ascontiguousarray(rows[:, pos:pos + size]).view(dtype)[:, 0]
+                    out.setdefault(name, []).append((index, part, values))
                 pos = end
         padding = length - pos
         return padding == 0 or (self.cdr and 0 <= padding < 4)
@@ -280,7 +301,9 @@ class Columns:
     header stamp; frame_ids: list of str, frame: (N,) index into it; child_frame_ids/child
     likewise for Odometry and TransformStamped (else None); orientation (N, 4) as
     (x, y, z, w); position (N, 3) or None; covariance0 (N,) (Imu's
-    orientation_covariance[0]) or None; angular_velocity (N, 3) (Imu's gyro) or None.
+    orientation_covariance[0]) or None; covariance (N, 9) or (N, 36), the orientation's
+    covariance of the types of :data:`COVARIANCE`, row-major, or None; angular_velocity
+    (N, 3) (Imu's gyro) or None.
     """
 
     def __init__(self, topic, msgtype):
@@ -294,7 +317,7 @@ class Columns:
         """Concatenate the chunks read into the columns."""
         parts, self._parts = self._parts, None
         self.record = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, np.int64)
-        names = set(SUPPORTED[self.msgtype]) | set(_HEADER)
+        names = {name for name, _ in wanted_fields(self.msgtype)}
         for name in sorted(names):
             if name in ('frame_id', 'child_frame_id'):
                 strings, index = _join_strings([p[1][name] for p in parts])
@@ -302,13 +325,17 @@ class Columns:
                 setattr(self, 'frame' if name == 'frame_id' else 'child', index)
             else:
                 dtype = np.int64 if name in ('sec', 'nanosec') else np.float64
-                width = len(_COLUMN_SHAPE.get(name, ()))
+                width = (COVARIANCE[self.msgtype][1] if name == 'covariance'
+                         else len(_COLUMN_SHAPE.get(name, ())))
                 shape = (0, width) if width else (0,)
                 arrays = [np.asarray(p[1][name], dtype) for p in parts]
                 setattr(self, name, np.concatenate(arrays) if arrays else np.zeros(shape, dtype))
-        for name in ('position', 'covariance0', 'angular_velocity'):
+        for name in ('position', 'covariance0', 'covariance', 'angular_velocity'):
             if name not in names:
                 setattr(self, name, None)
+        if self.covariance is not None and self.covariance.shape[1:] != (
+                COVARIANCE[self.msgtype][1],):
+            self.covariance = None  # a bag's own definition of the type, with another size
         if 'child_frame_id' not in names:
             self.child_frame_ids = self.child = None
         return self
@@ -353,7 +380,8 @@ def _assemble(pieces, n, msgtype):
             out[name] = (list(lookup), index)
             continue
         parts = _COLUMN_SHAPE.get(name)
-        column = np.empty((n, len(parts)) if parts else n, np.float64 if name not in (
+        width = (len(parts),) if parts else items[0][2].shape[1:]  # (count,): covariance
+        column = np.empty((n,) + width, np.float64 if name not in (
             'sec', 'nanosec') else np.int64)
         for rows, part, values in items:
             if part is None:
@@ -372,9 +400,8 @@ def _get(obj, path):
 
 def fields_of_objects(messages, msgtype):
     """Return the columns of deserialised message objects (the reference of the fast path)."""
-    wanted = {**_HEADER, **SUPPORTED[msgtype]}
     out = {}
-    for name, path in wanted.items():
+    for name, path in wanted_fields(msgtype):
         parts = _COLUMN_SHAPE.get(name)
         values = [_get(m, path) for m in messages]
         if name in ('frame_id', 'child_frame_id'):
@@ -386,6 +413,10 @@ def fields_of_objects(messages, msgtype):
                                  np.float64).reshape(-1, len(parts))
         elif name == 'covariance0':
             out[name] = np.array([v[0] for v in values], np.float64)
+        elif name == 'covariance':
+            size = COVARIANCE[msgtype][1]
+            out[name] = np.array([np.ravel(v) for v in values], np.float64).reshape(
+                len(values), -1) if values else np.zeros((0, size))
         else:
             out[name] = np.array(values, np.int64)
     return out
