@@ -12,7 +12,10 @@ every refusal (one ``rot-tools: error:`` line, status 2).
 
 import json
 import math
+import subprocess
 
+from conftest import REPO
+from doc_blocks import assert_doc_output, console_steps, doc_block
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -293,3 +296,41 @@ def test_help_lists_the_command_its_inputs_and_examples_that_run(script):
         assert (done.returncode, done.stderr) == (0, ''), line
     inner = run(script, 'covariance', 'quaternion', '--help').stdout
     assert inner.startswith('usage: rot-tools covariance quaternion X Y Z W\n')
+
+
+# ---------------------------------------------------------------------------------------
+# doc/covariance.md: the Jackal's IMU
+
+
+def _most_pitched_imu_message():
+    """Return (stamp s, orientation (x, y, z, w), covariance (9,)) of /imu/data's largest pitch."""
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    from rosbags.highlevel import AnyReader
+    best = None
+    with AnyReader([REPO.parent / 'shared' / 'data' / 'jackal_imu_odometry.bag']) as reader:
+        connections = [c for c in reader.connections if c.topic == '/imu/data']
+        for connection, _, raw in reader.messages(connections=connections):
+            msg = reader.deserialize(raw, connection.msgtype)
+            q = msg.orientation
+            pitch = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_euler('xyz')[1]
+            if best is None or abs(pitch) > best[0]:
+                stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+                best = (abs(pitch), stamp, [q.x, q.y, q.z, q.w],
+                        list(msg.orientation_covariance))
+    return best
+
+
+def test_doc_jackal_imu_example(script):
+    if not (REPO.parent / 'shared' / 'data' / 'jackal_imu_odometry.bag').exists():
+        pytest.skip('the shared Jackal bag is not here')
+    pitch, stamp, q, cov = _most_pitched_imu_message()
+    assert (round(stamp, 2), round(math.degrees(pitch), 1)) == (75.78, 11.9)  # the prose's
+    rotation = ' '.join(['quaternion', *_typed(q), '--cov', *_typed(cov)])
+    shown = []
+    for command, _ in console_steps(doc_block('covariance-jackal')):
+        argv = command.split()
+        assert ' '.join(argv[2:2 + len(rotation.split())]) == rotation  # the message's
+        done = subprocess.run([script, *argv[1:]], capture_output=True, text=True, timeout=60)
+        assert (done.returncode, done.stderr) == (0, ''), done.stderr
+        shown.append(f'$ {command}\n{done.stdout}')
+    assert_doc_output('covariance-jackal', ''.join(shown))
