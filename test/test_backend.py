@@ -9,6 +9,7 @@ and so3.plain_rotation's check written out) give what the batch formula gives, c
 property tests over random and edge inputs. No code is generated or compiled.
 """
 
+from contextlib import nullcontext
 import math
 from pathlib import Path
 import re
@@ -22,7 +23,7 @@ import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
-from rot_tools.core import decomposition, engine, so3
+from rot_tools.core import decomposition, engine, euler, so3
 from rot_tools.core.euler import GIMBAL_LOCK_TOL
 
 REPO = Path(__file__).resolve().parent.parent
@@ -368,14 +369,20 @@ _lock_tol = st.one_of(st.just(None), st.sampled_from([0.0, 1e-9, 1e-7, 1e-6, 1e-
 @example(rotation=(rt.euler_to_matrix([2.0, 0.0, -1.1], 'XZX'), 'XZX'), lock_tol=0.0,
          check=False)
 def test_fast_path_of_matrix_to_euler_gives_the_batch_formula(rotation, lock_tol, check):
-    # One plain rotation takes angles_kernel on FLOATS after so3.plain_rotation's check, a
-    # batch of one takes it on ARRAYS after apply's: the same lock flag, and the same angles
-    # to libm's and NumPy's last bit, in every sequence, at and near gimbal lock.
+    # One plain rotation takes euler._angles_of_floats (angles_kernel written with math)
+    # after so3.plain_rotation's check: the very bits of angles_kernel on FLOATS, both on
+    # libm. A batch of one takes the kernel on ARRAYS after apply's check: the same lock
+    # flag, and the same angles to libm's and NumPy's last bit, in every sequence, at and
+    # near gimbal lock.
     R, seq = rotation
     options = {'check': check} if lock_tol is None else {'check': check, 'lock_tol': lock_tol}
     angles, lock = rt.matrix_to_euler(R, seq, **options)
     angles_b, lock_b = rt.matrix_to_euler(R[None], seq, **options)
     assert type(angles) is np.ndarray and angles.shape == (3,) and type(lock) is np.bool_
+    on_floats, lock_f = euler.angles_kernel(
+        engine.FLOATS, R.tolist(), euler.parse_sequence(seq),
+        GIMBAL_LOCK_TOL if lock_tol is None else lock_tol)
+    assert angles.tobytes() == np.array(on_floats).tobytes() and lock == lock_f, on_floats
     if lock != lock_b[0]:  # θ2 a last bit from the lock's edge: libm's and NumPy's atan2 differ
         edge = (math.pi / 2 - abs(angles[1]) if seq.upper() in h.TAIT_BRYAN else
                 min(angles[1], math.pi - angles[1]))
@@ -457,6 +464,80 @@ def test_the_plain_rotation_check_is_validate_rotations(rotation, entry, error):
         valid = False
     assert (so3.plain_rotation(R, True) is not None) == valid
     assert so3.plain_rotation(R, False) == (R.tolist() if math.isfinite(error) else None)
+
+
+def _straddling_the_tolerance():
+    """
+    Matrices s·Q with s a few ulps either side of where a defect of s·Q reaches ROTATION_TOL.
+
+    For a rotation Q, |(s·Q)ᵀ(s·Q) − I| has s² − 1 on its diagonal and det(s·Q) − 1 = s³ − 1:
+    s near sqrt(1 ± tol) puts a column's squared norm at the edge, s near cbrt(1 ± tol) det R
+    (the columns then pass). Rounding spreads the computed defects over a few ulps around the
+    edge, so both sides and the floats at the edge itself are met.
+    """
+    tol = so3.ROTATION_TOL
+    out = []
+    for q in [np.eye(3)] + ROTATIONS[::6]:
+        for edge in (math.sqrt(1 + tol), math.sqrt(1 - tol), (1 + tol) ** (1 / 3),
+                     (1 - tol) ** (1 / 3)):
+            s = edge
+            for _ in range(24):
+                s = math.nextafter(s, 0.0)
+            for _ in range(48):
+                out.append(s * q)
+                s = math.nextafter(s, 2.0)
+    return out
+
+
+def test_the_plain_rotation_check_is_validate_rotations_at_the_tolerance():
+    # plain_rotation tests |s − 1| ≤ tol of the columns' squared norms and of det R as
+    # _ONE_LOW ≤ s ≤ _ONE_HIGH (no subtraction): it must take exactly the matrices that
+    # validate_rotation takes, at the last float either side of the edge too.
+    taken = []
+    for R in _straddling_the_tolerance():
+        try:
+            rt.validate_rotation(R)
+            valid = True
+        except rt.RotationError:
+            valid = False
+        assert (so3.plain_rotation(R, True) is not None) == valid, R
+        taken.append(valid)
+    assert 0.2 < sum(taken) / len(taken) < 0.8  # (both sides of the edge were met)
+    tol = so3.ROTATION_TOL
+    low, high = so3._ONE_LOW, so3._ONE_HIGH
+    assert 1.0 - low <= tol < 1.0 - math.nextafter(low, 0.0)
+    assert high - 1.0 <= tol < math.nextafter(high, 2.0) - 1.0
+
+
+def _at_the_edge(target):
+    """
+    Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] whose first column's squared norm c·c + v·v, as
+    the check computes it, is the float target, and det R too (c·c − (−v)·v); its columns
+    are orthogonal exactly (c·(−v) + v·c = 0).
+    """
+    for v in (0.0, 2.0 ** -27, math.sqrt(2.0 ** -53), 2.0 ** -26):
+        c = math.sqrt(target)
+        for _ in range(8):
+            m = [[c, -v, 0.0], [v, c, 0.0], [0.0, 0.0, 1.0]]
+            if c * c + v * v + 0.0 * 0.0 == target == so3.defects_kernel(engine.FLOATS, m)[1]:
+                return np.array(m)
+            c = math.nextafter(c, 0.0 if c * c > target else 2.0)
+    raise AssertionError(f'no matrix found with squared norm {target!r}')
+
+
+def test_the_plain_rotation_check_takes_the_last_float_at_the_tolerance():
+    # Columns' squared norms and det R exactly at _ONE_LOW, _ONE_HIGH (|s − 1| = tol to the
+    # last float: taken) and one float beyond (refused), in each column (P·R·Pᵀ, P cyclic).
+    low, high = so3._ONE_LOW, so3._ONE_HIGH
+    shift = np.roll(np.eye(3), 1, axis=0)
+    for target, valid in ((low, True), (high, True), (math.nextafter(low, 0.0), False),
+                          (math.nextafter(high, 2.0), False)):
+        R = _at_the_edge(target)
+        for _ in range(3):
+            with pytest.raises(rt.RotationError) if not valid else nullcontext():
+                rt.validate_rotation(R)
+            assert (so3.plain_rotation(R, True) is not None) == valid, (target, R)
+            R = shift @ R @ shift.T
 
 
 def test_plain_item_takes_one_finite_item_only():

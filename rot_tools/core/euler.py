@@ -27,10 +27,12 @@ angle (for lower-case sequences too).
 """
 
 import math
+from math import atan2, pi, sqrt
 
 import numpy as np
+from numpy import empty, False_, True_
 from rot_tools.core._arrays import require_tolerance
-from rot_tools.core.engine import apply, FLAG, FLOATS, MATRIX, plain_item, VECTOR
+from rot_tools.core.engine import apply, FLAG, MATRIX, plain_item, VECTOR
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import apply_to_rotations, plain_rotation
 
@@ -123,7 +125,7 @@ def euler_to_matrix(angles, seq='ZYX'):
     return matrix
 
 
-_HALF_PI, _TWO_PI = math.pi / 2, 2 * math.pi
+_HALF_PI, _TWO_PI, _MINUS_PI = math.pi / 2, 2 * math.pi, -math.pi
 
 
 def _wrap(angle):
@@ -137,22 +139,20 @@ def angles_kernel(ops, m, spec, lock_tol):
     mi, mj, mk = m[i], m[j], m[k]
     if proper:  # R[i,i] = cos θ2, (R[j,i], −σR[k,i]) = sin θ2·(sin θ1, cos θ1)
         y1, x1 = mj[i], -sig * mk[i]
-        rho = ops.sqrt(y1 * y1 + x1 * x1)
-        t2 = ops.atan2(rho, mi[i])
+        t2 = ops.atan2(ops.sqrt(y1 * y1 + x1 * x1), mi[i])
         lock = ops.minimum(t2, math.pi - t2) <= lock_tol
         sign3, other = -sig, k
     else:  # R[i,k] = σ sin θ2, (−σR[j,k], R[k,k]) = cos θ2·(sin θ1, cos θ1)
         y1, x1 = -sig * mj[k], mk[k]
-        rho = ops.sqrt(y1 * y1 + x1 * x1)
-        t2 = ops.atan2(sig * mi[k], rho)
+        t2 = ops.atan2(sig * mi[k], ops.sqrt(y1 * y1 + x1 * x1))
         lock = _HALF_PI - ops.abs(t2) <= lock_tol
         sign3, other = sig, i
     t1 = ops.atan2(y1, x1)
-    safe = ops.where(rho > 0, rho, 1.0)
-    c1, s1 = x1 / safe, sig * y1 / safe
-    # Peel: row j of Rot_i(θ1)ᵀ·R = c1·R[j] + σ s1·R[k] is row j of Rot_m(θ3), m the last
-    # axis, whose entries are cos θ3 at column j and sign3·sin θ3 at column `other`.
-    t3 = ops.atan2(sign3 * (c1 * mj[other] + s1 * mk[other]), c1 * mj[j] + s1 * mk[j])
+    # Peel: row j of Rot_i(θ1)ᵀ·R = cos θ1·R[j] + σ sin θ1·R[k] is row j of Rot_m(θ3), m the
+    # last axis, whose entries are cos θ3 at column j and sign3·sin θ3 at column `other`.
+    # (x1, y1) is (cos θ1, sin θ1) times |sin θ2| or |cos θ2| ≥ 0: atan2 needs no division.
+    s1 = sig * y1
+    t3 = ops.atan2(sign3 * (x1 * mj[other] + s1 * mk[other]), x1 * mj[j] + s1 * mk[j])
     if extrinsic:
         # Solved as the reversed intrinsic sequence: its first angle is the extrinsic θ3,
         # the one to zero at lock; its last then comes from the peel with θ1 = 0.
@@ -165,6 +165,42 @@ def angles_kernel(ops, m, spec, lock_tol):
             free = ops.atan2(sig * mk[j], mj[j])
         t1, t3 = ops.where(lock, free, t1), ops.where(lock, 0.0, t3)
     return [_wrap(t1), t2 + 0.0, _wrap(t3)], lock
+
+
+def _angles_of_floats(m, spec, lock_tol):
+    """
+    Return angles_kernel's (angles, degenerate) for one item of Python floats, in plain math.
+
+    matrix_to_euler's fast path: the same operations in the same order as angles_kernel on
+    FLOATS, so the same bits, with θ1 and θ3 computed only on the side of the lock that is
+    kept; the angles as an array and the flag as a NumPy bool, as apply returns them.
+    """
+    i, j, k, sig, proper, extrinsic = spec
+    mi, mj, mk = m[i], m[j], m[k]
+    if proper:
+        y1, x1 = mj[i], -sig * mk[i]
+        t2 = atan2(sqrt(y1 * y1 + x1 * x1), mi[i])
+        lock = t2 <= lock_tol or pi - t2 <= lock_tol
+        sign3, other = -sig, k
+    else:
+        y1, x1 = -sig * mj[k], mk[k]
+        t2 = atan2(sig * mi[k], sqrt(y1 * y1 + x1 * x1))
+        lock = _HALF_PI - abs(t2) <= lock_tol
+        sign3, other = sig, i
+    if lock:
+        t1 = atan2(sign3 * mj[other], mj[j]) if extrinsic else atan2(sig * mk[j], mj[j])
+        t3 = 0.0
+    else:
+        t1 = atan2(y1, x1)
+        s1 = sig * y1
+        t3 = atan2(sign3 * (x1 * mj[other] + s1 * mk[other]), x1 * mj[j] + s1 * mk[j])
+        if extrinsic:
+            t1, t3 = t3, t1
+    angles = empty(3)  # (three stores cost less than np.array of a list)
+    angles[0] = pi if t1 == _MINUS_PI else t1 + 0.0  # (as _wrap)
+    angles[1] = t2 + 0.0
+    angles[2] = pi if t3 == _MINUS_PI else t3 + 0.0
+    return angles, True_ if lock else False_
 
 
 def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
@@ -185,7 +221,6 @@ def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     if lock_tol is not GIMBAL_LOCK_TOL:  # (the default needs no check)
         lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
     m = plain_rotation(R, check)
-    if m is not None:  # fast path: one plain rotation, the kernel on floats without apply
-        angles, lock = angles_kernel(FLOATS, m, spec, lock_tol)  # (finite m: nothing raises)
-        return np.array(angles), np.bool_(lock)
+    if m is not None:  # fast path: one plain rotation (finite: no float operation raises)
+        return _angles_of_floats(m, spec, lock_tol)
     return apply_to_rotations(angles_kernel, R, check, [VECTOR, FLAG], params=(spec, lock_tol))

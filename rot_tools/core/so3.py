@@ -20,7 +20,7 @@ its SVD cannot take.
 import math
 
 import numpy as np
-from numpy import False_
+from numpy import False_, ndarray
 from rot_tools.core._arrays import apart, as_float_array, finite_array, require_tolerance
 from rot_tools.core.engine import apply, FLAG, FLOAT64, FLOATS, MATRIX, plain_item, SCALAR
 from rot_tools.core.errors import FLOAT_ERRORS, RotationError
@@ -190,26 +190,50 @@ def apply_to_named_rotations(kernel, rotations, check, outputs, extra=(), params
     return tuple(results[:len(outputs)])
 
 
+def _floats_near_one(tol):
+    """
+    Return (low, high): the floats s with |s − 1| ≤ tol (real arithmetic) are low ≤ s ≤ high.
+
+    For a float s within [0.5, 2], s − 1.0 is exact (Sterbenz), so abs(s - 1.0) <= tol is
+    low <= s <= high; outside it both tests fail (|s − 1| ≥ 0.5), NaN fails both. low and
+    high are 1 ∓ tol rounded inwards: their distance to 1 is exact too.
+    """
+    low, high = 1.0 - tol, 1.0 + tol
+    if 1.0 - low > tol:
+        low = math.nextafter(low, 2.0)
+    if high - 1.0 > tol:
+        high = math.nextafter(high, 0.0)
+    return low, high
+
+
+_ONE_LOW, _ONE_HIGH = _floats_near_one(ROTATION_TOL)
+
+
 def plain_rotation(R, check):
     """
     Return R's rows as Python floats for a fast path, or None (then apply's path decides).
 
     Not None where R is one finite float64 (3, 3) array and, with check, a rotation within
     ROTATION_TOL: the test of refuse_defects written out for plain floats (any defect fails
-    it, NaN and ±inf included, and the full path then raises the error that names it).
+    it, NaN and ±inf included, and the full path then raises the error that names it). The
+    same products and sums as defects_kernel; |s − 1| ≤ tol of a column's squared norm and
+    of det R is tested as _ONE_LOW ≤ s ≤ _ONE_HIGH, the same floats (_floats_near_one).
     """
     if not check:
         return plain_item(R, (3, 3))
-    if type(R) is not np.ndarray or R.dtype is not FLOAT64 or R.shape != (3, 3):
+    if type(R) is not ndarray or R.dtype is not FLOAT64 or R.shape != (3, 3):
         return None
     m = R.tolist()
     (a, b, c), (d, e, f), (g, h, i) = m
-    low, tol = -ROTATION_TOL, ROTATION_TOL  # (low ≤ x ≤ tol: |x| ≤ tol, NaN fails it)
-    if (low <= a * a + d * d + g * g - 1.0 <= tol and low <= b * b + e * e + h * h - 1.0 <= tol
-            and low <= c * c + f * f + i * i - 1.0 <= tol and low <= a * b + d * e + g * h <= tol
-            and low <= a * c + d * f + g * i <= tol and low <= b * c + e * f + h * i <= tol
-            and low <= a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) - 1.0
-            <= tol):
+    low, high = _ONE_LOW, _ONE_HIGH  # (columns' squared norms and det R: |s − 1| ≤ tol)
+    neg, tol = -ROTATION_TOL, ROTATION_TOL  # (dot products of two columns: |x| ≤ tol)
+    if (low <= a * a + d * d + g * g <= high
+            and low <= b * b + e * e + h * h <= high
+            and low <= c * c + f * f + i * i <= high
+            and neg <= a * b + d * e + g * h <= tol
+            and neg <= a * c + d * f + g * i <= tol
+            and neg <= b * c + e * f + h * i <= tol
+            and low <= a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) <= high):
         return m
     return None
 
