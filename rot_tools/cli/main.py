@@ -463,7 +463,9 @@ _BAG_TEXT = (
     'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
     'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
     'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
-    "from its gyro (RMS). roll, pitch, yaw are REP-103's (about the fixed X, Y, Z axes,\n"
+    'from its gyro (RMS). For Imu, PoseWithCovarianceStamped and Odometry, the median\n'
+    'standard deviations of roll, pitch and yaw from their covariances, and how many were\n'
+    "unknown or bad. roll, pitch, yaw are REP-103's (about the fixed X, Y, Z axes,\n"
     'the extrinsic sequence xyz) and continuous along each topic (no jump at ±180°)\n'
     'unless --wrap. With --csv, one row per accepted message; with --plot, roll, pitch\n'
     'and yaw against time, one panel per topic.')
