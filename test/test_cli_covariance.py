@@ -254,6 +254,25 @@ def test_bad_covariance_options(script, args, message):
     assert proc.stderr.count('\n') == 1, proc.stderr
 
 
+@pytest.mark.parametrize('cov, message', [
+    ('1.7976931348623157e308 -1e308 0 -1e308 5e-324 0 0 0 1',  # C + Cᵀ overflows
+     '--cov / max|C| is not positive semi-definite: its lowest eigenvalue is -0.248'),
+    ('1.7976931348623157e308 0 0 0 1e308 0 0 0 1',  # E⁻¹ makes it larger
+     '--cov: the converted covariance overflows float64'),
+    ('1e308 0 1e308 0 1 0 1e308 0 1e308', None),  # eigvalsh does not converge on it as typed
+])
+def test_covariances_at_the_edge_of_float64(script, cov, message):
+    proc = run(script, 'covariance', 'euler', 'xyz', '0.1', '0.2', '0.3', *_cov(cov), '--from',
+               'rotvec', '--to', 'ZYX', '--json')
+    if message is None:
+        assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
+        assert np.isfinite(json.loads(proc.stdout)['covariance']).all()
+        return
+    assert (proc.returncode, proc.stdout) == (2, ''), proc
+    assert proc.stderr.startswith(f'rot-tools: error: {message}'), proc.stderr
+    assert proc.stderr.count('\n') == 1, proc.stderr
+
+
 @pytest.mark.parametrize('args, message', [
     ('covariance quaternion 0 0 0 0', 'quaternion X Y Z W: quaternion (x, y, z, w) must be '
      'non-zero'),

@@ -183,7 +183,9 @@ def _rounded(values, precision):
 
 def report(R, C, source, target, frames, precision=DEFAULT_PRECISION):
     """Return (the report's plain data, the locked sequence or None); see the module docstring."""
-    out, locked = convert(R, C, source, target, *(f or 'parent' for f in frames))
+    scale = float(np.abs(C).max()) or 1.0  # linear in C: converted as C / max|C|, so that
+    out, locked = convert(R, C / scale, source, target, *(f or 'parent' for f in frames))
+    out = None if out is None else out * scale  # entries near 1e308 do not overflow on the way
     data = {'from': source, 'from_frame': frames[0], 'to': target, 'to_frame': frames[1]}
     if locked is not None:
         data.update(covariance=None, stddev=None, stddev_deg=None, correlation=None)
@@ -204,6 +206,21 @@ def _lock_note(seq):
     return (f'the rotation is at gimbal lock of {seq!r} (θ2 = {where}, within '
             f'GIMBAL_LOCK_TOL = {GIMBAL_LOCK_TOL:g} rad): the covariance of its angles does '
             'not exist; covariance and stddev are null')
+
+
+def _validate(C):
+    """
+    Check the typed covariance, or raise RotationError saying what and by how much.
+
+    In its own units first; then divided by max|C|, the same checks (they are relative to
+    max|C|) on numbers that neither overflow (C + Cᵀ of entries near 1e308) nor stop
+    eigvalsh from converging.
+    """
+    try:
+        validate_covariance(C, name='--cov')
+    except np.linalg.LinAlgError:
+        pass  # entries near float64's largest: checked below
+    validate_covariance(C / (float(np.abs(C).max()) or 1.0), name='--cov / max|C|')
 
 
 def run(args, parser, rotation):
@@ -227,9 +244,10 @@ def run(args, parser, rotation):
     frames = _frames(args, parser.error)
     args.hints = []
     R, _, _ = rotation(args, parser, f'covariance {args.input}')
-    with np.errstate(all='ignore'):  # a covariance of 1e300: refused below, no warning
+    C = np.reshape(args.cov, (3, 3))
+    with np.errstate(all='ignore'):  # entries near 1e308 overflow: checked on C / max|C|
         try:
-            C = validate_covariance(np.reshape(args.cov, (3, 3)), name='--cov')
+            _validate(C)
             data, locked = report(R, C, args.source, args.target, frames, args.precision)
         except RotationError as exc:
             parser.error(str(exc))
