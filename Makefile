@@ -34,13 +34,13 @@ TF2_MSGS := requirements-build.txt tools/build_tf2_msgs.py vendor/tf2_msgs/CMake
 
 .PHONY: run test test-pinned test-stock bench venv test-venv test-venv-stock clean
 
-# run also installs the optional extras the README's examples use, rot-tools bag (rosbags)
-# and --plot (matplotlib), at their pins in requirements-test.txt.
+# run also installs the optional extras the README says it does: bag (rosbags; pyarrow for
+# rot-tools bag --parquet) and plot (matplotlib), at their pins in requirements-test.txt.
 run: $(VENV)/.stamp-tf2_msgs $(VENV)/.stamp-extras
 	$(BIN)/rotation_node $(NODE_ARGS)
 
 $(VENV)/.stamp-extras: $(VENV)/.stamp-run requirements-test.txt
-	$(PIP) install -c requirements-test.txt matplotlib rosbags
+	$(PIP) install -c requirements-test.txt matplotlib rosbags pyarrow
 	touch $@
 
 # Both venvs are set up and both suites run side by side (most of a suite's time is spent
