@@ -7,10 +7,11 @@ knows nothing of that node (rotation_node imports this module, never the other w
 - :func:`start` is how a ROS program of this package starts — its console script (through
   rot_tools.ros.entry) and ``python -m rot_tools.ros.rotation_node`` alike. Python's default
   SIGTERM kills the process (status −15) and its SIGINT raises KeyboardInterrupt wherever the
-  interpreter is; importing NumPy and rclpy takes ~0.2 s. So :func:`start` installs
-  handlers that exit with status 0 *before* it imports the program's module, then runs its
-  ``main`` and ends the process with :func:`exit_now`. rclpy.init later installs its own
-  handlers, which shut the context down and let ``main`` return 0.
+  interpreter is; importing NumPy and rclpy takes ~0.2 s. So :func:`start` holds the
+  signals (:func:`hold_signals`) *before* it imports the program's module, ends the process
+  with status 0 after the import if one came, then installs handlers that exit with status 0
+  and runs ``main``, ending the process with :func:`exit_now`. rclpy.init later installs
+  its own handlers, which shut the context down and let ``main`` return 0.
   :func:`start_command` is the same for a command (rotation_client): Ctrl-C at any moment
   ends it with the shell's status for it, 130, and no traceback.
 - :func:`exit_now`: once ``main`` has returned, everything ROS is shut down and destroyed
@@ -63,18 +64,51 @@ def _install_exit_handlers():
         signal.signal(signum, _exit_cleanly)
 
 
-def start(module, args=None):
+def hold_signals(held=None):
+    """
+    From now on SIGINT and SIGTERM only append their number to list ``held``; return it.
+
+    While a program's module loads, a handler that raises would raise inside NumPy's and
+    rclpy's extension modules as they initialise, where C code may turn the exception into
+    another: a SystemExit raised as NumPy's C extension imports datetime became "ImportError:
+    Importing the numpy C-extensions failed" and a traceback. So start and start_command
+    hold the signals until the import is done. (rot_tools.ros.entry holds them the same way
+    before this module loads, and hands its list on.)
+    """
+    held = [] if held is None else held
+
+    def hold(signum, frame):
+        held.append(signum)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, hold)
+    return held
+
+
+def _load(module, held):
+    """Import ``module`` (a name) with the signals held (hold_signals); return it."""
+    hold_signals(held)
+    import importlib
+    return importlib.import_module(module)
+
+
+def start(module, args=None, held=None):
     """
     Run ``module``'s ``main(args)`` as this process, stopping cleanly on a signal; no return.
 
-    ``module`` is a module name (e.g. 'rot_tools.ros.rotation_node'), imported only after the
-    SIGINT / SIGTERM handlers are installed. The process ends with main's status through
-    exit_now (a SystemExit's code likewise).
+    ``module`` is a module name (e.g. 'rot_tools.ros.rotation_node'). A signal before main
+    runs — while the module loads (its signals held: hold_signals), or already in ``held``
+    (the console script's, rot_tools.ros.entry.HELD) — ends the process with status 0 as
+    soon as the import is done; from then on one ends main at once, with status 0, until
+    rclpy's handlers take over. The process ends with main's status through exit_now (a
+    SystemExit's code likewise).
     """
-    _install_exit_handlers()
+    held = [] if held is None else held
     try:
-        import importlib
-        status = importlib.import_module(module).main(args)
+        program = _load(module, held)
+        _install_exit_handlers()
+        if held:
+            exit_now(0)
+        status = program.main(args)
     except SystemExit as exc:
         status = exc.code
     if not isinstance(status, int):
@@ -88,11 +122,24 @@ def _interrupted(signum, frame):
     sys.exit(130)
 
 
-def start_command(module, args=None):
-    """Return ``module``'s ``main(args)``; Ctrl-C at any moment ends it with status 130."""
+def start_command(module, args=None, held=None):
+    """
+    Return ``module``'s ``main(args)``; Ctrl-C at any moment ends it with status 130.
+
+    A signal while the module loads, or in ``held`` (rot_tools.ros.entry.HELD), acts once
+    the import is done: SIGINT ends the command with 130, SIGTERM as its default action does
+    (status −15). Then SIGINT raises SystemExit(130) wherever main is; SIGTERM has its
+    default action.
+    """
+    held = [] if held is None else held
+    program = _load(module, held)
     signal.signal(signal.SIGINT, _interrupted)
-    import importlib
-    return importlib.import_module(module).main(args)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if signal.SIGINT in held:
+        sys.exit(130)
+    if signal.SIGTERM in held:
+        os.kill(os.getpid(), signal.SIGTERM)
+    return program.main(args)
 
 
 def exit_now(status):
@@ -383,8 +430,12 @@ def serve(make_node, executor_factory=make_executor):
     invalid parameter) is raised after the clean-up. The executor is made first, while the
     context was running an instant before: an executor made on a context a signal has shut
     down fails half built (rclpy then prints 'Exception ignored in Executor.__del__').
+    Warnings of the build are shown once it is over, unless a signal shut the context down
+    meanwhile: they are then the shutdown's (rclpy's node, shut down as it is made, warns
+    "Failed to fini rosout publisher: rcl node implementation is invalid").
     """
     import gc
+    import warnings
     import rclpy
     from rclpy.executors import ExternalShutdownException
     node = None
@@ -392,7 +443,13 @@ def serve(make_node, executor_factory=make_executor):
         if not rclpy.ok():
             return  # a signal during rclpy.init: a normal stop
         executor = executor_factory()
-        node = make_node()
+        try:
+            with warnings.catch_warnings(record=True) as warned:
+                node = make_node()
+        finally:
+            for w in warned if rclpy.ok() else ():
+                warnings.showwarning(w.message, w.category, w.filename, w.lineno, w.file,
+                                     w.line)
         # What exists now (modules, the node) lives as long as the process: left out of
         # the collector's full passes, which otherwise stall a message by ~15 ms every few
         # seconds under load (the tail of the latency).
