@@ -368,6 +368,10 @@ _lock_tol = st.one_of(st.just(None), st.sampled_from([0.0, 1e-9, 1e-7, 1e-6, 1e-
          check=True)
 @example(rotation=(rt.euler_to_matrix([2.0, 0.0, -1.1], 'XZX'), 'XZX'), lock_tol=0.0,
          check=False)
+@example(rotation=(np.eye(3), 'ZYX'), lock_tol=None, check=True)  # (θ2 = atan2(−0.0, 1))
+@example(rotation=(np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]), 'ZYX'),
+         lock_tol=0.0, check=True)  # (θ2 = π/2 exactly: locked at lock_tol 0)
+@example(rotation=(np.diag([1.0, -1.0, -1.0]), 'zxz'), lock_tol=0.0, check=True)  # (θ2 = π)
 def test_fast_path_of_matrix_to_euler_gives_the_batch_formula(rotation, lock_tol, check):
     # One plain rotation takes euler._angles_of_floats (angles_kernel written with math)
     # after so3.plain_rotation's check: the very bits of angles_kernel on FLOATS, both on
@@ -511,9 +515,11 @@ def test_the_plain_rotation_check_is_validate_rotations_at_the_tolerance():
 
 def _at_the_edge(target):
     """
-    Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] whose first column's squared norm c·c + v·v, as
-    the check computes it, is the float target, and det R too (c·c − (−v)·v); its columns
-    are orthogonal exactly (c·(−v) + v·c = 0).
+    Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] with squared column norms and det at ``target``.
+
+    The first two columns' squared norm c·c + v·v, as the check computes it, is the float
+    target, and det R too (c·c − (−v)·v); the columns are orthogonal exactly (c·(−v) + v·c
+    is 0).
     """
     for v in (0.0, 2.0 ** -27, math.sqrt(2.0 ** -53), 2.0 ** -26):
         c = math.sqrt(target)

@@ -167,14 +167,34 @@ def angles_kernel(ops, m, spec, lock_tol):
     return [_wrap(t1), t2 + 0.0, _wrap(t3)], lock
 
 
-def _angles_of_floats(m, spec, lock_tol):
+def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
     """
-    Return angles_kernel's (angles, degenerate) for one item of Python floats, in plain math.
+    Euler angles of R: returns (angles (..., 3), degenerate (...) bool).
 
-    matrix_to_euler's fast path: the same operations in the same order as angles_kernel on
-    FLOATS, so the same bits, with θ1 and θ3 computed only on the side of the lock that is
-    kept; the angles as an array and the flag as a NumPy bool, as apply returns them.
+    θ2 from the entries that do not involve θ1, θ3 (Tait–Bryan: R[i,k] = σ sin θ2 with
+    |(R[k,k], R[j,k])| = |cos θ2|; proper: R[i,i] = cos θ2, |(R[j,i], R[k,i])| = sin θ2),
+    each as an atan2 so it is accurate at every angle. θ1 from the column that carries it.
+    θ3 is then *peeled*: row j of Rot_i(θ1)ᵀ·R is row j of Rot_m(θ3), so θ3 absorbs any
+    rounding of θ1 and euler_to_matrix reproduces R to rounding even a hair from gimbal lock
+    (two separate atan2, as in textbooks, lose digits there). At lock (degenerate: θ2 within
+    lock_tol of ±π/2 or of 0, π) θ3 = 0 and θ1 is the free angle. Lower-case sequences are
+    solved as the reversed intrinsic sequence with its *first* angle zeroed, then read back.
+    Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
     """
+    try:
+        spec = _PARSED[seq]  # (parse_sequence's table, read without a call)
+    except (KeyError, TypeError):
+        spec = parse_sequence(seq)  # (raises, naming the 24 sequences)
+    if lock_tol is not GIMBAL_LOCK_TOL:  # (the default needs no check)
+        lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
+    m = plain_rotation(R, check)
+    if m is None:
+        return apply_to_rotations(angles_kernel, R, check, [VECTOR, FLAG],
+                                  params=(spec, lock_tol))
+    # Fast path, one plain rotation (finite: no float operation raises): angles_kernel written
+    # with math, the same operations in the same order (so the same bits as on FLOATS), with
+    # θ1 and θ3 computed only on the side of the lock that is kept, and the result filled
+    # into an empty array by three stores (cheaper than np.array of a list).
     i, j, k, sig, proper, extrinsic = spec
     mi, mj, mk = m[i], m[j], m[k]
     if proper:
@@ -196,31 +216,8 @@ def _angles_of_floats(m, spec, lock_tol):
         t3 = atan2(sign3 * (x1 * mj[other] + s1 * mk[other]), x1 * mj[j] + s1 * mk[j])
         if extrinsic:
             t1, t3 = t3, t1
-    angles = empty(3)  # (three stores cost less than np.array of a list)
+    angles = empty(3)
     angles[0] = pi if t1 == _MINUS_PI else t1 + 0.0  # (as _wrap)
     angles[1] = t2 + 0.0
     angles[2] = pi if t3 == _MINUS_PI else t3 + 0.0
     return angles, True_ if lock else False_
-
-
-def matrix_to_euler(R, seq='ZYX', *, check=True, lock_tol=GIMBAL_LOCK_TOL):
-    """
-    Euler angles of R: returns (angles (..., 3), degenerate (...) bool).
-
-    θ2 from the entries that do not involve θ1, θ3 (Tait–Bryan: R[i,k] = σ sin θ2 with
-    |(R[k,k], R[j,k])| = |cos θ2|; proper: R[i,i] = cos θ2, |(R[j,i], R[k,i])| = sin θ2),
-    each as an atan2 so it is accurate at every angle. θ1 from the column that carries it.
-    θ3 is then *peeled*: row j of Rot_i(θ1)ᵀ·R is row j of Rot_m(θ3), so θ3 absorbs any
-    rounding of θ1 and euler_to_matrix reproduces R to rounding even a hair from gimbal lock
-    (two separate atan2, as in textbooks, lose digits there). At lock (degenerate: θ2 within
-    lock_tol of ±π/2 or of 0, π) θ3 = 0 and θ1 is the free angle. Lower-case sequences are
-    solved as the reversed intrinsic sequence with its *first* angle zeroed, then read back.
-    Ranges: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] (Tait–Bryan) or [0, π] (proper).
-    """
-    spec = parse_sequence(seq)
-    if lock_tol is not GIMBAL_LOCK_TOL:  # (the default needs no check)
-        lock_tol = require_tolerance(lock_tol, 'lock_tol', math.pi / 4, '[0, π/4) rad')
-    m = plain_rotation(R, check)
-    if m is not None:  # fast path: one plain rotation (finite: no float operation raises)
-        return _angles_of_floats(m, spec, lock_tol)
-    return apply_to_rotations(angles_kernel, R, check, [VECTOR, FLAG], params=(spec, lock_tol))
