@@ -1,5 +1,7 @@
 """Euler angles: all 24 sequence names against explicit elementary-rotation products."""
 
+import re
+
 from hypothesis import given, settings, strategies as st
 import math_helpers as h
 import numpy as np
@@ -218,6 +220,15 @@ def test_the_24_cube_rotations(seq):
 def test_pitch_range_zyx_includes_negative_pitch():
     got, _ = matrix_to_euler(h.ref_elementary('y', -0.5), 'ZYX')
     assert h.max_abs(got - [0.0, -0.5, 0.0]) <= 1e-15
+
+
+@pytest.mark.parametrize('seq', [None, 123, ('Z', 'Y', 'X'), ['Z', 'Y', 'X'], 'zyX', b'ZYX'])
+def test_matrix_to_euler_refuses_other_sequences_on_every_path(seq):
+    # One plain rotation reads the sequence's table itself (no call): an unhashable name or
+    # one not in it must still be refused as parse_sequence refuses it, and a batch too.
+    for R in (np.eye(3), np.eye(3)[None], np.eye(3).tolist()):
+        with pytest.raises(RotationError, match=r'unknown Euler sequence ' + re.escape(repr(seq))):
+            matrix_to_euler(R, seq)
 
 
 def test_single_and_batch_shapes():
