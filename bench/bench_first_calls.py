@@ -13,12 +13,20 @@ RotationNode's ``~/pose`` callback called directly with the bytes of 10,000 diff
 PoseStamped (it reads, converts, decomposes and publishes its six outputs to topics nobody
 subscribes, DDS on the loopback in a domain of its own), markers off and, separately, on;
 with markers on, the picture's timer callback too, whenever the callback has made a picture
-due (at most 30 a second), timed on its own. Where the node cannot be built (no rclpy), the
-same path without the node: rot_tools.io.boundary's PoseStamped conversion and
+due (at most 30 a second), timed on its own. Then the node following base_link in map
+(``tf_reference_frame``, ``tf_body_frame``; markers off) fed 10,000 different /tf messages,
+its /tf callback (rot_tools.ros.tf_input.TfFollower.on_message) called directly with their
+bytes after the static edges map → odom (/tf_static; odom → base_link moves): the steady
+stream (``tf``), the same with base_link re-parented (odom ↔ map) at every 10th message
+(``tf-reparent``), and with the stream's clock going back 30 s every 1,000 messages and
+every 100th message stamped 10⁶ s ahead (``tf-jump``): bench/pose_flooder.py's
+tf_message, the scenarios of bench_overload.py --tf. Where the node cannot be built (no
+rclpy), the pose path without the node: rot_tools.io.boundary's PoseStamped conversion and
 decomposition.decompose_values.
 
 Run: ``.venv/bin/python bench/bench_first_calls.py [--calls N] [--messages N] [--skip-node]
-[--json PATH]``; ``--one NAME`` / ``--node MARKERS`` are the child processes' modes.
+[--json PATH]``; ``--one NAME`` / ``--node MARKERS`` / ``--tf SCENARIO`` are the child
+processes' modes.
 """
 
 import argparse
@@ -204,6 +212,60 @@ def run_node(markers, n):
     return out
 
 
+TF_PATHS = {'tf': 'steady', 'tf-reparent': 'reparent', 'tf-jump': 'jump'}
+"""--tf modes: the pose_flooder scenario of each (the stream's clock: 1 ms a message)."""
+
+
+def tf_messages(variant, n):
+    """Return the bytes of the n /tf messages of a TF_PATHS variant, and of map → odom."""
+    from rclpy.serialization import serialize_message
+    import pose_flooder
+    pool = pose_flooder.tf_pool()
+    start = time.time_ns()
+    messages = []
+    for k in range(n):
+        scenario = TF_PATHS[variant]
+        msg = pose_flooder.tf_message(pool, k, start + k * 1_000_000, start,
+                                      'steady' if scenario == 'reparent' else scenario)
+        transform = msg.transforms[0]
+        if scenario == 'reparent':  # a new parent at every 10th message
+            transform.header.frame_id = 'map' if k // 10 % 2 else 'odom'
+        messages.append(serialize_message(msg))
+        transform.header.frame_id = 'odom'  # (the pool's messages come round again)
+    return messages, serialize_message(pose_flooder.static_map_odom(start))
+
+
+def run_tf(variant, n):
+    os.environ.setdefault('ROS_DOMAIN_ID', str(1 + (os.getpid() * 7 + 3) % 101))
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    import rclpy
+    from rclpy.parameter import Parameter
+    from rot_tools.ros.rotation_node import RotationNode
+    messages, static = tf_messages(variant, n)
+    rclpy.init()
+    try:
+        node = RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
+            Parameter('publish_markers', value=False),
+            Parameter('tf_reference_frame', value='map'),
+            Parameter('tf_body_frame', value='base_link')])
+        follower = node._tf
+        follower.on_message(static, True)
+        clock, cpu = time.perf_counter_ns, time.thread_time_ns
+        times, cpus = [], []
+        for data in messages:
+            c0, t0 = cpu(), clock()
+            follower.on_message(data, False)
+            t1, c1 = clock(), cpu()
+            times.append(t1 - t0)
+            cpus.append(c1 - c0)
+        refused = {k: v for k, v in node.refused_counts().items() if v and k != 'total'}
+        node.destroy_node()
+    finally:
+        rclpy.try_shutdown()
+    shown = ', '.join(f'{k} {v}' for k, v in refused.items()) or 'none'
+    return [_summary(f'RotationNode /tf callback, {variant} (refused: {shown})', times, cpus)]
+
+
 def run_path_without_node(n, positions, quaternions, why):
     from types import SimpleNamespace
     from rot_tools.core.decomposition import decompose_values
@@ -256,12 +318,16 @@ def main(argv=None):
     parser.add_argument('--json', help='write the figures here')
     parser.add_argument('--one', help=argparse.SUPPRESS)
     parser.add_argument('--node', choices=['on', 'off'], help=argparse.SUPPRESS)
+    parser.add_argument('--tf', choices=sorted(TF_PATHS), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:
         print(json.dumps(run_one(args.one, args.calls)))
         return 0
     if args.node:
         print(json.dumps(run_node(args.node == 'on', args.messages)))
+        return 0
+    if args.tf:
+        print(json.dumps(run_tf(args.tf, args.messages)))
         return 0
     print(f'bench_first_calls: {benchlib.machine_line()}, {time.strftime("%Y-%m-%d %H:%M")}')
     rows, functions = [], []
@@ -282,6 +348,8 @@ def main(argv=None):
     if not args.skip_node:
         for markers in ('off', 'on'):
             node.extend(child(['--node', markers, '--messages', str(args.messages)]))
+        for variant in TF_PATHS:
+            node.extend(child(['--tf', variant, '--messages', str(args.messages)]))
         benchlib.print_table(
             f"rotation_node's per-message path, first {args.messages} messages, fresh process "
             '(µs)', ['path', 'first µs', 'median µs', 'worst µs (msg)', 'worst CPU µs (msg)',

@@ -1,13 +1,20 @@
 """
-Overload: rotation_node under a 60 s flood of ~/pose, as fast as one publisher sends or at a rate.
+Overload: rotation_node flooded 60 s on ~/pose or /tf, as fast as one publisher sends or at a rate.
 
 Processes (all started here, in a DDS domain of their own on the loopback):
 
 - ``rotation_node`` by its console script (next to this Python; defaults, markers on), or,
   with ``--executor NAME``, the same node on another executor (bench/node_on_executor.py);
+  with ``--tf SCENARIO`` it follows base_link in odom (``tf_reference_frame``,
+  ``tf_body_frame``);
 - ``bench/pose_flooder.py``: publishes PoseStamped on the node's ``~/pose`` back to back,
   as fast as it can (``--rate max``, the default: ``flood TOPIC max SECONDS``), or at
-  ``--rate`` msg/s (10000 for the service-latency goal);
+  ``--rate`` msg/s (10000 for the service-latency goal); with ``--tf SCENARIO``, TFMessages
+  on ``/tf`` instead (and ``map → odom`` on ``/tf_static``): ``steady`` (the followed edge
+  stamped now), ``large`` (steady, and every 5 s three TFMessages of 100,000 transforms),
+  ``reparent`` (base_link's parent changing at every message, odom ↔ map) or ``jump`` (the
+  stream's clock going back 30 s every second, every 100th message stamped 10⁶ s ahead):
+  pose_flooder.TF_SCENARIOS;
 - a listener (this script with ``--listen``): subscribes every output of the node
   (reliable, depth 10, as a user's RViz or recorder would), counts ``~/screw``;
 - this process: calls ``~/describe``, ``~/get_parameters`` and ``~/set_parameters``
@@ -17,22 +24,25 @@ Processes (all started here, in a DDS domain of their own on the loopback):
 
 Timeline: warm-up (a slow flood until the outputs reach the listener, one answered call of
 each service), RSS at the start, the flood for ``--seconds`` (60), RSS at its end, then the
-calls stop and the RSS is sampled for ``--after`` (10) seconds more. Printed: RSS at the
-start, at the end, at most and ``--after`` s after; for each service the latency p50, p99
-and max during the flood, how many calls took over 1 s (their request was lost and sent
-again at the client's next DDS heartbeat) and how many went unanswered. The goals, flooded
-as fast as one publisher sends: RSS grows by at most 50 MB and is back within 20 MB of the
-start 10 s after the flood, every call is answered within 5 s (the call timeout), the node keeps
-publishing; flooded at 10,000 msg/s: every service answers with p99 <= 100 ms (an
-unanswered call counts as infinitely late). Not a test: a script that prints what it
-measured.
+calls stop and the RSS is sampled for ``--after`` (10) seconds more; then the same flood
+again, and SIGINT to the node 2 s into it. Printed: RSS at the start, at the end, at most
+and ``--after`` s after; for each service the latency p50, p99 and max during the flood,
+how many calls took over 1 s (their request was lost and sent again at the client's next
+DDS heartbeat) and how many went unanswered; the refusals the node counted (~/describe);
+how the node ended on SIGINT. The goals, flooded as fast as one publisher sends: RSS grows
+by at most 50 MB and is back within 20 MB of the start 10 s after the flood, every call is
+answered within 5 s (the call timeout), the node keeps publishing; flooded at 10,000
+msg/s: every service answers with p99 <= 100 ms (an unanswered call counts as infinitely
+late); at either rate, SIGINT during the flood ends the node within 1 s with status 0 and
+no traceback in its log. Not a test: a script that prints what it measured.
 
 The node runs with its own Fast DDS profile (rot_tools.ros.runtime.use_fast_dds_profile);
 ``FASTDDS_BUILTIN_TRANSPORTS=DEFAULT`` in the environment runs it, and every other process
 here, on Fast DDS's defaults instead (the user's own setting keeps the node's profile out).
 
 Run: ``.venv/bin/python bench/bench_overload.py [--rate max|MSG_PER_S] [--seconds 60]
-[--after 10] [--executor events|single|multi] [--caller-heartbeat SECONDS] [--json PATH]``.
+[--after 10] [--tf steady|large|reparent|jump] [--executor events|single|multi]
+[--caller-heartbeat SECONDS] [--json PATH]``.
 """
 
 import argparse
@@ -47,6 +57,7 @@ import tempfile
 import time
 
 import benchlib
+from pose_flooder import TF_SCENARIOS
 
 BENCH = Path(__file__).resolve().parent
 NODE = 'bench_overload_rot_tools'
@@ -58,6 +69,12 @@ ANSWER_GOAL_S = 5.0
 """Every call answered within this under the fastest flood (--rate max)."""
 SLOW_S = 1.0
 """A call slower than this waited for its client's DDS to send the request again."""
+SIGINT_GOAL_S = 1.0
+"""SIGINT during the flood ends the node within this, with status 0."""
+SIGINT_AFTER_S = 2.0
+"""Seconds into the last flood at which the node gets SIGINT."""
+TF_FRAMES = ('odom', 'base_link')
+"""The frames the node follows with --tf (reference, body): pose_flooder's /tf stream."""
 SERVICES = ('describe', 'get_parameters', 'set_parameters')
 HEARTBEAT_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 <profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
@@ -70,9 +87,12 @@ HEARTBEAT_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
 """Fast DDS profile of the caller with --caller-heartbeat (the default period is 3 s)."""
 
 
-def node_command(executor):
+def node_command(executor, tf=None):
     """rotation_node by its console script, or on another executor (node_on_executor.py)."""
     ros_args = ['--ros-args', '-r', f'__node:={NODE}']
+    if tf:
+        ros_args += ['-p', f'tf_reference_frame:={TF_FRAMES[0]}',
+                     '-p', f'tf_body_frame:={TF_FRAMES[1]}']
     if executor:
         return [sys.executable, str(BENCH / 'node_on_executor.py'), '--executor', executor,
                 *ros_args]
@@ -149,6 +169,7 @@ class Caller:
                                                       f'/{node}/set_parameters'),
         }
         self._units = 0
+        self.answers = {}
 
         def set_request():
             self._units += 1
@@ -183,7 +204,7 @@ class Caller:
                 return math.inf, False
             self.executor.spin_once(timeout_sec=min(left, 0.05))
         took = time.monotonic() - begin
-        result = future.result()
+        result = self.answers[name] = future.result()
         ok = {'describe': lambda r: True,  # (success False is fine before any input)
               'get_parameters': lambda r: len(r.values) == 2,
               'set_parameters': lambda r: r.results and r.results[0].successful}[name](result)
@@ -251,15 +272,54 @@ class Listener:
         self.log.close()
 
 
-def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate='max'):
+def stop_during_a_flood(node, flooder, flood, node_log):
+    """
+    Flood as before, SIGINT the node SIGINT_AFTER_S into it; return {status, seconds, clean}.
+
+    seconds: from the signal to the node's exit (inf if it did not end within 10 s: then it
+    is killed); clean: no traceback in its log.
+    """
+    flood_command(flooder, flood(SIGINT_AFTER_S + 2.0))
+    time.sleep(SIGINT_AFTER_S)
+    begin = time.monotonic()
+    node.send_signal(signal.SIGINT)
+    try:
+        status = node.wait(timeout=10.0)
+        took = time.monotonic() - begin
+    except subprocess.TimeoutExpired:
+        node.kill()
+        status, took = node.wait(), math.inf
+    flood_reply(flooder)
+    node_log.flush()
+    with open(node_log.name, encoding='utf-8', errors='replace') as f:
+        clean = 'Traceback' not in f.read()
+    return {'status': status, 'seconds': took, 'clean': clean}
+
+
+def refusals(answer):
+    """Return the node's refusal counts {reason: n > 0} from a ~/describe answer."""
+    import yaml
+    try:
+        refused = yaml.safe_load(answer.message).get('refused') or {}
+    except (AttributeError, yaml.YAMLError):
+        return {}
+    return {reason: n for reason, n in refused.items() if n and reason != 'total'}
+
+
+def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate='max',
+            tf=None):
     node_log = open(os.path.join(logdir, 'node.log'), 'w')
-    node = subprocess.Popen(node_command(executor), stdout=node_log, stderr=subprocess.STDOUT)
+    node = subprocess.Popen(node_command(executor, tf), stdout=node_log,
+                            stderr=subprocess.STDOUT)
+    topic = '/tf' if tf else f'/{NODE}/pose'
+
+    def flood(duration, flood_rate=rate, scenario=tf):
+        return f'flood {topic} {flood_rate} {duration} {scenario or ""}'.rstrip()
     listener = flooder = caller = None
     try:
         caller = Caller(NODE, call_timeout, heartbeat, logdir)
         listener = Listener(logdir)
-        flooder = subprocess.Popen([sys.executable, str(BENCH / 'pose_flooder.py'),
-                                    f'/{NODE}/pose'],
+        flooder = subprocess.Popen([sys.executable, str(BENCH / 'pose_flooder.py'), topic],
                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         if flooder.stdout.readline().strip() != 'ready':
             raise RuntimeError('pose_flooder did not get ready')
@@ -268,7 +328,7 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
         while listener.poll() == 0:  # outputs flow to the listener (discovery both ways)
             if time.monotonic() > deadline or node.poll() is not None:
                 raise RuntimeError('rotation_node never answered; see its log')
-            flood_command(flooder, f'flood /{NODE}/pose 100 0.5')
+            flood_command(flooder, flood(0.5, 100, tf and 'steady'))
             flood_reply(flooder)
         for name in SERVICES:  # each client has had an answer (Fast DDS may drop a first)
             while not caller.call(name, timeout=2.0)[1]:
@@ -281,7 +341,7 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
         wrong = {name: 0 for name in SERVICES}
         count0 = listener.poll()
         start = time.monotonic()
-        flood_command(flooder, f'flood /{NODE}/pose {rate} {seconds}')
+        flood_command(flooder, flood(seconds))
         k = 0
         next_sample = start + 1.0
         while time.monotonic() - start < seconds:
@@ -305,7 +365,9 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
             time.sleep(min(1.0, max(0.0, after - (time.monotonic() - end))))
             after_samples.append((time.monotonic() - end, benchlib.rss_mb(node.pid)))
         final_call = caller.call('describe')
+        refused = refusals(caller.answers.get('describe'))
         alive = node.poll() is None
+        stop = stop_during_a_flood(node, flooder, flood, node_log) if alive else None
     finally:
         if flooder is not None and flooder.poll() is None:
             try:
@@ -337,19 +399,21 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
                          'p99': percentile(lat, 0.99), 'max': max(lat) if lat else math.nan}
     growth = max(mb for _, mb in samples) - rss_start
     goals = {'growth': growth <= GROWTH_GOAL_MB, 'alive': alive and answered > 0,
-             'returned': rss_after - rss_start <= RETURN_GOAL_MB}
+             'returned': rss_after - rss_start <= RETURN_GOAL_MB,
+             'sigint': stop is not None and stop['status'] == 0 and stop['clean']
+             and stop['seconds'] <= SIGINT_GOAL_S}
     if rate == 'max':
         goals['answered'] = all(v['max'] <= ANSWER_GOAL_S for v in latency.values())
     else:
         goals['latency'] = all(v['p99'] <= LATENCY_GOAL_S for v in latency.values())
     return {'executor': executor or 'node (console script)', 'rate': rate,
-            'seconds': seconds, 'after': after,
+            'flood': f'/tf {tf}' if tf else '~/pose', 'seconds': seconds, 'after': after,
             'sent': sent, 'sent_rate': sent / elapsed, 'answered': answered,
             'answered_rate': answered / elapsed, 'rss_start_mb': rss_start, 'rss_end_mb': rss_end,
             'rss_max_mb': max(mb for _, mb in samples + after_samples), 'rss_after_mb': rss_after,
             'growth_mb': growth, 'latency': latency, 'samples': samples,
             'after_samples': after_samples, 'final_describe_s': final_call[0], 'alive': alive,
-            'goals': goals}
+            'refused': refused, 'sigint': stop, 'goals': goals}
 
 
 def print_results(m):
@@ -358,7 +422,7 @@ def print_results(m):
     rows.append([f"{m['samples'][-1][0]:.0f} (end)", f"{m['rss_end_mb']:.1f}"])
     rows += [[f'+{t:.0f} after', f'{mb:.1f}'] for t, mb in m['after_samples']]
     benchlib.print_table(
-        f"rotation_node ({m['executor']}) RSS (MB): ~/pose flooded "
+        f"rotation_node ({m['executor']}) RSS (MB): {m['flood']} flooded "
         f"{'back to back' if m['rate'] == 'max' else 'at ' + m['rate'] + ' msg/s'}, "
         f"{m['sent_rate']:.0f} msg/s sent for {m['seconds']:.0f} s, {m['answered_rate']:.0f} "
         'answered per s (a subscriber on every output)', ['s', 'RSS MB'], rows)
@@ -375,7 +439,10 @@ def print_results(m):
         'sent again)',
         ['service', 'calls', 'p50', 'p99', 'max', f'> {SLOW_S:g} s', 'unanswered',
          'wrong answers'], rows)
-    g = m['goals']
+    if m['refused']:
+        print('  refused (~/describe after the flood): ' + ', '.join(
+            f'{reason} {n:,}' for reason, n in sorted(m['refused'].items())))
+    g, stop = m['goals'], m['sigint']
     rows = [
         ['RSS growth during the flood', f"{m['growth_mb']:+.1f} MB", f'<= {GROWTH_GOAL_MB:g} MB',
          'yes' if g['growth'] else 'NO'],
@@ -393,7 +460,14 @@ def print_results(m):
         rows.append(['slowest call', f"{max(v['max'] for v in m['latency'].values()):.3f} s",
                      f'<= {ANSWER_GOAL_S:g} s (none unanswered)',
                      'yes' if g['answered'] else 'NO'])
-    benchlib.print_table('Overload goals', ['figure', 'measured', 'goal', 'met?'], rows)
+    rows.append([f'SIGINT {SIGINT_AFTER_S:g} s into a flood',
+                 'node dead before' if stop is None else
+                 f"status {stop['status']} after {stop['seconds']:.2f} s"
+                 f"{'' if stop['clean'] else ', a traceback in its log'}",
+                 f'status 0 within {SIGINT_GOAL_S:g} s, no traceback',
+                 'yes' if g['sigint'] else 'NO'])
+    benchlib.print_table(f"Overload goals ({m['flood']})",
+                         ['figure', 'measured', 'goal', 'met?'], rows)
 
 
 def main(argv=None):
@@ -405,6 +479,9 @@ def main(argv=None):
                         help='seconds before a call counts as unanswered (5)')
     parser.add_argument('--rate', default='max',
                         help="flood rate, msg/s, or 'max': back to back (max)")
+    parser.add_argument('--tf', choices=sorted(TF_SCENARIOS),
+                        help='flood /tf instead of ~/pose, the node following base_link in '
+                        'odom: ' + '; '.join(f'{k}: {v}' for k, v in TF_SCENARIOS.items()))
     parser.add_argument('--executor', choices=('events', 'single', 'multi'),
                         help='run rotation_node on this executor (bench/node_on_executor.py) '
                         'instead of by its console script; single is the one it uses')
@@ -425,7 +502,7 @@ def main(argv=None):
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as logdir:
         m = measure(args.seconds, args.after, args.executor, args.call_timeout, logdir,
-                    args.caller_heartbeat, args.rate)
+                    args.caller_heartbeat, args.rate, args.tf)
     print_results(m)
     benchlib.write_json(args.json, m)
     return 0

@@ -3,11 +3,14 @@ Run every benchmark (``make bench``): math, first calls, node, memory, overload,
 
 Each script runs in its own process with this interpreter and prints its own tables; this
 script then collects their figures (JSON) and prints every goal with the figure measured
-and whether it is met. The whole run takes about 10 minutes on 2 cores.
+and whether it is met. The overload runs: ~/pose, then /tf in each of TF_OVERLOADS'
+scenarios (bench_overload.py --tf), each flooded back to back. The whole run takes about
+15 minutes on 2 cores.
 
-Run: ``.venv/bin/python bench/run_all.py [--quick] [--skip math|first|node|memory|overload|fleet]
-[--json-dir DIR]``. ``--quick`` is a smoke run (smaller batch, fewer repetitions and rates,
-a short flood): its figures are not the ones to quote.
+Run: ``.venv/bin/python bench/run_all.py [--quick]
+[--skip math|first|node|memory|overload|overload-tf|fleet] [--json-dir DIR]``. ``--quick``
+is a smoke run (smaller batch, fewer repetitions and rates, a short flood): its figures are
+not the ones to quote.
 """
 
 import argparse
@@ -22,6 +25,8 @@ import time
 import benchlib
 
 BENCH = Path(__file__).resolve().parent
+TF_OVERLOADS = ('large', 'reparent', 'jump')
+"""bench_overload.py --tf scenarios run (back to back), beside the ~/pose flood."""
 
 
 def run(script, args, json_path):
@@ -35,7 +40,36 @@ def run(script, args, json_path):
     return json.loads(json_path.read_text())
 
 
-def goal_rows(math, node, memory, first=None, overload=None, fleet=None):
+def overload_rows(overload):
+    """Goal rows of one bench_overload.py run: RSS, calls, publishing, SIGINT."""
+    what = overload.get('flood', '~/pose')
+    flood = (f"{what}, {overload['seconds']:.0f} s "
+             f"{'back to back' if overload['rate'] == 'max' else 'at ' + overload['rate']}")
+    goals, stop = overload['goals'], overload.get('sigint')
+    rows = [['overload: node RSS growth', flood, f"{overload['growth_mb']:+.1f} MB",
+             '<= 50 MB', 'yes' if goals['growth'] else 'NO'],
+            [f"overload: RSS {overload['after']:.0f} s after - start", flood,
+             f"{overload['rss_after_mb'] - overload['rss_start_mb']:+.1f} MB",
+             '<= 20 MB', 'yes' if goals['returned'] else 'NO'],
+            ['overload: the node publishes, alive after', flood, f"{overload['answered']}",
+             '> 0', 'yes' if goals['alive'] else 'NO']]
+    latency = overload['latency'].values()
+    if 'answered' in goals:
+        rows.append(['overload: slowest call', flood, f"{max(v['max'] for v in latency):.3f} s",
+                     '<= 5 s', 'yes' if goals['answered'] else 'NO'])
+    if 'latency' in goals:
+        rows.append(['overload: worst service p99', flood,
+                     f"{max(v['p99'] for v in latency):.3f} s", '<= 0.1 s',
+                     'yes' if goals['latency'] else 'NO'])
+    if 'sigint' in goals:
+        rows.append(['overload: SIGINT during the flood', flood,
+                     'dead before' if stop is None else
+                     f"status {stop['status']}, {stop['seconds']:.2f} s",
+                     '0, <= 1 s', 'yes' if goals['sigint'] else 'NO'])
+    return rows
+
+
+def goal_rows(math, node, memory, first=None, overload=None, fleet=None, tf_overloads=None):
     rows = []
     if math:
         for r in math.get('batch', []):
@@ -81,16 +115,12 @@ def goal_rows(math, node, memory, first=None, overload=None, fleet=None):
                      f"{memory['rss_end_mb'] - memory['rss_start_mb']:+.1f} MB",
                      'bounded', 'yes' if memory['bounded'] else 'NO'])
     if overload:
-        flood = f"{overload['seconds']:.0f} s back to back"
-        goals = overload['goals']
-        rows.append(['overload: node RSS growth', flood, f"{overload['growth_mb']:+.1f} MB",
-                     '<= 50 MB', 'yes' if goals['growth'] else 'NO'])
-        rows.append([f"overload: RSS {overload['after']:.0f} s after - start", flood,
-                     f"{overload['rss_after_mb'] - overload['rss_start_mb']:+.1f} MB",
-                     '<= 20 MB', 'yes' if goals['returned'] else 'NO'])
+        rows += overload_rows(overload)
         for name, v in overload['latency'].items():
             rows.append([f'overload: ~/{name} p99', f"{v['unanswered']} unanswered",
                          f"{v['p99']:.3f} s", '<= 1 s', 'yes' if v['p99'] <= 1.0 else 'NO'])
+    for tf in tf_overloads or ():
+        rows += overload_rows(tf)
     if fleet:
         copies = f"{fleet['copies']} copies of the bag"
         rows.append(['rot-tools bag --jobs 2 speed-up over --jobs 1', copies,
@@ -108,7 +138,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
     parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory', 'overload',
-                                           'fleet'],
+                                           'overload-tf', 'fleet'],
                         action='append', default=[])
     parser.add_argument('--json-dir', help='keep the JSON figures here')
     args = parser.parse_args(argv)
@@ -137,9 +167,15 @@ def main(argv=None):
             memory = run('bench_memory.py', memory_args, out / 'bench_memory.json')
         if 'overload' not in args.skip:
             overload = run('bench_overload.py', overload_args, out / 'bench_overload.json')
+        tf_overloads = []
+        if 'overload-tf' not in args.skip:
+            for scenario in TF_OVERLOADS:
+                tf_overloads.append(run('bench_overload.py', overload_args + ['--tf', scenario],
+                                        out / f'bench_overload_tf_{scenario}.json'))
         if 'fleet' not in args.skip:
             fleet = run('bench_fleet.py', fleet_args, out / 'bench_fleet.json')
-        rows = goal_rows(math, node, memory, first, overload, fleet)
+        rows = goal_rows(math, node, memory, first, overload, fleet,
+                         [tf for tf in tf_overloads if tf])
     benchlib.print_table(f'Goals (ratios rot_tools / reference, first calls in ms; '
                          f'{time.monotonic() - start:.0f} s in all)',
                          ['figure', 'against', 'measured', 'goal', 'met?'], rows)
@@ -150,6 +186,8 @@ def main(argv=None):
     failed = [s for s, res in (('math', math), ('first', first), ('node', node),
                                ('memory', memory), ('overload', overload), ('fleet', fleet))
               if s not in args.skip and res is None]
+    failed += [f'overload --tf {scenario}' for scenario, res in zip(TF_OVERLOADS, tf_overloads)
+               if res is None]
     if failed:
         print(f'run_all: {", ".join(failed)} benchmark failed (see above)', file=sys.stderr)
         return 1
