@@ -12,7 +12,8 @@ import math
 import struct
 from types import SimpleNamespace
 
-from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
+from geometry_msgs.msg import PoseWithCovarianceStamped, QuaternionStamped, TwistStamped
+from geometry_msgs.msg import Vector3Stamped
 from hypothesis import example, given, settings, strategies as st
 from math_helpers import HYPOTHESIS_SETTINGS
 import pytest
@@ -74,6 +75,19 @@ def test_the_screw_twist_is_angular_then_linear():
     t = msg.twist
     assert (t.angular.x, t.angular.y, t.angular.z) == (0.0, 1.0, 2.0)
     assert (t.linear.x, t.linear.y, t.linear.z) == (3.0, 4.0, 5.0)
+
+
+def test_the_rpy_covariance_is_the_pose_then_the_covariance():
+    (kind,) = [kind for kind in OUTPUTS if kind.row.covariance]
+    values = interface.PoseCovariance((1.0, 2.0, 3.0), (0.0, 0.0, 0.6, 0.8),
+                                      tuple(0.5 * k for k in range(36)))
+    msg = deserialize_message(kind.encode(cdr.header(5, 6, 'map'), kind.row.value(values)),
+                              PoseWithCovarianceStamped)
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id) == (
+        5, 6, 'map')
+    p, q = msg.pose.pose.position, msg.pose.pose.orientation
+    assert (p.x, p.y, p.z, q.x, q.y, q.z, q.w) == (1.0, 2.0, 3.0, 0.0, 0.0, 0.6, 0.8)
+    assert msg.pose.covariance.tolist() == list(values.covariance)
 
 
 def test_a_frame_id_ends_at_its_first_nul_as_in_rclpy():
@@ -182,6 +196,34 @@ def test_each_input_reads_its_messages_fields(kind, sec, nanosec, frame_id, chil
     assert (header.stamp.sec, header.stamp.nanosec, header.frame_id) == (
         sec, nanosec, deserialize_message(data, kind.msg_type).header.frame_id)
     assert list(fields) == [field_value(msg, path) for path in kind.row.floats()]
+
+
+COVARIANCE_INPUTS = [kind for kind in INPUTS if kind.row.covariance]
+"""The inputs that carry a covariance (~/imu, ~/pose_with_covariance, ~/odometry)."""
+
+
+@settings(**HYPOTHESIS_SETTINGS)
+@given(st.sampled_from(COVARIANCE_INPUTS), SECONDS, NANOSECONDS, st.text(max_size=20),
+       st.text(max_size=20), st.lists(NUMBERS, min_size=60, max_size=60), NUMBERS)
+@example(BY_NAME['odometry'], 1, 2, 'odom', 'base' * 3, [0.5] * 60, 0.25)
+@example(BY_NAME['imu'], 1, 2, 'imu_link', '', [float(k) for k in range(60)], 0.25)
+def test_each_covariance_input_reads_its_fields_then_its_covariance(
+        kind, sec, nanosec, frame_id, child, values, fill):
+    msg = _message(kind, sec, nanosec, frame_id, child, values, fill)
+    data = serialize_message(msg)
+    header, read = cdr.covariance_reader(kind.row)(data)
+    assert header == kind.read(data)[0]
+    path, size = kind.row.covariance
+    assert list(read) == [field_value(msg, p) for p in kind.row.covariance_floats()]
+    assert list(read[:len(kind.row.floats())]) == list(kind.read(data)[1])
+    assert list(read[-size:]) == list(field_value(msg, path))
+
+
+def test_only_the_inputs_with_a_covariance_read_one():
+    assert {kind.row.name for kind in COVARIANCE_INPUTS} == {
+        'imu', 'pose_with_covariance', 'odometry'}
+    assert all(kind.row.covariance_floats() == () for kind in INPUTS
+               if kind not in COVARIANCE_INPUTS)
 
 
 def test_nan_is_read_as_nan_and_a_frame_id_ends_at_its_first_nul():

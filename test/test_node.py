@@ -87,32 +87,38 @@ def set_pose(pose, q, p):
     o.x, o.y, o.z, o.w = map(float, q)
 
 
-def pose_with_covariance(q, p=(0.0, 0.0, 0.0), frame='map'):
-    """Build a PoseWithCovarianceStamped; its covariance is NaN (unused by the node)."""
+def pose_with_covariance(q, p=(0.0, 0.0, 0.0), frame='map', covariance=None):
+    """Build a PoseWithCovarianceStamped; its covariance all zeros (unknown) unless given."""
     msg = PoseWithCovarianceStamped()
     msg.header.frame_id = frame
     set_pose(msg.pose.pose, q, p)
-    msg.pose.covariance = [math.nan] * 36
+    if covariance is not None:
+        msg.pose.covariance = np.ravel(covariance).tolist()
     return msg
 
 
-def odometry(q, p=(0.0, 0.0, 0.0), frame='odom'):
+def odometry(q, p=(0.0, 0.0, 0.0), frame='odom', covariance=None):
     """Build an Odometry of base_link in ``frame``; its twist is Inf (unused by the node)."""
     msg = Odometry()
     msg.header.frame_id = frame
     msg.child_frame_id = 'base_link'
     set_pose(msg.pose.pose, q, p)
     msg.twist.twist.linear.x = math.inf
+    if covariance is not None:
+        msg.pose.covariance = np.ravel(covariance).tolist()
     return msg
 
 
-def imu(q, frame='imu_link', orientation_covariance0=0.0):
+def imu(q, frame='imu_link', orientation_covariance0=0.0, covariance=None):
     """Build an Imu with orientation q; angular velocity NaN (unused by the node)."""
     msg = Imu()
     msg.header.frame_id = frame
     o = msg.orientation
     o.x, o.y, o.z, o.w = map(float, q)
-    msg.orientation_covariance[0] = orientation_covariance0
+    if covariance is not None:
+        msg.orientation_covariance = np.ravel(covariance).tolist()
+    else:
+        msg.orientation_covariance[0] = orientation_covariance0
     msg.angular_velocity.z = math.nan
     return msg
 
@@ -945,7 +951,8 @@ def test_every_output_row_is_published_with_its_type(rig):
     published = {pub.topic_name: pub.msg_type for pub in rig.node.publishers}
     for kind in rotation_node.OUTPUTS:
         assert published[rig.node.resolve_topic_name(kind.topic)] is kind.msg_type
-    assert [kind.row.name for kind in rotation_node.OUTPUTS if kind.row.value] == list(ALWAYS)
+    assert [kind.row.name for kind in rotation_node.OUTPUTS
+            if kind.row.value and not kind.row.covariance] == list(ALWAYS)
 
 
 def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):

@@ -291,7 +291,7 @@ def test_parameter_file_is_applied(tester, node_process, tmp_path):
     assert_clean_exit(*shipped.stop(signal.SIGTERM))
 
     changed = {'euler_sequence': 'xyz', 'angle_unit': 'deg', 'quaternion_tolerance': 0.01,
-               'publish_markers': False, 'marker_scale': 2.5}
+               'publish_markers': False, 'marker_scale': 2.5, 'input_covariance': 'rpy'}
     edited = tmp_path / 'edited.yaml'
     text = PARAMETER_FILE.read_text()
     for name, value in changed.items():

@@ -23,7 +23,8 @@ turned into six Python objects), taking its bytes (``create_subscription(..., ra
 ~1 µs: :func:`stamped_reader` reads a stamped input's header and the float64 fields the
 node uses with one struct.unpack_from, in either byte order (CDR_LE or CDR_BE).
 :func:`input_reader` and :func:`output_writer` make them for a row of
-rot_tools.io.interface (the fields read or written).
+rot_tools.io.interface (the fields read or written); :func:`covariance_reader` reads an input's
+fields and its covariance array, for the inputs that carry one.
 """
 
 from functools import lru_cache
@@ -165,6 +166,16 @@ def input_reader(row):
     Its string fields skipped, its float64 fields read (:func:`stamped_reader`).
     """
     return stamped_reader(len(row.strings()), len(row.floats()))
+
+
+def covariance_reader(row):
+    """
+    Return read(data) → (Header, values) of an input row that carries a covariance.
+
+    The values are those of the row's covariance_floats(): its fields, then the whole
+    covariance array (rot_tools.io.interface.Input.covariance_floats).
+    """
+    return stamped_reader(len(row.strings()), len(row.covariance_floats()))
 
 
 def output_writer(row):

@@ -66,6 +66,23 @@ class Input(NamedTuple):
         """Return '~/name'."""
         return '~/' + self.name
 
+    def covariance_floats(self):
+        """
+        Return the paths of the float64 read with the covariance: floats(), then the array.
+
+        In every message that carries one the array follows the fields read, with nothing
+        between (an Imu's orientation_covariance after its orientation, its [0] among the
+        fields; a PoseWithCovariance's covariance after its pose): one read takes them all.
+        () for a row without a covariance.
+        """
+        if not self.covariance:
+            return ()
+        path, size = self.covariance
+        array = members(path, [f'[{k}]' for k in range(size)])
+        floats = self.floats()
+        start = floats.index(array[0]) if array[0] in floats else len(floats)
+        return floats[:start] + array
+
     def strings(self):
         """Return the paths of the string fields read (skipped by the node), in order."""
         return tuple(path for role, path in self.fields.items() if MEMBERS[role] is None)
@@ -93,6 +110,9 @@ class Output(NamedTuple):
     layout: tuple = ()
     """(label, size, stride) of each dimension of a std_msgs MultiArray; () for a type that
     starts with a std_msgs/Header."""
+    covariance: bool = False
+    """Published only for an input that carries a covariance (Input.covariance), when it is
+    known and converts; ``value`` then takes a :class:`PoseCovariance`, not the Values."""
 
     @property
     def topic(self):
@@ -105,8 +125,23 @@ class Output(NamedTuple):
         return not self.layout
 
 
+class PoseCovariance(NamedTuple):
+    """What ~/rpy_covariance writes: the input's pose and a 6×6 covariance, row-major."""
+
+    position: tuple
+    orientation: tuple
+    """(x, y, z, w) as the input gave it."""
+    covariance: tuple
+    """36 numbers: x, y, z, roll, pitch, yaw (rad, m)."""
+
+
 def _xyz(path):
     return members(path, 'xyz')
+
+
+def _pose_covariance(values):
+    """Return a PoseWithCovariance's numbers of a :class:`PoseCovariance`, in order."""
+    return (*values.position, *values.orientation, *values.covariance)
 
 
 def _screw_twist(values):
@@ -128,16 +163,18 @@ INPUTS = (
           boundary.pose_fields_to_rt,
           'rotation and translation of child_frame_id in header.frame_id'),
     Input('pose_with_covariance', 'geometry_msgs/msg/PoseWithCovarianceStamped', _POSE_POSE,
-          boundary.pose_fields_to_rt, 'pose.pose (the covariance is not used)',
+          boundary.pose_fields_to_rt, 'pose.pose, and pose.covariance',
           covariance=('pose.covariance', 36)),
     Input('odometry', 'nav_msgs/msg/Odometry',
           {'child_frame_id': 'child_frame_id', **_POSE_POSE}, boundary.pose_fields_to_rt,
-          'pose.pose: the body child_frame_id in header.frame_id (the twist is not used)',
+          'pose.pose: the body child_frame_id in header.frame_id, and pose.covariance (the '
+          'twist is not used)',
           covariance=('pose.covariance', 36)),
     Input('imu', 'sensor_msgs/msg/Imu',
           {'orientation': 'orientation', 'covariance0': 'orientation_covariance'},
           boundary.imu_fields_to_rt,
-          'orientation (b = 0); refused when orientation_covariance[0] is -1 (no estimate)',
+          'orientation (b = 0) and orientation_covariance; refused when '
+          'orientation_covariance[0] is -1 (no estimate)',
           bag_fields={'angular_velocity': 'angular_velocity'},
           covariance=('orientation_covariance', 9)),
     Input('orientation', 'geometry_msgs/msg/QuaternionStamped',
@@ -167,6 +204,13 @@ OUTPUTS = (
     Output('screw', 'geometry_msgs/msg/TwistStamped',
            _xyz('twist.linear') + _xyz('twist.angular'), _screw_twist,
            'exponential coordinates: angular = θ·l̂, linear = θ·v (screw_log)'),
+    Output('rpy_covariance', 'geometry_msgs/msg/PoseWithCovarianceStamped',
+           members('pose.pose.position', 'xyz') + members('pose.pose.orientation', 'xyzw')
+           + members('pose.covariance', [f'[{k}]' for k in range(36)]), _pose_covariance,
+           'for an input with a known covariance (~/imu, ~/pose_with_covariance, ~/odometry): '
+           'its pose, and the covariance of x, y, z, roll, pitch, yaw (rad², whatever '
+           'angle_unit; read as input_covariance says), none at gimbal lock',
+           covariance=True),
     Output('screw_axis', 'visualization_msgs/msg/Marker', (), None,
            'when publish_markers: the screw axis, an ARROW (DELETE for the identity)'),
     Output('markers', 'visualization_msgs/msg/MarkerArray', (), None,
@@ -174,7 +218,8 @@ OUTPUTS = (
            'and a label'),
 )
 """Every output of the node. Those with a ``value`` are published for every accepted input,
-from one decompose_values pass; the pictures (``value`` None) at a limited rate."""
+from one decompose_values pass, but a ``covariance`` one (for an input carrying a covariance,
+rot_tools.io.message_covariance); the pictures (``value`` None) at a limited rate."""
 
 TF_FIELDS = {'child_frame_id': 'child_frame_id', **boundary.TRANSFORM_FIELDS}
 """The fields of each transform of a tf2_msgs/TFMessage (a TransformStamped's)."""

@@ -38,7 +38,13 @@ class Refused(Exception):
 
 def stamped_outputs():
     """Return the names of the outputs published for every input with its header."""
-    return tuple(row.name for row in interface.OUTPUTS if row.value and row.stamped)
+    return tuple(row.name for row in interface.OUTPUTS
+                 if row.value and row.stamped and not row.covariance)
+
+
+def covariance_outputs():
+    """Return the names of the outputs published only for an input with a covariance."""
+    return tuple(row.name for row in interface.OUTPUTS if row.covariance)
 
 
 def picture_outputs():
@@ -194,7 +200,7 @@ class Client:
                                    self.timeout):
                 raise Unreachable(self.missing(f'publisher on {sub.topic_name}'))
 
-    def send(self, name, msg, pictures, topic=None):
+    def send(self, name, msg, pictures, topic=None, covariance=False):
         """
         Publish ``msg`` on the node's ~/name until it answers; return (topic, stamp, answer).
 
@@ -204,14 +210,17 @@ class Client:
         The answer is {output: message}: the outputs stamped as one sent message, the
         ~/rotation_matrix whose content matches, and, when ``pictures``, the pictures of that
         message if the node draws them within PICTURE_WAIT. Refused when the node's refusal
-        counts rise instead.
+        counts rise instead. With ``covariance`` (a covariance was sent) the answer has the
+        covariance outputs too: their message, or why the node published none
+        (:meth:`covariance_answer`).
         """
         from rclpy.qos import QoSProfile
         from rot_tools.ros.messages import message_class
         answers = Answers(msg.header.frame_id)
         matrix = matrix_output()
         qos = QoSProfile(depth=100)
-        wanted = stamped_outputs() + (picture_outputs() if pictures else ())
+        covariances = covariance_outputs() if covariance else ()
+        wanted = stamped_outputs() + covariances + (picture_outputs() if pictures else ())
         subs = [self.node.create_subscription(
                     message_class(interface.output_named(name).type_name), self.topic(name),
                     answers.collector(name), qos)
@@ -246,10 +255,32 @@ class Client:
         # Kept now: while the pictures are awaited, another publisher's inputs may push it
         # out of the latest matrices.
         matrix_msg = answers.matrix(R)
+        if covariances:
+            self.covariance_answer(answer, covariances, before, topic, answers.sent)
         if pictures:
             self.spin_until(lambda: set(picture_outputs()) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
         return topic, stamp, {**answer, matrix: matrix_msg}
+
+    def covariance_answer(self, answer, names, before, topic, stamps):
+        """
+        Wait for the covariance outputs ``names`` of ``answer``, or put why there are none.
+
+        ~/describe is served after the input's callback, so it tells what the node did with
+        the covariance: published (then awaited), refused (Refused, with the node's reason),
+        or neither, unknown or at gimbal lock (the answer holds describe's phrase instead).
+        """
+        data = describe_data(self.describe())
+        refused = refusal_text(data, before, topic, stamps)
+        if refused:
+            raise Refused(f'node {self.target} refused the covariance sent to {topic}: '
+                          f'{refused}')
+        phrase = data.get('rpy_stddev')
+        if isinstance(phrase, str):
+            answer.update(dict.fromkeys(names, phrase))
+        elif not self.spin_until(lambda: set(names) <= set(answer), self.timeout):
+            raise Unreachable(f'no message on {", ".join(map(self.topic, names))} '
+                              f'within {self.timeout:g} s')
 
 
 def _key(stamp):

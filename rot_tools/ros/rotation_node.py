@@ -14,7 +14,8 @@ one input share the axis sign. Outputs carry the input's header. Topics, service
 parameters: doc/node.md, and ``rotation_node --help``.
 
 The pictures (~/markers and ~/screw_axis) are throttled: rot_tools.ros.pictures. The reply of
-~/screw_path: rot_tools.ros.screw_path.
+~/screw_path: rot_tools.ros.screw_path. The covariance of roll, pitch and yaw of the inputs that
+carry a covariance (~/rpy_covariance): rot_tools.ros.rpy_covariance.
 """
 
 if __name__ == '__main__':
@@ -51,7 +52,7 @@ from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.io import cdr
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
-from rot_tools.ros import messages, runtime, screw_path, tf_input
+from rot_tools.ros import messages, rpy_covariance, runtime, screw_path, tf_input
 from rot_tools.ros.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
@@ -61,7 +62,7 @@ from std_srvs.srv import Trigger
 
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
     MALFORMED, NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
-) + tf_input.REFUSAL_REASONS
+) + tf_input.REFUSAL_REASONS + rpy_covariance.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
 PROG = 'rotation_node'
@@ -98,6 +99,7 @@ class Settings(NamedTuple):
     marker_scale: float
     tf_reference_frame: str
     tf_body_frame: str
+    input_covariance: str
 
 
 class Latest(NamedTuple):
@@ -235,6 +237,12 @@ PARAMETERS = {
         ParameterType.PARAMETER_STRING,
         "with tf_reference_frame: the frame followed on /tf and /tf_static; '' = off"),
         _check_tf_frame),
+    'input_covariance': ParameterSpec('rotvec', _descriptor(
+        ParameterType.PARAMETER_STRING,
+        'how the rotation covariance of ~/imu, ~/pose_with_covariance and ~/odometry is read '
+        "for ~/rpy_covariance: rotvec (rotations about the parent frame's fixed X, Y, Z, as "
+        'ROS documents it) or rpy (already roll, pitch, yaw)', "'rotvec' or 'rpy'"),
+        rpy_covariance.check_reading),
 }
 """Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
@@ -294,8 +302,9 @@ class RotationNode(Node):
             for kind in OUTPUTS}
         self._outputs = tuple(
             (publishers[kind.row.name].publish, kind.encode, kind.row.value, kind.row.angles)
-            for kind in OUTPUTS if kind.row.value is not None)
+            for kind in OUTPUTS if kind.row.value is not None and not kind.row.covariance)
         self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'])
+        self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
 
         # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
         # needs a tree between messages, two topics with their own QoS, and gives an output
@@ -309,9 +318,12 @@ class RotationNode(Node):
         for kind in INPUTS:
             source = Source(self.resolve_topic_name(kind.topic), kind.row.type_name, kind.read,
                             kind.row.convert, kind.row.fields)
+            callback = partial(self._on_input, source)
+            if kind.row.covariance:  # then ~/rpy_covariance (rot_tools.ros.rpy_covariance)
+                callback = partial(self._covariances.on_input, callback, source.topic,
+                                   rpy_covariance.covariance_reader(kind.row))
             # raw: the callback gets the message's bytes (rot_tools.io.cdr reads what it needs)
-            self.create_subscription(kind.msg_type, kind.topic, partial(self._on_input, source),
-                                     INPUT_QOS, raw=True,
+            self.create_subscription(kind.msg_type, kind.topic, callback, INPUT_QOS, raw=True,
                                      event_callbacks=NO_SUBSCRIPTION_EVENTS)
             self._sources.append(source)
 
@@ -400,7 +412,7 @@ class RotationNode(Node):
         return Settings(value['euler_sequence'], value['angle_unit'] == 'deg',
                         value['quaternion_tolerance'], value['publish_markers'],
                         value['marker_scale'], value['tf_reference_frame'],
-                        value['tf_body_frame'])
+                        value['tf_body_frame'], value['input_covariance'])
 
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters (rclpy has checked type and range)."""
@@ -431,7 +443,11 @@ class RotationNode(Node):
     # -- inputs ----------------------------------------------------------------------------
 
     def _on_input(self, source, data):
-        """Read one message's bytes to (header, R, b) and publish every output, or refuse it."""
+        """
+        Read one message's bytes to (header, R, b) and publish every output, or refuse it.
+
+        Return (header, R, settings) of an accepted message, None for a refused one.
+        """
         settings = self._settings
         try:
             header, values = source.read(data)
@@ -451,6 +467,7 @@ class RotationNode(Node):
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
             return
         self._publish(source, header, R, b, values, settings)
+        return header, R, settings
 
     def _on_tf_transform(self, header, R, b):
         """Return the followed frames have a new common time on /tf: publish every output."""
@@ -551,6 +568,7 @@ class RotationNode(Node):
                                          latest.settings.degrees))
             if self._tf.following:
                 data['tf'] = self._tf.describe()
+            data.update(self._covariances.describe())
             response.success = True
         data['refused'] = refused
         data['last_refusals'] = self.last_refusals()
