@@ -16,12 +16,13 @@ import subprocess
 import sys
 import time
 
-from conftest import console_script, NodeProcess, REPO, RUN, script_env
+from conftest import console_script, DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
 from doc_blocks import assert_doc_output
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from test_node_covariance import expected_covariance
 import yaml
 
 CLIENT = console_script('rotation_client', 'rot_tools.ros.rotation_client')
@@ -277,6 +278,52 @@ def test_describe_reports_the_input_just_sent(node):
         assert 'refused' in report
 
 
+COV = np.array([[4e-4, 1e-4, 0.0], [1e-4, 2e-4, -5e-5], [0.0, -5e-5, 1e-4]])
+"""A rotation's covariance (rad²) given to --cov."""
+
+
+@pytest.mark.parametrize('verb, position', [('imu', ()), ('odometry', (1.0, -2.0, 0.5))])
+def test_cov_is_sent_and_the_rpy_covariance_printed(node, verb, position):
+    q = Rotation.from_euler('xyz', [0.2, -0.4, 1.0]).as_quat()
+    out = answered(verb, *position, *q, '--cov', *COV.ravel(), '--node', node)
+    sent = np.asarray(out['input']['orientation_covariance' if verb == 'imu' else 'covariance'])
+    np.testing.assert_array_equal(sent[-3:, -3:], COV)
+    assert not sent[:-3].any() and not sent[:, :-3].any()  # a pose's other terms: 0
+    printed = out['answer']['rpy_covariance']
+    assert printed['position'] == list(position or (0.0, 0.0, 0.0))
+    assert [printed['orientation'][k] for k in 'xyzw'] == approx(q)
+    expected = expected_covariance(q, sent)
+    np.testing.assert_allclose(printed['covariance'], expected, rtol=0,
+                               atol=1e-9 * np.abs(expected).max())
+    unknown = answered(verb, *position, *q, '--cov', *[0] * 9, '--node', node)
+    assert unknown['answer']['rpy_covariance'] == 'unknown'
+
+
+def test_echo_rpy_covariance(node, tester):
+    """Check doc/client.md's example: facing +Y, an error about the fixed X axis is pitch."""
+    command = CLIENT + ['echo', 'rpy_covariance', '--once', '--node', node, '--timeout', '20']
+    echo = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=script_env(command), stdin=subprocess.DEVNULL)
+    topic = f'{node}/rpy_covariance'
+    tester.spin_until(lambda: tester.node.count_subscribers(topic) > 0, DISCOVERY_TIMEOUT,
+                      f'a subscription on {topic}')
+    answered(*'imu 0 0 0.7071068 0.7071068 --frame imu_link --cov'.split(), *COV.ravel(),
+             '--node', node)
+    out, err = echo.communicate(timeout=60)
+    assert (echo.returncode, err) == (0, '')
+    assert_doc_output('client-covariance', '$ rotation_client echo rpy_covariance --once\n'
+                      + out)
+    data = yaml.safe_load(out)
+    assert data['frame_id'] == 'imu_link'
+    printed = data['rpy_covariance']
+    assert printed['position'] == [0.0, 0.0, 0.0]
+    assert printed['orientation'] == {'x': 0.0, 'y': 0.0, 'z': 0.7071068, 'w': 0.7071068}
+    turn = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # E⁻¹ at yaw 90°
+    np.testing.assert_allclose(np.asarray(printed['covariance'])[3:, 3:],
+                               turn @ COV @ turn.T, rtol=0, atol=1e-12)
+    assert not np.asarray(printed['covariance'])[:3].any()
+
+
 @pytest.mark.parametrize('encoding', ['utf-8', 'ascii'])
 def test_frame_id_beyond_ascii_round_trips(node, encoding):
     """
@@ -339,6 +386,9 @@ def test_screw_path(node):
      'float64 (beyond ±1.8e308) (not_decomposable)'),
     (('screw-path', *[0] * 6, 1, 1, 0, 0, *[0] * 3, 1, '--tolerance', 1e-6), 'screw_path '
      'request: tolerance 1e-06 needs 1e+06 steps, more than 10000 (path_too_long)'),
+    (('imu', 0, 0, 0, 1, '--cov', 1, 0, 0, 0, 1, 0, 0, 0, -1), 'covariance sent to '
+     '{node}/imu: orientation_covariance is not positive semi-definite: its lowest eigenvalue '
+     'is -1, below -1e-09·max|C| = -1e-09 (bad_covariance)'),
 ])
 def test_refused_input(node, args, why):
     """One line: the node's sentence (what and by how much), and the reason counted."""
@@ -423,6 +473,8 @@ def test_unreachable_topic(node_process):
     (('transform', *[0] * 6), 'transform takes 7 numbers (X Y Z QX QY QZ QW), got 6'),
     (('orientation', *[0] * 5), 'orientation takes 4 numbers (QX QY QZ QW), got 5'),
     (('imu', *[0] * 5), 'imu takes 4 numbers (QX QY QZ QW), got 5'),
+    (('imu', 0, 0, 0, 1, '--cov', 1, 2), 'argument --cov: expected 9 arguments'),
+    (('pose', *[0] * 7, '--cov', *[0] * 9), 'unrecognized arguments: --cov'),
     (('screw-path', *[0] * 15), 'screw-path takes 14 numbers'),
     (('screw-path', *[0] * 14, '--tolerance', '1e-300'),
      'argument --tolerance: 1e-300 is below the smallest float32, 1.4e-45: the request '

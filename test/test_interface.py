@@ -87,7 +87,7 @@ def test_the_bag_reader_reads_every_input_with_an_orientation():
     assert 'geometry_msgs/msg/Vector3Stamped' not in bag_read.SUPPORTED  # Euler: no sequence
     for type_name in oriented:
         layout = bag_read._Layout(typestore, type_name, cdr=True)  # every field found
-        assert {column for column, _ in layout.wanted.values()} >= set(
+        assert {column for columns in layout.wanted.values() for column, _ in columns} >= set(
             bag_read.SUPPORTED[type_name])
 
 
@@ -111,7 +111,12 @@ def answer_messages():
             msg.data = np.eye(3).ravel().tolist()
         for j, path in enumerate(row.fields):
             parent, _, member = path.rpartition('.')
-            if parent and row.name != 'rotation_matrix':
+            name, _, index = member.partition('[')
+            if not parent or row.name == 'rotation_matrix':
+                continue
+            if index:  # an element of an array: pose.covariance[3]
+                getattr(field_value(msg, parent), name)[int(index[:-1])] = 10.0 * k + j
+            else:
                 setattr(field_value(msg, parent), member, 10.0 * k + j)
         if row.name == 'quaternion':
             msg.quaternion.x = msg.quaternion.y = msg.quaternion.z = 0.0
@@ -143,6 +148,12 @@ def test_the_client_prints_each_answer_under_its_output_name(monkeypatch):
     assert expected['axis_angle'] == [20.0, 21.0, 22.0]
     assert expected['screw'] == {'angular': [53.0, 54.0, 55.0], 'linear': [50.0, 51.0, 52.0]}
     assert expected['rpy'] == {'roll': 40.0, 'pitch': 41.0, 'yaw': 42.0, 'unit': 'rad'}
+    k = [row.name for row in interface.OUTPUTS].index('rpy_covariance')
+    assert expected['rpy_covariance'] == {
+        'position': [10.0 * k, 10.0 * k + 1, 10.0 * k + 2],
+        'orientation': {'x': 10.0 * k + 3, 'y': 10.0 * k + 4, 'z': 10.0 * k + 5,
+                        'w': 10.0 * k + 6},
+        'covariance': (10.0 * k + 7 + np.arange(36).reshape(6, 6)).tolist()}
     monkeypatch.setattr(interface, 'OUTPUTS', interface.OUTPUTS[::-1])
     reordered = rotation_client._answer_data(collect(messages), PARAMETERS)
     assert reordered == expected and list(reordered) == list(expected)[::-1]

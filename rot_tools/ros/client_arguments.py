@@ -37,7 +37,7 @@ FLOAT32_TINY = float(np.finfo(np.float32).smallest_subnormal)
 
 ARGUMENTS = {'position': 'X Y Z', 'orientation': 'QX QY QZ QW', 'angles': 'A1 A2 A3'}
 """The numbers given for each role of an input's fields (the others are not given: an
-Imu's orientation_covariance is sent zero)."""
+Imu's orientation_covariance is sent zero, or as --cov says)."""
 
 EULER_TEXT = (
     'A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n'
@@ -46,6 +46,9 @@ EULER_TEXT = (
 CHILD_TEXT = 'The body is --child-frame (default base_link).'
 POSE = 'X Y Z QX QY QZ QW'
 TOPIC_TEXT = "the topic to send to, when the node's input is remapped (default NODE/{name})"
+COV_TEXT = ("C11 C12 ... C33: the rotation's covariance, row-major, rad² (rotations about the "
+            "parent's fixed X, Y, Z, or roll, pitch, yaw: the node's input_covariance); "
+            "printed as ~/rpy_covariance (default: all 0, ROS's unknown)")
 
 
 def names_used():
@@ -238,6 +241,7 @@ def build_parser():
         '  rotation_client odometry 2 1 0  0 0 0.3826834 0.9238795 --frame odom\n'
         '  rotation_client orientation 0 0 0.7071068 0.7071068 --node /robot/rot_tools\n'
         '  rotation_client imu 0 0 0.7071068 0.7071068 --frame imu_link\n'
+        '  rotation_client imu 0 0 0 1 --cov 1e-4 0 0  0 1e-4 0  0 0 4e-4   (~/rpy_covariance)\n'
         '  rotation_client describe --json\n'
         '  rotation_client screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1.0\n'
         '  rotation_client imu 0 0 0 1 --topic /robot/imu/data     (an input remapped)\n'
@@ -268,6 +272,8 @@ def build_parser():
             p.add_argument('--deg', action='store_true', help='the angles are in degrees')
         if command.row is not None:
             p.add_argument('--topic', metavar='TOPIC', help=TOPIC_TEXT.format(name=name))
+        if command.row is not None and command.row.covariance:
+            p.add_argument('--cov', type=_number, nargs=9, metavar='C', help=COV_TEXT)
         if 'child_frame_id' in fields:
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')

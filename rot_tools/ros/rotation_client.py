@@ -6,11 +6,11 @@ quick start has this instead (doc/client.md is its manual)::
 
     rotation_client euler ZYX 30 20 10 --deg
     rotation_client pose X Y Z QX QY QZ QW
-    rotation_client pose_with_covariance X Y Z QX QY QZ QW
-    rotation_client odometry X Y Z QX QY QZ QW
+    rotation_client pose_with_covariance X Y Z QX QY QZ QW [--cov C11 C12 ... C33]
+    rotation_client odometry X Y Z QX QY QZ QW [--cov C11 C12 ... C33]
     rotation_client transform X Y Z QX QY QZ QW
     rotation_client orientation QX QY QZ QW
-    rotation_client imu QX QY QZ QW
+    rotation_client imu QX QY QZ QW [--cov C11 C12 ... C33]
     rotation_client describe
     rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
     rotation_client tf REFERENCE BODY [--once] [--seq SEQ] [--deg]
@@ -26,11 +26,15 @@ sequence and unit are sent as the same rotation in the node's euler_sequence and
 :func:`node_angles`) and prints the node's answer on its output topics for that message, output
 by output by name (rot_tools.ros.client_session) — as YAML, or JSON with ``--json``
 (rot_tools.io.report's writers). ``--topic`` sends to an input remapped away from
-``NODE/NAME``; the topic printed is the one used. Euler angles typed in radians larger than 2π
-get rot-tools' hint on stderr (rot_tools.io.report.angle_hint). The command line is parsed by
-rot_tools.ros.client_arguments. The node draws pictures (``~/screw_axis``, ``~/markers``) at a
-limited rate, the latest input winning, so they are printed when the node drew this input: the
-client waits for them at most ``PICTURE_WAIT`` seconds. ``describe`` prints ~/describe's
+``NODE/NAME``; the topic printed is the one used. ``--cov`` (an input that carries a
+covariance) sends 9 numbers, row-major, rad², as the rotation's covariance (the rest of a
+pose's 6×6 is 0; without it all is 0, ROS's "unknown"), and the answer adds
+``~/rpy_covariance``, or ~/describe's word for why the node published none. Euler angles
+typed in radians larger than 2π get rot-tools' hint on stderr (rot_tools.io.report.angle_hint).
+The command line is parsed by rot_tools.ros.client_arguments. The node draws pictures
+(``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so they are
+printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
+seconds. ``describe`` prints ~/describe's
 report; ``screw-path`` calls ~/screw_path and prints the path. ``tf`` needs no node: it listens
 to /tf and /tf_static itself (rot_tools.ros.tf_input) and prints the report of BODY in
 REFERENCE — tf2_echo's job, with every representation — once a second until Ctrl-C, or once
@@ -153,6 +157,14 @@ def _markers(msg, row, parameters):
     return [{k: v for k, v in _marker_data(m).items() if k != 'points'} for m in msg.markers]
 
 
+def _pose_covariance(msg, row, parameters):
+    """Return the pose and the 6×6 covariance (x, y, z, roll, pitch, yaw), or why there is none."""
+    if isinstance(msg, str):  # not published: ~/describe's phrase (unknown, gimbal lock)
+        return msg
+    return {**_pose_data(msg.pose.pose),
+            'covariance': np.reshape(msg.pose.covariance, (6, 6)).tolist()}
+
+
 PRINTED = {
     'rotation_matrix': lambda msg, row, parameters: np.reshape(msg.data, (3, 3)).tolist(),
     'quaternion': lambda msg, row, parameters: _quaternion(msg.quaternion),
@@ -163,6 +175,7 @@ PRINTED = {
                                            'linear': _xyz(msg.twist.linear)},
     'screw_axis': lambda msg, row, parameters: _marker_data(msg),
     'markers': _markers,
+    'rpy_covariance': _pose_covariance,
 }
 """How each output is printed, by its name: printer(message, row, the node's parameters).
 An output not here is printed as {field path: value} (_values)."""
@@ -227,7 +240,26 @@ def _input_message(args, parameters):
                                  sequence, unit == 'deg')
             _set_xyz(field_value(msg, path), angles)
             sent.update(sequence=sequence, unit=unit, angles=list(angles))
+    if getattr(args, 'cov', None) is not None:
+        sent.update(_set_covariance(msg, row.covariance, args.cov))
     return msg, sent
+
+
+def _set_covariance(msg, covariance, rotation):
+    """
+    Put the 9 numbers of ``rotation`` (row-major) in the covariance array (path, size) of msg.
+
+    9 numbers: the array itself (an Imu's orientation_covariance); 36: its rotation block,
+    the rest 0. Return {the array's name: its rows} as sent.
+    """
+    from rot_tools.ros.messages import field_value
+    path, size = covariance
+    n = 3 if size == 9 else 6
+    C = np.zeros((n, n))
+    C[n - 3:, n - 3:] = np.reshape(rotation, (3, 3))
+    parent, _, name = path.rpartition('.')
+    setattr(field_value(msg, parent) if parent else msg, name, C.ravel().tolist())
+    return {name: C.tolist()}
 
 
 def _input_command(client, args):
@@ -236,7 +268,8 @@ def _input_command(client, args):
     msg, sent = _input_message(args, parameters)
     msg.header.frame_id = args.frame
     topic, (sec, nanosec), answer = client.send(args.command, msg,
-                                                parameters['publish_markers'], args.topic)
+                                                parameters['publish_markers'], args.topic,
+                                                getattr(args, 'cov', None) is not None)
     return {'node': client.target,
             'input': {'topic': topic, 'type': args.row.type_name,
                       'frame_id': args.frame, 'stamp': {'sec': sec, 'nanosec': nanosec},
