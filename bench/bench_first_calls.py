@@ -13,14 +13,17 @@ RotationNode's ``~/pose`` callback called directly with the bytes of 10,000 diff
 PoseStamped (it reads, converts, decomposes and publishes its six outputs to topics nobody
 subscribes, DDS on the loopback in a domain of its own), markers off and, separately, on;
 with markers on, the picture's timer callback too, whenever the callback has made a picture
-due (at most 30 a second), timed on its own. Then the node following base_link in map
+due (at most 30 a second), timed on its own. Then the node following camera in map
 (``tf_reference_frame``, ``tf_body_frame``; markers off) fed 10,000 different /tf messages,
 its /tf callback (rot_tools.ros.tf_input.TfFollower.on_message) called directly with their
-bytes after the static edges map → odom (/tf_static; odom → base_link moves): the steady
-stream (``tf``), the same with base_link re-parented (odom ↔ map) at every 10th message
-(``tf-reparent``), and with the stream's clock going back 30 s every 1,000 messages and
-every 100th message stamped 10⁶ s ahead (``tf-jump``): bench/pose_flooder.py's
-tf_message, the scenarios of bench_overload.py --tf. Where the node cannot be built (no
+bytes after the static edge map → odom (/tf_static). Two edges move, in turn: odom →
+base_link and base_link → camera, each message one sample of one of them, so that each
+lookup interpolates the other edge (the chain's latest common time is the older edge's
+newest sample). The steady stream (``tf``), the same with base_link re-parented (odom ↔
+map) at every 10th message (``tf-reparent``), and with the stream's clock going back 30 s
+every 1,000 messages and every 100th message stamped 10⁶ s ahead (``tf-jump``):
+bench/pose_flooder.py's tf_message, the scenarios of bench_overload.py --tf. Where the
+node cannot be built (no
 rclpy), the pose path without the node: rot_tools.io.boundary's PoseStamped conversion and
 decomposition.decompose_values.
 
@@ -228,10 +231,13 @@ def tf_messages(variant, n):
         msg = pose_flooder.tf_message(pool, k, start + k * 1_000_000, start,
                                       'steady' if scenario == 'reparent' else scenario)
         transform = msg.transforms[0]
-        if scenario == 'reparent':  # a new parent at every 10th message
+        if k % 2:  # the second moving edge
+            transform.header.frame_id, transform.child_frame_id = 'base_link', 'camera'
+        elif scenario == 'reparent':  # a new parent at every 10th message
             transform.header.frame_id = 'map' if k // 10 % 2 else 'odom'
         messages.append(serialize_message(msg))
-        transform.header.frame_id = 'odom'  # (the pool's messages come round again)
+        # (the pool's messages come round again)
+        transform.header.frame_id, transform.child_frame_id = 'odom', 'base_link'
     return messages, serialize_message(pose_flooder.static_map_odom(start))
 
 
@@ -247,7 +253,7 @@ def run_tf(variant, n):
         node = RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
             Parameter('publish_markers', value=False),
             Parameter('tf_reference_frame', value='map'),
-            Parameter('tf_body_frame', value='base_link')])
+            Parameter('tf_body_frame', value='camera')])
         follower = node._tf
         follower.on_message(static, True)
         clock, cpu = time.perf_counter_ns, time.thread_time_ns
