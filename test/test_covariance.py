@@ -226,6 +226,27 @@ def test_a_covariance_psd_only_after_rounding_is_accepted():
     assert (change_covariance_frame(np.zeros((3, 3)), R0) == 0).all()
 
 
+BIG = 1.7976931348623157e308
+"""float64's largest: C + Cᵀ of such entries overflows, and eigvalsh may not converge."""
+
+
+def test_covariances_at_the_edge_of_float64_are_checked_without_overflow():
+    not_psd = np.array([[BIG, -1e308, 0], [-1e308, 5e-324, 0], [0, 0, 1]])  # NaN unscaled
+    lowest = np.linalg.eigvalsh(not_psd / BIG)[0] * BIG
+    assert lowest < -1e307
+    hard = np.array([[1e308, 0, 1e308], [0, 1, 0], [1e308, 0, 1e308]])  # PSD, rank 2
+    asymmetric = np.diag([BIG, 1.0, 1.0])
+    asymmetric[0, 1] = 1e300
+    with np.errstate(over='raise', invalid='raise', divide='raise'):  # no warning on the way
+        with pytest.raises(RotationError, match=re.escape(f'eigenvalue is {lowest:.3g}, below')):
+            change_covariance_frame(not_psd, R0)
+        with pytest.raises(RotationError, match=r'max\|C − Cᵀ\| = 1e\+300 > .*\(item \(1,\)\)'):
+            change_covariance_frame(np.stack([hard, asymmetric, not_psd]), R0)
+        assert np.isfinite(change_covariance_frame(hard * 1e-10, R0)).all()
+    with np.errstate(over='ignore'):  # the rotated covariance itself may overflow: not refused
+        change_covariance_frame(hard, R0)
+
+
 @pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
 def test_nan_and_inf_are_refused(bad):
     C = C0.copy()

@@ -208,21 +208,6 @@ def _lock_note(seq):
             'not exist; covariance and stddev are null')
 
 
-def _validate(C):
-    """
-    Check the typed covariance, or raise RotationError saying what and by how much.
-
-    In its own units first; then divided by max|C|, the same checks (they are relative to
-    max|C|) on numbers that neither overflow (C + Cᵀ of entries near 1e308) nor stop
-    eigvalsh from converging.
-    """
-    try:
-        validate_covariance(C, name='--cov')
-    except np.linalg.LinAlgError:
-        pass  # entries near float64's largest: checked below
-    validate_covariance(C / (float(np.abs(C).max()) or 1.0), name='--cov / max|C|')
-
-
 def run(args, parser, rotation):
     """
     Run rot-tools covariance on parsed ``args``; return the exit status (0).
@@ -245,9 +230,9 @@ def run(args, parser, rotation):
     args.hints = []
     R, _, _ = rotation(args, parser, f'covariance {args.input}')
     C = np.reshape(args.cov, (3, 3))
-    with np.errstate(all='ignore'):  # entries near 1e308 overflow: checked on C / max|C|
+    with np.errstate(all='ignore'):  # entries near 1e308: converted as C / max|C| (report)
         try:
-            _validate(C)
+            validate_covariance(C, name='--cov')
             data, locked = report(R, C, args.source, args.target, frames, args.precision)
         except RotationError as exc:
             parser.error(str(exc))

@@ -53,13 +53,17 @@ def covariance_defects(C):
     Return (asymmetry, negativity, bound) per item of C (..., n, n), finite float64.
 
     asymmetry = max|C − Cᵀ|, negativity = −(lowest eigenvalue of (C + Cᵀ)/2), bound =
-    COVARIANCE_TOL·max|C|: C is a covariance where both are ≤ bound.
+    COVARIANCE_TOL·max|C|: C is a covariance where both are ≤ bound. Both are computed on
+    C / max|C| and scaled back, so that entries near float64's largest neither overflow in
+    C + Cᵀ nor stop the eigenvalue solver from converging.
     """
     scale = np.abs(C).max(axis=(-2, -1), initial=0.0)
-    asymmetry = np.abs(C - np.swapaxes(C, -1, -2)).max(axis=(-2, -1), initial=0.0)
-    S = 0.5 * (C + np.swapaxes(C, -1, -2))
+    unit = C / np.where(scale > 0, scale, 1.0)[..., None, None]
+    asymmetry = np.abs(unit - np.swapaxes(unit, -1, -2)).max(axis=(-2, -1), initial=0.0)
+    S = 0.5 * (unit + np.swapaxes(unit, -1, -2))
     lowest = np.linalg.eigvalsh(S)[..., 0] if S.size else np.zeros(S.shape[:-2])
-    return asymmetry, -lowest, COVARIANCE_TOL * scale
+    with np.errstate(over='ignore'):  # |C − Cᵀ| up to 2·max|C|: inf where that overflows
+        return asymmetry * scale, -lowest * scale, COVARIANCE_TOL * scale
 
 
 def validate_covariance(cov, size=3, name='cov'):
@@ -83,7 +87,7 @@ def validate_covariance(cov, size=3, name='cov'):
         shown, tol = apart(negativity[at], bound[at])
         raise RotationError(f'{name} is not positive semi-definite: its lowest eigenvalue is '
                             f'-{shown}, below -{COVARIANCE_TOL:g}·max|C| = -{tol}{_item(at)}')
-    return 0.5 * (C + np.swapaxes(C, -1, -2))
+    return 0.5 * C + 0.5 * np.swapaxes(C, -1, -2)
 
 
 def _worst(excess, bound, scale):
