@@ -139,8 +139,10 @@ def _dask(items, jobs, scheduler):
     ``jobs`` worker processes of one thread each, closed at the end.
     """
     from dask.distributed import Client, LocalCluster
+    # dashboard_address ':0': the scheduler's HTTP server on a free port (with None it still
+    # tries 8787, and warns on stderr when another cluster, or another run, holds it)
     cluster = None if scheduler else LocalCluster(
-        n_workers=jobs, threads_per_worker=1, dashboard_address=None)
+        n_workers=jobs, threads_per_worker=1, dashboard_address=':0')
     try:
         try:
             client = Client(scheduler or cluster)  # waits distributed.comm.timeouts.connect
