@@ -76,13 +76,12 @@ def validate_covariance(cov, size=3, name='cov'):
     """
     C = finite_array(cov, (size, size), name)
     asymmetry, negativity, bound = covariance_defects(C)
-    scale = bound / COVARIANCE_TOL
-    at = _worst(asymmetry, bound, scale)
+    at = _worst(asymmetry, bound)
     if at is not None:
         shown, tol = apart(asymmetry[at], bound[at])
         raise RotationError(f'{name} is not symmetric: max|C − Cᵀ| = {shown} > '
                             f'{COVARIANCE_TOL:g}·max|C| = {tol}{_item(at)}')
-    at = _worst(negativity, bound, scale)
+    at = _worst(negativity, bound)
     if at is not None:
         shown, tol = apart(negativity[at], bound[at])
         raise RotationError(f'{name} is not positive semi-definite: its lowest eigenvalue is '
@@ -90,12 +89,13 @@ def validate_covariance(cov, size=3, name='cov'):
     return 0.5 * C + 0.5 * np.swapaxes(C, -1, -2)
 
 
-def _worst(excess, bound, scale):
-    """Index of the item most beyond its bound (by excess/scale), or None if none is."""
+def _worst(excess, bound):
+    """Index of the item most beyond its bound (by excess/bound), or None if none is."""
     bad = excess > bound
     if not bad.any():
         return None
-    ratio = np.where(bad, excess / np.where(scale > 0, scale, 1.0), -np.inf)
+    with np.errstate(divide='ignore'):  # bound underflows to 0 for subnormal C: ratio inf
+        ratio = np.divide(excess, bound, out=np.full(bad.shape, -np.inf), where=bad)
     return tuple(int(i) for i in np.unravel_index(np.argmax(ratio), ratio.shape))
 
 
