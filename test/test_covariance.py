@@ -197,6 +197,15 @@ def test_asymmetry_is_refused_with_its_size_and_the_worst_item():
     assert np.isfinite(change_covariance_frame(C, R0)).all()
 
 
+def test_the_worst_item_is_ranked_against_its_own_scale_even_when_subnormal():
+    batch = np.zeros((2, 3, 3))
+    batch[0, 0, 1] = 0.5  # half as asymmetric as its largest entry
+    batch[0, 0, 0] = 1.0
+    batch[1, 0, 1] = 5e-324  # wholly asymmetric; its bound 1e-9·max|C| underflows to 0
+    with pytest.raises(RotationError, match=r'= 4.94e-324 > 1e-09·max\|C\| = 0 \(item \(1,\)\)$'):
+        change_covariance_frame(batch, R0)
+
+
 def test_a_negative_eigenvalue_is_refused_with_its_size():
     A = rt.random_rotations(rng=4)
     bad = A @ np.diag([1e-4, 2e-4, -1e-6]) @ A.T
