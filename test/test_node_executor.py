@@ -596,6 +596,8 @@ def test_the_inputs_keep_a_burst_of_50(own_context, namespace):
     {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/robot/fastdds.xml'},
     {'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'},
     {'SKIP_DEFAULT_XML': '1'},
+    {'RMW_FASTRTPS_USE_QOS_FROM_XML': '0'},
+    {'RMW_FASTRTPS_PUBLICATION_MODE': 'ASYNCHRONOUS'},
     {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'},
     {'RMW_IMPLEMENTATION': 'rmw_zenoh_cpp'},
 ])
@@ -620,6 +622,7 @@ def test_fast_dds_gets_the_nodes_profile_when_the_user_set_none(rmw, tmp_path, m
     environ = {} if rmw is None else {'RMW_IMPLEMENTATION': rmw}
     assert runtime.use_fast_dds_profile(environ) == runtime.FAST_DDS_PROFILE
     assert environ['FASTRTPS_DEFAULT_PROFILES_FILE'] == runtime.FAST_DDS_PROFILE
+    assert environ['RMW_FASTRTPS_USE_QOS_FROM_XML'] == '1'  # its writers and readers too
 
 
 def test_the_profile_keeps_the_builtin_transports_with_a_deeper_port():
@@ -637,6 +640,73 @@ def test_the_profile_keeps_the_builtin_transports_with_a_deeper_port():
     assert participant.findtext('p:rtps/p:useBuiltinTransports', namespaces=ns) == 'false'
     (shm,) = [d for d in kinds.values() if d.findtext('p:type', namespaces=ns) == 'SHM']
     assert int(shm.findtext('p:port_queue_capacity', namespaces=ns)) > 512  # Fast DDS's
+
+
+def test_the_profile_sets_what_rmw_fastrtps_would_but_readers_give_memory_back():
+    """
+    The profile says what rmw_fastrtps would set, but for the readers' history: DYNAMIC.
+
+    Read with RMW_FASTRTPS_USE_QOS_FROM_XML=1, it replaces what rmw_fastrtps (Jazzy) sets
+    without it: discovery and writers with growing preallocated histories, synchronous
+    publication, no data sharing.
+    """
+    ns = {'p': 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'}
+    root = ElementTree.parse(runtime.FAST_DDS_PROFILE).getroot()
+    (participant,) = root.iterfind('p:participant', ns)
+    for history in ('readerHistoryMemoryPolicy', 'writerHistoryMemoryPolicy'):
+        assert participant.findtext(f'p:rtps/p:builtin/p:{history}',
+                                    namespaces=ns) == 'PREALLOCATED_WITH_REALLOC'
+    (writer,) = root.iterfind('p:data_writer', ns)
+    (reader,) = root.iterfind('p:data_reader', ns)
+    assert writer.get('is_default_profile') == reader.get('is_default_profile') == 'true'
+    assert writer.findtext('p:qos/p:publishMode/p:kind', namespaces=ns) == 'SYNCHRONOUS'
+    assert writer.findtext('p:historyMemoryPolicy', namespaces=ns) == 'PREALLOCATED_WITH_REALLOC'
+    assert reader.findtext('p:historyMemoryPolicy', namespaces=ns) == 'DYNAMIC'
+    for endpoint in (writer, reader):
+        assert endpoint.findtext('p:qos/p:data_sharing/p:kind', namespaces=ns) == 'OFF'
+
+
+HEAP = r"""
+import ctypes, sys
+from rot_tools.ros import runtime
+if sys.argv[1] == 'fixed':
+    runtime.give_large_blocks_back()
+libc = ctypes.CDLL(None)
+libc.malloc.restype, libc.malloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t]
+libc.free.argtypes = [ctypes.c_void_p]
+libc.memset.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_size_t]
+
+
+def rss_mb():
+    with open('/proc/self/status', encoding='ascii') as f:
+        return next(int(line.split()[1]) for line in f if line.startswith('VmRSS:')) / 1024
+
+
+def touched(size):
+    block = libc.malloc(size)
+    libc.memset(block, 1, size)
+    return block
+
+
+libc.free(touched(9_000_000))  # one large message has come and gone
+start = rss_mb()
+blocks = [touched(8_000_000) for _ in range(10)]
+for block in blocks[:-1]:  # all but the newest freed, as a burst taken in turn
+    libc.free(block)
+print(rss_mb() - start)
+"""
+
+
+@pytest.mark.skipif(not hasattr(__import__('ctypes').CDLL(None), 'mallopt'),
+                    reason='a C library without mallopt (not glibc)')
+def test_freed_large_blocks_are_given_back():
+    """Ten 8 MB blocks, nine freed: the node's allocator keeps one, glibc's default all ten."""
+    def kept(mode):
+        done = subprocess.run([sys.executable, '-c', HEAP, mode], capture_output=True,
+                              text=True, timeout=4 * TIMEOUT, check=True)
+        return float(done.stdout)
+    assert kept('default') > 60.0  # the heap keeps what was freed below the newest block
+    assert kept('fixed') < 20.0
 
 
 def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkeypatch):

@@ -664,6 +664,7 @@ def main(args=None):
         runtime.fail(PROG, f'unknown argument {options[0]!r} (ROS arguments go after '
                      f'--ros-args; see {PROG} --help)')
     runtime.use_fast_dds_profile()
+    runtime.give_large_blocks_back()
     runtime.init_ros(PROG, argv)
     home = os.path.expanduser('~')
     for remap in runtime.home_remaps(argv, home):
