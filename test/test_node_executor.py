@@ -374,8 +374,8 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
 
 
 SERVED_WITHIN = 500
-"""Most inputs the node may refuse between two answers of a flooded node (all but one pair: see
-below)."""
+"""Most inputs the node may refuse between two answers of a flooded node (three pairs in four:
+see below)."""
 
 
 def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
@@ -433,11 +433,13 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
                 counts.append(refused())
     listener.destroy_node()
     lags = [b - a for a, b in zip(counts, counts[1:])]
-    # All but the largest: one lag may come from outside the node (this test or a DDS thread
-    # descheduled by another process on the two cores, or a reply repaired by DDS: the node
-    # handles inputs meanwhile); the defect guarded against delays every answer. (Seen once
-    # in CI, with both suites at once: 1387 among lags of 23-88.)
-    assert sorted(lags)[-2] <= SERVED_WITHIN, f'inputs between two answers: {lags}'
+    # Three answers in four: a lag may come from outside the node (this test or a DDS thread
+    # descheduled by another process on the two cores, or a request or reply lost and sent
+    # again at its writer's next heartbeat, 3 s later: the node handles inputs meanwhile);
+    # the defect guarded against delays every answer. (Seen with both suites at once: 1387
+    # among lags of 23-88; another time three of 7971-10321 among sixteen of 8-40.)
+    slow = [lag for lag in lags if lag > SERVED_WITHIN]
+    assert len(slow) <= len(lags) // 4, f'inputs between two answers: {lags}'
     assert process.process.poll() is None
     assert_clean_exit(*process.stop(signal.SIGTERM))
 
