@@ -266,11 +266,16 @@ def start_and_signal(command, env, when, sig, probe):
         try:
             _, err = proc.communicate(timeout=3.0)
         except subprocess.TimeoutExpired:
-            if not (sig == signal.SIGINT and sent < handler_at(probe) < math.inf):
-                _, err = proc.communicate(timeout=27.0)  # (raises TimeoutExpired: red)
-            else:  # lost by CPython: the node runs
-                proc.send_signal(sig)
-                _, err = proc.communicate(timeout=27.0)
+            # Still running: a node slow to start on a loaded machine, or a SIGINT lost by
+            # CPython. Which, its first handler tells, once it is in place.
+            deadline = time.monotonic() + 27.0
+            while (proc.poll() is None and handler_at(probe) == math.inf
+                   and time.monotonic() < deadline):
+                time.sleep(0.05)
+            if sig == signal.SIGINT and sent < handler_at(probe) < math.inf:
+                proc.send_signal(sig)  # lost by CPython: the node runs
+            # (raises TimeoutExpired: red)
+            _, err = proc.communicate(timeout=max(1.0, deadline - time.monotonic()))
     finally:
         if proc.poll() is None:
             proc.kill()

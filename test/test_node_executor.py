@@ -89,9 +89,11 @@ def say(line):
     print(line, file=protocol, flush=True)
 
 
-# SIGINT ends the flood with KeyboardInterrupt even where this process was started with
-# SIGINT ignored (a background job of a non-interactive shell).
-signal.signal(signal.SIGINT, signal.default_int_handler)
+# SIGINT ends the flood, even where this process was started with SIGINT ignored (a
+# background job of a non-interactive shell): between two messages, so that the count says
+# exactly what was published (a KeyboardInterrupt could come between a publish and its count).
+stopped = []
+signal.signal(signal.SIGINT, lambda signum, frame: stopped.append(signum))
 import rclpy
 from geometry_msgs.msg import PoseStamped
 from rclpy.qos import qos_profile_sensor_data
@@ -119,26 +121,28 @@ for (q, p, frame) in poses:
     messages.append(msg)
 say('ready')
 sent, start = 0, time.monotonic()
-try:
-    if rate == 'max':  # back to back, until SIGINT or ``count`` messages
-        while sent != count:
-            msg = messages[sent % len(messages)]
-            msg.header.stamp.sec = 1_000_000 + sent
-            pub.publish(msg)
-            sent += 1
+
+
+def publish_until(due):
+    global sent
+    while sent < due and not stopped:
+        msg = messages[sent % len(messages)]
+        msg.header.stamp.sec = 1_000_000 + sent
+        pub.publish(msg)
+        sent += 1
+
+
+if rate == 'max':  # back to back, until SIGINT or ``count`` messages
+    publish_until(count if count >= 0 else float('inf'))
+    if not stopped:
         say(sent)
-        signal.pause()
-    rate = float(rate)
-    while True:
-        due = int((time.monotonic() - start) * rate) + 1
-        while sent < due:
-            msg = messages[sent % len(messages)]
-            msg.header.stamp.sec = 1_000_000 + sent
-            pub.publish(msg)
-            sent += 1
+else:
+    while not stopped:
+        publish_until(int((time.monotonic() - start) * float(rate)) + 1)
         time.sleep(0.002)
-except KeyboardInterrupt:
-    say(sent)
+while not stopped:
+    time.sleep(0.01)
+say(sent)
 """
 
 
