@@ -75,6 +75,15 @@ def script_env(command):
     return env
 
 
+def rss_mb(pid='self'):
+    """Return the resident set size in MB of process ``pid``, this one by default."""
+    with open(f'/proc/{pid}/status', encoding='ascii') as f:
+        for line in f:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) / 1024.0
+    pytest.fail(f'no VmRSS in /proc/{pid}/status')
+
+
 def run_delay(pid, tid=None):
     """
     Return the seconds thread ``tid`` of process ``pid`` has waited for a CPU, or None.

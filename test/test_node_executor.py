@@ -35,7 +35,7 @@ import threading
 import time
 from xml.etree import ElementTree
 
-from conftest import RUN, TIMEOUT
+from conftest import rss_mb, RUN, TIMEOUT
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.srv import GetPlan
 import numpy as np
@@ -313,15 +313,6 @@ HELD_FLOOD = 100_000
 """Poses sent back to back while the node's loop is held (~2 s from one publisher)."""
 HELD_GROWTH_MB = 4.0
 """Most the process's resident set may grow meanwhile: the EventsExecutor took 13.8 MB."""
-
-
-def rss_mb():
-    """Return this process's resident set size in MB (/proc/self/status)."""
-    with open('/proc/self/status', encoding='ascii') as f:
-        for line in f:
-            if line.startswith('VmRSS:'):
-                return int(line.split()[1]) / 1024.0
-    pytest.fail('no VmRSS in /proc/self/status')
 
 
 def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(

@@ -17,7 +17,7 @@ import re
 import subprocess
 import sys
 
-from conftest import console_script, REPO, RUN, script_env, TIMEOUT
+from conftest import console_script, REPO, rss_mb, RUN, script_env, TIMEOUT
 from doc_blocks import assert_doc_output
 import numpy as np
 import pytest
@@ -373,12 +373,6 @@ def test_large_tf_messages_are_cut_and_the_node_keeps_serving(node_process, test
     assert data['refused']['tf_too_many_transforms'] == 3
     assert ('(tf_too_many_transforms): a TFMessage of 100,000 transforms: the first 1,000 '
             'taken, 99,000 dropped') in node.wait_for_stderr('(tf_too_many_transforms)')
-
-
-def rss_mb(pid):
-    """Return process ``pid``'s resident set size in MB (/proc/PID/status)."""
-    with open(f'/proc/{pid}/status', encoding='ascii') as f:
-        return next(int(line.split()[1]) / 1024.0 for line in f if line.startswith('VmRSS:'))
 
 
 LARGE_MESSAGES = 20
