@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 import rot_tools as rt
 from rot_tools.core import decomposition, engine, euler, so3
-from rot_tools.core.euler import GIMBAL_LOCK_TOL
+from rot_tools.core.euler import GIMBAL_LOCK_TOL, RPY_SEQUENCE
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -444,7 +444,7 @@ def test_fast_path_of_the_node_gives_the_batch_formula(rotation, axis, size, seq
             # (outer angles a last bit from ±π may land on either side of the seam: the same
             # angle.) θ2 a last bit from the lock's edge: libm's and NumPy's atan2 differ
             # there, and one side takes the lock's form (θ3 = 0) where the other does not
-            s = seq if field == 'euler' else decomposition.RPY_SEQUENCE
+            s = seq if field == 'euler' else RPY_SEQUENCE
             edge = (math.pi / 2 - abs(a[1]) if s.upper() in h.TAIT_BRYAN else
                     min(a[1], math.pi - a[1]))
             assert abs(edge - GIMBAL_LOCK_TOL) <= 1e-15, (field, a, c)

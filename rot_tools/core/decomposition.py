@@ -13,6 +13,7 @@ import numpy as np
 from rot_tools.core.axis_angle import axis_angle_kernel
 from rot_tools.core.engine import apply, FLAG, plain_item, SCALAR, VECTOR
 from rot_tools.core.euler import angles_kernel, GIMBAL_LOCK_TOL, parse_sequence
+from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.core.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
 from rot_tools.core.so3 import apply_to_rotations, quaternion_of_matrix_kernel, run_on_floats
 
@@ -86,10 +87,6 @@ class Values(NamedTuple):
     twist: tuple
     quaternion: tuple
     rpy: tuple
-
-
-RPY_SEQUENCE = 'xyz'
-"""Roll, pitch, yaw (REP 103): rotations about the fixed x, y, z axes, in that order."""
 
 
 _RPY = parse_sequence(RPY_SEQUENCE)

@@ -45,6 +45,9 @@ EULER_SEQUENCES = EULER_SEQUENCES + tuple(s.lower() for s in EULER_SEQUENCES)
 GIMBAL_LOCK_TOL = 1e-6
 """Default distance (rad) of θ2 from its singular value below which a result is degenerate."""
 
+RPY_SEQUENCE = 'xyz'
+"""Roll, pitch, yaw (REP 103): rotations about the fixed x, y, z axes, in that order."""
+
 
 def _parse(seq):
     axes = ['XYZ'.index(a) for a in seq.upper()]

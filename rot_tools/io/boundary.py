@@ -48,6 +48,10 @@ NO_ORIENTATION = 'no_orientation'
 REFUSAL_REASONS = (NON_FINITE, ZERO_QUATERNION, NON_UNIT_QUATERNION, NO_ORIENTATION)
 """Reasons this module refuses a message for; rotation_node adds its own."""
 
+QUATERNION_TOLERANCE = 1e-3
+"""Largest |‖q‖ − 1| of a quaternion accepted by default (rotation_node's quaternion_tolerance,
+``rot-tools bag``, a typed or recorded quaternion); within it q is normalised."""
+
 ACCEPTED = 0
 """Reason code of an accepted item; a refused one has ``REFUSAL_REASONS.index(r) + 1``."""
 CODE = {reason: k + 1 for k, reason in enumerate(REFUSAL_REASONS)}

@@ -81,9 +81,9 @@ import math
 import re
 
 import numpy as np
-from rot_tools.core.decomposition import decompose, RPY_SEQUENCE
+from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler
+from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.rigid import invert_transform, transform_points, transform_to_homogeneous
 from rot_tools.core.so3 import matrix_to_quaternion
 import yaml
