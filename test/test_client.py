@@ -10,13 +10,18 @@ significant digits, so numbers are compared to that.
 
 import json
 import math
+import os
+from pathlib import Path
+import select
 import signal
 import string
 import subprocess
 import sys
+import threading
 import time
 
-from conftest import console_script, DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
+from conftest import console_script, DISCOVERY_TIMEOUT, node_seconds, NodeProcess, REPO, RUN
+from conftest import run_delay, script_env
 from doc_blocks import assert_doc_output
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
@@ -557,17 +562,73 @@ def test_help():
     assert "same\nrotation in the node's euler_sequence and angle_unit" in euler.stdout
 
 
+INTERRUPT_GOAL = 1.0
+"""Seconds of the client's own time from Ctrl-C to its end."""
+
+
+def popen(*args):
+    """Start rotation_client with ``args`` in a session of its own (see :func:`interrupt`)."""
+    command = CLIENT + [str(a) for a in args]
+    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=script_env(command), stdin=subprocess.DEVNULL,
+                            start_new_session=True)
+
+
+def _session(sid):
+    """Return the pids of the processes still in session ``sid`` (zombies included)."""
+    pids = []
+    for stat in Path('/proc').glob('[0-9]*/stat'):
+        try:
+            fields = stat.read_text().rsplit(')', 1)[1].split()
+        except OSError:  # ended meanwhile
+            continue
+        if int(fields[3]) == sid:
+            pids.append(int(stat.parent.name))
+    return pids
+
+
+def _delta(after, before):
+    return None if after is None or before is None else after - before
+
+
+def interrupt(process):
+    """
+    Send Ctrl-C's SIGINT to a client started by :func:`popen`; return (status, out, err).
+
+    Checked: it ends within INTERRUPT_GOAL seconds of its own time (the wall time less what
+    the machine kept it and this thread waiting for a CPU: conftest.node_seconds), with no
+    traceback, and leaves no process of its session behind.
+    """
+    pid = process.pid
+    pidfd = os.pidfd_open(pid)  # readable once the process has ended
+    try:
+        client_wait = run_delay(pid)
+        own_wait = run_delay(os.getpid(), threading.get_native_id())
+        begin = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        ended = select.select([pidfd], [], [], 30.0)[0]
+        wall = time.monotonic() - begin
+        client_wait = _delta(run_delay(pid), client_wait)  # (a zombie keeps its figures)
+        own_wait = _delta(run_delay(os.getpid(), threading.get_native_id()), own_wait)
+    finally:
+        os.close(pidfd)
+    left = [p for p in _session(pid) if p != pid]
+    out, err = process.communicate(timeout=30)
+    assert ended, 'the client ignored SIGINT for 30 s'
+    assert 'Traceback' not in err, err
+    assert left == [], f'processes left of the client: {left}'
+    seconds = node_seconds(wall, client_wait, own_wait)
+    assert seconds <= INTERRUPT_GOAL, f'ended {seconds:.2f} s after SIGINT (wall {wall:.2f} s)'
+    return process.returncode, out, err
+
+
 def test_interrupt_exits_promptly_and_quietly(tester):
-    command = CLIENT + ['describe', '--node', f'/{RUN}/nobody/rot_tools', '--timeout', '60']
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, env=script_env(command))
+    process = popen('describe', '--node', f'/{RUN}/nobody/rot_tools', '--timeout', '60')
     name = f'rotation_client_{process.pid}'
     # Interrupt it while it waits for discovery: once its node is in the graph.
     tester.spin_until(lambda: name in tester.node.get_node_names(), timeout=30,
                       what=f'node {name}')
-    process.send_signal(signal.SIGINT)
-    out, err = process.communicate(timeout=30)  # well before the 60 s --timeout
-    assert process.returncode == 130 and out == '' and err == '', err
+    assert interrupt(process) == (130, '', '')
 
 
 # ---------------------------------------------------------------------------------------

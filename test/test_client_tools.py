@@ -9,7 +9,6 @@ scipy, not from rot_tools.
 import json
 import math
 import re
-import signal
 import subprocess
 import sys
 import threading
@@ -18,7 +17,7 @@ from conftest import DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
 from doc_blocks import assert_doc_output
 import pytest
 from scipy.spatial.transform import Rotation
-from test_client import answered, approx, CLIENT, DIGITS, one_line_error, run
+from test_client import answered, approx, DIGITS, interrupt, one_line_error, popen, run
 import yaml
 
 HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in degrees, '
@@ -32,12 +31,6 @@ def node(tmp_path_factory):
     answered('orientation', 0, 0, 0, 1, '--node', process.name)
     yield process.name
     process.kill()
-
-
-def popen(*args):
-    command = CLIENT + [str(a) for a in args]
-    return subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=script_env(command), stdin=subprocess.DEVNULL)
 
 
 def wait_subscribed(tester, topic):
@@ -245,9 +238,8 @@ def test_tf_demo_publishes_the_tree(tester, namespace):
         assert_doc_output('readme-tf', ('$ rotation_client tf-demo &\n' + line).replace(
             namespace, '') + f'$ {command}\n' + ''.join(lines[:3] + lines[rpy:rpy + 3]))
     finally:
-        demo.send_signal(signal.SIGINT)
-        out, err = demo.communicate(timeout=30)
-    assert demo.returncode == 130 and out == '' and err == '', err
+        stopped = interrupt(demo)
+    assert stopped == (130, '', '')
 
 
 def test_tf_demo_for_a_duration(namespace):
@@ -286,9 +278,8 @@ def test_echo_interrupted_exits_130_quietly(node, tester):
     wait_subscribed(tester, f'{node}/rpy')
     answered('orientation', 0, 0, 0, 1, '--node', node)
     tester.spin_for(0.2)
-    echo.send_signal(signal.SIGINT)
-    out, err = echo.communicate(timeout=30)
-    assert echo.returncode == 130 and err == '', err
+    status, out, err = interrupt(echo)
+    assert (status, err) == (130, '')
     assert out.startswith('---\n')
 
 

@@ -54,18 +54,12 @@ seconds. Every wait is bounded by ``--timeout``.
 Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
 be reached within ``--timeout``, or ~/describe has nothing to report, or the node did not
 set a parameter (one line on stderr naming what); 2 bad arguments, ROS arguments included,
-or the node refused the input (one line on stderr with the node's reason); 130 Ctrl-C.
-rclpy is used here only, and only once the command line is known to be good: ``--help``,
-``--version`` and bad arguments start nothing.
+or the node refused the input (one line on stderr with the node's reason); 130 Ctrl-C;
+141 the reader of stdout went away; 143 SIGTERM. rclpy is used here only, and only once the
+command line is known to be good: ``--help``, ``--version`` and bad arguments start nothing.
+The process is the caller's: rclpy's own signal handlers, no other.
 ``rot-tools`` stays ROS-free.
 """
-
-if __name__ == '__main__':
-    # ``python -m rot_tools.ros.rotation_client`` runs like the console script: Ctrl-C at any
-    # moment, imports included, ends it with status 130 (rot_tools.ros.runtime.start_command).
-    import sys
-    from rot_tools.ros.runtime import start_command
-    sys.exit(start_command('rot_tools.ros.rotation_client'))
 
 from collections import deque
 import math
@@ -79,7 +73,6 @@ import numpy as np
 from rot_tools.core.euler import euler_to_matrix, matrix_to_euler
 from rot_tools.io import interface
 from rot_tools.io.report import to_json, to_yaml, transform_report
-from rot_tools.ros import runtime
 from rot_tools.ros.client_arguments import parse_args, PROG, without_ros_args
 from rot_tools.ros.client_session import Client, describe_data, Refused, Unreachable
 import yaml
@@ -464,40 +457,43 @@ def _json_escape(c):
     return f'\\u{0xd800 + (code >> 10):04x}\\u{0xdc00 + (code & 0x3ff):04x}'
 
 
-def main(argv=None):
-    """Run one command; return the exit status (0, 1 unreachable, 2 bad input or refused)."""
-    argv = sys.argv if argv is None else [PROG, *argv]
-    args = parse_args(without_ros_args(argv)[1:])  # --help, --version: nothing started
+EXIT_UNREACHABLE = 1
+EXIT_USAGE = 2
+"""Bad arguments (ROS arguments included), or an input the node refused."""
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+"""Ctrl-C: the shell's status for a program ended by SIGINT."""
+EXIT_TERMINATED = 128 + signal.SIGTERM
+"""SIGTERM: rclpy's handler shut the context down under the command."""
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
+"""The reader of stdout went away (``echo rpy | head -3``): the shell's status for SIGPIPE."""
+
+
+def _init_ros(argv):
+    """
+    rclpy.init with the command line's ROS arguments; None, or one line saying why not.
+
+    rcl refuses a malformed ``-p`` or ``-r``, a missing ``--params-file`` or an unknown flag
+    with a RuntimeError whose text names the argument; its own log line about it is kept
+    quiet, as the one line says it all.
+    """
     import rclpy
-    from rclpy.exceptions import NameValidationException
-    from rclpy.signals import SignalHandlerOptions
-    client = None
+    from rclpy.logging import get_logger_level, LoggingSeverity, set_logger_level
+    level = get_logger_level('rcl')
+    set_logger_level('rcl', LoggingSeverity.FATAL)
     try:
-        # Without rclpy's signal handlers Ctrl-C is a plain KeyboardInterrupt.
-        runtime.init_ros(PROG, argv, signal_handler_options=SignalHandlerOptions.NO)
-        client = Client(args.node, args.timeout)
-        result = COMMANDS[args.command](client, args)
-    except Unreachable as exc:
-        print(f'{PROG}: {exc}', file=sys.stderr)
-        return 1
-    except Refused as exc:
-        print(f'{PROG}: {exc}', file=sys.stderr)
-        return 2
-    except NameValidationException as exc:  # a -r __node:= / __ns:= rcl could not use
-        print(f'{PROG}: {runtime.ros_argument_error(exc)}', file=sys.stderr)
-        return runtime.EXIT_USAGE
-    except KeyboardInterrupt:
-        return 130
-    except BrokenPipeError:  # the reader of stdout has gone (echo rpy | head -3): end quietly
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # (the exit's flush)
-        return 128 + signal.SIGPIPE  # as a program killed by SIGPIPE: the shell's 141
+        rclpy.init(args=argv)
+    except RuntimeError as exc:
+        return f'bad ROS arguments (after --ros-args): {" ".join(str(exc).split())}'
     finally:
-        if client is not None:
-            client.close()
-        rclpy.try_shutdown()
+        if get_logger_level('rcl') == LoggingSeverity.FATAL:  # not set by --log-level
+            set_logger_level('rcl', level)
+    return None
+
+
+def _print_result(result, args):
     if result is None:  # printed as it went (echo, tf-demo)
-        pass
-    elif isinstance(result, str):  # describe's YAML as the node wrote it; set's line
+        return
+    if isinstance(result, str):  # describe's YAML as the node wrote it; set's line
         write(result)
     elif args.json:
         write(to_json(result), json_text=True)
@@ -506,4 +502,62 @@ def main(argv=None):
     for hint in args.hints:
         sys.stdout.flush()
         print(f'{PROG}: hint: {hint}', file=sys.stderr)
-    return 0
+
+
+def _run(args, argv):
+    """Start ROS, run the command, print its result; return the exit status."""
+    import rclpy
+    from rclpy.exceptions import NameValidationException
+    why = _init_ros(argv)
+    if why is not None:
+        print(f'{PROG}: {why}', file=sys.stderr)
+        return EXIT_USAGE
+    client = None
+    try:
+        client = Client(args.node, args.timeout)
+        _print_result(COMMANDS[args.command](client, args), args)
+        return 0
+    except Unreachable as exc:
+        print(f'{PROG}: {exc}', file=sys.stderr)
+        return EXIT_UNREACHABLE
+    except Refused as exc:
+        print(f'{PROG}: {exc}', file=sys.stderr)
+        return EXIT_USAGE
+    except NameValidationException as exc:  # a -r __node:= / __ns:= that makes a bad name
+        print(f'{PROG}: bad ROS arguments (after --ros-args): {str(exc).splitlines()[0]}',
+              file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:
+        # Python's own flush of stdout at exit would fail again: stdout goes nowhere now.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
+    except Exception:
+        if rclpy.ok():
+            raise
+        return EXIT_TERMINATED  # the context was shut down under the command: SIGTERM
+    finally:
+        if client is not None:
+            client.close()
+        rclpy.try_shutdown()
+
+
+def main(args=None):
+    """
+    Run one command of ``args`` (default: the command line); return the exit status.
+
+    0 answered; 1 unreachable; 2 bad arguments or refused; 130 Ctrl-C; 141 stdout's reader
+    gone. --help, --version and bad arguments end in the parser, before ROS is imported.
+    rclpy.init installs rclpy's signal handlers: on Ctrl-C they shut the context down and
+    Python raises KeyboardInterrupt wherever the command is, caught here; on SIGTERM the
+    context shuts down alike, and the command ends with 143.
+    """
+    argv = [PROG, *(sys.argv[1:] if args is None else args)]
+    parsed = parse_args(without_ros_args(argv)[1:])
+    try:
+        return _run(parsed, argv)
+    except KeyboardInterrupt:
+        return EXIT_INTERRUPTED
+
+
+if __name__ == '__main__':
+    sys.exit(main())
