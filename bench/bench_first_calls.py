@@ -9,23 +9,22 @@ nothing of rot_tools is warmed), then the 1,000 calls, each timed alone. Printed
 function: the first call, the median and the worst of the 1,000.
 
 The node: rotation_node's per-message path from its first message, in a fresh process —
-RotationNode's ``~/pose`` callback called directly with the bytes of 10,000 different
-PoseStamped (it reads, converts, decomposes and publishes its six outputs to topics nobody
-subscribes, DDS on the loopback in a domain of its own), markers off and, separately, on;
-with markers on, the picture's timer callback too, whenever the callback has made a picture
-due (at most 30 a second), timed on its own. Then the node following camera in map
-(``tf_reference_frame``, ``tf_body_frame``; markers off) fed 10,000 different /tf messages,
-its /tf callback (rot_tools.ros.tf_input.TfFollower.on_message) called directly with their
-bytes after the static edge map → odom (/tf_static). Two edges move, in turn: odom →
-base_link and base_link → camera, each message one sample of one of them, so that each
-lookup interpolates the other edge (the chain's latest common time is the older edge's
-newest sample). The steady stream (``tf``), the same with base_link re-parented (odom ↔
-map) at every 10th message (``tf-reparent``), and with the stream's clock going back 30 s
-every 1,000 messages and every 100th message stamped 10⁶ s ahead (``tf-jump``):
-bench/pose_flooder.py's tf_message, the scenarios of bench_overload.py --tf. Where the
-node cannot be built (no
-rclpy), the pose path without the node: rot_tools.io.boundary's PoseStamped conversion and
-decomposition.decompose_values.
+a RotationNode's ``~/pose`` subscription callback called directly, as the executor calls it,
+with 10,000 different PoseStamped message objects (it converts, decomposes and publishes its
+six outputs to topics nobody subscribes, DDS on the loopback in a domain of its own),
+markers off and, separately, on; with markers on, each of the node's timers the executor
+would call now (the pictures, drawn at a limited rate) too, timed on its own. Then the node
+following camera in map (``tf_reference_frame``, ``tf_body_frame``; markers off) fed 10,000
+different TFMessages, its /tf subscription callback called directly after the static edge
+map → odom (its /tf_static callback). Two edges move, in turn: odom → base_link and
+base_link → camera, each message one sample of one of them, so that each lookup
+interpolates the other edge (the chain's latest common time is the older edge's newest
+sample). The steady stream (``tf``), the same with base_link re-parented (odom ↔ map) at
+every 10th message (``tf-reparent``), and with the stream's clock going back 30 s every
+1,000 messages and every 100th message stamped 10⁶ s ahead (``tf-jump``):
+bench/pose_flooder.py's tf_message, the scenarios of bench_overload.py --tf. The node is
+reached by its public entities only (``node.subscriptions``, ``node.timers``,
+``node.services``: ~/describe's refusal counts).
 
 Run: ``.venv/bin/python bench/bench_first_calls.py [--calls N] [--messages N] [--skip-node]
 [--json PATH]``; ``--one NAME`` / ``--node MARKERS`` / ``--tf SCENARIO`` are the child
@@ -116,7 +115,7 @@ def cases():
             (_homogeneous(R, b),) for R, b in zip(_rotations(rng, n),
                                                   rng.uniform(-2, 2, (n, 3)))], {}),
         'decompose ZYX': ('decompose', rot_b, {'seq': 'ZYX'}),
-        'decompose_values XYZ (node)': ('decompose_values', rot_b, {'seq': 'XYZ'}),
+        'decompose XYZ unchecked (node)': ('decompose', rot_b, {'seq': 'XYZ', 'check': False}),
     }
 
 
@@ -133,10 +132,7 @@ def run_one(label, n):
     start = time.perf_counter()
     import rot_tools as rt
     name, make, kwargs = cases()[label]
-    if name == 'decompose_values':
-        from rot_tools.core.decomposition import decompose_values as fn
-    else:
-        fn = getattr(rt, name)  # imports the function's module
+    fn = getattr(rt, name)
     imported = time.perf_counter() - start
     import numpy as np
     args = make(rt, np.random.default_rng(7), n)
@@ -162,56 +158,87 @@ def _poses(n):
     return rng.uniform(-3, 3, (n, 3)).tolist(), q.tolist()
 
 
+def _node(parameters):
+    """Return a fresh RotationNode with ``parameters`` {name: value} (rclpy initialised)."""
+    from rclpy.parameter import Parameter
+    from rot_tools.ros.rotation_node import RotationNode
+    return RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
+        Parameter(name, value=value) for name, value in parameters.items()])
+
+
+def _callback(node, topic_end):
+    """Return the callback of the node's subscription whose topic ends in ``topic_end``."""
+    return next(sub.callback for sub in node.subscriptions
+                if sub.topic_name.endswith(topic_end))
+
+
+def _due_timers(node):
+    """Return the callbacks of the node's timers the executor would call now."""
+    return [timer.callback for timer in node.timers
+            if not timer.is_canceled() and timer.time_until_next_call() <= 0]
+
+
+def _refused(node):
+    """Return {reason: n > 0} of the refusals in the node's ~/describe report."""
+    import yaml
+    from std_srvs.srv import Trigger
+    describe = next(srv for srv in node.services if srv.srv_name.endswith('/describe'))
+    report = yaml.safe_load(describe.callback(Trigger.Request(), Trigger.Response()).message)
+    refused = (report or {}).get('refused') or {}
+    return {k: v for k, v in refused.items() if v and k != 'total'}
+
+
+def _timed(calls):
+    """Call each zero-argument callable in turn; return (wall ns, this thread's CPU ns)."""
+    clock, cpu = time.perf_counter_ns, time.thread_time_ns
+    times, cpus = [], []
+    for call in calls:
+        c0, t0 = cpu(), clock()
+        call()
+        t1, c1 = clock(), cpu()
+        times.append(t1 - t0)
+        cpus.append(c1 - c0)
+    return times, cpus
+
+
 def run_node(markers, n):
     os.environ.setdefault('ROS_DOMAIN_ID', str(1 + (os.getpid() * 7 + 3) % 101))
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     positions, quaternions = _poses(n)
-    try:
-        import rclpy
-        from geometry_msgs.msg import PoseStamped
-        from rclpy.parameter import Parameter
-        from rclpy.serialization import serialize_message
-        from rot_tools.ros.rotation_node import RotationNode
-    except ImportError as exc:
-        return run_path_without_node(n, positions, quaternions, f'no node: {exc}')
+    import rclpy
+    from geometry_msgs.msg import PoseStamped
+    msgs = []
+    for p, q in zip(positions, quaternions):
+        msg = PoseStamped()
+        msg.header.frame_id = 'world'
+        msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = p
+        o = msg.pose.orientation
+        o.x, o.y, o.z, o.w = q
+        msgs.append(msg)
     rclpy.init()
     try:
-        node = RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
-            Parameter('publish_markers', value=markers)])
-        source = next(s for s in node._sources if s.topic.endswith('/pose'))
-        msgs = []
-        for p, q in zip(positions, quaternions):
-            msg = PoseStamped()
-            msg.header.frame_id = 'world'
-            msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = p
-            o = msg.pose.orientation
-            o.x, o.y, o.z, o.w = q
-            msgs.append(serialize_message(msg))  # the node subscribes raw: it gets the bytes
+        node = _node({'publish_markers': markers})
+        on_pose = _callback(node, '/pose')
         clock, cpu = time.perf_counter_ns, time.thread_time_ns
-        times, cpus, picture_times, picture_cpus = [], [], [], []
+        times, cpus, timer_times, timer_cpus = [], [], [], []
         for msg in msgs:
             c0, t0 = cpu(), clock()
-            node._on_input(source, msg)
+            on_pose(msg)
             t1, c1 = clock(), cpu()
             times.append(t1 - t0)
             cpus.append(c1 - c0)
-            pictures = node._pictures
-            soon, timer = pictures.soon, pictures.timer
-            if not soon.is_canceled() or (  # a timer the executor would call now
-                    not timer.is_canceled() and timer.time_until_next_call() <= 0):
-                c0, t0 = cpu(), clock()
-                pictures.publish()
-                t1, c1 = clock(), cpu()
-                picture_times.append(t1 - t0)
-                picture_cpus.append(c1 - c0)
+            if markers:
+                wall, own = _timed(_due_timers(node))
+                timer_times += wall
+                timer_cpus += own
         node.destroy_node()
     finally:
         rclpy.try_shutdown()
     out = [_summary(f'RotationNode ~/pose callback, markers {"on" if markers else "off"}',
                     times, cpus)]
-    if picture_times:
-        out.append(_summary(f'RotationNode picture timer callback ({len(picture_times)} drawn)',
-                            picture_times, picture_cpus))
+    if timer_times:
+        out.append(_summary(f'RotationNode timer callbacks ({len(timer_times)} called)',
+                            timer_times, timer_cpus))
     return out
 
 
@@ -220,8 +247,8 @@ TF_PATHS = {'tf': 'steady', 'tf-reparent': 'reparent', 'tf-jump': 'jump'}
 
 
 def tf_messages(variant, n):
-    """Return the bytes of the n /tf messages of a TF_PATHS variant, and of map → odom."""
-    from rclpy.serialization import serialize_message
+    """Return the n TFMessages of a TF_PATHS variant, and the static map → odom."""
+    import copy
     import pose_flooder
     pool = pose_flooder.tf_pool()
     start = time.time_ns()
@@ -235,58 +262,30 @@ def tf_messages(variant, n):
             transform.header.frame_id, transform.child_frame_id = 'base_link', 'camera'
         elif scenario == 'reparent':  # a new parent at every 10th message
             transform.header.frame_id = 'map' if k // 10 % 2 else 'odom'
-        messages.append(serialize_message(msg))
+        messages.append(copy.deepcopy(msg))
         # (the pool's messages come round again)
         transform.header.frame_id, transform.child_frame_id = 'odom', 'base_link'
-    return messages, serialize_message(pose_flooder.static_map_odom(start))
+    return messages, pose_flooder.static_map_odom(start)
 
 
 def run_tf(variant, n):
     os.environ.setdefault('ROS_DOMAIN_ID', str(1 + (os.getpid() * 7 + 3) % 101))
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
-    from rclpy.parameter import Parameter
-    from rot_tools.ros.rotation_node import RotationNode
     messages, static = tf_messages(variant, n)
     rclpy.init()
     try:
-        node = RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
-            Parameter('publish_markers', value=False),
-            Parameter('tf_reference_frame', value='map'),
-            Parameter('tf_body_frame', value='camera')])
-        follower = node._tf
-        follower.on_message(static, True)
-        clock, cpu = time.perf_counter_ns, time.thread_time_ns
-        times, cpus = [], []
-        for data in messages:
-            c0, t0 = cpu(), clock()
-            follower.on_message(data, False)
-            t1, c1 = clock(), cpu()
-            times.append(t1 - t0)
-            cpus.append(c1 - c0)
-        refused = {k: v for k, v in node.refused_counts().items() if v and k != 'total'}
+        node = _node({'publish_markers': False, 'tf_reference_frame': 'map',
+                      'tf_body_frame': 'camera'})
+        _callback(node, '/tf_static')(static)
+        on_tf = _callback(node, '/tf')
+        times, cpus = _timed([lambda msg=msg: on_tf(msg) for msg in messages])
+        refused = _refused(node)
         node.destroy_node()
     finally:
         rclpy.try_shutdown()
     shown = ', '.join(f'{k} {v}' for k, v in refused.items()) or 'none'
     return [_summary(f'RotationNode /tf callback, {variant} (refused: {shown})', times, cpus)]
-
-
-def run_path_without_node(n, positions, quaternions, why):
-    from types import SimpleNamespace
-    from rot_tools.core.decomposition import decompose_values
-    from rot_tools.io import boundary
-    settings = SimpleNamespace(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False)
-    clock, cpu = time.perf_counter_ns, time.thread_time_ns
-    times, cpus = [], []
-    for p, q in zip(positions, quaternions):
-        c0, t0 = cpu(), clock()
-        R, b = boundary.pose_fields_to_rt((*p, *q), settings)
-        decompose_values(R, b, settings.euler_sequence)
-        t1, c1 = clock(), cpu()
-        times.append(t1 - t0)
-        cpus.append(c1 - c0)
-    return [_summary(f'boundary + decompose_values ({why})', times, cpus)]
 
 
 def _summary(label, times, cpus):

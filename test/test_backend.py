@@ -23,7 +23,7 @@ import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
-from rot_tools.core import decomposition, engine, euler, so3
+from rot_tools.core import engine, euler, so3
 from rot_tools.core.euler import GIMBAL_LOCK_TOL, RPY_SEQUENCE
 
 REPO = Path(__file__).resolve().parent.parent
@@ -73,7 +73,7 @@ def _public_calls():
         ('frame_to_matrix', lambda R, b: rt.frame_to_matrix(R[..., 0], R[..., 1], R[..., 2])),
         ('rotation_distance', lambda R, b: rt.rotation_distance(R, R[..., ::-1, :].swapaxes(
             -1, -2) @ R, check=False)),
-        ('decompose_values', lambda R, b: decomposition.decompose_values(R, b, 'yxz'))]
+        ('decompose yxz unchecked', lambda R, b: rt.decompose(R, b, 'yxz', check=False))]
     calls += [(f'matrix_to_euler {s}', lambda R, b, s=s: rt.matrix_to_euler(R, s))
               for s in SEQUENCES]
     calls += [(f'decompose {s}', lambda R, b, s=s: rt.decompose(R, b, s)) for s in SEQUENCES[:2]]
@@ -198,7 +198,6 @@ def _fail_alike_calls():
         ('screw', lambda m, v: rt.screw_from_transform(m, v[..., :3], check=False)),
         ('log', lambda m, v: rt.screw_log(m, v[..., :3], check=False)),
         ('decompose', lambda m, v: rt.decompose(m, v[..., :3], 'YXZ', check=False)),
-        ('values', lambda m, v: decomposition.decompose_values(m, v[..., :3], 'xyz')),
         ('points', lambda m, v: rt.transform_points(m, v[..., :3], v[..., :3], check=False)),
         ('compose', lambda m, v: rt.compose_transforms(m, v[..., :3], m, v[..., :3],
                                                        check=False)),
@@ -429,27 +428,34 @@ def test_fast_paths_to_a_matrix_give_the_batch_formula(axis, size, angle):
                            [-1.1468286846308076e-16, -1.0, -4.295855569846701e-17],
                            [0.35078322768961984, 0.0, -0.9364566872907963]]),
          axis=np.array([0.0, 0.0, 1.0]), size=0.0, seq='XYX')  # (θ1 a last bit from −π)
-def test_fast_path_of_the_node_gives_the_batch_formula(rotation, axis, size, seq):
-    # decompose_values skips the screw for max|b_i| ≤ ORDINARY_B, where it cannot overflow:
-    # the same numbers as the batch (which computes it), and no refusal the batch would make.
+def test_decompose_of_one_item_gives_the_batch_formula(rotation, axis, size, seq):
+    # One item (the kernel on floats) and a batch of one (on arrays): the same numbers in
+    # every field, and the same refusal (a screw beyond float64).
     b = axis * size
-    one = _outcome(decomposition.decompose_values, rotation, b, seq)
-    batch = _outcome(decomposition.decompose_values, rotation[None], b[None], seq)
+    one = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), rotation, b)
+    batch = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), rotation[None], b[None])
     if isinstance(one, tuple) and one and one[0] is rt.RotationError:
         assert batch == one
         return
-    for field, a, c in zip(one._fields, one, batch):
-        a, c = np.array(a), np.asarray(c)[0]
-        if field in ('euler', 'rpy') and _wrapped_difference(a, c) > 1e-15:
+    for field in one._fields:
+        a, c = getattr(one, field), _item_of(getattr(batch, field), 0)
+        if field in ('euler', 'rpy', 'degenerate') and not _same_angles(a, c):
             # (outer angles a last bit from ±π may land on either side of the seam: the same
             # angle.) θ2 a last bit from the lock's edge: libm's and NumPy's atan2 differ
             # there, and one side takes the lock's form (θ3 = 0) where the other does not
-            s = seq if field == 'euler' else RPY_SEQUENCE
-            edge = (math.pi / 2 - abs(a[1]) if s.upper() in h.TAIT_BRYAN else
-                    min(a[1], math.pi - a[1]))
+            s, angles = (RPY_SEQUENCE, a) if field == 'rpy' else (seq, one.euler)
+            edge = (math.pi / 2 - abs(angles[1]) if s.upper() in h.TAIT_BRYAN else
+                    min(angles[1], math.pi - angles[1]))
             assert abs(edge - GIMBAL_LOCK_TOL) <= 1e-15, (field, a, c)
             continue
-        assert field in ('euler', 'rpy') or _close(a, c), (field, a, c)
+        assert _close(a, c), (field, a, c)
+
+
+def _same_angles(a, c):
+    """Equal flags, or angles equal to rounding (±π and a hair inside counted alike)."""
+    if np.asarray(a).dtype == bool:
+        return a == c
+    return _wrapped_difference(a, c) <= 1e-15
 
 
 @settings(max_examples=300, deadline=None)
@@ -590,7 +596,7 @@ def test_public_names_become_plain_module_attributes_on_first_access():
 def test_results_do_not_depend_on_call_history():
     R, b = ROTATIONS[5], VECTORS[1]
     calls = [lambda: rt.matrix_to_euler(R, 'zyx'), lambda: rt.matrix_to_axis_angle(R),
-             lambda: decomposition.decompose_values(R, b, 'XYZ'), lambda: rt.screw_log(R, b),
+             lambda: rt.decompose(R, b, 'XYZ'), lambda: rt.screw_log(R, b),
              lambda: rt.euler_to_matrix([0.1, 0.2, 0.3]), lambda: rt.decompose(R, b),
              lambda: rt.quaternion_to_matrix((0.0, 0.0, 0.0, 0.0))]
     first = [repr(_outcome(c)) for c in calls]
@@ -625,8 +631,9 @@ def test_outputs_are_fresh_arrays_and_scalars_of_the_declared_types():
     assert second[0][0] != 99.0
     assert type(first[1]) is np.bool_
     assert rt.matrix_to_quaternion(R).flags.writeable
-    values = decomposition.decompose_values(R, VECTORS[1], 'zyx')
-    assert all(type(x) is float for field in values for x in field)
+    d = rt.decompose(R, VECTORS[1], 'zyx')
+    assert type(d.angle) is np.float64 and type(d.degenerate) is np.bool_
+    assert all(type(x) is np.ndarray for x in (d.axis, d.rotvec, d.euler, d.rpy, d.twist))
 
 
 def test_a_failing_conversion_traceback_names_the_kernel_line(monkeypatch):

@@ -11,7 +11,7 @@ import rot_tools as rt
 from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_euler, rot_x, rot_y,
     rot_z, RotationError, screw_from_transform)
-from rot_tools.core.decomposition import decompose_values
+from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io.report import round_number, to_json, to_yaml, transform_report
 from scipy.spatial.transform import Rotation
 
@@ -468,9 +468,10 @@ def test_decompose_matches_the_separate_functions():
             assert one.degenerate == d.degenerate[i]
 
 
-def test_decompose_values_are_decompose_and_matrix_to_quaternion_as_floats():
-    # The node's one-pass values: the same numbers as the public functions, bit for bit,
-    # as Python floats, single items on every path (π, identity, pure translation).
+def test_decompose_fields_are_the_public_functions_bit_for_bit():
+    # The node's and the report's one pass: every field is what its public function gives,
+    # bit for bit, one item and a batch (π, gimbal lock of rpy and of XYZ, identity, pure
+    # translation), as NumPy scalars and arrays for one item.
     rng = np.random.default_rng(8)
     R = np.concatenate([rt.rotvec_to_matrix(rng.normal(size=(20, 3))),
                         rt.axis_angle_to_matrix(rng.normal(size=(5, 3)), np.pi),
@@ -480,31 +481,25 @@ def test_decompose_values_are_decompose_and_matrix_to_quaternion_as_floats():
     b = rng.normal(size=(len(R), 3))
     b[-1] = 0.0
     for seq in ('ZYX', 'xzx', 'XYZ'):
-        for _ in range(2):  # (the second round runs compiled)
-            for Ri, bi in zip(R, b):
-                v = decompose_values(Ri, bi, seq)
-                d = rt.decompose(Ri, bi, seq, check=False)
-                assert all(type(x) is float for part in v for x in part)
-                assert list(v.rotvec) == (d.axis * d.angle).tolist()
-                assert list(v.euler) == d.euler.tolist()
-                assert list(v.twist) == d.twist.tolist()
-                assert list(v.quaternion) == rt.matrix_to_quaternion(Ri).tolist()
-                assert list(v.rpy) == rt.matrix_to_euler(Ri, 'xyz', check=False)[0].tolist()
-                assert v.matrix == Ri.ravel().tolist()
-    batch = decompose_values(R, b, 'ZYX')
-    assert batch.twist.shape == (len(R), 6)
-    assert np.array_equal(batch.twist, rt.decompose(R, b).twist)
+        for Ri, bi in zip(R, b):
+            d = rt.decompose(Ri, bi, seq)
+            assert type(d.angle) is np.float64 and type(d.degenerate) is np.bool_
+            assert d.rotvec.tobytes() == rt.matrix_to_rotvec(Ri).tobytes()
+            angles, lock = rt.matrix_to_euler(Ri, seq)
+            assert d.euler.tobytes() == angles.tobytes() and d.degenerate == lock
+            assert d.rpy.tobytes() == rt.matrix_to_euler(Ri, RPY_SEQUENCE)[0].tobytes()
+            assert d.quaternion.tobytes() == rt.matrix_to_quaternion(Ri).tobytes()
+            assert d.twist.tobytes() == rt.screw_log(Ri, bi).tobytes()
+        d = rt.decompose(R, b, seq)
+        assert d.rotvec.shape == (len(R), 3) and d.quaternion.shape == (len(R), 4)
+        assert np.array_equal(d.rotvec, rt.matrix_to_rotvec(R))
+        assert np.array_equal(d.rpy, rt.matrix_to_euler(R, RPY_SEQUENCE)[0])
+        assert np.array_equal(d.quaternion, rt.matrix_to_quaternion(R))
 
 
-def test_decompose_values_refuse_what_decompose_refuses():
-    far = (rt.rot_z(1e-10), [1e300, 0.0, 0.0])
-    for call in (rt.decompose, decompose_values):
-        with pytest.raises(rt.RotationError, match='the screw overflows float64'):
-            call(*far)
-        with pytest.raises(rt.RotationError, match='translation b must be finite'):
-            call(np.eye(3), [0.0, np.inf, 0.0])
-        with pytest.raises(rt.RotationError, match='unknown Euler sequence'):
-            call(np.eye(3), np.zeros(3), 'ZYx')
+def test_decompose_refuses_a_screw_beyond_float64():
+    with pytest.raises(rt.RotationError, match='the screw overflows float64'):
+        rt.decompose(rt.rot_z(1e-10), [1e300, 0.0, 0.0])
 
 
 def test_decompose_refuses_bad_input():

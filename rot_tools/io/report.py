@@ -83,9 +83,8 @@ import re
 import numpy as np
 from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler, RPY_SEQUENCE
+from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler
 from rot_tools.core.rigid import invert_transform, transform_points, transform_to_homogeneous
-from rot_tools.core.so3 import matrix_to_quaternion
 import yaml
 
 DEFAULT_PRECISION = 12
@@ -106,8 +105,7 @@ def _euler(angles, degenerate, degrees):
     return {'angles': _floats(angles), 'degenerate': bool(degenerate)}
 
 
-def _rpy(R, degrees):
-    angles, _ = matrix_to_euler(R, RPY_SEQUENCE, check=False)  # (validated by decompose)
+def _rpy(angles, degrees):
     roll, pitch, yaw = _floats(np.degrees(angles) if degrees else angles)
     return {'roll': roll, 'pitch': pitch, 'yaw': yaw, 'unit': 'deg' if degrees else 'rad'}
 
@@ -180,7 +178,7 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, p
             'axis': _floats(d.axis),
             'angle': angle,
             'angle_deg': _deg(angle),
-            'rotation_vector': _floats(d.axis * angle),
+            'rotation_vector': _floats(d.rotvec),
             'second_solution': {
                 'axis': _floats(-d.axis),
                 'angle': 2.0 * math.pi - angle,
@@ -188,9 +186,8 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, p
             },
         },
         'euler': euler,
-        'rpy': _rpy(R, degrees),
-        # R was validated by decompose above.
-        'quaternion': dict(zip('xyzw', _floats(matrix_to_quaternion(R, check=False)))),
+        'rpy': _rpy(d.rpy, degrees),
+        'quaternion': dict(zip('xyzw', _floats(d.quaternion))),
     }
     if b is not None:
         screw = d.screw
