@@ -626,3 +626,78 @@ def test_the_example_of_doc_tf_md_prints_what_the_page_shows(capsys):
     code = re.search(r'```python\n(.*?)```', example, re.S).group(1)
     exec(compile(code, 'doc/tf.md', 'exec'), {})
     assert_doc_output('tf-tree-example', capsys.readouterr().out)
+
+
+# ---------------------------------------------------------------------------------------
+# A recording followed through the tree
+
+
+def recording(samples):
+    """Return Transforms of samples [(parent, child, R, b, stamp, static)], as recorded."""
+    from rot_tools.core.transform_tree import Transforms
+    parent, child, R, b, stamp, static = zip(*samples)
+    return Transforms(list(parent), list(child), np.array(R), np.array(b), np.array(stamp),
+                      np.array(static))
+
+
+def test_follow_looks_up_at_every_stamp_of_the_dynamic_edges():
+    """Two dynamic edges sampled at different times and a static one: every stamp of both."""
+    stamps = {'odom': np.arange(0.0, 2.01, 0.5), 'base_link': np.arange(0.25, 2.3, 0.4)}
+    samples = [('base_link', 'camera', *random_transform(7), 0.1, True)]
+    for child, parent in (('odom', 'map'), ('base_link', 'odom')):
+        samples += [(parent, child, *motion('base_link' if child == 'odom' else 'optical', t),
+                     t, False) for t in stamps[child]]
+    samples.sort(key=lambda s: s[4])  # as recorded: in time order
+    tree = TransformTree(math.inf, max_samples=100)
+    followed = tree.follow('map', 'camera', recording(samples))
+    want = np.unique(np.concatenate(list(stamps.values())))
+    want = want[(want >= 0.25) & (want <= 2.0)]  # where both dynamic edges have data
+    np.testing.assert_array_equal(followed.stamp, want)
+    assert followed.chains == [['map', 'odom', 'base_link', 'camera']] and not followed.refused
+    tree = TransformTree(math.inf)  # the same samples fed at once: the same lookups
+    for parent, child, R, b, t, static in samples:
+        tree.set_transform(parent, child, R, b, t, static=static)
+    R, b, _ = tree.lookup('map', 'camera', want)
+    assert h.max_abs(followed.R - R) == 0 and h.max_abs(followed.b - b) == 0
+
+
+def test_follow_uses_a_re_parented_frame_under_each_parent():
+    """base_link under odom until 1.0 s, then under map: each time under the parent it had."""
+    samples, truth = [], {}
+    for k, t in enumerate(np.arange(0.0, 2.01, 0.25)):
+        samples.append(('map', 'odom', *random_transform(k), t, False))
+        parent = 'odom' if t <= 1.0 else 'map'
+        samples.append((parent, 'base_link', *random_transform(50 + k), t, False))
+        T = hom(*random_transform(50 + k))
+        truth[t] = hom(*random_transform(k)) @ T if parent == 'odom' else T
+    tree = TransformTree(math.inf, max_samples=100)
+    followed = tree.follow('map', 'base_link', recording(samples))
+    np.testing.assert_array_equal(followed.stamp, list(truth))
+    assert followed.chains == [['map', 'odom', 'base_link'], ['map', 'base_link']]
+    want = np.array(list(truth.values()))
+    assert_transform((followed.R, followed.b), want)
+
+
+def test_follow_counts_a_refused_run_and_goes_on():
+    """A loop (x under y, y under x) and an empty frame name are refused; the chain is not."""
+    R, b = np.eye(3), np.zeros(3)
+    samples = [('map', 'odom', R, b, t, False) for t in (1.0, 2.0)]
+    samples += [('x', 'y', R, b, 1.5, False), ('y', 'x', R, b, 1.6, False),
+                ('odom', '', R, b, 1.7, False)]
+    followed = TransformTree(math.inf).follow('map', 'odom', recording(samples))
+    assert {k: e.reason for k, e in followed.refused.items()} == {3: 'loop', 4: 'bad_frame'}
+    np.testing.assert_array_equal(followed.stamp, [1.0, 2.0])
+
+
+def test_follow_a_static_chain_once_and_refuse_what_cannot_be_looked_up():
+    R, b = random_transform(3)
+    tree = TransformTree(math.inf)
+    followed = tree.follow('a', 'b', recording([('a', 'b', R, b, 4.0, True)] * 3))
+    assert followed.stamp.tolist() == [4.0] and h.max_abs(followed.R[0] - R) == 0
+    with pytest.raises(TransformLookupError, match="frame 'c' is unknown") as caught:
+        TransformTree(math.inf).follow('a', 'c', recording([('a', 'b', R, b, 4.0, False)]))
+    assert caught.value.reason == 'unknown_frame'
+    disjoint = [('a', 'b', R, b, 1.0, False), ('a', 'b', R, b, 2.0, False),
+                ('a', 'c', R, b, 3.0, False), ('a', 'c', R, b, 4.0, False)]
+    with pytest.raises(TransformLookupError, match='no time at which every edge'):
+        TransformTree(math.inf).follow('b', 'c', recording(disjoint))

@@ -54,12 +54,16 @@ Messages show frame names cut to SHOWN_NAME characters.
 
 Batches: ``set_transform`` takes many samples of one edge at once (stamps (n,), R (n, 3, 3),
 b (n, 3)) and ``lookup`` many stamps at once (t (...) → R (..., 3, 3), b (..., 3), t (...)),
-each edge interpolated as one NumPy batch. The tree is safe to share between threads.
+each edge interpolated as one NumPy batch; one stamp is a batch of one, by the same formulas.
+``follow`` looks one frame up in another over a whole recording (a bag's /tf and /tf_static):
+the tree fed as the recording goes, the chain looked up at every stamp of its dynamic edges.
+The tree is safe to share between threads.
 """
 
 import math
 import numbers
 import threading
+from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core._arrays import as_float_array
@@ -83,7 +87,7 @@ SET_REASONS = (BAD_FRAME, LOOP, NON_FINITE, NOT_ROTATION, BAD_VALUE, TOO_MANY_FR
 """Reasons set_transform refuses a transform for (TransformTreeError.reason)."""
 
 DEFAULT_MAX_SAMPLES = 100_000
-"""Samples kept per dynamic edge at most: 10 s at 10 kHz (9.6 MB per edge when full)."""
+"""Samples kept per dynamic edge at most: 10 s at 10 kHz (each sample is 13 float64)."""
 
 DEFAULT_MAX_FRAMES = 10_000
 """Frames a tree holds at most (a few kB each); a transform that would add more is refused."""
@@ -120,6 +124,54 @@ class TransformLookupError(TransformTreeError):
         super().__init__(reason, message)
         self.edge = edge
         self.seconds = seconds
+
+
+class Lookup(NamedTuple):
+    """A lookup's answer: p_reference = R·p_body + b at ``stamp`` (see TransformTree.lookup)."""
+
+    R: np.ndarray
+    b: np.ndarray
+    stamp: object
+    """The time looked up at: a float, or the array of stamps asked for."""
+
+
+class TimeRange(NamedTuple):
+    """The times at which a chain can be looked up, ``first`` to ``last`` (seconds)."""
+
+    first: float
+    last: float
+
+
+class Transforms(NamedTuple):
+    """
+    Transforms as a recording holds them (tf2_msgs/TFMessage's), n of them, for follow.
+
+    parent, child: n frame names each; R (n, 3, 3), b (n, 3): p_parent = R·p_child + b;
+    stamp (n,) seconds; static (n,) bool (from /tf_static).
+    """
+
+    parent: object
+    child: object
+    R: np.ndarray
+    b: np.ndarray
+    stamp: np.ndarray
+    static: np.ndarray
+
+
+class Followed(NamedTuple):
+    """
+    A frame followed over a recording (TransformTree.follow).
+
+    stamp (m,), R (m, 3, 3), b (m, 3): the lookups, in time order; chains: every chain of
+    frames looked up through, in time order (one unless a frame was re-parented); refused:
+    {index of a transform: the TransformTreeError that refused it}.
+    """
+
+    stamp: np.ndarray
+    R: np.ndarray
+    b: np.ndarray
+    chains: list
+    refused: dict
 
 
 def shown(frame):
@@ -281,26 +333,6 @@ class _Edge:
                 Rs[j - 1], bs[j - 1], Rs[j], bs[j], (t[between] - t0) / (t1 - t0),
                 check=False)
         return R, b
-
-    def at_one(self, t, child, query):
-        """
-        Return (R (3, 3), b (3,)) of the edge at one time t (a float).
-
-        (R (3, 3), b (3,)) of the edge at one time t (a float): the per-message path,
-        through the one-item functions (a batch of one costs several times more).
-        """
-        if self.static:
-            return self.R[self.start], self.b[self.start]
-        stamps = self.stamps[self.start:self.end]
-        if not stamps[0] <= t <= stamps[-1]:
-            self._refuse(t, t, child, query)
-        i = self.start + int(np.searchsorted(stamps, t))
-        t1 = self.stamps[i]
-        if t1 == t:
-            return self.R[i], self.b[i]
-        t0 = self.stamps[i - 1]
-        return screw_interpolate(self.R[i - 1], self.b[i - 1], self.R[i], self.b[i],
-                                 (t - t0) / (t1 - t0), check=False)
 
     def _refuse(self, low, high, child, query):
         first, last = self.oldest, self.newest
@@ -521,8 +553,8 @@ class TransformTree:
             up, down = self._path(reference, body)
             dynamic = [e for e in map(self._edges.get, up + down) if not e.static]
             if not dynamic:
-                return -math.inf, math.inf
-            return max(e.oldest for e in dynamic), min(e.newest for e in dynamic)
+                return TimeRange(-math.inf, math.inf)
+            return TimeRange(max(e.oldest for e in dynamic), min(e.newest for e in dynamic))
 
     def latest_common_time(self, reference, body):
         """Return the time ``lookup(reference, body)`` answers at (see the module docstring)."""
@@ -543,7 +575,7 @@ class TransformTree:
 
     def lookup(self, reference, body, stamp=None):
         """
-        (R, b, stamp): the pose of ``body`` in ``reference``, p_reference = R·p_body + b.
+        Return a Lookup (R, b, stamp): ``body`` in ``reference``, p_reference = R·p_body + b.
 
         stamp: seconds (float) or an array of them (then R (..., 3, 3), b (..., 3) and the
         stamps (...) come back as arrays); None for the latest common time. Each dynamic
@@ -563,27 +595,15 @@ class TransformTree:
                     raise RotationError(f'the lookup stamps are empty (shape {times.shape})')
                 t = times.copy() if times.ndim else float(times)
             query = f'lookup of {shown(body)} in {shown(reference)}'
-            if times.ndim == 0:
-                R_up, b_up = self._compose_one(up, t, query)
-                R_down, b_down = self._compose_one(down, t, query)
-                # T_reference_body = T_common_reference⁻¹ · T_common_body.
-                return R_up.T @ R_down, R_up.T @ (b_down - b_up), t
             flat = times.reshape(-1)
             R_up, b_up = self._compose(up, flat, query)
             R_down, b_down = self._compose(down, flat, query)
+        # T_reference_body = T_common_reference⁻¹ · T_common_body.
         Rt = np.swapaxes(R_up, -1, -2)
         R = Rt @ R_down
         b = np.einsum('...ij,...j->...i', Rt, b_down - b_up)
         shape = times.shape
-        return R.reshape(shape + (3, 3)), b.reshape(shape + (3,)), t
-
-    def _compose_one(self, frames, t, query):
-        """_compose at one time t (a float): (R (3, 3), b (3,))."""
-        R, b = _IDENTITY, _ZERO
-        for frame in frames:
-            Re, be = self._edges[frame].at_one(t, frame, query)
-            R, b = Re @ R, Re @ b + be
-        return R, b
+        return Lookup(R.reshape(shape + (3, 3)), b.reshape(shape + (3,)), t)
 
     def _compose(self, frames, t, query):
         """
@@ -600,3 +620,89 @@ class TransformTree:
             b = np.einsum('...ij,...j->...i', Re, b) + be
             R = Re @ R
         return R, b
+
+    # -- a recording ---------------------------------------------------------------------
+
+    def follow(self, reference, body, transforms):
+        """
+        Look ``body`` up in ``reference`` over a recording of transforms (TF over a bag).
+
+        transforms: Transforms, in the order they were recorded. The tree is fed as the
+        recording goes: a frame's samples under one parent (and static or dynamic) are one
+        batch (set_transform), given when the first of them comes, which replaces the
+        frame's edge to an earlier parent. Between two such re-parentings the chain is looked
+        up as one batch at every stamp of its dynamic edges at which all of them have data
+        (and once, at the latest common time, where its edges are static). The tree's cache
+        must hold the recording: ``TransformTree(math.inf, max_samples=len(transforms))``.
+
+        Returns Followed; a batch the tree refuses is in ``refused`` and the rest goes on.
+        Raises TransformLookupError when no lookup could be made at all.
+        """
+        stamps = np.asarray(transforms.stamp, dtype=np.float64)
+        static = np.asarray(transforms.static, dtype=bool)
+        names = {}  # frame -> a number, to sort and cut by
+        parent = np.array([names.setdefault(f, len(names)) for f in transforms.parent], np.intp)
+        child = np.array([names.setdefault(f, len(names)) for f in transforms.child], np.intp)
+        # Runs: one child's samples in stamp order (then as recorded), cut where its parent or
+        # its kind (static or dynamic) changes: each is one set_transform.
+        order = np.lexsort((np.arange(len(stamps)), stamps, child))
+        key = np.stack([child[order], parent[order], static[order]], axis=1)
+        cuts = np.flatnonzero((key[1:] != key[:-1]).any(axis=1)) + 1
+        runs = sorted(np.split(order, cuts) if len(order) else [],
+                      key=lambda rows: (stamps[rows[0]], rows.min()))
+        feeds, seen = {}, set()  # when a run is given -> the runs; a frame's first at once
+        for rows in runs:
+            frame = child[rows[0]]
+            feeds.setdefault(stamps[rows[0]] if frame in seen else -math.inf, []).append(rows)
+            seen.add(frame)
+        times = sorted(feeds) + [math.inf]
+        found, refused, chains, error = [], {}, [], None
+        for lo, hi in zip(times[:-1], times[1:]):
+            for rows in feeds[lo]:
+                self._feed(transforms, rows, stamps, static, refused)
+            try:
+                at, chain = self._chain_stamps(reference, body, lo, hi)
+                if len(at):
+                    found.append(self.lookup(reference, body, at))
+                    chains += [chain] if chain not in chains else []
+            except TransformLookupError as exc:
+                error = exc
+        if not found:
+            raise error or TransformLookupError(
+                EXTRAPOLATION, f'no time at which every edge between {shown(reference)} and '
+                f'{shown(body)} has data')
+        return Followed(np.concatenate([f.stamp for f in found]),
+                        np.concatenate([f.R for f in found]),
+                        np.concatenate([f.b for f in found]), chains, refused)
+
+    def _feed(self, transforms, rows, stamps, static, refused):
+        """set_transform of one run (rows); a refusal is noted for each of its rows."""
+        first, last = int(rows[0]), int(rows[-1])
+        parent, child = str(transforms.parent[first]), str(transforms.child[first])
+        try:
+            if static[first]:  # a static edge holds one transform: the last given
+                self.set_transform(parent, child, transforms.R[last], transforms.b[last],
+                                   stamps[last], static=True)
+            else:
+                self.set_transform(parent, child, transforms.R[rows], transforms.b[rows],
+                                   stamps[rows])
+        except TransformTreeError as exc:
+            refused.update(dict.fromkeys(rows.tolist(), exc))
+
+    def _chain_stamps(self, reference, body, lo, hi):
+        """
+        Return (stamps, chain): where the chain can be looked up in [lo, hi), every stamp.
+
+        The stamps of its dynamic edges at which all of them have data; the latest common
+        time where it has none (when it is in [lo, hi), or lo is -inf).
+        """
+        with self._lock:
+            up, down = self._path(reference, body)
+            chain = self.chain(reference, body)
+            dynamic = [self._edges[f] for f in up + down if not self._edges[f].static]
+            if not dynamic:
+                t = self._latest(up, down, reference)
+                return np.array([t] if lo <= t < hi or lo == -math.inf else []), chain
+            first, last = self.time_range(reference, body)
+            t = np.unique(np.concatenate([e.stamps[e.start:e.end] for e in dynamic]))
+            return t[(t >= max(lo, first)) & (t < hi) & (t <= last)], chain
