@@ -31,11 +31,7 @@ NODE = 'bench_memory_rot_tools'
 
 
 class Listener:
-    """
-    This process's subscriber to the node's outputs, spun in a thread; counts ~/screw.
-
-    Raw subscriptions (no deserialisation), so that this process stays light.
-    """
+    """This process's subscriber to the node's outputs, spun in a thread; counts ~/screw."""
 
     def __init__(self):
         import rclpy
@@ -54,14 +50,13 @@ class Listener:
                    'rpy': Vector3Stamped, 'screw': TwistStamped, 'screw_axis': Marker,
                    'markers': MarkerArray}
         for name, msg_type in outputs.items():
-            cb = self._count if name == 'screw' else (lambda data: None)
-            self.node.create_subscription(msg_type, f'/{NODE}/{name}', cb, QoSProfile(depth=10),
-                                          raw=True)
+            cb = self._count if name == 'screw' else (lambda msg: None)
+            self.node.create_subscription(msg_type, f'/{NODE}/{name}', cb, QoSProfile(depth=10))
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self._thread = benchlib.spin_in_thread(rclpy, self.executor)
 
-    def _count(self, data):
+    def _count(self, msg):
         self.screws += 1
 
     def close(self):
@@ -97,7 +92,7 @@ def measure(rate, seconds, logdir):
             if time.monotonic() > deadline or node.poll() is not None:
                 raise RuntimeError('rotation_node never answered; see its log')
             flood(flooder, 100, 0.5)
-        flood(flooder, rate, 2.0)  # warm: kernels compiled, queues and pools at size
+        flood(flooder, rate, 2.0)  # warm: first calls done, queues at size
         time.sleep(1.0)
         samples = [(0.0, benchlib.rss_mb(node.pid))]
         result = {}

@@ -1,25 +1,27 @@
 """
-Overload: rotation_node flooded 60 s on ~/pose or /tf, as fast as one publisher sends or at a rate.
+Overload: rotation_node flooded on ~/pose or /tf, as fast as one publisher sends or at a rate.
 
 Processes (all started here, in a DDS domain of their own on the loopback):
 
-- ``rotation_node`` by its console script (next to this Python; defaults, markers on), or,
-  with ``--executor NAME``, the same node on another executor (bench/node_on_executor.py);
-  with ``--tf SCENARIO`` it follows base_link in odom (``tf_reference_frame``,
+- ``rotation_node`` by its console script (next to this Python; defaults, markers on); with
+  ``--tf SCENARIO`` it follows base_link in odom (``tf_reference_frame``,
   ``tf_body_frame``);
 - ``bench/pose_flooder.py``: publishes PoseStamped on the node's ``~/pose`` back to back,
   as fast as it can (``--rate max``, the default: ``flood TOPIC max SECONDS``), or at
   ``--rate`` msg/s (10000 for the service-latency goal); with ``--tf SCENARIO``, TFMessages
   on ``/tf`` instead (and ``map → odom`` on ``/tf_static``): ``steady`` (the followed edge
-  stamped now), ``large`` (steady, and every 5 s three TFMessages of 100,000 transforms),
-  ``reparent`` (base_link's parent changing at every message, odom ↔ map) or ``jump`` (the
-  stream's clock going back 30 s every second, every 100th message stamped 10⁶ s ahead):
-  pose_flooder.TF_SCENARIOS;
-- a listener (this script with ``--listen``): subscribes every output of the node
+  stamped now), ``large`` (steady, and one TFMessage of 100,000 transforms a second, ten in
+  all), ``reparent`` (base_link's parent changing at every message, odom ↔ map) or ``jump``
+  (the stream's clock going back 30 s every second, every 100th message stamped 10⁶ s
+  ahead): pose_flooder.TF_SCENARIOS;
+- a listener (this script with ``--listen NODE``): subscribes every output of the node
   (reliable, depth 10, as a user's RViz or recorder would), counts ``~/screw``;
+- with ``--tf``, a bare rclpy /tf subscriber (this script with ``--bare-tf``): tf2_ros's
+  QoS, a callback that only counts — what any /tf listener costs, the middleware's buffers
+  and rclpy's message objects included; its resident set is sampled beside the node's;
 - this process: calls ``~/describe``, ``~/get_parameters`` and ``~/set_parameters``
   (``angle_unit`` rad ↔ deg) in turn, one call outstanding at a time, each abandoned after
-  ``--call-timeout`` seconds (an *unanswered* call), and samples the node's resident set
+  ``--call-timeout`` seconds (an *unanswered* call), and samples the resident sets
   (/proc/PID/status VmRSS) every second.
 
 Timeline: warm-up (a slow flood until the outputs reach the listener, one answered call of
@@ -27,22 +29,18 @@ each service), RSS at the start, the flood for ``--seconds`` (60), RSS at its en
 calls stop and the RSS is sampled for ``--after`` (10) seconds more; then the same flood
 again, and SIGINT to the node 2 s into it. Printed: RSS at the start, at the end, at most
 and ``--after`` s after; for each service the latency p50, p99 and max during the flood,
-how many calls took over 1 s (their request was lost and sent again at the client's next
-DDS heartbeat) and how many went unanswered; the refusals the node counted (~/describe);
-how the node ended on SIGINT. The goals, flooded as fast as one publisher sends: RSS grows
-by at most 50 MB and is back within 20 MB of the start 10 s after the flood, every call is
-answered within 5 s (the call timeout), the node keeps publishing; flooded at 10,000
-msg/s: every service answers with p99 <= 100 ms (an unanswered call counts as infinitely
-late); at either rate, SIGINT during the flood ends the node within 1 s with status 0 and
-no traceback in its log. Not a test: a script that prints what it measured.
-
-The node runs with its own Fast DDS profile (rot_tools.ros.runtime.use_fast_dds_profile);
-``FASTDDS_BUILTIN_TRANSPORTS=DEFAULT`` in the environment runs it, and every other process
-here, on Fast DDS's defaults instead (the user's own setting keeps the node's profile out).
+how many calls took over 1 s and how many went unanswered; the refusals the node counted
+(~/describe); how the node ended on SIGINT. The goals: flooded at 10,000 msg/s, every
+service answers with p99 <= 100 ms (an unanswered call counts as infinitely late); flooded
+as fast as one publisher sends, every call is answered within 5 s (the call timeout) and
+the node keeps publishing; under ``--tf large``, the node's RSS grows (at most during the
+flood, and ``--after`` s after it) by at most 20 MB more than the bare /tf subscriber's; at
+any rate, SIGINT during the flood ends the node within 1 s with status 0 and no traceback
+in its log. The RSS growth under a ~/pose flood is printed against its older goals (50 MB,
+back within 20 MB). Not a test: a script that prints what it measured.
 
 Run: ``.venv/bin/python bench/bench_overload.py [--rate max|MSG_PER_S] [--seconds 60]
-[--after 10] [--tf steady|large|reparent|jump] [--executor events|single|multi]
-[--caller-heartbeat SECONDS] [--json PATH]``.
+[--after 10] [--tf steady|large|reparent|jump] [--json PATH]``.
 """
 
 import argparse
@@ -76,26 +74,17 @@ SIGINT_AFTER_S = 2.0
 TF_FRAMES = ('odom', 'base_link')
 """The frames the node follows with --tf (reference, body): pose_flooder's /tf stream."""
 SERVICES = ('describe', 'get_parameters', 'set_parameters')
-HEARTBEAT_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
-<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
-  <data_writer profile_name="bench_overload_caller" is_default_profile="true">
-    <times><heartbeatPeriod><sec>{sec}</sec><nanosec>{nanosec}</nanosec></heartbeatPeriod>
-    </times>
-  </data_writer>
-</profiles>
-"""
-"""Fast DDS profile of the caller with --caller-heartbeat (the default period is 3 s)."""
+TF_GROWTH_GOAL_MB = 20.0
+"""Under --tf large: the node's RSS growth at most this more than the bare subscriber's."""
+BARE_TF = 'bench_overload_bare_tf'
 
 
-def node_command(executor, tf=None):
-    """rotation_node by its console script, or on another executor (node_on_executor.py)."""
+def node_command(tf=None):
+    """rotation_node by its console script, following base_link in odom with ``tf``."""
     ros_args = ['--ros-args', '-r', f'__node:={NODE}']
     if tf:
         ros_args += ['-p', f'tf_reference_frame:={TF_FRAMES[0]}',
                      '-p', f'tf_body_frame:={TF_FRAMES[1]}']
-    if executor:
-        return [sys.executable, str(BENCH / 'node_on_executor.py'), '--executor', executor,
-                *ros_args]
     script = Path(sys.executable).parent / 'rotation_node'
     if not script.exists():
         found = shutil.which('rotation_node')
@@ -105,10 +94,28 @@ def node_command(executor, tf=None):
     return [str(script), *ros_args]
 
 
+def _count_until_shutdown(node, count):
+    """Spin ``node``, printing count[0] every 0.2 s, until a signal shuts rclpy down."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    last = time.monotonic()
+    try:
+        while rclpy.ok():
+            rclpy.spin_once(node, timeout_sec=0.05)
+            if time.monotonic() - last >= 0.2:
+                last = time.monotonic()
+                print(count[0], flush=True)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
 def listen(node):
     """Run the listener process: every output of ``node`` subscribed; print ~/screw counts."""
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSProfile
     from geometry_msgs.msg import QuaternionStamped, TwistStamped, Vector3Stamped
     from std_msgs.msg import Float64MultiArray
@@ -120,29 +127,36 @@ def listen(node):
                'axis_angle': Vector3Stamped, 'euler_angles': Vector3Stamped, 'rpy': Vector3Stamped,
                'screw': TwistStamped, 'screw_axis': Marker, 'markers': MarkerArray}
     for name, msg_type in outputs.items():
-        def on_output(data, screw=name == 'screw'):
+        def on_output(msg, screw=name == 'screw'):
             if screw:
                 count[0] += 1
         listener.create_subscription(msg_type, f'/{node}/{name}', on_output,
-                                     QoSProfile(depth=10), raw=True)
-    executor = SingleThreadedExecutor()
-    executor.add_node(listener)
-    last = time.monotonic()
-    try:
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=0.05)
-            if time.monotonic() - last >= 0.2:
-                last = time.monotonic()
-                print(count[0], flush=True)
-    except Exception:  # noqa: BLE001 - shut down by a signal while spinning: the end
-        pass
-    return 0
+                                     QoSProfile(depth=10))
+    return _count_until_shutdown(listener, count)
+
+
+def bare_tf():
+    """Run the bare /tf subscriber: tf2_ros's QoS, a callback that counts; print the count."""
+    import rclpy
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from tf2_msgs.msg import TFMessage
+    rclpy.init()
+    node = rclpy.create_node(BARE_TF)
+    count = [0]
+
+    def on_tf(msg):
+        count[0] += 1
+    # tf2_ros.TransformListener's QoS for /tf
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.VOLATILE)
+    node.create_subscription(TFMessage, '/tf', on_tf, qos)
+    return _count_until_shutdown(node, count)
 
 
 class Caller:
     """This process's service client of the node: one call at a time, bounded waits."""
 
-    def __init__(self, node, timeout, heartbeat=None, logdir=None):
+    def __init__(self, node, timeout):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
@@ -151,13 +165,7 @@ class Caller:
         from std_srvs.srv import Trigger
         self._rclpy = rclpy
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-        if heartbeat:  # this process's DDS writers (the requests) heartbeat more often
-            profile = Path(logdir, 'caller_profile.xml')
-            profile.write_text(HEARTBEAT_PROFILE.format(
-                sec=int(heartbeat), nanosec=int(round(heartbeat % 1 * 1e9))))
-            os.environ['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(profile)
         self.node = rclpy.create_node('bench_overload_caller')
-        os.environ.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)  # (not for the others)
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self.timeout = timeout
@@ -235,13 +243,13 @@ def flood_reply(flooder):
     return int(reply[1]), float(reply[2])
 
 
-class Listener:
-    """The listener process and the latest ~/screw count it printed."""
+class Counter:
+    """A process of this script that prints a count every 0.2 s; the latest count."""
 
-    def __init__(self, logdir):
-        self.log = open(os.path.join(logdir, 'listener.log'), 'w')
+    def __init__(self, logdir, name, *args):
+        self.log = open(os.path.join(logdir, f'{name}.log'), 'w')
         self.process = subprocess.Popen(
-            [sys.executable, str(Path(__file__).resolve()), '--listen', NODE],
+            [sys.executable, str(Path(__file__).resolve()), *args],
             stdout=subprocess.PIPE, stderr=self.log)
         self._fd = self.process.stdout.fileno()
         os.set_blocking(self._fd, False)
@@ -306,26 +314,44 @@ def refusals(answer):
     return {reason: n for reason, n in refused.items() if n and reason != 'total'}
 
 
-def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate='max',
-            tf=None):
+def _rss(processes):
+    """Return {name: RSS MB} of the running ``processes`` {name: Popen}."""
+    return {name: benchlib.rss_mb(p.pid) for name, p in processes.items()}
+
+
+def _stop(process, timeout=10.0):
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)
+        try:
+            process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def measure(seconds, after, call_timeout, logdir, rate='max', tf=None):
     node_log = open(os.path.join(logdir, 'node.log'), 'w')
-    node = subprocess.Popen(node_command(executor, tf), stdout=node_log,
-                            stderr=subprocess.STDOUT)
+    node = subprocess.Popen(node_command(tf), stdout=node_log, stderr=subprocess.STDOUT)
     topic = '/tf' if tf else f'/{NODE}/pose'
 
     def flood(duration, flood_rate=rate, scenario=tf):
         return f'flood {topic} {flood_rate} {duration} {scenario or ""}'.rstrip()
-    listener = flooder = caller = None
+    listener = bare = flooder = caller = None
     try:
-        caller = Caller(NODE, call_timeout, heartbeat, logdir)
-        listener = Listener(logdir)
+        caller = Caller(NODE, call_timeout)
+        listener = Counter(logdir, 'listener', '--listen', NODE)
+        watched = {'node': node}
+        if tf:
+            bare = Counter(logdir, 'bare_tf', '--bare-tf')
+            watched['bare'] = bare.process
         flooder = subprocess.Popen([sys.executable, str(BENCH / 'pose_flooder.py'), topic],
                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         if flooder.stdout.readline().strip() != 'ready':
             raise RuntimeError('pose_flooder did not get ready')
         deadline = time.monotonic() + 60.0
         caller.wait_ready(deadline)
-        while listener.poll() == 0:  # outputs flow to the listener (discovery both ways)
+        # Outputs flow to the listener, /tf to the bare subscriber (discovery both ways).
+        while listener.poll() == 0 or (bare is not None and bare.poll() == 0):
             if time.monotonic() > deadline or node.poll() is not None:
                 raise RuntimeError('rotation_node never answered; see its log')
             flood_command(flooder, flood(0.5, 100, tf and 'steady'))
@@ -335,7 +361,7 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
                 if time.monotonic() > deadline:
                     raise RuntimeError(f'{name} never answered before the flood')
         time.sleep(1.0)
-        rss_start = benchlib.rss_mb(node.pid)
+        rss_start = _rss(watched)
         samples = [(0.0, rss_start)]
         calls = {name: [] for name in SERVICES}
         wrong = {name: 0 for name in SERVICES}
@@ -352,18 +378,18 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
                 calls[name].append(took)
                 wrong[name] += math.isfinite(took) and not ok
             while time.monotonic() >= next_sample:
-                samples.append((next_sample - start, benchlib.rss_mb(node.pid)))
+                samples.append((next_sample - start, _rss(watched)))
                 next_sample += 1.0
             time.sleep(0.05)
         sent, elapsed = flood_reply(flooder)
         end = time.monotonic()
-        rss_end = benchlib.rss_mb(node.pid)
+        rss_end = _rss(watched)
         samples.append((end - start, rss_end))
         answered = listener.poll() - count0
         after_samples = []
         while time.monotonic() - end < after:
             time.sleep(min(1.0, max(0.0, after - (time.monotonic() - end))))
-            after_samples.append((time.monotonic() - end, benchlib.rss_mb(node.pid)))
+            after_samples.append((time.monotonic() - end, _rss(watched)))
         final_call = caller.call('describe')
         refused = refusals(caller.answers.get('describe'))
         alive = node.poll() is None
@@ -376,19 +402,13 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
             except (OSError, subprocess.TimeoutExpired):
                 flooder.kill()
                 flooder.wait()
-        if node.poll() is None:
-            node.send_signal(signal.SIGINT)
-            try:
-                node.wait(timeout=10.0)
-            except subprocess.TimeoutExpired:
-                node.kill()
-                node.wait()
-        if listener is not None:
-            listener.stop()
+        _stop(node)
+        for counter in (listener, bare):
+            if counter is not None:
+                counter.stop()
         if caller is not None:
             caller.close()
         node_log.close()
-    rss_after = after_samples[-1][1]
     latency = {}
     for name in SERVICES:
         lat = calls[name]
@@ -397,23 +417,37 @@ def measure(seconds, after, executor, call_timeout, logdir, heartbeat=None, rate
                          'slow': sum(t > SLOW_S for t in lat),
                          'wrong': wrong[name], 'p50': percentile(lat, 0.5),
                          'p99': percentile(lat, 0.99), 'max': max(lat) if lat else math.nan}
-    growth = max(mb for _, mb in samples) - rss_start
-    goals = {'growth': growth <= GROWTH_GOAL_MB, 'alive': alive and answered > 0,
-             'returned': rss_after - rss_start <= RETURN_GOAL_MB,
+    # RSS growth of each watched process: at most during the flood, and --after s after it
+    growth = {w: max(mb[w] for _, mb in samples) - rss_start[w] for w in watched}
+    kept = {w: after_samples[-1][1][w] - rss_start[w] for w in watched}
+    goals = {'growth': growth['node'] <= GROWTH_GOAL_MB, 'alive': alive and answered > 0,
+             'returned': kept['node'] <= RETURN_GOAL_MB,
              'sigint': stop is not None and stop['status'] == 0 and stop['clean']
              and stop['seconds'] <= SIGINT_GOAL_S}
     if rate == 'max':
         goals['answered'] = all(v['max'] <= ANSWER_GOAL_S for v in latency.values())
     else:
         goals['latency'] = all(v['p99'] <= LATENCY_GOAL_S for v in latency.values())
-    return {'executor': executor or 'node (console script)', 'rate': rate,
-            'flood': f'/tf {tf}' if tf else '~/pose', 'seconds': seconds, 'after': after,
-            'sent': sent, 'sent_rate': sent / elapsed, 'answered': answered,
-            'answered_rate': answered / elapsed, 'rss_start_mb': rss_start, 'rss_end_mb': rss_end,
-            'rss_max_mb': max(mb for _, mb in samples + after_samples), 'rss_after_mb': rss_after,
-            'growth_mb': growth, 'latency': latency, 'samples': samples,
-            'after_samples': after_samples, 'final_describe_s': final_call[0], 'alive': alive,
-            'refused': refused, 'sigint': stop, 'goals': goals}
+    beside_bare = None
+    if tf:
+        beside_bare = {'growth_mb': growth['node'] - growth['bare'],
+                       'kept_mb': kept['node'] - kept['bare'],
+                       'bare_growth_mb': growth['bare'], 'bare_kept_mb': kept['bare']}
+        if tf == 'large':
+            goals['tf_memory'] = max(beside_bare['growth_mb'],
+                                     beside_bare['kept_mb']) <= TF_GROWTH_GOAL_MB
+    node_rss = [(t, mb['node']) for t, mb in samples]
+    node_after = [(t, mb['node']) for t, mb in after_samples]
+    return {'rate': rate, 'flood': f'/tf {tf}' if tf else '~/pose', 'seconds': seconds,
+            'after': after, 'sent': sent, 'sent_rate': sent / elapsed, 'answered': answered,
+            'answered_rate': answered / elapsed, 'rss_start_mb': rss_start['node'],
+            'rss_end_mb': rss_end['node'],
+            'rss_max_mb': max(mb for _, mb in node_rss + node_after),
+            'rss_after_mb': node_after[-1][1], 'growth_mb': growth['node'],
+            'latency': latency, 'samples': node_rss, 'after_samples': node_after,
+            'all_samples': samples + after_samples, 'beside_bare_tf': beside_bare,
+            'final_describe_s': final_call[0], 'alive': alive, 'refused': refused,
+            'sigint': stop, 'goals': goals}
 
 
 def print_results(m):
@@ -422,7 +456,7 @@ def print_results(m):
     rows.append([f"{m['samples'][-1][0]:.0f} (end)", f"{m['rss_end_mb']:.1f}"])
     rows += [[f'+{t:.0f} after', f'{mb:.1f}'] for t, mb in m['after_samples']]
     benchlib.print_table(
-        f"rotation_node ({m['executor']}) RSS (MB): {m['flood']} flooded "
+        f"rotation_node RSS (MB): {m['flood']} flooded "
         f"{'back to back' if m['rate'] == 'max' else 'at ' + m['rate'] + ' msg/s'}, "
         f"{m['sent_rate']:.0f} msg/s sent for {m['seconds']:.0f} s, {m['answered_rate']:.0f} "
         'answered per s (a subscriber on every output)', ['s', 'RSS MB'], rows)
@@ -460,6 +494,13 @@ def print_results(m):
         rows.append(['slowest call', f"{max(v['max'] for v in m['latency'].values()):.3f} s",
                      f'<= {ANSWER_GOAL_S:g} s (none unanswered)',
                      'yes' if g['answered'] else 'NO'])
+    bare = m['beside_bare_tf']
+    if bare is not None:
+        rows.append(['RSS growth beside a bare /tf subscriber (max during; after)',
+                     f"{bare['growth_mb']:+.1f} MB; {bare['kept_mb']:+.1f} MB (bare: "
+                     f"{bare['bare_growth_mb']:+.1f}; {bare['bare_kept_mb']:+.1f})",
+                     f'<= {TF_GROWTH_GOAL_MB:g} MB' if 'tf_memory' in g else 'no goal',
+                     ('yes' if g['tf_memory'] else 'NO') if 'tf_memory' in g else '-'])
     rows.append([f'SIGINT {SIGINT_AFTER_S:g} s into a flood',
                  'node dead before' if stop is None else
                  f"status {stop['status']} after {stop['seconds']:.2f} s"
@@ -482,27 +523,24 @@ def main(argv=None):
     parser.add_argument('--tf', choices=sorted(TF_SCENARIOS),
                         help='flood /tf instead of ~/pose, the node following base_link in '
                         'odom: ' + '; '.join(f'{k}: {v}' for k, v in TF_SCENARIOS.items()))
-    parser.add_argument('--executor', choices=('events', 'single', 'multi'),
-                        help='run rotation_node on this executor (bench/node_on_executor.py) '
-                        'instead of by its console script; single is the one it uses')
-    parser.add_argument('--caller-heartbeat', type=float, metavar='SECONDS',
-                        help="the calling process's DDS writers heartbeat this often (Fast DDS: "
-                        '3 s): a request the flooded node lost is sent again sooner')
     parser.add_argument('--listen', metavar='NODE', help=argparse.SUPPRESS)
+    parser.add_argument('--bare-tf', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--json', metavar='PATH', help='also write the figures as JSON')
     args = parser.parse_args(argv)
     if args.listen:
         return listen(args.listen)
+    if args.bare_tf:
+        return bare_tf()
     domain = os.environ.get('BENCH_ROS_DOMAIN_ID') or str(1 + (os.getpid() * 11 + 5) % 101)
     os.environ['ROS_DOMAIN_ID'] = domain
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ.pop('ROS_STATIC_PEERS', None)
-    print(f'bench_overload: {benchlib.machine_line()}; ROS_DOMAIN_ID={domain}', flush=True)
+    print(f'bench_overload: {benchlib.machine_line()}, {time.strftime("%Y-%m-%d %H:%M %Z")}; '
+          f'ROS_DOMAIN_ID={domain}', flush=True)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as logdir:
-        m = measure(args.seconds, args.after, args.executor, args.call_timeout, logdir,
-                    args.caller_heartbeat, args.rate, args.tf)
+        m = measure(args.seconds, args.after, args.call_timeout, logdir, args.rate, args.tf)
     print_results(m)
     benchlib.write_json(args.json, m)
     return 0

@@ -1,11 +1,13 @@
 """
 What one picture (~/markers + ~/screw_axis) costs rotation_node, next to an input's work.
 
-In-process, no transport: a RotationNode's ~/pose callback is called on 1000 random poses
-(unit quaternions, positions in [-2, 2]^3) with publish_markers off, then again with the
-picture of every input drawn and published at once (what each input would cost without the
-node's MARKER_RATE throttle). Best of --repeats passes; no subscriber is matched, so the
-publishes serialise but send nothing. This is why the node throttles its pictures.
+In-process, no transport: a RotationNode's ``~/pose`` subscription callback is called, as the
+executor calls it, on 1000 random PoseStamped (unit quaternions, positions in [-2, 2]^3) with
+publish_markers off; then, with publish_markers on, each input is followed by a call of every
+timer callback of the node (the pictures are drawn on a timer), so that every input's picture
+is drawn and published at once (what each input would cost without the node's limited
+picture rate). Best of --repeats passes; no subscriber is matched, so the publishes convert
+but send nothing. This is why the node limits its pictures' rate.
 
 Run: ``.venv/bin/python bench/picture_cost.py``.
 """
@@ -19,9 +21,8 @@ import numpy as np
 
 
 def poses(n, seed=3):
-    """Return n random PoseStamped, serialised: rotation_node subscribes raw (the bytes)."""
+    """Return n random PoseStamped message objects."""
     from geometry_msgs.msg import PoseStamped
-    from rclpy.serialization import serialize_message
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(n):
@@ -32,7 +33,7 @@ def poses(n, seed=3):
         o, p = msg.pose.orientation, msg.pose.position
         o.x, o.y, o.z, o.w = q.tolist()
         p.x, p.y, p.z = rng.uniform(-2.0, 2.0, 3).tolist()
-        out.append(serialize_message(msg))
+        out.append(msg)
     return out
 
 
@@ -54,30 +55,32 @@ def main(argv=None):
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
     from rclpy.parameter import Parameter
-    from rot_tools.ros.rotation_node import MARKER_RATE, RotationNode
+    from rot_tools.ros.rotation_node import RotationNode
 
     rclpy.init()
-    node = RotationNode('bench_picture_cost',
-                        parameter_overrides=[Parameter('publish_markers', value=False)])
+    nodes = {markers: RotationNode(f'bench_picture_cost_{markers}', parameter_overrides=[
+        Parameter('publish_markers', value=markers)]) for markers in (False, True)}
     try:
-        source = node._sources[0]  # ~/pose
         msgs = poses(args.n)
-        work = best_per_call(lambda msg: node._on_input(source, msg), msgs, args.repeats)
-        node._settings = node._settings._replace(publish_markers=True)
+        on_pose = {markers: next(sub.callback for sub in node.subscriptions
+                                 if sub.topic_name.endswith('/pose'))
+                   for markers, node in nodes.items()}
+        timers = [timer.callback for timer in nodes[True].timers]
+        work = best_per_call(on_pose[False], msgs, args.repeats)
 
         def with_picture(msg):
-            node._on_input(source, msg)
-            node._publish_picture()  # at once, as without the throttle
+            on_pose[True](msg)
+            for timer in timers:  # at once, as without the limited rate
+                timer()
         both = best_per_call(with_picture, msgs, args.repeats)
     finally:
-        node.destroy_node()
+        for node in nodes.values():
+            node.destroy_node()
         rclpy.try_shutdown()
     print(f'per input, best of {args.repeats} passes over {args.n} random poses:')
     print(f'  the work of an input, no picture:   {work * 1e6:7.0f} us')
     print(f'  the same with its picture drawn:    {both * 1e6:7.0f} us '
           f'(the picture: {(both - work) * 1e6:.0f} us, {(both - work) / work:.1f} x the work)')
-    print(f'  throttled to {MARKER_RATE:g} pictures/s, they cost at most '
-          f'{(both - work) * MARKER_RATE:.1%} of a core')
 
 
 if __name__ == '__main__':

@@ -12,15 +12,14 @@ a subscriber, prints ``ready``, then reads commands on stdin, one a line:
     publish RATE msg/s for SECONDS, each message stamped from the wall clock
     (time.time_ns) just before it is published; prints ``done SENT ELAPSED`` (elapsed
     seconds of the flood). RATE ``max``: as fast as this process can publish, for SECONDS
-    of wall time (the fastest flood one publisher sends on the loopback: ~57k PoseStamped
-    a second on the 2-core machine of bench/README.md). SCENARIO (a /tf topic only; see
-    TF_SCENARIOS): ``steady`` (the default), ``large``, ``reparent`` or ``jump``.
+    of wall time (the fastest flood one publisher sends on the loopback). SCENARIO (a /tf
+    topic only; see TF_SCENARIOS): ``steady`` (the default), ``large``, ``reparent`` or ``jump``.
 ``quit``
     exit
 
 Messages come from a pool of 1000 random valid poses (unit quaternions), so the node does
-its full work on every one. The TF messages (tf_message, large_tf_message) are shared with
-bench_first_calls.py.
+its full work on every one. The TF stream's messages (tf_pool, tf_message, static_map_odom)
+are shared with bench_first_calls.py.
 """
 
 import math
@@ -37,8 +36,8 @@ NS = 1_000_000_000
 
 TF_SCENARIOS = {
     'steady': 'one transform odom → base_link a message, stamped now',
-    'large': 'steady, and every LARGE_PERIOD s a burst of LARGE_BURST TFMessages of '
-             'LARGE_TRANSFORMS transforms (odom → flood_000000 …)',
+    'large': 'steady, and every LARGE_PERIOD s one TFMessage of LARGE_TRANSFORMS transforms '
+             '(odom → flood_000000 …), LARGE_COUNT in all',
     'reparent': "steady, base_link's parent changing at every message: odom, map, odom … "
                 '(map → odom static)',
     'jump': "steady, the stream's clock going back JUMP_SECONDS every second, and every "
@@ -47,8 +46,8 @@ TF_SCENARIOS = {
 """What a /tf flood sends (the node follows base_link in odom)."""
 
 LARGE_TRANSFORMS = 100_000
-LARGE_BURST = 3
-LARGE_PERIOD = 5.0
+LARGE_COUNT = 10
+LARGE_PERIOD = 1.0
 JUMP_SECONDS = 30
 FUTURE_EVERY = 100
 FUTURE_SECONDS = 1_000_000
@@ -112,7 +111,12 @@ def tf_message(pool, k, now_ns, start_ns, scenario):
 
 
 def large_tf_message(now_ns, count=LARGE_TRANSFORMS):
-    """Return the CDR bytes of a TFMessage of ``count`` transforms odom → flood_NNNNNN."""
+    """
+    Return a TFMessage of ``count`` transforms odom → flood_NNNNNN, serialised.
+
+    Published as bytes (rclpy's publish takes them), so that the flooder does not convert
+    the message again at every publication.
+    """
     from rclpy.serialization import serialize_message
     from tf2_msgs.msg import TFMessage
     sec, nanosec = divmod(now_ns, NS)
@@ -161,8 +165,8 @@ class TfSender:
 
     The large messages go out through a publisher of their own (``large_publisher``), as from
     another tf2 broadcaster: on the stream's own writer (keep-last 100) the stream's next
-    100 messages would push a large one out of the writer's history before its fragments
-    (10 MB: ~160 of 64 kB) were all sent, and the node would never get one whole.
+    100 messages would push a large one out of the writer's history before all its
+    fragments were sent, and the node would never get one whole.
     """
 
     def __init__(self, publisher, large_publisher):
@@ -175,15 +179,15 @@ class TfSender:
         if scenario == 'large' and self.large is None:
             self.large = large_tf_message(time.time_ns())  # (built once, before the clock)
         start_ns = time.time_ns()
-        bursts = [0]
+        sent_large = [0]
         publish, pool, clock = self.publisher.publish, self.pool, time.time_ns
 
         def send(k):
             now = clock()
-            if scenario == 'large' and now - start_ns >= bursts[0] * LARGE_PERIOD * NS:
-                bursts[0] += 1
-                for _ in range(LARGE_BURST):
-                    self.large_publisher.publish(self.large)
+            if (scenario == 'large' and sent_large[0] < LARGE_COUNT
+                    and now - start_ns >= sent_large[0] * LARGE_PERIOD * NS):
+                sent_large[0] += 1
+                self.large_publisher.publish(self.large)
             publish(tf_message(pool, k, now, start_ns, scenario))
         return send
 

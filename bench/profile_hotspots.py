@@ -5,9 +5,10 @@ Not a ratio benchmark: a tool for whoever optimises rot_tools. It prints
 
 1. for each public conversion called on one item, the time per call and the functions with
    the most own time (cProfile, tottime), so the Python overhead around the formula shows;
-2. the in-process cost of rotation_node's ``~/pose`` callback against the relay's (the same
-   message, called directly, no DDS transport; publishing to topics nobody subscribes), and
-   the callback's cProfile.
+2. the in-process cost of rotation_node's ``~/pose`` callback against usual_node.py's (scipy
+   per message) and relay_node.py's (constant outputs): the same message object, each
+   subscription's callback called directly, as the executor calls it, no DDS transport,
+   publishing to topics nobody subscribes; and the node's callback's cProfile.
 
 Run: ``.venv/bin/python bench/profile_hotspots.py [--top N] [--skip-node]``.
 """
@@ -23,7 +24,7 @@ import timeit
 
 import numpy as np
 import rot_tools as rt
-from rot_tools.core.decomposition import decompose_values
+from rot_tools.core.decomposition import decompose
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -63,11 +64,16 @@ def math_paths(top):
         ('screw_log(R, b)', lambda: rt.screw_log(R, b)),
         ('screw_from_transform(R, b, check=False)',
          lambda: rt.screw_from_transform(R, b, check=False)),
-        ("decompose_values(R, b, 'ZYX') (the node's numbers for one input)",
-         lambda: decompose_values(R, b, 'ZYX')),
+        ("decompose(R, b, 'ZYX') (the node's numbers for one input)",
+         lambda: decompose(R, b, 'ZYX')),
     ]
     for label, fn in cases:
         profile_calls(label, fn, 20000, top)
+
+
+def _pose_callback(node):
+    """Return the callback of ``node``'s ~/pose subscription, as the executor calls it."""
+    return next(sub.callback for sub in node.subscriptions if sub.topic_name.endswith('/pose'))
 
 
 def node_callback(top):
@@ -76,19 +82,16 @@ def node_callback(top):
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.parameter import Parameter
-    from rclpy.serialization import deserialize_message, serialize_message
     from rot_tools.ros.rotation_node import RotationNode
     sys.path.insert(0, HERE)
     from relay_node import RelayNode
+    from usual_node import UsualNode
 
     rclpy.init()
     try:
-        relay = RelayNode('profile_relay')
+        others = {'usual way': UsualNode('profile_usual'), 'relay': RelayNode('profile_relay')}
         nodes = {markers: RotationNode(f'profile_rot_tools_{markers}', parameter_overrides=[
             Parameter('publish_markers', value=markers)]) for markers in (False, True)}
-        # ~/pose's callback as the executor calls it: _on_input bound to the ~/pose source
-        on_pose = {markers: partial(node._on_input, node._sources[0])
-                   for markers, node in nodes.items()}
         msg = PoseStamped()
         msg.header.frame_id = 'world'
         q = np.array([0.2, -0.4, 0.5, 0.74])
@@ -96,16 +99,12 @@ def node_callback(top):
         o = msg.pose.orientation
         o.x, o.y, o.z, o.w = (float(c) for c in q)
         msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 0.4, -1.0, 2.5
-        # What each callback is handed as the executor takes it from the middleware: the
-        # node subscribes raw (the bytes), the relay takes a message object (rclpy converts
-        # the C message to Python objects first: the last line, outside the callback).
-        data = serialize_message(msg)
-        candidates = {'rot_tools, markers off': partial(on_pose[False], data),
-                      'rot_tools, markers on': partial(on_pose[True], data),
-                      'relay': partial(relay._on_pose, msg),
-                      "relay's message object": partial(deserialize_message, data, PoseStamped)}
+        candidates = {'rot_tools, markers off': partial(_pose_callback(nodes[False]), msg),
+                      'rot_tools, markers on': partial(_pose_callback(nodes[True]), msg),
+                      **{name: partial(_pose_callback(node), msg)
+                         for name, node in others.items()}}
         for cb in candidates.values():
-            for _ in range(100):  # warm (caches, first calls of NumPy and rclpy)
+            for _ in range(100):  # warm (caches, first calls of NumPy, scipy and rclpy)
                 cb()
         times = {}
         for _ in range(5):  # interleaved
@@ -113,17 +112,16 @@ def node_callback(top):
                 t = min(timeit.repeat(cb, number=2000, repeat=1)) / 2000
                 times.setdefault(name, []).append(t)
         relay_us = min(times['relay']) * 1e6
-        print('\n== ~/pose callback in-process (no subscribers, no transport; markers are '
-              'throttled to 30 pictures/s, so in a tight loop almost every call skips them)')
+        print('\n== ~/pose callback in-process (no subscribers, no transport; the pictures '
+              'are drawn on a timer, not called here)')
         for name in candidates:
             us = min(times[name]) * 1e6
             print(f'   {name:24s} {us:6.1f} us ({us / relay_us:.2f}x the relay, '
                   f'{us - relay_us:+.1f} us)')
         profile_calls('rotation_node ~/pose callback, markers off',
                       candidates['rot_tools, markers off'], 5000, 2 * top, sort='cumulative')
-        for node in nodes.values():
+        for node in [*nodes.values(), *others.values()]:
             node.destroy_node()
-        relay.destroy_node()
     finally:
         rclpy.try_shutdown()
 

@@ -2,13 +2,13 @@
 A bare rclpy relay: rotation_node's per-input topics and QoS, constant content, no math.
 
 The ceiling of rclpy's own messaging on this machine, the second baseline of bench_node.py.
-It subscribes ``~/pose`` (geometry_msgs/PoseStamped, sensor-data QoS) and, for every
-message, publishes the six outputs usual_node.py and rotation_node publish (reliable, depth
-10): ``~/rotation_matrix`` (Float64MultiArray), ``~/quaternion`` (QuaternionStamped),
-``~/axis_angle``, ``~/euler_angles`` and ``~/rpy`` (Vector3Stamped) and ``~/screw``
-(TwistStamped). The messages are made once at start-up; each callback only puts the input's
-header into the stamped ones and publishes them. A plain message-object node, as
-usual_node.py, started and ended the same way.
+It subscribes ``~/pose`` (geometry_msgs/PoseStamped, with rotation_node's input QoS) and,
+for every message, publishes the six outputs usual_node.py and rotation_node publish
+(reliable, depth 10): ``~/rotation_matrix`` (Float64MultiArray), ``~/quaternion``
+(QuaternionStamped), ``~/axis_angle``, ``~/euler_angles`` and ``~/rpy`` (Vector3Stamped)
+and ``~/screw`` (TwistStamped). The messages are made once at start-up; each callback only
+puts the input's header into the stamped ones and publishes them. A plain message-object
+node, as usual_node.py, started and ended the same way.
 
 Run: ``.venv/bin/python bench/relay_node.py [--ros-args -r __node:=NAME]`` (default name
 ``relay``); SIGINT / SIGTERM end it.
@@ -21,7 +21,8 @@ from geometry_msgs.msg import Vector3Stamped
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from rclpy.qos import QoSProfile
+from rot_tools.ros.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 
 
@@ -38,7 +39,7 @@ class RelayNode(Node):
         self.rpy_pub = self.create_publisher(Vector3Stamped, '~/rpy', qos)
         self.screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
         self.pose_sub = self.create_subscription(PoseStamped, '~/pose', self.on_pose,
-                                                 qos_profile_sensor_data)
+                                                 INPUT_QOS)
 
         self.matrix = Float64MultiArray(
             layout=MultiArrayLayout(

@@ -2,10 +2,10 @@
 rotation_node's job on ~/pose written the usual way: message objects, scipy per message.
 
 What an engineer would write without rot_tools, the way ros2/demos write a node: it
-subscribes ``~/pose`` (geometry_msgs/PoseStamped, sensor-data QoS), refuses a pose whose
-numbers are not finite or whose quaternion is off unit by more than the tolerance, and for
-every other one builds scipy's ``Rotation`` and publishes fresh message objects (reliable,
-depth 10) on rotation_node's topics:
+subscribes ``~/pose`` (geometry_msgs/PoseStamped, with rotation_node's input QoS), refuses a
+pose whose numbers are not finite or whose quaternion is off unit by more than the
+tolerance, and for every other one builds scipy's ``Rotation`` and publishes fresh message
+objects (reliable, depth 10) on rotation_node's topics:
 
 - ``~/rotation_matrix`` (Float64MultiArray, row-major, rows/cols layout): ``as_matrix()``;
 - ``~/quaternion`` (QuaternionStamped): ``as_quat(canonical=True)``;
@@ -32,9 +32,10 @@ import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data, QoSProfile
+from rclpy.qos import QoSProfile
 from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.ros.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
@@ -64,7 +65,7 @@ class UsualNode(Node):
         self.rpy_pub = self.create_publisher(Vector3Stamped, '~/rpy', qos)
         self.screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
         self.pose_sub = self.create_subscription(PoseStamped, '~/pose', self.on_pose,
-                                                 qos_profile_sensor_data)
+                                                 INPUT_QOS)
 
     def on_pose(self, msg):
         p, o = msg.pose.position, msg.pose.orientation
