@@ -465,7 +465,7 @@ def test_unreachable_topic(node_process):
 
 @pytest.mark.parametrize('args, message', [
     (('euler', 'ZYX', 1, 2), 'euler takes 3 numbers (A1 A2 A3), got 2'),
-    (('euler', 'QQQ', 1, 2, 3), "argument SEQ: invalid choice: 'QQQ' (choose from 'XYX'"),
+    (('euler', 'QQQ', 1, 2, 3), "argument SEQ: unknown Euler sequence 'QQQ': use one of the 12"),
     (('pose', 1, 2, 3, 'x', 0, 0, 1), "not a number: 'x'"),
     (('orientation', 0, 0, 1), 'orientation takes 4 numbers (QX QY QZ QW), got 3'),
     (('screw-path', *[0] * 13), 'screw-path takes 14 numbers'),

@@ -30,11 +30,11 @@ import sys
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.cli import output_file
+from rot_tools.cli import options, output_file
 from rot_tools.core import trajectory
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import matrix_to_quaternion
-from rot_tools.io import bag_read
+from rot_tools.io import arguments, bag_read
 from rot_tools.io.report import round_number, to_json, to_yaml
 from rot_tools.io.trajectory_files import Poses, read_text, TrajectoryFileError
 
@@ -97,9 +97,9 @@ def _offset(text):
             f"expected 'auto' or seconds, got {text.strip()!r}") from None
 
 
-def add_parser(sub, plot_file, precision, version):
-    """Add the compare command to ``sub``; the common option types come from rot_tools.cli."""
-    p = sub.add_parser(
+def add_parser(subparsers):
+    """Add ``rot-tools compare`` to argparse's subparsers action and return its parser."""
+    p = subparsers.add_parser(
         'compare', help='an orientation against ground truth: errors, offset, mounting',
         usage='rot-tools compare EST REF [--est-topic T] [--ref-topic T] [--est-tf A B]\n'
         '       [--ref-tf A B] [--match interpolate|nearest] [--max-gap S]\n'
@@ -110,7 +110,6 @@ def add_parser(sub, plot_file, precision, version):
         epilog='examples:\n  rot-tools compare est.tum gt.csv --align se3 --deg\n'
         '  rot-tools compare run.bag gt.tum --est-topic /imu/data --offset auto --mounting\n'
         '  rot-tools compare est.tum ref.tum --match nearest --align se3 --deg --json')
-    p.set_defaults(handler=None)
     for side, name in (('est', 'EST'), ('ref', 'REF')):
         p.add_argument(side, metavar=name, help='a bag, a TUM file or an EuRoC CSV')
         p.add_argument(f'--{side}-topic', metavar='T', help=f'the topic of {name} in its bag')
@@ -142,16 +141,15 @@ def add_parser(sub, plot_file, precision, version):
                    help='write one row per match: stamp (s), angle, roll, pitch, yaw of E')
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
-    common.add_argument('--deg', action='store_true', default=suppress,
-                        help='angles in degrees')
-    common.add_argument('--json', action='store_true', default=suppress,
-                        help='print JSON instead of YAML')
-    common.add_argument('--precision', type=precision, default=suppress, metavar='N',
-                        help='round numbers to N significant digits and N decimal places')
-    common.add_argument('--plot', type=plot_file, default=suppress, metavar='FILE',
+    arguments.add_deg(common, 'angles in degrees', suppress)
+    arguments.add_json(common, default=suppress)
+    arguments.add_precision(common, 'round numbers to N significant digits and N decimal places',
+                            suppress)
+    common.add_argument('--plot', type=options.plot_file, default=suppress, metavar='FILE',
                         help='draw the error angle and its roll, pitch, yaw against time in '
                         "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
-    common.add_argument('--version', action=version, help='print the version and exit')
+    arguments.add_version(common)
+    return p
 
 
 # ---- reading ------------------------------------------------------------------------------
@@ -390,39 +388,39 @@ def write_plot(path, result, degrees):
         fig.savefig(out, format=os.path.splitext(str(path))[1][1:].lower())
 
 
-def _refuse_overwriting(args, error):
-    """Call error when --csv or --plot names EST or REF (or a file inside a bag directory)."""
+def _refuse_overwriting(args):
+    """One error line when --csv or --plot names EST or REF (or a file in a bag directory)."""
     inputs = [Path(p).resolve() for p in (args.est, args.ref)]
     for option, path in (('--csv', args.csv), ('--plot', args.plot)):
         if path is None:
             continue
         target = Path(path).resolve()
         if any(target == source or target.is_relative_to(source) for source in inputs):
-            error(f'{option} {path} would overwrite an input: refused')
+            options.error(f'{option} {path} would overwrite an input: refused')
 
 
-def run(args, error):
-    """rot-tools compare with parsed ``args``; ``error(text)`` prints one line and exits 2."""
+def run(args):
+    """Run rot-tools compare on the parsed ``args``; return the exit status (0)."""
     for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
                           ('--all-sequences', args.all_sequences), ('--seq', args.seq),
                           ('--tol', args.tol)):
         if given:
-            error(f'{option} does not apply to compare')
-    _refuse_overwriting(args, error)
+            options.error(f'{option} does not apply to compare')
+    _refuse_overwriting(args)
     try:
         est = read_side('EST', args.est, args.est_topic, args.est_tf)
         ref = read_side('REF', args.ref, args.ref_topic, args.ref_tf)
         result = compare(est, ref, args)
     except (CompareError, TrajectoryFileError, bag_read.BagError, RotationError) as exc:
-        error(f'compare: {exc}')
+        options.error(f'compare: {exc}')
     if args.plot:
         output_file.write_figure(lambda: write_plot(args.plot, result, args.deg), args.plot,
-                                 error)
+                                 options.error)
     if args.csv is not None:
         try:
             write_csv(args.csv, result, args.deg, args.precision)
         except OSError as exc:
-            error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
+            options.error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
     data = report(result, est, ref, args)
     text = to_json if args.json else to_yaml
     sys.stdout.write(text(data, precision=args.precision))

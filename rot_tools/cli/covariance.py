@@ -2,8 +2,8 @@
 ``rot-tools covariance INPUT ARGS... --cov C11 .. C33 --from A --to B``: one covariance, re-read.
 
 The rotation is typed as the one-shot commands take it (``quaternion X Y Z W``, ``euler SEQ
-A1 A2 A3``, ``matrix``, ``axis-angle``, ``rotvec``, ``frame``: rot_tools.cli.main parses
-it); the covariance of its small error is 9 numbers, row by row, in rad². A and B are each
+A1 A2 A3``, ``matrix``, ``axis-angle``, ``rotvec``, ``frame``: read by those commands'
+modules); the covariance of its small error is 9 numbers, row by row, in rad². A and B are each
 
 - ``rotvec``: a small rotation vector δ, about the parent's fixed X, Y, Z (``--frame
   parent``, R_true = exp([δ]×)·R, as geometry_msgs/PoseWithCovariance documents it) or about
@@ -33,28 +33,33 @@ import math
 import sys
 
 import numpy as np
+from rot_tools.cli import axis_angle, euler, frame, matrix, options, quaternion, rotvec
+from rot_tools.cli import typed_rotation
 from rot_tools.core.covariance import change_covariance_frame, euler_covariance_to_rotvec
 from rot_tools.core.covariance import FRAMES, rotvec_covariance_to_euler, validate_covariance
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import EULER_SEQUENCES, GIMBAL_LOCK_TOL, matrix_to_euler
+from rot_tools.core.euler import EULER_SEQUENCES, GIMBAL_LOCK_TOL, matrix_to_euler, RPY_SEQUENCE
+from rot_tools.io import arguments
 from rot_tools.io.message_covariance import stddev_correlation
 from rot_tools.io.report import DEFAULT_PRECISION, sequence_hint, to_json, to_yaml
 
 ROTVEC, RPY = 'rotvec', 'rpy'
-INPUTS = ('euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion', 'frame')
-"""The rotation's input kinds: rot-tools' one-shot commands that give a rotation."""
+INPUTS = (euler, matrix, axis_angle, rotvec, quaternion, frame)
+"""The rotation's input kinds: rot-tools' one-shot commands that give a rotation, each
+module's words (add_words) and reading (rotation)."""
 COMMON = ('--deg', '--json', '--precision', '--tol', '--wxyz', '--version')
 """rot-tools' common options that apply here (--deg: the angles typed in the rotation)."""
 
 _REPRESENTATION_HELP = (
     'rotvec (a small rotation vector, in --frame), rpy (roll, pitch, yaw about the fixed '
-    'X, Y, Z: the sequence xyz) or an Euler sequence (XYZ ... ZYZ intrinsic, xyz ... zyz '
-    'extrinsic)')
+    f'X, Y, Z: the sequence {RPY_SEQUENCE}) or an Euler sequence (XYZ ... ZYZ intrinsic, '
+    'xyz ... zyz extrinsic)')
 _TEXT = (
     'The covariance (9 numbers, row by row, rad²) of the small error of a rotation, read\n'
     "as --from and printed as --to: rotvec (a rotation vector about the parent's fixed\n"
     'X, Y, Z, as geometry_msgs/PoseWithCovariance documents it, or with --frame body\n'
-    "about the body's own axes), rpy (roll, pitch, yaw: the extrinsic sequence xyz) or\n"
+    "about the body's own axes), rpy (roll, pitch, yaw: the extrinsic sequence "
+    f'{RPY_SEQUENCE}) or\n'
     'any of the 24 Euler sequences. First order: Σ_θ = E⁻¹·Σ_δ·E⁻ᵀ with E the\n'
     "Euler-rate matrix at R's angles; sequence to sequence through the rotation vector.\n"
     'Prints covariance (rad²), stddev (rad), stddev_deg, correlation, degenerate.\n'
@@ -79,14 +84,18 @@ def _representation(text):
         f'expected {_REPRESENTATION_HELP}, got {text.strip()!r}{sequence_hint(text)}')
 
 
-def _add_options(p, number, suppress):
-    """--cov, --from, --to, --frame, --to-frame on p: defaults on the command, none on INPUTs."""
+def _add_options(p, suppress):
+    """
+    Add --cov, --from, --to, --frame, --to-frame to p: defaults on the command, none on INPUTs.
+
+    An INPUT's --cov takes every number that follows, so that a wrong count is counted in
+    the error line (run).
+    """
     def default(value):
         return argparse.SUPPRESS if suppress else value
-    p.add_argument('--cov', type=number, nargs='+' if suppress else 9, default=default(None),
-                   metavar='C' if suppress else tuple(f'C{i}{j}' for i in '123' for j in '123'),
-                   help='the covariance, 9 numbers C11 C12 C13 C21 .. C33 row by '
-                   'row, rad²: finite, symmetric, positive semi-definite')
+    cov = {'nargs': '+', 'metavar': 'C'} if suppress else {}
+    arguments.add_cov(p, 'the covariance, 9 numbers C11 C12 C13 C21 .. C33 row by row, rad²: '
+                      'finite, symmetric, positive semi-definite', default=default(None), **cov)
     p.add_argument('--from', dest='source', type=_representation, default=default(None),
                    metavar='A', help=f'how the covariance is read: {_REPRESENTATION_HELP}')
     p.add_argument('--to', dest='target', type=_representation, default=default(None),
@@ -99,50 +108,51 @@ def _add_options(p, number, suppress):
                    '--frame (parent to body: Rᵀ·Σ·R)')
 
 
-def add_parser(sub, commands, add_words, add_common, number):
-    """
-    Add the covariance command to ``sub``, with one parser per input kind of the rotation.
+def _add_leading_options(p):
+    """Add the options that may come before INPUT: theirs, and the common ones that apply."""
+    _add_options(p, suppress=False)
+    options.add_common(p, suppress=True, only=COMMON)
 
-    From rot_tools.cli.main: ``commands`` its table of one-shot commands (name → handler,
-    summary, usage, ...), ``add_words(p, name)`` adds the rotation's words of a kind,
-    ``add_common(p, suppress, only)`` the common options, ``number`` the type of a number.
+
+def add_parser(subparsers):
     """
-    p = sub.add_parser(
+    Add ``rot-tools covariance`` to argparse's subparsers action and return its parser.
+
+    Its commands are the input kinds of the rotation (INPUTS), each with the words of its
+    one-shot command.
+    """
+    p = subparsers.add_parser(
         'covariance', help="a rotation's covariance as another representation (rotvec, rpy, "
         'an Euler sequence)',
         usage='rot-tools covariance INPUT ARGS... --cov C11 .. C33 --from A --to B\n'
         '       [--frame parent|body] [--to-frame parent|body] [--json] [--deg] [--precision N]',
         description=f"A rotation's covariance as another representation.\n\n{_TEXT}",
-        epilog=f'INPUT is one of {", ".join(INPUTS)},\nwith its words as for '
-        '"rot-tools INPUT" ("rot-tools covariance INPUT --help").\n\nexamples:\n  '
+        epilog=f'INPUT is one of {", ".join(kind.NAME for kind in INPUTS)},\nwith its words as '
+        'for "rot-tools INPUT" ("rot-tools covariance INPUT --help").\n\nexamples:\n  '
         + _EXAMPLES.replace('\n', '\n  '))
-    p.intermixed = False  # argparse cannot intermix a parser that has commands of its own
-    p.set_defaults(handler=None)
-    _add_options(p, number, suppress=False)
-    add_common(p, suppress=True, only=COMMON)
-    inputs = p.add_subparsers(dest='input', metavar='INPUT', required=True,
-                              parser_class=type(p))
-    for name in INPUTS:
-        summary, usage = commands[name][1], commands[name][2]
-        words = usage.splitlines()[0].split(' [options]')[0]
+    inputs = p.add_commands(_add_leading_options, dest='input', metavar='INPUT', required=True)
+    for kind in INPUTS:
+        words = kind.USAGE.splitlines()[0].split(' [options]')[0]
         q = inputs.add_parser(
-            name, help=summary,
+            kind.NAME, help=kind.SUMMARY,
             usage=f'rot-tools covariance {words}\n       --cov C11 .. C33 --from A --to B '
             '[--frame parent|body] [options]',
-            description=f'The covariance of a rotation given as {summary}.\n\n{_TEXT}')
-        add_words(q, name)
-        _add_options(q, number, suppress=True)
-        add_common(q, suppress=True, only=COMMON)
+            description=f'The covariance of a rotation given as {kind.SUMMARY}.\n\n{_TEXT}')
+        q.set_defaults(rotation=kind.rotation)
+        kind.add_words(q)
+        _add_options(q, suppress=True)
+        options.add_common(q, suppress=True, only=COMMON)
+    return p
 
 
 def _sequence(word):
-    return 'xyz' if word == RPY else word
+    return RPY_SEQUENCE if word == RPY else word
 
 
-def _frames(args, error):
+def _frames(args):
     """Return (from_frame, to_frame): the rotation vectors' frames, None for Euler angles."""
     if args.to_frame is not None and args.target != ROTVEC:
-        error('--to-frame applies to --to rotvec only (Euler angles have no frame)')
+        options.error('--to-frame applies to --to rotvec only (Euler angles have no frame)')
     source = args.frame if args.source == ROTVEC else None
     target = (args.to_frame or args.frame) if args.target == ROTVEC else None
     return source, target
@@ -208,39 +218,33 @@ def _lock_note(seq):
             'not exist; covariance and stddev are null')
 
 
-def run(args, parser, rotation):
-    """
-    Run rot-tools covariance on parsed ``args``; return the exit status (0).
-
-    ``rotation(args, parser, what)`` is rot_tools.cli.main's reading of the typed rotation:
-    (R, b, sequence), or one ``rot-tools: error:`` line and exit 2 (parser.error).
-    """
+def run(args):
+    """Run rot-tools covariance on the parsed ``args``; return the exit status (0)."""
     for option, given in (('--seq', args.seq), ('--all-sequences', args.all_sequences),
                           ('--point', args.point), ('--plot', args.plot)):
         if given:
-            parser.error(f'{option} does not apply to covariance')
+            options.error(f'{option} does not apply to covariance')
     missing = [o for o, v in (('--cov', args.cov), ('--from', args.source),
                               ('--to', args.target)) if v is None]
     if missing:
-        parser.error(f'the following arguments are required: {", ".join(missing)}')
+        options.error(f'the following arguments are required: {", ".join(missing)}')
     if len(args.cov) != 9:
-        parser.error(f'--cov: expected 9 numbers (C11 C12 C13 C21 .. C33, row by row, rad²), '
-                     f'got {len(args.cov)}')
-    frames = _frames(args, parser.error)
-    args.hints = []
-    R, _, _ = rotation(args, parser, f'covariance {args.input}')
+        options.error(f'--cov: expected 9 numbers (C11 C12 C13 C21 .. C33, row by row, rad²), '
+                      f'got {len(args.cov)}')
+    frames = _frames(args)
+    R, _, _ = typed_rotation.read(args, args.rotation, f'covariance {args.input}')
     C = np.reshape(args.cov, (3, 3))
     with np.errstate(all='ignore'):  # entries near 1e308: converted as C / max|C| (report)
         try:
             validate_covariance(C, name='--cov')
             data, locked = report(R, C, args.source, args.target, frames, args.precision)
         except RotationError as exc:
-            parser.error(str(exc))
+            options.error(str(exc))
     text = to_json if args.json else to_yaml
     sys.stdout.write(text(data, precision=None))
     sys.stdout.flush()  # before the note or hint: in this order on a shared terminal or pipe
     if locked is not None:
-        sys.stderr.write(f'rot-tools: note: {_lock_note(locked)}\n')
+        sys.stderr.write(f'{options.PROG}: note: {_lock_note(locked)}\n')
     for hint in args.hints:
-        sys.stderr.write(f'rot-tools: hint: {hint}\n')
+        sys.stderr.write(f'{options.PROG}: hint: {hint}\n')
     return 0

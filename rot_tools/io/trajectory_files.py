@@ -9,17 +9,16 @@ Trajectory text files: TUM and EuRoC ground truth, read into stamps, rotations a
   Stamps become seconds as t = ns / 10⁹ (as evo reads them).
 
 A quaternion q becomes R by rot_tools.quaternion_to_matrix after it is normalised; one whose
-norm is off 1 by more than QUATERNION_TOL (a typo, a zero) is refused. Stamps must increase
-strictly. Every refusal is a TrajectoryFileError naming the file, the line and the value.
+norm is off 1 by more than rot_tools.io.boundary.QUATERNION_TOLERANCE (rotation_node's
+quaternion_tolerance: a typo, a zero) is refused. Stamps must increase strictly. Every refusal
+is a TrajectoryFileError naming the file, the line and the value.
 """
 
 from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core.so3 import quaternion_to_matrix
-
-QUATERNION_TOL = 1e-3
-"""Largest |‖q‖ − 1| of a quaternion read (rotation_node's quaternion_tolerance)."""
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
 
 
 class TrajectoryFileError(ValueError):
@@ -79,11 +78,11 @@ def _poses(path, rows, stamps, b, q, name):
             f'{rows[k - 1]}: stamps must increase')
     norm = np.linalg.norm(q, axis=1)
     off = np.abs(norm - 1)
-    if (off > QUATERNION_TOL).any():
+    if (off > QUATERNION_TOLERANCE).any():
         k = int(np.argmax(off))
         raise TrajectoryFileError(
             f'{path}:{rows[k]}: quaternion of norm {norm[k]:.6g}, off 1 by more than '
-            f'{QUATERNION_TOL:g}')
+            f'{QUATERNION_TOLERANCE:g}')
     return Poses(stamps, quaternion_to_matrix(q / norm[:, None]), b, name)
 
 

@@ -14,11 +14,8 @@ import math
 import re
 
 import numpy as np
-from rot_tools.core.euler import EULER_SEQUENCES
-from rot_tools.io import interface
-from rot_tools.io.arguments import negative_numbers_as_values, whole_number
+from rot_tools.io import arguments, interface
 from rot_tools.io.report import angle_hint
-from rot_tools.ros import runtime
 
 PROG = 'rotation_client'
 DEFAULT_NODE = '/rot_tools'
@@ -56,39 +53,8 @@ def names_used():
     return tuple(row.name for row in interface.INPUTS + interface.OUTPUTS) + SERVICES_USED
 
 
-class _Parser(argparse.ArgumentParser):
-    """Errors are one line on stderr (no usage block), exit status 2."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, formatter_class=argparse.RawDescriptionHelpFormatter,
-                         **kwargs)
-
-    def error(self, message):
-        self.exit(2, f'{PROG}: error: {" ".join(str(message).split())}\n')
-
-
-class _Version(argparse.Action):
-    """--version: the installed distribution's version, printed without starting ROS."""
-
-    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
-                 help=None):  # noqa: A002
-        super().__init__(option_strings, dest, nargs=0, default=default, help=help)
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        print(runtime.program_version(PROG))
-        parser.exit(0)
-
-
-def _number(text):
-    """Any float, NaN and Inf included: the node, not the client, decides what it refuses."""
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'not a number: {text.strip()!r}') from None
-
-
 def _positive(text):
-    value = _number(text)
+    value = arguments.any_number(text)
     if not (math.isfinite(value) and value > 0.0):
         raise argparse.ArgumentTypeError(f'must be a number > 0, got {text.strip()!r}')
     return value
@@ -102,7 +68,7 @@ def _tolerance(text):
     into inf for a single step: both are refused. NaN, and values ≤ 0 (all mean 20 steps)
     are sent as given.
     """
-    value = _number(text)
+    value = arguments.any_number(text)
     if math.isfinite(value) and value > 0.0:
         with np.errstate(over='ignore', under='ignore'):
             sent = float(np.float32(value))
@@ -146,15 +112,19 @@ def _options(parser, suppress):
     parser.add_argument('--timeout', type=_positive, default=default(DEFAULT_TIMEOUT),
                         metavar='SECONDS', help='bound of every wait: discovery, an answer '
                         f'(default {DEFAULT_TIMEOUT:g})')
-    parser.add_argument('--json', action='store_true', default=default(False),
-                        help='print JSON instead of YAML')
+    arguments.add_json(parser, default=default(False))
 
 
 def _wxyz_option(parser, suppress):
-    parser.add_argument('--wxyz', action='store_true',
-                        default=argparse.SUPPRESS if suppress else False,
-                        help='quaternions are given w first: QW QX QY QZ (default: the ROS '
-                        'order, QX QY QZ QW)')
+    arguments.add_wxyz(parser, 'quaternions are given w first: QW QX QY QZ (default: the ROS '
+                       'order, QX QY QZ QW)', argparse.SUPPRESS if suppress else False)
+
+
+def _leading_options(parser):
+    """Add the options before a command: --version, --node, --frame, --timeout, --json, --wxyz."""
+    arguments.add_version(parser)
+    _options(parser, suppress=False)
+    _wxyz_option(parser, suppress=False)
 
 
 USAGE = {'tf': 'REFERENCE BODY', 'echo': 'OUTPUT', 'set': 'NAME VALUE'}
@@ -229,11 +199,11 @@ def commands():
 
 def build_parser():
     """Build the rotation_client ArgumentParser (one subparser per command)."""
-    parser = _Parser(
+    parser = arguments.Parser(
         prog=PROG, description='Send one input to a running rotation_node and print its '
-        'answer (YAML, or JSON with --json).\nOptions may come before COMMAND or after its '
-        'arguments. Quaternions are QX QY QZ QW (the ROS\norder), or QW QX QY QZ with '
-        '--wxyz.',
+        'answer (YAML, or JSON with --json).\nOptions may come before COMMAND, after its '
+        'arguments or between them.\nQuaternions are QX QY QZ QW (the ROS order), or QW QX QY '
+        'QZ with --wxyz.',
         epilog='examples:\n  rotation_client euler ZYX 30 20 10 --deg\n'
         "  rotation_client euler xyz 0.1 0.2 0.3     (sent as the node's euler_sequence)\n"
         '  rotation_client pose 1 0 0.5  0 0 1 0\n'
@@ -252,11 +222,8 @@ def build_parser():
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nnothing to describe, or a parameter the node did not set; 2 '
         'bad arguments or an input\nthe node refused; 130 Ctrl-C.')
-    parser.add_argument('--version', action=_Version, help='print the version and exit')
-    _options(parser, suppress=False)
-    _wxyz_option(parser, suppress=False)
-    sub = parser.add_subparsers(dest='command', metavar='COMMAND', required=True,
-                                parser_class=_Parser)
+    sub = parser.add_commands(_leading_options, dest='command', metavar='COMMAND',
+                              required=True)
     for name, command in commands().items():
         fields = command.row.fields if command.row is not None else {}
         usage = ' '.join(filter(None, [PROG, name, 'SEQ' if 'angles' in fields else '',
@@ -267,13 +234,12 @@ def build_parser():
                            description=f'{summary[0].upper()}{summary[1:]}.\n'
                            f'{command.text}'.strip())
         if 'angles' in fields:
-            p.add_argument('sequence', choices=EULER_SEQUENCES, metavar='SEQ',
-                           help='one of the 24 sequences, upper case intrinsic')
-            p.add_argument('--deg', action='store_true', help='the angles are in degrees')
+            arguments.add_sequence(p)
+            arguments.add_deg(p, 'the angles are in degrees')
         if command.row is not None:
             p.add_argument('--topic', metavar='TOPIC', help=TOPIC_TEXT.format(name=name))
         if command.row is not None and command.row.covariance:
-            p.add_argument('--cov', type=_number, nargs=9, metavar='C', help=COV_TEXT)
+            arguments.add_cov(p, COV_TEXT, type=arguments.any_number, metavar='C')
         if 'child_frame_id' in fields:
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
@@ -284,9 +250,9 @@ def build_parser():
             p.add_argument('reference', metavar='REFERENCE', help='the reference frame')
             p.add_argument('body', metavar='BODY', help='the frame whose pose is printed')
             p.add_argument('--once', action='store_true', help='print one report and exit')
-            p.add_argument('--seq', choices=EULER_SEQUENCES, default='ZYX', metavar='SEQ',
+            p.add_argument('--seq', type=arguments.sequence, default='ZYX', metavar='SEQ',
                            help='Euler sequence of the report (default ZYX)')
-            p.add_argument('--deg', action='store_true', help='Euler angles in degrees')
+            arguments.add_deg(p, 'Euler angles in degrees')
         elif name == 'tf-demo':
             p.add_argument('--duration', type=_positive, metavar='SECONDS',
                            help='stop after SECONDS (default: until Ctrl-C)')
@@ -297,14 +263,14 @@ def build_parser():
                            help='the topic to listen to, when the output is remapped '
                            '(default NODE/OUTPUT)')
             p.add_argument('--once', action='store_true', help='print one message and exit')
-            p.add_argument('--count', type=whole_number, metavar='N',
+            p.add_argument('--count', type=arguments.whole_number, metavar='N',
                            help='print N messages and exit')
         elif name == 'set':
             p.add_argument('name', metavar='NAME', help="the parameter's name")
             p.add_argument('value', metavar='VALUE', help='its new value')
         if command.numbers:
-            p.add_argument('numbers', type=_number, nargs='*', metavar='NUMBER',
-                           help=command.numbers)
+            arguments.add_numbers(p, 'numbers', 'NUMBER', command.numbers,
+                                  type=arguments.any_number)
         p.set_defaults(parser=p, expected=len(command.numbers.split()), row=command.row)
         _options(p, suppress=True)
         if command.quaternions:
@@ -318,7 +284,7 @@ def parse_args(argv):
 
     With --wxyz the quaternions are reordered to the ROS order (w last) here.
     """
-    args = build_parser().parse_args(negative_numbers_as_values(argv))
+    args = build_parser().parse_command_line(arguments.negative_numbers_as_values(argv))
     command = commands()[args.command]
     if args.expected and len(args.numbers) != args.expected:
         args.parser.error(f'{args.command} takes {args.expected} numbers '
