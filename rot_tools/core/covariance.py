@@ -21,10 +21,12 @@ c2 × c3, c3 × c1, c1 × c2 of the columns c1, c2, c3). Jia, "Rotation in the S
 the sequences, §3 for the rotation vector.
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from rot_tools.core._arrays import apart, as_float_array, finite_array
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence
+from rot_tools.core.euler import GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence, RPY_SEQUENCE
 from rot_tools.core.so3 import rot_x, rot_y, rot_z, skew, validate_rotation
 
 COVARIANCE_TOL = 1e-9
@@ -48,9 +50,17 @@ def _item(index):
     return f' (item {index})' if index else ''
 
 
+class CovarianceDefects(NamedTuple):
+    """How far a matrix is from a covariance, per item: C is one where both are ≤ bound."""
+
+    asymmetry: np.ndarray
+    negativity: np.ndarray
+    bound: np.ndarray
+
+
 def covariance_defects(C):
     """
-    Return (asymmetry, negativity, bound) per item of C (..., n, n), finite float64.
+    Return the CovarianceDefects per item of C (..., n, n), finite float64.
 
     asymmetry = max|C − Cᵀ|, negativity = −(lowest eigenvalue of (C + Cᵀ)/2), bound =
     COVARIANCE_TOL·max|C|: C is a covariance where both are ≤ bound. Both are computed on
@@ -63,7 +73,8 @@ def covariance_defects(C):
     S = 0.5 * (unit + np.swapaxes(unit, -1, -2))
     lowest = np.linalg.eigvalsh(S)[..., 0] if S.size else np.zeros(S.shape[:-2])
     with np.errstate(over='ignore'):  # |C − Cᵀ| up to 2·max|C|: inf where that overflows
-        return asymmetry * scale, -lowest * scale, COVARIANCE_TOL * scale
+        return CovarianceDefects(asymmetry=asymmetry * scale, negativity=-lowest * scale,
+                                 bound=COVARIANCE_TOL * scale)
 
 
 def validate_covariance(cov, size=3, name='cov'):
@@ -75,7 +86,8 @@ def validate_covariance(cov, size=3, name='cov'):
     how much, and for a batch names its worst item.
     """
     C = finite_array(cov, (size, size), name)
-    asymmetry, negativity, bound = covariance_defects(C)
+    defects = covariance_defects(C)
+    asymmetry, negativity, bound = defects.asymmetry, defects.negativity, defects.bound
     at = _worst(asymmetry, bound)
     if at is not None:
         shown, tol = apart(asymmetry[at], bound[at])
@@ -108,15 +120,22 @@ def _batch(*shapes):
             f'batch shapes {" and ".join(map(str, shapes))} do not broadcast') from None
 
 
+class _Rates(NamedTuple):
+    """The Euler-rate matrix E (..., 3, 3), and the distance to gimbal lock (...) in rad."""
+
+    E: np.ndarray
+    distance: np.ndarray
+
+
 def _rate_matrix(angles, spec, frame):
     """
-    Return (E (..., 3, 3), distance to gimbal lock (...) in rad) for Euler angles θ.
+    Return the _Rates of Euler angles θ.
 
     E's columns are the angular velocity per unit rate of θ1, θ2, θ3 (see the module
     docstring); the distance is that of φ2 to the nearest ±π/2 (Tait–Bryan) or 0, π (proper).
     """
-    i, j, k, _, proper, extrinsic = spec
-    phi = angles[..., ::-1] if extrinsic else angles
+    i, j, k, proper = spec.i, spec.j, spec.k, spec.proper
+    phi = angles[..., ::-1] if spec.extrinsic else angles
     last = i if proper else k
     turn1 = _ELEMENTARY[i](phi[..., 0])
     turn12 = turn1 @ _ELEMENTARY[j](phi[..., 1])
@@ -125,11 +144,10 @@ def _rate_matrix(angles, spec, frame):
     if frame == 'body':
         R = turn12 @ _ELEMENTARY[last](phi[..., 2])
         E = np.swapaxes(R, -1, -2) @ E
-    if extrinsic:
+    if spec.extrinsic:
         E = E[..., ::-1]
     c2, s2 = np.abs(np.cos(phi[..., 1])), np.abs(np.sin(phi[..., 1]))
-    distance = np.arctan2(s2, c2) if proper else np.arctan2(c2, s2)
-    return E, distance
+    return _Rates(E=E, distance=np.arctan2(s2, c2) if proper else np.arctan2(c2, s2))
 
 
 def _inverse(E, lock):
@@ -152,16 +170,23 @@ def _rotation_covariance(cov):
     return validate_covariance(cov, 6 if cov.shape[-2:] == (6, 6) else 3)
 
 
+class ConvertedCovariance(NamedTuple):
+    """A covariance converted between representations, NaN where degenerate (gimbal lock)."""
+
+    cov: np.ndarray
+    degenerate: np.ndarray
+
+
 def _through(M, C, distance, seq, direction):
     """
-    Return (M·C·Mᵀ, degenerate) with NaN where the angles are at gimbal lock.
+    Return the ConvertedCovariance M·C·Mᵀ, NaN where the angles are at gimbal lock.
 
     One item at lock is refused, naming the sequence and the distance to the lock.
     """
     shape = _batch(M.shape[:-2], C.shape[:-2])
     lock = np.broadcast_to(distance <= GIMBAL_LOCK_TOL, shape)
     if lock.ndim == 0 and lock:
-        where = '0 or π' if parse_sequence(seq)[4] else '±π/2'
+        where = '0 or π' if parse_sequence(seq).proper else '±π/2'
         raise RotationError(
             f'{direction}: the {seq!r} angles are {float(distance):.3g} rad from gimbal lock '
             f'(θ2 = {where}), within GIMBAL_LOCK_TOL = {GIMBAL_LOCK_TOL:g}: the covariance of '
@@ -172,13 +197,13 @@ def _through(M, C, distance, seq, direction):
         J[..., 3:, 3:] = M
         M = J
     out = _sandwich(M, C)
-    out = np.where(lock[..., None, None], np.nan, out)
-    return out, lock.copy() if lock.ndim else np.bool_(lock)
+    return ConvertedCovariance(cov=np.where(lock[..., None, None], np.nan, out),
+                               degenerate=lock.copy() if lock.ndim else np.bool_(lock))
 
 
-def rotvec_covariance_to_euler(R, cov, seq='xyz', frame='parent'):
+def rotvec_covariance_to_euler(R, cov, seq=RPY_SEQUENCE, frame='parent'):
     """
-    Covariance of R's Euler angles from that of its error δ: returns (Σ_θ, degenerate).
+    Covariance of R's Euler angles from that of its error δ: ConvertedCovariance(Σ_θ, degenerate).
 
     Σ_θ = E⁻¹·Σ_δ·E⁻ᵀ with E(θ) the Euler-rate matrix of ``seq`` in ``frame``: 'parent'
     (R_true = exp([δ]×)·R, ROS's rotations about the parent's fixed X, Y, Z) or 'body'
@@ -190,15 +215,14 @@ def rotvec_covariance_to_euler(R, cov, seq='xyz', frame='parent'):
     spec, frame = parse_sequence(seq), _choice(frame, FRAMES, 'frame')
     R = validate_rotation(R)
     C = _rotation_covariance(cov)
-    angles, _ = matrix_to_euler(R, seq, check=False)
-    E, distance = _rate_matrix(angles, spec, frame)
-    M = _inverse(E, distance <= GIMBAL_LOCK_TOL)
-    return _through(M, C, distance, seq, 'rotvec_covariance_to_euler')
+    rates = _rate_matrix(matrix_to_euler(R, seq, check=False).angles, spec, frame)
+    M = _inverse(rates.E, rates.distance <= GIMBAL_LOCK_TOL)
+    return _through(M, C, rates.distance, seq, 'rotvec_covariance_to_euler')
 
 
-def euler_covariance_to_rotvec(angles, cov, seq='xyz', frame='parent'):
+def euler_covariance_to_rotvec(angles, cov, seq=RPY_SEQUENCE, frame='parent'):
     """
-    Covariance of the error δ of a rotation from that of its Euler angles: (Σ_δ, degenerate).
+    Covariance of the error δ of a rotation from that of its Euler angles (Σ_δ, degenerate).
 
     Σ_δ = E·Σ_θ·Eᵀ, the inverse of rotvec_covariance_to_euler (same ``seq``, ``frame``, 6×6
     and gimbal-lock rules): angles (..., 3) in rad, cov (..., 3, 3) in rad² or (..., 6, 6).
@@ -206,8 +230,8 @@ def euler_covariance_to_rotvec(angles, cov, seq='xyz', frame='parent'):
     spec, frame = parse_sequence(seq), _choice(frame, FRAMES, 'frame')
     angles = finite_array(angles, (3,), 'Euler angles')
     C = _rotation_covariance(cov)
-    E, distance = _rate_matrix(angles, spec, frame)
-    return _through(E, C, distance, seq, 'euler_covariance_to_rotvec')
+    rates = _rate_matrix(angles, spec, frame)
+    return _through(rates.E, C, rates.distance, seq, 'euler_covariance_to_rotvec')
 
 
 def transform_pose_covariance(R, b, cov6, convention='ros'):

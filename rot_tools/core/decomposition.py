@@ -13,11 +13,12 @@ from types import SimpleNamespace
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.core.axis_angle import axis_angle_kernel
-from rot_tools.core.engine import FLAG, SCALAR, VECTOR
+from rot_tools.core.axis_angle import axis_angle_kernel, rotvec_of
+from rot_tools.core.engine import FLAG, InRange, SCALAR, VECTOR
 from rot_tools.core.euler import angles_kernel, GIMBAL_LOCK_TOL, parse_sequence, RPY_SEQUENCE
 from rot_tools.core.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
-from rot_tools.core.so3 import apply_to_rotations, quaternion_of_matrix_kernel
+from rot_tools.core.screw import TWIST
+from rot_tools.core.so3 import apply_to_rotations, QUATERNION, quaternion_of_matrix_kernel
 
 
 class Decomposition(NamedTuple):
@@ -46,23 +47,25 @@ class Decomposition(NamedTuple):
 
 
 _RPY = parse_sequence(RPY_SEQUENCE)
+_DECOMPOSITION = InRange(value=Decomposition(
+    axis=VECTOR, angle=SCALAR, rotvec=VECTOR, euler=VECTOR, degenerate=FLAG, rpy=VECTOR,
+    quaternion=QUATERNION, screw=Screw(direction=VECTOR, point=VECTOR, moment=VECTOR,
+                                       angle=SCALAR, translation=SCALAR, pitch=SCALAR),
+    twist=TWIST), fits=FLAG)
 
 
 def _decomposition_kernel(ops, m, b, spec):
-    """Every field of the Decomposition, then whether the screw and the twist fit float64."""
-    axis, angle = axis_angle_kernel(ops, m)
-    screw, screw_fits = screw_of_axis_kernel(ops, axis, angle, b)
-    twist, twist_fits = twist_kernel(ops, axis, angle, b)
-    euler, degenerate = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
-    rpy, _ = angles_kernel(ops, m, _RPY, GIMBAL_LOCK_TOL)
-    (quaternion,) = quaternion_of_matrix_kernel(ops, m)
-    rotvec = [a * angle for a in axis]
-    return (axis, angle, rotvec, euler, degenerate, rpy, quaternion, *screw, twist,
-            screw_fits & twist_fits)
-
-
-_OUTPUTS = [VECTOR, SCALAR, VECTOR, VECTOR, FLAG, VECTOR, ((4,), np.float64),
-            VECTOR, VECTOR, VECTOR, SCALAR, SCALAR, SCALAR, ((6,), np.float64), FLAG]
+    """InRange(the Decomposition, where its screw and its twist fit float64)."""
+    turn = axis_angle_kernel(ops, m)
+    screw = screw_of_axis_kernel(ops, turn.axis, turn.angle, b)
+    twist = twist_kernel(ops, turn.axis, turn.angle, b)
+    euler = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
+    return InRange(value=Decomposition(
+        axis=turn.axis, angle=turn.angle, rotvec=rotvec_of(turn),
+        euler=euler.angles, degenerate=euler.degenerate,
+        rpy=angles_kernel(ops, m, _RPY, GIMBAL_LOCK_TOL).angles,
+        quaternion=quaternion_of_matrix_kernel(ops, m), screw=screw.value, twist=twist.value),
+        fits=screw.fits & twist.fits)
 
 
 def decompose(R, b, seq='ZYX', *, check=True):
@@ -74,12 +77,10 @@ def decompose(R, b, seq='ZYX', *, check=True):
     output of rotation_node come from the same numbers. RotationError where the screw
     overflows float64 (as screw_from_transform).
     """
-    spec = parse_sequence(seq)
-    *fields, fits = apply_to_rotations(
-        _decomposition_kernel, R, check, _OUTPUTS, [(b, (3,), 'translation b', True)],
-        (spec,))
-    refuse_far_axis(fits, fields[1], b)
-    return Decomposition(*fields[:7], Screw(*fields[7:13]), fields[13])
+    out = apply_to_rotations(_decomposition_kernel, R, check, _DECOMPOSITION,
+                             [(b, (3,), 'translation b', True)], (parse_sequence(seq),))
+    refuse_far_axis(out.fits, out.value.angle, b)
+    return out.value
 
 
 def decompose_values(R, b, seq='ZYX'):

@@ -1,30 +1,34 @@
 """
-One formula, two engines: Python floats for a single item, NumPy chunks for a batch.
+One formula, two ways to run it: Python floats for a single item, NumPy chunks for a batch.
 
 Every conversion in rot_tools is written once as a *kernel*: a function of an ops namespace
 and of the entries of its inputs (a matrix as ``m[row][col]``, a vector as ``v[i]``, a scalar
-as itself), returning the entries of its outputs, as scipy's ``_rotation_xp.py`` writes its
-formulas against ``xp``. ``apply`` runs a kernel
+as itself), returning its output, as scipy's ``_rotation_xp.py`` writes its formulas against
+``xp``. A kernel with several outputs returns a NamedTuple of them, and ``apply`` is told
+the same NamedTuple with a :class:`Spec` (trailing shape, dtype) in each field: it returns
+that NamedTuple again, with arrays in it, so every caller reads an output by its name.
+``apply`` runs a kernel
 
-- on a single item as ``kernel(FLOATS, ...)``: Python floats and the ``math`` module (a
-  chain of small NumPy calls costs ~10× more per item than plain floats); or
+- on a single item as ``kernel(FLOATS, ...)``: Python floats and the ``math`` module; or
 - on a batch as ``kernel(ARRAYS, ...)``, chunk by chunk (CHUNK items whose entries are
   contiguous NumPy arrays), so that the temporaries stay small and in cache.
 
 Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
 Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
-flag beside it and the caller refuses the flagged items (floating-point warnings of the
-batch engine are silenced). ``ops.rare(c)`` is the only data-dependent branch a kernel may
-take (true when c holds for the item, or for any item of a chunk): work that an item or a
-chunk without c skips — a huge or tiny vector rescaled, gimbal lock. doc/engine.md tells
-how to add a conversion.
+flag beside it (an :class:`InRange`) and the caller refuses the flagged items
+(floating-point warnings of the batch engine are silenced). ``ops.rare(c)`` is the only
+data-dependent branch a kernel may take (true when c holds for the item, or for any item of
+a chunk): work that an item or a chunk without c skips — a huge or tiny vector rescaled,
+gimbal lock. doc/engine.md tells how to add a conversion.
 """
 
+from dataclasses import dataclass
 from itertools import chain
 import math
 import sys
 from types import SimpleNamespace
+from typing import Any, NamedTuple
 
 import numpy as np
 from rot_tools.core._arrays import as_float_array, require_finite
@@ -32,12 +36,38 @@ from rot_tools.core.errors import FLOAT_ERRORS, RotationError
 
 CHUNK = 8192
 
-# An output's (trailing shape, dtype). dtype ``float`` (Python's) asks for plain Python
-# floats for a single item (a float, or a flat tuple of the entries, row-major).
-MATRIX = ((3, 3), np.float64)
-VECTOR = ((3,), np.float64)
-SCALAR = ((), np.float64)
-FLAG = ((), np.bool_)
+
+@dataclass(frozen=True)
+class Spec:
+    """
+    One output of a kernel: its trailing shape and its dtype.
+
+    dtype np.float64 or np.bool_; ``float`` gives a Python float for a single item (a
+    scalar output only), float64 for a batch.
+    """
+
+    tail: tuple
+    dtype: type = np.float64
+
+
+MATRIX = Spec((3, 3))
+VECTOR = Spec((3,))
+SCALAR = Spec(())
+FLAG = Spec((), np.bool_)
+
+
+class InRange(NamedTuple):
+    """A result that can leave float64's range for finite inputs, and where it did not."""
+
+    value: Any
+    fits: Any
+
+
+class Unit(NamedTuple):
+    """A 3-vector's direction v/|v| and its length |v| (see :func:`unit`)."""
+
+    direction: list
+    norm: Any
 
 
 def _maximum(a, b):
@@ -81,6 +111,8 @@ ARRAYS = SimpleNamespace(
     rare=np.any)
 """A batch chunk: NumPy arrays (errors on the discarded side of a where are silenced)."""
 
+FLOAT64 = np.dtype(np.float64)
+
 
 def apply(kernel, inputs, outputs, params=()):
     """
@@ -88,10 +120,12 @@ def apply(kernel, inputs, outputs, params=()):
 
     inputs: sequence of (value, trailing shape, name, finite): each value is made a float64
     array with that trailing shape (RotationError naming it otherwise) and, when ``finite``,
-    refused if it holds NaN/Inf; their batch shapes broadcast. outputs: sequence of
-    (trailing shape, dtype). params: fixed arguments after the entries (an Euler
-    sequence's axes). Returns a tuple of arrays of shape batch + trailing shape (NumPy
-    scalars for a single item, or Python floats where the dtype is ``float``).
+    refused if it holds NaN/Inf; their batch shapes broadcast. outputs: a Spec when the
+    kernel returns one output, or the NamedTuple the kernel returns with a Spec (or another
+    such NamedTuple, or a plain tuple of them) in each field. params: fixed arguments after
+    the entries (an Euler sequence's axes). Returns the kernel's output in the same form,
+    each Spec's value an array of shape batch + trailing shape (a NumPy scalar or array for
+    a single item).
 
     A single item runs on FLOATS; where Python's float arithmetic raises (x/0, sin(inf),
     sqrt(−1)) it is run as a batch of one instead, so that it gives the inf/NaN a batch
@@ -99,8 +133,10 @@ def apply(kernel, inputs, outputs, params=()):
     """
     values = []
     for x, tail, name, finite in inputs:
-        if type(x) is np.ndarray and x.shape == tail and x.dtype == FLOAT64:
+        if type(x) is np.ndarray and x.shape == tail and x.dtype is FLOAT64:
             v = x.tolist()  # (the usual one item: no array made, no shape to check)
+        elif type(x) is float and not tail:
+            v = x
         else:
             a = as_float_array(x, tail, name)
             if a.ndim != len(tail):
@@ -113,73 +149,71 @@ def apply(kernel, inputs, outputs, params=()):
         result = kernel(FLOATS, *values, *params)
     except FLOAT_ERRORS:
         return _apply_to_batch(kernel, inputs, outputs, params, one=True)
-    return tuple([_item(r, t, dt) for r, (t, dt) in zip(result, outputs)])
+    return _one_item(result, outputs)
 
 
-FLOAT64 = np.dtype(np.float64)
+def _one_item(value, spec):
+    """One item's outputs from the kernel's: NumPy scalars and arrays, in spec's form."""
+    if type(spec) is Spec:
+        if not spec.tail:
+            return spec.dtype(value)
+        out = np.array(value, spec.dtype)
+        if out.shape != spec.tail:
+            raise TypeError(f'a kernel gave an output of shape {out.shape}, declared '
+                            f'{spec.tail}')
+        return out
+    if type(value) is not type(spec) or type(value) is tuple and len(value) != len(spec):
+        _require_form(value, spec)  # (raises)
+    return tuple.__new__(type(spec), [_one_item(v, s) for v, s in zip(value, spec)])
 
 
-def plain_item(x, tail):
-    """
-    Return x's entries as Python floats (nested as a kernel takes them), or None.
+def _require_form(value, spec):
+    """Refuse a kernel's output that is not the NamedTuple (or tuple) that apply was told."""
+    if type(value) is not type(spec) or type(value) is tuple and len(value) != len(spec):
+        raise TypeError(f'a kernel returned {type(value).__name__} of {len(value)} where '
+                        f'apply was told {type(spec).__name__} of {len(spec)}')
 
-    Not None only where x is one finite item of trailing shape ``tail`` ((n,) or (3, 3)): a
-    float64 array, or for a vector a list or tuple of Python floats. The fast paths of the
-    public functions run their kernel on FLOATS straight on it; anything else (a batch,
-    another type, NaN/Inf) takes apply, which converts, refuses and raises as it always does.
-    """
-    if type(x) is np.ndarray and x.dtype is FLOAT64 and x.shape == tail:
-        v = x.tolist()
-    elif type(x) in (list, tuple) and len(tail) == 1 and len(x) == tail[0] and all(
-            type(e) is float for e in x):
-        v = list(x)
-    else:
-        return None
-    # 0·Σ is 0 for finite entries, NaN where one is NaN/Inf or where the sum overflowed
-    # (finite entries near 1.8e308: those then take apply, which tells them apart).
-    total = sum(v) if len(tail) < 2 else sum(v[0] + v[1] + v[2])  # (a matrix: 3 rows)
-    return v if 0.0 * total == 0.0 else None
+
+def _make(spec, parts):
+    """Return a tuple of spec's type (a NamedTuple's, or tuple) of the iterable parts."""
+    return tuple.__new__(type(spec), parts)
+
+
+def _leaves(value, spec):
+    """Return the values at the Specs of ``spec``, in order, from an output of its form."""
+    if type(spec) is Spec:
+        return [value]
+    _require_form(value, spec)
+    return [leaf for v, s in zip(value, spec) for leaf in _leaves(v, s)]
+
+
+def _rebuild(spec, leaves):
+    """Return the form of ``spec`` filled with the values of the iterator ``leaves``."""
+    if type(spec) is Spec:
+        return next(leaves)
+    return _make(spec, [_rebuild(s, leaves) for s in spec])
 
 
 def _apply_to_batch(kernel, inputs, outputs, params, one=False):
-    """Run apply's call as a batch (one: a single item run as a batch of one, one_as_batch)."""
+    """Run apply's call as a batch (one: a single item run as a batch of one)."""
     arrays = [as_float_array(x, t, name) for x, t, name, _ in inputs]
     tails = [t for _, t, _, _ in inputs]
     if one:
-        return one_as_batch(kernel, arrays, tails, outputs, params)
+        result = batch(kernel, [a[None] for a in arrays], tails, outputs, params)
+        specs = _leaves(outputs, outputs)
+        return _rebuild(outputs, iter([s.dtype(x[0]) if not s.tail else x[0] for x, s in zip(
+            _leaves(result, outputs), specs)]))
     checks = [(i, name) for i, (_, _, name, finite) in enumerate(inputs) if finite]
     return batch(kernel, arrays, tails, outputs, params, checks)
-
-
-def _item(value, tail, dtype):
-    """One item's output from a kernel's value: a NumPy scalar or array, or Python floats."""
-    if not tail:
-        return dtype(value)
-    if dtype is float:  # plain floats: a flat tuple, row-major
-        return tuple(flatten(value, tail))
-    return np.array(value, dtype=dtype)
-
-
-def one_as_batch(kernel, arrays, tails, outputs, params=()):
-    """One item run as a batch of one, returned as one item (the types of the float path)."""
-    out = []
-    result = batch(kernel, [a[None] for a in arrays], tails, outputs, params)
-    for r, (t, dt) in zip(result, outputs):
-        if not t:
-            out.append(dt(r[0]))
-        elif dt is float:
-            out.append(tuple(r[0].ravel().tolist()))
-        else:
-            out.append(r[0])
-    return tuple(out)
 
 
 def batch(kernel, arrays, tails, outputs, params=(), checks=()):
     """
     Return the kernel on ARRAYS, chunk by chunk, over the broadcast batch of the arrays.
 
-    checks: (index, name) of the arrays to refuse NaN/Inf in (require_finite's error, which
-    names the first bad index), each chunk's entries tested while they are in cache.
+    outputs as apply's. checks: (index, name) of the arrays to refuse NaN/Inf in
+    (require_finite's error, which names the first bad index), each chunk's entries tested
+    while they are in cache.
     """
     batches = [a.shape[:a.ndim - len(t)] for a, t in zip(arrays, tails)]
     try:
@@ -190,12 +224,13 @@ def batch(kernel, arrays, tails, outputs, params=(), checks=()):
     flat = [np.broadcast_to(a, shape + t).reshape((-1,) + t) for a, t in zip(arrays, tails)]
     n = flat[0].shape[0]
     length = min(n, CHUNK)
-    sizes = [math.prod(t) for t, _ in outputs]
-    outs = [np.empty((n, size), dtype=dt) for size, (_, dt) in zip(sizes, outputs)]
+    specs = _leaves(outputs, outputs)
+    sizes = [math.prod(s.tail) for s in specs]
+    outs = [np.empty((n, size), dtype=s.dtype) for size, s in zip(sizes, specs)]
     # One buffer per input and output for all chunks (a fresh one per chunk costs page faults).
     ins = [_rows(math.prod(t), length) if t else None for t in tails]
-    buffers = [_rows(size, length, dt) if size > 1 else None
-               for size, (_, dt) in zip(sizes, outputs)]
+    buffers = [_rows(size, length, s.dtype) if size > 1 else None
+               for size, s in zip(sizes, specs)]
     with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
         for start in range(0, n, CHUNK):
             chunk = slice(start, start + CHUNK)
@@ -205,12 +240,10 @@ def batch(kernel, arrays, tails, outputs, params=(), checks=()):
                     require_finite(arrays[i], name)
             result = kernel(ARRAYS, *(nest(list(e), t) for e, t in zip(entries, tails)),
                             *params)
-            values = [x for r, (t, _) in zip(result, outputs) for x in flatten(r, t)]
-            k = 0
-            for out, size, buffer in zip(outs, sizes, buffers):
-                _write_columns(out[chunk], values[k:k + size], buffer)
-                k += size
-    return tuple(out.reshape(shape + t) for out, (t, _) in zip(outs, outputs))
+            for out, size, buffer, value, spec in zip(outs, sizes, buffers,
+                                                      _leaves(result, outputs), specs):
+                _write_columns(out[chunk], flatten(value, spec.tail), buffer)
+    return _rebuild(outputs, iter([out.reshape(shape + s.tail) for out, s in zip(outs, specs)]))
 
 
 def _rows(count, length, dtype=np.float64):
@@ -267,11 +300,13 @@ def nest(entries, tail):
 
 def flatten(value, tail):
     """Return a kernel's output → its entries as a flat list (a matrix row-major)."""
-    if not tail:
-        return [value]
-    if len(tail) == 1:
-        return list(value)
-    return [x for row in value for x in row]
+    rows = value if len(tail) == 2 else [value]
+    if len(tail) == 2 and not all(type(row) in (list, tuple) for row in rows):
+        raise TypeError(f'a kernel gave an output of shape {tail} without rows')
+    entries = [x for row in rows for x in row] if tail else [value]
+    if len(entries) != math.prod(tail) or any(type(x) in (list, tuple) for x in entries):
+        raise TypeError(f'a kernel gave an output of another shape than {tail}')
+    return entries
 
 
 def _all_finite(values, rank):
@@ -301,17 +336,25 @@ def _rare(v, n2):
     return ((n2 < 1e-290) & nonzero) | (n2 > 1e290)
 
 
+class _Scaled(NamedTuple):
+    """A 3-vector v as largest = max |v_i| times vector = v / max |v_i|."""
+
+    largest: Any
+    vector: list
+
+
 def _scaled(ops, v):
-    """(max |v_i|, v / max |v_i|): the second has |·|² in [1, 3], safe to square."""
+    """Write v as largest·vector, |vector|² in [1, 3] (safe to square; v as is for v = 0)."""
     big = ops.maximum(ops.maximum(ops.abs(v[0]), ops.abs(v[1])), ops.abs(v[2]))
     safe = ops.where(big > 0, big, 1.0)
-    return big, [vi / safe for vi in v]  # (not vi * (1 / big): 1 / big overflows if tiny)
+    # (vi / big, not vi * (1 / big): 1 / big overflows for a tiny big)
+    return _Scaled(largest=big, vector=[vi / safe for vi in v])
 
 
 def _rescaled_norm(ops, v):
     """|v| = max |v_i|·|v / max |v_i||: inf only where |v| itself is beyond 1.8e308."""
-    big, scaled = _scaled(ops, v)
-    return big * ops.sqrt(dot(scaled, scaled))
+    scaled = _scaled(ops, v)
+    return scaled.largest * ops.sqrt(dot(scaled.vector, scaled.vector))
 
 
 def norm(ops, v):
@@ -322,27 +365,12 @@ def norm(ops, v):
     return ops.sqrt(n2)
 
 
-def norm_in_range(ops, v):
-    """
-    (|v|, in_range flag) of a 3-vector entry list: |v| is 0 where the flag is false.
-
-    Only a rescaled |v| can overflow (|v|² ≤ 1e290 off the rare path): the flag is True
-    there, without a test.
-    """
-    n2 = dot(v, v)
-    if ops.rare(_rare(v, n2)):
-        n = _rescaled_norm(ops, v)
-        fits = in_range(ops, [n])
-        return ops.where(fits, n, 0.0), fits
-    return ops.sqrt(n2), True
-
-
 _LARGEST = sys.float_info.max
 
 
 def unit(ops, v):
     """
-    (v/|v|, |v|) of a 3-vector entry list, with (0, 0, 1) for the zero vector.
+    Unit(direction v/|v|, norm |v|) of a 3-vector entry list; (0, 0, 1) for the zero vector.
 
     Where |v|² overflows or underflows, v/|v| is taken from v scaled by max |v_i|: |v| itself
     may be inf (beyond 1.8e308) or a subnormal with few digits, the direction is exact.
@@ -351,14 +379,15 @@ def unit(ops, v):
     rare = _rare(v, n2)
     n = size = ops.sqrt(n2)
     if ops.rare(rare):
-        big, scaled = _scaled(ops, v)
-        m = ops.sqrt(dot(scaled, scaled))
-        n = big * m
-        v = [ops.where(rare, s, vi) for s, vi in zip(scaled, v)]
+        scaled = _scaled(ops, v)
+        m = ops.sqrt(dot(scaled.vector, scaled.vector))
+        n = scaled.largest * m
+        v = [ops.where(rare, s, vi) for s, vi in zip(scaled.vector, v)]
         size = ops.where(rare, m, n)
     zero = n == 0  # (then every v_i is ±0: v_i / 1 + 0.0 is +0.0; + 0.0 also makes −0.0 +0)
     safe = ops.where(zero, 1.0, size)
-    return [v[0] / safe + 0.0, v[1] / safe + 0.0, ops.where(zero, 1.0, v[2] / safe)], n
+    return Unit(direction=[v[0] / safe + 0.0, v[1] / safe + 0.0,
+                           ops.where(zero, 1.0, v[2] / safe)], norm=n)
 
 
 def in_range(ops, values):
@@ -376,7 +405,7 @@ def in_range(ops, values):
 
 def linear_in_range(ops, linear, *vectors):
     """
-    (linear(*vectors), in_range flag) of a function linear in its 3-vector entry lists.
+    InRange(linear(*vectors), fits) of a function linear in its 3-vector entry lists.
 
     Its partial sums may overflow float64 where the result fits (R·b beyond 1.8e308 with a
     translation bringing it back): such items are computed again on the inputs scaled by 1/4
@@ -389,4 +418,4 @@ def linear_in_range(ops, linear, *vectors):
         quarter = linear(*([0.25 * x for x in v] for v in vectors))
         out = [ops.where(fits, x, 4.0 * y) for x, y in zip(out, quarter)]
         fits = in_range(ops, out)
-    return out, fits
+    return InRange(value=out, fits=fits)

@@ -25,6 +25,7 @@ The SVD functions use NumPy's batched linalg directly; any leading batch shape w
 import math
 import numbers
 import os
+from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core._arrays import finite_array, refuse_overflow, require_finite
@@ -52,8 +53,8 @@ def _distance_kernel(ops, m1, m2):
     # R1ᵀ·R2, entry (i, j) = Σ_k R1[k][i]·R2[k][j]
     m = [[m1[0][i] * m2[0][j] + m1[1][i] * m2[1][j] + m1[2][i] * m2[2][j] for j in range(3)]
          for i in range(3)]
-    w, cos = skew_and_cos(m)
-    return (ops.atan2(norm(ops, w), cos),)
+    parts = skew_and_cos(m)
+    return ops.atan2(norm(ops, parts.skew), parts.cos)
 
 
 def rotation_distance(R1, R2, *, check=True):
@@ -65,9 +66,7 @@ def rotation_distance(R1, R2, *, check=True):
     θ(Q·R1, Q·R2) for every rotation Q. check=False trusts R1, R2: for matrices that are
     not rotations the angle means nothing and may be NaN (rot_tools.core.so3).
     """
-    (theta,) = apply_to_named_rotations(_distance_kernel, [(R1, 'R1'), (R2, 'R2')], check,
-                                        [SCALAR])
-    return theta
+    return apply_to_named_rotations(_distance_kernel, [(R1, 'R1'), (R2, 'R2')], check, SCALAR)
 
 
 def _weights(weights, count, name):
@@ -89,9 +88,19 @@ def _weights(weights, count, name):
     return w / top
 
 
+class _Nearest(NamedTuple):
+    """The rotation U·diag(1, 1, det UVᵀ)·Vᵀ of an SVD s = U·diag(sigma)·Vᵀ, and its parts."""
+
+    rotation: np.ndarray
+    sigma: np.ndarray
+    u: np.ndarray  # its third column times det UVᵀ
+    vt: np.ndarray
+    rank_one: np.ndarray  # σ2 ≤ rank_one_below·σ1
+
+
 def _nearest_rotations(s, what, matrix, rank_one_below=UNIQUE_TOL):
     """
-    U·diag(1, 1, det UVᵀ)·Vᵀ maximising tr(Mᵀ·s) per item, and the rank-one flags.
+    Return the _Nearest rotation maximising tr(Mᵀ·s) per item, and the rank-one flags.
 
     RotationError when the maximiser is not unique (σ2 + det·σ3 ≤ UNIQUE_TOL·σ1) for an item
     not flagged; items with σ2 ≤ rank_one_below·σ1 are only flagged (the caller decides).
@@ -110,7 +119,7 @@ def _nearest_rotations(s, what, matrix, rank_one_below=UNIQUE_TOL):
             f'σ2 {"+" if sign[index] > 0 else "−"} σ3 = {gap[index]:.3g} ≤ '
             f'{UNIQUE_TOL:g}·σ1{where}')
     u = u * np.stack([np.ones_like(sign), np.ones_like(sign), sign], -1)[..., None, :]
-    return u @ vt, sigma, u, vt, rank_one
+    return _Nearest(rotation=u @ vt, sigma=sigma, u=u, vt=vt, rank_one=rank_one)
 
 
 def mean_rotation(R, weights=None, *, check=True):
@@ -135,14 +144,14 @@ def mean_rotation(R, weights=None, *, check=True):
         total = np.einsum('...n,...nij->...ij', w, R)
     except ValueError:
         raise RotationError(f'weights {w.shape} and R {R.shape} do not broadcast') from None
-    mean, sigma, *_, rank_one = _nearest_rotations(total, 'the mean rotation', 'Σ wᵢRᵢ')
-    if rank_one.any():
-        index = tuple(int(i) for i in np.argwhere(rank_one)[0])
+    mean = _nearest_rotations(total, 'the mean rotation', 'Σ wᵢRᵢ')
+    if mean.rank_one.any():
+        index = tuple(int(i) for i in np.argwhere(mean.rank_one)[0])
         raise RotationError(
             'the mean rotation is not unique: Σ wᵢRᵢ is rank-deficient (singular values '
-            f'{np.array2string(sigma[index], precision=3)}; e.g. rotations π apart with '
+            f'{np.array2string(mean.sigma[index], precision=3)}; e.g. rotations π apart with '
             'equal weights)' + (f' (item {index})' if index else ''))
-    return mean
+    return mean.rotation
 
 
 def _vectors(x, name):
@@ -204,6 +213,13 @@ def _rmsd(a, b, R, w):
     return rmsd
 
 
+class _Fit(NamedTuple):
+    """The best rotation about a dominant axis, and where it is the only best one."""
+
+    rotation: np.ndarray
+    unique: np.ndarray
+
+
 def _fit_about_dominant(a, b, w, a_axis, b_axis):
     """
     Return the best rotation among those taking b_axis onto a_axis (unit vectors, (..., 3)).
@@ -213,7 +229,7 @@ def _fit_about_dominant(a, b, w, a_axis, b_axis):
     Σ wᵢ‖aᵢ − Rot(a_axis, φ)·cᵢ‖² is least at φ = atan2(Σ wᵢ (c⊥ᵢ × a⊥ᵢ)·â, Σ wᵢ c⊥ᵢ·a⊥ᵢ)
     (the way scipy fits the other pairs about a primary one of infinite weight). Both sums
     come from the pairs themselves, not from H, so pairs that H's rounding would drop still
-    count. Returns (R, unique): unique is False where pairs off a_axis exist but their pulls
+    count. Returns a _Fit: unique is False where pairs off a_axis exist but their pulls
     cancel (every φ fits as well); where every pair lies along the axis (H of rank one), φ is
     0: the smallest rotation.
     """
@@ -239,7 +255,7 @@ def _fit_about_dominant(a, b, w, a_axis, b_axis):
     pull = np.sum(size * a_off * c_off, axis=-1)
     unique = ~off_axis.any(axis=-1) | (np.hypot(sin, cos) > UNIQUE_TOL * pull)
     phi = np.arctan2(sin, cos)
-    return axis_angle_to_matrix(a_axis, phi) @ r0, unique
+    return _Fit(rotation=axis_angle_to_matrix(a_axis, phi) @ r0, unique=unique)
 
 
 DOMINANT = 1e-2
@@ -256,9 +272,16 @@ ALONG_AXIS_SIN = 64 * np.finfo(float).eps
 """|a⊥|/|a| at or below which a pair counts as lying along the dominant axis (rounding)."""
 
 
+class Alignment(NamedTuple):
+    """What align_vectors gives: the best rotation R (..., 3, 3) and its rmsd (...)."""
+
+    R: np.ndarray
+    rmsd: np.ndarray
+
+
 def align_vectors(a, b, weights=None):
     """
-    Return the rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
+    Return the Alignment: the R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² (Wahba, Kabsch), and its rmsd.
 
     a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
     the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
@@ -288,8 +311,8 @@ def align_vectors(a, b, weights=None):
     h = np.einsum('...n,...ni,...nj->...ij', w, a_dir, b_dir)
     scale = np.einsum('...n,...n,...n->...', w, np.linalg.norm(a_dir, axis=-1),
                       np.linalg.norm(b_dir, axis=-1))
-    R, sigma, u, vt, dominant = _nearest_rotations(h, 'the best rotation', 'H = Σ wᵢ·aᵢbᵢᵀ',
-                                                   DOMINANT)
+    best = _nearest_rotations(h, 'the best rotation', 'H = Σ wᵢ·aᵢbᵢᵀ', DOMINANT)
+    sigma, R, dominant = best.sigma, best.rotation, best.rank_one
     vanishing = sigma[..., 0] <= UNIQUE_TOL * scale
     if vanishing.any():
         index = tuple(int(i) for i in np.argwhere(vanishing)[0])
@@ -299,16 +322,16 @@ def align_vectors(a, b, weights=None):
             'scaled to max 1): every rotation fits as well'
             + (f' (item {index})' if index else ''))
     if dominant.any():
-        fitted, unique = _fit_about_dominant(a_dir, b_dir, w, u[..., :, 0], vt[..., 0, :])
-        unsure = dominant & ~unique
+        fit = _fit_about_dominant(a_dir, b_dir, w, best.u[..., :, 0], best.vt[..., 0, :])
+        unsure = dominant & ~fit.unique
         if unsure.any():
             index = tuple(int(i) for i in np.argwhere(unsure)[0])
             raise RotationError(
                 'the best rotation is not unique: about the dominant direction of '
                 'H = Σ wᵢ·aᵢbᵢᵀ (σ2 ≤ 0.01·σ1), the other pairs pull equally every way: '
                 'every turn about it fits as well' + (f' (item {index})' if index else ''))
-        R = np.where(dominant[..., None, None], fitted, R)
-    return R, _rmsd(a, b, R, np.broadcast_to(w, shape[:-1]))
+        R = np.where(dominant[..., None, None], fit.rotation, R)
+    return Alignment(R=R, rmsd=_rmsd(a, b, R, np.broadcast_to(w, shape[:-1])))
 
 
 def random_rotations(n=None, rng=None):

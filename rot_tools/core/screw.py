@@ -31,14 +31,15 @@ they leave float64's range (|b| = 1e300 at θ = 1e-11) a RotationError says so.
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from rot_tools.core._arrays import finite_array, refuse_overflow
 from rot_tools.core.axis_angle import axis_angle_kernel, rodrigues_entries, sin_versin
-from rot_tools.core.engine import (apply, cross, dot, FLAG, in_range, linear_in_range, MATRIX,
-                                   SCALAR, unit, VECTOR)
+from rot_tools.core.engine import (apply, cross, dot, FLAG, in_range, InRange, linear_in_range,
+                                   SCALAR, Spec, unit, VECTOR)
 from rot_tools.core.errors import RotationError
+from rot_tools.core.rigid import MOTION, Motion
 from rot_tools.core.so3 import apply_to_rotations, checked_rotation
 
 PURE_TRANSLATION_ANGLE = 1e-12
@@ -73,14 +74,15 @@ def _apply_rigid(kernel, R, b, check, outputs):
 
 def screw_of_axis_kernel(ops, axis, angle, b):
     """
-    Return the Screw of (Rot_axis(angle), b) and an in-range flag.
+    Return InRange(the Screw of (Rot_axis(angle), b), fits).
 
-    Return the Screw of (Rot_axis(angle), b), axis and angle as axis_angle_kernel gives them,
-    and a flag: false where its point, moment, translation or pitch overflowed float64.
+    axis and angle as axis_angle_kernel gives them; fits is false where the screw's point,
+    moment, translation or pitch overflowed float64.
     """
-    b_dir, b_norm = unit(ops, b)
+    b_unit = unit(ops, b)
+    b_norm = b_unit.norm
     translating = angle < PURE_TRANSLATION_ANGLE
-    direction = [ops.where(translating, p, q) for p, q in zip(b_dir, axis)]
+    direction = [ops.where(translating, p, q) for p, q in zip(b_unit.direction, axis)]
     d = ops.where(translating, b_norm, dot(b, axis))
     b_perp = [bi - d * li for bi, li in zip(b, direction)]
     turning = ops.where(translating, 1.0, angle)  # no division by a zero angle below
@@ -94,8 +96,9 @@ def screw_of_axis_kernel(ops, axis, angle, b):
     slope = d / turning
     pitch = ops.where(translating, ops.where(b_norm > 0, math.inf, 0.0), slope)
     fits = in_range(ops, [*point, *moment, d, ops.where(translating, 0.0, slope)])
-    return (direction, point, moment, ops.where(translating, 0.0, angle), d + 0.0,
-            pitch + 0.0), fits
+    return InRange(value=Screw(direction=direction, point=point, moment=moment,
+                               angle=ops.where(translating, 0.0, angle), translation=d + 0.0,
+                               pitch=pitch + 0.0), fits=fits)
 
 
 def refuse_far_axis(fits, angle, b):
@@ -120,13 +123,14 @@ def refuse_far_axis(fits, angle, b):
         f'max|b_i| = {size:.3g} at θ = {theta:.3g} rad{where}')
 
 
-_SCREW = [VECTOR] * 3 + [SCALAR] * 3
-_TWIST = ((6,), np.float64)
+_SCREW = Screw(direction=VECTOR, point=VECTOR, moment=VECTOR, angle=SCALAR,
+               translation=SCALAR, pitch=SCALAR)
+TWIST = Spec((6,))
 
 
 def _screw_kernel(ops, m, b):
-    screw, fits = screw_of_axis_kernel(ops, *axis_angle_kernel(ops, m), b)
-    return (*screw, fits)
+    turn = axis_angle_kernel(ops, m)
+    return screw_of_axis_kernel(ops, turn.axis, turn.angle, b)
 
 
 def screw_from_transform(R, b, *, check=True):
@@ -137,14 +141,14 @@ def screw_from_transform(R, b, *, check=True):
     then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
     RotationError where c or h overflow float64 (|b|/θ beyond ~1e308).
     """
-    *screw, fits = _apply_rigid(_screw_kernel, R, b, check, _SCREW + [FLAG])
-    refuse_far_axis(fits, screw[3], b)
-    return Screw(*screw)
+    screw = _apply_rigid(_screw_kernel, R, b, check, InRange(value=_SCREW, fits=FLAG))
+    refuse_far_axis(screw.fits, screw.value.angle, b)
+    return screw.value
 
 
 def twist_kernel(ops, axis, angle, b):
     """
-    Exponential coordinates (θ·l̂, θ·v) of (Rot_axis(angle), b) and an in_range flag.
+    InRange(exponential coordinates (θ·l̂, θ·v) of (Rot_axis(angle), b), fits).
 
     θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂ (= −θ·l̂ × c + d·l̂ of the Screw), with
     (θ/2)·cot(θ/2) → 1 at θ = 0: no threshold, no division by a small θ.
@@ -158,12 +162,13 @@ def twist_kernel(ops, axis, angle, b):
         d = dot(b, axis)
         swing = cross(axis, b)
         return [k * (bi - d * li) - half * si + d * li for bi, li, si in zip(b, axis, swing)]
-    u, fits = linear_in_range(ops, twist_of, b)
-    return [angle * li for li in axis] + u, fits
+    u = linear_in_range(ops, twist_of, b)
+    return InRange(value=[angle * li for li in axis] + u.value, fits=u.fits)
 
 
 def _log_kernel(ops, m, b):
-    return twist_kernel(ops, *axis_angle_kernel(ops, m), b)
+    turn = axis_angle_kernel(ops, m)
+    return twist_kernel(ops, turn.axis, turn.angle, b)
 
 
 def screw_log(R, b, *, check=True):
@@ -174,71 +179,86 @@ def screw_log(R, b, *, check=True):
     (no pure-translation threshold: the identity rotation gives (0, b)). Inverse of
     screw_exp.
     """
-    twist, fits = _apply_rigid(_log_kernel, R, b, check, [_TWIST, FLAG])
-    refuse_overflow(fits, 'θ·v of screw_log (|θ·v| ≤ π/2·|b|)')
-    return twist
+    twist = _apply_rigid(_log_kernel, R, b, check, InRange(value=TWIST, fits=FLAG))
+    refuse_overflow(twist.fits, 'θ·v of screw_log (|θ·v| ≤ π/2·|b|)')
+    return twist.value
+
+
+class _Exp(NamedTuple):
+    motion: Motion
+    turns: Any  # |ω| fits float64
+    fits: Any  # b fits float64
 
 
 def _exp_kernel(ops, twist):
-    axis, theta = unit(ops, twist[:3])
-    turns = in_range(ops, [theta])  # |ω| itself may overflow: then refused, sin(inf) avoided
-    theta = ops.where(turns, theta, 0.0)
-    u = twist[3:]
-    d = dot(axis, u)
-    sin, versin = sin_versin(ops, theta)
+    axis = unit(ops, twist[:3])
+    turns = in_range(ops, [axis.norm])  # |ω| may overflow: then refused, sin(inf) avoided
+    theta = ops.where(turns, axis.norm, 0.0)
+    lhat, u = axis.direction, twist[3:]
+    d = dot(lhat, u)
+    trig = sin_versin(ops, theta)
     # sin θ/θ and (1 − cos θ)/θ; below 1e-8 rad their series 1 − θ²/6 and θ/2 − θ³/24 are
     # 1 and θ/2 to double precision (and 1 − cos θ would underflow for denormal θ).
     small = theta < 1e-8
     safe = ops.where(small, 1.0, theta)
-    sinc = ops.where(small, 1.0, sin / safe)
-    versinc = ops.where(small, 0.5 * theta, versin / safe)
-    swing = cross(axis, u)
-    b = [sinc * (ui - d * li) + versinc * si + d * li for ui, li, si in zip(u, axis, swing)]
-    return rodrigues_entries(*axis, sin, versin), b, turns, in_range(ops, b)
+    sinc = ops.where(small, 1.0, trig.sin / safe)
+    versinc = ops.where(small, 0.5 * theta, trig.versin / safe)
+    swing = cross(lhat, u)
+    b = [sinc * (ui - d * li) + versinc * si + d * li for ui, li, si in zip(u, lhat, swing)]
+    return _Exp(motion=Motion(R=rodrigues_entries(*lhat, trig), b=b), turns=turns,
+                fits=in_range(ops, b))
 
 
 def screw_exp(twist):
     """
-    Rigid motion (R, b) = exp of the twist (ω, u) = (θ·l̂, θ·v); (..., 6) → (R, b).
+    Rigid motion Motion(R, b) = exp of the twist (ω, u) = (θ·l̂, θ·v); (..., 6) → (R, b).
 
     R = Rot_l̂(θ) (Rodrigues) and b = (I − R)·c + d·l̂ with c = l̂ × u/θ, d = l̂·u, i.e.
     b = (sin θ/θ)·u⊥ + ((1 − cos θ)/θ)·l̂ × u + (l̂·u)·l̂, which is smooth at θ = 0 (b = u).
     RotationError where |ω| or b overflow float64.
     """
-    R, b, turns, fits = apply(_exp_kernel, [(twist, (6,), 'twist', True)],
-                              [MATRIX, VECTOR, FLAG, FLAG])
-    refuse_overflow(turns, 'the rotation angle |ω| of the twist')
-    refuse_overflow(fits, 'b of screw_exp')
-    return R, b
+    out = apply(_exp_kernel, [(twist, (6,), 'twist', True)],
+                _Exp(motion=MOTION, turns=FLAG, fits=FLAG))
+    refuse_overflow(out.turns, 'the rotation angle |ω| of the twist')
+    refuse_overflow(out.fits, 'b of screw_exp')
+    return out.motion
+
+
+class _ScrewMotion(NamedTuple):
+    motion: Motion
+    no_direction: Any  # a zero direction: refused
+    fits: Any  # b fits float64
 
 
 def _transform_of_screw_kernel(ops, direction, point, angle, translation):
-    axis, size = unit(ops, direction)
-    sin, versin = sin_versin(ops, angle)
-    along = dot(point, axis)
-    swing = cross(axis, point)
-    b = [versin * (ci - along * li) - sin * si + translation * li
-         for ci, li, si in zip(point, axis, swing)]
-    return rodrigues_entries(*axis, sin, versin), b, size == 0, in_range(ops, b)
+    axis = unit(ops, direction)
+    lhat = axis.direction
+    trig = sin_versin(ops, angle)
+    along = dot(point, lhat)
+    swing = cross(lhat, point)
+    b = [trig.versin * (ci - along * li) - trig.sin * si + translation * li
+         for ci, li, si in zip(point, lhat, swing)]
+    return _ScrewMotion(motion=Motion(R=rodrigues_entries(*lhat, trig), b=b),
+                        no_direction=axis.norm == 0, fits=in_range(ops, b))
 
 
 def transform_from_screw(direction, point, angle, translation):
     """
-    Rigid motion (R, b) of a screw: R = Rot_l̂(θ), b = (I − R)·point + d·l̂.
+    Rigid motion Motion(R, b) of a screw: R = Rot_l̂(θ), b = (I − R)·point + d·l̂.
 
     direction (..., 3) is normalised (zero raises RotationError); point (..., 3) may be any
     point of the axis; angle, translation (...); broadcasting. Inverse of
     screw_from_transform. (I − R)·c = (1 − cos θ)·c⊥ − sin θ·l̂ × c with c⊥ = c − (c·l̂)·l̂,
     so tiny angles with far-away axes keep their digits.
     """
-    R, b, zero, fits = apply(_transform_of_screw_kernel, [
+    out = apply(_transform_of_screw_kernel, [
         (direction, (3,), 'direction', True), (point, (3,), 'point', True),
         (angle, (), 'angle', True), (translation, (), 'translation', True)],
-        [MATRIX, VECTOR, FLAG, FLAG])
-    if zero.any():
+        _ScrewMotion(motion=MOTION, no_direction=FLAG, fits=FLAG))
+    if out.no_direction.any():
         raise RotationError('screw direction must be non-zero, got |direction| = 0')
-    refuse_overflow(fits, 'b = (I − R)·point + d·l̂ of transform_from_screw')
-    return R, b
+    refuse_overflow(out.fits, 'b = (I − R)·point + d·l̂ of transform_from_screw')
+    return out.motion
 
 
 def _require_broadcast(*shapes):
@@ -259,7 +279,8 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
 
     T(s) = T0 · exp(s · log(T0⁻¹ T1)): every point moves along one helix about the relative
     screw axis; T(0) = T0 and T(1) = T1, and s outside [0, 1] continues the same motion.
-    Returns (R(s) (..., 3, 3), b(s) (..., 3)); RotationError where a step overflows float64.
+    Returns Motion(R(s) (..., 3, 3), b(s) (..., 3)); RotationError where a step overflows
+    float64.
     """
     R0, R1 = checked_rotation(R0, check), checked_rotation(R1, check)
     b0, b1 = finite_array(b0, (3,), 'translation b0'), finite_array(b1, (3,), 'translation b1')
@@ -272,7 +293,7 @@ def screw_interpolate(R0, b0, R1, b1, s, *, check=True):
         refuse_overflow(np.isfinite(rel_b).all(-1), 'R0ᵀ·(b1 − b0) of screw_interpolate')
         step = s[..., None] * screw_log(rel_R, rel_b, check=False)
         refuse_overflow(np.isfinite(step).all(-1), 's·log(T0⁻¹·T1) of screw_interpolate')
-        step_R, step_b = screw_exp(step)
-        b = np.einsum('...ij,...j->...i', R0, step_b) + b0
+        step = screw_exp(step)
+        b = np.einsum('...ij,...j->...i', R0, step.b) + b0
         refuse_overflow(np.isfinite(b).all(-1), 'b(s) of screw_interpolate')
-    return R0 @ step_R, b
+    return Motion(R=R0 @ step.R, b=b)

@@ -18,12 +18,13 @@ its SVD cannot take.
 """
 
 import math
+from typing import Any, NamedTuple
 
 import numpy as np
-from numpy import False_, ndarray
+from numpy import False_
 from rot_tools.core._arrays import apart, as_float_array, finite_array, require_tolerance
-from rot_tools.core.engine import apply, FLAG, FLOAT64, FLOATS, MATRIX, plain_item, SCALAR
-from rot_tools.core.errors import FLOAT_ERRORS, RotationError
+from rot_tools.core.engine import apply, FLAG, MATRIX, SCALAR, Spec
+from rot_tools.core.errors import RotationError
 
 ROTATION_TOL = 1e-9
 """Default tolerance of is_rotation / validate_rotation on max|RᵀR − I| and |det R − 1|."""
@@ -69,28 +70,38 @@ def skew(v):
     return out
 
 
+class Defects(NamedTuple):
+    """How far a matrix is from a rotation: orthogonality = max|RᵀR − I|, and det R."""
+
+    orthogonality: Any
+    det: Any
+
+
+_DEFECTS = Defects(orthogonality=SCALAR, det=SCALAR)
+
+
 def defects_kernel(ops, m):
     """
-    Return (max|RᵀR − I|, det R) of the entries m.
+    Return the Defects of the entries m.
 
-    (max|RᵀR − I|, det R) of the entries m: the six distinct entries of the Gram matrix
-    RᵀR, and the triple product of the rows. NaN entries propagate to NaN (never ≤ tol).
+    orthogonality from the six distinct entries of the Gram matrix RᵀR, det as the triple
+    product of the rows. NaN entries propagate to NaN (never ≤ tol).
     """
     (a, b, c), (d, e, f), (g, h, i) = m
     err = ops.max_of(
         ops.abs(a * a + d * d + g * g - 1.0), ops.abs(b * b + e * e + h * h - 1.0),
         ops.abs(c * c + f * f + i * i - 1.0), ops.abs(a * b + d * e + g * h),
         ops.abs(a * c + d * f + g * i), ops.abs(b * c + e * f + h * i))
-    return err, a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return Defects(orthogonality=err,
+                   det=a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g))
 
 
-_QUATERNION = ((4,), np.float64)
-_FLOAT = ((), float)  # (a Python float for one item: refuse_defects' quick path)
+QUATERNION = Spec((4,))
 
 
 def _defects(R):
-    """Per item: (max|RᵀR − I|, det R)."""
-    return apply(defects_kernel, [(R, (3, 3), 'R', False)], [SCALAR, SCALAR])
+    """Per item: the Defects of R."""
+    return apply(defects_kernel, [(R, (3, 3), 'R', False)], _DEFECTS)
 
 
 def is_rotation(R, tol=ROTATION_TOL):
@@ -104,8 +115,8 @@ def is_rotation(R, tol=ROTATION_TOL):
     R = as_float_array(R, (3, 3), 'R')
     finite = np.isfinite(R).all(axis=(-2, -1))
     with np.errstate(invalid='ignore', over='ignore'):
-        err, det = _defects(np.where(finite[..., None, None], R, 0.0))
-    ok = finite & (err <= tol) & (np.abs(det - 1.0) <= tol)
+        defects = _defects(np.where(finite[..., None, None], R, 0.0))
+    ok = finite & (defects.orthogonality <= tol) & (np.abs(defects.det - 1.0) <= tol)
     return ok if ok.ndim else bool(ok)
 
 
@@ -118,21 +129,18 @@ def validate_rotation(R, tol=ROTATION_TOL):
     """
     tol = require_tolerance(tol, 'tol')
     R = finite_array(R, (3, 3), 'R')
-    refuse_defects(*_defects(R), tol)
+    refuse_defects(_defects(R), tol)
     return R
 
 
-def refuse_defects(err, det, tol, name='R'):
+def refuse_defects(defects, tol, name='R'):
     """
-    Raise RotationError for the worst item whose (max|RᵀR − I|, det R) is out of tol.
+    Raise RotationError for the worst item whose Defects are out of tol.
 
     name: how the message calls the matrix: 'R', 'R2', 'R (T[:3, :3])'.
     """
-    if type(err) is float:  # one item, as Python floats
-        if err <= tol and abs(det - 1.0) <= tol:
-            return
-        err, det = np.float64(err), np.float64(det)
-    elif err.ndim == 0 and err <= tol and abs(det - 1.0) <= tol:
+    err, det = defects.orthogonality, defects.det
+    if err.ndim == 0 and err <= tol and abs(det - 1.0) <= tol:
         return  # one good item: no NumPy reductions
     where = '' if err.ndim == 0 else ' (worst at item {})'
     if not (err <= tol).all():
@@ -149,23 +157,30 @@ def refuse_defects(err, det, tol, name='R'):
             + where.format(tuple(map(int, worst))))
 
 
+class _Checked(NamedTuple):
+    """A kernel's output, and the Defects of each of its rotations."""
+
+    value: Any
+    defects: tuple
+
+
 def _checked(ops, *args):
     """
-    Return a kernel's outputs with the defects of its first ``count`` inputs appended.
+    Return the _Checked output of a kernel: its own, and the Defects of its first inputs.
 
     args: the kernel's entries, then (kernel, count, params), as apply_to_named_rotations
-    passes them: (max|RᵀR − I|, det R) of each rotation follow the kernel's outputs.
+    passes them: the first ``count`` entries are the rotations.
     """
     *entries, kernel, count, params = args
-    defects = [d for m in entries[:count] for d in defects_kernel(ops, m)]
-    return (*kernel(ops, *entries, *params), *defects)
+    return _Checked(value=kernel(ops, *entries, *params),
+                    defects=tuple(defects_kernel(ops, m) for m in entries[:count]))
 
 
 def apply_to_rotations(kernel, R, check, outputs, extra=(), params=()):
     """
     apply(kernel, [R, *extra], outputs, params) with R (..., 3, 3), validated in the same pass.
 
-    With check, R must pass validate_rotation (tol ROTATION_TOL): its defects are computed
+    With check, R must pass validate_rotation (tol ROTATION_TOL): its Defects are computed
     beside the kernel's outputs, which are dropped if R is refused.
     """
     return apply_to_named_rotations(kernel, [(R, 'R')], check, outputs, extra, params)
@@ -181,69 +196,12 @@ def apply_to_named_rotations(kernel, rotations, check, outputs, extra=(), params
     inputs = [(R, (3, 3), name, check) for R, name in rotations]
     if not check:
         return apply(kernel, [*inputs, *extra], outputs, params)
-    count = len(rotations)
-    results = apply(_checked, [*inputs, *extra], [*outputs] + [_FLOAT, _FLOAT] * count,
-                    (kernel, count, params))
-    for i, (_, name) in enumerate(rotations):
-        err, det = results[len(outputs) + 2 * i:len(outputs) + 2 * i + 2]
-        refuse_defects(err, det, ROTATION_TOL, name)
-    return tuple(results[:len(outputs)])
-
-
-def _floats_near_one(tol):
-    """
-    Return (low, high): the floats s with |s − 1| ≤ tol (real arithmetic) are low ≤ s ≤ high.
-
-    For a float s within [0.5, 2], s − 1.0 is exact (Sterbenz), so abs(s - 1.0) <= tol is
-    low <= s <= high; outside it both tests fail (|s − 1| ≥ 0.5), NaN fails both. low and
-    high are 1 ∓ tol rounded inwards: their distance to 1 is exact too.
-    """
-    low, high = 1.0 - tol, 1.0 + tol
-    if 1.0 - low > tol:
-        low = math.nextafter(low, 2.0)
-    if high - 1.0 > tol:
-        high = math.nextafter(high, 0.0)
-    return low, high
-
-
-_ONE_LOW, _ONE_HIGH = _floats_near_one(ROTATION_TOL)
-
-
-def plain_rotation(R, check):
-    """
-    Return R's rows as Python floats for a fast path, or None (then apply's path decides).
-
-    Not None where R is one finite float64 (3, 3) array and, with check, a rotation within
-    ROTATION_TOL: the test of refuse_defects written out for plain floats (any defect fails
-    it, NaN and ±inf included, and the full path then raises the error that names it). The
-    same products and sums as defects_kernel; |s − 1| ≤ tol of a column's squared norm and
-    of det R is tested as _ONE_LOW ≤ s ≤ _ONE_HIGH, the same floats (_floats_near_one).
-    """
-    if not check:
-        return plain_item(R, (3, 3))
-    if type(R) is not ndarray or R.dtype is not FLOAT64 or R.shape != (3, 3):
-        return None
-    m = R.tolist()
-    (a, b, c), (d, e, f), (g, h, i) = m
-    low, high = _ONE_LOW, _ONE_HIGH  # (columns' squared norms and det R: |s − 1| ≤ tol)
-    neg, tol = -ROTATION_TOL, ROTATION_TOL  # (dot products of two columns: |x| ≤ tol)
-    if (low <= a * a + d * d + g * g <= high
-            and low <= b * b + e * e + h * h <= high
-            and low <= c * c + f * f + i * i <= high
-            and neg <= a * b + d * e + g * h <= tol
-            and neg <= a * c + d * f + g * i <= tol
-            and neg <= b * c + e * f + h * i <= tol
-            and low <= a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) <= high):
-        return m
-    return None
-
-
-def run_on_floats(kernel, *args):
-    """kernel(FLOATS, *args) of a fast path, or None where float arithmetic raises."""
-    try:
-        return kernel(FLOATS, *args)
-    except FLOAT_ERRORS:
-        return None
+    checked = apply(_checked, [*inputs, *extra],
+                    _Checked(value=outputs, defects=(_DEFECTS,) * len(rotations)),
+                    (kernel, len(rotations), params))
+    for defects, (_, name) in zip(checked.defects, rotations):
+        refuse_defects(defects, ROTATION_TOL, name)
+    return checked.value
 
 
 def checked_rotation(R, check):
@@ -278,18 +236,15 @@ def quaternion_to_matrix(q, *, tol=None):
     ≥ 0 also refuses q with ||q| − 1| > tol (a quaternion typed or sent as unit that is not),
     saying |q| and by how much (the worst item of a batch).
     """
-    v = plain_item(q, (4,))
-    out = v and tol is None and run_on_floats(_quaternion_kernel, v)
-    if out and not out[1]:  # fast path: one plain non-zero item, the kernel on floats
-        return np.array(out[0])
-    matrix, zero = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
-                         [MATRIX, FLAG])
+    out = apply(_quaternion_kernel, [(q, (4,), 'quaternion (x, y, z, w)', True)],
+                _QUATERNION_MATRIX)
+    zero = out.zero
     if zero is not False_ and zero.any():  # (one item's flag is one of NumPy's two bools)
         where = f' (item {tuple(int(i) for i in np.argwhere(zero)[0])})' if zero.ndim else ''
         raise RotationError(f'quaternion (x, y, z, w) must be non-zero, got |q| = 0{where}')
     if tol is not None:
         _refuse_non_unit(np.asarray(q, dtype=np.float64), tol)  # a valid q: apply took it
-    return matrix
+    return out.matrix
 
 
 def _refuse_non_unit(q, tol):
@@ -317,6 +272,14 @@ def _refuse_non_unit(q, tol):
                         f'off 1 by {off_text} > tol {tol_text}{where}')
 
 
+class _QuaternionMatrix(NamedTuple):
+    matrix: Any
+    zero: Any  # q = 0, which has no rotation
+
+
+_QUATERNION_MATRIX = _QuaternionMatrix(matrix=MATRIX, zero=FLAG)
+
+
 def _quaternion_kernel(ops, q):
     x, y, z, w = q
     n2 = x * x + y * y + z * z + w * w
@@ -331,9 +294,9 @@ def _quaternion_kernel(ops, q):
     sx, sy, sz = s * x, s * y, s * z
     xx, yy, zz, xy, xz, yz = sx * x, sy * y, sz * z, sx * y, sx * z, sy * z
     xw, yw, zw = sx * w, sy * w, sz * w
-    return [[1.0 - (yy + zz), xy - zw, xz + yw],
-            [xy + zw, 1.0 - (xx + zz), yz - xw],
-            [xz - yw, yz + xw, 1.0 - (xx + yy)]], zero
+    return _QuaternionMatrix(matrix=[[1.0 - (yy + zz), xy - zw, xz + yw],
+                                     [xy + zw, 1.0 - (xx + zz), yz - xw],
+                                     [xz - yw, yz + xw, 1.0 - (xx + yy)]], zero=zero)
 
 
 def quaternion_of_matrix_kernel(ops, m):
@@ -355,7 +318,7 @@ def quaternion_of_matrix_kernel(ops, m):
     # Canonical sign: w > 0; at w = 0 the first non-zero of x, y, z positive.
     lead = ops.where(w != 0, w, ops.where(x != 0, x, ops.where(y != 0, y, z)))
     s = ops.where(lead < 0, -1.0, 1.0) / n
-    return [x * s + 0.0, y * s + 0.0, z * s + 0.0, w * s + 0.0],
+    return [x * s + 0.0, y * s + 0.0, z * s + 0.0, w * s + 0.0]
 
 
 def matrix_to_quaternion(R, *, check=True):
@@ -369,9 +332,4 @@ def matrix_to_quaternion(R, *, check=True):
     result is accurate to rounding at every angle, 0 and π included. The boundary twin of
     quaternion_to_matrix, for messages and for people; never used inside the math.
     """
-    m = plain_rotation(R, check)
-    out = m and run_on_floats(quaternion_of_matrix_kernel, m)
-    if out:  # fast path: one plain rotation, the kernel on floats without apply around it
-        return np.array(out[0])
-    (q,) = apply_to_rotations(quaternion_of_matrix_kernel, R, check, [_QUATERNION])
-    return q
+    return apply_to_rotations(quaternion_of_matrix_kernel, R, check, QUATERNION)

@@ -27,7 +27,7 @@ import numpy as np
 from rot_tools.core._arrays import finite_array, require_tolerance
 from rot_tools.core.axis_angle import matrix_to_rotvec
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import matrix_to_euler
+from rot_tools.core.euler import matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.fitting import align_vectors, mean_rotation, rotation_distance
 from rot_tools.core.screw import screw_interpolate
 from rot_tools.core.so3 import checked_rotation, rot_z
@@ -85,18 +85,31 @@ def _times(at, name):
     return at
 
 
+class _Pairs(NamedTuple):
+    R_ref: np.ndarray
+    R_est: np.ndarray
+
+
 def _pair_count(R_ref, R_est, least):
-    """Both batches of rotations, equal in count and ≥ least."""
+    """Return both batches of rotations as _Pairs, equal in count and ≥ least."""
     R_ref, R_est = _rotations(R_ref, 'R_ref'), _rotations(R_est, 'R_est')
     if len(R_ref) != len(R_est):
         raise RotationError(f'R_ref has {len(R_ref)} rotations but R_est has {len(R_est)}: '
                             'pairs are needed')
     if len(R_ref) < least:
         raise RotationError(f'{len(R_ref)} pair(s) of rotations: at least {least} needed')
-    return R_ref, R_est
+    return _Pairs(R_ref=R_ref, R_est=R_est)
 
 
 # ---- matching ----------------------------------------------------------------------------
+
+
+class Interpolated(NamedTuple):
+    """Poses at the covered times: R (K, 3, 3), b (K, 3) or None, covered (M,) bool."""
+
+    R: np.ndarray
+    b: np.ndarray
+    covered: np.ndarray
 
 
 def interpolate_poses(stamps, R, b, at, max_gap=0.1):
@@ -107,8 +120,8 @@ def interpolate_poses(stamps, R, b, at, max_gap=0.1):
     at (M,) any order. For t_k ≤ a ≤ t_{k+1}: T(a) = T_k·exp(s·log(T_k⁻¹T_{k+1})),
     s = (a − t_k)/(t_{k+1} − t_k) (screw_interpolate; with b = 0 this is the slerp of R).
     ``a`` is covered where both neighbours lie within max_gap (s) of it, or a stamp equals it.
-    Returns (R_at (K, 3, 3), b_at (K, 3) or None, covered (M,) bool) with K = covered.sum():
-    the poses at at[covered], in order.
+    Returns Interpolated(R (K, 3, 3), b (K, 3) or None, covered (M,) bool) with K =
+    covered.sum(): the poses at at[covered], in order.
     """
     t = _stamps(stamps, 'stamps', 2)
     R = _rotations(R, 'R', len(t))
@@ -121,9 +134,15 @@ def interpolate_poses(stamps, R, b, at, max_gap=0.1):
     covered = exact | ((before >= 0) & (after >= 0) & (before <= gap) & (after <= gap))
     k, before = k[covered], before[covered]
     s = before / (t[k + 1] - t[k])
-    R_at, b_at = screw_interpolate(R[k], positions[k], R[k + 1], positions[k + 1], s,
-                                   check=False)
-    return R_at, None if b is None else b_at, covered
+    pose = screw_interpolate(R[k], positions[k], R[k + 1], positions[k + 1], s, check=False)
+    return Interpolated(R=pose.R, b=None if b is None else pose.b, covered=covered)
+
+
+class NearestStamps(NamedTuple):
+    """Indices (K,) into the stamps, and which times were covered (M,) bool."""
+
+    index: np.ndarray
+    covered: np.ndarray
 
 
 def nearest_stamps(stamps, at, max_gap=0.01):
@@ -131,9 +150,9 @@ def nearest_stamps(stamps, at, max_gap=0.01):
     Index of the nearest stamp to each time ``at``, within max_gap (s), as evo pairs poses.
 
     stamps (N,) strictly increasing; at (M,). A tie goes to the earlier stamp. Returns
-    (index (K,) into stamps, covered (M,) bool), K = covered.sum(). evo walks the stream with
-    fewer poses and looks each of its stamps up in the other: to reproduce its pairs, pass the
-    shorter stream as ``at``.
+    NearestStamps(index (K,) into stamps, covered (M,) bool), K = covered.sum(). evo walks the
+    stream with fewer poses and looks each of its stamps up in the other: to reproduce its pairs,
+    pass the shorter stream as ``at``.
     """
     t = _stamps(stamps, 'stamps', 1)
     at = _times(at, 'at')
@@ -144,10 +163,17 @@ def nearest_stamps(stamps, at, max_gap=0.01):
     d_lower, d_upper = np.abs(at - t[lower]), np.abs(t[upper] - at)
     index = np.where(d_upper < d_lower, upper, lower)
     covered = np.minimum(d_lower, d_upper) <= gap
-    return index[covered], covered
+    return NearestStamps(index=index[covered], covered=covered)
 
 
 # ---- time offset -------------------------------------------------------------------------
+
+
+class Speeds(NamedTuple):
+    """Angular speeds (rad/s) between consecutive poses, at the midpoints of their stamps."""
+
+    t: np.ndarray
+    speed: np.ndarray
 
 
 def angular_speeds(stamps, R, name='R'):
@@ -156,12 +182,12 @@ def angular_speeds(stamps, R, name='R'):
 
     |ω_k| = θ(R_kᵀR_{k+1}) / (t_{k+1} − t_k), θ the geodesic angle (a turn of more than π
     between two samples aliases). stamps (N,) strictly increasing, N ≥ 2; returns
-    (midpoints (N − 1,), speeds (N − 1,)).
+    Speeds(t: midpoints (N − 1,), speed (N − 1,)).
     """
     t = _stamps(stamps, f'stamps of {name}', 2)
     R = _rotations(R, name, len(t))
-    speeds = rotation_distance(R[:-1], R[1:], check=False) / np.diff(t)
-    return (t[:-1] + t[1:]) / 2, speeds
+    return Speeds(t=(t[:-1] + t[1:]) / 2,
+                  speed=rotation_distance(R[:-1], R[1:], check=False) / np.diff(t))
 
 
 def _on_grid(grid, t, v):
@@ -178,11 +204,16 @@ def _sliding_sums(a, b, lags):
     return sums[:2 * lags + 1]
 
 
+class _Correlations(NamedTuple):
+    r: np.ndarray
+    count: np.ndarray
+
+
 def _correlations(ref, est, lags):
     """
     Pearson correlation of ref[g] and est[g + lags − j] over their common samples, per lag j.
 
-    ref (n,), est (n + 2·lags,), NaN where a stream has no sample. Returns (r, count) for
+    ref (n,), est (n + 2·lags,), NaN where a stream has no sample. Returns _Correlations for
     j = −lags … lags; r is NaN where fewer than half the largest count overlap.
     """
     m_r, m_e = np.isfinite(ref), np.isfinite(est)
@@ -199,7 +230,7 @@ def _correlations(ref, est, lags):
     with np.errstate(divide='ignore', invalid='ignore'):
         r = (sxy - sx * sy / n) / np.sqrt((sxx - sx * sx / n) * (syy - sy * sy / n))
     r = np.where(enough & np.isfinite(r), r, np.nan)
-    return r[::-1], count[::-1]  # k = lags − j: reversed, index j + lags
+    return _Correlations(r=r[::-1], count=count[::-1])  # k = lags − j: reversed, index j + lags
 
 
 class TimeOffset(NamedTuple):
@@ -223,8 +254,9 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
     do not overlap within max_offset, a stream never turns, or the best offset is at
     ±max_offset (the true one may lie beyond).
     """
-    te, we = angular_speeds(stamps_est, R_est, 'R_est')
-    tr, wr = angular_speeds(stamps_ref, R_ref, 'R_ref')
+    est = angular_speeds(stamps_est, R_est, 'R_est')
+    ref = angular_speeds(stamps_ref, R_ref, 'R_ref')
+    te, we, tr, wr = est.t, est.speed, ref.t, ref.speed
     reach = require_tolerance(max_offset, 'max_offset')
     for name, speed in (('R_est', we), ('R_ref', wr)):
         if np.ptp(speed) == 0:
@@ -239,7 +271,7 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
     h = max(h, (hi - lo) / MAX_GRID, reach / MAX_GRID)
     lags, n = math.ceil(reach / h - 1e-9), int((hi - lo) / h) + 1  # (0.2/0.01 = 20.000…04)
     grid = lo + h * np.arange(-lags, n + lags)
-    r, _ = _correlations(_on_grid(grid[lags:lags + n], tr, wr), _on_grid(grid, te, we), lags)
+    r = _correlations(_on_grid(grid[lags:lags + n], tr, wr), _on_grid(grid, te, we), lags).r
     if not np.isfinite(r).any():
         raise RotationError('the angular speeds do not correlate at any offset within '
                             f'±{reach:g} s (too little overlap, or a speed constant there)')
@@ -250,7 +282,7 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
     r_minus, r_0, r_plus = r[best - 1], r[best], r[best + 1]
     curve = r_minus - 2 * r_0 + r_plus
     step = 0.5 * (r_minus - r_plus) / curve if curve < 0 else 0.0  # NaN compares False: 0
-    return TimeOffset(float((best - lags + step) * h), float(r_0))
+    return TimeOffset(offset=float((best - lags + step) * h), correlation=float(r_0))
 
 
 # ---- alignment ---------------------------------------------------------------------------
@@ -258,6 +290,13 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
 
 ALIGNMENTS = ('none', 'rotation', 'yaw', 'se3')
 """The methods of align_rotations."""
+
+
+class FrameAlignment(NamedTuple):
+    """The constant motion (W (3, 3), t (3,)) between two streams' reference frames."""
+
+    W: np.ndarray
+    t: np.ndarray
 
 
 def align_rotations(R_ref, R_est, method='rotation', *, b_ref=None, b_est=None):
@@ -275,25 +314,26 @@ def align_rotations(R_ref, R_est, method='rotation', *, b_ref=None, b_est=None):
       Σ‖(b_ref,k − b̄_ref) − W·(b_est,k − b̄_est)‖² (align_vectors), t = b̄_ref − W·b̄_est.
       Needs b_ref, b_est (N, 3), N ≥ 3.
 
-    Returns (W (3, 3), t (3,)). RotationError for an unknown method, unpaired input and a
-    W that is not unique.
+    Returns FrameAlignment(W (3, 3), t (3,)). RotationError for an unknown method, unpaired
+    input and a W that is not unique.
     """
     if method not in ALIGNMENTS:
         raise RotationError(f'method must be one of {", ".join(ALIGNMENTS)}, got {method!r}')
-    R_ref, R_est = _pair_count(R_ref, R_est, 1)
+    pairs = _pair_count(R_ref, R_est, 1)
+    R_ref, R_est = pairs.R_ref, pairs.R_est
     zero = np.zeros(3)
     if method == 'none':
-        return np.eye(3), zero
+        return FrameAlignment(W=np.eye(3), t=zero)
     if method == 'se3':
         return _umeyama(b_ref, b_est, len(R_ref))
     if method == 'rotation':
-        return mean_rotation(R_ref @ np.swapaxes(R_est, -1, -2)), zero
+        return FrameAlignment(W=mean_rotation(R_ref @ np.swapaxes(R_est, -1, -2)), t=zero)
     S = np.einsum('nij,nkj->ik', R_ref, R_est)
     cos, sin = S[0, 0] + S[1, 1], S[1, 0] - S[0, 1]
     if math.hypot(cos, sin) <= 1e-9 * len(R_ref):
         raise RotationError('the yaw alignment is not unique: every turn about z fits as well '
                             f'(S₀₀ + S₁₁ = {cos:.3g}, S₁₀ − S₀₁ = {sin:.3g})')
-    return rot_z(math.atan2(sin, cos)), zero
+    return FrameAlignment(W=rot_z(math.atan2(sin, cos)), t=zero)
 
 
 def _umeyama(b_ref, b_est, count):
@@ -308,8 +348,8 @@ def _umeyama(b_ref, b_est, count):
         raise RotationError("method 'se3' needs positions that move: "
                             f"{'b_ref' if not d_ref.any() else 'b_est'} stands still")
     keep = d_ref.any(axis=1) & d_est.any(axis=1)  # a pair at a centroid pulls nowhere
-    W, _ = align_vectors(d_ref[keep], d_est[keep])
-    return W, mean_ref - W @ mean_est
+    W = align_vectors(d_ref[keep], d_est[keep]).R
+    return FrameAlignment(W=W, t=mean_ref - W @ mean_est)
 
 
 # ---- mounting ----------------------------------------------------------------------------
@@ -343,7 +383,8 @@ def hand_eye_rotation(A, B):
     fewer than two excited axes (HandEye.axes < 2) the turn about the one excited axis is
     set by noise, and HandEye.warning says so. RotationError for fewer than 2 pairs that turn.
     """
-    A, B = _pair_count(A, B, 2)
+    pairs = _pair_count(A, B, 2)
+    A, B = pairs.R_ref, pairs.R_est
     alpha, beta = matrix_to_rotvec(A, check=False), matrix_to_rotvec(B, check=False)
     turns = alpha.any(axis=1) & beta.any(axis=1)
     if turns.sum() < 2:
@@ -351,14 +392,15 @@ def hand_eye_rotation(A, B):
                             'and B both): the motion never turns enough for a mounting')
     sigma = np.linalg.svd(alpha[turns], compute_uv=False) / math.sqrt(int(turns.sum()))
     axes = int(np.sum(sigma >= EXCITED_RATIO * sigma[0]))
-    X, _ = align_vectors(alpha[turns], beta[turns])
+    X = align_vectors(alpha[turns], beta[turns]).R
     residual = rotation_distance(A @ X, X @ B, check=False)
     warning = ''
     if axes < 2:
         warning = (f'the motion excited {axes} rotation axis (σ2/σ1 = {sigma[1] / sigma[0]:.2g}'
                    f' < {EXCITED_RATIO:g}): the turn of the mounting about it is not '
                    'determined')
-    return HandEye(X, float(np.sqrt(np.mean(residual ** 2))), sigma, axes, warning)
+    return HandEye(rotation=X, residual=float(np.sqrt(np.mean(residual ** 2))),
+                   singular_values=sigma, axes=axes, warning=warning)
 
 
 # ---- errors ------------------------------------------------------------------------------
@@ -425,7 +467,7 @@ class RotationErrors(NamedTuple):
     Absolute and relative rotation errors of paired streams (rotation_errors).
 
     angle (N,): θ(E_k) ∈ [0, π] of E_k = R_ref,kᵀ·R_est,k; rpy (N, 3): E_k's roll, pitch,
-    yaw (extrinsic 'xyz', each unwrapped along the stream); ape: error_statistics(angle);
+    yaw (RPY_SEQUENCE, each unwrapped along the stream); ape: error_statistics(angle);
     pairs (K, 2): delta_pairs; rpe_angle (K,): the angle of (Q_iᵀQ_j)ᵀ(P_iᵀP_j);
     rpe: error_statistics(rpe_angle). Radians.
     """
@@ -448,14 +490,15 @@ def rotation_errors(R_ref, R_est, delta=1, unit='f', stamps=None):
     delta, unit, stamps) — by default (1 frame) every consecutive pair (k, k + 1) — the angle
     of (Q_iᵀQ_j)ᵀ·(P_iᵀP_j). Returns RotationErrors.
     """
-    R_ref, R_est = _pair_count(R_ref, R_est, 2)
+    both = _pair_count(R_ref, R_est, 2)
+    R_ref, R_est = both.R_ref, both.R_est
     pairs = delta_pairs(len(R_ref), delta, unit, stamps)
     E = np.swapaxes(R_ref, -1, -2) @ R_est
     angle = rotation_distance(R_ref, R_est, check=False)
-    rpy = np.unwrap(matrix_to_euler(E, 'xyz', check=False)[0], axis=0)
+    rpy = np.unwrap(matrix_to_euler(E, RPY_SEQUENCE, check=False).angles, axis=0)
     i, j = pairs[:, 0], pairs[:, 1]
     rel_ref = np.swapaxes(R_ref[i], -1, -2) @ R_ref[j]
     rel_est = np.swapaxes(R_est[i], -1, -2) @ R_est[j]
     rpe_angle = rotation_distance(rel_ref, rel_est, check=False)
-    return RotationErrors(angle, rpy, error_statistics(angle), pairs, rpe_angle,
-                          error_statistics(rpe_angle))
+    return RotationErrors(angle=angle, rpy=rpy, ape=error_statistics(angle), pairs=pairs,
+                          rpe_angle=rpe_angle, rpe=error_statistics(rpe_angle))

@@ -83,7 +83,7 @@ import re
 import numpy as np
 from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler
+from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.rigid import invert_transform, transform_points, transform_to_homogeneous
 import yaml
 
@@ -125,8 +125,8 @@ def sequence_hint(name):
     key = ''.join(c for c in str(name).lower() if c.isalpha())
     if key in _RPY_NAMES:
         return ('; roll, pitch, yaw (about the fixed x, y, z axes) are the extrinsic sequence '
-                "'xyz': every report prints them as rpy, and rotation_node publishes them on "
-                '~/rpy')
+                f"'{RPY_SEQUENCE}': every report prints them as rpy, and rotation_node publishes "
+                'them on ~/rpy')
     if key in _YPR_NAMES:
         return ("; yaw, pitch, roll (about the moving z, y', x'' axes) are the intrinsic "
                 "sequence 'ZYX'; every report prints them as rpy (roll, pitch, yaw), and "
