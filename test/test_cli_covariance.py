@@ -273,6 +273,24 @@ def test_covariances_at_the_edge_of_float64(script, cov, message):
     assert proc.stderr.count('\n') == 1, proc.stderr
 
 
+@pytest.mark.parametrize('mixed', [
+    '--deg covariance --from rpy --to rotvec euler xyz 5 60 30 --cov 3e-4 0 0 0 7.6e-5 0 0 0 '
+    '1.4e-3',
+    'covariance --from rpy euler xyz 5 --deg 60 30 --frame body --to rotvec --cov 3e-4 0 0 0 '
+    '7.6e-5 0 0 0 1.4e-3',
+    'covariance --cov 3e-4 0 0 0 7.6e-5 0 0 0 1.4e-3 --to rotvec euler --from rpy xyz 5 60 30',
+])
+def test_options_before_between_and_after_the_rotation(script, mixed):
+    """Covariance's own options and the common ones go anywhere, as for the other commands."""
+    canonical = ('covariance euler xyz 5 60 30 --deg --from rpy --to rotvec --frame body --cov '
+                 '3e-4 0 0  0 7.6e-5 0  0 0 1.4e-3')
+    mixed += '' if '--frame' in mixed else ' --frame body'
+    mixed += '' if '--deg' in mixed else ' --deg'
+    proc = run(script, *mixed.split())
+    assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
+    assert proc.stdout == run(script, *canonical.split()).stdout
+
+
 @pytest.mark.parametrize('args, message', [
     ('covariance quaternion 0 0 0 0', 'quaternion X Y Z W: quaternion (x, y, z, w) must be '
      'non-zero'),

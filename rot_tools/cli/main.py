@@ -1,22 +1,24 @@
 """
 rot-tools: every representation of a rotation or rigid transform, on the command line.
 
-No ROS needed: argparse over rot_tools and rot_tools.io.report. Each command is a module of
-rot_tools.cli with ``add_parser(subparsers)``, which adds its parser to argparse's subparsers
-action and returns it, and ``run(args)``, which returns the exit status; this module lists
-them (COMMANDS), reads the command line and runs the command::
+No ROS needed: argparse over rot_tools and rot_tools.io.report::
 
-    rot-tools euler ZYX 30 20 10 --deg                    (rot_tools.cli.euler)
-    rot-tools matrix 0 -1 0  1 0 0  0 0 1                 (matrix)
-    rot-tools axis-angle 0 0 1 90 --deg                   (axis_angle)
-    rot-tools rotvec 0 0 1.5707963267949                  (rotvec)
-    rot-tools quaternion 0 0 0.7071 0.7071                (quaternion)
-    rot-tools frame 0 1 0  -1 0 0  0 0 1                  (frame)
+    rot-tools euler ZYX 30 20 10 --deg
+    rot-tools matrix 0 -1 0  1 0 0  0 0 1
+    rot-tools axis-angle 0 0 1 90 --deg
+    rot-tools rotvec 0 0 1.5707963267949
+    rot-tools quaternion 0 0 0.7071 0.7071
+    rot-tools frame 0 1 0  -1 0 0  0 0 1
     rot-tools matrix 0 -1 0 1  1 0 0 0  0 0 1 0.5  0 0 0 1
-    rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3  (screw)
-    rot-tools bag run.bag --csv run.csv --plot rpy.png   (bag: the 'bag' extra)
-    rot-tools compare est.tum gt.csv --align se3          (compare)
+    rot-tools screw --euler ZYX 90 0 0 --translation 1 0 0.5 --deg --point 1 2 3
+    rot-tools bag run.bag --csv run.csv --plot rpy.png   (the 'bag' extra)
+    rot-tools compare est.tum gt.csv --align se3
     rot-tools covariance quaternion 0 0 0 1 --cov 1e-4 0 0 0 1e-4 0 0 0 1e-4 --from rotvec --to rpy
+
+Each command is a module of rot_tools.cli (``axis-angle``: axis_angle) with
+``add_parser(subparsers)``, which adds its parser to argparse's subparsers action and returns
+it, and ``run(args)``, which runs it and returns the exit status. This module lists them
+(COMMANDS), reads the command line and runs the command it names.
 
 The one-shot commands (euler ... screw) print ``transform_report`` (keys documented in
 rot_tools.io.report) as YAML, or JSON with ``--json`` (rot_tools.cli.one_shot), of an input

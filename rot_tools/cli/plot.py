@@ -152,7 +152,7 @@ def figure(R, b=None, degrees=False, scale=None):
 
 
 SVG_STYLE = {'svg.fonttype': 'none', 'svg.hashsalt': 'rot_tools'}
-"""SVG text stays text (a third of the size of glyph paths) and ids do not vary by run."""
+"""SVG text stays text (smaller than glyph paths) and ids do not vary from run to run."""
 
 
 def save(R, b, path, degrees=False):
