@@ -2,7 +2,7 @@
 rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 and MCAP).
 
 Every value is checked against an independent computation from the messages as rosbags
-decodes them: scipy's Rotation (from_quat, as_euler('xyz'), as_rotvec, mean), numpy.unwrap,
+decodes them: scipy's Rotation (from_quat, as_euler(RPY_SEQUENCE), as_rotvec, mean), numpy.unwrap,
 and a log map written here. Runs the CLI in-process (rot_tools.cli.main.main), and as the console
 script where the exit status and the exact stderr matter (test_bag_errors.py).
 """
@@ -18,6 +18,7 @@ import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 from rot_tools.cli import bag_output, main as cli  # noqa: E402
+from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
@@ -119,7 +120,7 @@ def test_summary_of_the_real_bag(capsys, reference):
         assert t['rate'] == pytest.approx((len(ref['stamp']) - 1) / np.ptp(ref['stamp']),
                                           rel=1e-9)
         rot = Rotation.from_quat(ref['q'])
-        rpy = np.unwrap(rot.as_euler('xyz'), axis=0)
+        rpy = np.unwrap(rot.as_euler(RPY_SEQUENCE), axis=0)
         for k, name in enumerate(('roll', 'pitch', 'yaw')):
             np.testing.assert_allclose(t['rpy_range'][name], [rpy[:, k].min(), rpy[:, k].max()],
                                        rtol=0, atol=1e-10)
@@ -135,7 +136,7 @@ def test_summary_of_the_real_bag(capsys, reference):
         np.testing.assert_allclose([got[c] for c in 'xyzw'], canonical(mean.as_quat()[None])[0],
                                    rtol=0, atol=1e-9)
         np.testing.assert_allclose(list(t['mean_orientation']['rpy'].values()),
-                                   mean.as_euler('xyz'), rtol=0, atol=1e-9)
+                                   mean.as_euler(RPY_SEQUENCE), rtol=0, atol=1e-9)
     # Imu: RMS |ω − mean gyro of the step's ends|, ω from consecutive orientations
     ref = reference[IMU]
     rel = Rotation.from_quat(ref['q'][:-1]).inv() * Rotation.from_quat(ref['q'][1:])
@@ -186,7 +187,8 @@ def test_csv_rows_of_the_real_bag(capsys, reference):
         np.testing.assert_allclose(q, canonical(rot.as_quat()), rtol=0, atol=1e-11)
         assert (q[:, 3] > 0).all()
         np.testing.assert_allclose(col(mine, 'roll', 'pitch', 'yaw'),
-                                   np.unwrap(rot.as_euler('xyz'), axis=0), rtol=0, atol=1e-10)
+                                   np.unwrap(rot.as_euler(RPY_SEQUENCE), axis=0), rtol=0,
+                                   atol=1e-10)
         np.testing.assert_allclose(col(mine, 'ZYX_1', 'ZYX_2', 'ZYX_3'),
                                    np.unwrap(rot.as_euler('ZYX'), axis=0), rtol=0, atol=1e-10)
         np.testing.assert_allclose(col(mine, 'rx', 'ry', 'rz'), rot.as_rotvec(), rtol=0,
@@ -208,7 +210,7 @@ def test_csv_wrap_and_degrees(capsys, reference):
     ref = reference[ODOM]
     rot = Rotation.from_quat(ref['q'])
     got = col(rows, 'roll', 'pitch', 'yaw')
-    want = np.degrees(rot.as_euler('xyz'))
+    want = np.degrees(rot.as_euler(RPY_SEQUENCE))
     assert got.max() <= 180 and got.min() > -180
     # ±180° are the same angle: compare on the circle
     np.testing.assert_allclose((got - want + 180) % 360 - 180, 0, atol=1e-9)
@@ -235,23 +237,26 @@ def test_rosbag2_gives_what_the_ros1_bag_gives(capsys, converted, storage):
 
 
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
-def test_fast_columns_equal_rosbags_decoding(converted, storage):
+def test_columns_are_the_fields_rosbags_decodes(converted, reference, storage):
+    """Each topic's columns hold the fields of its messages, as rosbags decodes them."""
     path = bh.REAL if storage == 'ros1' else converted[storage]
     with bag_read.open_bag(path) as reader:
-        conns = list(reader.connections)
-        slow = bag_read.read_topics(reader, conns, fast=False)
-        reader.deserialize = _no_decoding  # the fast path reads every message itself
-        fast = bag_read.read_topics(reader, conns)
-    assert set(fast) == set(slow) == {IMU, ODOM}
-    for topic in fast:
-        a, b = fast[topic], slow[topic]
-        for name in ('record', 'sec', 'nanosec', 'frame', 'orientation', 'position',
-                     'covariance0', 'covariance', 'angular_velocity', 'child'):
-            x, y = getattr(a, name), getattr(b, name)
-            assert (x is None) == (y is None)
-            if x is not None:
-                np.testing.assert_array_equal(x, y)
-        assert (a.frame_ids, a.child_frame_ids) == (b.frame_ids, b.child_frame_ids)
+        columns = bag_read.read_topics(reader, list(reader.connections))
+    assert set(columns) == {IMU, ODOM}
+    for topic, c in columns.items():
+        ref = reference[topic]
+        np.testing.assert_array_equal(c.orientation, ref['q'])
+        np.testing.assert_array_equal(c.sec, ref['sec'])
+        np.testing.assert_array_equal(c.nanosec, ref['nsec'])
+        assert [c.frame_ids[i] for i in c.frame] == ref['frame']
+        assert c.record.dtype == np.int64 and (np.diff(c.record) >= 0).all()
+    imu, odom = columns[IMU], columns[ODOM]
+    np.testing.assert_array_equal(imu.angular_velocity, reference[IMU]['gyro'])
+    np.testing.assert_array_equal(odom.position, reference[ODOM]['p'])
+    assert imu.position is None and odom.angular_velocity is None
+    assert imu.covariance.shape == (3061, 9) and odom.covariance.shape == (3060, 36)
+    np.testing.assert_array_equal(imu.covariance0, imu.covariance[:, 0])
+    assert odom.child_frame_ids == ['base_link'] and imu.child_frame_ids is None
 
 
 def test_start_and_end_select_by_record_time(capsys):
@@ -291,17 +296,8 @@ def test_plot_one_panel_per_topic(capsys, tmp_path):
     assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
 
 
-def _no_decoding(raw, msgtype):
-    raise AssertionError('rosbags decoded a message the fast path should have read')
-
-
-def test_fast_columns_with_strings_of_many_lengths(tmp_path):
-    """
-    Test frame ids of different lengths, and of one total length in different places.
-
-    Frame ids of different lengths, and of the same total length in different places:
-    the layout is split by the strings' lengths, and gives rosbags' columns exactly.
-    """
+def test_frame_ids_of_many_lengths_are_read_as_recorded(tmp_path):
+    """Frame ids of different lengths, empty ones too, in both rosbag2 storages."""
     b = bh.Builder()
     q = Rotation.random(24, random_state=5).as_quat()
     frames = [('a', 'bbb'), ('bbb', 'a'), ('cc', 'dd'), ('', 'child'), ('xy', 'zw'), ('a', 'bbb')]
@@ -316,47 +312,39 @@ def test_fast_columns_with_strings_of_many_lengths(tmp_path):
     for storage in ('sqlite3', 'mcap'):
         path = bh.write_bag(tmp_path / storage, messages, storage)
         with bag_read.open_bag(path) as reader:
-            conns = list(reader.connections)
-            slow = bag_read.read_topics(reader, conns, fast=False)
-            reader.deserialize = _no_decoding  # the fast path must read every message itself
-            fast = bag_read.read_topics(reader, conns)
-        for topic in ('/tf_stamped', '/pose'):
-            a, s = fast[topic], slow[topic]
-            names = [a.frame_ids[i] for i in a.frame]
-            assert names == [s.frame_ids[i] for i in s.frame]
-            if a.child is not None:
-                assert [a.child_frame_ids[i] for i in a.child] == [
-                    s.child_frame_ids[i] for i in s.child]
-            for name in ('sec', 'nanosec', 'orientation', 'position'):
-                np.testing.assert_array_equal(getattr(a, name), getattr(s, name))
-        tf = fast['/tf_stamped']
-        assert [tf.frame_ids[i] for i in tf.frame][:6] == [f for f, _ in frames]
+            columns = bag_read.read_topics(reader, list(reader.connections))
+        tf, pose = columns['/tf_stamped'], columns['/pose']
+        assert [tf.frame_ids[i] for i in tf.frame] == [frames[k % 6][0] for k in range(24)]
+        assert [tf.child_frame_ids[i] for i in tf.child] == [frames[k % 6][1] for k in range(24)]
+        assert [pose.frame_ids[i] for i in pose.frame] == [
+            frames[k % 6][0] * (k % 3) for k in range(24)]
         np.testing.assert_array_equal(tf.position[:, 0], np.arange(24))
+        np.testing.assert_array_equal(pose.orientation, q)
 
 
-def test_frame_ids_of_fast_and_decoded_chunks_are_one_list(monkeypatch, capsys):
-    """Check a topic read partly by the fast path (bytes), partly by rosbags (str)."""
-    real_read = bag_read._Layout.read
-    calls = []
-
-    def every_other_chunk(self, rows):
-        calls.append(len(rows))
-        return real_read(self, rows) if len(calls) % 2 else None
-
-    monkeypatch.setattr(bag_read, 'CHUNK', 1000)
-    monkeypatch.setattr(bag_read._Layout, 'read', every_other_chunk)
+def test_a_topic_read_in_many_chunks_is_one_table(monkeypatch, capsys):
+    """Columns read a chunk of messages at a time join into one: frame ids listed once."""
+    whole = rows_of(capsys, 'bag', bh.REAL)
+    monkeypatch.setattr(bag_read, 'CHUNK', 100)
     s = summary_of(capsys, 'bag', bh.REAL)
-    assert len(calls) > 4
     assert s['topics'][IMU]['frame_ids'] == ['base_link']
     assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']
+    assert rows_of(capsys, 'bag', bh.REAL) == whole
 
 
-def test_csv_beyond_twelve_digits_uses_python_formatting(capsys):
-    fast = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU)
-    slow = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '15')
-    assert len(fast) == len(slow) == 3061
+def test_csv_numbers_are_rounded_then_written_as_the_shortest_text(capsys):
+    """--precision rounds each number, written as Python's repr of the rounded float."""
+    def round_number(x, digits):  # correctly rounded by Python's formatting
+        return float(f'{x:.{digits}g}') if abs(x) >= 1 else round(x, digits) + 0.0
+
+    full = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '17')
+    four = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '4')
+    assert len(full) == len(four) == 3061
+    assert [r['stamp'] for r in full] == [r['stamp'] for r in four]  # stamps exactly
     names = [n for n in bag_output.csv_header(None) if n not in ('topic', 'stamp', 'frame_id')]
-    assert [r['stamp'] for r in fast] == [r['stamp'] for r in slow]
-    np.testing.assert_allclose(col(slow[1:], *names), col(fast[1:], *names), rtol=1e-11,
-                               atol=1e-12)
-    assert max(len(r['roll']) for r in slow) > max(len(r['roll']) for r in fast)
+    for long, short in zip(full[1:], four[1:]):
+        for name in names:
+            assert short[name] == repr(float(short[name]))  # the shortest round-trip text
+            assert float(short[name]) == round_number(float(long[name]), 4), name
+    assert max(len(r['roll']) for r in full) > 12 >= max(len(r['roll']) for r in four)
+    assert four[0]['x'] == '0.0' and four[0]['wx'] == ''  # no position; no previous row

@@ -13,10 +13,10 @@ from hypothesis import example, given, settings as hsettings, strategies as st
 import numpy as np
 import pytest
 from rot_tools.io import boundary, interface
-from rot_tools.io.boundary import RefusedInput
+from rot_tools.io.boundary import QUATERNION_TOLERANCE, RefusedInput
 from scipy.spatial.transform import Rotation
 
-TOL = 1e-3
+TOL = QUATERNION_TOLERANCE
 SETTINGS = SimpleNamespace(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False)
 IMU, ODOMETRY = interface.input_named('imu'), interface.input_named('odometry')
 

@@ -22,9 +22,11 @@ import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 from rot_tools.cli import main as cli  # noqa: E402
+from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
+from rot_tools.io.boundary import QUATERNION_TOLERANCE  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
-TOL = 1e-3
+TOL = QUATERNION_TOLERANCE
 RNG = np.random.default_rng(18)
 NAN, INF = math.nan, math.inf
 
@@ -147,7 +149,7 @@ def test_accepted_rows_are_the_normalised_inputs(capsys, bad_bag):
         want = rot.as_quat() * np.where(rot.as_quat()[:, 3] < 0, -1, 1)[:, None]
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-11)
         rpy = np.array([[float(r[c]) for c in ('roll', 'pitch', 'yaw')] for r in mine])
-        np.testing.assert_allclose(rpy, np.unwrap(rot.as_euler('xyz'), axis=0), atol=1e-10)
+        np.testing.assert_allclose(rpy, np.unwrap(rot.as_euler(RPY_SEQUENCE), axis=0), atol=1e-10)
         if good[0][1] is not None:
             xyz = np.array([[float(r[c]) for c in 'xyz'] for r in mine])
             np.testing.assert_allclose(xyz, [g[1] for g in good], rtol=1e-11)

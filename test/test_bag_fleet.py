@@ -223,8 +223,9 @@ def test_parquet_schema_column_by_column(bags):
         for name in floats:
             column = np.array([np.nan if v is None else v for v in data[name]])
             text = np.array([float(r[name]) if r[name] else np.nan for r in mine])
-            # the CSV's 17 digits and 17 decimal places: within 5e-18 or 5e-17 relative
-            np.testing.assert_allclose(column, text, rtol=6e-17, atol=6e-18, err_msg=name)
+            # the CSV's 17 digits and 17 decimal places, rounded as numbers: within one unit
+            # of the last digit (1e-17, or 1e-16 relative)
+            np.testing.assert_allclose(column, text, rtol=1.1e-16, atol=1.1e-17, err_msg=name)
         first = [k for k, t in enumerate(data['topic']) if data['topic'].index(t) == k]
         assert [data['wx'][k] for k in first] == [None, None]  # empty in the CSV: null
 

@@ -8,9 +8,9 @@ conversion per topic, never one per message. Per accepted message, with R its ro
 
 - the canonical quaternion (rot_tools.matrix_to_quaternion: w > 0);
 - roll, pitch, yaw: REP-103's angles about the fixed X, Y, Z axes (the extrinsic sequence
-  ``xyz``), and the angles of ``--seq SEQ`` when asked; each made continuous along the
-  topic's stream with numpy.unwrap (so a heading goes on past ±180° instead of jumping),
-  unless ``--wrap``;
+  rot_tools.core.euler.RPY_SEQUENCE), and the angles of ``--seq SEQ`` when asked; each made
+  continuous along the topic's stream with numpy.unwrap (so a heading goes on past ±180°
+  instead of jumping), unless ``--wrap``;
 - the rotation vector and angle of R (rot_tools.matrix_to_axis_angle);
 - the body angular velocity from the previous accepted message of the topic:
   ω = log(Rₖ₋₁ᵀ·Rₖ)/Δt, Δt from the header stamps (none on the first row, nor where Δt ≤ 0).
@@ -30,34 +30,59 @@ Messages are taken in the order they were recorded; ``--start``/``--end`` select
 record time, in seconds from the bag's start.
 
 ``--tf REFERENCE BODY``: the transforms of the bag's TFMessage topics pass the same boundary
-(counted), feed a rot_tools.TransformTree, and the chain between the two frames is looked up
-as one batch at every stamp of its dynamic edges (:func:`tf_topic`); it is one more topic,
-``tf:REFERENCE->BODY``.
+(counted) and feed a rot_tools.TransformTree, which follows BODY in REFERENCE over the
+recording (TransformTree.follow: the chain looked up as one batch at every stamp of its
+dynamic edges); it is one more topic, ``tf:REFERENCE->BODY``.
+
+The command: :func:`add_parser` adds ``bag`` to rot-tools' commands and :func:`run` runs it
+(many bags: rot_tools.cli.fleet; one bag: :func:`one_bag`).
 """
 
+import argparse
 import math
 import os
 from pathlib import Path
 import sys
 import time
-from types import SimpleNamespace
+from typing import NamedTuple
 
 import numpy as np
-from rot_tools.cli import bag_covariance, bag_parquet, output_file
-from rot_tools.cli.bag_output import in_unit, MAX_PLOTTED_TOPICS, plot_note, write_csv, write_plot
+from rot_tools.cli import bag_covariance, bag_parquet, options, output_file
+from rot_tools.cli.bag_output import in_unit, MAX_PLOTTED_TOPICS, NS_PER_S, plot_note
+from rot_tools.cli.bag_output import write_csv, write_plot
 from rot_tools.core import transform_tree
 from rot_tools.core.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import matrix_to_euler
+from rot_tools.core.euler import matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.fitting import mean_rotation
 from rot_tools.core.so3 import matrix_to_quaternion
-from rot_tools.io import bag_read, boundary, csv_text, interface
+from rot_tools.io import arguments, bag_read, boundary, interface
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.io.message_covariance import READINGS
+from rot_tools.io.report import DEFAULT_PRECISION
 
-RPY = 'xyz'
-"""REP-103 roll, pitch, yaw: about the fixed X, Y, Z axes."""
+TF_REASONS = (transform_tree.BAD_FRAME, transform_tree.LOOP, transform_tree.TOO_MANY_FRAMES)
+"""Refusals of a TF transform besides the boundary's: the tree's, counted as rotation_node
+counts them (an empty frame name, a loop, a tree full of frames), and the analysis goes on."""
 
-DEFAULT_TOLERANCE = 1e-3
-"""Largest |‖q‖ − 1| accepted (rotation_node's quaternion_tolerance default)."""
+_TF_CODE = {reason: len(boundary.REFUSAL_REASONS) + 1 + k for k, reason in enumerate(TF_REASONS)}
+
+
+class TfChain(NamedTuple):
+    """
+    BODY followed in REFERENCE through the bag's TF (:func:`tf_topic`).
+
+    R (n, 3, 3): the lookups' rotations; frames: the chain of frames (or the list of the
+    chains, in time order, when a frame was re-parented); codes: every TF transform's reason
+    code (boundary.ACCEPTED, a boundary refusal, or one of TF_REASONS after them);
+    transforms: their Columns; texts: {transform index: why the tree refused it}.
+    """
+
+    R: np.ndarray
+    frames: list
+    codes: np.ndarray
+    transforms: bag_read.Columns
+    texts: dict
 
 
 class Topic:
@@ -71,18 +96,17 @@ class Topic:
         if chain is None:
             self.codes, norms = boundary.check_batch(c.orientation, tolerance, c.position,
                                                      c.covariance0)
-            ok = self.codes == boundary.ACCEPTED
+            self.ok = self.codes == boundary.ACCEPTED
             self.R = boundary.accepted_rotations(c.orientation, norms, self.codes)
         else:  # a TF chain: its lookups, all made; the transforms' refusals are chain.codes
             self.codes = chain.codes
-            ok = np.ones(len(c), bool)
+            self.ok = np.ones(len(c), bool)
             self.R = chain.R
-        self.ok = ok
-        n = len(self.R)
+        ok, n = self.ok, len(self.R)
         self.ns, self.frame = stamp_ns(c.sec[ok], c.nanosec[ok]), c.frame[ok]
         self.position = c.position[ok] if c.position is not None else np.zeros((n, 3))
         self.quaternion = matrix_to_quaternion(self.R, check=False)
-        self.rpy = self._angles(RPY, wrap)
+        self.rpy = self._angles(RPY_SEQUENCE, wrap)
         self.seq = seq
         self.seq_angles = self._angles(seq, wrap) if seq else None
         axis, self.angle = matrix_to_axis_angle(self.R, check=False)
@@ -111,7 +135,7 @@ class Topic:
                 self.R, self.covariance, reading)
 
     def _angles(self, seq, wrap):
-        angles, _ = matrix_to_euler(self.R, seq, check=False)
+        angles = matrix_to_euler(self.R, seq, check=False)[0]
         return angles if wrap or not len(angles) else np.unwrap(angles, axis=0)
 
     def refused(self):
@@ -130,18 +154,17 @@ class Topic:
         if self.chain is not None and k in self.chain.texts:
             return self.chain.texts[k]
         q = c.orientation[k]
-        code = int(self.codes[k])
-        _, norm = boundary.check_batch(q[None], self.tolerance)
+        norm = boundary.check_batch(q[None], self.tolerance)[1]
         position = c.position[k] if c.position is not None else None
         fields = (interface.TF_FIELDS if self.chain is not None
                   else bag_read.SUPPORTED[self.msgtype])
-        return boundary.batch_refusal_text(fields, code, q, float(norm[0]), self.tolerance,
-                                           position)
+        return boundary.batch_refusal_text(fields, int(self.codes[k]), q, float(norm[0]),
+                                           self.tolerance, position)
 
 
 def stamp_ns(sec, nanosec):
     """Return header stamps as int64 nanoseconds, sec·10⁹ + nanosec: exact, negative ones too."""
-    return np.asarray(sec, np.int64) * csv_text.NS_PER_S + np.asarray(nanosec, np.int64)
+    return np.asarray(sec, np.int64) * NS_PER_S + np.asarray(nanosec, np.int64)
 
 
 def topic_summary(t, degrees):
@@ -166,9 +189,8 @@ def topic_summary(t, degrees):
     if len(c):
         ns = stamp_ns(c.sec, c.nanosec)
         first, last = int(ns.min()), int(ns.max())
-        start, end = first / csv_text.NS_PER_S, last / csv_text.NS_PER_S
-        out['start'], out['end'] = start, end
-        out['duration'] = (last - first) / csv_text.NS_PER_S
+        out['start'], out['end'] = first / NS_PER_S, last / NS_PER_S
+        out['duration'] = (last - first) / NS_PER_S
         out['rate'] = (len(c) - 1) / out['duration'] if last > first else None
     if not len(t.R):
         return out
@@ -184,7 +206,7 @@ def topic_summary(t, degrees):
         out['mean_orientation'] = f'not unique: {exc}'
     else:
         q = matrix_to_quaternion(mean)
-        rpy = in_unit(matrix_to_euler(mean, RPY)[0], degrees)
+        rpy = in_unit(matrix_to_euler(mean, RPY_SEQUENCE)[0], degrees)
         out['mean_orientation'] = {
             'quaternion': dict(zip('xyzw', map(float, q))),
             'rpy': dict(zip(('roll', 'pitch', 'yaw'), map(float, rpy)))}
@@ -236,7 +258,7 @@ class Progress:
 
 
 # ---------------------------------------------------------------------------------------
-# The command
+# Reading a bag
 
 
 def select_connections(reader, topics):
@@ -268,211 +290,60 @@ def select_connections(reader, topics):
     return chosen
 
 
-TF_REASONS = (transform_tree.BAD_FRAME, transform_tree.LOOP, transform_tree.TOO_MANY_FRAMES)
-"""Refusals of a TF transform besides the boundary's: the tree's, counted as rotation_node
-counts them (an empty frame name, a loop, a tree full of frames), and the analysis goes on."""
-
-_TF_CODE = {reason: len(boundary.REFUSAL_REASONS) + 1 + k for k, reason in enumerate(TF_REASONS)}
-
-
-class _Chain:
-    """
-    The lookups of a TF chain, and what became of the transforms.
-
-    R (n, 3, 3); frames, the chain (or the list of the chains, in time order, when a frame
-    was re-parented); codes, every TF transform's reason code; texts {transform index: why
-    the tree refused it}.
-    """
-
-    def __init__(self, R, frames, codes, transforms, texts):
-        self.R, self.frames, self.codes, self.transforms = R, frames, codes, transforms
-        self.texts = texts
-
-
-class _Run:
-    """Consecutive samples (by stamp) of one child under one parent: rows into the accepted."""
-
-    def __init__(self, child, parent, static, rows, ns):
-        self.child, self.parent, self.static = child, parent, static
-        self.rows, self.ns = rows, ns
-
-
-def _runs(parent, child, static, ns):
-    """
-    Return the runs of the accepted transforms ([_Run]).
-
-    Per child, in stamp order, a new run wherever its parent (or static) changes; a dynamic
-    run keeps the last recorded sample of each stamp.
-    """
-    runs = []
-    order = np.lexsort((np.arange(len(ns)), ns, child))  # by child, stamp, record order
-    key = np.stack([child[order], parent[order], static[order]], axis=1)
-    cuts = np.flatnonzero((key[1:] != key[:-1]).any(axis=1)) + 1
-    for rows in np.split(order, cuts):
-        if not len(rows):
-            continue
-        stamps = ns[rows]
-        if not static[rows[0]]:
-            last = np.append(stamps[1:] != stamps[:-1], True)  # the last of equal stamps
-            rows, stamps = rows[last], stamps[last]
-        runs.append(_Run(int(child[rows[0]]), int(parent[rows[0]]), bool(static[rows[0]]),
-                         rows, stamps))
-    return runs
-
-
-class _ChainLookups:
-    """
-    BODY in REFERENCE looked up over time while the tree's shape changes (re-parenting).
-
-    The bag's time is cut where a frame takes a new parent; within each segment every
-    child's run that holds there (the last that started at or before the segment's start)
-    feeds a fresh TransformTree — only its samples in the segment and one on each side, so
-    a segment costs what it holds — and the chain is looked up at every stamp of its dynamic
-    edges in the segment at which all of them have data (one batch). Stamps go to the tree
-    as seconds from the first stamp, ``(ns − ns₀)·10⁻⁹``: distinct to the nanosecond over
-    a bag of weeks, where seconds since 1970 collapse stamps closer than ~0.2 µs.
-    """
-
-    def __init__(self, frames, R, b, ns, runs):
-        self.frames, self.R, self.b, self.ns, self.runs = frames, R, b, ns, runs
-        self.origin = int(ns.min()) if len(ns) else 0
-        self.refused = {}  # accepted row -> (reason, text)
-
-    def seconds(self, ns):
-        return 1e-9 * (np.asarray(ns, np.int64) - self.origin)
-
-    def segments(self):
-        """[(lo, hi, [_Run])]: the runs that hold in [lo, hi) ns, segments in time order."""
-        first_of = {}
-        for run in self.runs:
-            first_of.setdefault(run.child, run)
-        switches = sorted({int(r.ns[0]) for r in self.runs if first_of[r.child] is not r})
-        bounds = [-math.inf] + switches + [math.inf]
-        out = []
-        for lo, hi in zip(bounds[:-1], bounds[1:]):
-            holding = {}
-            for run in self.runs:  # runs of a child are in stamp order
-                if run.child not in holding or run.ns[0] <= lo:
-                    holding[run.child] = run
-            out.append((lo, hi, sorted(holding.values(), key=lambda r: int(r.rows.min()))))
-        return out
-
-    def feed(self, tree, run, lo, hi):
-        """Set run's samples in [lo, hi) (and one on each side) in tree; refusals noted."""
-        names = self.frames[run.parent], self.frames[run.child]
-        try:
-            if run.static:
-                last = run.rows[-1]
-                tree.set_transform(*names, self.R[last], self.b[last],
-                                   float(self.seconds(run.ns[-1])), static=True)
-                return
-            i0 = max(0, int(np.searchsorted(run.ns, lo, 'right')) - 1)
-            i1 = min(len(run.ns), int(np.searchsorted(run.ns, hi, 'left')) + 1)
-            rows = run.rows[i0:i1]
-            tree.set_transform(*names, self.R[rows], self.b[rows], self.seconds(run.ns[i0:i1]))
-        except transform_tree.TransformTreeError as exc:
-            if exc.reason not in _TF_CODE:
-                raise
-            inside = (run.ns >= lo) & (run.ns < hi)
-            for row in run.rows[inside].tolist():
-                self.refused.setdefault(row, (exc.reason, str(exc)))
-
-    def segment(self, tree, holding, reference, body, lo, hi):
-        """(ns, R, b, chain) of the lookups in [lo, hi); TransformLookupError if none can be."""
-        chain = tree.chain(reference, body)
-        runs = {self.frames[r.child]: r for r in holding}
-        times = [runs[f].ns for f in chain
-                 if f in runs and not runs[f].static and tree.parent(f) in chain]
-        if times:
-            t = np.unique(np.concatenate(times))
-            t = t[(t >= lo) & (t < hi)]
-            first, last = tree.time_range(reference, body)
-            seconds = self.seconds(t)
-            t = t[(seconds >= first) & (seconds <= last)]
-        else:  # static edges only: one lookup, at the newest of their stamps
-            newest = max(int(runs[f].ns[-1]) for f in chain if f in runs
-                         and tree.parent(f) in chain) if len(chain) > 1 else self.origin
-            t = np.array([newest] if lo <= newest < hi or lo == -math.inf else [], np.int64)
-        R, b, _ = tree.lookup(reference, body, self.seconds(t))
-        return t, R.reshape(-1, 3, 3), b.reshape(-1, 3), chain
-
-    def lookup(self, reference, body):
-        """(ns, R, b, chains) of every lookup; BagError when there is none."""
-        parts, chains, why = [], [], None
-        for lo, hi, holding in self.segments():
-            tree = transform_tree.TransformTree(cache_seconds=math.inf)
-            for run in holding:
-                self.feed(tree, run, lo, hi)
-            try:
-                t, R, b, chain = self.segment(tree, holding, reference, body, lo, hi)
-            except transform_tree.TransformLookupError as exc:
-                why = exc
-                continue
-            if len(t):
-                parts.append((t, R, b))
-                if chain not in chains:
-                    chains.append(chain)
-        if not parts:
-            raise bag_read.BagError(f'--tf {reference} {body}: {why}' if why is not None else
-                                    f'--tf: no time at which every edge of {reference} → '
-                                    f'{body} has data')
-        ns, R, b = (np.concatenate(x) for x in zip(*parts))
-        return ns, R, b, chains
-
-
 def tf_topic(reader, reference, body, tolerance, lo, hi):
     """
-    (Columns, _Chain) of BODY in REFERENCE from the bag's TFMessage topics.
+    Return (Columns, TfChain): BODY in REFERENCE from the bag's TFMessage topics.
 
-    Every transform passes the boundary's checks, then the tree's (an empty frame name, a
-    loop): refusals are counted and the rest goes on. The accepted ones feed
-    rot_tools.TransformTree (static ones whatever --start/--end say); a frame's samples
-    under each of its parents are used while that parent holds (_ChainLookups).
+    Every transform passes the boundary's checks (refusals counted, the rest goes on); the
+    accepted ones, static ones whatever --start/--end say, feed a rot_tools.TransformTree
+    that follows BODY in REFERENCE over the recording (TransformTree.follow), whose own
+    refusals (an empty frame name, a loop) are counted too. Its stamps are seconds from the
+    first transform's, so that stamps a nanosecond apart stay apart over a long bag.
     """
     connections = [c for c in reader.connections if c.msgtype == bag_read.TF_TYPE]
     if not connections:
         raise bag_read.BagError('--tf: the bag has no tf2_msgs/msg/TFMessage topic')
     static = [c for c in connections if c.topic.endswith('tf_static')]
     dynamic = [c for c in connections if c not in static]
-    parts = [bag_read.read_tf(reader, static)] if static else []
-    parts += [bag_read.read_tf(reader, dynamic, lo, hi)] if dynamic else []
-    tf = bag_read.join_tf(parts)
-    frames = tf['frames']
-    codes, norms = boundary.check_batch(tf['orientation'], tolerance, tf['position'])
-    empty = np.array([not f for f in frames] or [False])
-    nameless = (codes == boundary.ACCEPTED) & (empty[tf['parent']] | empty[tf['child']])
-    codes[nameless] = _TF_CODE[transform_tree.BAD_FRAME]
-    texts = {int(k): 'an empty frame name: header.frame_id '
-             f"{frames[tf['parent'][k]]!r}, child_frame_id {frames[tf['child'][k]]!r}"
-             for k in np.flatnonzero(nameless)[:1]}
+    tf = bag_read.read_tf(reader, static, dynamic, lo, hi)
+    c = tf.columns
+    codes, norms = boundary.check_batch(c.orientation, tolerance, c.position)
     ok = codes == boundary.ACCEPTED
-    R = boundary.accepted_rotations(tf['orientation'], norms, codes)
-    parent, child = tf['parent'][ok], tf['child'][ok]
-    ns = stamp_ns(tf['sec'][ok], tf['nanosec'][ok])
-    named = {frames[i] for i in np.concatenate([parent, child]).tolist()}
+    parents = np.array(c.frame_ids, object)[c.frame[ok]]
+    children = np.array(c.child_frame_ids, object)[c.child[ok]]
+    named = set(parents) | set(children)
     for frame in (reference, body):
         if frame not in named:
             known = ', '.join(sorted(named)) or 'none'
             raise bag_read.BagError(
                 f"--tf: frame {frame} never appears in the bag's TF (frames: {known})")
-    lookups = _ChainLookups(frames, R, tf['position'][ok], ns,
-                            _runs(parent, child, tf['static'][ok], ns))
-    t, R_chain, b_chain, chains = lookups.lookup(reference, body)
+    ns = stamp_ns(c.sec[ok], c.nanosec[ok])
+    origin = int(ns.min())
+    transforms = transform_tree.Transforms(
+        parents, children, boundary.accepted_rotations(c.orientation, norms, codes),
+        c.position[ok], (ns - origin) / NS_PER_S, tf.static[ok])
+    tree = transform_tree.TransformTree(math.inf, max_samples=max(2, len(ns)))
+    try:
+        followed = tree.follow(reference, body, transforms)
+    except transform_tree.TransformLookupError as exc:
+        raise bag_read.BagError(f'--tf {reference} {body}: {exc}') from None
     accepted = np.flatnonzero(ok)
-    for row, (reason, text) in sorted(lookups.refused.items()):
-        codes[accepted[row]] = _TF_CODE[reason]
-        texts.setdefault(int(accepted[row]), text)
-    columns = bag_read.Columns(f'tf:{reference}->{body}', bag_read.TF_TYPE)
-    columns.record = np.zeros(len(t), np.int64)
-    columns.sec, columns.nanosec = np.divmod(t, csv_text.NS_PER_S)
-    columns.frame_ids, columns.frame = [reference], np.zeros(len(t), np.intp)
-    columns.child_frame_ids, columns.child = [body], np.zeros(len(t), np.intp)
-    columns.position = np.asarray(b_chain, np.float64).reshape(-1, 3)
-    columns.orientation = None
-    columns.covariance0 = columns.covariance = columns.angular_velocity = None
-    transforms = SimpleNamespace(orientation=tf['orientation'], position=tf['position'])
-    return columns, _Chain(R_chain, chains[0] if len(chains) == 1 else chains, codes,
-                           transforms, texts)
+    texts = {}
+    for row, exc in sorted(followed.refused.items()):
+        codes[accepted[row]] = _TF_CODE[exc.reason]
+        texts[int(accepted[row])] = str(exc)
+    # The lookups' stamps are stamps of the transforms: back to their exact nanoseconds.
+    known = np.unique(ns)
+    t = known[np.searchsorted((known - origin) / NS_PER_S, followed.stamp)]
+    n = len(t)
+    sec, nanosec = np.divmod(t, NS_PER_S)
+    columns = bag_read.Columns(f'tf:{reference}->{body}', bag_read.TF_TYPE,
+                               np.zeros(n, np.int64), sec, nanosec, [reference],
+                               np.zeros(n, np.intp), [body], np.zeros(n, np.intp),
+                               position=followed.b)
+    chains = followed.chains
+    return columns, TfChain(followed.R, chains[0] if len(chains) == 1 else chains, codes, c,
+                            texts)
 
 
 NS_MAX = 2 ** 63 - 1
@@ -484,10 +355,17 @@ def record_bound(bag_start, seconds):
     return min(bag_start + int(round(min(seconds * 1e9, 2.0 ** 63))), NS_MAX - 1)
 
 
-def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, seq=None,
-            wrap=False, fast=True, progress_stream=None, tf=None, reading='rotvec'):
+class Analysis(NamedTuple):
+    """A bag analysed: its storage ('rosbag1', 'rosbag2 sqlite3', ...) and its [Topic]."""
+
+    storage: str
+    topics: list
+
+
+def analyse(path, topics=(), start=None, end=None, tolerance=QUATERNION_TOLERANCE, seq=None,
+            wrap=False, progress_stream=None, tf=None, reading='rotvec'):
     """
-    (storage name, [Topic]) of the bag at PATH; BagError for what cannot be read.
+    Return the Analysis of the bag at PATH; BagError for what cannot be read.
 
     tf: (REFERENCE, BODY) adds the TF chain between them (then topics are read only when
     asked for by name). reading: how a recorded covariance's rotation block is read,
@@ -502,7 +380,7 @@ def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, 
         hi = None if end is None else record_bound(bag_start, end) + 1
         progress = Progress(sum(c.msgcount for c in connections), progress_stream)
         try:
-            columns = bag_read.read_topics(reader, connections, lo, hi, fast=fast,
+            columns = bag_read.read_topics(reader, connections, lo, hi,
                                            progress=progress) if connections else {}
         finally:
             progress.done()
@@ -512,7 +390,11 @@ def analyse(path, topics=(), start=None, end=None, tolerance=DEFAULT_TOLERANCE, 
            for name in sorted(columns)]
     if chain is not None:
         out.append(Topic(chain[0], tolerance, seq, wrap, chain=chain[1]))
-    return storage, out
+    return Analysis(storage, out)
+
+
+# ---------------------------------------------------------------------------------------
+# Writing
 
 
 def refuse_overwriting(bag, outputs, error):
@@ -562,7 +444,7 @@ def to_stdout(write, error):
         error(f'cannot write to the standard output: {exc.strerror or exc}')
 
 
-def run(args, error):
+def one_bag(args, error):
     """
     rot-tools bag on the one bag ``args.path``; ``error(text)`` prints one line and exits 2.
 
@@ -575,7 +457,7 @@ def run(args, error):
                                    ('--parquet', args.parquet)], error)
     try:
         storage, topics = analyse(args.path, args.topic or (), args.start, args.end,
-                                  DEFAULT_TOLERANCE if args.tol is None else args.tol,
+                                  QUATERNION_TOLERANCE if args.tol is None else args.tol,
                                   args.seq, args.wrap, tf=args.tf,
                                   reading=args.input_covariance)
     except bag_read.BagError as exc:
@@ -607,3 +489,135 @@ def run(args, error):
     data = summary(args.path, storage, topics, args.deg)
     to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
     return 0
+
+
+# ---------------------------------------------------------------------------------------
+# The command
+
+
+def _seconds(text):
+    value = arguments.number(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(
+            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
+    return value
+
+
+TEXT = (
+    'Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags without ROS (the rosbags library: pip\n'
+    "install 'rot_tools[bag]'). Topics of type PoseStamped, PoseWithCovarianceStamped,\n"
+    'Odometry, Imu, QuaternionStamped and TransformStamped are read (default: all of\n'
+    "them). Each message passes the checks of rotation_node's inputs: a NaN/Inf, a zero or\n"
+    f'non-unit quaternion (|q| off 1 by more than --tol, default {QUATERNION_TOLERANCE:g}), an '
+    'Imu without\n'
+    'orientation is refused and counted by reason.\n\n'
+    'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
+    'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
+    'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
+    'from its gyro (RMS). For Imu, PoseWithCovarianceStamped and Odometry, the median\n'
+    'standard deviations of roll, pitch and yaw from their covariances, and how many were\n'
+    "unknown or bad. roll, pitch, yaw are REP-103's (about the fixed X, Y, Z axes,\n"
+    f'the extrinsic sequence {RPY_SEQUENCE}) and continuous along each topic (no jump at ±180°)\n'
+    'unless --wrap. With --csv, one row per accepted message; with --plot, roll, pitch\n'
+    'and yaw against time, one panel per topic.')
+"""What ``rot-tools bag --help`` says of the command."""
+
+
+def add_parser(subparsers):
+    """Add ``rot-tools bag`` to argparse's subparsers action and return its parser."""
+    p = subparsers.add_parser(
+        'bag', help='the orientations recorded in a ROS bag: summary, CSV, plot',
+        usage=f'{options.PROG} bag PATH... [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] '
+        '[--deg]\n'
+        '       [--wrap] [--csv FILE|-] [--json] [--plot FILE] [--start S] [--end S]\n'
+        '       [--input-covariance rotvec|rpy] [--jobs N] [--parquet DIR]\n'
+        '       [--engine dask [--scheduler ADDRESS]]',
+        description=f'The orientations recorded in a ROS bag.\n\n{TEXT}',
+        epilog='examples:\n  rot-tools bag run.bag\n'
+        '  rot-tools bag run.bag --topic /imu/data --csv imu.csv --deg\n'
+        '  rot-tools bag rosbag2_dir --plot rpy.png --start 10 --end 20\n'
+        '  rot-tools bag recordings/ --jobs 4 --parquet table/')
+    p.add_argument('path', metavar='PATH', nargs='+',
+                   help='a ROS 1 .bag file, a rosbag2 directory, or a file in one; any other '
+                   'directory is searched for bags. Several bags: a summary per bag and '
+                   'for the fleet, a bag that cannot be read listed as failed (exit '
+                   'status 1), --csv one table with a bag column first')
+    p.add_argument('--topic', action='append', metavar='T',
+                   help='read this topic (repeat for more); default: every topic of a type '
+                   'read')
+    p.add_argument('--tf', nargs=2, metavar=('REFERENCE', 'BODY'),
+                   help="the transform of BODY in REFERENCE from the bag's /tf and "
+                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree, at every '
+                   'stamp of the dynamic transforms between them (a topic named '
+                   'tf:REFERENCE->BODY); other topics then only with --topic')
+    p.add_argument('--wrap', action='store_true',
+                   help='angles as computed, each in (−180°, 180°], instead of continuous')
+    p.add_argument('--csv', metavar='FILE',
+                   help='write one row per accepted message to FILE (- = standard output, '
+                   'which then gets no summary): topic, stamp (s), frame_id, x, y, z, qx, qy, '
+                   'qz, qw (w ≥ 0), roll, pitch, yaw, the --seq angles SEQ_1..3, rotation '
+                   'vector rx, ry, rz, angle, body angular velocity wx, wy, wz from the '
+                   'previous row of the topic (empty on its first row), standard deviations '
+                   'roll_std, pitch_std, yaw_std from the covariance (empty where none is '
+                   'known)')
+    p.add_argument('--input-covariance', choices=READINGS, default='rotvec',
+                   help="how a recorded covariance's rotation block is read, as "
+                   "rotation_node's input_covariance: rotvec (default, ROS's "
+                   "PoseWithCovariance: rotations about the parent's fixed X, Y, Z) or rpy "
+                   '(already roll, pitch, yaw)')
+    p.add_argument('--start', type=_seconds, metavar='S',
+                   help="only messages recorded S seconds or more after the bag's start")
+    p.add_argument('--end', type=_seconds, metavar='S',
+                   help="only messages recorded at most S seconds after the bag's start")
+    p.add_argument('--jobs', type=arguments.whole_number, metavar='N',
+                   help='read the bags in N processes (default: one per CPU; 1: here, one '
+                   'after the other); the output is the same whatever N is')
+    p.add_argument('--parquet', metavar='DIR',
+                   help='write one Parquet file per bag in DIR: the --csv columns plus bag, '
+                   'stamp as int64 nanoseconds (needs pyarrow, the bag extra)')
+    p.add_argument('--engine', choices=('processes', 'dask'), default='processes',
+                   help='processes: --jobs N processes here (default); dask: each bag a '
+                   'task on a Dask cluster (the fleet extra), a local one of N workers '
+                   'unless --scheduler')
+    p.add_argument('--scheduler', metavar='ADDRESS',
+                   help='with --engine dask: the address of a running Dask scheduler '
+                   '(tcp://HOST:8786), whose workers must see the bags and DIR')
+    common = p.add_argument_group('common options')
+    suppress = argparse.SUPPRESS
+    common.add_argument('--deg', action='store_true', default=suppress,
+                        help='every angle in degrees (angular velocities in deg/s)')
+    common.add_argument('--seq', type=arguments.sequence, default=suppress, metavar='SEQ',
+                        help='also the Euler angles of SEQ (CSV columns SEQ_1..3), '
+                        'continuous like roll, pitch, yaw')
+    common.add_argument('--json', action='store_true', default=suppress,
+                        help='print the summary as JSON instead of YAML')
+    common.add_argument('--precision', type=arguments.precision, default=suppress, metavar='N',
+                        help='round numbers to N significant digits and N decimal places '
+                        f'(default {DEFAULT_PRECISION}), in the summary and the CSV (whose '
+                        'stamps are exact)')
+    common.add_argument('--tol', type=options.tolerance, default=suppress, metavar='TOL',
+                        help='largest ||q| − 1| of a recorded quaternion (default '
+                        f'{QUATERNION_TOLERANCE:g}, '
+                        "rotation_node's quaternion_tolerance); within it q is normalised")
+    common.add_argument('--plot', type=options.plot_file, default=suppress, metavar='FILE',
+                        help='draw roll, pitch, yaw against time, one panel per topic, in '
+                        "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
+    arguments.add_version(common)
+    return p
+
+
+def run(args):
+    """
+    Run ``rot-tools bag`` on the parsed ``args``; return the exit status.
+
+    0 when every bag was read; 1 when, among several bags, one could not be; one error line
+    and status 2 (options.error) for what stops the command: an option that does not apply,
+    a bag given alone that cannot be read, an output that cannot be written. Many bags, or
+    one: rot_tools.cli.fleet.command.
+    """
+    for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
+                          ('--all-sequences', args.all_sequences)):
+        if given:
+            options.error(f'{option} does not apply to bag')
+    from rot_tools.cli import fleet
+    return fleet.command(args, options.error)

@@ -21,9 +21,12 @@ message_covariance.rpy_covariances, every message checked and converted in one b
 give the same numbers (test_bag_covariance.py).
 """
 
+from typing import NamedTuple
+
 import numpy as np
 from rot_tools.core.covariance import rotvec_covariance_to_euler
 from rot_tools.core.errors import RotationError
+from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io import message_covariance
 from rot_tools.io.message_covariance import BAD, LOCK, OK, UNKNOWN
 
@@ -51,15 +54,24 @@ def _euler_block(R, C):
     as message_covariance converts it.
     """
     try:
-        return rotvec_covariance_to_euler(R, C[-3:, -3:], 'xyz', 'parent')
+        return rotvec_covariance_to_euler(R, C[-3:, -3:], RPY_SEQUENCE, 'parent')
     except RotationError:
-        out, lock = rotvec_covariance_to_euler(R, C, 'xyz', 'parent')
+        out, lock = rotvec_covariance_to_euler(R, C, RPY_SEQUENCE, 'parent')
         return out[:, -3:, -3:], lock
+
+
+class Stddevs(NamedTuple):
+    """The standard deviations of N messages' roll, pitch, yaw, and their covariances' status."""
+
+    sigma: np.ndarray
+    """(N, 3), rad; NaN where the status is not OK."""
+    status: np.ndarray
+    """(N,) int8: rot_tools.io.message_covariance's OK, UNKNOWN, BAD or LOCK."""
 
 
 def stddevs(R, cov, reading='rotvec'):
     """
-    Return (σ (N, 3) of roll, pitch, yaw in rad, status (N,) int8) of N messages.
+    Return Stddevs (σ (N, 3) of roll, pitch, yaw in rad, status (N,) int8) of N messages.
 
     R (N, 3, 3) their rotations; cov (N, 9) or (N, 36) their covariances, row-major
     (rot_tools.io.message_covariance.rpy_covariances: the same status codes and numbers);
@@ -69,12 +81,12 @@ def stddevs(R, cov, reading='rotvec'):
     cov = np.ascontiguousarray(cov, dtype=np.float64)
     n = len(cov)
     if not n:
-        return np.zeros((0, 3)), np.zeros(0, np.int8)
+        return Stddevs(np.zeros((0, 3)), np.zeros(0, np.int8))
     bits = cov.view(np.int64)  # bit for bit: a run of NaN is one run too
     starts = np.flatnonzero(np.append(True, (bits[1:] != bits[:-1]).any(axis=1)))
     if len(starts) > GROUPS:
         C, status = message_covariance.rpy_covariances(R, cov, reading)
-        return _sigma(C), status
+        return Stddevs(_sigma(C), status)
     sigma, status = np.full((n, 3), np.nan), np.empty(n, np.int8)
     # each run's covariance alone: reading 'rpy' converts nothing, it only checks
     _, checked = message_covariance.rpy_covariances(
@@ -90,7 +102,7 @@ def stddevs(R, cov, reading='rotvec'):
         out, lock = _euler_block(R[start:end], C)
         sigma[start:end] = _sigma(out)
         status[start:end][lock] = LOCK
-    return sigma, status
+    return Stddevs(sigma, status)
 
 
 def summary(sigma, status, cov, reading, degrees):

@@ -1,11 +1,13 @@
 """
 The table and the plot of a bag's topics: ``rot-tools bag --csv`` and ``--plot``.
 
-The CSV has one row per accepted message (csv_header names the columns); its numbers are
-made a chunk of rows at a time by rot_tools.io.csv_text, and text cells a spreadsheet would
-run as a formula are escaped. The plot draws each topic's roll and pitch on one axis and its
-yaw on another (a heading that turns many times would flatten the tilt to lines at 0), for
-at most MAX_PLOTTED_TOPICS topics, and says which.
+The CSV has one row per accepted message (csv_header names the columns), written by Python's
+``csv`` module: each number is rounded to ``--precision`` as a number first (:func:`rounded`),
+then written as the shortest text that reads back as the same float (Python's ``repr``);
+a stamp is written exactly, from its integer nanoseconds (:func:`stamp_text`); text cells a
+spreadsheet would run as a formula are escaped. The plot draws each topic's roll and pitch on
+one axis and its yaw on another (a heading that turns many times would flatten the tilt to
+lines at 0), for at most MAX_PLOTTED_TOPICS topics, and says which.
 """
 
 import csv
@@ -14,7 +16,9 @@ import os
 
 import numpy as np
 from rot_tools.cli import output_file
-from rot_tools.io import csv_text
+from rot_tools.core.euler import RPY_SEQUENCE
+
+NS_PER_S = 1_000_000_000
 
 
 def in_unit(values, degrees):
@@ -39,43 +43,55 @@ FORMULA_STARTS = ('=', '+', '-', '@', '\t', '\r')
 """First characters that make a spreadsheet run a cell as a formula (OWASP, CSV injection)."""
 
 
-def csv_text_cell(text):
+def text_cell(text):
     """
-    Write a text (never a number) as one CSV field, safe to open in a spreadsheet.
+    Return a text (never a number) as one CSV cell, safe to open in a spreadsheet.
 
     A text starting with one of FORMULA_STARTS gets a single quote before it (OWASP's rule:
-    ``=HYPERLINK("x")`` is written ``'=HYPERLINK(""x"")``, read as text); then the field is
-    quoted only where CSV needs it.
+    ``=HYPERLINK("x")`` is written ``'=HYPERLINK(""x"")``, read as text); then the csv module
+    quotes the cell where CSV needs it (a comma, a quote, a line break: a CR too, which a
+    writer whose lines end in LF alone would leave bare).
     """
     if text.startswith(FORMULA_STARTS):
         text = "'" + text
-    out = io.StringIO()
-    csv.writer(out, lineterminator='\r\n').writerow([text])  # quotes a CR or LF inside
-    return out.getvalue()[:-2]
+    cell = io.StringIO()
+    csv.writer(cell, lineterminator='\r\n').writerow([text])
+    return cell.getvalue()[:-2]
 
 
-ROWS_PER_CHUNK = 1024
-"""Rows made into text at a time (their arrays stay in the CPU's cache)."""
+def stamp_text(ns):
+    """Return the text of a stamp of ``ns`` (int) nanoseconds: '[-]s.nnnnnnnnn', exact."""
+    sec, nsec = divmod(abs(ns), NS_PER_S)
+    return f'{"-" if ns < 0 else ""}{sec}.{nsec:09d}'
 
 
-def _number_text(value, precision):
-    """One number by the rule of rot_tools.io.csv_text, with Python's (correctly rounded) %f."""
-    if value != value:
-        return ''
-    digits = len('%d' % abs(value)) if abs(value) >= 1 else 0
-    text = '%.*f' % (max(0, precision - digits), value)
-    if '.' in text:
-        text = text.rstrip('0').rstrip('.')
-    return '0' if text in ('-0', '') else text
+def rounded(values, precision):
+    """
+    Return ``values`` rounded to ``precision`` significant digits and decimal places.
 
-
-def binary_writer(out):
-    """Return a function writing bytes to the text stream ``out`` (through its buffer if any)."""
-    buffer = getattr(out, 'buffer', None)
-    if buffer is None:
-        return lambda data: out.write(data.decode('utf-8'))
-    out.flush()
-    return buffer.write
+    The rule of every number rot-tools prints (rot_tools.io.report.round_number), as a batch
+    of numbers: a value x with 10ᵉ ≤ |x| < 10ᵉ⁺¹ keeps k = precision − 1 − e decimals when
+    |x| ≥ 1 and k = precision when |x| < 1, as rint(x·10ᵏ)/10ᵏ (k < 0: rint(x/10⁻ᵏ)·10⁻ᵏ,
+    tens and more of the integer part rounded away; Python's formatting rounds where 10⁻ᵏ
+    is no longer exact in float64). −0 becomes 0; NaN and ±inf stay.
+    """
+    x = np.asarray(values, dtype=np.float64)
+    with np.errstate(divide='ignore', invalid='ignore', over='ignore'):
+        a = np.abs(x)
+        e = np.floor(np.log10(a))
+        e -= np.power(10.0, e) > a  # log10 rounded up past a power of ten
+        e += np.power(10.0, e + 1) <= a  # ... or down below one
+        k = np.where(a >= 1, precision - 1 - e, precision)
+        k = np.where(np.isfinite(x), k, 0)
+        up = np.power(10.0, np.maximum(k, 0))
+        down = np.power(10.0, np.maximum(-k, 0))
+        scaled = x * up / down
+        # |x·10ᵏ| ≥ 2⁵²: the digit rounded to is below x's own last bit, x is its rounding
+        out = np.where(np.isfinite(x) & (np.abs(scaled) < 2.0 ** 52),
+                       np.rint(scaled) * down / up, x)
+    big = np.flatnonzero(np.abs(x) >= 10.0 ** (precision + 22))  # 10⁻ᵏ beyond float64's
+    out.flat[big] = [float(f'{v:.{precision}g}') for v in x.flat[big]]  # exact powers of ten
+    return out + 0.0
 
 
 def row_values(t, degrees):
@@ -94,43 +110,39 @@ def row_values(t, degrees):
     return np.hstack(columns)
 
 
+ROWS_PER_CHUNK = 4096
+"""Rows made into Python values at a time, then written."""
+
+
 def write_csv(out, topics, degrees, precision, bag=None, header=True):
     """
     Write the rows of every topic (topic by topic, in the bag's order) to ``out``.
 
-    Numbers rounded to ``precision`` significant digits and ``precision`` decimal places (the
-    rule of every number rot-tools prints), trailing zeros dropped, −0 as 0; the stamp
-    exactly (from integer nanoseconds); text cells by csv_text_cell; ω empty on a topic's
-    first row and where Δt ≤ 0. The text is
-    made by rot_tools.io.csv_text for a chunk of rows at once (Python's formatting, one
-    number at a time, where its arithmetic would not be exact: precision > 12, |x| ≥ 1e15).
-    ``bag``: a first column ``bag`` holding this text on every row (a table of many bags);
-    ``header``: whether to write the line of column names.
+    Numbers :func:`rounded` to ``precision``, each written by the csv module as its shortest
+    round-trip text (Python's ``repr``), NaN as an empty cell (ω on a topic's first row and
+    where Δt ≤ 0, σ where unknown); the stamp exactly (:func:`stamp_text`); text cells by
+    :func:`text_cell`. ``bag``: a first column ``bag`` holding this text on every row (a table
+    of many bags); ``header``: whether to write the line of column names.
     """
     seq = next((t.seq for t in topics if t.seq), None)
+    writer = csv.writer(out, lineterminator='\n')
     if header:
-        out.write(','.join((['bag'] if bag is not None else []) + csv_header(seq)) + '\n')
-    first = b'' if bag is None else csv_text_cell(bag).encode() + b','
-    write = binary_writer(out)
+        writer.writerow((['bag'] if bag is not None else []) + csv_header(seq))
+    first = '' if bag is None else text_cell(bag) + ','
     for t in topics:
         if not len(t.R):
             continue
-        values = row_values(t, degrees)
-        topic = first + csv_text_cell(t.topic).encode()
-        frames = [csv_text_cell(f).encode() for f in t.columns.frame_ids]
-        fast = csv_text.numbers_fit(values, precision)
+        head = first + text_cell(t.topic) + ','
+        frames = np.array([text_cell(f) for f in t.columns.frame_ids], object)
+        values = rounded(row_values(t, degrees), precision)
         for start in range(0, len(values), ROWS_PER_CHUNK):
             part = slice(start, start + ROWS_PER_CHUNK)
-            if fast:
-                write(csv_text.rows(topic, t.ns[part], frames, t.frame[part], values[part],
-                                    precision))
-                continue
-            lines = [b'%s,%s,%s,%s\n' % (
-                topic, csv_text.stamp_text(ns).encode(), frames[f],
-                ','.join(_number_text(v, precision) for v in row).encode())
-                for ns, f, row in zip(t.ns[part].tolist(), t.frame[part].tolist(),
-                                      values[part].tolist())]
-            write(b''.join(lines))
+            numbers = values[part].astype(object)
+            numbers[np.isnan(values[part])] = ''
+            for ns, frame, row in zip(t.ns[part].tolist(), frames[t.frame[part]],
+                                      numbers.tolist()):
+                out.write(f'{head}{stamp_text(ns)},{frame},')  # text cells made above
+                writer.writerow(row)
 
 
 # ---------------------------------------------------------------------------------------
@@ -189,7 +201,7 @@ def write_plot(path, topics, degrees):
                     gid=f'{t.topic}:{name}')
         for ax in (tilt, heading):
             ax.legend(loc='upper left', fontsize=8, ncols=2)
-    axes[-1].set_xlabel(f'time (s) from header stamp {csv_text.stamp_text(ns0)}')
-    fig.suptitle('roll, pitch, yaw (REP-103, extrinsic xyz), continuous', fontsize=11)
+    axes[-1].set_xlabel(f'time (s) from header stamp {stamp_text(ns0)}')
+    fig.suptitle(f'roll, pitch, yaw (REP-103, extrinsic {RPY_SEQUENCE}), continuous', fontsize=11)
     with output_file.complete_or_nothing(path, 'wb') as out:
         fig.savefig(out, format=os.path.splitext(str(path))[1][1:].lower() or 'png')

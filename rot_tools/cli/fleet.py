@@ -17,10 +17,12 @@ import os
 from pathlib import Path
 import sys
 import time
+from typing import NamedTuple
 
 from rot_tools.cli import bag, bag_parquet, output_file
-from rot_tools.cli.bag_output import binary_writer, csv_header, write_csv
+from rot_tools.cli.bag_output import csv_header, write_csv
 from rot_tools.io import bag_read
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
 
 
 def _bags_under(directory):
@@ -35,9 +37,16 @@ def _bags_under(directory):
     return sorted(found)
 
 
+class Found(NamedTuple):
+    """The bags of PATH... (strings, in order), and whether a directory was searched."""
+
+    bags: list
+    searched: bool
+
+
 def find_bags(paths):
     """
-    Return (bags, searched): the bags of PATH..., and whether a directory was searched.
+    Return Found: the bags of PATH..., and whether a directory was searched.
 
     The bags are in the order given, each as given or as found (strings).
 
@@ -56,7 +65,7 @@ def find_bags(paths):
             searched = True
         else:
             bags.append(path)
-    return bags, searched
+    return Found(bags, searched)
 
 
 class Outcome:
@@ -68,12 +77,10 @@ class Outcome:
 
 
 def _csv_rows(topics, path, options):
-    """Return the CSV rows of one bag (bytes, a ``bag`` column first, no header)."""
-    data = io.BytesIO()
-    text = io.TextIOWrapper(data, encoding='utf-8', newline='')
+    """Return the CSV rows of one bag (text, a ``bag`` column first, no header)."""
+    text = io.StringIO(newline='')
     write_csv(text, topics, options.deg, options.precision, bag=str(path), header=False)
-    text.flush()
-    return data.getvalue()
+    return text.getvalue()
 
 
 def read_bag(path, options, parquet=None):
@@ -88,7 +95,7 @@ def read_bag(path, options, parquet=None):
     try:
         storage, topics = bag.analyse(
             path, options.topic or (), options.start, options.end,
-            bag.DEFAULT_TOLERANCE if options.tol is None else options.tol, options.seq,
+            QUATERNION_TOLERANCE if options.tol is None else options.tol, options.seq,
             options.wrap, progress_stream=quiet, tf=options.tf,
             reading=options.input_covariance)
     except bag_read.BagError as exc:
@@ -218,7 +225,7 @@ def _collect(items, args, out):
                 progress.done()
                 sys.stderr.write(f'rot-tools: error: bag: {outcome.error}\n')
             elif out is not None:
-                binary_writer(out)(outcome.rows)
+                out.write(outcome.rows)
             outcome.rows = None
             done.append(outcome)
     finally:
@@ -244,8 +251,8 @@ def command(args, error):
     """
     rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2.
 
-    One bag given alone is analysed by rot_tools.cli.bag.run as it always was; several (or a
-    directory searched for bags) by :func:`run`.
+    One bag given alone is analysed by rot_tools.cli.bag.one_bag; several (or a directory
+    searched for bags) by :func:`run`.
     """
     missing = bag_read.rosbags_missing()
     if missing:
@@ -263,7 +270,7 @@ def command(args, error):
         return run(args, bags, error)
     args.path = bags[0]
     check_extras(args, error)
-    return bag.run(args, error)
+    return bag.one_bag(args, error)
 
 
 def run(args, bags, error):

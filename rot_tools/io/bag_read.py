@@ -1,32 +1,30 @@
 """
 Reading the orientation fields of recorded bags into NumPy columns, without ROS.
 
-The bags are read by the ``rosbags`` library (the optional ``bag`` extra): rosbag2 (sqlite3
-and MCAP) and ROS 1 bags. Its reader hands over each message's raw bytes; turning every one
-into a Python message object (rosbags' deserialiser) costs far more than the rest of
-``rot-tools bag``. The types read here have a fixed layout once their strings' lengths are
-known: no sequences, only numbers, fixed arrays, nested messages and strings. So, as
-rosbags' own generated deserialisers do, the layout is computed from the type's field
-definitions (the bag's own, which rosbags parses) — alignment as CDR wants it for rosbag2,
-none for ROS 1 — but for a whole chunk of messages at once: the messages of one topic with
-the same byte length and the same string lengths are rows of one (n, length) byte array,
-and each needed field is a column of it, read with NumPy (``ndarray.view``). A chunk whose
-layout does not come out exactly (a big-endian CDR message, a length that does not add
-up) goes through rosbags' deserialiser message by message instead, which also is the
-reference the tests compare the fast path with.
+The bags are read by the ``rosbags`` library (the optional ``bag`` extra), through its
+documented reader: rosbag2 (sqlite3 and MCAP) and ROS 1 bags are opened by ``AnyReader``,
+their topics are ``reader.connections``, ``reader.messages(connections=...)`` yields each
+message's bytes, and ``reader.deserialize`` turns them into a message object of the bag's own
+type definitions (or ROS 2 Jazzy's, from a ``typesys`` store, for a bag without them).
+
+From those objects each topic keeps only the fields its boundary check and conversions need,
+found by their paths in rot_tools.io.interface (``recorded_inputs()``: {type: {role: path}}):
+a small getter per path (:func:`field_getter`) reads them from a chunk of messages at a time
+into NumPy columns, one per field, and the messages are dropped. Everything after that runs
+on whole columns.
 
 :func:`open_bag` opens PATH (a ROS 1 ``.bag`` file, a rosbag2 directory, or a file inside
-one) and :func:`read_topics` returns a :class:`Columns` per topic: record times, header
-stamps (sec, nanosec), frame ids, and the fields its boundary check and conversions need.
-Every failure of the bag itself — missing, empty, corrupt — is a :class:`BagError` with one
-line of text.
+one), :func:`read_topics` returns a :class:`Columns` per topic — record times, header stamps
+(sec, nanosec), frame ids, and the fields of its type — and :func:`read_tf` the transforms of
+the TFMessage topics. Every failure of the bag itself — missing, empty, corrupt, a message
+that does not decode — is a :class:`BagError` with one line of text.
 """
 
 from contextlib import contextmanager
-from itertools import islice
-from operator import attrgetter
+from operator import attrgetter, itemgetter
 from pathlib import Path
 import stat
+from typing import NamedTuple
 
 import numpy as np
 from rot_tools.io import interface
@@ -43,30 +41,14 @@ the float64 array, read whole as the column ``covariance`` (N, size), row-major.
 TF_TYPE = 'tf2_msgs/msg/TFMessage'
 """Read only with --tf (the transforms of /tf and /tf_static feed a transform tree)."""
 
-_HEADER = {'sec': 'header.stamp.sec', 'nanosec': 'header.stamp.nanosec',
-           'frame_id': 'header.frame_id'}
-_COLUMN_SHAPE = {role: parts for role, parts in interface.MEMBERS.items()
-                 if parts is not None and len(parts) > 1}
-"""The columns of several components, and the field members of each (x, y, z, w)."""
+HEADER = {'stamp': 'header.stamp', 'frame_id': 'header.frame_id'}
+"""The header's fields read from every message (and every transform of a TFMessage)."""
 
+STAMP_MEMBERS = ('sec', 'nanosec')
+"""The members of a header stamp (builtin_interfaces/Time), read as int64."""
 
-def wanted_fields(msgtype):
-    """Return [(column, field path)] read from each message of msgtype, in no set order."""
-    out = list({**_HEADER, **SUPPORTED[msgtype]}.items())
-    if msgtype in COVARIANCE:
-        out.append(('covariance', COVARIANCE[msgtype][0]))
-    return out
-
-
-CHUNK = 1 << 15
-"""Messages read at a time; each topic's among them are parsed together, then dropped."""
-
-_SIZES = {'bool': 1, 'byte': 1, 'char': 1, 'int8': 1, 'uint8': 1, 'int16': 2, 'uint16': 2,
-          'int32': 4, 'uint32': 4, 'float32': 4, 'int64': 8, 'uint64': 8, 'float64': 8}
-_KINDS = {'bool': 'u', 'byte': 'u', 'char': 'u', 'int8': 'i', 'uint8': 'u', 'int16': 'i',
-          'uint16': 'u', 'int32': 'i', 'uint32': 'u', 'float32': 'f', 'int64': 'i',
-          'uint64': 'u', 'float64': 'f'}
-
+CHUNK = 4096
+"""Messages of one topic held as objects at a time, before their fields become columns."""
 
 BAG_SUFFIXES = ('.bag', '.db3', '.mcap')
 """Files read as a bag outside a rosbag2 directory: ROS 1, and rosbag2's storage files."""
@@ -156,148 +138,72 @@ def storage_name(reader):
 
 
 # ---------------------------------------------------------------------------------------
-# Layouts: the leaves of a message type, in serialisation order
+# Fields of message objects, as columns
 
 
-class _Unsupported(Exception):
-    """A type with a field of no fixed layout (a sequence): parsed by rosbags instead."""
+def field_getter(path):
+    """
+    Return get(msg): the field at ``path`` of a message object.
+
+    The path names fields from the message down, dot-separated ('pose.pose.orientation',
+    'header.stamp'); its last field may be indexed ('orientation_covariance[0]').
+    """
+    name, indexed, index = path.partition('[')
+    get = attrgetter(name)
+    if not indexed:
+        return get
+    k = int(index.rstrip(']'))
+    return lambda msg: get(msg)[k]
 
 
-def _leaves(typestore, typename, prefix=''):
-    """[(path, kind, base, count)] of a type: kind 'prim' (count numbers) or 'string'."""
-    out = []
-    for name, (nodetype, desc) in typestore.fielddefs[typename][1]:
-        path = prefix + name
-        kind = getattr(nodetype, 'name', str(nodetype))
-        if kind == 'NAME':
-            out.extend(_leaves(typestore, desc, path + '.'))
-        elif kind == 'BASE':
-            base = desc[0]
-            if base == 'string':
-                out.append((path, 'string', base, 1))
-            elif base in _SIZES:
-                out.append((path, 'prim', base, 1))
-            else:
-                raise _Unsupported(f'{path}: {base}')
-        elif kind == 'ARRAY':
-            (sub_kind, sub_desc), count = desc
-            if getattr(sub_kind, 'name', '') == 'BASE' and sub_desc[0] in _SIZES:
-                out.append((path, 'prim', sub_desc[0], count))
-            elif getattr(sub_kind, 'name', '') == 'NAME':
-                for i in range(count):
-                    out.extend(_leaves(typestore, sub_desc, f'{path}[{i}].'))
-            else:
-                raise _Unsupported(path)
-        else:
-            raise _Unsupported(path)
-    return out
+def _members_getter(names):
+    """Return get(value): the tuple of a field's members ('x', 'y'; or '[0]': one number)."""
+    if names[0].startswith('['):
+        return itemgetter(*(int(n.strip('[]')) for n in names))
+    return attrgetter(*names)
 
 
-class _Layout:
-    """How to read the needed leaves of one type from rows of raw bytes."""
+class _Fields:
+    """
+    The columns read from the messages of one type, and how each is read.
 
-    def __init__(self, typestore, typename, cdr):
-        self.leaves = _leaves(typestore, typename)
-        self.cdr = cdr
-        by_path = {}  # field path -> the columns read from it
-        for name, path in wanted_fields(typename):
-            by_path.setdefault(path, []).append(name)
-        self.wanted = {}  # leaf path -> [(column, component index or None)]
-        for path, _, _, count in self.leaves:
-            parent, _, last = path.rpartition('.')
-            if path in by_path:
-                if 'covariance' in by_path[path] and count != COVARIANCE[typename][1]:
-                    raise _Unsupported(f'{path}: {count} numbers')
-                self.wanted[path] = [(name, None) for name in by_path[path]]
-            elif parent in by_path:
-                self.wanted[path] = [(name, _COLUMN_SHAPE[name].index(last))
-                                     for name in by_path[parent] if name in _COLUMN_SHAPE]
-        found = {name for columns in self.wanted.values() for name, _ in columns}
-        missing = {name for names in by_path.values() for name in names} - found
-        if missing:
-            raise _Unsupported(f'no field for {sorted(missing)}')
+    fields: {column: path}, the header's (:data:`HEADER`) added; covariance: (path, size) of
+    an array read whole, or None. A column is the stamp (sec, nanosec: int64), a string (a
+    frame id), the numbers of a role's members (rot_tools.io.interface.MEMBERS: float64), or
+    a whole float64 array (``covariance``).
+    """
 
-    def read(self, rows):
-        """{column: array} of rows (n, length) uint8, or None where the layout fails."""
-        n, length = rows.shape
-        if self.cdr:
-            if length < 4 or not ((rows[:, 0] == 0) & (rows[:, 1] == 1)).all():
-                return None  # not little-endian CDR
-            start = 4
-        else:
-            start = 0
+    def __init__(self, fields, covariance=None):
+        self.getters = []  # (column, field getter, members getter or None, dtype)
+        for column, path in {**HEADER, **fields}.items():
+            members = STAMP_MEMBERS if column == 'stamp' else interface.MEMBERS.get(column)
+            self.getters.append((column, field_getter(path),
+                                 members and _members_getter(members),
+                                 np.int64 if column == 'stamp' else np.float64))
+        if covariance:
+            self.getters.append(('covariance', field_getter(covariance[0]), None, np.float64))
+        self.size = covariance[1] if covariance else None
+        self.names = {column for column, _, _, _ in self.getters}
+
+    def columns(self, messages):
+        """Return {column: values} of a list of message objects (numbers as NumPy arrays)."""
         out = {}
-        if not self._walk(rows, start, 0, out, np.arange(n)):
-            return None
-        return out
-
-    def _walk(self, rows, pos, first, out, index):
-        """Read leaves[first:] from byte pos on; split rows where a string length differs."""
-        n, length = rows.shape
-        origin = 4 if self.cdr else 0
-        for k in range(first, len(self.leaves)):
-            path, kind, base, count = self.leaves[k]
-            if kind == 'string':
-                if self.cdr:
-                    pos += -(pos - origin) % 4
-                if pos + 4 > length:
-                    return False
-                lens = rows[:, pos:pos + 4].copy().view('<u4')[:, 0]
-                if (lens != lens[0]).any():  # a different layout for each length
-                    for value in np.unique(lens):
-                        part = lens == value
-                        if not self._walk(rows[part], pos, k, out, index[part]):
-                            return False
-                    return True
-                size = int(lens[0])
-                end = pos + 4 + size
-                if end > length:
-                    return False
-                for name, _ in self.wanted.get(path, ()):
-                    text = rows[:, pos + 4:end]
-                    if self.cdr and size:
-                        text = text[:, :-1]  # the terminating NUL
-                    _put_strings(out, name, text, index)
-                pos = end
+        for column, get, members, dtype in self.getters:
+            values = list(map(get, messages))
+            if column == 'covariance':
+                out[column] = np.array(values, dtype).reshape(len(values), -1)
+            elif members is None:  # strings
+                out[column] = values
             else:
-                size = _SIZES[base]
-                if self.cdr:
-                    pos += -(pos - origin) % size
-                end = pos + size * count
-                if end > length:
-                    return False
-                for name, part in self.wanted.get(path, ()):
-                    dtype = np.dtype(f'<{_KINDS[base]}{size}')
-                    if name == 'covariance':  # the whole array: (n, count)
-                        values = np.ascontiguousarray(rows[:, pos:end]).view(dtype)
-                    else:  # a number, or an array's first (covariance0)
-                        values = np.ascontiguousarray(rows[:, pos:pos + size]).view(dtype)[:, 0]
-                    out.setdefault(name, []).append((index, part, values))
-                pos = end
-        padding = length - pos
-        return padding == 0 or (self.cdr and 0 <= padding < 4)
-
-
-def _put_strings(out, name, text, index):
-    """Store the strings of rows ``index`` (m, size bytes) into column ``name``."""
-    if text.shape[1] == 0:
-        uniques, inverse = [b''], np.zeros(len(index), np.intp)
-    else:
-        flat = np.ascontiguousarray(text).view(f'V{text.shape[1]}')[:, 0]
-        values, inverse = np.unique(flat, return_inverse=True)
-        uniques = [v.tobytes() for v in values]
-    out.setdefault(name, []).append((index, None, (uniques, inverse.reshape(-1))))
-
-
-# ---------------------------------------------------------------------------------------
-# Columns of one topic
+                out[column] = np.array(list(map(members, values)), dtype)
+        return out
 
 
 class Columns:
     """
     The fields of one topic's messages, one row per message, in the bag's order.
 
-    record: (N,) int64 ns, when the message was recorded; sec, nanosec: (N,) int64, its
+    record: (N,) int64, when the message was recorded (ns); sec, nanosec: (N,) int64, its
     header stamp; frame_ids: list of str, frame: (N,) index into it; child_frame_ids/child
     likewise for Odometry and TransformStamped (else None); orientation (N, 4) as
     (x, y, z, w); position (N, 3) or None; covariance0 (N,) (Imu's
@@ -306,39 +212,15 @@ class Columns:
     (N, 3) (Imu's gyro) or None.
     """
 
-    def __init__(self, topic, msgtype):
-        self.topic, self.msgtype = topic, msgtype
-        self._parts = []
-
-    def add(self, record, fields):
-        self._parts.append((record, fields))
-
-    def finish(self):
-        """Concatenate the chunks read into the columns."""
-        parts, self._parts = self._parts, None
-        self.record = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, np.int64)
-        names = {name for name, _ in wanted_fields(self.msgtype)}
-        for name in sorted(names):
-            if name in ('frame_id', 'child_frame_id'):
-                strings, index = _join_strings([p[1][name] for p in parts])
-                setattr(self, 'frame_ids' if name == 'frame_id' else 'child_frame_ids', strings)
-                setattr(self, 'frame' if name == 'frame_id' else 'child', index)
-            else:
-                dtype = np.int64 if name in ('sec', 'nanosec') else np.float64
-                width = (COVARIANCE[self.msgtype][1] if name == 'covariance'
-                         else len(_COLUMN_SHAPE.get(name, ())))
-                shape = (0, width) if width else (0,)
-                arrays = [np.asarray(p[1][name], dtype) for p in parts]
-                setattr(self, name, np.concatenate(arrays) if arrays else np.zeros(shape, dtype))
-        for name in ('position', 'covariance0', 'covariance', 'angular_velocity'):
-            if name not in names:
-                setattr(self, name, None)
-        if self.covariance is not None and self.covariance.shape[1:] != (
-                COVARIANCE[self.msgtype][1],):
-            self.covariance = None  # a bag's own definition of the type, with another size
-        if 'child_frame_id' not in names:
-            self.child_frame_ids = self.child = None
-        return self
+    def __init__(self, topic, msgtype, record, sec, nanosec, frame_ids, frame,
+                 child_frame_ids=None, child=None, orientation=None, position=None,
+                 covariance0=None, covariance=None, angular_velocity=None):
+        self.topic, self.msgtype, self.record = topic, msgtype, record
+        self.sec, self.nanosec, self.frame_ids, self.frame = sec, nanosec, frame_ids, frame
+        self.child_frame_ids, self.child = child_frame_ids, child
+        self.orientation, self.position = orientation, position
+        self.covariance0, self.covariance = covariance0, covariance
+        self.angular_velocity = angular_velocity
 
     def __len__(self):
         return len(self.record)
@@ -348,221 +230,144 @@ class Columns:
         return self.sec + 1e-9 * self.nanosec
 
 
-def _join_strings(parts):
-    """
-    Join several (strings, index) chunks into one.
-
-    (strings, index) of several (strings, index) chunks (bytes from the fast path, str
-    from rosbags' decoder: the same frame id is one string either way).
-    """
-    lookup, indices = {}, []
-    for chunk_strings, chunk_index in parts:
-        remap = np.array([lookup.setdefault(_text(s), len(lookup)) for s in chunk_strings],
-                         np.intp)
-        indices.append(remap[chunk_index] if len(chunk_index) else chunk_index)
-    index = np.concatenate(indices) if indices else np.zeros(0, np.intp)
-    return list(lookup), index
-
-
-def _text(s):
-    return s.decode('utf-8', 'replace') if isinstance(s, bytes) else s
-
-
-def _assemble(pieces, n, msgtype):
-    """{column: array (n, ...)} from the pieces of the layout walk (rows in any order)."""
-    out = {}
-    for name, items in pieces.items():
-        if name in ('frame_id', 'child_frame_id'):
-            lookup, index = {}, np.empty(n, np.intp)
-            for rows, _, (uniques, inverse) in items:
-                remap = np.array([lookup.setdefault(u, len(lookup)) for u in uniques], np.intp)
-                index[rows] = remap[inverse]
-            out[name] = (list(lookup), index)
-            continue
-        parts = _COLUMN_SHAPE.get(name)
-        width = (len(parts),) if parts else items[0][2].shape[1:]  # (count,): covariance
-        column = np.empty((n,) + width, np.float64 if name not in (
-            'sec', 'nanosec') else np.int64)
-        for rows, part, values in items:
-            if part is None:
-                column[rows] = values
-            else:
-                column[rows, part] = values
-        out[name] = column
+def _columns(topic, msgtype, parts, fields):
+    """Return the Columns of chunks ``parts`` [(record (n,), {column: values})] of ``fields``."""
+    stamp = _join('stamp', parts, fields)
+    out = Columns(topic, msgtype, np.concatenate([p[0] for p in parts] or [np.zeros(0, np.int64)]),
+                  stamp[:, 0], stamp[:, 1], *_index([p[1]['frame_id'] for p in parts]))
+    if 'child_frame_id' in fields.names:
+        out.child_frame_ids, out.child = _index([p[1]['child_frame_id'] for p in parts])
+    for name in ('orientation', 'position', 'covariance0', 'angular_velocity', 'covariance'):
+        if name in fields.names:
+            setattr(out, name, _join(name, parts, fields))
+    if out.covariance is not None and out.covariance.shape[1] != fields.size:
+        out.covariance = None  # a bag's own definition of the type, with another size
     return out
 
 
-def _get(obj, path):
-    for name in path.split('.'):
-        obj = getattr(obj, name)
-    return obj
+def _index(chunks):
+    """(strings, index (N,)) of the strings of several chunks: each distinct one listed once."""
+    lookup = {}
+    index = [lookup.setdefault(s, len(lookup)) for chunk in chunks for s in chunk]
+    return list(lookup), np.array(index, np.intp)
 
 
-def fields_of_objects(messages, msgtype):
-    """Return the columns of deserialised message objects (the reference of the fast path)."""
-    out = {}
-    for name, path in wanted_fields(msgtype):
-        parts = _COLUMN_SHAPE.get(name)
-        values = [_get(m, path) for m in messages]
-        if name in ('frame_id', 'child_frame_id'):
-            lookup = {}
-            index = np.array([lookup.setdefault(v, len(lookup)) for v in values], np.intp)
-            out[name] = (list(lookup), index)
-        elif parts:
-            out[name] = np.array([[getattr(v, p) for p in parts] for v in values],
-                                 np.float64).reshape(-1, len(parts))
-        elif name == 'covariance0':
-            out[name] = np.array([v[0] for v in values], np.float64)
-        elif name == 'covariance':
-            size = COVARIANCE[msgtype][1]
-            out[name] = np.array([np.ravel(v) for v in values], np.float64).reshape(
-                len(values), -1) if values else np.zeros((0, size))
-        else:
-            out[name] = np.array(values, np.int64)
-    return out
+def _join(name, parts, fields):
+    """Return column ``name`` of every chunk, joined."""
+    width = len(STAMP_MEMBERS if name == 'stamp' else interface.MEMBERS.get(name) or ()) \
+        or fields.size
+    empty = np.zeros((0, width) if width > 1 else (0,), np.int64 if name == 'stamp' else None)
+    return np.concatenate([p[1][name] for p in parts] or [empty])
 
 
-class _TopicReader:
-    """Parses one topic's raw messages, a chunk at a time, into Columns."""
+class _Topic:
+    """One topic being read: its messages of the current chunk, and the chunks' columns."""
 
-    def __init__(self, reader, topic, msgtype, fast=True):
-        self.reader, self.msgtype = reader, msgtype
-        self.columns = Columns(topic, msgtype)
+    def __init__(self, topic, msgtype, fields):
+        self.topic, self.msgtype, self.fields = topic, msgtype, fields
+        self.records, self.messages, self.parts = [], [], []
         self.count = 0
-        self.layout = None
-        if fast:
-            try:
-                self.layout = _Layout(reader.typestore, msgtype, cdr=reader.is2)
-            except (_Unsupported, KeyError):
-                self.layout = None
 
-    def add(self, raw, times):
-        fields = self._fast(raw) if self.layout is not None else None
-        if fields is None:
-            fields = fields_of_objects(self._deserialise(raw), self.msgtype)
-        self.columns.add(np.asarray(times, np.int64), fields)
-        self.count += len(raw)
+    def add(self, record, message):
+        self.records.append(record)
+        self.messages.append(message)
+        if len(self.messages) >= CHUNK:
+            self.flush()
 
-    def _fast(self, raw):
-        """Return the fields of raw messages by their layout, None if any group fails."""
-        n = len(raw)
-        lengths = np.fromiter(map(len, raw), np.int64, n)
-        pieces = {}
-        for length in np.unique(lengths):
-            index = np.flatnonzero(lengths == length)
-            if len(index) == n:
-                data = b''.join(raw)
-            else:
-                data = b''.join([raw[i] for i in index])
-            rows = np.frombuffer(data, np.uint8).reshape(len(index), int(length))
-            out = self.layout.read(rows)
-            if out is None:
-                return None
-            for name, items in out.items():
-                pieces.setdefault(name, []).extend(
-                    (index[rows_], part, values) for rows_, part, values in items)
-        return _assemble(pieces, n, self.msgtype)
+    def flush(self):
+        if self.messages:
+            self.parts.append((np.array(self.records, np.int64),
+                               self.fields.columns(self.messages)))
+            self.count += len(self.messages)
+        self.records, self.messages = [], []
 
-    def _deserialise(self, raw):
-        out = []
-        for k, data in enumerate(raw):
-            try:
-                out.append(self.reader.deserialize(data, self.msgtype))
-            except Exception as exc:  # noqa: BLE001 - rosbags' serde errors vary
-                raise BagError(f'{self.columns.topic}: message {self.count + k} cannot be '
-                               f'decoded as {self.msgtype}: {_one_line(exc)}') from None
-        return out
+    def finish(self):
+        self.flush()
+        return _columns(self.topic, self.msgtype, self.parts, self.fields)
 
 
-def _messages(reader, connections, start, stop):
-    """Return rosbags' message generator; one bag's own reader when there is one."""
-    if len(reader.readers) == 1:
-        return reader.readers[0].messages(connections=connections, start=start, stop=stop)
-    return reader.messages(connections=connections, start=start, stop=stop)
+def fields_of(msgtype):
+    """Return the _Fields read from messages of ``msgtype`` (one of SUPPORTED)."""
+    return _Fields(SUPPORTED[msgtype], COVARIANCE.get(msgtype))
 
 
-def read_topics(reader, connections, start=None, stop=None, fast=True, progress=None):
+def _decode(reader, raw, conn, index):
+    """Return the message object of ``raw``; BagError naming the message if it does not decode."""
+    try:
+        return reader.deserialize(raw, conn.msgtype)
+    except Exception as exc:  # noqa: BLE001 - rosbags' serde errors vary
+        raise BagError(f'{conn.topic}: message {index} cannot be decoded as {conn.msgtype}: '
+                       f'{_one_line(exc)}') from None
+
+
+def read_topics(reader, connections, start=None, stop=None, progress=None):
     """
     {topic: Columns} of the connections' messages between start and stop (ns, record time).
 
-    ``fast=False`` decodes every message with rosbags (the reference). ``progress(n)`` is
-    called now and then with the number of messages read so far.
+    ``progress(n)`` is called now and then with the number of messages read so far.
     """
-    readers, by_id = {}, {}
+    topics, by_id = {}, {}
     for conn in connections:
-        topic_reader = readers.get(conn.topic)
-        if topic_reader is None:
-            topic_reader = readers[conn.topic] = _TopicReader(reader, conn.topic, conn.msgtype,
-                                                              fast)
-        by_id[conn.id] = topic_reader
+        if conn.topic not in topics:
+            topics[conn.topic] = _Topic(conn.topic, conn.msgtype, fields_of(conn.msgtype))
+        by_id[conn.id] = topics[conn.topic]
     count = 0
     try:
-        messages = _messages(reader, connections, start, stop)
-        while True:
-            chunk = list(islice(messages, CHUNK))
-            if not chunk:
-                break
-            conns, times, raws = zip(*chunk)
-            ids = np.fromiter(map(attrgetter('id'), conns), np.int64, len(chunk))
-            unique = np.unique(ids)
-            if len(unique) == 1:
-                by_id[int(unique[0])].add(raws, times)
-            else:
-                for conn_id in unique:
-                    index = np.flatnonzero(ids == conn_id).tolist()
-                    by_id[int(conn_id)].add([raws[i] for i in index], [times[i] for i in index])
-            count += len(chunk)
-            if progress is not None:
+        for conn, record, raw in reader.messages(connections=connections, start=start,
+                                                 stop=stop):
+            topic = by_id[conn.id]
+            topic.add(record, _decode(reader, raw, conn, topic.count + len(topic.messages)))
+            count += 1
+            if progress is not None and not count % CHUNK:
                 progress(count)
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags' reader
         raise BagError(f'cannot read the bag: {_one_line(exc)}') from None
-    return {topic: r.columns.finish() for topic, r in readers.items()}
+    if progress is not None:
+        progress(count)
+    return {name: topic.finish() for name, topic in topics.items()}
 
 
-def read_tf(reader, connections, start=None, stop=None):
+# ---------------------------------------------------------------------------------------
+# TF
+
+
+class TfColumns(NamedTuple):
     """
-    Return the transforms of TFMessage connections as columns, in the order they were recorded.
+    The transforms of a bag's TFMessage topics, in the order they were read (read_tf).
 
-    Returns a dict: static (N,) bool (from a /tf_static-like topic: its name ends in
-    'static'), parent/child (N,) indices into frames (list), sec, nanosec (N,), position
-    (N, 3), orientation (N, 4), topic (N,) index into topics (list).
+    columns: Columns of the transforms (as TransformStamped: header, child frame,
+    position, orientation), one row each; static (N,) bool: from a /tf_static-like topic
+    (its name ends in 'static').
     """
-    frames, topics = {}, {}
-    rows = []
+
+    columns: Columns
+    static: np.ndarray
+
+
+def read_tf(reader, static, dynamic, start=None, stop=None):
+    """
+    Return TfColumns of the transforms of TFMessage connections.
+
+    ``static`` connections are read whole, ``dynamic`` ones between start and stop (ns,
+    record time), static ones first.
+    """
+    topic = _Topic('tf', TF_TYPE, _Fields(interface.TF_FIELDS))
+    kinds, count = [], 0
     try:
-        for conn, _, raw in reader.messages(connections=connections, start=start, stop=stop):
-            msg = reader.deserialize(raw, conn.msgtype)
-            t_index = topics.setdefault(conn.topic, len(topics))
-            for tf in msg.transforms:
-                t, q, stamp = tf.transform.translation, tf.transform.rotation, tf.header.stamp
-                rows.append((t_index, frames.setdefault(tf.header.frame_id, len(frames)),
-                             frames.setdefault(tf.child_frame_id, len(frames)),
-                             stamp.sec, stamp.nanosec, t.x, t.y, t.z, q.x, q.y, q.z, q.w))
+        for connections, lo, hi in ((static, None, None), (dynamic, start, stop)):
+            if not connections:
+                continue
+            for conn, record, raw in reader.messages(connections=connections, start=lo,
+                                                     stop=hi):
+                transforms = _decode(reader, raw, conn, count).transforms
+                count += 1
+                kinds += [connections is static] * len(transforms)
+                for transform in transforms:
+                    topic.add(record, transform)
+    except BagError:
+        raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags
         raise BagError(f'cannot read the bag: {_one_line(exc)}') from None
-    table = np.array(rows, np.float64).reshape(-1, 12)
-    ints = table[:, :5].astype(np.int64)
-    topic_names = list(topics)
-    return {'topics': topic_names, 'topic': ints[:, 0], 'frames': list(frames),
-            'parent': ints[:, 1], 'child': ints[:, 2], 'sec': ints[:, 3],
-            'nanosec': ints[:, 4], 'position': table[:, 5:8], 'orientation': table[:, 8:12],
-            'static': np.array([topic_names[i].endswith('static') for i in ints[:, 0]], bool)}
-
-
-def join_tf(parts):
-    """One read_tf result of several (frames and topics renumbered)."""
-    frames, topics, out = {}, {}, []
-    for part in parts:
-        fmap = np.array([frames.setdefault(f, len(frames)) for f in part['frames']] or [0])
-        tmap = np.array([topics.setdefault(t, len(topics)) for t in part['topics']] or [0])
-        out.append({**part, 'parent': fmap[part['parent']], 'child': fmap[part['child']],
-                    'topic': tmap[part['topic']]})
-    joined = {'frames': list(frames), 'topics': list(topics)}
-    for key in ('topic', 'parent', 'child', 'sec', 'nanosec', 'static'):
-        joined[key] = np.concatenate([p[key] for p in out]) if out else np.zeros(0, np.int64)
-    for key, width in (('position', 3), ('orientation', 4)):
-        joined[key] = (np.concatenate([p[key] for p in out]) if out
-                       else np.zeros((0, width)))
-    return joined
+    return TfColumns(topic.finish(), np.array(kinds, bool))
