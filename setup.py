@@ -6,12 +6,12 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=[package_name] + [package_name + '.' + sub for sub in ('core', 'io', 'cli', 'ros')],
-    package_data={package_name + '.ros': ['fastdds_profile.xml']},
     data_files=[
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/config', ['config/rot_tools.yaml']),
+        ('share/' + package_name + '/config',
+            ['config/rot_tools.yaml', 'config/fastdds_profile.xml']),
         ('share/' + package_name + '/launch', ['launch/rot_tools.launch.xml']),
     ],
     install_requires=['setuptools', 'numpy', 'pyyaml'],
@@ -30,8 +30,8 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-            'rotation_node = rot_tools.ros.entry:rotation_node',
-            'rotation_client = rot_tools.ros.entry:rotation_client',
+            'rotation_node = rot_tools.ros.rotation_node:main',
+            'rotation_client = rot_tools.ros.rotation_client:main',
             'rot-tools = rot_tools.cli.main:main',
         ],
     },

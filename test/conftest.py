@@ -219,14 +219,14 @@ class Tester:
         Spin ``node`` (a node under test, usually in another context) with the tester.
 
         A node of another context (another DDS participant) gets an executor of its own —
-        the kind rotation_node runs on (rot_tools.ros.runtime.make_executor), so that every node
+        the kind rotation_node runs on, rclpy's SingleThreadedExecutor, so that every node
         test holds on it; both are spun in turn, in this thread.
         """
-        from rot_tools.ros.runtime import make_executor
+        from rclpy.executors import SingleThreadedExecutor
         if node.context is self.context:
             self.executors[0].add_node(node)
         else:
-            executor = make_executor(context=node.context)
+            executor = SingleThreadedExecutor(context=node.context)
             executor.add_node(node)
             self.executors.append(executor)
 

@@ -6,8 +6,6 @@ table, the client's verbs and answers, and the bag reader's types, against the s
 The client matches answers to outputs by name: reordered or fewer rows change nothing else.
 """
 
-from types import SimpleNamespace
-
 from builtin_interfaces.msg import Time
 import numpy as np
 import pytest
@@ -85,10 +83,10 @@ def test_the_bag_reader_reads_every_input_with_an_orientation():
     oriented = {row.type_name for row in interface.INPUTS if 'orientation' in row.fields}
     assert set(bag_read.SUPPORTED) == oriented
     assert 'geometry_msgs/msg/Vector3Stamped' not in bag_read.SUPPORTED  # Euler: no sequence
-    for type_name in oriented:
-        layout = bag_read._Layout(typestore, type_name, cdr=True)  # every field found
-        assert {column for columns in layout.wanted.values() for column, _ in columns} >= set(
-            bag_read.SUPPORTED[type_name])
+    for row in interface.INPUTS:
+        if row.type_name in oriented:  # every field the bag reader reads is the message's
+            assert bag_read.SUPPORTED[row.type_name] == {**row.fields, **row.bag_fields}
+            assert row.type_name in typestore.types
 
 
 # ---------------------------------------------------------------------------------------
@@ -146,7 +144,7 @@ def test_the_client_prints_each_answer_under_its_output_name(monkeypatch):
     expected = rotation_client._answer_data(collect(messages), PARAMETERS)
     assert list(expected) == [row.name for row in interface.OUTPUTS]
     assert expected['axis_angle'] == [20.0, 21.0, 22.0]
-    assert expected['screw'] == {'angular': [53.0, 54.0, 55.0], 'linear': [50.0, 51.0, 52.0]}
+    assert expected['screw'] == {'angular': [50.0, 51.0, 52.0], 'linear': [53.0, 54.0, 55.0]}
     assert expected['rpy'] == {'roll': 40.0, 'pitch': 41.0, 'yaw': 42.0, 'unit': 'rad'}
     k = [row.name for row in interface.OUTPUTS].index('rpy_covariance')
     assert expected['rpy_covariance'] == {
@@ -165,7 +163,7 @@ def test_the_client_prints_each_answer_under_its_output_name(monkeypatch):
 
 def test_a_new_output_row_is_printed_by_its_fields(monkeypatch):
     row = interface.Output('rotvec_again', 'geometry_msgs/msg/Vector3Stamped',
-                           interface.members('vector', 'xyz'), lambda values: values.rotvec)
+                           interface.members('vector', 'xyz'), 'rotvec')
     monkeypatch.setattr(interface, 'OUTPUTS', interface.OUTPUTS + (row,))
     messages = answer_messages()
     answer = rotation_client._answer_data(collect(messages), PARAMETERS)
@@ -173,4 +171,17 @@ def test_a_new_output_row_is_printed_by_its_fields(monkeypatch):
     assert answer['rotvec_again'] == {'vector.x': 10.0 * k, 'vector.y': 10.0 * k + 1,
                                       'vector.z': 10.0 * k + 2}
     assert client_session.stamped_outputs()[-1] == 'rotvec_again'  # awaited like the others
-    assert row.value(SimpleNamespace(rotvec=(1.0, 2.0, 3.0))) == (1.0, 2.0, 3.0)
+
+
+def test_every_output_names_what_it_publishes():
+    """Each per-input output holds a field of the Decomposition by name, the matrix or a pose."""
+    from rot_tools.core.decomposition import Decomposition
+    for row in interface.OUTPUTS:
+        if row.value is None:  # a picture
+            continue
+        assert row.value in Decomposition._fields or row.value in (
+            interface.MATRIX, interface.POSE_COVARIANCE), row.name
+    assert {row.name: row.value for row in interface.OUTPUTS} == {
+        'rotation_matrix': interface.MATRIX, 'quaternion': 'quaternion', 'axis_angle': 'rotvec',
+        'euler_angles': 'euler', 'rpy': 'rpy', 'screw': 'twist',
+        'rpy_covariance': interface.POSE_COVARIANCE, 'screw_axis': None, 'markers': None}

@@ -109,7 +109,7 @@ def test_the_launch_file_runs_this_package_s_node_with_the_shipped_parameter_fil
     assert pkg == parse_package(str(REPO / 'package.xml')).name == PACKAGE
     scripts = dict(entry.split(' = ') for entry in
                    setup_keywords()['entry_points']['console_scripts'])
-    assert scripts[executable] == 'rot_tools.ros.entry:rotation_node'
+    assert scripts[executable] == 'rot_tools.ros.rotation_node:main'
     (params_file,) = [ros_args[i + 1] for i, a in enumerate(ros_args) if a == '--params-file']
     assert Path(params_file) == REPO / 'config' / 'rot_tools.yaml'
     remaps = [ros_args[i + 1] for i, a in enumerate(ros_args) if a == '-r']

@@ -1,8 +1,8 @@
 """
 rot_tools.ros.messages: the message <-> NumPy boundary of rotation_node (no DDS needed).
 
-Inbound, a message goes the node's way: serialised by rclpy, its bytes read by its INPUTS
-row (rot_tools.io.cdr) and its fields converted.
+Inbound, a message goes the node's way: serialised by rclpy and read back as a message
+object, the fields at its INPUTS row's paths read and converted.
 """
 
 import math
@@ -17,6 +17,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
 from rot_tools.io import boundary
+from rot_tools.io.boundary import QUATERNION_TOLERANCE as TOL
 from rot_tools.ros import messages
 from rot_tools.ros.messages import RefusedInput
 from rot_tools.ros.topics import INPUTS
@@ -28,18 +29,19 @@ ATOL = 1e-12
 RNG = np.random.default_rng(7)
 
 
-def settings(quaternion_tolerance=1e-3, euler_sequence='ZYX', degrees=False):
+def settings(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False):
     """Return what the converters read of rotation_node's Settings."""
     return SimpleNamespace(quaternion_tolerance=quaternion_tolerance,
                            euler_sequence=euler_sequence, degrees=degrees)
 
 
 def take(msg, given=None):
-    """(header, R, b) of msg as rotation_node takes it: its bytes read, its fields converted."""
+    """(header, R, b) of msg as rotation_node takes it: its row's fields read and converted."""
     kind, = (kind for kind in INPUTS if kind.msg_type is type(msg))
-    header, values = kind.read(serialize_message(msg))
-    return (header, *kind.row.convert(values, settings() if given is None else given,
-                                      kind.row.fields))
+    msg = deserialize_message(serialize_message(msg), type(msg))
+    values = kind.read(msg)
+    return (msg.header, *kind.row.convert(values, settings() if given is None else given,
+                                          kind.row.fields))
 
 
 def same_header(read, msg):
@@ -67,32 +69,32 @@ def unit(v):
 @pytest.mark.parametrize('q', [(0, 0, 0, 1), (1, 0, 0, 0), (0.5, 0.5, 0.5, 0.5),
                                tuple(unit(RNG.normal(size=4)))])
 def test_unit_quaternion(q):
-    R = boundary.quaternion_to_rotation(*quaternion_fields(q), 1e-3)
+    R = boundary.quaternion_to_rotation(*quaternion_fields(q), TOL)
     np.testing.assert_allclose(R, quaternion_to_matrix(q), rtol=0, atol=ATOL)
 
 
 def test_quaternion_order_is_x_y_z_w():
     half = math.sqrt(0.5)  # 90° about z: (x, y, z, w) = (0, 0, sin 45°, cos 45°)
-    R = boundary.quaternion_to_rotation(*quaternion_fields((0, 0, half, half)), 1e-3)
+    R = boundary.quaternion_to_rotation(*quaternion_fields((0, 0, half, half)), TOL)
     np.testing.assert_allclose(R, rot_z(math.pi / 2), rtol=0, atol=ATOL)
 
 
 def test_quaternion_within_tolerance_is_normalised():
     q = unit((0.3, -0.2, 0.9, 0.1)) * (1 - 0.99e-3)
-    R = boundary.quaternion_to_rotation(*quaternion_fields(q), 1e-3)
+    R = boundary.quaternion_to_rotation(*quaternion_fields(q), TOL)
     assert is_rotation(R, tol=1e-15)
     np.testing.assert_allclose(R, quaternion_to_matrix(unit(q)), rtol=0, atol=ATOL)
 
 
 @pytest.mark.parametrize('q, tol, reason, match', [
-    ((0, 0, 0, 0), 1e-3, 'zero_quaternion', 'orientation is the zero quaternion'),
+    ((0, 0, 0, 0), TOL, 'zero_quaternion', 'orientation is the zero quaternion'),
     ((0, 0, 0, 0), 10.0, 'zero_quaternion', 'zero quaternion'),
-    ((0, 0, 0, 2), 1e-3, 'non_unit_quaternion', r'norm 2, off 1 by 1 > quaternion_tolerance'),
-    ((0, 0, 0, 1.0011), 1e-3, 'non_unit_quaternion', 'off 1 by 0.0011'),
+    ((0, 0, 0, 2), TOL, 'non_unit_quaternion', r'norm 2, off 1 by 1 > quaternion_tolerance'),
+    ((0, 0, 0, 1.0011), TOL, 'non_unit_quaternion', 'off 1 by 0.0011'),
     ((0, 0.5, 0, 0), 0.4, 'non_unit_quaternion', 'norm 0.5'),
-    ((1e300, -1e300, 1e300, 1e300), 1e-3, 'non_unit_quaternion', r'norm 2e\+300'),
-    ((math.nan, 0, 0, 1), 1e-3, 'non_finite', r'orientation\.x is nan'),
-    ((0, 0, 0, math.inf), 1e-3, 'non_finite', r'orientation\.w is inf'),
+    ((1e300, -1e300, 1e300, 1e300), TOL, 'non_unit_quaternion', r'norm 2e\+300'),
+    ((math.nan, 0, 0, 1), TOL, 'non_finite', r'orientation\.x is nan'),
+    ((0, 0, 0, math.inf), TOL, 'non_finite', r'orientation\.w is inf'),
     ((0, -math.inf, 0, 1), 1e3, 'non_finite', r'orientation\.y is -inf'),
 ])
 def test_bad_quaternion_is_refused(q, tol, reason, match):
@@ -252,14 +254,41 @@ def test_quaternion_stamped():
     assert info.value.reason == 'non_unit_quaternion'
 
 
+def test_a_row_reads_the_fields_at_its_paths():
+    """An Imu row naming angular_velocity reads angular_velocity, not what comes first."""
+    from rot_tools.io import interface
+    from rot_tools.ros import topics
+    row = interface.Input('gyro', 'sensor_msgs/msg/Imu', {'angles': 'angular_velocity'},
+                          boundary.euler_fields_to_rt, 'the rates, as if they were angles')
+    msg = Imu(orientation=quaternion((0.5, 0.5, 0.5, 0.5)))
+    msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = 0.1, 0.2, 0.3
+    msg.orientation_covariance[0] = -1.0
+    assert topics.subscribed(row).read(msg) == (0.1, 0.2, 0.3)
+    imu, = (kind for kind in INPUTS if kind.row.name == 'imu')
+    assert imu.read(msg) == (0.5, 0.5, 0.5, 0.5, -1.0)
+
+
+def test_an_output_row_writes_the_fields_at_its_paths():
+    from rot_tools.ros.topics import OUTPUTS
+    for kind in OUTPUTS:
+        if kind.row.value is None:
+            continue
+        msg = kind.message()
+        numbers = [0.5 + k for k in range(len(kind.row.fields))]
+        kind.write(msg, numbers)
+        msg = deserialize_message(serialize_message(msg), kind.msg_type)
+        assert [messages.field_value(msg, path) for path in kind.row.fields] == numbers
+
+
 # ---------------------------------------------------------------------------------------
 # Outbound
 
 
 def test_screw_axis_marker():
     header = Header(frame_id='map')
-    m = deserialize_message(messages.screw_axis_marker(header, np.array([1.0, 2.0, 0.0]),
-                                                       np.array([0.0, 0.6, 0.8]), 2.0), Marker)
+    m = messages.screw_axis_marker(header, np.array([1.0, 2.0, 0.0]),
+                                   np.array([0.0, 0.6, 0.8]), 2.0)
+    m = deserialize_message(serialize_message(m), Marker)
     assert m.header == header
     assert (m.type, m.action, m.id) == (Marker.ARROW, Marker.ADD, 0)
     assert [(p.x, p.y, p.z) for p in m.points] == [(1.0, 2.0, 0.0), (1.0, 3.2, 1.6)]

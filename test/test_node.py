@@ -10,7 +10,6 @@ significant digits, so its numbers are compared to that.
 """
 
 import math
-from operator import attrgetter
 import time
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, QuaternionStamped
@@ -27,7 +26,9 @@ from rclpy.serialization import serialize_message
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix,
     rotvec_to_matrix, screw_exp, screw_from_transform, screw_interpolate, screw_log)
+from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io import interface
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import transform_report
 from rot_tools.ros import rotation_node, topics
 from rot_tools.ros.messages import message_class
@@ -165,7 +166,7 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
                                rtol=0, atol=ATOL * (180 if degrees else 1))
     # ~/rpy: x, y, z = roll, pitch, yaw (REP 103), for every sequence: scipy's extrinsic 'xyz'
     # where it is unique; at gimbal lock the library's rule (yaw 0, roll the free angle).
-    rpy, lock = matrix_to_euler(R, 'xyz')
+    rpy, lock = matrix_to_euler(R, RPY_SEQUENCE)
     if not lock:
         np.testing.assert_allclose(rpy, Rotation.from_matrix(R).as_euler('xyz'), rtol=0,
                                    atol=1e-10)
@@ -618,21 +619,18 @@ def test_bad_input_is_refused(rig, case):
     assert why in warning.msg and reason in warning.msg and rig.topic(kind) in warning.msg
 
 
-@pytest.mark.parametrize('damage, why', [
-    (lambda data: data[:40], 'the message ends early: 40 bytes'),
-    (lambda data: b'\x00\x07' + data[2:], 'encapsulation 00 07 00 00 is not CDR'),
-    (lambda data: data[:12] + b'\xff' + data[13:], 'does not end in a NUL'),
+@pytest.mark.parametrize('damage', [
+    lambda data: data[:40], lambda data: b'\x00\x07' + data[2:],
+    lambda data: data[:12] + b'\xff' + data[13:],
 ], ids=['truncated', 'xcdr2', 'frame_id_length'])
-def test_bytes_that_are_not_the_message_are_refused(rig, damage, why):
-    # The node reads its inputs' bytes (rot_tools.io.cdr): a publisher of raw bytes can send
-    # anything on ~/pose. Refused as malformed, counted, warned; the next message is served.
+def test_bytes_that_are_not_the_message_never_reach_the_node(rig, damage):
+    # A publisher of raw bytes can send anything on ~/pose: rclpy's type support cannot make a
+    # PoseStamped of it, and the node never sees it. Nothing is refused, nothing logged, and
+    # the next message is served.
     rig.pubs['pose'].publish(damage(serialize_message(GOOD_INPUTS['pose'])))
-    rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 1, what='the refusal')
     rig.outputs(rig.send('pose', GOOD_INPUTS['pose']))
-    assert rig.report()['refused']['malformed'] == 1
-    rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='the warning on /rosout')
-    (warning,) = rig.node_logs(Log.WARN)
-    assert 'not a geometry_msgs/msg/PoseStamped: ' in warning.msg and why in warning.msg
+    assert rig.report()['refused']['total'] == 0
+    assert rig.node_logs(Log.WARN) == rig.node_logs(Log.ERROR) == []
 
 
 def test_quaternion_within_tolerance_is_normalised(rig):
@@ -957,7 +955,7 @@ def test_every_output_row_is_published_with_its_type(rig):
 
 def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):
     row = interface.Output('euler_again', 'geometry_msgs/msg/Vector3Stamped',
-                           interface.members('vector', 'xyz'), attrgetter('euler'), angles=True)
+                           interface.members('vector', 'xyz'), 'euler', angles=True)
     monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (topics.published(row),))
     tester.subscribe(f'{namespace}/rot_tools/euler_again', Vector3Stamped)
     rig = make_rig(angle_unit='deg')  # (discovery waits for the new topic's match too)
@@ -997,7 +995,7 @@ def test_parameter_descriptors(rig):
     node = rig.node
     expected = {'euler_sequence': (ParameterType.PARAMETER_STRING, 'ZYX'),
                 'angle_unit': (ParameterType.PARAMETER_STRING, 'rad'),
-                'quaternion_tolerance': (ParameterType.PARAMETER_DOUBLE, 1e-3),
+                'quaternion_tolerance': (ParameterType.PARAMETER_DOUBLE, QUATERNION_TOLERANCE),
                 'publish_markers': (ParameterType.PARAMETER_BOOL, True),
                 'marker_scale': (ParameterType.PARAMETER_DOUBLE, 1.0)}
     for name, (kind, default) in expected.items():
@@ -1173,27 +1171,21 @@ def test_double_parameters_take_integer_values(make_rig):
 
 
 @pytest.mark.parametrize('service', ['set_parameters', 'set_parameters_atomically'])
-def test_a_parameter_of_unknown_type_or_without_a_name_is_refused(rig, service):
-    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+def test_a_parameter_without_a_name_is_refused(rig, service):
     from rcl_interfaces.srv import SetParameters, SetParametersAtomically
     srv_type = {'set_parameters': SetParameters,
                 'set_parameters_atomically': SetParametersAtomically}[service]
     good = Parameter('angle_unit', value='deg').to_parameter_msg()
-    cases = [(ParameterMsg(name='marker_scale', value=ParameterValue(type=99)),
-              "parameter 'marker_scale' has type 99, not a type of "
-              'rcl_interfaces/msg/ParameterType (0–9)'),
-             (Parameter('', value=1.0).to_parameter_msg(), 'a parameter name is empty')]
-    for bad, why in cases:
-        response = rig.call(srv_type, service, srv_type.Request(parameters=[bad, good]))
-        if service == 'set_parameters':  # one by one: the good one is set
-            assert [(r.successful, r.reason) for r in response.results] == [
-                (False, why), (True, '')]
-            assert rig.node.get_parameter('angle_unit').value == 'deg'
-            set_one(rig.node, 'angle_unit', 'rad')
-        else:  # all or nothing
-            assert (response.result.successful, response.result.reason) == (False, why)
-            assert rig.node.get_parameter('angle_unit').value == 'rad'
+    bad = Parameter('', value=1.0).to_parameter_msg()
+    why = 'a parameter name is empty'
+    response = rig.call(srv_type, service, srv_type.Request(parameters=[bad, good]))
+    if service == 'set_parameters':  # one by one: the good one is set
+        assert [(r.successful, r.reason) for r in response.results] == [
+            (False, why), (True, '')]
+        assert rig.node.get_parameter('angle_unit').value == 'deg'
+    else:  # all or nothing
+        assert (response.result.successful, response.result.reason) == (False, why)
+        assert rig.node.get_parameter('angle_unit').value == 'rad'
     assert '' not in rig.node.list_parameters([], 0).names
-    assert rig.node.get_parameter('marker_scale').value == 1.0
-    assert not rig.node_logs(Log.ERROR)  # no traceback
+    assert not rig.node_logs(Log.ERROR)
     rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))  # and the node keeps serving

@@ -365,3 +365,27 @@ def test_a_remap_the_shell_expanded_is_warned_about(node_process):
 def test_home_remaps(argv, found):
     from rot_tools.ros.runtime import home_remaps
     assert home_remaps(argv, '/home/u/') == found
+
+
+FAST_DDS_PROFILE = REPO / 'config' / 'fastdds_profile.xml'
+
+
+def test_the_opt_in_fast_dds_profile_is_read_whole_with_the_users_two_settings(
+        tester, node_process):
+    """
+    Check that the shipped profile turns on as doc/node.md says, and the node runs under it.
+
+    Fast DDS reads it (an XML error would be logged and the profile left out), and the node
+    answers as without it.
+    """
+    page = (REPO / 'doc' / 'node.md').read_text(encoding='utf-8')
+    for setting in ('FASTRTPS_DEFAULT_PROFILES_FILE=', 'RMW_FASTRTPS_USE_QOS_FROM_XML=1'):
+        assert f'export {setting}' in page
+    process = node_process(env_extra={'FASTRTPS_DEFAULT_PROFILES_FILE': str(FAST_DDS_PROFILE),
+                                      'RMW_FASTRTPS_USE_QOS_FROM_XML': '1'})
+    remote = Remote(tester, process.name)
+    out = remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
+    check_outputs(out, quaternion_to_matrix((0, 0, 1, 0)), np.array([1.0, 0.0, 0.0]))
+    assert_clean_exit(*process.stop(signal.SIGINT))
+    logs = process.out_path.read_text() + process.err_path.read_text()  # (Fast DDS: stdout)
+    assert 'XMLPARSER' not in logs

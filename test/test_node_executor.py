@@ -1,11 +1,11 @@
 """
-The executor rotation_node runs on (rot_tools.ros.runtime.make_executor), proved in use.
+The executor rotation_node runs on, rclpy's SingleThreadedExecutor, proved in use.
 
-It is rclpy's SingleThreadedExecutor, chosen over rclpy's EventsExecutor, whose event queue
-grows without bound under a flood beyond the node's pace and makes service calls wait
-behind it (bench/bench_overload.py). The node spins it through rot_tools.ros.runtime.spin,
-in one context (one DDS participant) with its services; these tests show, on the real
-executor and (where a signal or the process matters) on the real console script:
+It was chosen over rclpy's EventsExecutor, whose event queue grows without bound under a
+flood beyond the node's pace and makes service calls wait behind it
+(bench/bench_overload.py). The node spins it through rot_tools.ros.runtime.spin, in one
+context (one DDS participant) with its services; these tests show, on the real executor and
+(where a signal or the process matters) on the real console script:
 
 - SIGINT and SIGTERM, 20 times each, idle and under a flood of poses: exit status 0 within
   a second of the node's own time (what a loaded machine keeps it waiting for a CPU is
@@ -17,12 +17,13 @@ executor and (where a signal or the process matters) on the real console script:
   node, every call of ~/describe and the parameter services is served within a few
   bursts of inputs (the EventsExecutor served them after the whole queue);
 - a flood of bad input is refused and counted, and the node keeps serving;
-- a callback that raises is logged and costs nothing else (the inputs sent with it are all
-  answered); the node's topics add no QoS event handlers to the wait set;
+- a callback that raises — ours, or rclpy's own on a hostile parameter request — is logged
+  and costs nothing else (the inputs sent with it are all answered); a service of the node
+  that raises still replies; the node's topics add no QoS event handlers to the wait set;
 - the graph (what ``ros2 node info`` prints) lists the node's services as its own.
 
 The in-process node tests (test_node.py) run on the same executor: conftest's Tester spins
-nodes under test with make_executor.
+nodes under test on a SingleThreadedExecutor of their context.
 """
 
 import itertools
@@ -33,7 +34,6 @@ import subprocess
 import sys
 import threading
 import time
-from xml.etree import ElementTree
 
 from conftest import rss_mb, RUN, TIMEOUT
 from geometry_msgs.msg import PoseStamped, TwistStamped
@@ -48,7 +48,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, 
 from rclpy.qos import ReliabilityPolicy
 from rot_tools.ros import runtime
 from rot_tools.ros.rotation_node import INPUTS, OUTPUTS, RotationNode
-from rot_tools.ros.runtime import guard_callbacks, make_executor, spin
+from rot_tools.ros.runtime import spin
 from std_srvs.srv import Trigger
 import yaml
 
@@ -328,16 +328,17 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
     held, release = threading.Event(), threading.Event()
     real = RotationNode._on_input
 
-    def on_input(self, source, data):
-        if source.read(data)[0].frame_id == 'hold':
+    def on_input(self, source, msg):
+        if msg.header.frame_id == 'hold':
             held.set()
             assert release.wait(8 * TIMEOUT)
-        return real(self, source, data)
+        return real(self, source, msg)
 
     monkeypatch.setattr(RotationNode, '_on_input', on_input)
     node = RotationNode(context=own_context, namespace=namespace)
     prefix = node.get_fully_qualified_name()
-    thread = threading.Thread(target=spin, args=(node, make_executor(own_context)))
+    thread = threading.Thread(target=spin,
+                              args=(node, SingleThreadedExecutor(context=own_context)))
     thread.start()
     try:
         pub = tester.publisher(f'{prefix}/pose', PoseStamped, qos_profile_sensor_data)
@@ -495,19 +496,20 @@ def answer(tester, client, request, timeout):
 
 
 def test_a_raising_callback_is_logged_and_costs_no_other_message(
-        tester, ros_context, namespace, monkeypatch, capfd):
+        tester, own_context, namespace, monkeypatch, capfd):
     real = RotationNode._on_input
 
-    def on_input(self, source, data):
-        if source.read(data)[0].frame_id == 'boom':
+    def on_input(self, source, msg):
+        if msg.header.frame_id == 'boom':
             raise RuntimeError('a bug in a callback')
-        return real(self, source, data)
+        return real(self, source, msg)
 
     monkeypatch.setattr(RotationNode, '_on_input', on_input)
-    node = RotationNode(context=ros_context, namespace=namespace)
+    node = RotationNode(context=own_context, namespace=namespace)
+    thread = threading.Thread(target=spin,
+                              args=(node, SingleThreadedExecutor(context=own_context)))
+    thread.start()
     try:
-        guard_callbacks(node)
-        tester.add_node(node)  # on the node's executor (conftest)
         prefix = node.get_fully_qualified_name()
         tester.subscribe(f'{prefix}/screw', TwistStamped)
         pub = tester.publisher(f'{prefix}/pose', PoseStamped, QoSProfile(depth=10))
@@ -522,7 +524,7 @@ def test_a_raising_callback_is_logged_and_costs_no_other_message(
             send(0)
             tester.spin_for(0.05)
         tester.spin_for(0.3)  # the rest of the warm-up: the queues are empty again
-        for stamp in range(1, 6):  # in one go (the input queue keeps 5): the third raises
+        for stamp in range(1, 6):  # in one go (the input queue keeps them): the third raises
             send(stamp, 'boom' if stamp == 3 else 'map')
         tester.spin_until(lambda: received[-1].header.stamp.sec == 5,
                           what='the inputs after the failing one')
@@ -530,20 +532,24 @@ def test_a_raising_callback_is_logged_and_costs_no_other_message(
         send(6)  # and later ones
         tester.spin_until(lambda: received[-1].header.stamp.sec == 6, what='input 6')
     finally:
-        tester.remove_node(node)
+        own_context.try_shutdown()
+        thread.join(timeout=4 * TIMEOUT)
         node.destroy_node()
+    assert not thread.is_alive()
     err = capfd.readouterr().err
-    assert f'subscription {prefix}/pose callback raised; the node keeps serving' in err
+    assert 'a callback raised; the node keeps serving' in err
     assert 'RuntimeError: a bug in a callback' in err
 
 
-def test_a_raising_service_callback_still_replies(tester, own_context, namespace, monkeypatch):
-    def broken(self, request, response):
+def test_a_raising_service_callback_still_replies(tester, own_context, namespace, monkeypatch,
+                                                  capfd):
+    def broken(self):
         raise ZeroDivisionError('a bug in a service')
 
-    monkeypatch.setattr(RotationNode, '_on_describe', broken)
+    monkeypatch.setattr(RotationNode, 'refused_counts', broken)  # (what ~/describe calls first)
     node = RotationNode(context=own_context, namespace=namespace)
-    thread = threading.Thread(target=spin, args=(node, make_executor(own_context)))
+    thread = threading.Thread(target=spin,
+                              args=(node, SingleThreadedExecutor(context=own_context)))
     thread.start()
     try:
         for _ in range(3):
@@ -555,6 +561,9 @@ def test_a_raising_service_callback_still_replies(tester, own_context, namespace
         thread.join(timeout=5.0)
         node.destroy_node()
     assert not thread.is_alive()
+    err = capfd.readouterr().err
+    assert '_on_describe raised; the node keeps serving' in err
+    assert 'ZeroDivisionError: a bug in a service' in err
 
 
 def test_the_node_adds_no_qos_event_handlers_to_the_wait_set(own_context, namespace):
@@ -590,122 +599,32 @@ def test_the_inputs_keep_a_burst_of_50(own_context, namespace):
         node.destroy_node()
 
 
-@pytest.mark.parametrize('setting', [
-    {'FASTRTPS_DEFAULT_PROFILES_FILE': '/etc/robot/fastdds.xml'},
-    {'FASTDDS_DEFAULT_PROFILES_FILE': '/etc/robot/fastdds.xml'},
-    {'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'},
-    {'SKIP_DEFAULT_XML': '1'},
-    {'RMW_FASTRTPS_USE_QOS_FROM_XML': '0'},
-    {'RMW_FASTRTPS_PUBLICATION_MODE': 'ASYNCHRONOUS'},
-    {'RMW_IMPLEMENTATION': 'rmw_cyclonedds_cpp'},
-    {'RMW_IMPLEMENTATION': 'rmw_zenoh_cpp'},
-])
-def test_the_users_own_middleware_settings_are_kept(setting, tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    environ = dict(setting)
-    assert runtime.use_fast_dds_profile(environ) is None
-    assert environ == setting
-
-
-def test_a_profile_file_in_the_working_directory_is_kept(tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    (tmp_path / 'DEFAULT_FASTRTPS_PROFILES.xml').write_text('<profiles/>')
-    environ = {}
-    assert runtime.use_fast_dds_profile(environ) is None
-    assert environ == {}
-
-
-@pytest.mark.parametrize('rmw', [None, '', 'rmw_fastrtps_cpp', 'rmw_fastrtps_dynamic_cpp'])
-def test_fast_dds_gets_the_nodes_profile_when_the_user_set_none(rmw, tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    environ = {} if rmw is None else {'RMW_IMPLEMENTATION': rmw}
-    assert runtime.use_fast_dds_profile(environ) == runtime.FAST_DDS_PROFILE
-    assert environ['FASTRTPS_DEFAULT_PROFILES_FILE'] == runtime.FAST_DDS_PROFILE
-    assert environ['RMW_FASTRTPS_USE_QOS_FROM_XML'] == '1'  # its writers and readers too
-
-
-def test_the_profile_keeps_the_builtin_transports_with_a_deeper_port():
-    """The profile is Fast DDS's default transports, shared memory and UDPv4, a port deeper."""
-    ns = {'p': 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'}
-    root = ElementTree.parse(runtime.FAST_DDS_PROFILE).getroot()
-    kinds = {d.findtext('p:transport_id', namespaces=ns): d
-             for d in root.iterfind('p:transport_descriptors/p:transport_descriptor', ns)}
-    assert sorted(d.findtext('p:type', namespaces=ns) for d in kinds.values()) == [
-        'SHM', 'UDPv4']
-    (participant,) = root.iterfind('p:participant', ns)
-    assert participant.get('is_default_profile') == 'true'
-    used = [t.text for t in participant.iterfind('p:rtps/p:userTransports/p:transport_id', ns)]
-    assert sorted(used) == sorted(kinds)
-    assert participant.findtext('p:rtps/p:useBuiltinTransports', namespaces=ns) == 'false'
-    (shm,) = [d for d in kinds.values() if d.findtext('p:type', namespaces=ns) == 'SHM']
-    assert int(shm.findtext('p:port_queue_capacity', namespaces=ns)) > 512  # Fast DDS's
-
-
-def test_the_profile_sets_what_rmw_fastrtps_would_but_readers_give_memory_back():
+def test_a_hostile_parameter_request_is_logged_and_the_node_keeps_serving(
+        tester, node_process):
     """
-    The profile says what rmw_fastrtps would set, but for the readers' history: DYNAMIC.
+    Check that a request rclpy itself raises on costs the node nothing but that request.
 
-    Read with RMW_FASTRTPS_USE_QOS_FROM_XML=1, it replaces what rmw_fastrtps (Jazzy) sets
-    without it: discovery and writers with growing preallocated histories, synchronous
-    publication, no data sharing.
+    A parameter of type 99 (no rcl_interfaces/msg/ParameterType) makes rclpy's own
+    SetParameters service raise as it reads the request: no reply, an error in the node's log,
+    and every other call is answered.
     """
-    ns = {'p': 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'}
-    root = ElementTree.parse(runtime.FAST_DDS_PROFILE).getroot()
-    (participant,) = root.iterfind('p:participant', ns)
-    for history in ('readerHistoryMemoryPolicy', 'writerHistoryMemoryPolicy'):
-        assert participant.findtext(f'p:rtps/p:builtin/p:{history}',
-                                    namespaces=ns) == 'PREALLOCATED_WITH_REALLOC'
-    (writer,) = root.iterfind('p:data_writer', ns)
-    (reader,) = root.iterfind('p:data_reader', ns)
-    assert writer.get('is_default_profile') == reader.get('is_default_profile') == 'true'
-    assert writer.findtext('p:qos/p:publishMode/p:kind', namespaces=ns) == 'SYNCHRONOUS'
-    assert writer.findtext('p:historyMemoryPolicy', namespaces=ns) == 'PREALLOCATED_WITH_REALLOC'
-    assert reader.findtext('p:historyMemoryPolicy', namespaces=ns) == 'DYNAMIC'
-    for endpoint in (writer, reader):
-        assert endpoint.findtext('p:qos/p:data_sharing/p:kind', namespaces=ns) == 'OFF'
-
-
-HEAP = r"""
-import ctypes, sys
-from rot_tools.ros import runtime
-if sys.argv[1] == 'fixed':
-    runtime.give_large_blocks_back()
-libc = ctypes.CDLL(None)
-libc.malloc.restype, libc.malloc.argtypes = ctypes.c_void_p, [ctypes.c_size_t]
-libc.free.argtypes = [ctypes.c_void_p]
-libc.memset.argtypes = [ctypes.c_void_p, ctypes.c_int, ctypes.c_size_t]
-
-
-def rss_mb():
-    with open('/proc/self/status', encoding='ascii') as f:
-        return next(int(line.split()[1]) for line in f if line.startswith('VmRSS:')) / 1024
-
-
-def touched(size):
-    block = libc.malloc(size)
-    libc.memset(block, 1, size)
-    return block
-
-
-libc.free(touched(9_000_000))  # one large message has come and gone
-start = rss_mb()
-blocks = [touched(8_000_000) for _ in range(10)]
-for block in blocks[:-1]:  # all but the newest freed, as a burst taken in turn
-    libc.free(block)
-print(rss_mb() - start)
-"""
-
-
-@pytest.mark.skipif(not hasattr(__import__('ctypes').CDLL(None), 'mallopt'),
-                    reason='a C library without mallopt (not glibc)')
-def test_freed_large_blocks_are_given_back():
-    """Ten 8 MB blocks, nine freed: the node's allocator keeps one, glibc's default all ten."""
-    def kept(mode):
-        done = subprocess.run([sys.executable, '-c', HEAP, mode], capture_output=True,
-                              text=True, timeout=4 * TIMEOUT, check=True)
-        return float(done.stdout)
-    assert kept('default') > 60.0  # the heap keeps what was freed below the newest block
-    assert kept('fixed') < 20.0
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
+    process = node_process()
+    name = process.name
+    wait_until_serving(tester, process)
+    client = tester.node.create_client(SetParameters, f'{name}/set_parameters')
+    tester.spin_until(client.service_is_ready, what=f'service {client.srv_name}')
+    hostile = SetParameters.Request(parameters=[
+        ParameterMsg(name='marker_scale', value=ParameterValue(type=99))])
+    assert answer(tester, client, hostile, TIMEOUT / 5) is None
+    process.wait_for_stderr('ValueError: 99 is not a valid Parameter.Type')
+    results = tester.set_parameters(name, [Parameter('angle_unit', value='deg')])
+    assert results[0].successful
+    assert describe(tester, name)['source'] == f'{name}/pose'
+    wait_until_serving(tester, process)
+    status, seconds, stderr = process.stop(signal.SIGINT)
+    assert status == 0 and seconds < STOP_WITHIN, stderr
+    assert 'a callback raised; the node keeps serving' in stderr
 
 
 def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkeypatch):
@@ -713,8 +632,7 @@ def test_spin_returns_when_the_context_shuts_down(own_context, namespace, monkey
     # noticed at its next timeout would still be waiting when the join below gives up.
     monkeypatch.setattr(runtime, 'SPIN_TIMEOUT', 3600.0)
     node = RotationNode(context=own_context, namespace=namespace)
-    executor = make_executor(own_context)
-    assert type(executor) is SingleThreadedExecutor
+    executor = SingleThreadedExecutor(context=own_context)
     spinning = threading.Event()
     spin_once = executor.spin_once
 

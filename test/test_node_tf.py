@@ -363,58 +363,112 @@ def test_large_tf_messages_are_cut_and_the_node_keeps_serving(node_process, test
         transforms = [make_transform('odom', 'base_link', 0.1, sec=1_000 + k * 100_000 + 99_999
                                      - i, nanosec=0) for i in range(100_000)]
         send(*transforms)
-    # Answered between the messages: a reply within the retries (5 of 2 s), where the node
-    # took 24-60 s reading every transform.
-    describe(tester, node.name)
+    # rclpy makes each of them a message object of 100,000 transforms (seconds on a loaded
+    # machine); the node puts 1,000 of them into its tree and serves on.
     send(make_transform('odom', 'base_link', 0.2, sec=400_000, nanosec=7))
     tester.spin_until(lambda: any(m.header.stamp.sec == 400_000 for m in tester.received[out]),
-                      TIMEOUT * 6, 'the output of the sample after the flood')
+                      TIMEOUT * 12, 'the output of the sample after the flood')
     _, data = describe(tester, node.name)
     assert data['refused']['tf_too_many_transforms'] == 3
     assert ('(tf_too_many_transforms): a TFMessage of 100,000 transforms: the first 1,000 '
             'taken, 99,000 dropped') in node.wait_for_stderr('(tf_too_many_transforms)')
 
 
-LARGE_MESSAGES = 20
-"""TFMessages of 100,000 transforms (9 MB each) sent back to back."""
+LARGE_MESSAGES = 10
+"""TFMessages of 100,000 transforms sent back to back."""
+
+TAKEN_WITHIN = 300.0
+"""Seconds for both processes to take them: rclpy makes each a message object of 100,000
+transforms, seconds each on a machine shared with the other process and the test."""
+
+MORE_THAN_A_BARE_SUBSCRIBER_MB = 20.0
+"""Most the node may grow beyond a bare rclpy /tf subscriber under the same messages."""
+
+BARE_TF_SUBSCRIBER = """
+import sys
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rot_tools.ros.tf_input import TF_QOS
+from tf2_msgs.msg import TFMessage
+rclpy.init()
+node = rclpy.create_node('bare_tf_subscriber', namespace=sys.argv[2])
+taken = []
 
 
-def test_large_tf_messages_leave_no_memory_behind(node_process, tester, namespace):
+def on_tf(msg):
+    taken.append(len(msg.transforms))
+    print(len(taken), flush=True)
+
+
+node.create_subscription(TFMessage, sys.argv[1], on_tf, TF_QOS)
+print('ready', flush=True)
+try:
+    rclpy.spin(node)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+finally:
+    node.destroy_node()
+    rclpy.try_shutdown()
+"""
+"""A plain rclpy node on /tf with tf2_ros's QoS that counts the messages it takes."""
+
+
+def test_large_tf_messages_grow_the_node_little_more_than_a_bare_subscriber(
+        node_process, tester, namespace):
     """
-    Twenty 9 MB TFMessages sent back to back leave the node within 20 MB once taken.
+    Check that ten TFMessages of 100,000 transforms grow the node little more than a bare one.
 
-    rmw_fastrtps's own reader history keeps each of /tf's 100 slots at the largest sample it
-    held (+160–170 MB here, kept); the node's profile gives a sample's memory back once the
-    node has taken it, and its allocator gives the blocks back (runtime.give_large_blocks_back).
+    At most MORE_THAN_A_BARE_SUBSCRIBER_MB more than a bare rclpy /tf subscriber beside it.
+    Both take every message as rclpy makes it (a message object of 100,000 transforms); what
+    the middleware and rclpy keep is theirs, the same in both; the node must add little to it.
     """
     from geometry_msgs.msg import QuaternionStamped
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rclpy.serialization import serialize_message
     node = node_process(*node_args(namespace, 'odom', 'base_link'))
-    out = f'{node.name}/quaternion'
-    tester.subscribe(out, QuaternionStamped, qos=1000)
-    wait_started(tester, out)
-    pub = tester.publisher(f'{namespace}/tf', tf2_msgs.TFMessage,
-                           QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    command = [sys.executable, '-c', BARE_TF_SUBSCRIBER, f'{namespace}/tf', f'/{RUN}']
+    bare = subprocess.Popen(command, env=script_env(command), stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
+    try:
+        assert bare.stdout.readline().strip() == 'ready'
+        out = f'{node.name}/quaternion'
+        tester.subscribe(out, QuaternionStamped, qos=1000)
+        wait_started(tester, out)
+        pub = tester.publisher(f'{namespace}/tf', tf2_msgs.TFMessage,
+                               QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        tester.spin_until(lambda: pub.get_subscription_count() >= 2, TIMEOUT * 4,
+                          'the bare subscriber')
 
-    def follow(sec):
-        pub.publish(tf2_msgs.TFMessage(transforms=[
-            make_transform('odom', 'base_link', 0.1, sec=sec, nanosec=0)]))
-        tester.spin_until(lambda: any(m.header.stamp.sec == sec for m in tester.received[out]),
-                          TIMEOUT * 6, f'the output of the sample stamped {sec}')
+        def follow(sec):
+            """Send one transform; wait until both processes have taken every message."""
+            pub.publish(tf2_msgs.TFMessage(transforms=[
+                make_transform('odom', 'base_link', 0.1, sec=sec, nanosec=0)]))
+            tester.spin_until(
+                lambda: any(m.header.stamp.sec == sec for m in tester.received[out]),
+                TAKEN_WITHIN, f'the output of the sample stamped {sec}')
+            sent[0] += 1
+            while int(bare.stdout.readline()) < sent[0]:
+                pass  # (one reliable writer, in order: the last one taken, every one taken)
 
-    follow(1_000)
-    before = rss_mb(node.process.pid)
-    ballast = make_transform('odom', 'ballast', sec=1_000, nanosec=0)
-    large = serialize_message(tf2_msgs.TFMessage(transforms=[ballast] * 100_000))
-    for _ in range(LARGE_MESSAGES):  # serialised once: faster than the node takes them
-        pub.publish(large)
-    follow(2_000)  # one reliable writer, in order: every large message was taken before it
+        sent = [0]
+        follow(1_000)
+        before = rss_mb(node.process.pid), rss_mb(bare.pid)
+        ballast = make_transform('odom', 'ballast', sec=1_000, nanosec=0)
+        large = serialize_message(tf2_msgs.TFMessage(transforms=[ballast] * 100_000))
+        for _ in range(LARGE_MESSAGES):  # serialised once: faster than they are taken
+            pub.publish(large)
+        sent[0] += LARGE_MESSAGES
+        follow(2_000)
+        after = rss_mb(node.process.pid), rss_mb(bare.pid)
+    finally:
+        bare.kill()
+        bare.wait()
     _, data = describe(tester, node.name)
     assert data['refused']['tf_too_many_transforms'] == LARGE_MESSAGES
-    growth = rss_mb(node.process.pid) - before
-    assert growth < 20.0, f'RSS +{growth:.1f} MB after {LARGE_MESSAGES} messages of 9 MB'
-    assert 'XMLPARSER' not in node.err_path.read_text()  # the profile was read whole
+    node_growth, bare_growth = after[0] - before[0], after[1] - before[1]
+    print(f'RSS before {before}, after {after} (node, bare subscriber; MB)')
+    assert node_growth - bare_growth <= MORE_THAN_A_BARE_SUBSCRIBER_MB, (
+        f'the node grew {node_growth:.1f} MB, the bare subscriber {bare_growth:.1f} MB')
 
 
 def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
@@ -671,7 +725,6 @@ def test_follower_refuses_future_stamps_and_starts_over_when_time_goes_back(foll
 
 
 def test_follower_forgets_dynamic_edges_not_heard_but_not_static_ones(follower, monkeypatch):
-    from rclpy.serialization import serialize_message
     from rot_tools.ros import tf_input
     follower, got, refused = follower
     follower.add(make_transform('a', 'b'), False, '/tf')
@@ -680,40 +733,29 @@ def test_follower_forgets_dynamic_edges_not_heard_but_not_static_ones(follower, 
     # Everything heard is now older than the cache, and the sweep is due.
     monkeypatch.setattr(tf_input, 'CACHE_SECONDS', -1.0)
     monkeypatch.setattr(tf_input, 'FORGET_PERIOD', 0.0)
-    follower.on_message(serialize_message(tf2_msgs.TFMessage()), False)
+    follower.on_tf(tf2_msgs.TFMessage())
     assert follower.tree.frames == ['a', 'b'] and refused == []
 
 
 def test_follower_takes_at_most_max_transforms_a_message(follower):
-    from geometry_msgs.msg import TransformStamped
-    from rclpy.serialization import serialize_message
     from rot_tools.ros import tf_input
     follower, got, refused = follower
     follower.follow('odom', 'base_link')
     transforms = [make_transform('odom', 'base_link', float(k), sec=1_000 + k)
                   for k in range(tf_input.MAX_TRANSFORMS_PER_MESSAGE + 500)]
-    data = serialize_message(tf2_msgs.TFMessage(transforms=transforms))
-    follower.on_message(data, False)
+    follower.on_tf(tf2_msgs.TFMessage(transforms=transforms))
     assert [r[1] for r in refused] == ['tf_too_many_transforms']
     assert refused[0][2].startswith('a TFMessage of 1,500 transforms: the first 1,000 taken, '
                                     '500 dropped')
     assert len(got) == 1 and got[0][0].stamp.sec == 1_000 + 999
-    # Read from the bytes as rclpy reads them: names, stamps and values.
-    count, read = tf_input.read_tf_message(data, 3)
-    assert count == 1_500 and [tf_input.Transform.of(t) for t in transforms[:3]] == read
-    # Junk bytes and cut messages are malformed, names beyond MAX_FRAME_NAME are not read.
+    # Names beyond MAX_FRAME_NAME bytes are refused, and never repeated whole.
     refused.clear()
-    small = serialize_message(tf2_msgs.TFMessage(transforms=transforms[:3]))
-    for junk in (b'\x00\x07\x00\x00' + small[4:], small[:-9], small[:60]):
-        follower.on_message(junk, False)
-    assert [r[1] for r in refused] == ['malformed'] * 3
-    refused.clear()
-    long = make_transform('odom', 'x' * 1_000_000)
-    follower.on_message(serialize_message(tf2_msgs.TFMessage(transforms=[long])), False)
-    assert [r[1] for r in refused] == ['tf_bad_frame']
+    for name in ('x' * 1_000_000, 'é' * 200):  # 1,000,000 bytes; 400 bytes in 200 characters
+        follower.on_tf(tf2_msgs.TFMessage(transforms=[make_transform('odom', name)]))
+    assert [r[1] for r in refused] == ['tf_bad_frame'] * 2
     assert 'child_frame_id of 1,000,000 bytes, at most MAX_FRAME_NAME = 256' in refused[0][2]
-    assert len(refused[0][2]) < 200
-    assert isinstance(long, TransformStamped)
+    assert 'child_frame_id of 400 bytes' in refused[1][2]
+    assert max(len(r[2]) for r in refused) < 200
 
 
 def test_the_start_up_refusals_are_those_the_docs_call_normal(follower):
@@ -772,7 +814,6 @@ def test_refusals_of_every_kind_in_sequence_are_logged_without_a_traceback(
     from geometry_msgs.msg import PoseStamped, QuaternionStamped
     from nav_msgs.srv import GetPlan
     from rclpy.qos import qos_profile_sensor_data
-    from rclpy.serialization import serialize_message
     from sensor_msgs.msg import Imu
     node = node_process(*node_args(namespace, 'odom', 'base_link'))
     tester.subscribe(f'{node.name}/quaternion', QuaternionStamped)
@@ -790,13 +831,11 @@ def test_refusals_of_every_kind_in_sequence_are_logged_without_a_traceback(
 
     no_orientation = Imu()
     no_orientation.orientation_covariance[0] = -1.0
-    good = serialize_message(pose((0.0, 0.0, 0.0, 1.0)))
     topic_inputs = [  # (reason, topic, send)
         ('non_finite', 'pose', lambda: pubs['pose'].publish(pose((math.nan, 0., 0., 1.)))),
         ('zero_quaternion', 'pose', lambda: pubs['pose'].publish(pose((0., 0., 0., 0.)))),
         ('non_unit_quaternion', 'pose', lambda: pubs['pose'].publish(pose((0., 0., 0., 2.)))),
         ('no_orientation', 'imu', lambda: pubs['imu'].publish(no_orientation)),
-        ('malformed', 'pose', lambda: pubs['pose'].publish(good[:40])),
         ('tf_unknown_frame', 'tf', lambda: send_tf(make_transform('map', 'x'))),
         ('tf_not_connected', 'tf', lambda: send_tf(make_transform('odom', 'a'),
                                                    make_transform('b', 'base_link'))),

@@ -15,8 +15,8 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
 CONSOLE_SCRIPTS = {
-    'rotation_node': 'rot_tools.ros.entry:rotation_node',
-    'rotation_client': 'rot_tools.ros.entry:rotation_client',
+    'rotation_node': 'rot_tools.ros.rotation_node:main',
+    'rotation_client': 'rot_tools.ros.rotation_client:main',
     'rot-tools': 'rot_tools.cli.main:main',
 }
 # exec_depends the node needs whatever the code happens to import today.
@@ -280,9 +280,8 @@ def test_installed_cli_runs(colcon_install):
     assert result.stdout.startswith('usage: rot-tools')
 
 
-def test_colcon_installs_the_nodes_fast_dds_profile(colcon_install):
-    """The node's middleware profile ships with the package (package_data), not only in git."""
-    found = list(colcon_install.glob('lib/python3*/site-packages/rot_tools/ros/'
-                                     'fastdds_profile.xml'))
-    assert len(found) == 1, f'no rot_tools/ros/fastdds_profile.xml under {colcon_install}'
-    assert found[0].read_text() == (REPO / 'rot_tools' / 'ros' / 'fastdds_profile.xml').read_text()
+def test_colcon_installs_the_opt_in_fast_dds_profile(colcon_install):
+    """The Fast DDS profile doc/node.md offers ships in share/rot_tools/config, as it is."""
+    installed = colcon_install / 'share' / PACKAGE / 'config' / 'fastdds_profile.xml'
+    assert installed.read_text() == (REPO / 'config' / 'fastdds_profile.xml').read_text()
+    assert not list(colcon_install.glob('lib/python3*/site-packages/rot_tools/**/*.xml'))

@@ -12,7 +12,7 @@ from nav_msgs.srv import GetPlan
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
-from rot_tools.ros import rotation_node, runtime
+from rot_tools.ros import rotation_node
 from rot_tools.ros.screw_path import MAX_PATH_STEPS, MAX_REPLY_BYTES, reply_bytes
 from test_node import pose_stamped
 
@@ -35,8 +35,7 @@ class Service:
         """
         Return the path of a request, waiting up to 30 s an attempt.
 
-        Return the path of a request; a big reply (10,001 poses, 1 MB) may take long to come
-        on a loaded machine: 30 s an attempt.
+        A big reply (10,001 poses) may take long to come on a loaded machine.
         """
         return self.tester.call(GetPlan, self.name, request(start, goal, tolerance),
                                 timeout=30.0, attempts=3).plan
@@ -56,7 +55,6 @@ class Service:
 @pytest.fixture
 def service(ros_context, tester, namespace):
     node = rotation_node.RotationNode(context=ros_context, namespace=namespace)
-    runtime.guard_callbacks(node)  # as the runtime's spin() runs it
     yield Service(tester, node)
     tester.remove_node(node)
     node.destroy_node()

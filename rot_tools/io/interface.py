@@ -3,21 +3,20 @@ rotation_node's interface: every input and every output, one row each.
 
 An input row says where the input arrives (``~/NAME``), its message type, the fields read,
 in the message's order, and the formula that turns them into one rigid motion (R, b)
-(rot_tools.io.boundary). An output row says where it goes, its type, the fields written and
-the formula that takes their values from an input's decomposition
-(rot_tools.core.decomposition.Values). The rows are read by the node (its subscriptions,
-publishers, and the bytes it reads and writes: rot_tools.io.cdr), by ``rotation_client``
-(its commands: a verb per input, its arguments and help; the answer, output by output, by
-name), by ``rot-tools bag`` (the types it reads, and their fields) and by every ``--help``
-that lists them. A new input or output is one row here and its formula.
+(rot_tools.io.boundary). An output row says where it goes, its type, the fields written and,
+by name, the value they hold: a field of the input's decomposition
+(rot_tools.core.decomposition.Decomposition), or the input's own R. The rows are read by the
+node (its subscriptions and publishers, and the fields it reads and writes by their paths),
+by ``rotation_client`` (its commands: a verb per input, its arguments and help; the answer,
+output by output, by name), by ``rot-tools bag`` (the types it reads, and their fields) and
+by every ``--help`` that lists them. A new input or output is one row here and its formula.
 
 Fields are given by role (:data:`MEMBERS`): ``{role: path}`` in the message's order, e.g.
 ``{'position': 'pose.position', 'orientation': 'pose.orientation'}``, the path's members
-(x, y, z, ...) read in turn. Strings (``child_frame_id``) come first, skipped by the node.
+(x, y, z, ...) read in turn. Strings (``child_frame_id``) are not read by the node.
 Message types are names ('geometry_msgs/msg/PoseStamped'): this module imports no ROS.
 """
 
-from operator import attrgetter
 from typing import Callable, NamedTuple
 
 from rot_tools.io import boundary
@@ -52,7 +51,7 @@ class Input(NamedTuple):
     """{role: path} read by the node and by ``rot-tools bag``, in the message's order."""
     convert: Callable
     """convert(values, settings, fields) -> (R, b) (rot_tools.io.boundary); ``values`` are
-    the float64 of :meth:`floats`, in order; raises boundary.RefusedInput."""
+    the numbers at the paths of :meth:`floats`, in order; raises boundary.RefusedInput."""
     help: str  # noqa: A003
     bag_fields: dict = {}
     """{role: path} that only ``rot-tools bag`` reads (an Imu's gyro, for its check)."""
@@ -66,25 +65,8 @@ class Input(NamedTuple):
         """Return '~/name'."""
         return '~/' + self.name
 
-    def covariance_floats(self):
-        """
-        Return the paths of the float64 read with the covariance: floats(), then the array.
-
-        In every message that carries one the array follows the fields read, with nothing
-        between (an Imu's orientation_covariance after its orientation, its [0] among the
-        fields; a PoseWithCovariance's covariance after its pose): one read takes them all.
-        () for a row without a covariance.
-        """
-        if not self.covariance:
-            return ()
-        path, size = self.covariance
-        array = members(path, [f'[{k}]' for k in range(size)])
-        floats = self.floats()
-        start = floats.index(array[0]) if array[0] in floats else len(floats)
-        return floats[:start] + array
-
     def strings(self):
-        """Return the paths of the string fields read (skipped by the node), in order."""
+        """Return the paths of the string fields (not read by the node), in order."""
         return tuple(path for role, path in self.fields.items() if MEMBERS[role] is None)
 
     def floats(self):
@@ -92,27 +74,46 @@ class Input(NamedTuple):
         return tuple(leaf for role, path in self.fields.items() if MEMBERS[role] is not None
                      for leaf in members(path, MEMBERS[role]))
 
+    def slots(self):
+        """Return {role: slice}: where each role's numbers are among those of floats()."""
+        at, slots = 0, {}
+        for role, path in self.fields.items():
+            if MEMBERS[role] is not None:
+                slots[role] = slice(at, at + len(MEMBERS[role]))
+                at += len(MEMBERS[role])
+        return slots
+
+
+MATRIX = 'matrix'
+"""The value of an output that publishes the input's R itself (row-major), not a field of its
+decomposition."""
+
+POSE_COVARIANCE = 'pose_covariance'
+"""The value of an output that publishes a :class:`PoseCovariance` (an input's covariance)."""
+
 
 class Output(NamedTuple):
-    """One output of the node: ~/name, its type, the fields written and their formula."""
+    """One output of the node: ~/name, its type, the fields written and the value they hold."""
 
     name: str
     """The topic's name under the node (``~/name``); rotation_client prints it by this name."""
     type_name: str
     fields: tuple
-    """Paths of the float64 written, in the message's order (after the header, if any)."""
-    value: Callable = None
-    """value(Values) -> the numbers of ``fields``, in their order; None for a picture, which
-    the node draws at most MARKER_RATE times a second instead of once per input."""
+    """Paths of the float64 written, in the order of the value's numbers."""
+    value: str = None
+    """The name of what ``fields`` hold: a field of rot_tools.core.decomposition.Decomposition
+    (``'rotvec'``, ``'quaternion'``, ...), :data:`MATRIX` or :data:`POSE_COVARIANCE`; None for
+    a picture, which the node draws at most MARKER_RATE times a second instead of once per
+    input."""
     help: str = ''  # noqa: A003
     angles: bool = False
-    """The numbers are angles, published in angle_unit (the Values are in radians)."""
+    """The numbers are angles, published in angle_unit (the decomposition's are in radians)."""
     layout: tuple = ()
     """(label, size, stride) of each dimension of a std_msgs MultiArray; () for a type that
     starts with a std_msgs/Header."""
     covariance: bool = False
     """Published only for an input that carries a covariance (Input.covariance), when it is
-    known and converts; ``value`` then takes a :class:`PoseCovariance`, not the Values."""
+    known and converts; its value is then a :class:`PoseCovariance`."""
 
     @property
     def topic(self):
@@ -137,16 +138,6 @@ class PoseCovariance(NamedTuple):
 
 def _xyz(path):
     return members(path, 'xyz')
-
-
-def _pose_covariance(values):
-    """Return a PoseWithCovariance's numbers of a :class:`PoseCovariance`, in order."""
-    return (*values.position, *values.orientation, *values.covariance)
-
-
-def _screw_twist(values):
-    """Return a TwistStamped's (linear, angular) of the twist (θ·l̂, θ·v) = screw_log."""
-    return (*values.twist[3:], *values.twist[:3])
 
 
 _POSE = {'position': 'pose.position', 'orientation': 'pose.orientation'}
@@ -189,24 +180,24 @@ MATRIX_LAYOUT = (('rows', 3, 9), ('cols', 3, 3))
 
 OUTPUTS = (
     Output('rotation_matrix', 'std_msgs/msg/Float64MultiArray',
-           members('data', [f'[{k}]' for k in range(9)]), attrgetter('matrix'),
+           members('data', [f'[{k}]' for k in range(9)]), MATRIX,
            'R, 9 values row-major (the type has no header)', layout=MATRIX_LAYOUT),
     Output('quaternion', 'geometry_msgs/msg/QuaternionStamped',
-           members('quaternion', 'xyzw'), attrgetter('quaternion'),
+           members('quaternion', 'xyzw'), 'quaternion',
            'R as (x, y, z, w), the canonical sign of matrix_to_quaternion'),
-    Output('axis_angle', 'geometry_msgs/msg/Vector3Stamped', _xyz('vector'),
-           attrgetter('rotvec'), 'rotation vector θ·l̂ (rad; its norm is the angle)'),
-    Output('euler_angles', 'geometry_msgs/msg/Vector3Stamped', _xyz('vector'),
-           attrgetter('euler'), 'θ1, θ2, θ3 of euler_sequence, in angle_unit', angles=True),
-    Output('rpy', 'geometry_msgs/msg/Vector3Stamped', _xyz('vector'), attrgetter('rpy'),
+    Output('axis_angle', 'geometry_msgs/msg/Vector3Stamped', _xyz('vector'), 'rotvec',
+           'rotation vector θ·l̂ (rad; its norm is the angle)'),
+    Output('euler_angles', 'geometry_msgs/msg/Vector3Stamped', _xyz('vector'), 'euler',
+           'θ1, θ2, θ3 of euler_sequence, in angle_unit', angles=True),
+    Output('rpy', 'geometry_msgs/msg/Vector3Stamped', _xyz('vector'), 'rpy',
            'roll, pitch, yaw (REP 103: about the fixed x, y, z axes), in angle_unit',
            angles=True),
     Output('screw', 'geometry_msgs/msg/TwistStamped',
-           _xyz('twist.linear') + _xyz('twist.angular'), _screw_twist,
+           _xyz('twist.angular') + _xyz('twist.linear'), 'twist',
            'exponential coordinates: angular = θ·l̂, linear = θ·v (screw_log)'),
     Output('rpy_covariance', 'geometry_msgs/msg/PoseWithCovarianceStamped',
            members('pose.pose.position', 'xyz') + members('pose.pose.orientation', 'xyzw')
-           + members('pose.covariance', [f'[{k}]' for k in range(36)]), _pose_covariance,
+           + members('pose.covariance', [f'[{k}]' for k in range(36)]), POSE_COVARIANCE,
            'for an input with a known covariance (~/imu, ~/pose_with_covariance, ~/odometry): '
            'its pose, and the covariance of x, y, z, roll, pitch, yaw (rad², whatever '
            'angle_unit; read as input_covariance says), none at gimbal lock',
@@ -218,7 +209,7 @@ OUTPUTS = (
            'and a label'),
 )
 """Every output of the node. Those with a ``value`` are published for every accepted input,
-from one decompose_values pass, but a ``covariance`` one (for an input carrying a covariance,
+from one decompose pass, but a ``covariance`` one (for an input carrying a covariance,
 rot_tools.io.message_covariance); the pictures (``value`` None) at a limited rate."""
 
 TF_FIELDS = {'child_frame_id': 'child_frame_id', **boundary.TRANSFORM_FIELDS}

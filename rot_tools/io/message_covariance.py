@@ -8,13 +8,15 @@ orientation at all and is refused before (rot_tools.io.boundary). The rotation b
 as geometry_msgs/PoseWithCovariance documents it, rotations about the parent's fixed X, Y, Z
 (``reading='rotvec'``: a small rotation vector in the parent frame), or as the covariance of
 roll, pitch, yaw (``reading='rpy'``), as some drivers and filters write it. Roll, pitch, yaw
-are the extrinsic 'xyz' angles (REP 103), as rotation_node's ~/rpy.
+are the Euler angles of rot_tools.core.euler.RPY_SEQUENCE (REP 103: about the fixed x, y, z
+axes), as rotation_node's ~/rpy.
 """
 
 import numpy as np
 from rot_tools.core.covariance import covariance_defects, rotvec_covariance_to_euler
 from rot_tools.core.covariance import validate_covariance
 from rot_tools.core.errors import RotationError
+from rot_tools.core.euler import RPY_SEQUENCE
 
 READINGS = ('rotvec', 'rpy')
 """How a message's rotation covariance is read: a rotation vector about the parent's fixed
@@ -38,7 +40,7 @@ def rpy_covariances(R, cov, reading='rotvec'):
 
     R (N, 3, 3) rotations; cov (N, 9) (an Imu's orientation_covariance) or (N, 36) (a
     PoseWithCovariance's, x, y, z, rx, ry, rz), row-major. For ``reading='rotvec'``
-    C = diag(I, E⁻¹)·Σ·diag(I, E⁻¹)ᵀ with E the Euler-rate matrix of 'xyz' in the parent
+    C = diag(I, E⁻¹)·Σ·diag(I, E⁻¹)ᵀ with E the Euler-rate matrix of RPY_SEQUENCE in the parent
     frame (rot_tools.core.covariance.rotvec_covariance_to_euler): a pose's position block
     kept, its cross terms carried through the same Jacobian; for 'rpy' C is Σ. C is
     (N, 3, 3) or (N, 6, 6), NaN where status (N,) is not OK (see the status codes).
@@ -56,7 +58,8 @@ def rpy_covariances(R, cov, reading='rotvec'):
     if reading == 'rpy':
         out[ok] = 0.5 * (C[ok] + np.swapaxes(C[ok], -1, -2))
     else:
-        out[ok], lock = rotvec_covariance_to_euler(np.asarray(R)[ok], C[ok], 'xyz', 'parent')
+        out[ok], lock = rotvec_covariance_to_euler(np.asarray(R)[ok], C[ok], RPY_SEQUENCE,
+                                                   'parent')
         status[np.flatnonzero(ok)[lock]] = LOCK
     return out, status
 

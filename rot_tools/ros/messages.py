@@ -3,41 +3,39 @@ ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware he
 
 Inbound, every input message becomes one rigid transform ``(header, R, b)``: R a (3, 3)
 rotation, b a (3,) translation (b = 0 for an input that carries only an orientation), by
-its row's converter (rot_tools.io.interface). A message that cannot be one transform — a
-NaN/Inf in a field that is used, a zero quaternion, a quaternion whose norm is further than
-the tolerance from 1, an Imu that says it has no orientation — raises
-:class:`RefusedInput`, whose ``reason`` is a short key for counting. The converters and
-their checks are ROS-free and live in rot_tools.io.boundary (``rot-tools bag`` runs the same
-checks on recorded messages, as batches); the names the node uses are re-exported here.
+its row's converter (rot_tools.io.interface), from the numbers at the row's field paths
+(:func:`field_getter`). A message that cannot be one transform — a NaN/Inf in a field that is
+used, a zero quaternion, a quaternion whose norm is further than the tolerance from 1, an Imu
+that says it has no orientation — raises :class:`RefusedInput`, whose ``reason`` is a short
+key for counting. The converters and their checks are ROS-free and live in
+rot_tools.io.boundary (``rot-tools bag`` runs the same checks on recorded messages, as
+batches); the names the node uses are re-exported here.
 
 Quaternions are (x, y, z, w), the ROS message order. Inbound they go through
 rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_quaternion of R
 (canonical sign), and path poses write q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R,
 signed for continuity along the path.
 
-Outbound helpers build the node's other messages from NumPy values: poses and Path
-(message objects), and the pictures — the screw-axis Marker and the MarkerArray of a
-rot_tools.io.drawing.Picture — as serialised bytes (rot_tools.io.cdr.Writer: ~60 µs for a
-picture's MarkerArray, where building Marker objects and rclpy's conversion of them took
-~200 µs). The per-input outputs are bytes too (rot_tools.io.cdr, from the rows of
-rot_tools.io.interface).
+Outbound, the per-input outputs are written field by field at their rows' paths
+(:func:`field_setter`); the helpers below build the node's other messages, all as message
+objects: poses and Path, and the pictures — the screw-axis Marker and the MarkerArray of a
+rot_tools.io.drawing.Picture.
 """
 
 import importlib
-import struct
+from operator import attrgetter
 
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 import numpy as np
 from rot_tools.core.axis_angle import matrix_to_axis_angle
-from rot_tools.io import cdr
 # The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.io.boundary. Its
 # names are re-exported here, where rotation_node has always found them.
 from rot_tools.io.boundary import (  # noqa: F401
     NO_ORIENTATION, NON_FINITE, NON_UNIT_QUATERNION, pose_to_rt, REFUSAL_REASONS, RefusedInput,
     ZERO_QUATERNION)
-from std_msgs.msg import Header
-from visualization_msgs.msg import Marker
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
 
 
 def type_name(msg_type):
@@ -51,14 +49,62 @@ def message_class(name):
     return getattr(importlib.import_module(f'{package}.{kind}'), class_name)
 
 
+def field_getter(path):
+    """
+    Return get(msg): the field at ``path`` of a message ('pose.position', 'data[3]').
+
+    The path names fields from the message down, dot-separated; only its last field may be
+    indexed (an element of an array or a sequence).
+    """
+    name, indexed, index = path.partition('[')
+    get = attrgetter(name)
+    if not indexed:
+        return get
+    k = int(index.rstrip(']'))
+    return lambda msg: get(msg)[k]
+
+
 def field_value(msg, path):
     """Return the field at ``path`` of a message: 'pose.position', 'data[3]'."""
-    for name in path.split('.'):
-        name, _, index = name.partition('[')
-        msg = getattr(msg, name)
-        if index:
-            msg = msg[int(index[:-1])]
-    return msg
+    return field_getter(path)(msg)
+
+
+def fields_reader(paths):
+    """Return read(msg): the tuple of the fields at ``paths`` of a message, in order."""
+    getters = tuple(map(field_getter, paths))
+    return lambda msg: tuple([get(msg) for get in getters])
+
+
+def field_setter(path):
+    """
+    Return put(msg, value): ``value`` written into the field at ``path`` of a message.
+
+    As :func:`field_getter`'s paths; an indexed element must exist already (a fixed-size
+    array, or a sequence given its length once).
+    """
+    name, indexed, index = path.partition('[')
+    if indexed:
+        get, k = attrgetter(name), int(index.rstrip(']'))
+
+        def put(msg, value):
+            get(msg)[k] = value
+        return put
+    parent, _, leaf = name.rpartition('.')
+    get = attrgetter(parent) if parent else (lambda msg: msg)
+
+    def put(msg, value):
+        setattr(get(msg), leaf, value)
+    return put
+
+
+def fields_writer(paths):
+    """Return write(msg, values): values[k] written into the field at paths[k], in order."""
+    setters = tuple(map(field_setter, paths))
+
+    def write(msg, values):
+        for put, value in zip(setters, values):
+            put(msg, value)
+    return write
 
 
 # ---------------------------------------------------------------------------------------
@@ -85,67 +131,33 @@ LABEL_COLOR = (1.0, 1.0, 1.0, 1.0)
 label white (the screw axis orange)."""
 
 
-def _payload(write):
-    """Return the payload ``write(writer)`` writes: constant fields, encoded once."""
-    w = cdr.Writer()
-    write(w)
-    return w.payload()
+def point_msg(p):
+    """geometry_msgs/Point of a 3-vector."""
+    return Point(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
-_COLOR_TO_FRAME_LOCKED = struct.Struct('<4f2i?')
-"""A Marker's color (float32 r, g, b, a), lifetime (sec, nanosec) and frame_locked."""
-
-_UNUSED_BEFORE_TEXT = _payload(lambda w: (
-    w.uint32(0), w.string(''), w.header(Header()), w.string(''), w.uint32(0), w.uint32(0)))
-"""A Marker's empty colors, texture_resource, texture (sensor_msgs/CompressedImage: header,
-format, data) and uv_coordinates: after a sequence of points, at an offset that is a
-multiple of 4, as everything in it is aligned to at most 4."""
-
-_UNUSED_AFTER_TEXT = _payload(lambda w: (
-    w.string(''), w.string(''), w.uint32(0), w.boolean(False)))
-"""A Marker's empty mesh_resource and mesh_file (filename, data), and
-mesh_use_embedded_materials false; put aligned to 4."""
-
-
-def _write_marker(w, header, ns, marker_id, kind=Marker.ARROW, action=Marker.ADD,
-                  position=(0.0, 0.0, 0.0), scale=(0.0, 0.0, 0.0),
-                  color=(0.0, 0.0, 0.0, 0.0), points=(), text=''):
+def marker(header, ns, marker_id, kind=Marker.ARROW, action=Marker.ADD,
+           position=(0.0, 0.0, 0.0), scale=(0.0, 0.0, 0.0), color=(0.0, 0.0, 0.0, 0.0),
+           points=(), text=''):
     """
-    Append a visualization_msgs/Marker to the rot_tools.io.cdr.Writer ``w``.
+    Return a visualization_msgs/Marker in ``header``'s frame.
 
-    Its pose is ``position`` with the identity orientation (w = 1: RViz rejects q = 0); no
-    lifetime (0: until replaced), no colours per point, texture or mesh.
+    Its pose is ``position`` with the identity orientation (w = 1: RViz rejects q = 0);
+    ``points`` (n, 3) carry the geometry; no lifetime (0: until replaced), no colours per
+    point, texture or mesh.
     """
-    w.header(header)
-    w.string(ns)
-    w.int32(marker_id, kind, action)
-    w.float64(*position, 0.0, 0.0, 0.0, 1.0, *scale)
-    w.put(4, _COLOR_TO_FRAME_LOCKED.pack(*color, 0, 0, False))
-    w.points(points)
-    w.put(4, _UNUSED_BEFORE_TEXT)
-    w.string(text)
-    w.put(4, _UNUSED_AFTER_TEXT)
-
-
-def _marker(header, **fields):
-    """Return the bytes of one Marker (the arguments of _write_marker)."""
-    w = cdr.Writer()
-    _write_marker(w, header, **fields)
-    return w.data()
-
-
-def _marker_array(header, markers):
-    """Return the bytes of a MarkerArray; ``markers``: each one's fields for _write_marker."""
-    w = cdr.Writer()
-    w.uint32(len(markers))
-    for fields in markers:
-        _write_marker(w, header, **fields)
-    return w.data()
+    msg = Marker(header=header, ns=ns, id=marker_id, type=kind, action=action, text=text,
+                 points=[point_msg(p) for p in points],
+                 color=ColorRGBA(r=color[0], g=color[1], b=color[2], a=color[3]))
+    msg.pose.position = point_msg(position)
+    msg.pose.orientation.w = 1.0
+    msg.scale.x, msg.scale.y, msg.scale.z = map(float, scale)
+    return msg
 
 
 def screw_axis_marker(header, point, direction, scale):
     """
-    visualization_msgs/Marker bytes: an ARROW from ``point`` to ``point + scale·direction``.
+    visualization_msgs/Marker: an ARROW from ``point`` to ``point + scale·direction``.
 
     Points in ``header.frame_id``, identity pose, id 0 so each new axis replaces the last.
     scale.x/y/z are shaft diameter, head diameter and head length, proportional to the
@@ -153,27 +165,23 @@ def screw_axis_marker(header, point, direction, scale):
     """
     point = np.asarray(point, dtype=np.float64)
     tip = point + scale * np.asarray(direction, dtype=np.float64)
-    return _marker(header, ns=SCREW_AXIS_NS, marker_id=0, color=SCREW_AXIS_COLOR,
-                   scale=(0.05 * scale, 0.1 * scale, 0.2 * scale), points=(point, tip))
+    return marker(header, SCREW_AXIS_NS, 0, color=SCREW_AXIS_COLOR,
+                  scale=(0.05 * scale, 0.1 * scale, 0.2 * scale), points=(point, tip))
 
 
 def delete_marker(header, ns, marker_id):
-    """visualization_msgs/Marker bytes that delete marker (ns, marker_id) of the frame."""
-    return _marker(header, ns=ns, marker_id=marker_id, action=Marker.DELETE)
-
-
-def _deletes(ids):
-    return [{'ns': MARKERS_NS, 'marker_id': i, 'action': Marker.DELETE} for i in ids]
+    """visualization_msgs/Marker that deletes marker (ns, marker_id) of the frame."""
+    return marker(header, ns, marker_id, action=Marker.DELETE)
 
 
 def delete_picture_markers(header):
-    """visualization_msgs/MarkerArray bytes that delete every marker of picture_markers."""
-    return _marker_array(header, _deletes(MARKER_IDS))
+    """visualization_msgs/MarkerArray that deletes every marker of picture_markers."""
+    return MarkerArray(markers=[delete_marker(header, MARKERS_NS, i) for i in MARKER_IDS])
 
 
 def picture_markers(header, picture):
     """
-    visualization_msgs/MarkerArray bytes of a rot_tools.io.drawing.Picture (see MARKER_IDS).
+    visualization_msgs/MarkerArray of a rot_tools.io.drawing.Picture (see MARKER_IDS).
 
     In ``header.frame_id``, namespace MARKERS_NS: the moved frame's x, y, z axes as red,
     green and blue ARROWs from b (picture.scale long), the screw axis as an orange ARROW
@@ -187,23 +195,21 @@ def picture_markers(header, picture):
     if picture.path is None:
         return delete_picture_markers(header)
     tail = picture.origin
-    markers = [{'ns': MARKERS_NS, 'marker_id': i, 'color': color,
-                'scale': (0.05 * s, 0.1 * s, 0.2 * s),
-                'points': (tail, tail + s * picture.frame[:, k])}
+    markers = [marker(header, MARKERS_NS, i, color=color, scale=(0.05 * s, 0.1 * s, 0.2 * s),
+                      points=(tail, tail + s * picture.frame[:, k]))
                for k, (i, color) in enumerate(zip(TRIAD_IDS, TRIAD_COLORS))]
     if picture.axis is None:
-        markers += _deletes((AXIS_ID,))
+        markers.append(delete_marker(header, MARKERS_NS, AXIS_ID))
     else:
-        markers.append({'ns': MARKERS_NS, 'marker_id': AXIS_ID, 'color': SCREW_AXIS_COLOR,
-                        'scale': (0.02 * s, 0.06 * s, 0.15 * s), 'points': picture.axis})
-    markers.append({'ns': MARKERS_NS, 'marker_id': PATH_ID, 'kind': Marker.LINE_STRIP,
-                    'color': PATH_COLOR, 'scale': (0.02 * s, 0.0, 0.0),
-                    'points': picture.path})
-    markers.append({'ns': MARKERS_NS, 'marker_id': LABEL_ID, 'kind': Marker.TEXT_VIEW_FACING,
-                    'color': LABEL_COLOR, 'scale': (0.0, 0.0, 0.15 * s),
-                    'position': tuple(map(float, picture.label_at)),
-                    'text': f'{picture.label}\npath: {picture.traced}'})
-    return _marker_array(header, markers)
+        markers.append(marker(header, MARKERS_NS, AXIS_ID, color=SCREW_AXIS_COLOR,
+                              scale=(0.02 * s, 0.06 * s, 0.15 * s), points=picture.axis))
+    markers.append(marker(header, MARKERS_NS, PATH_ID, kind=Marker.LINE_STRIP,
+                          color=PATH_COLOR, scale=(0.02 * s, 0.0, 0.0), points=picture.path))
+    markers.append(marker(header, MARKERS_NS, LABEL_ID, kind=Marker.TEXT_VIEW_FACING,
+                          color=LABEL_COLOR, scale=(0.0, 0.0, 0.15 * s),
+                          position=picture.label_at,
+                          text=f'{picture.label}\npath: {picture.traced}'))
+    return MarkerArray(markers=markers)
 
 
 def matrices_to_quaternions(R, first=None):

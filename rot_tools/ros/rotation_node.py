@@ -2,28 +2,19 @@
 rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
 
 Every input and output is one row of rot_tools.io.interface — topic, message type, fields,
-formula — and every message becomes one rigid transform (header, R, b) at the boundary: its
-bytes read by rot_tools.io.cdr (a raw subscription, rot_tools.ros.topics), its fields
-converted by its row's formula (rot_tools.io.boundary).
-From there one path serves them all: one pass of the decomposition kernels
-(rot_tools.core.decomposition.decompose_values) gives every number published — rotation
-vector θ·l̂,
-Euler angles, twist (θ·l̂, θ·m + d·l̂) = screw_log, and the quaternion (matrix_to_quaternion
-of R) — and the picture's decomposition runs the same kernels, so at θ = π all outputs of
-one input share the axis sign. Outputs carry the input's header. Topics, services and
-parameters: doc/node.md, and ``rotation_node --help``.
+formula — and every message becomes one rigid transform (header, R, b) at the boundary: the
+numbers at its row's field paths (rot_tools.ros.topics) converted by its row's formula
+(rot_tools.io.boundary). From there one path serves them all: one decomposition
+(rot_tools.core.decomposition.decompose) gives every number published — rotation vector θ·l̂,
+Euler angles, roll/pitch/yaw, twist (θ·l̂, θ·m + d·l̂) = screw_log and the quaternion — each
+output row naming the field it publishes, and the picture's decomposition runs the same
+kernels, so at θ = π all outputs of one input share the axis sign. Outputs carry the input's
+header. Topics, services and parameters: doc/node.md, and ``rotation_node --help``.
 
 The pictures (~/markers and ~/screw_axis) are throttled: rot_tools.ros.pictures. The reply of
 ~/screw_path: rot_tools.ros.screw_path. The covariance of roll, pitch and yaw of the inputs that
 carry a covariance (~/rpy_covariance): rot_tools.ros.rpy_covariance.
 """
-
-if __name__ == '__main__':
-    # ``python -m rot_tools.ros.rotation_node`` starts like the console script: the signal
-    # handlers first, then this module imported by its name (NumPy and rclpy load then),
-    # then main (rot_tools.ros.runtime.start, which never returns).
-    from rot_tools.ros.runtime import start
-    start('rot_tools.ros.rotation_node')
 
 import difflib
 from functools import partial, wraps
@@ -32,36 +23,38 @@ import os
 import sys
 import textwrap
 import time
+import traceback
 from typing import Callable, NamedTuple
 
 from nav_msgs.srv import GetPlan
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
-from rcl_interfaces.srv import SetParameters, SetParametersAtomically
+import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time_source import USE_SIM_TIME_NAME
 from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
-from rot_tools.core.decomposition import decompose_values
+from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
-from rot_tools.io import cdr
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.io.interface import MATRIX
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
 from rot_tools.ros import messages, rpy_covariance, runtime, screw_path, tf_input
 from rot_tools.ros.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
-from rot_tools.ros.tf_input import MALFORMED
-from rot_tools.ros.topics import INPUTS, OUTPUTS  # noqa: F401 - the rows as subscribed
+from rot_tools.ros.topics import INPUTS, OUTPUTS
 from std_srvs.srv import Trigger
 
 REFUSAL_REASONS = messages.REFUSAL_REASONS + (
-    MALFORMED, NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
+    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
 ) + tf_input.REFUSAL_REASONS + rpy_covariance.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
@@ -87,6 +80,20 @@ class Source(NamedTuple):
     read: Callable
     convert: Callable
     fields: dict
+
+
+class Publishing(NamedTuple):
+    """One output published for every input: its publisher's publish, message and writer."""
+
+    publish: Callable
+    message: object
+    """The output's message, filled and published again for every input."""
+    write: Callable
+    """write(message, numbers): the numbers into the row's fields (rot_tools.ros.topics)."""
+    value: str
+    """The row's value: a field of the input's Decomposition, or MATRIX (its R)."""
+    angles: bool
+    stamped: bool
 
 
 class Settings(NamedTuple):
@@ -150,46 +157,22 @@ def _any_value(value):
     return ''
 
 
-PARAMETER_TYPES = range(ParameterType.PARAMETER_NOT_SET, ParameterType.PARAMETER_STRING_ARRAY + 1)
-"""The values of rcl_interfaces/msg/ParameterType (0 not set, ..., 9 string array)."""
-
-
-def parameter_refusal(msg):
-    """Return why a SetParameters request's rcl_interfaces/Parameter is refused, or ''."""
-    if not msg.name:
-        return 'a parameter name is empty'
-    if msg.value.type not in PARAMETER_TYPES:
-        return (f'parameter {msg.name!r} has type {msg.value.type}, not a type of '
-                f'rcl_interfaces/msg/ParameterType ({PARAMETER_TYPES[0]}–{PARAMETER_TYPES[-1]})')
-    return ''
-
-
-def _checked_set_parameters(callback):
+def _answers_even_if_it_raises(callback):
     """
-    Wrap rclpy's SetParameters or SetParametersAtomically service ``callback``.
+    Wrap a service callback of the node: an exception it raises is logged, the request answered.
 
-    A parameter with no name or of an unknown type is refused (SetParametersResult
-    successful=False and why) instead of reaching rclpy, which accepted the empty name and
-    raised on the type (no reply). The other parameters of a SetParameters request are set
-    one by one, as rclpy does.
+    The client then gets the response as it was given (success false, an empty path) instead of
+    no reply at all; the node serves on.
     """
     @wraps(callback)
-    def checked(request, response):
-        reasons = [parameter_refusal(msg) for msg in request.parameters]
-        if not any(reasons):
-            return callback(request, response)
-        if not hasattr(response, 'results'):  # atomically: all or nothing
-            reason = next(filter(None, reasons))
-            response.result = SetParametersResult(successful=False, reason=reason)
+    def answering(node, request, response):
+        try:
+            return callback(node, request, response)
+        except Exception:  # noqa: BLE001 - any bug: log it, answer, keep serving
+            node.get_logger().error(f'{callback.__name__} raised; the node keeps serving:\n'
+                                    + traceback.format_exc(), throttle_duration_sec=1.0)
             return response
-        for msg, reason in zip(request.parameters, reasons):
-            if reason:
-                response.results.append(SetParametersResult(successful=False, reason=reason))
-            else:
-                one = callback(type(request)(parameters=[msg]), type(response)())
-                response.results.extend(one.results)
-        return response
-    return checked
+    return answering
 
 
 class ParameterSpec(NamedTuple):
@@ -211,7 +194,7 @@ PARAMETERS = {
         ParameterType.PARAMETER_STRING,
         'unit of the angles of ~/euler, ~/euler_angles and ~/rpy', "'rad' or 'deg'"),
         _check_angle_unit),
-    'quaternion_tolerance': ParameterSpec(1e-3, _descriptor(
+    'quaternion_tolerance': ParameterSpec(QUATERNION_TOLERANCE, _descriptor(
         ParameterType.PARAMETER_DOUBLE,
         'largest |‖q‖ − 1| of an input quaternion; within it q is normalised, beyond it the '
         'message is refused', '>= 0, finite',
@@ -282,9 +265,6 @@ class RotationNode(Node):
             self.destroy_node()
             raise
         self._settings = self._read_settings()
-        for srv in self.services:
-            if srv.srv_type in (SetParameters, SetParametersAtomically):  # rclpy's services
-                srv.callback = _checked_set_parameters(srv.callback)
         self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
@@ -294,14 +274,16 @@ class RotationNode(Node):
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
-        # For each output published per input: its publish, encode, Values getter and whether
-        # it is angles (the hot path); the pictures' publishers by name.
+        # Each output published per input: its publisher, its message (filled and published
+        # for every input), the writer of its fields and the row; the pictures' publishers
+        # by name.
         qos = QoSProfile(depth=10)
         publishers = {kind.row.name: self.create_publisher(
             kind.msg_type, kind.topic, qos, event_callbacks=NO_PUBLISHER_EVENTS)
             for kind in OUTPUTS}
         self._outputs = tuple(
-            (publishers[kind.row.name].publish, kind.encode, kind.row.value, kind.row.angles)
+            Publishing(publishers[kind.row.name].publish, kind.message(), kind.write,
+                       kind.row.value, kind.row.angles, kind.row.stamped)
             for kind in OUTPUTS if kind.row.value is not None and not kind.row.covariance)
         self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'])
         self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
@@ -322,8 +304,7 @@ class RotationNode(Node):
             if kind.row.covariance:  # then ~/rpy_covariance (rot_tools.ros.rpy_covariance)
                 callback = partial(self._covariances.on_input, callback, source.topic,
                                    rpy_covariance.covariance_reader(kind.row))
-            # raw: the callback gets the message's bytes (rot_tools.io.cdr reads what it needs)
-            self.create_subscription(kind.msg_type, kind.topic, callback, INPUT_QOS, raw=True,
+            self.create_subscription(kind.msg_type, kind.topic, callback, INPUT_QOS,
                                      event_callbacks=NO_SUBSCRIPTION_EVENTS)
             self._sources.append(source)
 
@@ -415,8 +396,14 @@ class RotationNode(Node):
                         value['tf_body_frame'], value['input_covariance'])
 
     def _on_set_parameters(self, parameters):
-        """Refuse invalid values of our parameters (rclpy has checked type and range)."""
+        """
+        Refuse invalid values of our parameters (rclpy has checked type and range).
+
+        And a parameter without a name, which rclpy would otherwise declare.
+        """
         for parameter in parameters:
+            if not parameter.name:
+                return SetParametersResult(successful=False, reason='a parameter name is empty')
             spec = PARAMETERS.get(parameter.name)
             if spec is not None:
                 reason = spec.check(parameter.value)
@@ -442,53 +429,50 @@ class RotationNode(Node):
 
     # -- inputs ----------------------------------------------------------------------------
 
-    def _on_input(self, source, data):
+    def _on_input(self, source, msg):
         """
-        Read one message's bytes to (header, R, b) and publish every output, or refuse it.
+        Turn one input message into (header, R, b) and publish every output, or refuse it.
 
-        Return (header, R, settings) of an accepted message, None for a refused one.
+        Return (header, R, values, settings) of an accepted message (``values``: the numbers
+        at its row's field paths), None for a refused one.
         """
         settings = self._settings
-        try:
-            header, values = source.read(data)
-        except cdr.Malformed as exc:
-            self._refuse(source.topic, MALFORMED, f'not a {source.type_name}: {exc}')
-            return
+        header = msg.header
+        values = source.read(msg)
         try:
             R, b = source.convert(values, settings, source.fields)
-            # Every number published, as plain floats from the generated kernels (the hot
-            # path: decompose's arrays cost more than the math); the picture's
-            # decomposition is left to the drawing, at most MARKER_RATE times a second.
-            values = decompose_values(R, b, settings.euler_sequence)
+            decomposition = decompose(R, b, settings.euler_sequence, check=False)
         except messages.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc), header=header)
-            return
+            return None
         except RotationError as exc:
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
-            return
-        self._publish(source, header, R, b, values, settings)
-        return header, R, settings
+            return None
+        self._publish(source, header, R, b, decomposition, settings)
+        return header, R, values, settings
 
     def _on_tf_transform(self, header, R, b):
         """Return the followed frames have a new common time on /tf: publish every output."""
         settings = self._settings
         try:
-            values = decompose_values(R, b, settings.euler_sequence)
+            decomposition = decompose(R, b, settings.euler_sequence, check=False)
         except RotationError as exc:
             self._refuse(self._tf_source.topic, NOT_DECOMPOSABLE, str(exc))
             return
-        self._publish(self._tf_source, header, R, b, values, settings)
+        self._publish(self._tf_source, header, R, b, decomposition, settings)
 
-    def _publish(self, source, header, R, b, values, settings):
-        """Every output of one accepted input (header, R, b), ``values`` its decomposition."""
-        degrees = settings.degrees
-        stamp = header.stamp
-        head = cdr.header(stamp.sec, stamp.nanosec, header.frame_id)
-        for publish, encode, value_of, angles in self._outputs:
-            value = value_of(values)
-            if angles and degrees:
-                value = tuple(map(math.degrees, value))
-            publish(encode(head, value))
+    def _publish(self, source, header, R, b, decomposition, settings):
+        """Every output of one accepted input (header, R, b) and its ``decomposition``."""
+        for output in self._outputs:
+            value = R.ravel() if output.value == MATRIX else getattr(decomposition,
+                                                                     output.value)
+            if output.angles and settings.degrees:
+                value = np.degrees(value)
+            msg = output.message
+            if output.stamped:
+                msg.header = header
+            output.write(msg, value.tolist())
+            output.publish(msg)
         if settings.publish_markers:
             self._pictures.offer(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
@@ -543,6 +527,7 @@ class RotationNode(Node):
             latest[reason] = entry
         return latest
 
+    @_answers_even_if_it_raises
     def _on_describe(self, request, response):
         """
         YAML report of the latest input (rot_tools.io.report), with the refusals' data.
@@ -575,6 +560,7 @@ class RotationNode(Node):
         response.message = to_yaml(data)
         return response
 
+    @_answers_even_if_it_raises
     def _on_screw_path(self, request, response):
         """
         Constant-screw motion start → goal, poses at most ``tolerance`` apart.
@@ -644,13 +630,13 @@ def usage():
 
 def main(args=None):
     """
-    Run the node until SIGINT / SIGTERM; exit status 0, or 2 for bad arguments.
+    Run the node until SIGINT / SIGTERM; return the exit status: 0, or 2 for bad arguments.
 
     ``args``: the whole command line as rclpy.init takes it, program name first (sys.argv
-    when None). ``--help`` and ``--version`` print and return 0 before anything ROS
-    starts; any other argument outside ``--ros-args`` is refused. Started by
-    rot_tools.ros.runtime.start (the console script, ``python -m rot_tools.ros.rotation_node``),
-    which handles an early signal and ends the process.
+    when None). ``--help`` and ``--version`` print and return 0 before anything ROS starts;
+    any other argument outside ``--ros-args`` is refused, as are bad ROS arguments: one line
+    on stderr, status 2. Signals are rclpy's: its handlers shut the context down and the
+    loop (rot_tools.ros.runtime.spin) ends.
     """
     argv = sys.argv if args is None else list(args)
     options = runtime.user_arguments(argv)
@@ -663,8 +649,6 @@ def main(args=None):
     if options:
         runtime.fail(PROG, f'unknown argument {options[0]!r} (ROS arguments go after '
                      f'--ros-args; see {PROG} --help)')
-    runtime.use_fast_dds_profile()
-    runtime.give_large_blocks_back()
     runtime.init_ros(PROG, argv)
     home = os.path.expanduser('~')
     for remap in runtime.home_remaps(argv, home):
@@ -672,11 +656,28 @@ def main(args=None):
         get_logger(PROG).warning(
             f'remap -r {remap} starts with the home directory {home}: the shell expanded an '
             f'unquoted ~; quote it: -r {quoted}')
+    executor = node = None
     try:
-        runtime.serve(RotationNode)
-    except Exception as exc:  # noqa: BLE001 - bad ROS arguments are one line, exit 2
-        text = runtime.ros_argument_error(exc)
-        if text is None:
+        executor = SingleThreadedExecutor()
+        node = RotationNode()
+        runtime.spin(node, executor)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except runtime.ROS_ARGUMENT_ERRORS as exc:  # -p values, -r names the node cannot take
+        if rclpy.ok():
+            runtime.fail(PROG, runtime.ros_argument_error(exc))
+    except Exception:
+        if rclpy.ok():
             raise
-        runtime.fail(PROG, text)
+        # A signal shut the context down while the node was being made: a normal stop.
+    finally:
+        if executor is not None:
+            executor.shutdown()
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
     return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

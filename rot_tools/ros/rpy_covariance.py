@@ -4,7 +4,7 @@ rotation_node's ~/rpy_covariance: an input's covariance as that of roll, pitch a
 Only the inputs that carry a covariance (rows of rot_tools.io.interface with a
 ``covariance``: ~/imu, ~/pose_with_covariance, ~/odometry) come here, once the input is
 accepted and its other outputs are published; the others (~/pose's flood) pay nothing for it.
-The covariance array is read from the same bytes (rot_tools.io.cdr.covariance_reader) and
+The covariance array is read from the same message, at the row's ``covariance`` path, and
 converted by rot_tools.io.message_covariance.rpy_covariances, read as the parameter
 ``input_covariance`` says (``rotvec``: rotations about the parent's fixed X, Y, Z, as ROS
 documents PoseWithCovariance; ``rpy``: already roll, pitch, yaw). What follows:
@@ -21,12 +21,13 @@ documents PoseWithCovariance; ``rpy``: already roll, pitch, yaw). What follows:
 a covariance (:meth:`RpyCovariances.describe`).
 """
 
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
-from rot_tools.io import cdr, interface
+from rot_tools.io import interface
 from rot_tools.io.message_covariance import BAD, LOCK, OK, UNKNOWN
 from rot_tools.io.message_covariance import fault, READINGS, rpy_covariances, stddev_correlation
+from rot_tools.ros.messages import field_getter
 
 BAD_COVARIANCE = 'bad_covariance'
 REFUSAL_REASONS = (BAD_COVARIANCE,)
@@ -47,30 +48,22 @@ def check_reading(value):
 
 
 class Reader(NamedTuple):
-    """How one input row's covariance is read from its bytes."""
+    """How one input row's covariance is read from its message."""
 
-    read: object
-    """read(data) -> (header, the row's covariance_floats())."""
+    covariance: Callable
+    """covariance(msg) -> the covariance array (9 or 36 float64, row-major)."""
     position: slice
-    """Where the position is among the floats (None: an input without one, position 0)."""
+    """Where the position is among the row's numbers (None: an input without one, at 0)."""
     orientation: slice
-    covariance: slice
     path: str
     """The covariance's field, named in a refusal."""
 
 
 def covariance_reader(row):
     """Return the Reader of an input row that carries a covariance."""
-    at, slots = 0, {}
-    for role in row.fields:
-        names = interface.MEMBERS[role]
-        if names is not None:
-            slots[role] = slice(at, at + len(names))
-            at += len(names)
-    path, size = row.covariance
-    count = len(row.covariance_floats())
-    return Reader(cdr.covariance_reader(row), slots.get('position'), slots['orientation'],
-                  slice(count - size, count), path)
+    slots = row.slots()
+    path, _ = row.covariance
+    return Reader(field_getter(path), slots.get('position'), slots['orientation'], path)
 
 
 class Latest(NamedTuple):
@@ -94,50 +87,50 @@ class RpyCovariances:
         ``outputs``: rot_tools.ros.topics.OUTPUTS (the rows, bound to their writers);
         ``refuse(topic, reason, text, header=...)``: the node's counted, throttled refusal.
         """
-        self._outputs = tuple((publishers[kind.row.name].publish, kind.encode, kind.row.value)
+        self._outputs = tuple((publishers[kind.row.name].publish, kind.message(), kind.write)
                               for kind in outputs if kind.row.covariance)
         self._refuse = refuse
         self._latest = None
 
-    def on_input(self, take, topic, reader, data):
+    def on_input(self, take, topic, reader, msg):
         """
-        Serve one message of a covariance input: ``take(data)`` (the node's), then its covariance.
+        Serve one message of a covariance input: ``take(msg)`` (the node's), then its covariance.
 
-        ``take`` returns (header, R, settings) of an accepted input, None for a refused one.
+        ``take`` returns (header, R, values, settings) of an accepted input (``values``: the
+        numbers of its row's fields), None for a refused one.
         """
-        accepted = take(data)
+        accepted = take(msg)
         if accepted is None:
             return
-        header, R, settings = accepted
-        _, floats = reader.read(data)
-        cov = floats[reader.covariance]
-        if any(cov):  # (NaN is true: refused below)
-            (C,), (status,) = rpy_covariances(R[None], np.array(cov)[None],
-                                              settings.input_covariance)
-        else:  # all zeros, unknown: rpy_covariances' verdict, without its ~0.2 ms
+        header, R, values, settings = accepted
+        cov = np.asarray(reader.covariance(msg), dtype=np.float64)
+        if cov.any():  # (NaN is true: refused below)
+            (C,), (status,) = rpy_covariances(R[None], cov[None], settings.input_covariance)
+        else:  # all zeros, unknown: rpy_covariances' verdict, without converting anything
             C, status = np.full((3, 3), np.nan), UNKNOWN
         self._latest = Latest(topic, header, int(status), C[-3:, -3:], settings.degrees)
         if status == OK:
-            self._publish(header, reader, floats, C)
+            self._publish(header, reader, values, C)
         elif status == BAD:
-            text = fault(np.array(cov))
+            text = fault(cov)
             if text.startswith('covariance '):
                 text = reader.path + text[len('covariance'):]
             self._refuse(topic, BAD_COVARIANCE, text, header=header)
 
-    def _publish(self, header, reader, floats, C):
-        """Publish the pose of the input (its floats) with C, 3×3 (an Imu's) or 6×6."""
+    def _publish(self, header, reader, values, C):
+        """Publish the pose of the input (its ``values``) with C, 3×3 (an Imu's) or 6×6."""
         if C.shape[-1] == 3:
             C6 = np.zeros((6, 6))
             C6[3:, 3:] = C
             C = C6
-        position = floats[reader.position] if reader.position is not None else (0.0,) * 3
-        values = interface.PoseCovariance(position, floats[reader.orientation],
-                                          tuple(C.ravel().tolist()))
-        stamp = header.stamp
-        head = cdr.header(stamp.sec, stamp.nanosec, header.frame_id)
-        for publish, encode, value_of in self._outputs:
-            publish(encode(head, value_of(values)))
+        position = values[reader.position] if reader.position is not None else (0.0,) * 3
+        pose = interface.PoseCovariance(position, values[reader.orientation],
+                                        tuple(C.ravel().tolist()))
+        numbers = [*pose.position, *pose.orientation, *pose.covariance]
+        for publish, msg, write in self._outputs:
+            msg.header = header
+            write(msg, numbers)
+            publish(msg)
 
     def describe(self):
         """

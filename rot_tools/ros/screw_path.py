@@ -100,8 +100,9 @@ def check_reply_bytes(frame_id, poses):
     """
     Raise RefusedInput (path_too_long) if the reply would exceed MAX_REPLY_BYTES.
 
-    Checked before anything is built: a 100 kB frame_id × 10,001 poses is a 1 GB
-    reply, and the node would hold it twice (messages and their serialisation).
+    Checked before anything is built: a frame_id of a hundred thousand bytes in each of
+    10,001 poses is a reply of a gigabyte, and the node would hold it twice (messages and
+    their serialisation).
     """
     size = reply_bytes(frame_id, poses)
     if size > MAX_REPLY_BYTES:

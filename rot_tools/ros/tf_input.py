@@ -16,9 +16,8 @@ Refusals are handed on with a reason, for the node to count and warn about:
 arrived while it cannot be answered), ``tf_loop`` (a transform that would make a frame its
 own ancestor), ``tf_bad_frame`` (an empty frame_id or child_frame_id, or one longer than
 MAX_FRAME_NAME bytes), ``tf_too_many_frames`` (a new frame beyond MAX_FRAMES),
-``tf_future_stamp``, ``tf_time_jump`` and ``tf_too_many_transforms`` (below), the
-boundary's ``non_finite``, ``zero_quaternion``, ``non_unit_quaternion``, and ``malformed``
-(bytes that are not a TFMessage).
+``tf_future_stamp``, ``tf_time_jump`` and ``tf_too_many_transforms`` (below), and the
+boundary's ``non_finite``, ``zero_quaternion`` and ``non_unit_quaternion``.
 
 Time. A /tf sample stamped more than MAX_FUTURE_SECONDS after the node's clock is refused
 (``tf_future_stamp``: one stamp of the year 2033 would otherwise hold its edge's newest time
@@ -29,13 +28,14 @@ edge's samples are dropped and it starts again from this one, as tf2_ros clears 
 when /clock jumps back, and the jump is counted (``tf_time_jump``). /tf_static stamps are
 not checked (tf2 ignores them; a static publisher often runs on another clock).
 
-Bounds. Messages arrive as bytes and are read here (read_tf_message): at most
-MAX_TRANSFORMS_PER_MESSAGE transforms of a TFMessage are taken, the rest dropped and the
-message counted once (``tf_too_many_transforms``), so one callback costs milliseconds and
-the services and signals are served between messages; a frame name is read only up to
-MAX_FRAME_NAME bytes. A dynamic edge not heard for CACHE_SECONDS is forgotten (its frames
-too, when no other edge names them): junk frames leave room for real ones again; static
-edges stay, as in tf2. Frame names in refusals are cut short (transform_tree.shown).
+Bounds. Messages arrive as tf2_msgs/TFMessage objects: at most MAX_TRANSFORMS_PER_MESSAGE
+transforms of one are put into the tree, the rest dropped and the message counted once
+(``tf_too_many_transforms``), so that the tree's work for one message stays bounded and the
+services and signals are served between messages; a transform naming a frame longer than
+MAX_FRAME_NAME bytes is refused (``tf_bad_frame``). A dynamic edge not heard for
+CACHE_SECONDS is forgotten (its frames too, when no other edge names them): junk frames leave
+room for real ones again; static edges stay, as in tf2. Frame names in refusals are cut short
+(transform_tree.shown).
 
 Stamps. Header stamps are carried as integer nanoseconds: the tree holds float seconds
 since an epoch (the whole second of the first stamp that is not 0), and the follower keeps
@@ -44,7 +44,6 @@ an edge's newest, at the latest common time — is an input's stamp exactly. (In
 uses the floats: exact to the nanosecond within weeks of the epoch.)
 """
 
-import struct
 import time
 from types import SimpleNamespace
 from typing import NamedTuple
@@ -53,7 +52,8 @@ from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rot_tools.core.transform_tree import (
     MAX_FRAME_NAME, shown, SHOWN_NAME, TransformLookupError, TransformTree, TransformTreeError)
-from rot_tools.io import boundary, cdr
+from rot_tools.io import boundary
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from std_msgs.msg import Header
 
 TF_TOPIC = '/tf'
@@ -80,9 +80,6 @@ TF_TOO_MANY_TRANSFORMS = 'tf_too_many_transforms'
 REFUSAL_REASONS = (TF_UNKNOWN_FRAME, TF_NOT_CONNECTED, TF_EXTRAPOLATION, TF_LOOP, TF_BAD_FRAME,
                    TF_TOO_MANY_FRAMES, TF_FUTURE_STAMP, TF_TIME_JUMP, TF_TOO_MANY_TRANSFORMS)
 """The reasons of this input, besides the boundary's (rot_tools.io.boundary.REFUSAL_REASONS)."""
-
-MALFORMED = 'malformed'
-"""The node's reason for bytes that are not the message type of the topic."""
 
 _REASON = {'unknown_frame': TF_UNKNOWN_FRAME, 'not_connected': TF_NOT_CONNECTED,
            'extrapolation': TF_EXTRAPOLATION, 'loop': TF_LOOP, 'bad_frame': TF_BAD_FRAME,
@@ -111,15 +108,12 @@ def tf2_msgs_missing():
     return ''
 
 
-DEFAULT_QUATERNION_TOLERANCE = 1e-3
-"""|‖q‖ − 1| accepted when no node parameter says otherwise (rotation_client tf)."""
-
 CACHE_SECONDS = 10.0
 MAX_SAMPLES = 2_000
 MAX_FRAMES = 1_000
 """The follower's tree: 10 s of each edge (tf2's default), at most 2,000 samples an edge (the
 newest: 200 Hz for the whole 10 s; the latest common time needs only the newest few) and
-1,000 frames: 210 kB an edge at most (104 bytes a sample)."""
+1,000 frames."""
 
 MAX_TRANSFORMS_PER_MESSAGE = 1_000
 """Transforms taken from one TFMessage at most (tf2's largest, robot_state_publisher's,
@@ -135,12 +129,10 @@ FORGET_PERIOD = 1.0
 """Seconds between two looks for dynamic edges not heard for CACHE_SECONDS."""
 
 _NS = 1_000_000_000
-_ORDERS = {b'\x00\x01': '<', b'\x00\x00': '>'}
-"""Encapsulation identifier → struct byte order: CDR_LE, CDR_BE (XCDR version 1)."""
 
 
 class Transform(NamedTuple):
-    """One geometry_msgs/TransformStamped as read: names cut to MAX_FRAME_NAME + 1."""
+    """One geometry_msgs/TransformStamped as the tree takes it."""
 
     sec: int
     nanosec: int
@@ -155,51 +147,9 @@ class Transform(NamedTuple):
         t, q = msg.transform.translation, msg.transform.rotation
         long = [f'{what} of {len(name.encode()):,} bytes' for what, name in (
             ('frame_id', msg.header.frame_id), ('child_frame_id', msg.child_frame_id))
-            if len(name) > MAX_FRAME_NAME]
+            if len(name.encode()) > MAX_FRAME_NAME]
         return cls(msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id,
                    msg.child_frame_id, (t.x, t.y, t.z, q.x, q.y, q.z, q.w), ', '.join(long))
-
-
-def read_tf_message(data, limit):
-    """
-    Return (count, [Transform]): a TFMessage's CDR bytes, its first ``limit`` transforms.
-
-    Each TransformStamped is a stamp (int32 sec, uint32 nanosec), two strings (uint32 length
-    with the NUL, 4-aligned) and seven float64 (8-aligned), alignment counted from the end
-    of the 4-byte encapsulation. A name is decoded only up to MAX_FRAME_NAME + 1 bytes, as
-    UTF-8 with an invalid byte replaced. Raises cdr.Malformed for another encapsulation,
-    a string without its NUL, or bytes that end early.
-    """
-    order = _ORDERS.get(bytes(data[:2]))
-    if order is None:
-        raise cdr.Malformed(f'encapsulation {bytes(data[:4]).hex(" ")} is not CDR '
-                            '(00 01 or 00 00, XCDR version 1)')
-    word, stamp, floats = (struct.Struct(order + f) for f in ('I', 'iI', '7d'))
-    try:
-        (count,) = word.unpack_from(data, 4)
-        pos, transforms = 4, []
-        for _ in range(min(count, limit)):
-            pos += -pos % 4
-            sec, nanosec = stamp.unpack_from(data, 4 + pos)
-            names, long, pos = [], [], pos + 8
-            for what in ('frame_id', 'child_frame_id'):
-                pos += -pos % 4
-                (size,) = word.unpack_from(data, 4 + pos)
-                start, pos = 4 + pos + 4, pos + 4 + size
-                if not size or 4 + pos > len(data) or data[4 + pos - 1]:
-                    raise cdr.Malformed(f'a {what} of {size} bytes does not end in a NUL '
-                                        f'within the {len(data)} bytes')
-                if size - 1 > MAX_FRAME_NAME:
-                    long.append(f'{what} of {size - 1:,} bytes')
-                name = data[start:start + min(size - 1, MAX_FRAME_NAME + 1)]
-                names.append(name.partition(b'\0')[0].decode('utf-8', 'replace'))
-            pos += -pos % 8
-            transforms.append(Transform(sec, nanosec, *names, floats.unpack_from(data, 4 + pos),
-                                        ', '.join(long)))
-            pos += 56
-    except struct.error:
-        raise cdr.Malformed(f'the message ends early: {len(data)} bytes') from None
-    return count, transforms
 
 
 class TfFollower:
@@ -212,7 +162,7 @@ class TfFollower:
     """
 
     def __init__(self, node, on_transform, on_refused, *,
-                 quaternion_tolerance=DEFAULT_QUATERNION_TOLERANCE, max_frames=MAX_FRAMES):
+                 quaternion_tolerance=QUATERNION_TOLERANCE, max_frames=MAX_FRAMES):
         self.node = node
         self.tree = TransformTree(CACHE_SECONDS, max_samples=MAX_SAMPLES,
                                   max_frames=max_frames)
@@ -252,14 +202,10 @@ class TfFollower:
             if missing:
                 raise RuntimeError(missing)
             from tf2_msgs.msg import TFMessage
-            # raw: the callback gets the bytes, read_tf_message reads what it takes.
             self._subscriptions = (
-                self.node.create_subscription(
-                    TFMessage, TF_TOPIC, lambda data: self.on_message(data, False), TF_QOS,
-                    raw=True),
-                self.node.create_subscription(
-                    TFMessage, TF_STATIC_TOPIC, lambda data: self.on_message(data, True),
-                    TF_STATIC_QOS, raw=True))
+                self.node.create_subscription(TFMessage, TF_TOPIC, self.on_tf, TF_QOS),
+                self.node.create_subscription(TFMessage, TF_STATIC_TOPIC, self.on_tf_static,
+                                              TF_STATIC_QOS))
         elif not self.following and self._subscriptions:
             for subscription in self._subscriptions:
                 self.node.destroy_subscription(subscription)
@@ -290,19 +236,25 @@ class TfFollower:
 
     # -- messages ----------------------------------------------------------------------
 
-    def on_message(self, data, static):
-        """Put the transforms of a TFMessage's bytes into the tree; then look the pair up."""
+    def on_tf(self, msg):
+        """Take a tf2_msgs/TFMessage of /tf."""
+        self.on_message(msg, False)
+
+    def on_tf_static(self, msg):
+        """Take a tf2_msgs/TFMessage of /tf_static."""
+        self.on_message(msg, True)
+
+    def on_message(self, msg, static):
+        """Put the transforms of a TFMessage into the tree; then look the pair up."""
         topic = self.static_topic if static else self.topic
-        try:
-            count, transforms = read_tf_message(data, MAX_TRANSFORMS_PER_MESSAGE)
-        except cdr.Malformed as exc:
-            self._on_refused(topic, MALFORMED, f'not a {TYPE_NAME}: {exc}')
-            return
-        if count > len(transforms):
+        transforms = msg.transforms
+        if len(transforms) > MAX_TRANSFORMS_PER_MESSAGE:
             self._on_refused(topic, TF_TOO_MANY_TRANSFORMS, (
-                f'a TFMessage of {count:,} transforms: the first {len(transforms):,} taken, '
-                f'{count - len(transforms):,} dropped (at most MAX_TRANSFORMS_PER_MESSAGE = '
-                f'{MAX_TRANSFORMS_PER_MESSAGE:,} a message)'))
+                f'a TFMessage of {len(transforms):,} transforms: the first '
+                f'{MAX_TRANSFORMS_PER_MESSAGE:,} taken, '
+                f'{len(transforms) - MAX_TRANSFORMS_PER_MESSAGE:,} dropped (at most '
+                f'MAX_TRANSFORMS_PER_MESSAGE = {MAX_TRANSFORMS_PER_MESSAGE:,} a message)'))
+            transforms = transforms[:MAX_TRANSFORMS_PER_MESSAGE]
         self._forget_unheard()  # first: a new frame may need the place of a forgotten one
         now = 0 if static else self.node.get_clock().now().nanoseconds
         for transform in transforms:

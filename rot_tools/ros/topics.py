@@ -1,23 +1,20 @@
 """
 rotation_node's topics as rclpy takes them.
 
-Each row of rot_tools.io.interface bound to its message class and to the reader or writer
-of its bytes (rot_tools.io.cdr).
-
-The node subscribes raw (``create_subscription(..., raw=True)``: the callback gets the
-message's bytes) and publishes bytes (``publish(bytes)``), both public rclpy API; the bytes
-are read and written from the rows' fields, and test_cdr checks them against
-rclpy.serialization for every row.
+Each row of rot_tools.io.interface bound to its message class, and to the reader or the
+writer of its fields by their paths (rot_tools.ros.messages.fields_reader, fields_writer):
+the node takes and publishes message objects, and reads or writes in them exactly the
+fields its rows name.
 """
 
 from typing import Callable, NamedTuple
 
-from rot_tools.io import cdr, interface
-from rot_tools.ros.messages import message_class
+from rot_tools.io import interface
+from rot_tools.ros.messages import fields_reader, fields_writer, message_class
 
 
 class Subscribed(NamedTuple):
-    """An input row with its message class and read(data) -> (header, values)."""
+    """An input row with its message class and read(msg) -> the numbers of row.floats()."""
 
     row: interface.Input
     msg_type: type
@@ -30,31 +27,44 @@ class Subscribed(NamedTuple):
 
 
 class Published(NamedTuple):
-    """An output row with its message class and encode(head, values) -> bytes (or None)."""
+    """An output row with its message class and write(msg, numbers) of row.fields."""
 
     row: interface.Output
     msg_type: type
-    encode: Callable
+    write: Callable
 
     @property
     def topic(self):
         """Return the topic of the row, e.g. '~/quaternion'."""
         return self.row.topic
 
+    def message(self):
+        """
+        Return a message of the row's type, ready to be written by ``write``.
+
+        A MultiArray gets its layout (the row's, constant) and its data sized.
+        """
+        msg = self.msg_type()
+        if self.row.layout:
+            dimension = message_class('std_msgs/msg/MultiArrayDimension')
+            msg.layout.dim = [dimension(label=label, size=size, stride=stride)
+                              for label, size, stride in self.row.layout]
+            msg.data = [0.0] * self.row.layout[0][2]
+        return msg
+
 
 def subscribed(row):
     """Return an input row bound to its message class and the reader of its fields."""
-    return Subscribed(row, message_class(row.type_name), cdr.input_reader(row))
+    return Subscribed(row, message_class(row.type_name), fields_reader(row.floats()))
 
 
 def published(row):
     """Return an output row bound to its message class and the writer of its fields."""
-    encode = cdr.output_writer(row) if row.value is not None else None
-    return Published(row, message_class(row.type_name), encode)
+    return Published(row, message_class(row.type_name), fields_writer(row.fields))
 
 
 INPUTS = tuple(map(subscribed, interface.INPUTS))
 """Every input of the node, as it subscribes them."""
 
 OUTPUTS = tuple(map(published, interface.OUTPUTS))
-"""Every output of the node, as it publishes them (a picture has no ``encode``)."""
+"""Every output of the node, as it publishes them (a picture has no fields to write)."""
