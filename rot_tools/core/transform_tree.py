@@ -499,12 +499,7 @@ class TransformTree:
                 UNKNOWN_FRAME, f'frame {shown(frame)} is unknown (known frames: {known})')
 
     def _path(self, reference, body):
-        """
-        Return the frames from reference and from body up to their common ancestor.
-
-        (up, down): the frames from reference and from body up to (not including) their
-        common ancestor.
-        """
+        """Return (up, down): from reference, and from body, up to their common ancestor."""
         self._require_known(reference)
         self._require_known(body)
         ancestors = {}
@@ -534,8 +529,8 @@ class TransformTree:
         """
         Return the frames from ``reference`` to ``body``, both ends included.
 
-        Return the frames from ``reference`` to ``body`` through their common ancestor, both ends
-        included (['odom', 'base_link', 'camera']; [frame] for a frame in itself).
+        Through their common ancestor: ['odom', 'base_link', 'camera']; [frame] for a frame in
+        itself.
         """
         with self._lock:
             up, down = self._path(reference, body)
@@ -544,10 +539,9 @@ class TransformTree:
 
     def time_range(self, reference, body):
         """
-        Return (first, last): the times at which the chain can be looked up.
+        Return TimeRange (first, last): when every dynamic edge of the chain has data.
 
-        (first, last): the times at which the chain can be looked up, every dynamic edge
-        having data; (-inf, inf) for a chain of static edges only.
+        (-inf, inf) for a chain of static edges only.
         """
         with self._lock:
             up, down = self._path(reference, body)
@@ -609,8 +603,7 @@ class TransformTree:
         """
         Return T_common_x of the first frame x of ``frames`` at times t (n,).
 
-        T_common_x of the first frame x of ``frames`` (x's chain up to the common ancestor)
-        at times t (n,): E(x_k)···E(x); the identity for no frames.
+        ``frames``: x's chain up to the common ancestor; E(x_k)···E(x), the identity for none.
         """
         R = np.broadcast_to(_IDENTITY, t.shape + (3, 3))
         b = np.broadcast_to(_ZERO, t.shape + (3,))
@@ -691,10 +684,9 @@ class TransformTree:
 
     def _chain_stamps(self, reference, body, lo, hi):
         """
-        Return (stamps, chain): where the chain can be looked up in [lo, hi), every stamp.
+        Return (stamps, chain): the times in [lo, hi) to look the chain up at.
 
-        The stamps of its dynamic edges at which all of them have data; the latest common
-        time where it has none (when it is in [lo, hi), or lo is -inf).
+        Its dynamic edges' stamps where all have data; else its latest common time.
         """
         with self._lock:
             up, down = self._path(reference, body)
