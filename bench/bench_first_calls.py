@@ -3,9 +3,9 @@ First calls: what each public one-item function costs from its first call after 
 
 Not a ratio benchmark: the figures are absolute, and the goal is absolute too (every one of
 the first 1,000 calls ≤ 1 ms: no call pays for compilation or other one-off work). Each
-function runs in a FRESH process: ``import rot_tools``, the function looked up (which imports
-its module; shown as "import"), 1,000 different ordinary inputs built with plain NumPy (so
-nothing of rot_tools is warmed), then the 1,000 calls, each timed alone. Printed per
+function runs in a FRESH process: ``import rot_tools`` (which imports every public name;
+shown as "import"), 1,000 different ordinary inputs built with plain NumPy (so nothing of
+rot_tools is warmed), then the 1,000 calls, each timed alone. Printed per
 function: the first call, the median and the worst of the 1,000.
 
 The node: rotation_node's per-message path from its first message, in a fresh process —
@@ -345,7 +345,7 @@ def main(argv=None):
                      'yes' if r['worst_cpu_ms'] <= GOAL_MS else 'NO'])
     benchlib.print_table(
         f'First {args.calls} calls of each public one-item function, each in a fresh process '
-        "(µs; import = looking the function up, ms; worst CPU = the call's own CPU time, "
+        "(µs; import = import rot_tools, ms; worst CPU = the call's own CPU time, "
         'without pauses while another process had the core)',
         ['function', 'import ms', 'first µs', 'median µs', 'worst µs', 'worst CPU µs (call)',
          f'≤ {GOAL_MS:g} ms?'], rows)

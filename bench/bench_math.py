@@ -10,7 +10,10 @@ Three tables, each measured side by side in one run (repetitions interleaved, me
    to it): the peak of what the call allocates, output included, divided by the bytes of its
    input and output arrays. scipy's figure is shown for comparison.
 3. Single-call latency: one rotation through the same public functions, Python call
-   overhead included, against scipy and against transforms3d.
+   overhead included, against scipy (the goal), with transforms3d (which checks nothing) as
+   an informative column where it has the conversion, and decompose (informative: nine
+   fields) beside scipy's four conversions of the same rotation (rotvec, Euler angles,
+   roll-pitch-yaw, quaternion).
 
 Both libraries get their defaults: rot_tools validates every matrix (check=True), scipy's
 from_matrix runs with assume_valid=False and pytransform3d's single-transform function with
@@ -38,7 +41,6 @@ import transforms3d.quaternions as t3d_quaternions
 BATCH_GOAL_QUATERNION_ROUTE = 0.25  # scipy routes Euler / matrix conversions via quaternions
 BATCH_GOAL_DIRECT = 1.5  # rotvec, axis-angle, quaternion → matrix: scipy's one direct formula
 SINGLE_GOAL_SCIPY = 0.5  # every single conversion
-SINGLE_GOAL_T3D = 1.0  # every conversion transforms3d has (it checks nothing; rot_tools does)
 MEMORY_GOAL = 2.0
 TOL = 1e-12
 
@@ -274,6 +276,12 @@ def print_memory(results):
 
 # -- 3. single-call latency ---------------------------------------------------------------
 
+def _scipy_representations(R, seq):
+    """The usual way to get decompose's rotation fields: scipy, one conversion each."""
+    r = Rotation.from_matrix(R)
+    return r.as_rotvec(), r.as_euler(seq), r.as_euler('xyz'), r.as_quat(canonical=True)
+
+
 def single_cases():
     """(operation, {candidate: statement}, [(reference, goal)]) and the globals they use."""
     a_tb = np.array([0.3, -0.4, 1.2])
@@ -289,8 +297,8 @@ def single_cases():
     g = {'rt': rt, 'Rotation': Rotation, 'e': t3d_euler, 'aa': t3d_axangles, 'tq': t3d_quaternions,
          'pt': pt_transformations, 'a_tb': a_tb, 'a_pr': a_pr, 'f_tb': [float(v) for v in a_tb],
          'f_pr': [float(v) for v in a_pr], 'R': R, 'axis': axis, 'angle': angle, 'rotvec': rotvec,
-         'b': b, 'T': T, 'q': q, 'q_wxyz': np.roll(q, 1)}
-    sc, t3 = ('scipy', SINGLE_GOAL_SCIPY), ('transforms3d', SINGLE_GOAL_T3D)
+         'b': b, 'T': T, 'q': q, 'q_wxyz': np.roll(q, 1), 'scipy_all': _scipy_representations}
+    sc, t3 = ('scipy', SINGLE_GOAL_SCIPY), ('transforms3d', None)  # (t3: informative)
     sc_rotvec = ('scipy (rotvec)', SINGLE_GOAL_SCIPY)
     return g, [
         ('Euler ZYX -> matrix', {
@@ -302,9 +310,13 @@ def single_cases():
             'scipy': "Rotation.from_euler('ZXZ', a_pr).as_matrix()",
             'transforms3d': "e.euler2mat(*f_pr, axes='rzxz')"}, [sc, t3]),
         ('matrix -> Euler ZYX', {
-            'rot_tools': "rt.matrix_to_euler(R, 'ZYX')[0]",
+            'rot_tools': "rt.matrix_to_euler(R, 'ZYX').angles",
             'scipy': "Rotation.from_matrix(R).as_euler('ZYX')",
             'transforms3d': "e.mat2euler(R, axes='rzyx')"}, [sc, t3]),
+        ('matrix -> Euler zxz', {
+            'rot_tools': "rt.matrix_to_euler(R, 'zxz').angles",
+            'scipy': "Rotation.from_matrix(R).as_euler('zxz')",
+            'transforms3d': "e.mat2euler(R, axes='szxz')"}, [sc, t3]),
         ('matrix -> rotvec', {
             'rot_tools': 'rt.matrix_to_rotvec(R)',
             'scipy': 'Rotation.from_matrix(R).as_rotvec()'}, [sc]),
@@ -331,11 +343,19 @@ def single_cases():
             'rot_tools': 'rt.screw_log(R, b)',
             'pytransform3d': 'pt.exponential_coordinates_from_transform(T)'},
          [('pytransform3d', None)]),
+        ('decompose (R, b) ZYX', {
+            'rot_tools': "rt.decompose(R, b, 'ZYX')",
+            'scipy (4 conversions)': "scipy_all(R, 'ZYX')"},
+         [('scipy (4 conversions)', None)]),  # (informative: 9 fields against 4)
     ]
 
 
 def _single_diff(operation, name, out):
     """Flatten one single-call result, so each reference can be compared with rot_tools."""
+    if operation.startswith('decompose'):
+        if name == 'rot_tools':
+            out = (out.rotvec, out.euler, out.rpy, out.quaternion)
+        return np.concatenate([np.ravel(x) for x in out])
     if operation == 'matrix -> axis, angle':
         if name == 'scipy (rotvec)':  # θ·l̂ → (l̂, θ)
             return np.concatenate([out / np.linalg.norm(out), [np.linalg.norm(out)]])
