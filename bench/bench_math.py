@@ -277,7 +277,7 @@ def print_memory(results):
 # -- 3. single-call latency ---------------------------------------------------------------
 
 def _scipy_representations(R, seq):
-    """The usual way to get decompose's rotation fields: scipy, one conversion each."""
+    """Return decompose's rotation fields the usual way: scipy, one conversion each."""
     r = Rotation.from_matrix(R)
     return r.as_rotvec(), r.as_euler(seq), r.as_euler('xyz'), r.as_quat(canonical=True)
 
