@@ -26,19 +26,21 @@ way. Checks run in one order, which fixes the reason of a message with several d
 no orientation (Imu), then a non-finite position or translation, then the quaternion.
 
 Per message, every converter has the form ``convert(values, settings, fields)`` →
-``(R, b)``: ``values`` are the floats it needs, in the message's order (rotation_node reads
-them from the message's bytes, rot_tools.io.cdr), ``settings`` is rotation_node's Settings
-(they read ``quaternion_tolerance``, and the Euler one ``euler_sequence`` and ``degrees``),
-``fields`` the input's {role: path} (rot_tools.io.interface: the names a refusal gives); it
-raises :class:`RefusedInput`. For a batch,
-:func:`check_batch` gives each item's reason code (0 = accepted; ``REFUSAL_REASONS[code - 1]``
+``Motion(R, b)``: ``values`` are the numbers it needs, in the message's order (rotation_node
+reads them at the input row's field paths, rot_tools.io.interface), ``settings`` is
+rotation_node's Settings (they read ``quaternion_tolerance``, and the Euler one
+``euler_sequence`` and ``degrees``), ``fields`` the input's {role: path} (the names a
+refusal gives); it raises :class:`RefusedInput`. For a batch, :func:`check_batch` gives each
+item's Verdict: its reason code (0 = accepted; ``REFUSAL_REASONS[code - 1]``
 otherwise) and :func:`refusal_text` the sentence the per-message converter would raise.
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core.euler import euler_to_matrix
+from rot_tools.core.rigid import Motion
 from rot_tools.core.so3 import quaternion_to_matrix
 
 NON_FINITE = 'non_finite'
@@ -106,9 +108,16 @@ _SAFE_SQUARES = (1e-290, 1e290)
 """Where ‖q‖² = Σ q_i² lies in this range nothing overflowed or lost digits to underflow."""
 
 
+class Verdict(NamedTuple):
+    """A quaternion's reason code (ACCEPTED or a refusal's) and its norm ‖q‖."""
+
+    code: object
+    norm: object
+
+
 def quaternion_verdict(ops, x, y, z, w, tolerance):
     """
-    (code, norm) of the quaternion (x, y, z, w): the one rule of both engines.
+    Return the Verdict of the quaternion (x, y, z, w): the one rule of both engines.
 
     code: ACCEPTED, or the code of non_finite (a component NaN/±Inf), zero_quaternion
     (‖q‖ = 0) or non_unit_quaternion (|‖q‖ − 1| > tolerance). ‖q‖ = sqrt(Σ q_i²), and
@@ -133,7 +142,7 @@ def quaternion_verdict(ops, x, y, z, w, tolerance):
         slow = ops.where(finite, slow, CODE[NON_FINITE])
         code = ops.where(rare, slow, code)
         norm = ops.where(rare, scaled, norm)
-    return code, norm
+    return Verdict(code=code, norm=norm)
 
 
 def refusal_text(code, name, components=None, norm=None, tolerance=None, fields='xyzw'):
@@ -186,7 +195,8 @@ def quaternion_to_rotation(x, y, z, w, tolerance, name='orientation'):
     |‖q‖ − 1| > ``tolerance``; within the tolerance q is normalised (R is exactly orthogonal).
     ``name`` is the field's, for the refusal.
     """
-    code, norm = quaternion_verdict(SCALAR, x, y, z, w, tolerance)
+    verdict = quaternion_verdict(SCALAR, x, y, z, w, tolerance)
+    code, norm = verdict.code, verdict.norm
     if code:
         raise RefusedInput(REFUSAL_REASONS[code - 1],
                            refusal_text(code, name, (x, y, z, w), norm, tolerance))
@@ -199,18 +209,19 @@ TRANSFORM_FIELDS = {'position': 'transform.translation', 'orientation': 'transfo
 
 def rigid_of_fields(values, tolerance, orientation, position):
     """
-    (R, b) of a Pose's or a Transform's fields (px, py, pz, qx, qy, qz, qw).
+    Motion(R, b) of a Pose's or a Transform's fields (px, py, pz, qx, qy, qz, qw).
 
     b = the position, R from the quaternion; ``orientation`` and ``position`` are the
     fields' names, for the refusal.
     """
     px, py, pz, qx, qy, qz, qw = values
     _require_finite(position, 'xyz', (px, py, pz))
-    return quaternion_to_rotation(qx, qy, qz, qw, tolerance, orientation), np.array((px, py, pz))
+    return Motion(R=quaternion_to_rotation(qx, qy, qz, qw, tolerance, orientation),
+                  b=np.array((px, py, pz)))
 
 
 def pose_to_rt(pose, tolerance, name='pose'):
-    """(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
+    """Motion(R, b) of a geometry_msgs/Pose: R from the orientation, b = the position."""
     p, q = pose.position, pose.orientation
     return rigid_of_fields((p.x, p.y, p.z, q.x, q.y, q.z, q.w), tolerance,
                            f'{name}.orientation', f'{name}.position')
@@ -218,7 +229,7 @@ def pose_to_rt(pose, tolerance, name='pose'):
 
 def pose_fields_to_rt(values, settings, fields):
     """
-    (R, b) of a Pose's or a Transform's (position, orientation) values: b, R from q.
+    Motion(R, b) of a Pose's or a Transform's (position, orientation) values: b, R from q.
 
     ``fields``: {'position': path, 'orientation': path} of the message, for the refusal
     (e.g. an Odometry's pose.pose.position; its covariance and twist are not used).
@@ -227,16 +238,9 @@ def pose_fields_to_rt(values, settings, fields):
                            fields['position'])
 
 
-def transform_stamped_to_transform(msg, settings):
-    """(header, R, b) of a geometry_msgs/TransformStamped message object (the TF tree's)."""
-    t, q = msg.transform.translation, msg.transform.rotation
-    return (msg.header, *pose_fields_to_rt((t.x, t.y, t.z, q.x, q.y, q.z, q.w), settings,
-                                           TRANSFORM_FIELDS))
-
-
 def imu_fields_to_rt(values, settings, fields):
     """
-    (R, 0) of a sensor_msgs/Imu's (orientation x, y, z, w, orientation_covariance[0]).
+    Motion(R, 0) of a sensor_msgs/Imu's (orientation x, y, z, w, orientation_covariance[0]).
 
     sensor_msgs/Imu marks "no orientation estimate" with orientation_covariance[0] = -1:
     such a message is refused (NO_ORIENTATION). Angular velocity, linear acceleration and
@@ -246,18 +250,19 @@ def imu_fields_to_rt(values, settings, fields):
     name = fields['orientation']
     if lacks_orientation(covariance0):
         raise RefusedInput(NO_ORIENTATION, refusal_text(CODE[NO_ORIENTATION], name))
-    return quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance, name), np.zeros(3)
+    return Motion(R=quaternion_to_rotation(x, y, z, w, settings.quaternion_tolerance, name),
+                  b=np.zeros(3))
 
 
 def quaternion_fields_to_rt(values, settings, fields):
-    """(R, 0) of a quaternion's (x, y, z, w); ``fields['orientation']`` names it."""
-    return quaternion_to_rotation(*values, settings.quaternion_tolerance,
-                                  fields['orientation']), np.zeros(3)
+    """Motion(R, 0) of a quaternion's (x, y, z, w); ``fields['orientation']`` names it."""
+    return Motion(R=quaternion_to_rotation(*values, settings.quaternion_tolerance,
+                                           fields['orientation']), b=np.zeros(3))
 
 
 def euler_fields_to_rt(values, settings, fields):
     """
-    (R, 0) of Euler angles (θ1, θ2, θ3); ``fields['angles']`` names the Vector3 holding them.
+    Motion(R, 0) of Euler angles (θ1, θ2, θ3); ``fields['angles']`` names their Vector3.
 
     The angles are of ``settings.euler_sequence``, in degrees when ``settings.degrees``,
     else radians.
@@ -265,7 +270,7 @@ def euler_fields_to_rt(values, settings, fields):
     _require_finite(fields['angles'], 'xyz', values)
     if settings.degrees:
         values = tuple(math.radians(a) for a in values)
-    return euler_to_matrix(values, settings.euler_sequence), np.zeros(3)
+    return Motion(R=euler_to_matrix(values, settings.euler_sequence), b=np.zeros(3))
 
 
 # ---------------------------------------------------------------------------------------
@@ -274,7 +279,7 @@ def euler_fields_to_rt(values, settings, fields):
 
 def check_batch(quaternions, tolerance, positions=None, covariance0=None):
     """
-    Reason codes (N,) int8 and norms (N,) of N messages' fields, in the converters' order.
+    Return the Verdict of N messages' fields: codes (N,) int8 and norms (N,).
 
     quaternions (N, 4) as (x, y, z, w); positions (N, 3) or None; covariance0 (N,) — an
     Imu's orientation_covariance[0] — or None. The code of each item is what the
@@ -283,14 +288,14 @@ def check_batch(quaternions, tolerance, positions=None, covariance0=None):
     """
     q = np.asarray(quaternions, dtype=np.float64).reshape(-1, 4)
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
-        code, norm = quaternion_verdict(ARRAY, q[:, 0], q[:, 1], q[:, 2], q[:, 3], tolerance)
-    code = np.asarray(code, dtype=np.int8)
+        verdict = quaternion_verdict(ARRAY, q[:, 0], q[:, 1], q[:, 2], q[:, 3], tolerance)
+    code = np.asarray(verdict.code, dtype=np.int8)
     if positions is not None:
         bad = ~np.isfinite(np.asarray(positions, dtype=np.float64)).all(axis=1)
         code[bad] = CODE[NON_FINITE]
     if covariance0 is not None:
         code[lacks_orientation(np.asarray(covariance0, dtype=np.float64))] = CODE[NO_ORIENTATION]
-    return code, norm
+    return Verdict(code=code, norm=verdict.norm)
 
 
 def batch_refusal_text(fields, code, quaternion, norm, tolerance, position=None):

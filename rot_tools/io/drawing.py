@@ -115,12 +115,19 @@ def path_segments(angle, radius, scale):
     return max(1, math.ceil(angle / step))
 
 
+class _Traced(NamedTuple):
+    """The point p0 whose path is drawn, and its name."""
+
+    name: str
+    point: np.ndarray
+
+
 def _traced_point(kind, direction, scale):
-    """(name, p0): the origin, or for a pure rotation the reference axis tip farthest off."""
+    """Return the _Traced origin, or for a pure rotation the axis tip farthest off its axis."""
     if kind != ROTATION:
-        return 'origin', np.zeros(3)
+        return _Traced(name='origin', point=np.zeros(3))
     k = int(np.argmin(np.abs(direction)))
-    return f"{'xyz'[k]}-axis tip", scale * np.eye(3)[k]
+    return _Traced(name=f"{'xyz'[k]}-axis tip", point=scale * np.eye(3)[k])
 
 
 def label_point(path, scale):
@@ -200,8 +207,10 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
             else ROTATION if not b.any() else SCREW)
     label = label_text(screw, degrees)
     if kind == IDENTITY:
-        return Picture(kind, b, R, scale, None, None, '', label, b.copy(), screw)
-    traced, p0 = _traced_point(kind, direction, scale)
+        return Picture(kind=kind, origin=b, frame=R, scale=scale, axis=None, path=None,
+                       traced='', label=label, label_at=b.copy(), screw=screw)
+    traced = _traced_point(kind, direction, scale)
+    p0 = traced.point
     with np.errstate(over='ignore', invalid='ignore'):  # checked below
         path = screw_path(screw, p0, R @ p0 + b, scale)
         label_at = label_point(path, scale)
@@ -216,4 +225,5 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
         raise RotationError(
             f'the picture of this motion overflows float64 (scale {scale:.3g}, max|b_i| = '
             f'{np.abs(b).max():.3g}, screw axis point max|c_i| = {np.abs(point).max():.3g})')
-    return Picture(kind, b, R, scale, axis, path, traced, label, label_at, screw)
+    return Picture(kind=kind, origin=b, frame=R, scale=scale, axis=axis, path=path,
+                   traced=traced.name, label=label, label_at=label_at, screw=screw)
