@@ -9,9 +9,9 @@ one to the next), and the median of each taken:
 
 - the job ``rot-tools bag FLEET --jobs 1`` and ``--jobs 2``: goal, the second ≥ 1.6 × as
   fast on 2 cores. The job is the command's ``main`` timed in a process that has imported
-  the package and rosbags already (``JOB``): start-up (Python, NumPy, rosbags: about 0.3 s,
-  the same for any fleet) would otherwise bound the ratio near 1.5 with 8 bags of about
-  0.08 s each. The whole commands are timed too, and their ratio printed beside it;
+  the package and rosbags already (``JOB``): start-up (Python, NumPy, rosbags: the same for
+  any fleet, and several times one small bag's job) would otherwise bound the ratio. The
+  whole commands are timed too, and their ratio printed beside it;
 - ``rot-tools bag ONE`` against reading the same bag with rosbags alone, deserialising every
   message (its AnyReader, the loop users write): goal, ≤ 1.5 × the bare read's time. Both
   are whole commands, Python's start-up included. Messages per second are printed for each.

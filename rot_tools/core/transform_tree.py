@@ -68,6 +68,7 @@ from typing import NamedTuple
 import numpy as np
 from rot_tools.core._arrays import as_float_array
 from rot_tools.core.errors import RotationError
+from rot_tools.core.rigid import Motion
 from rot_tools.core.screw import screw_interpolate
 from rot_tools.core.so3 import validate_rotation
 
@@ -116,8 +117,7 @@ class TransformLookupError(TransformTreeError):
     A lookup that cannot be answered; ``reason`` is one of LOOKUP_REASONS.
 
     For ``extrapolation``, ``edge`` is the (parent, child) pair whose data does not reach the
-    time asked, and ``seconds`` (> 0) how far outside its data that time is; both are None
-    for the other reasons.
+    time asked and ``seconds`` (> 0) how far outside it that time is; else both are None.
     """
 
     def __init__(self, reason, message, edge=None, seconds=None):
@@ -144,10 +144,10 @@ class TimeRange(NamedTuple):
 
 class Transforms(NamedTuple):
     """
-    Transforms as a recording holds them (tf2_msgs/TFMessage's), n of them, for follow.
+    Transforms as recorded, for follow.
 
-    parent, child: n frame names each; R (n, 3, 3), b (n, 3): p_parent = R·p_child + b;
-    stamp (n,) seconds; static (n,) bool (from /tf_static).
+    parent, child (n frame names each), R (n, 3, 3) and b (n, 3) of p_parent = R·p_child + b,
+    stamp (n,) seconds, static (n,) bool (from /tf_static).
     """
 
     parent: object
@@ -162,7 +162,7 @@ class Followed(NamedTuple):
     """
     A frame followed over a recording (TransformTree.follow).
 
-    stamp (m,), R (m, 3, 3), b (m, 3): the lookups, in time order; chains: every chain of
+    The lookups' stamp (m,), R (m, 3, 3) and b (m, 3), in time order; chains: the chains of
     frames looked up through, in time order (one unless a frame was re-parented); refused:
     {index of a transform: the TransformTreeError that refused it}.
     """
@@ -172,6 +172,13 @@ class Followed(NamedTuple):
     b: np.ndarray
     chains: list
     refused: dict
+
+
+class _Branches(NamedTuple):
+    """The frames from reference, and from body, up to (not including) their common ancestor."""
+
+    up: list
+    down: list
 
 
 def shown(frame):
@@ -213,8 +220,7 @@ class _Edge:
     __slots__ = ('parent', 'static', 'stamps', 'R', 'b', 'start', 'end')
 
     def __init__(self, parent, static, capacity):
-        self.parent = parent
-        self.static = static
+        self.parent, self.static = parent, static
         self.stamps = np.empty(capacity)
         self.R = np.empty((capacity, 3, 3))
         self.b = np.empty((capacity, 3))
@@ -315,8 +321,8 @@ class _Edge:
         """(R, b) of the edge at times t (a float64 array), interpolated; or refused."""
         if self.static:
             shape = t.shape
-            return (np.broadcast_to(self.R[self.start], shape + (3, 3)),
-                    np.broadcast_to(self.b[self.start], shape + (3,)))
+            return Motion(np.broadcast_to(self.R[self.start], shape + (3, 3)),
+                          np.broadcast_to(self.b[self.start], shape + (3,)))
         stamps = self.stamps[self.start:self.end]
         low, high = t.min(), t.max()
         if low < stamps[0] or high > stamps[-1]:
@@ -332,7 +338,7 @@ class _Edge:
             R[between], b[between] = screw_interpolate(
                 Rs[j - 1], bs[j - 1], Rs[j], bs[j], (t[between] - t0) / (t1 - t0),
                 check=False)
-        return R, b
+        return Motion(R, b)
 
     def _refuse(self, low, high, child, query):
         first, last = self.oldest, self.newest
@@ -414,8 +420,7 @@ class TransformTree:
                 first = tuple(int(i) for i in np.argwhere(~finite)[0])
                 raise TransformTreeError(
                     NON_FINITE, f'the transform {shown(parent)} → {shown(child)} is not '
-                    f'finite: {name} '
-                    f'has {value[first]} at index {first}')
+                    f'finite: {name} has {value[first]} at index {first}')
         try:
             validate_rotation(R)
         except RotationError as exc:
@@ -434,8 +439,7 @@ class TransformTree:
                 edge = _Edge(parent, bool(static), 1 if static else _MIN_CAPACITY)
             if static:
                 edge.stamps[0], edge.R[0], edge.b[0] = stamps, R, b
-                edge.end = 1
-                stored = 1
+                edge.end = stored = 1
             elif many:
                 stored = edge.add_many(stamps, R, b, self.cache_seconds, self.max_samples)
             else:
@@ -455,9 +459,8 @@ class TransformTree:
             path.append(frame)
         cycle = ' → '.join(map(shown, [child] + path))
         raise TransformTreeError(
-            LOOP, f'the transform {shown(parent)} → {shown(child)} would make '
-            f'{shown(child)} its own '
-            f'ancestor (a loop: {cycle}); refused')
+            LOOP, f'the transform {shown(parent)} → {shown(child)} would make {shown(child)} '
+            f'its own ancestor (a loop: {cycle}); refused')
 
     def forget(self, frame):
         """
@@ -499,19 +502,17 @@ class TransformTree:
                 UNKNOWN_FRAME, f'frame {shown(frame)} is unknown (known frames: {known})')
 
     def _path(self, reference, body):
-        """Return (up, down): from reference, and from body, up to their common ancestor."""
+        """Return the _Branches of reference and body; TransformLookupError if none join."""
         self._require_known(reference)
         self._require_known(body)
-        ancestors = {}
-        frame = reference
+        ancestors, frame = {}, reference
         while True:
             ancestors[frame] = len(ancestors)
             edge = self._edges.get(frame)
             if edge is None:
                 break
             frame = edge.parent
-        down = []
-        frame = body
+        down, frame = [], body
         while frame not in ancestors:
             down.append(frame)
             edge = self._edges.get(frame)
@@ -522,15 +523,13 @@ class TransformTree:
                     f'connected: {shown(reference)} is in the tree of {shown(root)}, '
                     f'{shown(body)} in the tree of {shown(frame)}')
             frame = edge.parent
-        up = list(ancestors)[:ancestors[frame]]
-        return up, down
+        return _Branches(list(ancestors)[:ancestors[frame]], down)
 
     def chain(self, reference, body):
         """
         Return the frames from ``reference`` to ``body``, both ends included.
 
-        Through their common ancestor: ['odom', 'base_link', 'camera']; [frame] for a frame in
-        itself.
+        Through their common ancestor: ['odom', 'base_link', 'camera']; [f] for f in itself.
         """
         with self._lock:
             up, down = self._path(reference, body)
@@ -612,7 +611,7 @@ class TransformTree:
             Re, be = edge.at(t, frame, query)
             b = np.einsum('...ij,...j->...i', Re, b) + be
             R = Re @ R
-        return R, b
+        return Motion(R, b)
 
     # -- a recording ---------------------------------------------------------------------
 
@@ -654,7 +653,8 @@ class TransformTree:
             for rows in feeds[lo]:
                 self._feed(transforms, rows, stamps, static, refused)
             try:
-                at, chain = self._chain_stamps(reference, body, lo, hi)
+                at = self._chain_stamps(reference, body, lo, hi)
+                chain = self.chain(reference, body)
                 if len(at):
                     found.append(self.lookup(reference, body, at))
                     chains += [chain] if chain not in chains else []
@@ -684,17 +684,16 @@ class TransformTree:
 
     def _chain_stamps(self, reference, body, lo, hi):
         """
-        Return (stamps, chain): the times in [lo, hi) to look the chain up at.
+        Return the times in [lo, hi) to look the chain from reference to body up at.
 
         Its dynamic edges' stamps where all have data; else its latest common time.
         """
         with self._lock:
             up, down = self._path(reference, body)
-            chain = self.chain(reference, body)
             dynamic = [self._edges[f] for f in up + down if not self._edges[f].static]
             if not dynamic:
                 t = self._latest(up, down, reference)
-                return np.array([t] if lo <= t < hi or lo == -math.inf else []), chain
+                return np.array([t] if lo <= t < hi or lo == -math.inf else [])
             first, last = self.time_range(reference, body)
             t = np.unique(np.concatenate([e.stamps[e.start:e.end] for e in dynamic]))
-            return t[(t >= max(lo, first)) & (t < hi) & (t <= last)], chain
+            return t[(t >= max(lo, first)) & (t < hi) & (t <= last)]
