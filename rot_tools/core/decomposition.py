@@ -9,7 +9,6 @@ angles_kernel, quaternion_of_matrix_kernel, screw_of_axis_kernel, twist_kernel),
 equals what that function gives, and at θ = π all of them use the same axis sign.
 """
 
-from types import SimpleNamespace
 from typing import NamedTuple
 
 import numpy as np
@@ -81,11 +80,3 @@ def decompose(R, b, seq='ZYX', *, check=True):
                              [(b, (3,), 'translation b', True)], (parse_sequence(seq),))
     refuse_far_axis(out.fits, out.value.angle, b)
     return out.value
-
-
-def decompose_values(R, b, seq='ZYX'):
-    """Return decompose's fields as rotation_node read them (deprecated: it goes with that use)."""
-    d = decompose(R, b, seq, check=False)
-    fields = ('rotvec', 'euler', 'twist', 'quaternion', 'rpy')
-    return SimpleNamespace(matrix=np.asarray(R, dtype=np.float64).ravel().tolist(),
-                           **{f: tuple(getattr(d, f).tolist()) for f in fields})
