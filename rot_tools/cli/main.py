@@ -35,144 +35,21 @@ stderr and exits with status 2. An angle typed without ``--deg`` that is larger 
 only gets a one-line ``rot-tools: hint: ...`` on stderr (after the report; status 0).
 """
 
-import argparse
 import sys
 
 from rot_tools.cli import (
-    axis_angle, compare, covariance, euler, frame, matrix, options, quaternion, rotvec, screw)
-from rot_tools.core.euler import RPY_SEQUENCE
+    axis_angle, bag, compare, covariance, euler, frame, matrix, options, quaternion, rotvec,
+    screw)
 from rot_tools.io import arguments
-from rot_tools.io.boundary import QUATERNION_TOLERANCE
-from rot_tools.io.message_covariance import READINGS
-from rot_tools.io.report import DEFAULT_PRECISION
 
 PROG = options.PROG
 
-COMMANDS = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw, compare, covariance)
-"""The modules of rot-tools' commands, in the order --help lists them (bag's is added after
-screw's)."""
+COMMANDS = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw, bag, compare,
+            covariance)
+"""The modules of rot-tools' commands, in the order --help lists them."""
 
 ONE_SHOT = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw)
 """The one-shot commands, whose first examples the main help shows."""
-
-
-def _seconds(text):
-    value = arguments.number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(
-            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
-    return value
-
-
-_BAG_TEXT = (
-    'Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags without ROS (the rosbags library: pip\n'
-    "install 'rot_tools[bag]'). Topics of type PoseStamped, PoseWithCovarianceStamped,\n"
-    'Odometry, Imu, QuaternionStamped and TransformStamped are read (default: all of\n'
-    "them). Each message passes the checks of rotation_node's inputs: a NaN/Inf, a zero or\n"
-    f'non-unit quaternion (|q| off 1 by more than --tol, default {QUATERNION_TOLERANCE:g}), an '
-    'Imu without\n'
-    'orientation is refused and counted by reason.\n\n'
-    'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
-    'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
-    'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
-    'from its gyro (RMS). For Imu, PoseWithCovarianceStamped and Odometry, the median\n'
-    'standard deviations of roll, pitch and yaw from their covariances, and how many were\n'
-    "unknown or bad. roll, pitch, yaw are REP-103's (about the fixed X, Y, Z axes,\n"
-    f'the extrinsic sequence {RPY_SEQUENCE}) and continuous along each topic (no jump at ±180°)\n'
-    'unless --wrap. With --csv, one row per accepted message; with --plot, roll, pitch\n'
-    'and yaw against time, one panel per topic.')
-
-
-def _add_bag(sub):
-    """Add the bag command: its own options, and the common ones that apply to it."""
-    p = sub.add_parser(
-        'bag', help='the orientations recorded in a ROS bag: summary, CSV, plot',
-        usage=f'{PROG} bag PATH... [--topic T]... [--tf REFERENCE BODY] [--seq SEQ] [--deg]\n'
-        '       [--wrap] [--csv FILE|-] [--json] [--plot FILE] [--start S] [--end S]\n'
-        '       [--input-covariance rotvec|rpy] [--jobs N] [--parquet DIR]\n'
-        '       [--engine dask [--scheduler ADDRESS]]',
-        description=f'The orientations recorded in a ROS bag.\n\n{_BAG_TEXT}',
-        epilog='examples:\n  rot-tools bag run.bag\n'
-        '  rot-tools bag run.bag --topic /imu/data --csv imu.csv --deg\n'
-        '  rot-tools bag rosbag2_dir --plot rpy.png --start 10 --end 20\n'
-        '  rot-tools bag recordings/ --jobs 4 --parquet table/')
-    p.add_argument('path', metavar='PATH', nargs='+',
-                   help='a ROS 1 .bag file, a rosbag2 directory, or a file in one; any other '
-                   'directory is searched for bags. Several bags: a summary per bag and '
-                   'for the fleet, a bag that cannot be read listed as failed (exit '
-                   'status 1), --csv one table with a bag column first')
-    p.add_argument('--topic', action='append', metavar='T',
-                   help='read this topic (repeat for more); default: every topic of a type '
-                   'read')
-    p.add_argument('--tf', nargs=2, metavar=('REFERENCE', 'BODY'),
-                   help="the transform of BODY in REFERENCE from the bag's /tf and "
-                   '/tf_static (tf2_msgs/TFMessage), through rot_tools.TransformTree, at every '
-                   'stamp of the dynamic transforms between them (a topic named '
-                   'tf:REFERENCE->BODY); other topics then only with --topic')
-    p.add_argument('--wrap', action='store_true',
-                   help='angles as computed, each in (−180°, 180°], instead of continuous')
-    p.add_argument('--csv', metavar='FILE',
-                   help='write one row per accepted message to FILE (- = standard output, '
-                   'which then gets no summary): topic, stamp (s), frame_id, x, y, z, qx, qy, '
-                   'qz, qw (w ≥ 0), roll, pitch, yaw, the --seq angles SEQ_1..3, rotation '
-                   'vector rx, ry, rz, angle, body angular velocity wx, wy, wz from the '
-                   'previous row of the topic (empty on its first row), standard deviations '
-                   'roll_std, pitch_std, yaw_std from the covariance (empty where none is '
-                   'known)')
-    p.add_argument('--input-covariance', choices=READINGS, default='rotvec',
-                   help="how a recorded covariance's rotation block is read, as "
-                   "rotation_node's input_covariance: rotvec (default, ROS's "
-                   "PoseWithCovariance: rotations about the parent's fixed X, Y, Z) or rpy "
-                   '(already roll, pitch, yaw)')
-    p.add_argument('--start', type=_seconds, metavar='S',
-                   help="only messages recorded S seconds or more after the bag's start")
-    p.add_argument('--end', type=_seconds, metavar='S',
-                   help="only messages recorded at most S seconds after the bag's start")
-    p.add_argument('--jobs', type=arguments.whole_number, metavar='N',
-                   help='read the bags in N processes (default: one per CPU; 1: here, one '
-                   'after the other); the output is the same whatever N is')
-    p.add_argument('--parquet', metavar='DIR',
-                   help='write one Parquet file per bag in DIR: the --csv columns plus bag, '
-                   'stamp as int64 nanoseconds (needs pyarrow, the bag extra)')
-    p.add_argument('--engine', choices=('processes', 'dask'), default='processes',
-                   help='processes: --jobs N processes here (default); dask: each bag a '
-                   'task on a Dask cluster (the fleet extra), a local one of N workers '
-                   'unless --scheduler')
-    p.add_argument('--scheduler', metavar='ADDRESS',
-                   help='with --engine dask: the address of a running Dask scheduler '
-                   '(tcp://HOST:8786), whose workers must see the bags and DIR')
-    common = p.add_argument_group('common options')
-    suppress = argparse.SUPPRESS
-    common.add_argument('--deg', action='store_true', default=suppress,
-                        help='every angle in degrees (angular velocities in deg/s)')
-    common.add_argument('--seq', type=arguments.sequence, default=suppress, metavar='SEQ',
-                        help='also the Euler angles of SEQ (CSV columns SEQ_1..3), '
-                        'continuous like roll, pitch, yaw')
-    common.add_argument('--json', action='store_true', default=suppress,
-                        help='print the summary as JSON instead of YAML')
-    common.add_argument('--precision', type=arguments.precision, default=suppress, metavar='N',
-                        help='round numbers to N significant digits and N decimal places '
-                        f'(default {DEFAULT_PRECISION}), in the summary and the CSV (whose '
-                        'stamps are exact)')
-    common.add_argument('--tol', type=options.tolerance, default=suppress, metavar='TOL',
-                        help='largest ||q| − 1| of a recorded quaternion (default '
-                        f'{QUATERNION_TOLERANCE:g}, '
-                        "rotation_node's quaternion_tolerance); within it q is normalised")
-    common.add_argument('--plot', type=options.plot_file, default=suppress, metavar='FILE',
-                        help='draw roll, pitch, yaw against time, one panel per topic, in '
-                        "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
-    arguments.add_version(common)
-    return p
-
-
-def _bag(args):
-    """rot-tools bag: rot_tools.cli.fleet, then bag (imported only now: the 'bag' extra)."""
-    for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
-                          ('--all-sequences', args.all_sequences)):
-        if given:
-            options.error(f'{option} does not apply to bag')
-    from rot_tools.cli import fleet
-    return fleet.command(args, options.error)
 
 
 def build_parser():
@@ -192,8 +69,6 @@ def build_parser():
                                      dest='command', metavar='COMMAND', required=True)
     for module in COMMANDS:
         module.add_parser(subparsers).set_defaults(run=module.run)
-        if module is screw:
-            _add_bag(subparsers).set_defaults(run=_bag)
     return parser
 
 
