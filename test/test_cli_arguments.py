@@ -125,6 +125,18 @@ def test_version_is_the_installed_distributions(capsys):
     assert capsys.readouterr() == (f'toy {version("rot_tools")}\n', '')
 
 
+def test_version_without_the_distribution_is_one_error_line(monkeypatch, capsys):
+    import importlib.metadata
+
+    def missing(name):
+        raise importlib.metadata.PackageNotFoundError(name)
+    monkeypatch.setattr(importlib.metadata, 'version', missing)
+    assert cli.main(['euler', 'ZYX', '1', '2', '3', '--version']) == 2
+    assert capsys.readouterr() == (
+        '', 'rot-tools: error: --version: rot_tools is not installed (no distribution '
+        'metadata)\n')
+
+
 def test_parsing_is_argparse_own():
     """
     No parser of rot_tools replaces one of argparse's parsing methods.

@@ -4,7 +4,8 @@ Command-line pieces shared by rot-tools and rotation_client: argparse, no ROS.
 - :class:`Parser`: an ArgumentParser whose errors are one line, ``PROGRAM: error: ...``, with
   exit status 2 (no usage block), and whose commands take their options anywhere:
   ``rot-tools euler ZYX --deg 30 20 10`` as well as ``rot-tools --deg euler ZYX 30 20 10``.
-- ``--version`` (:class:`Version`): the installed distribution's version.
+- ``--version`` (:class:`Version`, :func:`version_line`): the installed distribution's
+  version.
 - Value types: :func:`number` (finite), :func:`any_number`, :func:`sequence`,
   :func:`precision`, :func:`whole_number`.
 - Options both programs take: :func:`add_deg`, :func:`add_json`, :func:`add_precision`,
@@ -121,17 +122,27 @@ class Parser(argparse.ArgumentParser):
         return command.parse_command_line(words, found)
 
 
+def version_line(program):
+    """
+    Return 'PROGRAM VERSION': the installed rot_tools distribution's version (setup.py's).
+
+    importlib.metadata.PackageNotFoundError when rot_tools is not installed.
+    """
+    from importlib.metadata import version  # only when asked
+    return f'{program} {version("rot_tools")}'
+
+
 class Version(argparse.Action):
-    """--version: print 'PROGRAM VERSION', the installed rot_tools distribution's, and exit 0."""
+    """--version: print :func:`version_line` of the program and exit 0."""
 
     def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS,
                  help='print the version and exit'):  # noqa: A002
         super().__init__(option_strings, dest, nargs=0, default=default, help=help)
 
     def __call__(self, parser, namespace, values, option_string=None):
-        from importlib.metadata import PackageNotFoundError, version  # only when asked
+        from importlib.metadata import PackageNotFoundError
         try:
-            text = f'{program_name(parser)} {version("rot_tools")}'
+            text = version_line(program_name(parser))
         except PackageNotFoundError:
             parser.error('--version: rot_tools is not installed (no distribution metadata)')
         print(text)
