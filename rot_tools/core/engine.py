@@ -39,12 +39,7 @@ CHUNK = 8192
 
 @dataclass(frozen=True)
 class Spec:
-    """
-    One output of a kernel: its trailing shape and its dtype.
-
-    dtype np.float64 or np.bool_; ``float`` gives a Python float for a single item (a
-    scalar output only), float64 for a batch.
-    """
+    """One output of a kernel: its trailing shape and its dtype (np.float64 or np.bool_)."""
 
     tail: tuple
     dtype: type = np.float64
@@ -162,9 +157,8 @@ def _one_item(value, spec):
             raise TypeError(f'a kernel gave an output of shape {out.shape}, declared '
                             f'{spec.tail}')
         return out
-    if type(value) is not type(spec) or type(value) is tuple and len(value) != len(spec):
-        _require_form(value, spec)  # (raises)
-    return tuple.__new__(type(spec), [_one_item(v, s) for v, s in zip(value, spec)])
+    _require_form(value, spec)
+    return _make(spec, [_one_item(v, s) for v, s in zip(value, spec)])
 
 
 def _require_form(value, spec):
@@ -200,9 +194,9 @@ def _apply_to_batch(kernel, inputs, outputs, params, one=False):
     tails = [t for _, t, _, _ in inputs]
     if one:
         result = batch(kernel, [a[None] for a in arrays], tails, outputs, params)
-        specs = _leaves(outputs, outputs)
-        return _rebuild(outputs, iter([s.dtype(x[0]) if not s.tail else x[0] for x, s in zip(
-            _leaves(result, outputs), specs)]))
+        firsts = [x[0] if s.tail else s.dtype(x[0])
+                  for x, s in zip(_leaves(result, outputs), _leaves(outputs, outputs))]
+        return _rebuild(outputs, iter(firsts))
     checks = [(i, name) for i, (_, _, name, finite) in enumerate(inputs) if finite]
     return batch(kernel, arrays, tails, outputs, params, checks)
 
