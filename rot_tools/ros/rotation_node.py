@@ -18,6 +18,7 @@ carry a covariance (~/rpy_covariance): rot_tools.ros.rpy_covariance.
 
 import difflib
 from functools import partial, wraps
+from importlib.metadata import PackageNotFoundError
 import math
 import os
 import sys
@@ -43,6 +44,7 @@ from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
+from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.interface import MATRIX
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
@@ -80,6 +82,8 @@ class Source(NamedTuple):
     read: Callable
     convert: Callable
     fields: dict
+    covariance: rpy_covariance.Reader = None
+    """How its covariance is read, for an input that carries one (~/rpy_covariance)."""
 
 
 class Publishing(NamedTuple):
@@ -293,19 +297,17 @@ class RotationNode(Node):
         # only when the chain has a new common time; rot_tools.ros.tf_input).
         self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
                                        quaternion_tolerance=self._settings.quaternion_tolerance)
-        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None, None)
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None, {})
         self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
 
         self._sources = []
         for kind in INPUTS:
             source = Source(self.resolve_topic_name(kind.topic), kind.row.type_name, kind.read,
-                            kind.row.convert, kind.row.fields)
-            callback = partial(self._on_input, source)
-            if kind.row.covariance:  # then ~/rpy_covariance (rot_tools.ros.rpy_covariance)
-                callback = partial(self._covariances.on_input, callback, source.topic,
-                                   rpy_covariance.covariance_reader(kind.row))
-            self.create_subscription(kind.msg_type, kind.topic, callback, INPUT_QOS,
-                                     event_callbacks=NO_SUBSCRIPTION_EVENTS)
+                            kind.row.convert, kind.row.fields,
+                            rpy_covariance.covariance_reader(kind.row)
+                            if kind.row.covariance else None)
+            self.create_subscription(kind.msg_type, kind.topic, partial(self._on_input, source),
+                                     INPUT_QOS, event_callbacks=NO_SUBSCRIPTION_EVENTS)
             self._sources.append(source)
 
         self.create_service(Trigger, '~/describe', self._on_describe)
@@ -433,8 +435,8 @@ class RotationNode(Node):
         """
         Turn one input message into (header, R, b) and publish every output, or refuse it.
 
-        Return (header, R, values, settings) of an accepted message (``values``: the numbers
-        at its row's field paths), None for a refused one.
+        An input that carries a covariance then has its ~/rpy_covariance
+        (rot_tools.ros.rpy_covariance): the other inputs (~/pose's flood) pay nothing for it.
         """
         settings = self._settings
         header = msg.header
@@ -444,12 +446,14 @@ class RotationNode(Node):
             decomposition = decompose(R, b, settings.euler_sequence, check=False)
         except messages.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc), header=header)
-            return None
+            return
         except RotationError as exc:
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
-            return None
+            return
         self._publish(source, header, R, b, decomposition, settings)
-        return header, R, values, settings
+        if source.covariance is not None:
+            self._covariances.on_input(source.topic, source.covariance, msg, header, R, values,
+                                       settings)
 
     def _on_tf_transform(self, header, R, b):
         """Return the followed frames have a new common time on /tf: publish every output."""
@@ -644,7 +648,10 @@ def main(args=None):
         print(usage(), end='')
         return 0
     if '--version' in options:
-        print(runtime.program_version(PROG))
+        try:
+            print(version_line(PROG))
+        except PackageNotFoundError:
+            runtime.fail(PROG, '--version: rot_tools is not installed (no distribution metadata)')
         return 0
     if options:
         runtime.fail(PROG, f'unknown argument {options[0]!r} (ROS arguments go after '

@@ -92,17 +92,13 @@ class RpyCovariances:
         self._refuse = refuse
         self._latest = None
 
-    def on_input(self, take, topic, reader, msg):
+    def on_input(self, topic, reader, msg, header, R, values, settings):
         """
-        Serve one message of a covariance input: ``take(msg)`` (the node's), then its covariance.
+        Publish the covariance of one accepted input ``msg``, or say why there is none.
 
-        ``take`` returns (header, R, values, settings) of an accepted input (``values``: the
-        numbers of its row's fields), None for a refused one.
+        ``reader``: its row's Reader; ``header``, ``R``: the input's; ``values``: the numbers
+        at its row's field paths; ``settings``: the node's, as the input was converted.
         """
-        accepted = take(msg)
-        if accepted is None:
-            return
-        header, R, values, settings = accepted
         cov = np.asarray(reader.covariance(msg), dtype=np.float64)
         if cov.any():  # (NaN is true: refused below)
             (C,), (status,) = rpy_covariances(R[None], cov[None], settings.input_covariance)

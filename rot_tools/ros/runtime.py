@@ -1,5 +1,5 @@
 """
-What rot_tools' ROS programs share around rclpy: their arguments, their errors, their loop.
+What rotation_node's main does around rclpy: its arguments, their errors, its loop.
 
 - :func:`user_arguments`, :func:`home_remaps`: the command line outside ``--ros-args`` (so
   that ``--help`` and ``--version`` answer before anything ROS starts), and the remaps whose
@@ -9,7 +9,6 @@ What rot_tools' ROS programs share around rclpy: their arguments, their errors, 
   invalid node name or parameter value) end the program with exactly one line on stderr, the
   text of what rclpy raised, and exit status 2 — not rcl's log line and a traceback.
 - :func:`spin`: the node's loop on an executor rclpy ships.
-- :func:`program_version`: the installed distribution's version, for ``--version``.
 
 Signals are rclpy's: rclpy.init installs its handlers, which shut the context down on SIGINT
 and SIGTERM; the loop then ends, and the program returns its status.
@@ -126,15 +125,6 @@ def init_ros(program, args=None, **kwargs):
     finally:
         if get_logger_level('rcl') == LoggingSeverity.FATAL:  # not set by --log-level
             set_logger_level('rcl', level)
-
-
-def program_version(program):
-    """'program 0.1.0': the installed rot_tools distribution's version (setup.py's)."""
-    from importlib.metadata import PackageNotFoundError, version
-    try:
-        return f'{program} {version("rot_tools")}'
-    except PackageNotFoundError:
-        return f'{program} (rot_tools not installed: no distribution metadata)'
 
 
 def spin(node, executor):
