@@ -85,6 +85,13 @@ class TfChain(NamedTuple):
     texts: dict
 
 
+class TfTopic(NamedTuple):
+    """The topic ``tf:REFERENCE->BODY``: its Columns (the lookups) and its TfChain."""
+
+    columns: bag_read.Columns
+    chain: TfChain
+
+
 class Topic:
     """One topic's accepted messages and everything computed from them (radians)."""
 
@@ -94,10 +101,10 @@ class Topic:
         self.tolerance = tolerance
         self.chain = chain
         if chain is None:
-            self.codes, norms = boundary.check_batch(c.orientation, tolerance, c.position,
-                                                     c.covariance0)
+            verdict = boundary.check_batch(c.orientation, tolerance, c.position, c.covariance0)
+            self.codes = verdict.code
             self.ok = self.codes == boundary.ACCEPTED
-            self.R = boundary.accepted_rotations(c.orientation, norms, self.codes)
+            self.R = boundary.accepted_rotations(c.orientation, verdict.norm, self.codes)
         else:  # a TF chain: its lookups, all made; the transforms' refusals are chain.codes
             self.codes = chain.codes
             self.ok = np.ones(len(c), bool)
@@ -154,7 +161,7 @@ class Topic:
         if self.chain is not None and k in self.chain.texts:
             return self.chain.texts[k]
         q = c.orientation[k]
-        norm = boundary.check_batch(q[None], self.tolerance)[1]
+        norm = boundary.check_batch(q[None], self.tolerance).norm
         position = c.position[k] if c.position is not None else None
         fields = (interface.TF_FIELDS if self.chain is not None
                   else bag_read.SUPPORTED[self.msgtype])
@@ -292,7 +299,7 @@ def select_connections(reader, topics):
 
 def tf_topic(reader, reference, body, tolerance, lo, hi):
     """
-    Return (Columns, TfChain): BODY in REFERENCE from the bag's TFMessage topics.
+    Return the TfTopic of BODY in REFERENCE from the bag's TFMessage topics.
 
     Every transform passes the boundary's checks (refusals counted, the rest goes on); the
     accepted ones, static ones whatever --start/--end say, feed a rot_tools.TransformTree
@@ -307,7 +314,8 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
     dynamic = [c for c in connections if c not in static]
     tf = bag_read.read_tf(reader, static, dynamic, lo, hi)
     c = tf.columns
-    codes, norms = boundary.check_batch(c.orientation, tolerance, c.position)
+    verdict = boundary.check_batch(c.orientation, tolerance, c.position)
+    codes = verdict.code
     ok = codes == boundary.ACCEPTED
     parents = np.array(c.frame_ids, object)[c.frame[ok]]
     children = np.array(c.child_frame_ids, object)[c.child[ok]]
@@ -320,7 +328,7 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
     ns = stamp_ns(c.sec[ok], c.nanosec[ok])
     origin = int(ns.min())
     transforms = transform_tree.Transforms(
-        parents, children, boundary.accepted_rotations(c.orientation, norms, codes),
+        parents, children, boundary.accepted_rotations(c.orientation, verdict.norm, codes),
         c.position[ok], (ns - origin) / NS_PER_S, tf.static[ok])
     tree = transform_tree.TransformTree(math.inf, max_samples=max(2, len(ns)))
     try:
@@ -342,8 +350,8 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
                                np.zeros(n, np.intp), [body], np.zeros(n, np.intp),
                                position=followed.b)
     chains = followed.chains
-    return columns, TfChain(followed.R, chains[0] if len(chains) == 1 else chains, codes, c,
-                            texts)
+    return TfTopic(columns, TfChain(followed.R, chains[0] if len(chains) == 1 else chains,
+                                    codes, c, texts))
 
 
 NS_MAX = 2 ** 63 - 1
@@ -384,12 +392,12 @@ def analyse(path, topics=(), start=None, end=None, tolerance=QUATERNION_TOLERANC
                                            progress=progress) if connections else {}
         finally:
             progress.done()
-        chain = tf_topic(reader, tf[0], tf[1], tolerance, lo, hi) if tf else None
+        followed = tf_topic(reader, tf[0], tf[1], tolerance, lo, hi) if tf else None
         storage = bag_read.storage_name(reader)
     out = [Topic(columns[name], tolerance, seq, wrap, reading=reading)
            for name in sorted(columns)]
-    if chain is not None:
-        out.append(Topic(chain[0], tolerance, seq, wrap, chain=chain[1]))
+    if followed is not None:
+        out.append(Topic(followed.columns, tolerance, seq, wrap, chain=followed.chain))
     return Analysis(storage, out)
 
 

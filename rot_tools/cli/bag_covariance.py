@@ -46,7 +46,9 @@ def _sigma(C):
 
 def _euler_block(R, C):
     """
-    Return (Σ of roll, pitch, yaw (n, 3, 3), lock (n,)) of one good covariance C, rotations R.
+    Return the ConvertedCovariance of one good covariance C at rotations R (n, 3, 3).
+
+    cov: Σ of roll, pitch, yaw (n, 3, 3); degenerate (n,): at gimbal lock.
 
     Only the rotation block is converted (the diagonal needs nothing else); a block that fails
     the check on its own — its tolerance is relative to its own largest entry, the whole
@@ -56,8 +58,8 @@ def _euler_block(R, C):
     try:
         return rotvec_covariance_to_euler(R, C[-3:, -3:], RPY_SEQUENCE, 'parent')
     except RotationError:
-        out, lock = rotvec_covariance_to_euler(R, C, RPY_SEQUENCE, 'parent')
-        return out[:, -3:, -3:], lock
+        whole = rotvec_covariance_to_euler(R, C, RPY_SEQUENCE, 'parent')
+        return whole._replace(cov=whole.cov[:, -3:, -3:])
 
 
 class Stddevs(NamedTuple):
@@ -99,9 +101,9 @@ def stddevs(R, cov, reading='rotvec'):
         if reading == 'rpy':
             sigma[start:end] = _sigma(C)
             continue
-        out, lock = _euler_block(R[start:end], C)
-        sigma[start:end] = _sigma(out)
-        status[start:end][lock] = LOCK
+        converted = _euler_block(R[start:end], C)
+        sigma[start:end] = _sigma(converted.cov)
+        status[start:end][converted.degenerate] = LOCK
     return Stddevs(sigma, status)
 
 

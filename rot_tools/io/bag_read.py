@@ -230,34 +230,51 @@ class Columns:
         return self.sec + 1e-9 * self.nanosec
 
 
-def _columns(topic, msgtype, parts, fields):
-    """Return the Columns of chunks ``parts`` [(record (n,), {column: values})] of ``fields``."""
-    stamp = _join('stamp', parts, fields)
-    out = Columns(topic, msgtype, np.concatenate([p[0] for p in parts] or [np.zeros(0, np.int64)]),
-                  stamp[:, 0], stamp[:, 1], *_index([p[1]['frame_id'] for p in parts]))
+class Chunk(NamedTuple):
+    """Some messages of one topic, read: their record times (n,), {column: values}."""
+
+    record: np.ndarray
+    columns: dict
+
+
+def _columns(topic, msgtype, chunks, fields):
+    """Return the Columns of a topic's chunks [Chunk] of ``fields``, joined."""
+    stamp = _join('stamp', chunks, fields)
+    frames = _index([chunk.columns['frame_id'] for chunk in chunks])
+    out = Columns(topic, msgtype, np.concatenate([chunk.record for chunk in chunks]
+                                                 or [np.zeros(0, np.int64)]),
+                  stamp[:, 0], stamp[:, 1], frames.values, frames.index)
     if 'child_frame_id' in fields.names:
-        out.child_frame_ids, out.child = _index([p[1]['child_frame_id'] for p in parts])
+        children = _index([chunk.columns['child_frame_id'] for chunk in chunks])
+        out.child_frame_ids, out.child = children.values, children.index
     for name in ('orientation', 'position', 'covariance0', 'angular_velocity', 'covariance'):
         if name in fields.names:
-            setattr(out, name, _join(name, parts, fields))
+            setattr(out, name, _join(name, chunks, fields))
     if out.covariance is not None and out.covariance.shape[1] != fields.size:
         out.covariance = None  # a bag's own definition of the type, with another size
     return out
 
 
+class Strings(NamedTuple):
+    """A column of strings: each distinct one listed once, and each row's index into them."""
+
+    values: list
+    index: np.ndarray
+
+
 def _index(chunks):
-    """(strings, index (N,)) of the strings of several chunks: each distinct one listed once."""
+    """Return the Strings of the strings of several chunks (lists), one row per string."""
     lookup = {}
     index = [lookup.setdefault(s, len(lookup)) for chunk in chunks for s in chunk]
-    return list(lookup), np.array(index, np.intp)
+    return Strings(list(lookup), np.array(index, np.intp))
 
 
-def _join(name, parts, fields):
+def _join(name, chunks, fields):
     """Return column ``name`` of every chunk, joined."""
     width = len(STAMP_MEMBERS if name == 'stamp' else interface.MEMBERS.get(name) or ()) \
         or fields.size
     empty = np.zeros((0, width) if width > 1 else (0,), np.int64 if name == 'stamp' else None)
-    return np.concatenate([p[1][name] for p in parts] or [empty])
+    return np.concatenate([chunk.columns[name] for chunk in chunks] or [empty])
 
 
 class _Topic:
@@ -265,7 +282,7 @@ class _Topic:
 
     def __init__(self, topic, msgtype, fields):
         self.topic, self.msgtype, self.fields = topic, msgtype, fields
-        self.records, self.messages, self.parts = [], [], []
+        self.records, self.messages, self.chunks = [], [], []
         self.count = 0
 
     def add(self, record, message):
@@ -276,14 +293,14 @@ class _Topic:
 
     def flush(self):
         if self.messages:
-            self.parts.append((np.array(self.records, np.int64),
-                               self.fields.columns(self.messages)))
+            self.chunks.append(Chunk(np.array(self.records, np.int64),
+                                     self.fields.columns(self.messages)))
             self.count += len(self.messages)
         self.records, self.messages = [], []
 
     def finish(self):
         self.flush()
-        return _columns(self.topic, self.msgtype, self.parts, self.fields)
+        return _columns(self.topic, self.msgtype, self.chunks, self.fields)
 
 
 def fields_of(msgtype):
