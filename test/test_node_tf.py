@@ -374,6 +374,34 @@ def test_large_tf_messages_are_cut_and_the_node_keeps_serving(node_process, test
             'taken, 99,000 dropped') in node.wait_for_stderr('(tf_too_many_transforms)')
 
 
+def test_ctrl_c_while_rclpy_makes_a_huge_message_ends_the_node_within_a_second(
+        node_process, tester, namespace):
+    """
+    Check that SIGINT ends the node within a second while rclpy makes a huge message.
+
+    rclpy turns a TFMessage of 100,000 transforms into a message object in seconds of the
+    node's time; Ctrl-C ends it within a second of its own time, status 0, no traceback.
+    """
+    import signal
+    from geometry_msgs.msg import QuaternionStamped
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rclpy.serialization import serialize_message
+    node = node_process(*node_args(namespace, 'odom', 'base_link'))
+    out = f'{node.name}/quaternion'
+    tester.subscribe(out, QuaternionStamped)
+    wait_started(tester, out)
+    pub = tester.publisher(f'{namespace}/tf', tf2_msgs.TFMessage,
+                           QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+    ballast = make_transform('odom', 'ballast', sec=1_000, nanosec=0)
+    large = serialize_message(tf2_msgs.TFMessage(transforms=[ballast] * 100_000))
+    for _ in range(3):
+        pub.publish(large)
+    node.wait_for_stderr('(tf_too_many_transforms)')  # the first taken: the second is made
+    status, seconds, stderr = node.stop(signal.SIGINT)
+    assert status == 0 and 'Traceback' not in stderr, stderr
+    assert seconds < 1.0, f'the node took {seconds:.2f} s of its own time to stop'
+
+
 LARGE_MESSAGES = 10
 """TFMessages of 100,000 transforms sent back to back."""
 

@@ -493,7 +493,8 @@ class RotationNode(Node):
         self._refused[reason] += 1
         self._last_refusals[reason] = (topic, header, text)
         now = time.monotonic()
-        if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD:
+        if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD and (
+                self.context.ok()):  # (shut down by a signal: the node is stopping)
             self._warned[topic, reason] = now
             # One call site per severity: rclpy's logger keeps a call site's first severity
             # and raises ValueError when that site logs at another one.
