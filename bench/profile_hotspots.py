@@ -10,7 +10,7 @@ Not a ratio benchmark: a tool for whoever optimises rot_tools. It prints
    subscription's callback called directly, as the executor calls it, no DDS transport,
    publishing to topics nobody subscribes; and the node's callback's cProfile.
 
-Run: ``.venv/bin/python bench/profile_hotspots.py [--top N] [--skip-node]``.
+Run: ``.venv/bin/python bench/profile_hotspots.py [--top N] [--skip-node | --skip-math]``.
 """
 
 import argparse
@@ -130,8 +130,10 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--top', type=int, default=10, help='entries per profile (10)')
     parser.add_argument('--skip-node', action='store_true', help='math paths only')
+    parser.add_argument('--skip-math', action='store_true', help='the node callbacks only')
     args = parser.parse_args(argv)
-    math_paths(args.top)
+    if not args.skip_math:
+        math_paths(args.top)
     if not args.skip_node:
         node_callback(args.top)
 
