@@ -239,12 +239,7 @@ class _Edge:
         return float(self.stamps[self.end - 1])
 
     def _room(self, needed, max_samples):
-        """
-        Make room for ``needed`` more samples after ``end``.
-
-        The arrays double as the edge grows, to max_samples + 1 at most (one over, for the
-        sample added before the oldest expires) unless more are needed at once.
-        """
+        """Make room for ``needed`` samples after ``end``: arrays doubled, to max_samples + 1."""
         capacity = len(self.stamps)
         if self.end + needed <= capacity:
             return
@@ -335,9 +330,11 @@ class _Edge:
             between = ~exact
             j = i1[between]
             t0, t1 = stamps[j - 1], stamps[j]
-            R[between], b[between] = screw_interpolate(
-                Rs[j - 1], bs[j - 1], Rs[j], bs[j], (t[between] - t0) / (t1 - t0),
-                check=False)
+            s = (t[between] - t0) / (t1 - t0)
+            if len(j) == 1:  # one item: screw_interpolate's own one-item path, not a batch of 1
+                j, s = j[0], s[0]
+            R[between], b[between] = screw_interpolate(Rs[j - 1], bs[j - 1], Rs[j], bs[j], s,
+                                                       check=False)
         return Motion(R, b)
 
     def _refuse(self, low, high, child, query):
