@@ -55,6 +55,7 @@ def main(argv=None):
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
     from rclpy.parameter import Parameter
+    from rot_tools.ros.pictures import MARKER_RATE
     from rot_tools.ros.rotation_node import RotationNode
 
     rclpy.init()
@@ -81,6 +82,8 @@ def main(argv=None):
     print(f'  the work of an input, no picture:   {work * 1e6:7.0f} us')
     print(f'  the same with its picture drawn:    {both * 1e6:7.0f} us '
           f'(the picture: {(both - work) * 1e6:.0f} us, {(both - work) / work:.1f} x the work)')
+    print(f'  at most {MARKER_RATE:g} pictures/s, they cost at most '
+          f'{(both - work) * MARKER_RATE:.1%} of a core')
 
 
 if __name__ == '__main__':
