@@ -163,6 +163,15 @@ def _members_getter(names):
     return attrgetter(*names)
 
 
+class _Getter(NamedTuple):
+    """How one column is read: the field at its path, then its members (None: a string)."""
+
+    column: str
+    field: object
+    members: object
+    dtype: type
+
+
 class _Fields:
     """
     The columns read from the messages of one type, and how each is read.
@@ -174,28 +183,28 @@ class _Fields:
     """
 
     def __init__(self, fields, covariance=None):
-        self.getters = []  # (column, field getter, members getter or None, dtype)
+        self.getters = []
         for column, path in {**HEADER, **fields}.items():
             members = STAMP_MEMBERS if column == 'stamp' else interface.MEMBERS.get(column)
-            self.getters.append((column, field_getter(path),
-                                 members and _members_getter(members),
-                                 np.int64 if column == 'stamp' else np.float64))
+            self.getters.append(_Getter(column, field_getter(path),
+                                        members and _members_getter(members),
+                                        np.int64 if column == 'stamp' else np.float64))
         if covariance:
-            self.getters.append(('covariance', field_getter(covariance[0]), None, np.float64))
+            self.getters.append(_Getter('covariance', field_getter(covariance[0]), None,
+                                        np.float64))
         self.size = covariance[1] if covariance else None
-        self.names = {column for column, _, _, _ in self.getters}
+        self.names = {getter.column for getter in self.getters}
 
     def columns(self, messages):
         """Return {column: values} of a list of message objects (numbers as NumPy arrays)."""
         out = {}
-        for column, get, members, dtype in self.getters:
-            values = list(map(get, messages))
-            if column == 'covariance':
-                out[column] = np.array(values, dtype).reshape(len(values), -1)
-            elif members is None:  # strings
-                out[column] = values
-            else:
-                out[column] = np.array(list(map(members, values)), dtype)
+        for getter in self.getters:
+            values = list(map(getter.field, messages))
+            if getter.column == 'covariance':  # a whole array
+                values = np.array(values, getter.dtype).reshape(len(values), -1)
+            elif getter.members is not None:
+                values = np.array(list(map(getter.members, values)), getter.dtype)
+            out[getter.column] = values  # strings: a list
         return out
 
 
