@@ -26,6 +26,7 @@ from doc_blocks import assert_doc_output
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 import pytest
+from rot_tools.core.euler import RPY_SEQUENCE
 from scipy.spatial.transform import Rotation
 from test_node_covariance import expected_covariance
 import yaml
@@ -91,7 +92,7 @@ def check_answer(answer, rotation, b=(0.0, 0.0, 0.0), drawn=True):
     q = answer['quaternion']
     assert [q['x'], q['y'], q['z'], q['w']] == approx(rotation.as_quat(canonical=True))
     assert answer['axis_angle'] == approx(rotation.as_rotvec())
-    roll, pitch, yaw = rotation.as_euler('xyz')  # REP 103: about the fixed x, y, z
+    roll, pitch, yaw = rotation.as_euler(RPY_SEQUENCE)  # REP 103: about the fixed x, y, z
     assert answer['rpy'] == {'roll': pytest.approx(roll, **DIGITS),
                              'pitch': pytest.approx(pitch, **DIGITS),
                              'yaw': pytest.approx(yaw, **DIGITS), 'unit': 'rad'}
