@@ -1,8 +1,8 @@
 """
-rot_tools leaves the process and the middleware to their owner, and speaks to its libraries
-by their documented names.
+rot_tools leaves the process and the wire to their owners and speaks to libraries by name.
 
-Read from the package's syntax tree (comments and strings are not code), every module of
+The process and the middleware belong to whoever starts them; rclpy and rosbags are used by
+their documented names. Read from the package's syntax tree (comments and strings are not code), every module of
 rot_tools/ is refused:
 
 - hand-written serialisation: a call with ``raw=True`` (a subscription handing over bytes),
