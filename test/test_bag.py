@@ -325,7 +325,7 @@ def test_frame_ids_of_many_lengths_are_read_as_recorded(tmp_path):
 def test_a_topic_read_in_many_chunks_is_one_table(monkeypatch, capsys):
     """Columns read a chunk of messages at a time join into one: frame ids listed once."""
     whole = rows_of(capsys, 'bag', bh.REAL)
-    monkeypatch.setattr(bag_read, 'CHUNK', 100)
+    monkeypatch.setattr(bag_read, 'CHUNK', 7)
     s = summary_of(capsys, 'bag', bh.REAL)
     assert s['topics'][IMU]['frame_ids'] == ['base_link']
     assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']

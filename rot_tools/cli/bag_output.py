@@ -110,7 +110,7 @@ def row_values(t, degrees):
     return np.hstack(columns)
 
 
-ROWS_PER_CHUNK = 4096
+ROWS_PER_CHUNK = 256
 """Rows made into Python values at a time, then written."""
 
 

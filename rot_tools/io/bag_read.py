@@ -47,8 +47,9 @@ HEADER = {'stamp': 'header.stamp', 'frame_id': 'header.frame_id'}
 STAMP_MEMBERS = ('sec', 'nanosec')
 """The members of a header stamp (builtin_interfaces/Time), read as int64."""
 
-CHUNK = 4096
-"""Messages of one topic held as objects at a time, before their fields become columns."""
+CHUNK = 64
+"""Messages of one topic held as objects at a time, before their fields become columns: few,
+so that they are gone before Python's garbage collector would walk them again and again."""
 
 BAG_SUFFIXES = ('.bag', '.db3', '.mcap')
 """Files read as a bag outside a rosbag2 directory: ROS 1, and rosbag2's storage files."""
