@@ -18,10 +18,12 @@ All three are plain rclpy nodes on rclpy's SingleThreadedExecutor, started with
 ``--ros-args -r __node:=NAME`` and flooded the same way. All run all the time; the trials go
 round them, rate by rate (1000 to 20000 msg/s offered, 3 s each by default), in three rounds,
 the order rotating. Delivered msg/s is the best round's (what the process can do; a round
-disturbed by other work on the machine is left out), latency and CPU the median. Before
-measuring, every output of each node is seen to arrive (discovery is awaited by messages
-flowing, never by sleeping); during the trials only ``~/screw`` is subscribed, while each
-node still publishes all of its outputs for every input.
+disturbed by other work on the machine is left out), latency and CPU the median; a p99
+ratio is the median of each round's ratio (the trials of a round at one rate run one after
+the other, so a disturbance falls on both sides). Before measuring, every output of each
+node is seen to arrive (discovery is awaited by messages flowing, never by sleeping);
+during the trials only ``~/screw`` is subscribed, while each node still publishes all of its
+outputs for every input.
 
 Per trial: delivered msg/s (screw messages received / flood duration), the fraction lost,
 latency p50 / p99, and the node process's CPU time per delivered message (from
@@ -338,13 +340,27 @@ def summarise(trials, rates):
     return out
 
 
-def compare(summary, rates, node, other):
-    """Node against another: sustained throughput ratio, p99 ratios where both sustain, CPU."""
+def round_ratio(trials, node, other, rate, key):
+    """Median over the rounds of node's ``key`` / other's in the same round, at ``rate``."""
+    rounds = {}
+    for t in trials:
+        if t['rate'] == rate and t['target'] in (node, other):
+            rounds.setdefault(t['round'], {})[t['target']] = t[key]
+    return benchlib.median([r[node] / r[other] for r in rounds.values() if len(r) == 2])
+
+
+def compare(summary, trials, rates, node, other):
+    """
+    Node against another: sustained throughput ratio, p99 ratios where both sustain, CPU.
+
+    A p99 ratio is the median of each round's: the two trials of a round run one after the
+    other, so a round disturbed by other work on the machine disturbs both.
+    """
     best = {t: max(summary[(t, r)]['delivered'] for r in rates) for t in (node, other)}
     # Latency is compared at the rates both sustain (≤ 1 % lost): beyond that a latency is
     # queueing in DDS, and the shortfall is the throughput figure's to show.
     both = [r for r in rates if max(summary[(t, r)]['loss'] for t in (node, other)) <= LOSS_OK]
-    p99 = {r: summary[(node, r)]['p99'] / summary[(other, r)]['p99'] for r in both}
+    p99 = {r: round_ratio(trials, node, other, r, 'p99') for r in both}
     cpu = [summary[(node, r)]['cpu_us'] / summary[(other, r)]['cpu_us'] for r in rates]
     return {'node_msgs': best[node], 'other_msgs': best[other],
             'throughput_ratio': best[node] / best[other], 'p99_ratios': p99,
@@ -352,11 +368,11 @@ def compare(summary, rates, node, other):
             'cpu_ratio': benchlib.median(cpu)}
 
 
-def evaluate(summary, rates):
+def evaluate(summary, trials, rates):
     """Every comparison, keyed 'node vs other', and each target's highest sustained rate."""
     pairs = [('rot_tools', 'usual'), ('rot_tools', 'relay'), ('usual', 'relay'),
              ('rot_tools_markers', 'rot_tools')]
-    ev = {f'{a} vs {b}': compare(summary, rates, a, b) for a, b in pairs
+    ev = {f'{a} vs {b}': compare(summary, trials, rates, a, b) for a, b in pairs
           if a in TARGETS and b in TARGETS}
     ev['sustained_rate'] = {
         t: max([r for r in rates if summary[(t, r)]['loss'] <= LOSS_OK], default=0)
@@ -411,7 +427,7 @@ def print_results(summary, ev, first, rates, seconds, repeats):
                      f"{c['cpu_ratio']:.2f}"])
     benchlib.print_table(
         'Comparisons (sustained throughput = most msg/s delivered at any offered rate; p99 '
-        'ratios at the offered rates both sustain with <= 1 % lost)',
+        "ratios at the offered rates both sustain with <= 1 % lost, the median of each round's)",
         ['a vs b', 'msg/s', 'throughput ratio', 'worst p99 ratio', 'p99 ratio by rate',
          'CPU/msg ratio'], rows)
     sustained = ', '.join(f'{TARGETS[t].label} {r}' for t, r in ev['sustained_rate'].items())
@@ -476,12 +492,12 @@ def main(argv=None):
                     shift = (rep + i) % len(order)
                     for target in order[shift:] + order[:shift]:
                         seconds = max(args.seconds, args.min_messages / rate)
-                        trials.append(harness.trial(target, rate, seconds))
+                        trials.append(dict(harness.trial(target, rate, seconds), round=rep))
                 print(f'  repetition {rep + 1}/{args.repeats} done', flush=True)
         finally:
             harness.stop()
     summary = summarise(trials, args.rates)
-    ev = evaluate(summary, args.rates)
+    ev = evaluate(summary, trials, args.rates)
     print_results(summary, ev, first, args.rates, args.seconds, args.repeats)
     goals = [{'figure': f, 'measured': v, 'goal': g, 'met': ok}
              for f, v, g, ok in goal_rows(ev, first)]
