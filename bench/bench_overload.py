@@ -34,10 +34,14 @@ how many calls took over 1 s and how many went unanswered; the refusals the node
 service answers with p99 <= 100 ms (an unanswered call counts as infinitely late); flooded
 as fast as one publisher sends, every call is answered within 5 s (the call timeout) and
 the node keeps publishing; under ``--tf large``, the node's RSS grows (at most during the
-flood, and ``--after`` s after it) by at most 20 MB more than the bare /tf subscriber's; at
+flood, and ``--after`` s after it) by at most 20 MB more than the bare /tf subscriber's,
+measured with the steady stream at a rate the node keeps up with (``--tf large --rate
+100``: under a faster one its /tf queue drops the large messages before it takes them, and
+the goal is then not met for want of evidence); at
 any rate, SIGINT during the flood ends the node within 1 s with status 0 and no traceback
 in its log. The RSS growth under a ~/pose flood is printed against its older goals (50 MB,
-back within 20 MB). Not a test: a script that prints what it measured.
+back within 20 MB; under a /tf flood the middleware's buffers make most of it, and the bare
+subscriber's is the measure). Not a test: a script that prints what it measured.
 
 Run: ``.venv/bin/python bench/bench_overload.py [--rate max|MSG_PER_S] [--seconds 60]
 [--after 10] [--tf steady|large|reparent|jump] [--json PATH]``.
@@ -420,10 +424,12 @@ def measure(seconds, after, call_timeout, logdir, rate='max', tf=None):
     # RSS growth of each watched process: at most during the flood, and --after s after it
     growth = {w: max(mb[w] for _, mb in samples) - rss_start[w] for w in watched}
     kept = {w: after_samples[-1][1][w] - rss_start[w] for w in watched}
-    goals = {'growth': growth['node'] <= GROWTH_GOAL_MB, 'alive': alive and answered > 0,
-             'returned': kept['node'] <= RETURN_GOAL_MB,
+    goals = {'alive': alive and answered > 0,
              'sigint': stop is not None and stop['status'] == 0 and stop['clean']
              and stop['seconds'] <= SIGINT_GOAL_S}
+    if not tf:  # (under /tf floods the bare subscriber beside the node is the measure)
+        goals.update(growth=growth['node'] <= GROWTH_GOAL_MB,
+                     returned=kept['node'] <= RETURN_GOAL_MB)
     if rate == 'max':
         goals['answered'] = all(v['max'] <= ANSWER_GOAL_S for v in latency.values())
     else:
@@ -434,8 +440,12 @@ def measure(seconds, after, call_timeout, logdir, rate='max', tf=None):
                        'kept_mb': kept['node'] - kept['bare'],
                        'bare_growth_mb': growth['bare'], 'bare_kept_mb': kept['bare']}
         if tf == 'large':
-            goals['tf_memory'] = max(beside_bare['growth_mb'],
-                                     beside_bare['kept_mb']) <= TF_GROWTH_GOAL_MB
+            # Only a run in which the node took large messages says anything of their cost:
+            # under a fast steady stream its queue drops them before they are taken.
+            from rot_tools.ros.tf_input import TF_TOO_MANY_TRANSFORMS
+            beside_bare['large_taken'] = refused.get(TF_TOO_MANY_TRANSFORMS, 0)
+            goals['tf_memory'] = beside_bare['large_taken'] > 0 and max(
+                beside_bare['growth_mb'], beside_bare['kept_mb']) <= TF_GROWTH_GOAL_MB
     node_rss = [(t, mb['node']) for t, mb in samples]
     node_after = [(t, mb['node']) for t, mb in after_samples]
     return {'rate': rate, 'flood': f'/tf {tf}' if tf else '~/pose', 'seconds': seconds,
@@ -477,12 +487,15 @@ def print_results(m):
         print('  refused (~/describe after the flood): ' + ', '.join(
             f'{reason} {n:,}' for reason, n in sorted(m['refused'].items())))
     g, stop = m['goals'], m['sigint']
+
+    def met(key):
+        return '-' if key not in g else 'yes' if g[key] else 'NO'
     rows = [
-        ['RSS growth during the flood', f"{m['growth_mb']:+.1f} MB", f'<= {GROWTH_GOAL_MB:g} MB',
-         'yes' if g['growth'] else 'NO'],
+        ['RSS growth during the flood', f"{m['growth_mb']:+.1f} MB",
+         f'<= {GROWTH_GOAL_MB:g} MB' if 'growth' in g else 'no goal', met('growth')],
         [f"RSS {m['after']:.0f} s after - start",
-         f"{m['rss_after_mb'] - m['rss_start_mb']:+.1f} MB", f'<= {RETURN_GOAL_MB:g} MB',
-         'yes' if g['returned'] else 'NO'],
+         f"{m['rss_after_mb'] - m['rss_start_mb']:+.1f} MB",
+         f'<= {RETURN_GOAL_MB:g} MB' if 'returned' in g else 'no goal', met('returned')],
         ['node publishing during the flood, alive after it',
          f"{m['answered']} outputs, {'alive' if m['alive'] else 'dead'}", '> 0, alive',
          'yes' if g['alive'] else 'NO'],
@@ -496,9 +509,11 @@ def print_results(m):
                      'yes' if g['answered'] else 'NO'])
     bare = m['beside_bare_tf']
     if bare is not None:
+        taken = (f", {bare['large_taken']} large messages taken by the node"
+                 if 'large_taken' in bare else '')
         rows.append(['RSS growth beside a bare /tf subscriber (max during; after)',
                      f"{bare['growth_mb']:+.1f} MB; {bare['kept_mb']:+.1f} MB (bare: "
-                     f"{bare['bare_growth_mb']:+.1f}; {bare['bare_kept_mb']:+.1f})",
+                     f"{bare['bare_growth_mb']:+.1f}; {bare['bare_kept_mb']:+.1f}){taken}",
                      f'<= {TF_GROWTH_GOAL_MB:g} MB' if 'tf_memory' in g else 'no goal',
                      ('yes' if g['tf_memory'] else 'NO') if 'tf_memory' in g else '-'])
     rows.append([f'SIGINT {SIGINT_AFTER_S:g} s into a flood',
