@@ -163,3 +163,16 @@ def tf_chain_messages(n=40, bad_at=7):
         messages.append(('/tf', 'tf2_msgs/msg/TFMessage', int(stamp * 1e9) + 1000,
                          b.tf_message(transforms)))
     return messages, truth, (static_q, np.array([0.1, 0.0, 0.2]))
+
+
+def without_definitions(bag):
+    """
+    Return the rosbag2 sqlite3 bag with its message definitions removed.
+
+    As older recorders wrote bags: a reader then needs a type store of its own.
+    """
+    import sqlite3
+    (db,) = Path(bag).glob('*.db3')
+    with sqlite3.connect(db) as con:
+        con.execute('DELETE FROM message_definitions')
+    return Path(bag)

@@ -259,6 +259,19 @@ def test_columns_are_the_fields_rosbags_decodes(converted, reference, storage):
     assert odom.child_frame_ids == ['base_link'] and imu.child_frame_ids is None
 
 
+def test_a_bag_without_type_definitions_is_read_with_ros2_jazzy_s(capsys, tmp_path):
+    b = bh.Builder()
+    q = Rotation.random(5, random_state=3).as_quat()
+    path = bh.without_definitions(bh.write_bag(tmp_path / 'old', [
+        ('/q', 'geometry_msgs/msg/QuaternionStamped', k + 1, b.quaternion_stamped(1.0 + k, qk))
+        for k, qk in enumerate(q)]))
+    from rosbags.highlevel import AnyReader, AnyReaderError
+    with pytest.raises(AnyReaderError, match='no type definitions'):
+        AnyReader([path]).open()  # as rosbags reads it alone
+    rows = rows_of(capsys, 'bag', path)
+    np.testing.assert_allclose(col(rows, 'qx', 'qy', 'qz', 'qw'), canonical(q), atol=1e-15)
+
+
 def test_start_and_end_select_by_record_time(capsys):
     from rosbags.highlevel import AnyReader
     with AnyReader([bh.REAL]) as reader:

@@ -123,12 +123,11 @@ def _processes(items, jobs):
     Yield read_bag(*item) for each item, in order, from ``jobs`` processes.
 
     The processes are forked from this one (the command's own process) once the bag reader
-    is imported and its type store built, so each starts with them loaded: on a fleet of
-    small bags, making them again in every process costs as much as the reading.
+    is imported, so each starts with it loaded: on a fleet of small bags, importing it again
+    in every process costs as much as the reading.
     """
     from concurrent.futures import ProcessPoolExecutor
-    from rosbags.typesys import get_typestore, Stores
-    get_typestore(Stores.ROS2_JAZZY)  # rosbags keeps it: built once, here, for every process
+    import rosbags.highlevel  # noqa: F401 - imported once, here, for every process
     context = multiprocessing.get_context('fork')
     with ProcessPoolExecutor(min(jobs, len(items)), mp_context=context) as pool:
         yield from pool.map(read_bag, *zip(*items))

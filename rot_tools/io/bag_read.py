@@ -108,15 +108,35 @@ def _one_line(exc):
     return text if len(text) < 300 else text[:297] + '...'
 
 
+def _opened(paths, typestore=None):
+    from rosbags.highlevel import AnyReader
+    reader = AnyReader(paths, default_typestore=typestore)
+    reader.open()
+    return reader
+
+
 @contextmanager
 def open_bag(path):
-    """Return a rosbags AnyReader on PATH, open; BagError for what cannot be read."""
-    from rosbags.highlevel import AnyReader
+    """
+    Return a rosbags AnyReader on PATH, open; BagError for what cannot be read.
+
+    The bag's messages are read by its own type definitions (every ROS 1 bag, and rosbag2
+    bags of recent recorders, carry them). Only one that AnyReader cannot open without is
+    opened again with ROS 2 Jazzy's (a typesys store, built then: it takes longer than
+    reading a small bag).
+    """
+    from rosbags.highlevel import AnyReaderError
     from rosbags.typesys import get_typestore, Stores
     paths = bag_paths(path)
     try:
-        reader = AnyReader(paths, default_typestore=get_typestore(Stores.ROS2_JAZZY))
-        reader.open()
+        try:
+            reader = _opened(paths)
+        except AnyReaderError as exc:
+            first = exc
+            try:
+                reader = _opened(paths, get_typestore(Stores.ROS2_JAZZY))
+            except Exception:  # noqa: BLE001 - the first error says what is wrong
+                raise first from None
     except Exception as exc:  # noqa: BLE001 - rosbags' errors vary by format and damage
         raise BagError(f'{path}: cannot read the bag: {_one_line(exc)}') from None
     try:
