@@ -315,6 +315,10 @@ class _Topic:
         self.records, self.messages, self.chunks = [], [], []
         self.count = 0
 
+    def index(self):
+        """Return the index among the topic's messages of the next one added."""
+        return self.count + len(self.messages)
+
     def add(self, record, message):
         self.records.append(record)
         self.messages.append(message)
@@ -339,11 +343,15 @@ def fields_of(msgtype):
 
 
 def _decode(reader, raw, conn, index):
-    """Return the message object of ``raw``; BagError naming the message if it does not decode."""
+    """
+    Return the message object of ``raw``; BagError naming the message if it does not decode.
+
+    index(): the message's index among its topic's (asked only then).
+    """
     try:
         return reader.deserialize(raw, conn.msgtype)
     except Exception as exc:  # noqa: BLE001 - rosbags' serde errors vary
-        raise BagError(f'{conn.topic}: message {index} cannot be decoded as {conn.msgtype}: '
+        raise BagError(f'{conn.topic}: message {index()} cannot be decoded as {conn.msgtype}: '
                        f'{_one_line(exc)}') from None
 
 
@@ -363,7 +371,7 @@ def read_topics(reader, connections, start=None, stop=None, progress=None):
         for conn, record, raw in reader.messages(connections=connections, start=start,
                                                  stop=stop):
             topic = by_id[conn.id]
-            topic.add(record, _decode(reader, raw, conn, topic.count + len(topic.messages)))
+            topic.add(record, _decode(reader, raw, conn, topic.index))
             count += 1
             if progress is not None and not count % CHUNK:
                 progress(count)
@@ -408,7 +416,7 @@ def read_tf(reader, static, dynamic, start=None, stop=None):
                 continue
             for conn, record, raw in reader.messages(connections=connections, start=lo,
                                                      stop=hi):
-                transforms = _decode(reader, raw, conn, count).transforms
+                transforms = _decode(reader, raw, conn, lambda: count).transforms
                 count += 1
                 kinds += [connections is static] * len(transforms)
                 for transform in transforms:
