@@ -43,8 +43,11 @@ in its log. The RSS growth under a ~/pose flood is printed against its older goa
 back within 20 MB; under a /tf flood the middleware's buffers make most of it, and the bare
 subscriber's is the measure). Not a test: a script that prints what it measured.
 
+With ``--fastdds-profile`` the node runs on the opt-in Fast DDS profile shipped in
+config/ (its process only, set as doc/node.md says).
+
 Run: ``.venv/bin/python bench/bench_overload.py [--rate max|MSG_PER_S] [--seconds 60]
-[--after 10] [--tf steady|large|reparent|jump] [--json PATH]``.
+[--after 10] [--tf steady|large|reparent|jump] [--fastdds-profile] [--json PATH]``.
 """
 
 import argparse
@@ -333,9 +336,18 @@ def _stop(process, timeout=10.0):
             process.wait()
 
 
-def measure(seconds, after, call_timeout, logdir, rate='max', tf=None):
+PROFILE = BENCH.parent / 'config' / 'fastdds_profile.xml'
+"""The opt-in Fast DDS profile shipped for the node (doc/node.md), for --fastdds-profile."""
+
+
+def measure(seconds, after, call_timeout, logdir, rate='max', tf=None, profile=False):
     node_log = open(os.path.join(logdir, 'node.log'), 'w')
-    node = subprocess.Popen(node_command(tf), stdout=node_log, stderr=subprocess.STDOUT)
+    env = dict(os.environ)
+    if profile:  # the node's process only, as doc/node.md turns it on
+        env.update(FASTRTPS_DEFAULT_PROFILES_FILE=str(PROFILE),
+                   RMW_FASTRTPS_USE_QOS_FROM_XML='1')
+    node = subprocess.Popen(node_command(tf), stdout=node_log, stderr=subprocess.STDOUT,
+                            env=env)
     topic = '/tf' if tf else f'/{NODE}/pose'
 
     def flood(duration, flood_rate=rate, scenario=tf):
@@ -448,7 +460,9 @@ def measure(seconds, after, call_timeout, logdir, rate='max', tf=None):
                 beside_bare['growth_mb'], beside_bare['kept_mb']) <= TF_GROWTH_GOAL_MB
     node_rss = [(t, mb['node']) for t, mb in samples]
     node_after = [(t, mb['node']) for t, mb in after_samples]
-    return {'rate': rate, 'flood': f'/tf {tf}' if tf else '~/pose', 'seconds': seconds,
+    return {'rate': rate, 'flood': (f'/tf {tf}' if tf else '~/pose')
+            + (', the node on the opt-in Fast DDS profile' if profile else ''),
+            'seconds': seconds,
             'after': after, 'sent': sent, 'sent_rate': sent / elapsed, 'answered': answered,
             'answered_rate': answered / elapsed, 'rss_start_mb': rss_start['node'],
             'rss_end_mb': rss_end['node'],
@@ -538,6 +552,9 @@ def main(argv=None):
     parser.add_argument('--tf', choices=sorted(TF_SCENARIOS),
                         help='flood /tf instead of ~/pose, the node following base_link in '
                         'odom: ' + '; '.join(f'{k}: {v}' for k, v in TF_SCENARIOS.items()))
+    parser.add_argument('--fastdds-profile', action='store_true',
+                        help='run the node on the opt-in Fast DDS profile, config/'
+                        'fastdds_profile.xml (doc/node.md)')
     parser.add_argument('--listen', metavar='NODE', help=argparse.SUPPRESS)
     parser.add_argument('--bare-tf', action='store_true', help=argparse.SUPPRESS)
     parser.add_argument('--json', metavar='PATH', help='also write the figures as JSON')
@@ -555,7 +572,8 @@ def main(argv=None):
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as logdir:
-        m = measure(args.seconds, args.after, args.call_timeout, logdir, args.rate, args.tf)
+        m = measure(args.seconds, args.after, args.call_timeout, logdir, args.rate, args.tf,
+                    args.fastdds_profile)
     print_results(m)
     benchlib.write_json(args.json, m)
     return 0
