@@ -43,7 +43,7 @@ GOAL = 0.75
 
 OURS = r"""
 import contextlib, os, sys, time
-from rot_tools.cli import bag, fleet, main  # noqa: F401 (imported before the clock starts)
+from rot_tools.cli import bag, bag_analysis, fleet, main  # noqa: F401 (before the clock)
 from rosbags.highlevel import AnyReader  # noqa: F401
 
 with open(os.devnull, 'w') as devnull, contextlib.redirect_stdout(devnull):

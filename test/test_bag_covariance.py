@@ -337,8 +337,8 @@ def test_runs_and_the_whole_batch_give_the_same(tmp_path, monkeypatch):
 
 
 def cli_analyse(path, reading):
-    from rot_tools.cli import bag
-    return bag.analyse(path, reading=reading)
+    from rot_tools.cli import bag_analysis
+    return bag_analysis.analyse(path, reading=reading)
 
 
 def test_parquet_null_where_the_csv_is_empty(capsys, tmp_path):

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import bag as bag_cli, bag_output  # noqa: E402
+from rot_tools.cli import bag_analysis, bag_output  # noqa: E402
 from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 
@@ -153,7 +153,7 @@ def test_negative_stamps_are_exact(capsys, tmp_path):
     assert float(rows[2]['wx'] or 0) != 0 or rows[2]['wx'] != ''  # Δt > 0: ω given
     s = json.loads(run(capsys, 'bag', path, '--json')[1])['topics']['/pose']
     assert (s['start'], s['end'], s['duration']) == (-12345.0, 0.25, 12345.25)
-    bag = next(iter(bag_cli.analyse(path)[1]))
+    bag = next(iter(bag_analysis.analyse(path)[1]))
     assert bag.ns.tolist() == [-12345 * 10**9, -2 * 10**9, -15 * 10**8, -5 * 10**8, -1,
                                25 * 10**7]
 

@@ -174,8 +174,8 @@ def test_offset_of_the_recorded_imu_is_recovered_within_a_sample(capsys, tmp_pat
     pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
     if not bh.REAL.exists():
         pytest.skip(f'the shared recording is not there: {bh.REAL}')
-    from rot_tools.cli import bag
-    _, (imu,) = bag.analyse(bh.REAL, ('/imu/data',))
+    from rot_tools.cli import bag_analysis
+    _, (imu,) = bag_analysis.analyse(bh.REAL, ('/imu/data',))
     shift = 0.137  # s, not a multiple of the 0.02 s period
     builder = bh.Builder()
     stamps = imu.ns / 1e9 + shift

@@ -3,8 +3,8 @@
 
 Each side is read into stamps t (s), rotations R and positions b where it has them
 (rot_tools.io.trajectory_files for TUM and EuRoC files; a bag's topic or TF frame pair
-through rot_tools.cli.bag, whose messages pass the same checks as ``rot-tools bag``'s). Then,
-with the pieces of rot_tools.core.trajectory, in this order:
+through rot_tools.cli.bag_analysis, whose messages pass the same checks as ``rot-tools
+bag``'s). Then, with the pieces of rot_tools.core.trajectory, in this order:
 
 1. **Time offset** o, added to EST's stamps: ``--offset SECONDS`` (default 0), or ``auto``:
    the shift that best correlates the two angular speeds |ω| (estimate_time_offset); a
@@ -169,11 +169,11 @@ def read_side(name, path, topic, tf):
     if missing:
         raise CompareError(f'{name}: reading a bag needs the rosbags library ({missing} is '
                            "missing), the 'bag' extra: pip install 'rot_tools[bag]'")
-    from rot_tools.cli import bag
+    from rot_tools.cli import bag_analysis
     if tf is not None:
-        _, topics = bag.analyse(path, tf=tuple(tf))
+        _, topics = bag_analysis.analyse(path, tf=tuple(tf))
     else:
-        _, topics = bag.analyse(path, () if topic is None else (topic,))
+        _, topics = bag_analysis.analyse(path, () if topic is None else (topic,))
         if len(topics) > 1:
             listed = ', '.join(t.topic for t in topics)
             raise CompareError(f'{name}: the bag {path} has {len(topics)} topics ({listed}): '

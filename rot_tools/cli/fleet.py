@@ -19,7 +19,7 @@ import sys
 import time
 from typing import NamedTuple
 
-from rot_tools.cli import bag, bag_parquet, output_file
+from rot_tools.cli import bag_analysis, bag_parquet, output_file
 from rot_tools.cli.bag_output import csv_header, write_csv
 from rot_tools.io import bag_read
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
@@ -93,7 +93,7 @@ def read_bag(path, options, parquet=None):
     """
     quiet = io.StringIO()  # not a terminal: no bar per bag, the fleet's line says how far
     try:
-        storage, topics = bag.analyse(
+        storage, topics = bag_analysis.analyse(
             path, options.topic or (), options.start, options.end,
             QUATERNION_TOLERANCE if options.tol is None else options.tol, options.seq,
             options.wrap, progress_stream=quiet, tf=options.tf,
@@ -101,7 +101,7 @@ def read_bag(path, options, parquet=None):
     except bag_read.BagError as exc:
         text = str(exc)
         return Outcome(path, error=text if text.startswith(f'{path}:') else f'{path}: {text}')
-    summary = bag.summary(path, storage, topics, options.deg)
+    summary = bag_analysis.summary(path, storage, topics, options.deg)
     accepted = sum(t['accepted'] for t in summary['topics'].values())
     rows = _csv_rows(topics, path, options) if options.csv is not None else None
     if parquet is not None:
@@ -174,7 +174,7 @@ def outcomes(items, jobs, engine, scheduler):
         yield from _processes(items, jobs)
 
 
-class FleetProgress(bag.Progress):
+class FleetProgress(bag_analysis.Progress):
     """Bags done and messages (accepted) per second, on stderr when it is a terminal."""
 
     def __init__(self, total, stream=None):
@@ -246,32 +246,6 @@ def fleet_summary(done):
                                        'messages': sum(o.accepted for o in done)}}
 
 
-def command(args, error):
-    """
-    rot-tools bag with parsed ``args``; ``error(text)`` prints one line and exits 2.
-
-    One bag given alone is analysed by rot_tools.cli.bag.one_bag; several (or a directory
-    searched for bags) by :func:`run`.
-    """
-    missing = bag_read.rosbags_missing()
-    if missing:
-        error(f"bag needs the rosbags library ({missing} is missing), the 'bag' extra: "
-              "pip install 'rot_tools[bag]'")
-    if args.start is not None and args.end is not None and args.end < args.start:
-        error(f'--end {args.end:g} is before --start {args.start:g}')
-    if args.scheduler is not None and args.engine != 'dask':
-        error('--scheduler ADDRESS is the address of a Dask scheduler: it needs --engine dask')
-    try:
-        bags, searched = find_bags(args.path)
-    except bag_read.BagError as exc:
-        error(f'bag: {exc}')
-    if len(bags) > 1 or searched:
-        return run(args, bags, error)
-    args.path = bags[0]
-    check_extras(args, error)
-    return bag.one_bag(args, error)
-
-
 def run(args, bags, error):
     """rot-tools bag over many bags; returns the exit status (1 when a bag failed)."""
     if args.plot:
@@ -281,8 +255,8 @@ def run(args, bags, error):
         args.jobs = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') \
             else os.cpu_count() or 1
     for path in bags:
-        bag.refuse_overwriting(path, [('--csv', args.csv), ('--parquet', args.parquet)],
-                               error)
+        output_file.refuse_overwriting(path, [('--csv', args.csv), ('--parquet', args.parquet)],
+                                       error)
     names = [None] * len(bags)
     if args.parquet is not None:
         bag_parquet.directory(args.parquet, error)
@@ -300,7 +274,7 @@ def _write(items, args, error):
 
     if args.csv == '-':
         found = []
-        bag.to_stdout(lambda out: found.extend(_collect(items, args, out)), error)
+        output_file.to_stdout(lambda out: found.extend(_collect(items, args, out)), error)
         return 1 if any(o.error is not None for o in found) else 0
     if args.csv is not None:
         try:
@@ -313,5 +287,5 @@ def _write(items, args, error):
         done = _collect(items, args, None)
     text = to_json if args.json else to_yaml
     data = fleet_summary(done)
-    bag.to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
+    output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
     return 1 if data['fleet']['failed'] else 0
