@@ -2,8 +2,8 @@
 rot_tools leaves the process and the wire to their owners and speaks to libraries by name.
 
 The process and the middleware belong to whoever starts them; rclpy and rosbags are used by
-their documented names. Read from the package's syntax tree (comments and strings are not code), every module of
-rot_tools/ is refused:
+their documented names. Read from the package's syntax tree (comments and strings are not
+code), every module of rot_tools/ is refused:
 
 - hand-written serialisation: a call with ``raw=True`` (a subscription handing over bytes),
   ``import struct``;
@@ -38,6 +38,7 @@ ROSBAGS_MODULES = ('rosbags.highlevel', 'rosbags.rosbag1', 'rosbags.rosbag2',
 
 def _rosbags_internal(module):
     return module.split('.')[0] == 'rosbags' and module not in ROSBAGS_MODULES
+
 
 ENVIRON_METHODS = {'setdefault', 'update', 'pop', 'popitem', 'clear', '__setitem__',
                    '__delitem__'}
@@ -85,9 +86,8 @@ def takeovers(tree):
                 found.append((node.lineno, f'from {node.module} import ...'))
             if _rosbags_internal(node.module):
                 found.append((node.lineno, f'from {node.module} import ...'))
-            if root in ('os', 'gc') and any(a.name in ('_exit', 'freeze', 'disable', 'putenv',
-                                                        'unsetenv', 'environ')
-                                            for a in node.names):
+            takeover = ('_exit', 'freeze', 'disable', 'putenv', 'unsetenv', 'environ')
+            if root in ('os', 'gc') and any(a.name in takeover for a in node.names):
                 found.append((node.lineno, f'from {node.module} import ...'))
         elif isinstance(node, ast.Attribute):
             name = _name(node)
@@ -138,7 +138,7 @@ BAD_SAMPLES = {
     'os._exit': 'os._exit(0)',
     'gc.freeze': 'gc.freeze()',
     'gc.disable': 'gc.disable()',
-    "os.environ[...] set": "os.environ['RMW_FASTRTPS_USE_QOS_FROM_XML'] = '1'",
+    'os.environ[...] set': "os.environ['RMW_FASTRTPS_USE_QOS_FROM_XML'] = '1'",
     'os.environ.setdefault': "os.environ.setdefault('A', 'b')",
     'environ[...] set': "environ['A'] = 'b'",
     'os.putenv': "os.putenv('A', 'b')",
