@@ -16,6 +16,7 @@ and SIGTERM; the loop then ends, and the program returns its status.
 
 import os
 import sys
+import time
 import traceback
 
 import rclpy
@@ -134,16 +135,23 @@ def spin(node, executor):
     The loop rclpy.spin runs, one spin_once of at most SPIN_TIMEOUT at a time, with a look at
     the context between two (rclpy.spin could miss a signal's shutdown and wait on). An
     exception that a callback raises — ours, or rclpy's own on a hostile request to a
-    parameter service — is logged and the node serves on. KeyboardInterrupt (rclpy's SIGINT
-    handler raises it once the context is shut down) is raised.
+    parameter service — is logged and the node serves on. It is logged SPIN_TIMEOUT later if
+    the context is still up then: a SIGINT that lands inside rclpy's C++ (taking a message)
+    comes out as that call's RuntimeError a moment before rclpy's handler shuts the context
+    down, and is then the shutdown's, not a failure. KeyboardInterrupt (rclpy's SIGINT
+    handler raises it after the shutdown) is raised.
     """
     executor.add_node(node)
+    failure = None  # (traceback, time.monotonic()) of a callback's failure not yet logged
     while executor.context.ok():
         try:
             executor.spin_once(timeout_sec=SPIN_TIMEOUT)
         except ExternalShutdownException:
             return  # the context shut down while spin_once waited: the normal end
         except Exception:  # noqa: BLE001 - any callback's failure: log it, keep serving
+            failure = failure or (traceback.format_exc(), time.monotonic())
+        if failure is not None and time.monotonic() - failure[1] >= SPIN_TIMEOUT:
             if executor.context.ok():
                 node.get_logger().error('a callback raised; the node keeps serving:\n'
-                                        + traceback.format_exc(), throttle_duration_sec=1.0)
+                                        + failure[0], throttle_duration_sec=1.0)
+            failure = None
