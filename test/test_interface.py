@@ -10,9 +10,10 @@ from builtin_interfaces.msg import Time
 import numpy as np
 import pytest
 from rot_tools.io import bag_read, interface
+from rot_tools.io.fields import field_value
 from rot_tools.ros import client_session, rotation_client
 from rot_tools.ros.client_arguments import parse_args
-from rot_tools.ros.messages import field_value, message_class
+from rot_tools.ros.messages import message_class
 from rot_tools.ros.rotation_node import RotationNode
 
 PARAMETERS = {'euler_sequence': 'ZYX', 'angle_unit': 'rad', 'publish_markers': True}

@@ -18,8 +18,9 @@ from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
 from rot_tools.io import boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE as TOL
+from rot_tools.io.boundary import RefusedInput
+from rot_tools.io.fields import field_value
 from rot_tools.ros import messages
-from rot_tools.ros.messages import RefusedInput
 from rot_tools.ros.topics import INPUTS
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
@@ -101,7 +102,7 @@ def test_bad_quaternion_is_refused(q, tol, reason, match):
     with pytest.raises(RefusedInput, match=match) as info:
         boundary.quaternion_to_rotation(*quaternion_fields(q), tol)
     assert info.value.reason == reason
-    assert reason in messages.REFUSAL_REASONS
+    assert reason in boundary.REFUSAL_REASONS
 
 
 def test_zero_tolerance_accepts_an_exactly_unit_quaternion():
@@ -229,7 +230,7 @@ def test_imu_without_orientation_is_refused(q):
     with pytest.raises(RefusedInput, match=r'orientation_covariance\[0\] is -1') as info:
         take(msg)
     assert info.value.reason == 'no_orientation'
-    assert 'no_orientation' in messages.REFUSAL_REASONS
+    assert 'no_orientation' in boundary.REFUSAL_REASONS
 
 
 def test_imu_with_a_covariance_is_used():
@@ -277,7 +278,7 @@ def test_an_output_row_writes_the_fields_at_its_paths():
         numbers = [0.5 + k for k in range(len(kind.row.fields))]
         kind.write(msg, numbers)
         msg = deserialize_message(serialize_message(msg), kind.msg_type)
-        assert [messages.field_value(msg, path) for path in kind.row.fields] == numbers
+        assert [field_value(msg, path) for path in kind.row.fields] == numbers
 
 
 # ---------------------------------------------------------------------------------------

@@ -161,24 +161,20 @@ def add_parser(subparsers):
                    '(tcp://HOST:8786), whose workers must see the bags and DIR')
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
-    common.add_argument('--deg', action='store_true', default=suppress,
-                        help='every angle in degrees (angular velocities in deg/s)')
+    arguments.add_deg(common, 'every angle in degrees (angular velocities in deg/s)', suppress)
     common.add_argument('--seq', type=arguments.sequence, default=suppress, metavar='SEQ',
                         help='also the Euler angles of SEQ (CSV columns SEQ_1..3), '
                         'continuous like roll, pitch, yaw')
-    common.add_argument('--json', action='store_true', default=suppress,
-                        help='print the summary as JSON instead of YAML')
-    common.add_argument('--precision', type=arguments.precision, default=suppress, metavar='N',
-                        help='round numbers to N significant digits and N decimal places '
-                        f'(default {DEFAULT_PRECISION}), in the summary and the CSV (whose '
-                        'stamps are exact)')
+    arguments.add_json(common, 'print the summary as JSON instead of YAML', suppress)
+    arguments.add_precision(common, 'round numbers to N significant digits and N decimal '
+                            f'places (default {DEFAULT_PRECISION}), in the summary and the CSV '
+                            '(whose stamps are exact)', suppress)
     common.add_argument('--tol', type=options.tolerance, default=suppress, metavar='TOL',
                         help='largest ||q| − 1| of a recorded quaternion (default '
                         f'{QUATERNION_TOLERANCE:g}, '
                         "rotation_node's quaternion_tolerance); within it q is normalised")
-    common.add_argument('--plot', type=options.plot_file, default=suppress, metavar='FILE',
-                        help='draw roll, pitch, yaw against time, one panel per topic, in '
-                        "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
+    options.add_plot(common, 'draw roll, pitch, yaw against time, one panel per topic',
+                     suppress)
     arguments.add_version(common)
     return p
 

@@ -145,9 +145,8 @@ def add_parser(subparsers):
     arguments.add_json(common, default=suppress)
     arguments.add_precision(common, 'round numbers to N significant digits and N decimal places',
                             suppress)
-    common.add_argument('--plot', type=options.plot_file, default=suppress, metavar='FILE',
-                        help='draw the error angle and its roll, pitch, yaw against time in '
-                        "FILE (.png or .svg); needs matplotlib (pip install 'rot_tools[plot]')")
+    options.add_plot(common, 'draw the error angle and its roll, pitch, yaw against time',
+                     suppress)
     arguments.add_version(common)
     return p
 

@@ -31,6 +31,13 @@ def plot_file(text):
     return text
 
 
+def add_plot(parser, text, default=None):
+    """Add --plot FILE: ``text`` says what is drawn; the file is .png or .svg (matplotlib)."""
+    parser.add_argument('--plot', type=plot_file, default=default, metavar='FILE',
+                        help=f'{text} in FILE (.png or .svg); needs matplotlib (pip install '
+                        "'rot_tools[plot]')")
+
+
 def tolerance(text):
     """Read a tolerance: a finite number ≥ 0."""
     value = arguments.number(text)
@@ -91,9 +98,7 @@ def add_common(parser, suppress, only=None):
                            'the point p = (X, Y, Z), R·p + b, and its coordinates in the moved '
                            'frame, Rᵀ·(p − b)')
     if wanted('--plot'):
-        group.add_argument('--plot', type=plot_file, default=default(None), metavar='FILE',
-                           help='also draw the motion in FILE (.png or .svg): both frames, the '
-                           'rotation or screw axis, the path of the origin; needs matplotlib '
-                           "(pip install 'rot_tools[plot]')")
+        add_plot(group, 'also draw the motion (both frames, the rotation or screw axis, the path '
+                 'of the origin)', default(None))
     if wanted('--version'):
         arguments.add_version(group)

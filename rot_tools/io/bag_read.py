@@ -28,6 +28,7 @@ from typing import NamedTuple
 
 import numpy as np
 from rot_tools.io import interface
+from rot_tools.io.fields import field_getter
 
 SUPPORTED = interface.recorded_inputs()
 """The message types read — rotation_node's inputs with an orientation — and where their
@@ -160,21 +161,6 @@ def storage_name(reader):
 
 # ---------------------------------------------------------------------------------------
 # Fields of message objects, as columns
-
-
-def field_getter(path):
-    """
-    Return get(msg): the field at ``path`` of a message object.
-
-    The path names fields from the message down, dot-separated ('pose.pose.orientation',
-    'header.stamp'); its last field may be indexed ('orientation_covariance[0]').
-    """
-    name, indexed, index = path.partition('[')
-    get = attrgetter(name)
-    if not indexed:
-        return get
-    k = int(index.rstrip(']'))
-    return lambda msg: get(msg)[k]
 
 
 def _members_getter(names):

@@ -1,39 +1,26 @@
 """
-ROS messages <-> NumPy: the boundary of rotation_node, and the only ROS-aware helpers.
+ROS messages <-> NumPy: message classes by name, and the node's other messages built.
 
-Inbound, every input message becomes one rigid transform ``(header, R, b)``: R a (3, 3)
-rotation, b a (3,) translation (b = 0 for an input that carries only an orientation), by
-its row's converter (rot_tools.io.interface), from the numbers at the row's field paths
-(:func:`field_getter`). A message that cannot be one transform — a NaN/Inf in a field that is
-used, a zero quaternion, a quaternion whose norm is further than the tolerance from 1, an Imu
-that says it has no orientation — raises :class:`RefusedInput`, whose ``reason`` is a short
-key for counting. The converters and their checks are ROS-free and live in
-rot_tools.io.boundary (``rot-tools bag`` runs the same checks on recorded messages, as
-batches); the names the node uses are re-exported here.
+Inbound, every input message becomes one rigid transform ``(header, R, b)`` by its row's
+converter (rot_tools.io.interface), from the numbers at the row's field paths
+(rot_tools.io.fields); a message that cannot be one transform is refused by the ROS-free
+boundary (rot_tools.io.boundary.RefusedInput, with a reason), which ``rot-tools bag`` runs
+on recorded messages too, as batches. Outbound, the per-input outputs are written at their
+rows' paths (rot_tools.io.fields.fields_writer).
 
-Quaternions are (x, y, z, w), the ROS message order. Inbound they go through
-rot_tools.quaternion_to_matrix; outbound, ~/quaternion is rot_tools.matrix_to_quaternion of R
-(canonical sign), and path poses write q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R,
-signed for continuity along the path.
-
-Outbound, the per-input outputs are written field by field at their rows' paths
-(:func:`field_setter`); the helpers below build the node's other messages, all as message
-objects: poses and Path, and the pictures — the screw-axis Marker and the MarkerArray of a
-rot_tools.io.drawing.Picture.
+This module holds what needs the message classes: :func:`message_class` of a type name, and
+the node's other messages as message objects — poses and Path (``~/screw_path``), and the
+pictures: the screw-axis Marker and the MarkerArray of a rot_tools.io.drawing.Picture.
+Quaternions are (x, y, z, w), the ROS message order; path poses write
+q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R, signed for continuity along the path.
 """
 
 import importlib
-from operator import attrgetter
 
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 import numpy as np
 from rot_tools.core.axis_angle import matrix_to_axis_angle
-# The inbound boundary is ROS-free and shared with `rot-tools bag`: rot_tools.io.boundary. Its
-# names are re-exported here, where rotation_node has always found them.
-from rot_tools.io.boundary import (  # noqa: F401
-    NO_ORIENTATION, NON_FINITE, NON_UNIT_QUATERNION, pose_to_rt, REFUSAL_REASONS, RefusedInput,
-    ZERO_QUATERNION)
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -47,64 +34,6 @@ def message_class(name):
     """Return the message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
     package, kind, class_name = name.split('/')
     return getattr(importlib.import_module(f'{package}.{kind}'), class_name)
-
-
-def field_getter(path):
-    """
-    Return get(msg): the field at ``path`` of a message ('pose.position', 'data[3]').
-
-    The path names fields from the message down, dot-separated; only its last field may be
-    indexed (an element of an array or a sequence).
-    """
-    name, indexed, index = path.partition('[')
-    get = attrgetter(name)
-    if not indexed:
-        return get
-    k = int(index.rstrip(']'))
-    return lambda msg: get(msg)[k]
-
-
-def field_value(msg, path):
-    """Return the field at ``path`` of a message: 'pose.position', 'data[3]'."""
-    return field_getter(path)(msg)
-
-
-def fields_reader(paths):
-    """Return read(msg): the tuple of the fields at ``paths`` of a message, in order."""
-    getters = tuple(map(field_getter, paths))
-    return lambda msg: tuple([get(msg) for get in getters])
-
-
-def field_setter(path):
-    """
-    Return put(msg, value): ``value`` written into the field at ``path`` of a message.
-
-    As :func:`field_getter`'s paths; an indexed element must exist already (a fixed-size
-    array, or a sequence given its length once).
-    """
-    name, indexed, index = path.partition('[')
-    if indexed:
-        get, k = attrgetter(name), int(index.rstrip(']'))
-
-        def put(msg, value):
-            get(msg)[k] = value
-        return put
-    parent, _, leaf = name.rpartition('.')
-    get = attrgetter(parent) if parent else (lambda msg: msg)
-
-    def put(msg, value):
-        setattr(get(msg), leaf, value)
-    return put
-
-
-def fields_writer(paths):
-    """Return write(msg, values): values[k] written into the field at paths[k], in order."""
-    setters = tuple(map(field_setter, paths))
-
-    def write(msg, values):
-        for put, value in zip(setters, values):
-            put(msg, value)
-    return write
 
 
 # ---------------------------------------------------------------------------------------

@@ -132,7 +132,7 @@ def _marker_data(marker):
 
 def _values(msg, row, parameters):
     """Return {field path: value} of an output's message (an output without a printer)."""
-    from rot_tools.ros.messages import field_value
+    from rot_tools.io.fields import field_value
     return {path: field_value(msg, path) for path in row.fields}
 
 
@@ -211,7 +211,8 @@ def _input_message(args, parameters):
     child_frame_id is --child-frame. Keyed by each field's last name (orientation,
     rotation, quaternion, ...); Euler angles by sequence, unit, angles.
     """
-    from rot_tools.ros.messages import field_value, message_class
+    from rot_tools.io.fields import field_value
+    from rot_tools.ros.messages import message_class
     row = args.row
     msg = message_class(row.type_name)()
     numbers = iter(args.numbers)
@@ -245,7 +246,7 @@ def _set_covariance(msg, covariance, rotation):
     9 numbers: the array itself (an Imu's orientation_covariance); 36: its rotation block,
     the rest 0. Return {the array's name: its rows} as sent.
     """
-    from rot_tools.ros.messages import field_value
+    from rot_tools.io.fields import field_value
     path, size = covariance
     n = 3 if size == 9 else 6
     C = np.zeros((n, n))

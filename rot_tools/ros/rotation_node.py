@@ -44,18 +44,19 @@ from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
+from rot_tools.io import boundary
 from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.interface import MATRIX
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
-from rot_tools.ros import messages, rpy_covariance, runtime, screw_path, tf_input
+from rot_tools.ros import rpy_covariance, runtime, screw_path, tf_input
 from rot_tools.ros.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
 from rot_tools.ros.topics import INPUTS, OUTPUTS
 from std_srvs.srv import Trigger
 
-REFUSAL_REASONS = messages.REFUSAL_REASONS + (
+REFUSAL_REASONS = boundary.REFUSAL_REASONS + (
     NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
 ) + tf_input.REFUSAL_REASONS + rpy_covariance.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
@@ -444,7 +445,7 @@ class RotationNode(Node):
         try:
             R, b = source.convert(values, settings, source.fields)
             decomposition = decompose(R, b, settings.euler_sequence, check=False)
-        except messages.RefusedInput as exc:
+        except boundary.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc), header=header)
             return
         except RotationError as exc:
@@ -577,7 +578,7 @@ class RotationNode(Node):
         response.plan.header = header
         try:
             response.plan = screw_path.screw_path(request, self._settings.quaternion_tolerance)
-        except messages.RefusedInput as exc:
+        except boundary.RefusedInput as exc:
             self._refuse(self._screw_path_name, exc.reason, str(exc), error=True, header=header)
         except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
             self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,

@@ -25,9 +25,9 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 from rot_tools.io import interface
+from rot_tools.io.fields import field_getter
 from rot_tools.io.message_covariance import BAD, LOCK, OK, UNKNOWN
 from rot_tools.io.message_covariance import fault, READINGS, rpy_covariances, stddev_correlation
-from rot_tools.ros.messages import field_getter
 
 BAD_COVARIANCE = 'bad_covariance'
 REFUSAL_REASONS = (BAD_COVARIANCE,)

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 from rot_tools.core.screw import screw_from_transform, screw_interpolate
+from rot_tools.io.boundary import pose_to_rt, RefusedInput
 from rot_tools.ros import messages
 
 FRAME_MISMATCH = 'frame_mismatch'
@@ -35,19 +36,19 @@ def screw_path(request, quaternion_tolerance):
     """
     Return the nav_msgs/Path of a GetPlan request: start, the screw motion, goal.
 
-    Raises messages.RefusedInput (frame_mismatch, bad_tolerance, path_too_long,
+    Raises RefusedInput (frame_mismatch, bad_tolerance, path_too_long,
     not_decomposable, or the boundary's reasons for a bad pose).
     """
     start, goal = request.start, request.goal
     if start.header.frame_id != goal.header.frame_id:
-        raise messages.RefusedInput(
+        raise RefusedInput(
             FRAME_MISMATCH, f'start is in frame {start.header.frame_id!r}, goal in '
             f'{goal.header.frame_id!r}')
-    R0, b0 = messages.pose_to_rt(start.pose, quaternion_tolerance, 'start.pose')
-    R1, b1 = messages.pose_to_rt(goal.pose, quaternion_tolerance, 'goal.pose')
+    R0, b0 = pose_to_rt(start.pose, quaternion_tolerance, 'start.pose')
+    R1, b1 = pose_to_rt(goal.pose, quaternion_tolerance, 'goal.pose')
     with np.errstate(all='ignore'):
         if not np.isfinite(R0.T @ (b1 - b0)).all():
-            raise messages.RefusedInput(
+            raise RefusedInput(
                 NOT_DECOMPOSABLE, 'start and goal are too far apart: goal.position '
                 '− start.position overflows float64 (beyond ±1.8e308)')
         steps = path_steps(R0, b0, R1, b1, request.tolerance)
@@ -55,7 +56,7 @@ def screw_path(request, quaternion_tolerance):
         Rs, bs = screw_interpolate(R0, b0, R1, b1, np.linspace(0.0, 1.0, steps + 1),
                                    check=False)
     if not (np.isfinite(Rs).all() and np.isfinite(bs).all()):
-        raise messages.RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
+        raise RefusedInput(NOT_DECOMPOSABLE, 'values too large to interpolate')
     return messages.path_msg(start.header, start, goal, Rs, bs)
 
 
@@ -70,7 +71,7 @@ def path_steps(R0, b0, R1, b1, tolerance):
     raises RefusedInput.
     """
     if math.isnan(tolerance):
-        raise messages.RefusedInput(BAD_TOLERANCE, 'tolerance is NaN')
+        raise RefusedInput(BAD_TOLERANCE, 'tolerance is NaN')
     if tolerance <= 0.0:
         return DEFAULT_PATH_STEPS
     screw = screw_from_transform(R0.T @ R1, R0.T @ (b1 - b0), check=False)
@@ -78,7 +79,7 @@ def path_steps(R0, b0, R1, b1, tolerance):
     arc = math.hypot(float(np.linalg.norm(screw.point)) * theta, float(screw.translation))
     need = max(theta, arc) / tolerance
     if not need <= MAX_PATH_STEPS:
-        raise messages.RefusedInput(
+        raise RefusedInput(
             PATH_TOO_LONG, f'tolerance {tolerance:g} needs {need:.3g} steps, more than '
             f'{MAX_PATH_STEPS}')
     return max(1, math.ceil(need - 1e-9))  # 4 + rounding noise is 4 steps, not 5
@@ -107,6 +108,6 @@ def check_reply_bytes(frame_id, poses):
     size = reply_bytes(frame_id, poses)
     if size > MAX_REPLY_BYTES:
         frame_bytes = len(frame_id.encode('utf-8', 'surrogatepass'))
-        raise messages.RefusedInput(
+        raise RefusedInput(
             PATH_TOO_LONG, f'a reply of {poses} poses with a frame_id of {frame_bytes} '
             f'bytes would take {size / 1e6:.3g} MB, more than {MAX_REPLY_BYTES / 1e6:g} MB')

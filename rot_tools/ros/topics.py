@@ -2,7 +2,7 @@
 rotation_node's topics as rclpy takes them.
 
 Each row of rot_tools.io.interface bound to its message class, and to the reader or the
-writer of its fields by their paths (rot_tools.ros.messages.fields_reader, fields_writer):
+writer of its fields by their paths (rot_tools.io.fields.fields_reader, fields_writer):
 the node takes and publishes message objects, and reads or writes in them exactly the
 fields its rows name.
 """
@@ -10,7 +10,8 @@ fields its rows name.
 from typing import Callable, NamedTuple
 
 from rot_tools.io import interface
-from rot_tools.ros.messages import fields_reader, fields_writer, message_class
+from rot_tools.io.fields import fields_reader, fields_writer
+from rot_tools.ros.messages import message_class
 
 
 class Subscribed(NamedTuple):
