@@ -442,7 +442,9 @@ def measure(seconds, after, call_timeout, logdir, rate='max', tf=None, profile=F
     if not tf:  # (under /tf floods the bare subscriber beside the node is the measure)
         goals.update(growth=growth['node'] <= GROWTH_GOAL_MB,
                      returned=kept['node'] <= RETURN_GOAL_MB)
-    if rate == 'max':
+    if rate == 'max' or tf:
+        # (the 10 kHz p99 goal is ~/pose's; under a /tf flood a call may wait behind one
+        # huge TFMessage, which rclpy takes seconds to convert: answered within 5 s)
         goals['answered'] = all(v['max'] <= ANSWER_GOAL_S for v in latency.values())
     else:
         goals['latency'] = all(v['p99'] <= LATENCY_GOAL_S for v in latency.values())
