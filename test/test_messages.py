@@ -16,7 +16,7 @@ import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
-from rot_tools.io import boundary
+from rot_tools.io import boundary, fields
 from rot_tools.io.boundary import QUATERNION_TOLERANCE as TOL
 from rot_tools.io.boundary import RefusedInput
 from rot_tools.io.fields import field_value
@@ -279,6 +279,21 @@ def test_an_output_row_writes_the_fields_at_its_paths():
         kind.write(msg, numbers)
         msg = deserialize_message(serialize_message(msg), kind.msg_type)
         assert [field_value(msg, path) for path in kind.row.fields] == numbers
+
+
+def test_fields_writer_writes_each_path_as_its_own_setter_would():
+    # Paths that leave a parent and come back to it, members and elements of one message:
+    # the writer (one parent lookup per run of paths) and field_setter (one per path) agree.
+    paths = ('pose.pose.position.x', 'pose.pose.position.y', 'pose.covariance[3]',
+             'pose.covariance[4]', 'pose.pose.position.z', 'pose.covariance[0]',
+             'pose.pose.orientation.w', 'pose.pose.orientation.x')
+    numbers = [0.5 + k for k in range(len(paths))]
+    written, one_by_one = PoseWithCovarianceStamped(), PoseWithCovarianceStamped()
+    fields.fields_writer(paths)(written, numbers)
+    for path, value in zip(paths, numbers):
+        fields.field_setter(path)(one_by_one, value)
+    assert [field_value(written, path) for path in paths] == numbers
+    assert serialize_message(written) == serialize_message(one_by_one)
 
 
 # ---------------------------------------------------------------------------------------

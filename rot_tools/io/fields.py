@@ -60,10 +60,62 @@ def field_setter(path):
 
 
 def fields_writer(paths):
-    """Return write(msg, values): values[k] written into the field at paths[k], in order."""
-    setters = tuple(map(field_setter, paths))
+    """
+    Return write(msg, values): values[k] written into the field at paths[k], in order.
+
+    Consecutive paths under one parent ('vector.x', 'vector.y', 'vector.z'; 'data[0]' to
+    'data[8]') are written together, the parent looked up once; each leaf gets what
+    :func:`field_setter` would write into it.
+    """
+    groups = []  # (parent, indexed, leaves) of consecutive paths under one parent
+    for path in paths:
+        parent, indexed, leaf = _parent_and_leaf(path)
+        if groups and groups[-1][:2] == (parent, indexed):
+            groups[-1][2].append(leaf)
+        else:
+            groups.append((parent, indexed, [leaf]))
+    puts, start = [], 0
+    for parent, indexed, leaves in groups:
+        puts.append((_children_setter(parent, indexed, tuple(leaves)),
+                     slice(start, start + len(leaves))))
+        start += len(leaves)
 
     def write(msg, values):
-        for put, value in zip(setters, values):
-            put(msg, value)
+        for put, part in puts:
+            put(msg, values[part])
     return write
+
+
+def _parent_and_leaf(path):
+    """
+    Return (parent, indexed, leaf) of a path.
+
+    ('vector', False, 'x') of 'vector.x', ('data', True, 3) of 'data[3]', ('', False, 'x')
+    of 'x'.
+    """
+    name, indexed, index = path.partition('[')
+    if indexed:
+        return name, True, int(index.rstrip(']'))
+    parent, _, leaf = name.rpartition('.')
+    return parent, False, leaf
+
+
+def _children_setter(parent, indexed, leaves):
+    """
+    Return put(msg, values): values written into the leaves of the field at ``parent``.
+
+    leaves: the names of its members, or (``indexed``) the indices of its elements, which
+    must exist already.
+    """
+    get = attrgetter(parent) if parent else (lambda msg: msg)
+    if indexed:
+        def put(msg, values):
+            field = get(msg)
+            for k, value in zip(leaves, values):
+                field[k] = value
+    else:
+        def put(msg, values):
+            field = get(msg)
+            for name, value in zip(leaves, values):
+                setattr(field, name, value)
+    return put
