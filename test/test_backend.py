@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 import rot_tools as rt
 from rot_tools.core import engine, euler, so3
+from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.euler import GIMBAL_LOCK_TOL, RPY_SEQUENCE
 
 REPO = Path(__file__).resolve().parent.parent
@@ -266,6 +267,58 @@ def test_one_item_gives_what_a_batch_gives_where_float_arithmetic_would_raise():
     assert type(one) is _Three and [type(x) for x in one] == [np.float64] * 3
     assert one.quotient == -math.inf and math.isnan(one.root) and math.isnan(one.sine)
     assert np.array_equal(np.array(one), np.array([x[0] for x in batch]), equal_nan=True)
+
+
+def test_apply_to_one_gives_the_numbers_of_apply_as_python_numbers():
+    # The kernel's own floats (where float arithmetic raises, those of a batch of one), the
+    # same numbers as apply's NumPy scalars; an input as a tuple of floats is taken as the
+    # array; a batch is refused.
+    def kernel(ops, v):
+        return _Three(quotient=v[0] / v[1], root=ops.sqrt(v[0]),
+                      sine=ops.sin(v[2] * 1e308 * 10.0))
+    outputs = _Three(quotient=engine.SCALAR, root=engine.SCALAR, sine=engine.SCALAR)
+    for item in ([4.0, 2.0, 1e-310], [-1.0, 0.0, 1.0]):
+        numpy = engine.apply(kernel, [(np.array(item), (3,), 'v', True)], outputs)
+        for taken in (np.array(item), tuple(item), item):
+            one = engine.apply_to_one(kernel, [(taken, (3,), 'v', True)], outputs)
+            assert type(one) is _Three and [type(x) for x in one] == [float] * 3
+            assert np.array_equal(np.array(one), np.array(numpy), equal_nan=True)
+    with pytest.raises(rt.RotationError, match=r'one item only: v of shape \(3,\)'):
+        engine.apply_to_one(kernel, [(np.ones((2, 3)), (3,), 'v', True)], outputs)
+    with pytest.raises(rt.RotationError, match='v must be finite'):
+        engine.apply_to_one(kernel, [((1.0, math.nan, 0.0), (3,), 'v', True)], outputs)
+
+
+def _python_numbers(value):
+    """Tell whether a result holds only Python floats and bools, in lists and NamedTuples."""
+    if isinstance(value, (tuple, list)):
+        return all(map(_python_numbers, value))
+    return type(value) in (float, bool)
+
+
+@pytest.mark.parametrize('seq', SEQUENCES)
+def test_decompose_one_gives_the_numbers_of_decompose(seq):
+    # rotation_node's decomposition: every field of decompose(check=False), bit for bit, as
+    # Python numbers; the same refusal where the screw overflows float64.
+    for R in ROTATIONS:
+        for b in VECTORS:
+            one = _outcome(lambda R, b: decompose_one(R, b, seq), R, b)
+            arrays = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), R, b)
+            if isinstance(arrays, tuple) and arrays[0] is rt.RotationError:
+                assert one == arrays
+                continue
+            assert type(one) is type(arrays) and _python_numbers(one), one
+            assert np.array(_leaves(one)).tobytes() == np.array(_leaves(arrays)).tobytes(), (
+                R, b)
+    with pytest.raises(rt.RotationError, match=r'one item only: R of shape \(3, 3\)'):
+        decompose_one(np.array(ROTATIONS[:2]), VECTORS[1], seq)
+
+
+def _leaves(result):
+    """Return the numbers of a decomposition, in order, flat."""
+    if isinstance(result, (tuple, list, np.ndarray)):
+        return [x for part in result for x in _leaves(part)]
+    return [float(result)]
 
 
 class _Pose(NamedTuple):

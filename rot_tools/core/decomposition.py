@@ -7,13 +7,14 @@ or a batch: the rot-tools report and every output of rotation_node read its fiel
 Every field comes from the kernel of its own public function (axis_angle_kernel,
 angles_kernel, quaternion_of_matrix_kernel, screw_of_axis_kernel, twist_kernel), so each
 equals what that function gives, and at θ = π all of them use the same axis sign.
+:func:`decompose_one` gives the same numbers for one motion as Python numbers.
 """
 
 from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core.axis_angle import axis_angle_kernel, rotvec_of
-from rot_tools.core.engine import FLAG, InRange, SCALAR, VECTOR
+from rot_tools.core.engine import apply_to_one, FLAG, InRange, SCALAR, VECTOR
 from rot_tools.core.euler import angles_kernel, GIMBAL_LOCK_TOL, parse_sequence, RPY_SEQUENCE
 from rot_tools.core.screw import refuse_far_axis, Screw, screw_of_axis_kernel, twist_kernel
 from rot_tools.core.screw import TWIST
@@ -79,4 +80,22 @@ def decompose(R, b, seq='ZYX', *, check=True):
     out = apply_to_rotations(_decomposition_kernel, R, check, _DECOMPOSITION,
                              [(b, (3,), 'translation b', True)], (parse_sequence(seq),))
     refuse_far_axis(out.fits, out.value.angle, b)
+    return out.value
+
+
+def decompose_one(R, b, seq='ZYX'):
+    """
+    Return decompose(R, b, seq, check=False) of one motion, its fields as Python numbers.
+
+    R (3, 3), b (3,). The same numbers, from the same kernel pass, as the kernels give them on
+    one item (rot_tools.core.engine.apply_to_one): floats (degenerate a bool), lists for the
+    vectors, no NumPy value made. For a caller that writes the numbers out one by one, as
+    rotation_node writes its messages. R is not validated; RotationError where the screw
+    overflows float64, as decompose.
+    """
+    out = apply_to_one(_decomposition_kernel, [(R, (3, 3), 'R', False),
+                                               (b, (3,), 'translation b', True)],
+                       _DECOMPOSITION, (parse_sequence(seq),))
+    if not out.fits:
+        refuse_far_axis(np.asarray(out.fits), np.asarray(out.value.angle), b)
     return out.value

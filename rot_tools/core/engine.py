@@ -13,6 +13,10 @@ that NamedTuple again, with arrays in it, so every caller reads an output by its
 - on a batch as ``kernel(ARRAYS, ...)``, chunk by chunk (CHUNK items whose entries are
   contiguous NumPy arrays), so that the temporaries stay small and in cache.
 
+``apply_to_one`` runs a kernel on one item too, and hands its output back as the kernel
+gave it (Python floats and lists, no NumPy value made), for a caller that uses the numbers
+as Python numbers.
+
 Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
 not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
 Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
@@ -126,25 +130,62 @@ def apply(kernel, inputs, outputs, params=()):
     sqrt(−1)) it is run as a batch of one instead, so that it gives the inf/NaN a batch
     gives.
     """
+    values = _entries_of_one_item(inputs)
+    if values is None:
+        return _apply_to_batch(kernel, inputs, outputs, params)
+    try:
+        result = kernel(FLOATS, *values, *params)
+    except FLOAT_ERRORS:
+        return _apply_to_batch(kernel, inputs, outputs, params, one=True)
+    return _one_item(result, outputs)
+
+
+def apply_to_one(kernel, inputs, outputs, params=()):
+    """
+    Return apply's result for one item as Python numbers: the kernel's output on FLOATS.
+
+    The same numbers as apply gives, in the same NamedTuple, but as the kernel gives them:
+    a float (a bool for a flag), a list for a vector, a list of rows for a matrix. For a
+    caller that uses them as Python numbers (rotation_node writes them into its messages),
+    which apply would have made into NumPy values first. inputs, outputs and params as
+    apply's; every input is one item (RotationError for a batch).
+    """
+    values = _entries_of_one_item(inputs)
+    if values is None:
+        raise RotationError('one item only: ' + ', '.join(
+            f'{name} of shape {tail}' for _, tail, name, _ in inputs))
+    try:
+        return kernel(FLOATS, *values, *params)
+    except FLOAT_ERRORS:
+        result = _apply_to_batch(kernel, inputs, outputs, params, one=True)
+        return _rebuild(outputs, iter([x.tolist() for x in _leaves(result, outputs)]))
+
+
+def _entries_of_one_item(inputs):
+    """
+    Return the kernel's entries of apply's inputs when they are one item, else None.
+
+    Each input as Python floats: a float, a list (vector) or a list of rows (matrix); NaN/Inf
+    refused in the inputs marked finite.
+    """
     values = []
     for x, tail, name, finite in inputs:
         if type(x) is np.ndarray and x.shape == tail and x.dtype is FLOAT64:
             v = x.tolist()  # (the usual one item: no array made, no shape to check)
         elif type(x) is float and not tail:
             v = x
+        elif type(x) in (tuple, list) and len(tail) == 1 and len(x) == tail[0] and all(
+                type(c) is float for c in x):
+            v = list(x)  # (a vector of Python floats, as a message's fields give it)
         else:
             a = as_float_array(x, tail, name)
             if a.ndim != len(tail):
-                return _apply_to_batch(kernel, inputs, outputs, params)
+                return None
             v = a.tolist()
         if finite and not _all_finite(v, len(tail)):
             require_finite(np.asarray(v), name)
         values.append(v)
-    try:
-        result = kernel(FLOATS, *values, *params)
-    except FLOAT_ERRORS:
-        return _apply_to_batch(kernel, inputs, outputs, params, one=True)
-    return _one_item(result, outputs)
+    return values
 
 
 def _one_item(value, spec):
