@@ -4,12 +4,13 @@ rotation_node: orientations and poses republished as matrix, quaternion, Euler, 
 Every input and output is one row of rot_tools.io.interface — topic, message type, fields,
 formula — and every message becomes one rigid transform (header, R, b) at the boundary: the
 numbers at its row's field paths (rot_tools.ros.topics) converted by its row's formula
-(rot_tools.io.boundary). From there one path serves them all: one decomposition
-(rot_tools.core.decomposition.decompose) gives every number published — rotation vector θ·l̂,
-Euler angles, roll/pitch/yaw, twist (θ·l̂, θ·m + d·l̂) = screw_log and the quaternion — each
-output row naming the field it publishes, and the picture's decomposition runs the same
-kernels, so at θ = π all outputs of one input share the axis sign. Outputs carry the input's
-header. Topics, services and parameters: doc/node.md, and ``rotation_node --help``.
+(rot_tools.io.boundary). From there one path serves them all: one decomposition, as Python
+numbers (rot_tools.core.decomposition.decompose_one), gives every number published —
+rotation vector θ·l̂, Euler angles, roll/pitch/yaw, twist (θ·l̂, θ·m + d·l̂) = screw_log and
+the quaternion — each output row naming the field it publishes, and the picture's
+decomposition runs the same kernels, so at θ = π all outputs of one input share the axis
+sign. Outputs carry the input's header. Topics, services and parameters: doc/node.md, and
+``rotation_node --help``.
 
 The pictures (~/markers and ~/screw_axis) are throttled: rot_tools.ros.pictures. The reply of
 ~/screw_path: rot_tools.ros.screw_path. The covariance of roll, pitch and yaw of the inputs that
@@ -41,7 +42,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time_source import USE_SIM_TIME_NAME
 from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
-from rot_tools.core.decomposition import decompose
+from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.io import boundary
@@ -444,14 +445,14 @@ class RotationNode(Node):
         values = source.read(msg)
         try:
             R, b = source.convert(values, settings, source.fields)
-            decomposition = decompose(R, b, settings.euler_sequence, check=False)
+            numbers = decompose_one(R, b, settings.euler_sequence)
         except boundary.RefusedInput as exc:
             self._refuse(source.topic, exc.reason, str(exc), header=header)
             return
         except RotationError as exc:
             self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
             return
-        self._publish(source, header, R, b, decomposition, settings)
+        self._publish(source, header, R, b, numbers, settings)
         if source.covariance is not None:
             self._covariances.on_input(source.topic, source.covariance, msg, header, R, values,
                                        settings)
@@ -460,23 +461,23 @@ class RotationNode(Node):
         """Return the followed frames have a new common time on /tf: publish every output."""
         settings = self._settings
         try:
-            decomposition = decompose(R, b, settings.euler_sequence, check=False)
+            numbers = decompose_one(R, b, settings.euler_sequence)
         except RotationError as exc:
             self._refuse(self._tf_source.topic, NOT_DECOMPOSABLE, str(exc))
             return
-        self._publish(self._tf_source, header, R, b, decomposition, settings)
+        self._publish(self._tf_source, header, R, b, numbers, settings)
 
-    def _publish(self, source, header, R, b, decomposition, settings):
-        """Every output of one accepted input (header, R, b) and its ``decomposition``."""
+    def _publish(self, source, header, R, b, numbers, settings):
+        """Every output of one accepted input (header, R, b); ``numbers``: its decompose_one."""
         for output in self._outputs:
-            value = R.ravel() if output.value == MATRIX else getattr(decomposition,
-                                                                     output.value)
+            value = R.ravel().tolist() if output.value == MATRIX else getattr(numbers,
+                                                                              output.value)
             if output.angles and settings.degrees:
-                value = np.degrees(value)
+                value = [math.degrees(angle) for angle in value]
             msg = output.message
             if output.stamped:
                 msg.header = header
-            output.write(msg, value.tolist())
+            output.write(msg, value)
             output.publish(msg)
         if settings.publish_markers:
             self._pictures.offer(header, R, b, settings)
