@@ -203,6 +203,18 @@ def test_publish_markers_false_silences_both(make_rig):  # noqa: F811
                             [(stamp, 'odom', [Marker.ADD]), (stamp, 'odom', [Marker.DELETE])])
 
 
+def test_the_picture_timer_exists_only_while_markers_are_published(make_rig):  # noqa: F811
+    # Without pictures the node has no timer for its executor to wait on.
+    rig = make_rig(publish_markers=False)  # noqa: F811
+    assert list(rig.node.timers) == []
+    assert set_one(rig.node, 'publish_markers', True).successful
+    assert len(list(rig.node.timers)) == 1
+    stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
+    markers_of(rig, stamp)
+    assert set_one(rig.node, 'publish_markers', False).successful
+    assert list(rig.node.timers) == []
+
+
 def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
         make_rig, monkeypatch):  # noqa: F811
     """

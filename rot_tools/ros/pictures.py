@@ -3,7 +3,9 @@ rotation_node's pictures of its inputs: ~/markers (MarkerArray) and ~/screw_axis
 
 A picture (rot_tools.io.drawing) costs several times the rest of an input's work, so it is
 throttled: at most MARKER_RATE a second, the latest input wins, and the last input is
-always drawn. A timer callback draws it, never an input's callback.
+always drawn. A timer callback draws it, never an input's callback; the timer exists only
+while publish_markers is true (start, stop), so that a node without pictures has no timer
+for its executor to wait on.
 """
 
 import math
@@ -25,23 +27,30 @@ WARM_UP_TRANSLATION = np.array([0.0, 0.0, 1.0])
 
 
 class Pictures:
-    """The pictures of one node: drawn by its timers, published on its two publishers."""
+    """The pictures of one node: drawn by its timer, published on its two publishers."""
 
-    def __init__(self, node, markers_publisher, screw_axis_publisher):
-        """Make the timers on ``node`` (stopped) and draw one picture, publishing nothing."""
+    def __init__(self, node, markers_publisher, screw_axis_publisher, publish_markers):
+        """
+        Draw one picture, publishing nothing; start when ``publish_markers`` is true.
+
+        The timer is made on ``node`` by start and destroyed by stop.
+        """
         self._node = node
         self._markers_pub = markers_publisher
         self._marker_pub = screw_axis_publisher
+        self._timer = None  # while publish_markers is true: fires when a picture is due
         self._due = None  # the arguments of the latest drawing not yet published
         self._shown = None  # the header of the picture on show (ADDs), or None
         self._sent = -math.inf  # time.monotonic() of the last one published
-        # The next picture a MARKER_RATE period after the last (timer), or at once when that
-        # has passed (soon, period 0: due on the executor's next pass).
-        steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self.timer = node.create_timer(
-            1.0 / MARKER_RATE, self.publish, clock=steady, autostart=False)
-        self.soon = node.create_timer(0.0, self.publish, clock=steady, autostart=False)
         self._warm_up()
+        if publish_markers:
+            self.start()
+
+    def start(self):
+        """publish_markers is true: make the timer that draws the pictures (stopped)."""
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timer = self._node.create_timer(1.0 / MARKER_RATE, self.publish, clock=steady,
+                                              autostart=False)
 
     def offer(self, header, R, b, settings):
         """
@@ -51,20 +60,19 @@ class Pictures:
         wins, and the last input is always drawn.
         """
         self._due = (header, R, b, settings)
-        if not (self.timer.is_canceled() and self.soon.is_canceled()):
+        if not self._timer.is_canceled():
             return
-        if time.monotonic() - self._sent >= 1.0 / MARKER_RATE:
-            self.soon.reset()  # due at once
-        else:
-            self.timer.reset()  # fires one period from now
+        # Due a MARKER_RATE period after the last picture, or at once when that has passed.
+        wait = self._sent + 1.0 / MARKER_RATE - time.monotonic()
+        self._timer.timer_period_ns = round(max(wait, 0.0) * 1e9)
+        self._timer.reset()
 
     def publish(self):
         """~/markers and ~/screw_axis of the input waiting (DELETEs for the identity)."""
-        self.timer.cancel()
-        self.soon.cancel()
         due, self._due = self._due, None
-        if due is None:  # dropped: publish_markers was switched off (clear)
+        if due is None:  # dropped: publish_markers was switched off (stop)
             return
+        self._timer.cancel()
         header, R, b, settings = due
         self._sent = time.monotonic()
         try:
@@ -80,15 +88,16 @@ class Pictures:
         self._marker_pub.publish(messages.screw_axis_marker(
             header, picture.screw.point, picture.screw.direction, settings.marker_scale))
 
-    def clear(self):
+    def stop(self):
         """
         publish_markers was switched off: drop the picture waiting, delete the one shown.
 
         The DELETEs go once, in the frame of the last picture drawn; nothing is sent when
-        nothing is shown (none drawn yet, or the last input was the identity).
+        nothing is shown (none drawn yet, or the last input was the identity). The timer is
+        destroyed.
         """
-        self.timer.cancel()
-        self.soon.cancel()
+        self._node.destroy_timer(self._timer)
+        self._timer = None
         self._due = None
         if self._shown is not None:
             self._delete(self._shown)

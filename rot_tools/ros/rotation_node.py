@@ -291,7 +291,8 @@ class RotationNode(Node):
             Publishing(publishers[kind.row.name].publish, kind.message(), kind.write,
                        kind.row.value, kind.row.angles, kind.row.stamped)
             for kind in OUTPUTS if kind.row.value is not None and not kind.row.covariance)
-        self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'])
+        self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'],
+                                  self._settings.publish_markers)
         self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
 
         # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
@@ -416,13 +417,14 @@ class RotationNode(Node):
         return SetParametersResult(successful=True)
 
     def _on_parameters_set(self, parameters):
-        """Take the new values into use from the next message; publish_markers off clears."""
+        """Take the new values into use from the next message; publish_markers starts, stops."""
         if any(parameter.name in PARAMETERS for parameter in parameters):
-            was_drawing = self._settings.publish_markers
             old, self._settings = self._settings, self._read_settings()
-            if was_drawing and not self._settings.publish_markers:
-                self._pictures.clear()
             new = self._settings
+            if old.publish_markers and not new.publish_markers:
+                self._pictures.stop()
+            elif new.publish_markers and not old.publish_markers:
+                self._pictures.start()
             self._tf.set_quaternion_tolerance(new.quaternion_tolerance)
             frames = (new.tf_reference_frame, new.tf_body_frame)
             if frames != (old.tf_reference_frame, old.tf_body_frame):
