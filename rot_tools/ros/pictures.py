@@ -23,7 +23,8 @@ MARKER_RATE = 30.0
 
 WARM_UP_ROTATION = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 WARM_UP_TRANSLATION = np.array([0.0, 0.0, 1.0])
-"""The screw motion drawn (and not published) at start-up: a quarter turn about z, 1 m up."""
+"""The screw motion drawn (and not published) at start-up, a quarter turn about z, 1 m up;
+rotation_node decomposes it too."""
 
 
 class Pictures:

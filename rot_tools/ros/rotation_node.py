@@ -51,7 +51,8 @@ from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.interface import MATRIX
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
 from rot_tools.ros import rpy_covariance, runtime, screw_path, tf_input
-from rot_tools.ros.pictures import MARKER_RATE, Pictures
+from rot_tools.ros.pictures import (MARKER_RATE, Pictures, WARM_UP_ROTATION,
+                                    WARM_UP_TRANSLATION)
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
 from rot_tools.ros.topics import INPUTS, OUTPUTS
@@ -291,6 +292,7 @@ class RotationNode(Node):
             Publishing(publishers[kind.row.name].publish, kind.message(), kind.write,
                        kind.row.value, kind.row.angles, kind.row.stamped)
             for kind in OUTPUTS if kind.row.value is not None and not kind.row.covariance)
+        self._warm_up()
         self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'],
                                   self._settings.publish_markers)
         self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
@@ -472,18 +474,28 @@ class RotationNode(Node):
     def _publish(self, source, header, R, b, numbers, settings):
         """Every output of one accepted input (header, R, b); ``numbers``: its decompose_one."""
         for output in self._outputs:
-            value = R.ravel().tolist() if output.value == MATRIX else getattr(numbers,
-                                                                              output.value)
-            if output.angles and settings.degrees:
-                value = [math.degrees(angle) for angle in value]
             msg = output.message
             if output.stamped:
                 msg.header = header
-            output.write(msg, value)
+            output.write(msg, _output_numbers(output, R, numbers, settings))
             output.publish(msg)
         if settings.publish_markers:
             self._pictures.offer(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
+
+    def _warm_up(self):
+        """
+        Decompose one motion and write it into every output's message, publishing nothing.
+
+        The first input of a process pays for one-off work (the first calls of the kernels
+        and of the message writers): paid here at start-up instead, as the pictures pay for
+        their first drawing (rot_tools.ros.pictures).
+        """
+        settings = self._settings
+        numbers = decompose_one(WARM_UP_ROTATION, WARM_UP_TRANSLATION, settings.euler_sequence)
+        for output in self._outputs:
+            output.write(output.message,
+                         _output_numbers(output, WARM_UP_ROTATION, numbers, settings))
 
     def _refuse(self, topic, reason, text, error=False, header=None):
         """
@@ -588,6 +600,18 @@ class RotationNode(Node):
                          f'no screw motion from start to goal: {exc}', error=True,
                          header=header)
         return response
+
+
+def _output_numbers(output, R, numbers, settings):
+    """
+    Return the numbers an output publishes, as a list: R row-major, or a decompose_one field.
+
+    Angles in angle_unit (``settings.degrees``); the decomposition's are in radians.
+    """
+    value = R.ravel().tolist() if output.value == MATRIX else getattr(numbers, output.value)
+    if output.angles and settings.degrees:
+        return [math.degrees(angle) for angle in value]
+    return value
 
 
 def _rows(rows, width=99):
