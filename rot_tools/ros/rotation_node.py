@@ -48,7 +48,6 @@ from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.io import boundary
 from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
-from rot_tools.io.interface import MATRIX
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
 from rot_tools.ros import rpy_covariance, runtime, screw_path, tf_input
 from rot_tools.ros.pictures import (MARKER_RATE, Pictures, WARM_UP_ROTATION,
@@ -97,9 +96,8 @@ class Publishing(NamedTuple):
     """The output's message, filled and published again for every input."""
     write: Callable
     """write(message, numbers): the numbers into the row's fields (rot_tools.ros.topics)."""
-    value: str
-    """The row's value: a field of the input's Decomposition, or MATRIX (its R)."""
-    angles: bool
+    numbers: Callable
+    """numbers(R, decomposition, degrees): what the output publishes (rot_tools.ros.topics)."""
     stamped: bool
 
 
@@ -290,9 +288,15 @@ class RotationNode(Node):
             for kind in OUTPUTS}
         self._outputs = tuple(
             Publishing(publishers[kind.row.name].publish, kind.message(), kind.write,
-                       kind.row.value, kind.row.angles, kind.row.stamped)
+                       kind.numbers, kind.row.stamped)
             for kind in OUTPUTS if kind.row.value is not None and not kind.row.covariance)
-        self._warm_up()
+        # The first calls of the kernels and of the writers pay for one-off work: made here, on
+        # one motion written into every output's message and not published (as the pictures
+        # draw one), not with the first input.
+        warm_up = decompose_one(WARM_UP_ROTATION, WARM_UP_TRANSLATION,
+                                self._settings.euler_sequence)
+        for output in self._outputs:
+            output.write(output.message, output.numbers(WARM_UP_ROTATION, warm_up, False))
         self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'],
                                   self._settings.publish_markers)
         self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
@@ -477,25 +481,11 @@ class RotationNode(Node):
             msg = output.message
             if output.stamped:
                 msg.header = header
-            output.write(msg, _output_numbers(output, R, numbers, settings))
+            output.write(msg, output.numbers(R, numbers, settings.degrees))
             output.publish(msg)
         if settings.publish_markers:
             self._pictures.offer(header, R, b, settings)
         self._latest = Latest(source, header, R, b, settings)
-
-    def _warm_up(self):
-        """
-        Decompose one motion and write it into every output's message, publishing nothing.
-
-        The first input of a process pays for one-off work (the first calls of the kernels
-        and of the message writers): paid here at start-up instead, as the pictures pay for
-        their first drawing (rot_tools.ros.pictures).
-        """
-        settings = self._settings
-        numbers = decompose_one(WARM_UP_ROTATION, WARM_UP_TRANSLATION, settings.euler_sequence)
-        for output in self._outputs:
-            output.write(output.message,
-                         _output_numbers(output, WARM_UP_ROTATION, numbers, settings))
 
     def _refuse(self, topic, reason, text, error=False, header=None):
         """
@@ -600,18 +590,6 @@ class RotationNode(Node):
                          f'no screw motion from start to goal: {exc}', error=True,
                          header=header)
         return response
-
-
-def _output_numbers(output, R, numbers, settings):
-    """
-    Return the numbers an output publishes, as a list: R row-major, or a decompose_one field.
-
-    Angles in angle_unit (``settings.degrees``); the decomposition's are in radians.
-    """
-    value = R.ravel().tolist() if output.value == MATRIX else getattr(numbers, output.value)
-    if output.angles and settings.degrees:
-        return [math.degrees(angle) for angle in value]
-    return value
 
 
 def _rows(rows, width=99):

@@ -7,6 +7,7 @@ the node takes and publishes message objects, and reads or writes in them exactl
 fields its rows name.
 """
 
+import math
 from typing import Callable, NamedTuple
 
 from rot_tools.io import interface
@@ -28,7 +29,7 @@ class Subscribed(NamedTuple):
 
 
 class Published(NamedTuple):
-    """An output row with its message class and write(msg, numbers) of row.fields."""
+    """An output row with its message class, write(msg, numbers) of row.fields, numbers()."""
 
     row: interface.Output
     msg_type: type
@@ -52,6 +53,21 @@ class Published(NamedTuple):
                               for label, size, stride in self.row.layout]
             msg.data = [0.0] * self.row.layout[0][2]
         return msg
+
+    def numbers(self, R, decomposition, degrees):
+        """
+        Return the numbers of one input that this output publishes, as write takes them.
+
+        R row-major (interface.MATRIX), or the row's field of the input's decomposition as
+        Python numbers (rot_tools.core.decomposition.decompose_one); angles in degrees when
+        ``degrees`` (the decomposition's are in radians).
+        """
+        if self.row.value == interface.MATRIX:
+            return R.ravel().tolist()
+        value = getattr(decomposition, self.row.value)
+        if self.row.angles and degrees:
+            return [math.degrees(angle) for angle in value]
+        return value
 
 
 def subscribed(row):
