@@ -31,9 +31,9 @@ latency p50 / p99, and the node process's CPU time per delivered message (from
 any offered rate) ≥ 1.0 × the usual way's and ≥ 0.75 × the relay's; its p99 ≤ 1.5 × the
 relay's at every rate both sustain (≤ 1 % lost) unsaturated (each process using at most
 UNSATURATED of a core: nearer its ceiling a p99 measures a queue's length); and the slowest
-of its first 10,000 messages ≤ 1 ms, measured first, before the flood, by bench_first_calls.py's node path (the
-``~/pose`` callback of a fresh node called on 10,000 different poses, each timed alone). Not
-a test: it prints ratios and asserts nothing.
+of its first 10,000 messages ≤ 1 ms, measured first, before the flood, by
+bench_first_calls.py's node path (the ``~/pose`` callback of a fresh node called on 10,000
+different poses, each timed alone). Not a test: it prints ratios and asserts nothing.
 
 Run: ``.venv/bin/python bench/bench_node.py`` (options: --help). The domain is
 $BENCH_ROS_DOMAIN_ID or one derived from the pid; ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST.
