@@ -52,6 +52,9 @@ CHUNK = 64
 """Messages of one topic held as objects at a time, before their fields become columns: few,
 so that they are gone before Python's garbage collector would walk them again and again."""
 
+VECTOR3 = ('x', 'y', 'z')
+"""The members of a Vector3 field read on request (read_topics' ``vectors``)."""
+
 BAG_SUFFIXES = ('.bag', '.db3', '.mcap')
 """Files read as a bag outside a rosbag2 directory: ROS 1, and rosbag2's storage files."""
 
@@ -184,15 +187,18 @@ class _Fields:
     The columns read from the messages of one type, and how each is read.
 
     fields: {column: path}, the header's (:data:`HEADER`) added; covariance: (path, size) of
-    an array read whole, or None. A column is the stamp (sec, nanosec: int64), a string (a
-    frame id), the numbers of a role's members (rot_tools.io.interface.MEMBERS: float64), or
+    an array read whole, or None; vectors: {column: path} of Vector3 fields read besides. A
+    column is the stamp (sec, nanosec: int64), a string (a frame id), the numbers of a role's
+    members (rot_tools.io.interface.MEMBERS: float64) or of a Vector3 (:data:`VECTOR3`), or
     a whole float64 array (``covariance``).
     """
 
-    def __init__(self, fields, covariance=None):
+    def __init__(self, fields, covariance=None, vectors=None):
         self.getters = []
-        for column, path in {**HEADER, **fields}.items():
-            members = STAMP_MEMBERS if column == 'stamp' else interface.MEMBERS.get(column)
+        self.vectors = dict(vectors or {})
+        for column, path in {**HEADER, **fields, **self.vectors}.items():
+            members = (STAMP_MEMBERS if column == 'stamp' else VECTOR3
+                       if column in self.vectors else interface.MEMBERS.get(column))
             self.getters.append(_Getter(column, field_getter(path),
                                         members and _members_getter(members),
                                         np.int64 if column == 'stamp' else np.float64))
@@ -225,7 +231,8 @@ class Columns:
     (x, y, z, w); position (N, 3) or None; covariance0 (N,) (Imu's
     orientation_covariance[0]) or None; covariance (N, 9) or (N, 36), the orientation's
     covariance of the types of :data:`COVARIANCE`, row-major, or None; angular_velocity
-    (N, 3) (Imu's gyro) or None.
+    (N, 3) (Imu's gyro) or None; and an (N, 3) attribute per Vector3 field that
+    :func:`read_topics` was asked for (``vectors``).
     """
 
     def __init__(self, topic, msgtype, record, sec, nanosec, frame_ids, frame,
@@ -263,7 +270,8 @@ def _columns(topic, msgtype, chunks, fields):
     if 'child_frame_id' in fields.names:
         children = _index([chunk.columns['child_frame_id'] for chunk in chunks])
         out.child_frame_ids, out.child = children.values, children.index
-    for name in ('orientation', 'position', 'covariance0', 'angular_velocity', 'covariance'):
+    for name in ('orientation', 'position', 'covariance0', 'angular_velocity', 'covariance',
+                 *fields.vectors):
         if name in fields.names:
             setattr(out, name, _join(name, chunks, fields))
     if out.covariance is not None and out.covariance.shape[1] != fields.size:
@@ -287,8 +295,8 @@ def _index(chunks):
 
 def _join(name, chunks, fields):
     """Return column ``name`` of every chunk, joined."""
-    width = len(STAMP_MEMBERS if name == 'stamp' else interface.MEMBERS.get(name) or ()) \
-        or fields.size
+    width = len(STAMP_MEMBERS if name == 'stamp' else VECTOR3 if name in fields.vectors
+                else interface.MEMBERS.get(name) or ()) or fields.size
     empty = np.zeros((0, width) if width > 1 else (0,), np.int64 if name == 'stamp' else None)
     return np.concatenate([chunk.columns[name] for chunk in chunks] or [empty])
 
@@ -323,9 +331,13 @@ class _Topic:
         return _columns(self.topic, self.msgtype, self.chunks, self.fields)
 
 
-def fields_of(msgtype):
-    """Return the _Fields read from messages of ``msgtype`` (one of SUPPORTED)."""
-    return _Fields(SUPPORTED[msgtype], COVARIANCE.get(msgtype))
+def fields_of(msgtype, vectors=None):
+    """
+    Return the _Fields read from messages of ``msgtype`` (one of SUPPORTED).
+
+    vectors: {column: path} of Vector3 fields read besides (read_topics' ``vectors``).
+    """
+    return _Fields(SUPPORTED[msgtype], COVARIANCE.get(msgtype), vectors)
 
 
 def _decode(reader, raw, conn, index):
@@ -341,16 +353,20 @@ def _decode(reader, raw, conn, index):
                        f'{_one_line(exc)}') from None
 
 
-def read_topics(reader, connections, start=None, stop=None, progress=None):
+def read_topics(reader, connections, start=None, stop=None, progress=None, vectors=None):
     """
     {topic: Columns} of the connections' messages between start and stop (ns, record time).
 
     ``progress(n)`` is called now and then with the number of messages read so far.
+    ``vectors``: {type name: {column: path}}, Vector3 fields read besides a type's own, each
+    an attribute ``column`` (N, 3) of its topics' Columns (an Imu's linear_acceleration for
+    ``rot-tools imu-check``).
     """
     topics, by_id = {}, {}
     for conn in connections:
         if conn.topic not in topics:
-            topics[conn.topic] = _Topic(conn.topic, conn.msgtype, fields_of(conn.msgtype))
+            topics[conn.topic] = _Topic(conn.topic, conn.msgtype, fields_of(
+                conn.msgtype, (vectors or {}).get(conn.msgtype)))
         by_id[conn.id] = topics[conn.topic]
     count = 0
     try:
