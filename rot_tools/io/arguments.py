@@ -149,6 +149,11 @@ class Version(argparse.Action):
         parser.exit(0)
 
 
+def install_hint(extra):
+    """Return the command that adds an optional extra to a checkout's install (not on PyPI)."""
+    return f"pip install -e '.[{extra}]' in the rot_tools checkout"
+
+
 def add_version(parser):
     """Add --version to parser."""
     parser.add_argument('--version', action=Version)
