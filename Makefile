@@ -1,4 +1,4 @@
-# Quick start on a machine with Python 3.11 (no ROS installed):
+# Quick start on a machine with Python 3.11 or 3.12 (no ROS installed; 3.11 when both are):
 #   make run          set up .venv and start rotation_node
 #   make test         set up both venvs and run every test in each, side by side (CI):
 #                     .venv (Python 3.11, the pinned versions of requirements*.txt) and
@@ -12,7 +12,7 @@
 # Each set-up step leaves a stamp file in its venv, so a second run installs nothing unless
 # a requirements file or the packaging files changed. `make clean` removes both venvs.
 
-PYTHON ?= $(shell tools/find_python.sh 3.11 || echo python3.11)
+PYTHON ?= $(shell tools/find_python.sh 3.11 || tools/find_python.sh 3.12 || echo python3.11)
 STOCK_PYTHON ?= $(shell tools/find_python.sh 3.12)
 VENV := .venv
 BIN := $(VENV)/bin
@@ -86,7 +86,7 @@ test-venv-stock: $(STOCK_VENV)/.stamp-test
 # apply only to colcon / `setup.py install|develop`, which put them in lib/rot_tools).
 $(VENV)/.stamp-run: requirements.txt $(PACKAGING)
 	@command -v $(PYTHON) >/dev/null || { \
-	  echo 'make: $(PYTHON) not found: install Python 3.11 or pass PYTHON=/path/to/python3.11' >&2; \
+	  echo 'make: no python3.11 or python3.12 found: install one or pass PYTHON=/path/to/python3' >&2; \
 	  exit 1; }
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install -r requirements.txt
