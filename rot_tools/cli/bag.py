@@ -29,8 +29,8 @@ def one_bag(args, error):
     """
     from rot_tools.io.report import to_json, to_yaml
 
-    output_file.refuse_overwriting(args.path, [('--csv', args.csv), ('--plot', args.plot),
-                                   ('--parquet', args.parquet)], error)
+    output_file.check_outputs([('--csv', args.csv), ('--plot', args.plot),
+                               ('--parquet', args.parquet)], [args.path], error)
     try:
         storage, topics = bag_analysis.analyse(
             args.path, args.topic or (), args.start, args.end,

@@ -387,17 +387,6 @@ def write_plot(path, result, degrees):
         fig.savefig(out, format=os.path.splitext(str(path))[1][1:].lower())
 
 
-def _refuse_overwriting(args):
-    """One error line when --csv or --plot names EST or REF (or a file in a bag directory)."""
-    inputs = [Path(p).resolve() for p in (args.est, args.ref)]
-    for option, path in (('--csv', args.csv), ('--plot', args.plot)):
-        if path is None:
-            continue
-        target = Path(path).resolve()
-        if any(target == source or target.is_relative_to(source) for source in inputs):
-            options.error(f'{option} {path} would overwrite an input: refused')
-
-
 def run(args):
     """Run rot-tools compare on the parsed ``args``; return the exit status (0)."""
     for option, given in (('--point', args.point), ('--wxyz', args.wxyz),
@@ -405,7 +394,8 @@ def run(args):
                           ('--tol', args.tol)):
         if given:
             options.error(f'{option} does not apply to compare')
-    _refuse_overwriting(args)
+    output_file.check_outputs([('--csv', args.csv), ('--plot', args.plot)],
+                              [args.est, args.ref])
     try:
         est = read_side('EST', args.est, args.est_topic, args.est_tf)
         ref = read_side('REF', args.ref, args.ref_topic, args.ref_tf)

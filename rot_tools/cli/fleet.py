@@ -254,9 +254,7 @@ def run(args, bags, error):
     if args.jobs is None:
         args.jobs = len(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') \
             else os.cpu_count() or 1
-    for path in bags:
-        output_file.refuse_overwriting(path, [('--csv', args.csv), ('--parquet', args.parquet)],
-                                       error)
+    output_file.check_outputs([('--csv', args.csv), ('--parquet', args.parquet)], bags, error)
     names = [None] * len(bags)
     if args.parquet is not None:
         bag_parquet.directory(args.parquet, error)

@@ -8,9 +8,9 @@ the temporary file and leaves whatever NAME held before. ``os.replace`` in one d
 atomic on POSIX. A NAME that exists and is not a regular file (``/dev/null``, a FIFO) is
 written directly: renaming over it would replace the device or the pipe.
 
-:func:`refuse_overwriting` refuses an output that is the bag being read (or a file of its
-rosbag2 directory); :func:`to_stdout` writes to the standard output, a closed pipe ending
-quietly.
+:func:`check_outputs` is the one guard of every command's output paths: it refuses an output
+that is an input, lies in an input bag, or is another output, before anything is written.
+:func:`to_stdout` writes to the standard output, a closed pipe ending quietly.
 """
 
 from contextlib import contextmanager, suppress
@@ -69,25 +69,72 @@ def write_figure(draw, path, error):
         error(f'--plot: cannot write {path}: {exc.strerror or exc}')
 
 
-def refuse_overwriting(bag, outputs, error):
-    """
-    Call ``error`` if an output file is the bag: the same file, or a file in its directory.
-
-    outputs: [(option, path or None)]; ``-`` is the standard output. The bag is what
-    rot_tools.io.bag_read.bag_paths opens (a rosbag2 directory for a file inside one).
-    """
+def _real(path):
+    """Return the absolute path, every symlink and ``..`` resolved (as far as it exists)."""
     try:
-        inputs = [Path(p).resolve() for p in bag_read.bag_paths(bag)] + [Path(bag).resolve()]
-    except bag_read.BagError:
-        return  # the analysis says what is wrong with it
+        return Path(path).resolve()
+    except (OSError, RuntimeError):  # a symlink loop: compared as typed, made absolute
+        return Path(os.path.abspath(path))
+
+
+def _stat(path):
+    try:
+        return os.stat(path)
+    except (OSError, ValueError):
+        return None
+
+
+def _protected(path):
+    """
+    Return (what an input protects, is it a bag) for one input path.
+
+    A rosbag2 directory (one holding metadata.yaml) protects itself and everything in it, and
+    so does any file of one (its storage files, metadata.yaml); any other input protects
+    itself, a bag when it is a directory or ends in .bag, .db3 or .mcap.
+    """
+    real = _real(path)
+    if real.is_dir():
+        return real, True
+    if (real.parent / 'metadata.yaml').exists():
+        return real.parent, True
+    return real, real.suffix.lower() in bag_read.BAG_SUFFIXES
+
+
+def check_outputs(outputs, inputs, error=None):
+    """
+    Refuse, before anything is written, an output path that would destroy an input or output.
+
+    outputs: [(option, path)] of every file or directory the command writes (``--csv``,
+    ``--plot``, ``--parquet`` ...); a path that is None (not asked for) or ``-`` (the
+    standard output) passes, and so does an existing character device (/dev/null). inputs:
+    every path the command reads (text files, bags; None is skipped). An output is refused
+    when, with symlinks and relative paths resolved, it is an input (or a hard link to one),
+    lies inside an input bag (a rosbag2 directory: the directory, its metadata.yaml, its
+    storage files; a bag file), or is the same file as another output. ``error(text)``
+    (default rot_tools.cli.options.error: one line, exit 2) says which and why.
+    """
+    if error is None:
+        from rot_tools.cli.options import error
+    protected = [(str(path), *_protected(path)) for path in inputs if path is not None]
+    seen = []
     for option, path in outputs:
-        if path is None or path == '-':
+        if path is None or str(path) == '-':
             continue
-        target = Path(path).resolve()
-        for source in inputs:
-            if (target == source or (source.is_dir() and target.is_relative_to(source))
-                    or (target.exists() and os.path.samefile(target, source))):
-                error(f'{option} {path} would overwrite the bag being read ({bag}): refused')
+        target, found = _real(path), _stat(path)
+        if found is not None and stat.S_ISCHR(found.st_mode):
+            continue
+        for given, area, bag in protected:
+            source = _stat(given)
+            if (target == area or target.is_relative_to(area)
+                    or (found is not None and source is not None
+                        and os.path.samestat(found, source))):
+                what = f'the bag being read ({given})' if bag else f'an input ({given})'
+                error(f'{option} {path} would overwrite {what}: refused')
+        for other_option, other, other_target, other_found in seen:
+            if target == other_target or (found is not None and other_found is not None
+                                          and os.path.samestat(found, other_found)):
+                error(f'{option} {path} and {other_option} {other} are the same file: refused')
+        seen.append((option, path, target, found))
 
 
 def release_stdout():
