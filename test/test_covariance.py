@@ -8,6 +8,7 @@ sequences, both frames, both directions. Central differences of matrix_to_euler 
 matrix_to_rotvec give the Jacobian to ~1e-10, so the closed form must match to 1e-7.
 """
 
+from fractions import Fraction
 import re
 
 import numpy as np
@@ -15,6 +16,9 @@ import pytest
 import rot_tools as rt
 from rot_tools import (change_covariance_frame, euler_covariance_to_rotvec, EULER_SEQUENCES,
                        RotationError, rotvec_covariance_to_euler, transform_pose_covariance)
+from rot_tools.core.covariance import gimbal_lock_distance
+from rot_tools.io.message_covariance import BAD, fault, near_lock_note, OK, rpy_covariances
+from rot_tools.io.message_covariance import stddev_correlation
 
 R0 = rt.rotvec_to_matrix([1.0, -0.19, 2.09])
 """θ2 is at least 0.77 rad from gimbal lock in every sequence (checked below)."""
@@ -252,8 +256,9 @@ def test_covariances_at_the_edge_of_float64_are_checked_without_overflow():
         with pytest.raises(RotationError, match=r'max\|C − Cᵀ\| = 1e\+300 > .*\(item \(1,\)\)'):
             change_covariance_frame(np.stack([hard, asymmetric, not_psd]), R0)
         assert np.isfinite(change_covariance_frame(hard * 1e-10, R0)).all()
-    with np.errstate(over='ignore'):  # the rotated covariance itself may overflow: not refused
-        change_covariance_frame(hard, R0)
+        # the rotated covariance itself is beyond float64 (2e308 of [1, 0, 1]·[1, 0, 1]ᵀ)
+        with pytest.raises(RotationError, match='turned covariance overflows float64'):
+            change_covariance_frame(hard, R0)
 
 
 @pytest.mark.parametrize('bad', [np.nan, np.inf, -np.inf])
@@ -341,3 +346,130 @@ def test_change_covariance_frame_agrees_with_sampling_and_batches():
     pose[3:, 3:] = C0
     np.testing.assert_allclose(transform_pose_covariance(R[0], [1, 2, 3], pose)[3:, 3:],
                                change_covariance_frame(C0, R[0]), rtol=1e-14)
+
+
+# ---------------------------------------------------------------------------------------
+# The ends of float64: converted at the scale of 1, exact arithmetic as the reference
+
+
+def _exact_sandwich(M, C):
+    """M·C·Mᵀ of the float64 entries in exact rational arithmetic, rounded once to float64."""
+    M = [[Fraction(float(x)) for x in row] for row in np.asarray(M)]
+    C = [[Fraction(float(x)) for x in row] for row in np.asarray(C)]
+    n, m = len(M), len(C)
+    MC = [[sum(M[i][k] * C[k][j] for k in range(m)) for j in range(m)] for i in range(n)]
+    return np.array([[float(sum(MC[i][k] * M[j][k] for k in range(m))) for j in range(n)]
+                     for i in range(n)])
+
+
+def _adjoint(R, b):
+    """[[R, [b]×·R], [0, R]], written out here."""
+    bx = np.array([[0.0, -b[2], b[1]], [b[2], 0.0, -b[0]], [-b[1], b[0], 0.0]])
+    return np.block([[R, bx @ R], [np.zeros((3, 3)), R]])
+
+
+B0 = np.array([3.0, -2.0, 1.5])
+SANDWICHES = {  # name: (the call on C, M such that the result is M·C·Mᵀ, C's size)
+    'change_covariance_frame': (lambda C: change_covariance_frame(C, R0), R0, 3),
+    'transform_pose_covariance ros': (
+        lambda C: transform_pose_covariance(R0, B0, C), np.kron(np.eye(2), R0), 6),
+    'transform_pose_covariance se3': (
+        lambda C: transform_pose_covariance(R0, B0, C, 'se3'), _adjoint(R0, B0), 6),
+}
+
+
+@pytest.mark.parametrize('name', SANDWICHES)
+@pytest.mark.parametrize('size', ['huge', 'subnormal'])
+def test_huge_and_subnormal_covariances_are_carried_as_exact_arithmetic_carries_them(
+        name, size):
+    """
+    s·I stays finite up to float64's largest result, 5e-324·I does not vanish.
+
+    (ROS reads an all-zero covariance as unknown.) The huge s makes the largest entry of
+    M·C·Mᵀ 0.9 of float64's largest: computed as it stands, out + outᵀ overflowed.
+    """
+    call, M, n = SANDWICHES[name]
+    scale = 0.9 * BIG / np.abs(M @ M.T).max() if size == 'huge' else 5e-324
+    C = scale * np.eye(n)
+    with np.errstate(over='raise', invalid='raise', divide='raise'):  # no warning
+        got = call(C)
+    want = _exact_sandwich(M, C)
+    assert np.all(np.diag(got) > 0) and np.all(np.diag(got) <= np.diag(want) * (1 + 1e-15))
+    np.testing.assert_allclose(got, want, rtol=0, atol=4e-16 * np.abs(want).max())
+    np.testing.assert_array_equal(got, got.T)
+
+
+@pytest.mark.parametrize('seq', ['xyz', 'ZYX', 'zxz'])
+@pytest.mark.parametrize('scale', [1e307, 5e-324])
+def test_euler_covariances_of_huge_and_subnormal_ones_are_linear_in_them(seq, scale):
+    """f(s·C) = s·f(C) (one rounding): the conversions at s = 1 are checked above."""
+    angles = rt.matrix_to_euler(R0, seq).angles
+    unit = np.diag([1.0, 0.5, 0.25]) if scale > 1 else np.eye(3)  # (0.5·5e-324 is 0)
+    with np.errstate(over='raise', invalid='raise', divide='raise'):
+        to_euler = rotvec_covariance_to_euler(R0, scale * unit, seq).cov
+        to_rotvec = euler_covariance_to_rotvec(angles, scale * unit, seq, 'body').cov
+    for got, at_one in ((to_euler, rotvec_covariance_to_euler(R0, unit, seq).cov),
+                        (to_rotvec, euler_covariance_to_rotvec(angles, unit, seq, 'body').cov)):
+        assert np.diag(got).max() > 0, got
+        np.testing.assert_allclose(got, scale * at_one, rtol=1e-15, atol=5e-324)
+
+
+def test_the_issue_s_subnormal_covariance_is_kept_in_every_function():
+    C = 5e-324 * np.eye(3)
+    pose = 5e-324 * np.eye(6)
+    for got in (change_covariance_frame(C, R0), rotvec_covariance_to_euler(R0, C).cov,
+                euler_covariance_to_rotvec([0.1, 0.2, 0.3], C).cov,
+                transform_pose_covariance(R0, B0, pose)):
+        assert np.diag(got).min() == 5e-324, got
+
+
+def test_a_covariance_converted_beyond_float64_is_refused():
+    big = np.diag([BIG, BIG, BIG])
+    with np.errstate(over='raise', invalid='raise', divide='raise'):
+        with pytest.raises(RotationError, match=re.escape(
+                'rotvec_covariance_to_euler: the converted covariance overflows float64 '
+                '(beyond ±1.8e308), first at item (1,)')):
+            rotvec_covariance_to_euler(np.stack([R0, R0]), np.stack([C0, big]))
+        with pytest.raises(RotationError, match='transform_pose_covariance: the transformed '
+                           r'covariance overflows float64 \(beyond ±1.8e308\)$'):
+            transform_pose_covariance(R0, B0, np.diag([1.0] * 5 + [BIG]), 'se3')
+        # at gimbal lock an item is NaN (degenerate), whatever its size
+        lock = rt.euler_to_matrix([0.1, np.pi / 2, 0.2], 'xyz')
+        out = rotvec_covariance_to_euler(np.stack([R0, lock]), np.stack([C0, big]), 'xyz')
+        assert out.degenerate.tolist() == [False, True] and np.isnan(out.cov[1]).all()
+
+
+@pytest.mark.parametrize('seq', ['xyz', 'ZYX', 'zxz', 'XZX'])
+def test_gimbal_lock_distance_is_the_middle_angle_s(seq):
+    angles = rt.matrix_to_euler(rt.random_rotations(50, rng=5), seq).angles
+    np.testing.assert_allclose(gimbal_lock_distance(angles, seq), _lock_distance(angles, seq),
+                               rtol=0, atol=1e-15)
+    near = gimbal_lock_distance([0.3, np.pi / 2 - 1.7e-6, 1.1])
+    assert near == pytest.approx(1.7e-6, rel=1e-9)
+
+
+def test_a_covariance_near_gimbal_lock_has_a_note():
+    """1.7e-6 rad from the lock, 0.01 rad of pitch: roll and yaw's 5,700 rad mean nothing."""
+    rpy = [0.3, np.pi / 2 - 1.7e-6, 1.1]
+    R = rt.euler_to_matrix(rpy, 'xyz')
+    C, (status,) = rpy_covariances(R[None], (1e-4 * np.eye(3)).ravel()[None])
+    sigma, _ = stddev_correlation(C[0])
+    assert status == OK and sigma[0] > 5000 and sigma[1] == pytest.approx(0.01, rel=0.01)
+    note = near_lock_note(gimbal_lock_distance(rpy), sigma[1])
+    assert note.startswith('pitch is 1.7e-06 rad from gimbal lock (pitch = ±90°), within 3 of '
+                           'its standard deviations (0.01 rad)'), note
+    assert near_lock_note(0.05, 0.01) == ''  # 5 standard deviations away
+    assert near_lock_note(1.7e-6, 1e-9) == ''  # first order holds: errors tiny against it
+
+
+def test_message_covariances_at_the_ends_of_float64():
+    """What the node and rot-tools bag publish: finite or BAD (said why), never inf or 0."""
+    R = rt.euler_to_matrix([0.3, -0.5, 1.1], 'xyz')
+    covs = np.stack([np.eye(3).ravel() * k for k in (1e308, BIG, 5e-324)])
+    with np.errstate(over='raise', invalid='raise', divide='raise'):
+        C, status = rpy_covariances(np.stack([R] * 3), covs)
+    assert status.tolist() == [OK, BAD, OK]
+    assert np.isfinite(C[0]).all() and np.isnan(C[1]).all()
+    assert np.diag(C[2]).min() == 5e-324
+    assert fault(covs[1]) == ('covariance: its covariance of roll, pitch, yaw overflows float64 '
+                              '(beyond ±1.8e308)')

@@ -1191,3 +1191,21 @@ def test_a_parameter_without_a_name_is_refused(rig, service):
     assert '' not in rig.node.list_parameters([], 0).names
     assert not rig.node_logs(Log.ERROR)
     rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))  # and the node keeps serving
+
+
+def test_a_megabyte_parameter_value_is_logged_and_answered_in_excerpts(rig):
+    """Strings of 1 MB set by the service: the log line and refusals quote 40 characters."""
+    huge = 'a' * 1_000_000
+    names = ('tf_reference_frame', 'tf_body_frame', 'euler_sequence', 'angle_unit',
+             'input_covariance')
+    results = rig.tester.set_parameters(rig.node.get_fully_qualified_name(),
+                                        [Parameter(name, value=huge) for name in names])
+    assert [r.successful for r in results] == [True, True, False, False, False]
+    excerpt = repr(huge)[:39] + '…'
+    for name, result in zip(names[2:], results[2:]):
+        assert result.reason.startswith(f'{name} {excerpt} is not '), result.reason[:100]
+        assert len(result.reason) < 400
+    following = f'following {excerpt} in {excerpt} on /tf'
+    rig.tester.spin_until(lambda: any(log.msg == following for log in rig.node_logs()),
+                          what='the log line of the frames followed')
+    assert max(len(log.msg) for log in rig.node_logs()) < 1000

@@ -10,6 +10,7 @@ differences (step 1e-5: truncation ~1e-10, rounding ~1e-11), then Σ_rpy = J·Σ
 """
 
 import math
+import warnings
 
 import conftest
 from doc_blocks import assert_doc_output
@@ -212,6 +213,7 @@ NAN = np.eye(6) * 0.01
 NAN[5, 5] = math.nan
 INF = np.eye(3) * 1e-4
 INF[1, 2] = -math.inf
+BIG = 1.7976931348623157e308
 
 BAD = [  # (kind, covariance, the refusal's sentence)
     ('pose_with_covariance', NON_SYMMETRIC,
@@ -222,6 +224,8 @@ BAD = [  # (kind, covariance, the refusal's sentence)
      'index (5, 5)'),
     ('imu', INF, 'orientation_covariance must be finite: 1 non-finite value(s), first -inf at '
      'index (1, 2)'),
+    ('imu', BIG * np.eye(3), 'orientation_covariance: its covariance of roll, pitch, yaw '
+     'overflows float64 (beyond ±1.8e308)'),  # a covariance, but not its roll, pitch, yaw
 ]
 
 
@@ -239,3 +243,34 @@ def test_bad_covariances_are_refused_one_after_the_other(rig):
         assert report['rpy_stddev'] == 'refused (bad_covariance)'
         assert report['source'] == rig.topic(kind)  # the input itself was accepted
         assert_no_covariance(rig, kind, stamp)
+
+
+def test_huge_and_subnormal_covariances_are_published_as_they_are(rig):
+    """1e308·I is finite (no .inf, no RuntimeWarning); 5e-324·I is not all zeros (unknown)."""
+    huge = np.diag([1e308, 2e307, 1e307, 1e308, 1e308, 1e308])
+    with warnings.catch_warnings(record=True) as caught:  # the node runs in this thread
+        warnings.simplefilter('always')
+        got = np.reshape(covariance_of(rig, served(rig, 'odometry', BUILD['odometry'](huge)))
+                         .pose.covariance, (6, 6))
+        tiny = covariance_of(rig, served(rig, 'imu', BUILD['imu'](5e-324 * np.eye(3))))
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    expected = expected_covariance(Q, huge / 1e308) * 1e308  # linear in the covariance
+    assert np.isfinite(got).all()
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+    np.testing.assert_array_equal(got[:3, :3], huge[:3, :3])
+    rpy = np.reshape(tiny.pose.covariance, (6, 6))[3:, 3:]
+    J = rpy_jacobian(Q)  # diag(J·Jᵀ) ≥ 1 (the Euler-rate columns are unit vectors)
+    np.testing.assert_array_equal(np.diag(rpy), 5e-324 * np.round(np.diag(J @ J.T)))
+
+
+def test_near_gimbal_lock_describe_notes_what_the_standard_deviations_mean(rig):
+    """1.7e-6 rad from the lock, 0.57° of error: a roll and yaw of 5,700 rad, and a note."""
+    q = Rotation.from_euler('xyz', [0.2, math.pi / 2 - 1.7e-6, 0.1]).as_quat()
+    served(rig, 'imu', BUILD['imu'](np.eye(3) * 1e-4, q))
+    report = rig.report()
+    assert report['rpy_stddev']['roll'] > 5000
+    assert report['rpy_note'].startswith(
+        'pitch is 1.7e-06 rad from gimbal lock (pitch = ±90°), within 3 of its standard '
+        'deviations (0.01 rad)'), report['rpy_note']
+    served(rig, 'imu', BUILD['imu'](np.eye(3) * 1e-4))
+    assert 'rpy_note' not in rig.report()

@@ -24,7 +24,7 @@ the sequences, §3 for the rotation vector.
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.core._arrays import apart, as_float_array, finite_array
+from rot_tools.core._arrays import apart, as_float_array, finite_array, refuse_overflow
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import GIMBAL_LOCK_TOL, matrix_to_euler, parse_sequence, RPY_SEQUENCE
 from rot_tools.core.so3 import rot_x, rot_y, rot_z, skew, validate_rotation
@@ -98,7 +98,8 @@ def validate_covariance(cov, size=3, name='cov'):
         shown, tol = apart(negativity[at], bound[at])
         raise RotationError(f'{name} is not positive semi-definite: its lowest eigenvalue is '
                             f'-{shown}, below -{COVARIANCE_TOL:g}·max|C| = -{tol}{_item(at)}')
-    return 0.5 * C + 0.5 * np.swapaxes(C, -1, -2)
+    Ct = np.swapaxes(C, -1, -2)
+    return np.where(C == Ct, C, 0.5 * C + 0.5 * Ct)  # (0.5·5e-324 is 0: a subnormal C kept)
 
 
 def _worst(excess, bound):
@@ -146,8 +147,27 @@ def _rate_matrix(angles, spec, frame):
         E = np.swapaxes(R, -1, -2) @ E
     if spec.extrinsic:
         E = E[..., ::-1]
-    c2, s2 = np.abs(np.cos(phi[..., 1])), np.abs(np.sin(phi[..., 1]))
-    return _Rates(E=E, distance=np.arctan2(s2, c2) if proper else np.arctan2(c2, s2))
+    return _Rates(E=E, distance=_lock_distance(phi[..., 1], proper))
+
+
+def _lock_distance(phi2, proper):
+    """Distance of the middle angle φ2 to ±π/2 (Tait–Bryan) or to 0, π (proper), rad."""
+    c2, s2 = np.abs(np.cos(phi2)), np.abs(np.sin(phi2))
+    return np.arctan2(s2, c2) if proper else np.arctan2(c2, s2)
+
+
+def gimbal_lock_distance(angles, seq=RPY_SEQUENCE):
+    """
+    Distance (rad, in [0, π/2]) of Euler angles (..., 3) of ``seq`` from gimbal lock.
+
+    That of the middle angle θ2 to ±π/2 (Tait–Bryan: pitch for roll, pitch, yaw) or to 0, π
+    (proper Euler). Near it the covariance of the angles grows as 1/distance² (E⁻¹ of the
+    module docstring), and a first-order covariance stops meaning much once the middle
+    angle's own standard deviation is not small against the distance.
+    """
+    spec = parse_sequence(seq)
+    angles = finite_array(angles, (3,), 'Euler angles')
+    return _lock_distance(angles[..., 1], spec.proper)
 
 
 def _inverse(E, lock):
@@ -158,10 +178,23 @@ def _inverse(E, lock):
     return rows / np.where(lock, 1.0, det)[..., None, None]
 
 
-def _sandwich(M, C):
-    """M·C·Mᵀ, made exactly symmetric."""
-    out = M @ C @ np.swapaxes(M, -1, -2)
-    return 0.5 * (out + np.swapaxes(out, -1, -2))
+def _sandwich(M, C, what, skip=False):
+    """
+    M·C·Mᵀ, made exactly symmetric, as s·(M·(C/s)·Mᵀ) with s = max|C| per item.
+
+    The product is linear in C: computed at the scale of 1, neither entries near float64's
+    largest overflow on the way (C·Mᵀ, then a sum of three, then out + outᵀ), nor subnormal
+    ones vanish (0.5·5e-324 is 0, and ROS reads an all-zero covariance as unknown). A result
+    beyond float64 is a RotationError naming ``what`` (items where ``skip`` is true, as gimbal
+    lock's, are not checked).
+    """
+    scale = np.abs(C).max(axis=(-2, -1), initial=0.0)[..., None, None]
+    scale = np.where(scale > 0, scale, 1.0)
+    out = M @ (C / scale) @ np.swapaxes(M, -1, -2)
+    with np.errstate(over='ignore'):  # refused below
+        out = scale * (0.5 * (out + np.swapaxes(out, -1, -2)))
+    refuse_overflow(np.isfinite(out).all(axis=(-2, -1)) | skip, what)
+    return out
 
 
 def _rotation_covariance(cov):
@@ -196,7 +229,7 @@ def _through(M, C, distance, seq, direction):
         J[..., :3, :3] = np.eye(3)
         J[..., 3:, 3:] = M
         M = J
-    out = _sandwich(M, C)
+    out = _sandwich(M, C, f'{direction}: the converted covariance', lock)
     return ConvertedCovariance(cov=np.where(lock[..., None, None], np.nan, out),
                                degenerate=lock.copy() if lock.ndim else np.bool_(lock))
 
@@ -254,7 +287,7 @@ def transform_pose_covariance(R, b, cov6, convention='ros'):
     Ad[..., 3:, 3:] = R
     if convention == 'se3':
         Ad[..., :3, 3:] = skew(b) @ R
-    return _sandwich(Ad, C)
+    return _sandwich(Ad, C, 'transform_pose_covariance: the transformed covariance')
 
 
 def change_covariance_frame(cov, R):
@@ -262,4 +295,4 @@ def change_covariance_frame(cov, R):
     C = validate_covariance(cov)
     R = validate_rotation(R)
     _batch(C.shape[:-2], R.shape[:-2])
-    return _sandwich(R, C)
+    return _sandwich(R, C, 'change_covariance_frame: the turned covariance')

@@ -24,7 +24,8 @@ axes (ROS's PoseWithCovariance), or roll, pitch, yaw."""
 
 OK, UNKNOWN, BAD, LOCK = 0, 1, 2, 3
 """Status codes of :func:`rpy_covariances`: converted; all zeros (unknown); not finite,
-symmetric or PSD; within GIMBAL_LOCK_TOL of pitch ±π/2 (no roll/pitch/yaw covariance)."""
+symmetric or PSD, or converted beyond float64; within GIMBAL_LOCK_TOL of pitch ±π/2 (no
+roll/pitch/yaw covariance)."""
 
 
 def square(cov):
@@ -57,21 +58,57 @@ def rpy_covariances(R, cov, reading='rotvec'):
     out = np.full(C.shape, np.nan)
     if reading == 'rpy':
         out[ok] = 0.5 * (C[ok] + np.swapaxes(C[ok], -1, -2))
-    else:
-        out[ok], lock = rotvec_covariance_to_euler(np.asarray(R)[ok], C[ok], RPY_SEQUENCE,
-                                                   'parent')
+    else:  # linear in C: converted at the scale of 1, then each item's beyond float64 is BAD
+        scale = np.abs(C[ok]).max(axis=(-2, -1))[:, None, None]  # > 0: all zeros is UNKNOWN
+        unit, lock = rotvec_covariance_to_euler(np.asarray(R)[ok], C[ok] / scale, RPY_SEQUENCE,
+                                                'parent')
+        with np.errstate(over='ignore'):
+            converted = unit * scale
+        fits = np.isfinite(converted).all(axis=(-2, -1))
+        out[ok] = np.where(fits[:, None, None], converted, np.nan)
         status[np.flatnonzero(ok)[lock]] = LOCK
+        status[np.flatnonzero(ok)[~fits & ~lock]] = BAD
     return out, status
 
 
+OVERFLOW = 'its covariance of roll, pitch, yaw overflows float64 (beyond ±1.8e308)'
+"""Why a valid covariance is BAD: what rpy_covariances makes of it is too large."""
+
+
 def fault(cov):
-    """Say why one covariance (9 or 36 numbers) is not one (its RotationError's text)."""
+    """
+    Say why one BAD covariance (9 or 36 numbers) is (its RotationError's text).
+
+    A valid one is BAD when its roll, pitch, yaw covariance overflows float64 (OVERFLOW).
+    """
     C = square(cov)
     try:
         validate_covariance(C, C.shape[-1], 'covariance')
     except RotationError as exc:
         return str(exc)
-    return ''
+    return f'covariance: {OVERFLOW}'
+
+
+NEAR_LOCK_SIGMAS = 3.0
+"""A covariance of Euler angles is near gimbal lock when the lock lies within this many of the
+middle angle's standard deviations: a first-order covariance assumes errors small against
+the distance to the lock, and the other two angles' variances grow as 1/distance² there."""
+
+
+def near_lock_note(distance, sigma, angle='pitch', lock='±90°'):
+    """
+    Return a note on a covariance of Euler angles near gimbal lock, or '' when it is not.
+
+    ``distance``: the middle angle's from the lock (rad,
+    rot_tools.core.covariance.gimbal_lock_distance); ``sigma``: its standard deviation (rad).
+    Near is within NEAR_LOCK_SIGMAS standard deviations.
+    """
+    if not distance < NEAR_LOCK_SIGMAS * sigma:
+        return ''
+    return (f'{angle} is {distance:.2g} rad from gimbal lock ({angle} = {lock}), within '
+            f'{NEAR_LOCK_SIGMAS:g} of its standard deviations ({sigma:.2g} rad): the other two '
+            "angles' standard deviations grow as 1/distance there and, to first order, mean "
+            'little')
 
 
 def stddev_correlation(C):

@@ -45,6 +45,7 @@ from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
+from rot_tools.core.transform_tree import shown
 from rot_tools.io import boundary
 from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
@@ -133,12 +134,12 @@ def _descriptor(kind, description, constraints='', fp_range=None):
 def _check_sequence(value):
     if value in EULER_SEQUENCES:
         return ''
-    return (f'euler_sequence {value!r} is not a sequence: use one of '
+    return (f'euler_sequence {shown(value)} is not a sequence: use one of '
             + ' '.join(EULER_SEQUENCES) + sequence_hint(value))
 
 
 def _check_angle_unit(value):
-    return '' if value in ('rad', 'deg') else f"angle_unit {value!r} is not 'rad' or 'deg'"
+    return '' if value in ('rad', 'deg') else f"angle_unit {shown(value)} is not 'rad' or 'deg'"
 
 
 def _check_tolerance(value):
@@ -436,7 +437,7 @@ class RotationNode(Node):
             if frames != (old.tf_reference_frame, old.tf_body_frame):
                 self._tf.follow(*frames)
                 self.get_logger().info(
-                    f'following {frames[1]!r} in {frames[0]!r} on {self._tf.topic}'
+                    f'following {shown(frames[1])} in {shown(frames[0])} on {self._tf.topic}'
                     if self._tf.following else f'not following frames on {self._tf.topic}')
 
     # -- inputs ----------------------------------------------------------------------------

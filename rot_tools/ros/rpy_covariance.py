@@ -18,16 +18,21 @@ documents PoseWithCovariance; ``rpy``: already roll, pitch, yaw). What follows:
   does not exist there), ~/describe says so. Not a refusal.
 
 ~/describe's ``rpy_stddev`` and ``rpy_correlation`` are those of the latest input that carried
-a covariance (:meth:`RpyCovariances.describe`).
+a covariance (:meth:`RpyCovariances.describe`), with ``rpy_note`` near gimbal lock, where they
+are large and mean little.
 """
 
 from typing import Callable, NamedTuple
 
 import numpy as np
+from rot_tools.core.covariance import gimbal_lock_distance
+from rot_tools.core.euler import matrix_to_euler, RPY_SEQUENCE
+from rot_tools.core.transform_tree import shown
 from rot_tools.io import interface
 from rot_tools.io.fields import field_getter
 from rot_tools.io.message_covariance import BAD, LOCK, OK, UNKNOWN
-from rot_tools.io.message_covariance import fault, READINGS, rpy_covariances, stddev_correlation
+from rot_tools.io.message_covariance import fault, near_lock_note, READINGS, rpy_covariances
+from rot_tools.io.message_covariance import stddev_correlation
 
 BAD_COVARIANCE = 'bad_covariance'
 REFUSAL_REASONS = (BAD_COVARIANCE,)
@@ -44,7 +49,7 @@ def check_reading(value):
     """Return why ``value`` is not an input_covariance, or ''."""
     if value in READINGS:
         return ''
-    return f'input_covariance {value!r} is not ' + ' or '.join(map(repr, READINGS))
+    return f'input_covariance {shown(value)} is not ' + ' or '.join(map(repr, READINGS))
 
 
 class Reader(NamedTuple):
@@ -75,6 +80,8 @@ class Latest(NamedTuple):
     C: np.ndarray
     """The 3×3 covariance of roll, pitch, yaw (rad²); NaN unless status is OK."""
     degrees: bool
+    R: np.ndarray
+    """The input's rotation (for the distance to gimbal lock)."""
 
 
 class RpyCovariances:
@@ -104,12 +111,12 @@ class RpyCovariances:
             (C,), (status,) = rpy_covariances(R[None], cov[None], settings.input_covariance)
         else:  # all zeros, unknown: rpy_covariances' verdict, without converting anything
             C, status = np.full((3, 3), np.nan), UNKNOWN
-        self._latest = Latest(topic, header, int(status), C[-3:, -3:], settings.degrees)
+        self._latest = Latest(topic, header, int(status), C[-3:, -3:], settings.degrees, R)
         if status == OK:
             self._publish(header, reader, values, C)
         elif status == BAD:
             text = fault(cov)
-            if text.startswith('covariance '):
+            if text.startswith('covariance'):  # (' is not …' or ': its …')
                 text = reader.path + text[len('covariance'):]
             self._refuse(topic, BAD_COVARIANCE, text, header=header)
 
@@ -134,7 +141,9 @@ class RpyCovariances:
 
         ``rpy_covariance_of`` (the input's topic and stamp), ``rpy_stddev`` {roll, pitch, yaw,
         unit} in that input's angle_unit and ``rpy_correlation`` (3 rows); when nothing was
-        published, both say why (NOT_PUBLISHED).
+        published, both say why (NOT_PUBLISHED). Near gimbal lock (within NEAR_LOCK_SIGMAS
+        standard deviations of pitch), ``rpy_note`` says so
+        (rot_tools.io.message_covariance.near_lock_note).
         """
         latest = self._latest
         if latest is None:
@@ -146,9 +155,14 @@ class RpyCovariances:
             data['rpy_stddev'] = data['rpy_correlation'] = NOT_PUBLISHED[latest.status]
             return data
         s, rho = stddev_correlation(latest.C)
+        s_rad = s
         if latest.degrees:
             s = np.degrees(s)
         data['rpy_stddev'] = {**dict(zip(NAMES, s.tolist())),
                               'unit': 'deg' if latest.degrees else 'rad'}
         data['rpy_correlation'] = rho.tolist()
+        angles = matrix_to_euler(latest.R, RPY_SEQUENCE, check=False).angles
+        note = near_lock_note(float(gimbal_lock_distance(angles)), float(s_rad[1]))
+        if note:
+            data['rpy_note'] = note
         return data
