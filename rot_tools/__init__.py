@@ -16,6 +16,7 @@ from rot_tools.core.euler import (
     EULER_SEQUENCES, euler_to_matrix, GIMBAL_LOCK_TOL, matrix_to_euler)
 from rot_tools.core.fitting import (
     align_vectors, mean_rotation, random_rotations, rotation_distance, UNIQUE_TOL)
+from rot_tools.core.imu import check_imu, ImuChecks, ImuReference
 from rot_tools.core.rigid import (
     compose_transforms, frame_to_matrix, homogeneous_to_transform, invert_transform,
     transform_points, transform_to_homogeneous)
@@ -34,10 +35,11 @@ from rot_tools.core.transform_tree import (
 
 __all__ = [
     'ALIGNMENTS', 'Decomposition', 'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'HandEye',
+    'ImuChecks', 'ImuReference',
     'PURE_TRANSLATION_ANGLE', 'ROTATION_TOL', 'RotationError', 'RotationErrors', 'Screw',
     'TimeOffset', 'TransformLookupError', 'TransformTree', 'TransformTreeError', 'UNIQUE_TOL',
     'align_rotations', 'align_vectors', 'angular_speeds', 'axis_angle_to_matrix',
-    'change_covariance_frame', 'compose_transforms', 'decompose', 'delta_pairs',
+    'change_covariance_frame', 'check_imu', 'compose_transforms', 'decompose', 'delta_pairs',
     'error_statistics', 'estimate_time_offset', 'euler_covariance_to_rotvec',
     'euler_to_matrix', 'frame_to_matrix', 'hand_eye_rotation', 'homogeneous_to_transform',
     'interpolate_poses', 'invert_transform', 'is_rotation', 'matrix_to_axis_angle',

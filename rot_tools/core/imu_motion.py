@@ -1,0 +1,191 @@
+"""
+An IMU's motion: its slow spells, its orientation's lag, its gyro against its orientation.
+
+Samples in time order (ImuSamples): stamps t_k, orientations R_k (the IMU frame in the
+orientation's world) or none, gyro ω_k and accelerometer a_k on the IMU's axes.
+
+- **Slow spells** (slow_spells): samples where the body turns slower than SLOW_RATE on
+  average over SLOW_WINDOW around them, by the orientation's turn over the window, or
+  without orientation by the gyro's integrated rate (as it reads).
+- **Lag** (orientation_lag): the angular speeds |ω| of the gyro and of consecutive
+  orientations do not depend on units, axes or frames; the shift that best correlates them
+  (trajectory.estimate_time_offset, the gyro's speed given as the turn of a rotation about
+  one axis) is how late the orientation is.
+- **Rates** (body_rates): the body rates of consecutive orientations, ω°_k =
+  log(R_kᵀR_{k+1}) / Δt_k, at the midpoints of their stamps, and the gyro interpolated at the
+  same instants less the lag.
+- **Gyro fit** (fit_gyro): the least-squares fit ω° ≈ A·ω + c. A row i of A fixes an axis
+  where its largest entry A_ij stands out: MIN_T standard errors, DOMINANCE times every other
+  entry of the row, and within SIZE_RANGE of the scale; M_ij = sign A_ij. The scale is the
+  least-squares s of ω° ≈ s·M·ω + c over the rows fixed; the bias, on the gyro's axes in
+  rad/s, s·mean(ω) − Mᵀ·mean(ω°) (from mean ω° = s·M·(mean ω − b)). An axis the motion does
+  not excite stays unknown; its row of M is completed in order for the bias, which is then
+  given only when the orientation's mean rate about it is at most BIAS_SLACK.
+"""
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from rot_tools.core.axis_angle import matrix_to_rotvec
+from rot_tools.core.fitting import rotation_distance
+from rot_tools.core.so3 import rot_z
+from rot_tools.core.trajectory import estimate_time_offset
+
+RATE_GAP = 3
+"""Steps longer than this many median periods give no rate (the turn may alias)."""
+
+SLOW_RATE = 0.05
+"""Angular speed (rad/s), averaged over SLOW_WINDOW, below which the body turns slowly."""
+
+SLOW_WINDOW = 0.5
+"""Seconds over which the angular speed of a slow spell is averaged."""
+
+MAX_LAG = 1.0
+"""The lag is searched within ±MAX_LAG (s)."""
+
+MIN_T = 10.0
+"""|A_ij| / its standard error at least, for row i of the gyro fit to fix an axis."""
+
+DOMINANCE = 3.0
+"""|A_ij| at least this many times every other entry of its row, to fix an axis."""
+
+SIZE_RANGE = (0.5, 2.0)
+"""|A_ij| / scale within this range, to fix an axis (outside it the rates disagree)."""
+
+BIAS_SLACK = 0.002
+"""Mean orientation rate (rad/s) about an axis the fit leaves unknown, at most, for a bias."""
+
+
+class ImuSamples(NamedTuple):
+    """Samples in time order, each stamp once: t (N,), R (N, 3, 3) or None, gyro, accel (N, 3)."""
+
+    t: np.ndarray
+    R: Any
+    gyro: np.ndarray
+    accel: np.ndarray
+    period: float
+
+
+def integrated_gyro(samples):
+    """Return ∫ω dt from the first sample (N, 3), by trapezoids: the turn over small steps."""
+    steps = 0.5 * (samples.gyro[:-1] + samples.gyro[1:]) * np.diff(samples.t)[:, None]
+    return np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+
+
+def slow_spells(samples):
+    """Return (N,) bool: the mean angular speed over SLOW_WINDOW around the sample < SLOW_RATE."""
+    t, count = samples.t, len(samples.t)
+    w = max(1, int(round(SLOW_WINDOW / samples.period)))
+    slow = np.zeros(count, dtype=bool)
+    if count <= w:
+        return slow
+    span = t[w:] - t[:-w]
+    if samples.R is not None:
+        turn = rotation_distance(samples.R[:-w], samples.R[w:], check=False)
+    else:
+        total = integrated_gyro(samples)
+        turn = np.linalg.norm(total[w:] - total[:-w], axis=1)
+    slow[w // 2:w // 2 + count - w] = (turn < SLOW_RATE * span) & (
+        span <= RATE_GAP * w * samples.period)
+    return slow
+
+
+class Lag(NamedTuple):
+    """How late the orientation is (s), and the correlation of the two speeds there."""
+
+    seconds: float
+    correlation: float
+
+
+def orientation_lag(samples):
+    """
+    Return the Lag of the orientation behind the gyro, from their angular speeds.
+
+    The gyro's speed, averaged over each step and scaled to at most 1 rad per step (the
+    correlation does not see the scale), is the turn of a rotation about z; its offset to the
+    orientation is estimate_time_offset's within ±MAX_LAG. RotationError as that raises it,
+    and for a gyro that reads 0 throughout.
+    """
+    t, speed = samples.t, np.linalg.norm(samples.gyro, axis=1)
+    steps = 0.5 * (speed[:-1] + speed[1:]) * np.diff(t)
+    top = float(steps.max())
+    turn = np.concatenate([[0.0], np.cumsum(steps / top if top > 0 else steps)])
+    found = estimate_time_offset(t, samples.R, t, rot_z(turn % (2 * math.pi)), MAX_LAG)
+    return Lag(seconds=-found.offset, correlation=found.correlation)
+
+
+class Rates(NamedTuple):
+    """The orientation's body rates (K, 3) and the gyro at the same instants (K, 3)."""
+
+    orientation: np.ndarray
+    gyro: np.ndarray
+
+
+def body_rates(samples, lag):
+    """Return the Rates: of consecutive orientations, and the gyro at their midpoints − lag."""
+    t, R = samples.t, samples.R
+    dt = np.diff(t)
+    at = t[:-1] + dt / 2 - lag
+    use = np.flatnonzero((dt <= RATE_GAP * samples.period) & (at >= t[0]) & (at <= t[-1]))
+    turn = np.swapaxes(R[use], -1, -2) @ R[use + 1]
+    orientation = matrix_to_rotvec(turn, check=False) / dt[use, None]
+    gyro = np.stack([np.interp(at[use], t, samples.gyro[:, i]) for i in range(3)], axis=-1)
+    return Rates(orientation=orientation, gyro=gyro)
+
+
+class GyroFit(NamedTuple):
+    """
+    What the rates fix: ω° ≈ scale·M·(ω − bias/scale).
+
+    scale: float or None; rows: {i: (j, ±1)}, M_ij for the axes i of the orientation fixed;
+    bias: (3,) rad/s on the gyro's axes, or None; mean_rate: mean ω° (3,) rad/s.
+    """
+
+    scale: Any
+    rows: dict
+    bias: Any
+    mean_rate: np.ndarray
+
+
+def fit_gyro(rates):
+    """Return the GyroFit of ω° ≈ A·ω + c (module docstring)."""
+    mean_o, mean_g = rates.orientation.mean(axis=0), rates.gyro.mean(axis=0)
+    d_o, d_g = rates.orientation - mean_o, rates.gyro - mean_g
+    S, C = d_g.T @ d_g, d_g.T @ d_o
+    inverse = np.linalg.pinv(S)
+    A = (inverse @ C).T
+    residual = d_o - d_g @ A.T
+    variance = np.sum(residual * residual, axis=0) / max(len(d_o) - 4, 1)
+    error = np.sqrt(variance[:, None] * np.maximum(np.diag(inverse), 0.0)[None, :])
+    size = np.abs(A)
+    column = np.argmax(size, axis=1)
+    ordered = np.sort(size, axis=1)
+    top, second = ordered[:, 2], ordered[:, 1]
+    clear = ((top > 0) & (top >= MIN_T * error[np.arange(3), column])
+             & (top >= DOMINANCE * second))
+    rows = {i: (int(column[i]), 1 if A[i, column[i]] > 0 else -1) for i in range(3) if clear[i]}
+    taken = [j for j, _ in rows.values()]
+    rows = {i: js for i, js in rows.items() if taken.count(js[0]) == 1}
+    none = GyroFit(scale=None, rows={}, bias=None, mean_rate=mean_o)
+    scale = 0.0
+    for _ in range(2):  # once, then again without the rows whose size disagrees
+        den = sum(S[j, j] for j, _ in rows.values())
+        if not rows or den <= 0:
+            return none
+        scale = sum(s * C[j, i] for i, (j, s) in rows.items()) / den
+        if scale <= 0:
+            return none
+        rows = {i: (j, s) for i, (j, s) in rows.items()
+                if SIZE_RANGE[0] <= size[i, j] / scale <= SIZE_RANGE[1]}
+    if not rows:
+        return none
+    free = iter(j for j in range(3) if j not in [j for j, _ in rows.values()])
+    M = np.zeros((3, 3))
+    for i in range(3):
+        j, s = rows.get(i) or (next(free), 1)
+        M[i, j] = s
+    bias = None
+    if all(abs(mean_o[i]) <= BIAS_SLACK for i in range(3) if i not in rows):
+        bias = scale * mean_g - M.T @ mean_o
+    return GyroFit(scale=float(scale), rows=rows, bias=bias, mean_rate=mean_o)

@@ -1,0 +1,102 @@
+"""
+An IMU's mounting on a body: the IMU frame in the body frame, from the two orientations.
+
+The body's orientation Q_k (a reference: odometry, a pose, TF) and the IMU's R_k turn together:
+Q_k·X = W·R_k for the mounting X (the IMU frame in the body frame, as a static transform
+base_link → imu_link gives it) and a constant W between their worlds. Their relative rotations
+over the same steps then satisfy A·X = X·B (A = Q_iᵀQ_j, B = R_iᵀR_j): the rotation part of
+hand-eye calibration (trajectory.hand_eye_rotation), over steps HAND_EYE_STEP apart. Without
+an orientation, B is the turn of the gyro's rates integrated over the step (first order).
+
+A body that turns about one axis only (a ground robot's yaw) fixes the IMU axis that turns
+with it, not the turn of the mounting about that axis. Of the mountings that map the same IMU
+axis, the one given then best keeps the IMU's x (then y) along the body's (one_axis_mounting):
+the identity for an IMU that only lacks a turn about the axis, the half turn about x for a
+device turned upside down as NED devices are.
+"""
+
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from rot_tools.core.axis_angle import axis_angle_to_matrix, matrix_to_rotvec, rotvec_to_matrix
+from rot_tools.core.fitting import align_vectors
+from rot_tools.core.imu_motion import integrated_gyro, RATE_GAP
+from rot_tools.core.so3 import skew
+from rot_tools.core.trajectory import hand_eye_rotation, interpolate_poses
+
+HAND_EYE_STEP = 0.5
+"""Seconds between the poses whose relative rotations give the mounting."""
+
+KEEP_AXES = np.diag([1.0, 0.5, 0.25])
+"""Weights of tr(KEEP_AXES·X) that one_axis_mounting maximises: x first, then y, then z."""
+
+
+def one_axis_mounting(X, alpha):
+    """
+    Return the mounting that maps the same IMU axis as X and best keeps the body's x, then y.
+
+    alpha (K, 3): the body's turns, about one axis n (their first singular vector). X₀, the
+    smallest turn taking m = Xᵀ·n onto n, then Rot(n, ψ)·X₀ maximising tr(Rot(n, ψ)·P) with
+    P = X₀·KEEP_AXES: ψ = atan2(tr([n]×·P), tr P − nᵀ·P·n).
+    """
+    n = np.linalg.svd(alpha, full_matrices=False)[2][0]
+    X0 = align_vectors(n[None], (X.T @ n)[None]).R
+    P = X0 @ KEEP_AXES
+    psi = math.atan2(float(np.trace(skew(n) @ P)), float(np.trace(P) - n @ P @ n))
+    return axis_angle_to_matrix(n, psi) @ X0
+
+
+class Mounting(NamedTuple):
+    """
+    The mounting X (3, 3), the HandEye it came from, and where the reference was sampled.
+
+    warning: '' or why only an axis is fixed; poses: indices of the IMU samples used;
+    Q (len(poses), 3, 3): the reference there (NaN where it does not cover them).
+    """
+
+    X: np.ndarray
+    warning: str
+    poses: np.ndarray
+    Q: Any
+
+
+def mounting_poses(samples, ref_t):
+    """Return the IMU sample indices HAND_EYE_STEP apart within the reference's span."""
+    step = max(1, int(round(HAND_EYE_STEP / samples.period)))
+    inside = (samples.t >= ref_t[0]) & (samples.t <= ref_t[-1])
+    return np.flatnonzero(inside)[::step]
+
+
+def imu_mounting(samples, ref_t, ref_Q, ref_period):
+    """
+    Return the Mounting of the IMU (ImuSamples) on the body (ref_t (M,), ref_Q (M, 3, 3)).
+
+    The reference at the IMU's stamps HAND_EYE_STEP apart (interpolate_poses: slerp, within
+    RATE_GAP periods), relative rotations of consecutive ones that it covers without a gap,
+    then hand_eye_rotation (one_axis_mounting where it excites one axis only). RotationError
+    as hand_eye_rotation raises it (fewer than two steps that turn).
+    """
+    t = samples.t
+    poses = mounting_poses(samples, ref_t)
+    got = interpolate_poses(ref_t, ref_Q, None, t[poses],
+                            max_gap=RATE_GAP * max(ref_period, samples.period))
+    Q = np.full((len(poses), 3, 3), np.nan)
+    Q[got.covered] = got.R
+    step = HAND_EYE_STEP / samples.period
+    pair = (got.covered[:-1] & got.covered[1:]
+            & (np.diff(t[poses]) <= RATE_GAP * max(step, 1) * samples.period))
+    i, j = poses[:-1][pair], poses[1:][pair]
+    A = np.swapaxes(Q[:-1][pair], -1, -2) @ Q[1:][pair]
+    if samples.R is not None:
+        B = np.swapaxes(samples.R[i], -1, -2) @ samples.R[j]
+    else:
+        total = integrated_gyro(samples)
+        B = rotvec_to_matrix(total[j] - total[i])
+    found = hand_eye_rotation(A, B)
+    X, warning = found.rotation, ''
+    if found.axes < 2:
+        X = one_axis_mounting(X, matrix_to_rotvec(A, check=False))
+        warning = (f"{found.warning}; of the turns about it, the one that best keeps the IMU's "
+                   "x (then y) along the body's is given")
+    return Mounting(X=X, warning=warning, poses=poses, Q=Q)
