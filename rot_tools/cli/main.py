@@ -38,14 +38,14 @@ only gets a one-line ``rot-tools: hint: ...`` on stderr (after the report; statu
 import sys
 
 from rot_tools.cli import (
-    axis_angle, bag, compare, covariance, euler, frame, matrix, options, quaternion, rotvec,
-    screw)
+    axis_angle, bag, compare, covariance, euler, frame, imu_check, matrix, options, quaternion,
+    rotvec, screw)
 from rot_tools.io import arguments
 
 PROG = options.PROG
 
 COMMANDS = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw, bag, compare,
-            covariance)
+            covariance, imu_check)
 """The modules of rot-tools' commands, in the order --help lists them."""
 
 ONE_SHOT = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw)

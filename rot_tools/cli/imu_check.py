@@ -1,0 +1,687 @@
+"""
+``rot-tools imu-check BAG``: an IMU's conventions checked from a recording.
+
+Is the IMU publishing what ROS expects? One ``sensor_msgs/Imu`` topic of the bag (the only
+one, or ``--imu-topic``) is read through rot_tools.io.bag_read — header stamps, orientation,
+angular_velocity, linear_acceleration — and, when asked, a reference orientation of the same
+body: a topic (``--ref-topic``: Odometry, a pose, a TransformStamped or a QuaternionStamped)
+or a TF frame pair (``--ref-tf PARENT CHILD``, followed over the recording by
+rot_tools.TransformTree as ``rot-tools bag --tf`` follows it). An IMU publishes no
+orientation when its orientation_covariance[0] is −1 or its quaternions are all zero
+(sensor_msgs/Imu's own convention): the orientation checks are then unknown.
+
+The checks are rot_tools.core.imu.check_imu's (REP 103 and REP 145: units, signs, axes, the
+orientation's lag and world, the mounting; doc/imu.md says what each means). This module
+prints them: with ``--json`` one document ``{imu: {topic, frame, messages, rate}, checks:
+{name: {status, message, <numbers>}}, faults: N, fix: [lines]}``; without it a table, one
+row a check, and under it what to change, in the user's terms — the factor to multiply a
+field by, the axis map, a ``static_transform_publisher`` line for a mounting or a NED
+device. Angles in radians and rates in rad/s unless ``--deg``; scales are plain factors.
+
+Exit status: 0 when no check is at fault, 1 when one is, 2 on bad input (one line): a
+path that is missing or not a bag, a bag without an Imu topic, two Imu topics and no
+``--imu-topic``, a topic or frame that is not there.
+"""
+
+import argparse
+import math
+from typing import NamedTuple
+
+import numpy as np
+from rot_tools.cli import bag_analysis, options, output_file
+from rot_tools.cli.bag_analysis import stamp_ns
+from rot_tools.cli.bag_output import NS_PER_S
+from rot_tools.core.so3 import matrix_to_quaternion
+from rot_tools.io import arguments, bag_read, boundary
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.io.report import DEFAULT_PRECISION, to_json
+
+IMU_TYPE = 'sensor_msgs/msg/Imu'
+"""The type of the topic checked."""
+
+ACCELERATION = {IMU_TYPE: {'linear_acceleration': 'linear_acceleration'}}
+"""The Imu field read besides those rot-tools bag reads (bag_read.read_topics' vectors)."""
+
+REFERENCE_TYPES = tuple(t for t in bag_read.SUPPORTED if t != IMU_TYPE)
+"""The types a reference topic may have: those of rot-tools bag with an orientation, but an
+Imu (whose orientation is its own sensor frame's, not the body's)."""
+
+BODY_FRAME = 'base_link'
+"""The body's frame in a static transform line when the reference does not name it (REP 105's
+name for the robot's body)."""
+
+IMU_FRAME = 'imu_link'
+"""The IMU's frame in a static transform line when its messages are stamped with the body's
+frame (REP 145's default frame_id)."""
+
+NED_FRAME = 'imu_link_ned'
+"""The same for a NED device (REP 145's default frame_id of an IMU with a NED world)."""
+
+FRD = (1.0, 0.0, 0.0, 0.0)
+"""A forward-right-down sensor frame in a forward-left-up body: π about x, [x, y, z, w]."""
+
+JSON_DIGITS = 6
+"""Significant digits of the numbers of ``--json`` (estimates from noisy data)."""
+
+TABLE_DIGITS = 4
+"""Significant digits of the numbers of the table."""
+
+MOUNTING_SHOWN = math.radians(3)
+"""A mounting turned further than this from the identity gets its static transform line
+under the table (the accuracy of the mounting's up axis is 3°)."""
+
+G = 9.80665
+"""Standard gravity (m/s²): an accelerometer in g needs this factor."""
+
+ANGLES = {'angle': ('rad', 'deg'), 'bias': ('rad/s', 'deg/s')}
+"""The numbers of a check that are angles or rates: their unit without and with --deg."""
+
+UNITS = {'period': 's', 'gap': 's'}
+"""The other numbers with a unit in the table (scales, matrices and quaternions have none;
+time_offset's seconds are shown without their name)."""
+
+
+class Stream(NamedTuple):
+    """
+    A stream of orientations read from the bag, stamps in seconds from the IMU's first.
+
+    name: the topic, or ``tf:PARENT->CHILD``; msgtype; body: the frame the orientation is of
+    (an Odometry's child frame, --ref-tf's CHILD; None when the message does not name it);
+    parent: the frame it is in; stamps (n,); quaternions (n, 4) [x, y, z, w].
+    """
+
+    name: str
+    msgtype: str
+    body: object
+    parent: object
+    stamps: np.ndarray
+    quaternions: np.ndarray
+
+
+class Imu(NamedTuple):
+    """
+    The IMU topic read, and the arrays check_imu takes.
+
+    topic, frame (its most frequent frame_id), messages (how many were read), rate (Hz,
+    None for fewer than two stamps), dropped (messages left out: a NaN or Inf, or an
+    orientation refused while others are given); stamps (N,) s, quaternions (N, 4) or None,
+    angular_velocity and linear_acceleration (N, 3), as recorded.
+    """
+
+    topic: str
+    frame: str
+    messages: int
+    rate: object
+    dropped: int
+    stamps: np.ndarray
+    quaternions: object
+    angular_velocity: np.ndarray
+    linear_acceleration: np.ndarray
+
+
+class Recording(NamedTuple):
+    """
+    What imu-check reads from a bag.
+
+    imu: the Imu; reference: the reference Stream or None; hint: a sentence naming the
+    bag's topics that could serve as reference, or None.
+    """
+
+    imu: Imu
+    reference: object
+    hint: object
+
+
+# ---------------------------------------------------------------------------------------
+# Reading
+
+
+def _topics(reader):
+    """Return {topic: type} of the bag, in the order of its connections."""
+    found = {}
+    for conn in reader.connections:
+        found.setdefault(conn.topic, conn.msgtype)
+    return found
+
+
+def _listed(found):
+    return ', '.join(f'{t} ({m})' for t, m in sorted(found.items())) or 'none'
+
+
+def imu_topic(found, asked=None):
+    """
+    Return the Imu topic to check: ``asked``, or the bag's only one; BagError if none fits.
+
+    found: {topic: type} of the bag.
+    """
+    if asked is not None:
+        if asked not in found:
+            raise bag_read.BagError(f'--imu-topic: no topic {asked} in the bag (its topics: '
+                                    f'{_listed(found)})')
+        if found[asked] != IMU_TYPE:
+            raise bag_read.BagError(f'--imu-topic: {asked} is a {found[asked]}, not a '
+                                    f'{IMU_TYPE}')
+        return asked
+    imus = sorted(t for t, m in found.items() if m == IMU_TYPE)
+    if not imus:
+        raise bag_read.BagError(f'no {IMU_TYPE} topic in the bag (its topics: '
+                                f'{_listed(found)})')
+    if len(imus) > 1:
+        raise bag_read.BagError(f'{len(imus)} {IMU_TYPE} topics ({", ".join(imus)}): choose '
+                                'one with --imu-topic')
+    return imus[0]
+
+
+def _reference_topic(found, asked, imu):
+    if asked not in found:
+        raise bag_read.BagError(f'--ref-topic: no topic {asked} in the bag (its topics: '
+                                f'{_listed(found)})')
+    if asked == imu or found[asked] not in REFERENCE_TYPES:
+        kinds = ', '.join(t.rsplit('/', 1)[1] for t in REFERENCE_TYPES)
+        raise bag_read.BagError(f'--ref-topic: {asked} is a {found[asked]}, not a reference '
+                                f'orientation of the body ({kinds}; or --ref-tf PARENT '
+                                'CHILD)')
+    return asked
+
+
+def reference_hint(found, imu):
+    """Return a sentence naming the topics that could be the reference, or None."""
+    topics = sorted(t for t, m in found.items() if m in REFERENCE_TYPES and t != imu)
+    tf = any(m == bag_read.TF_TYPE for m in found.values())
+    if not topics and not tf:
+        return None
+    ways = [f'--ref-topic {t}' for t in topics] + (['--ref-tf PARENT CHILD'] if tf else [])
+    return ('accel_sign, world_up and mounting need a reference orientation of the body: '
+            f'{" or ".join(ways)}')
+
+
+def _majority(columns):
+    """Return the frame_id most of a topic's messages carry ('' when it has none)."""
+    if not len(columns):
+        return ''
+    counts = np.bincount(columns.frame, minlength=len(columns.frame_ids))
+    return columns.frame_ids[int(np.argmax(counts))]
+
+
+def _has_orientation(columns):
+    """Tell which messages carry an orientation: covariance[0] ≠ −1 and a quaternion ≠ 0."""
+    q = columns.orientation
+    return (columns.covariance0 != -1) & np.any(q != 0, axis=1)
+
+
+def imu_stream(columns, origin):
+    """
+    Return the Imu of an Imu topic's Columns, stamps in seconds from ``origin`` (ns).
+
+    With no orientation in any message (sensor_msgs/Imu's covariance[0] = −1, or zero
+    quaternions) the quaternions are None. Messages with a NaN or Inf are left out, and
+    when some messages give an orientation, those whose orientation the boundary refuses
+    (rotation_node's checks) too: ``dropped`` counts them.
+    """
+    c = columns
+    ns = stamp_ns(c.sec, c.nanosec)
+    gyro, accel = c.angular_velocity, c.linear_acceleration
+    keep = np.isfinite(gyro).all(axis=1) & np.isfinite(accel).all(axis=1)
+    quaternions = None
+    if _has_orientation(c).any():
+        verdict = boundary.check_batch(c.orientation, QUATERNION_TOLERANCE, None,
+                                       c.covariance0)
+        keep &= verdict.code == boundary.ACCEPTED
+        quaternions = c.orientation[keep] / verdict.norm[keep, None]
+    n = len(c)
+    span = (int(ns.max()) - int(ns.min())) / NS_PER_S if n else 0.0
+    return Imu(c.topic, _majority(c), n, (n - 1) / span if span > 0 else None,
+               int(n - keep.sum()), (ns[keep] - origin) / NS_PER_S, quaternions,
+               gyro[keep], accel[keep])
+
+
+def topic_stream(columns, origin):
+    """Return the Stream of a reference topic's Columns (refused orientations left out)."""
+    c = columns
+    verdict = boundary.check_batch(c.orientation, QUATERNION_TOLERANCE, c.position,
+                                   c.covariance0)
+    ok = verdict.code == boundary.ACCEPTED
+    body = c.child_frame_ids[int(c.child[ok][0])] if c.child is not None and ok.any() else None
+    parent = c.frame_ids[int(c.frame[ok][0])] if ok.any() else None
+    return Stream(c.topic, c.msgtype, body, parent,
+                  (stamp_ns(c.sec, c.nanosec)[ok] - origin) / NS_PER_S,
+                  c.orientation[ok] / verdict.norm[ok, None])
+
+
+def tf_stream(followed, parent, child, origin):
+    """Return the Stream of CHILD in PARENT followed through the bag's TF (a TfTopic)."""
+    c = followed.columns
+    return Stream(c.topic, bag_read.TF_TYPE, child, parent,
+                  (stamp_ns(c.sec, c.nanosec) - origin) / NS_PER_S,
+                  matrix_to_quaternion(followed.chain.R, check=False))
+
+
+def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None):
+    """
+    Return the Recording of the bag at PATH; BagError (one line) for what cannot be read.
+
+    imu: the Imu topic (default: the bag's only one); ref_topic or ref_tf (PARENT, CHILD):
+    the reference; start, end: seconds from the bag's start (record time), as rot-tools
+    bag's --start and --end.
+    """
+    with bag_read.open_bag(path) as reader:
+        found = _topics(reader)
+        topic = imu_topic(found, imu)
+        names = [topic]
+        if ref_topic is not None:
+            names.append(_reference_topic(found, ref_topic, topic))
+        lo = None if start is None else bag_analysis.record_bound(reader.start_time, start)
+        hi = None if end is None else bag_analysis.record_bound(reader.start_time, end) + 1
+        connections = [c for c in reader.connections if c.topic in names]
+        columns = bag_read.read_topics(reader, connections, lo, hi, vectors=ACCELERATION)
+        window = '' if start is None and end is None else ' between --start and --end'
+        if not len(columns[topic]):
+            raise bag_read.BagError(f'{topic}: no message{window}')
+        origin = int(stamp_ns(columns[topic].sec[:1], columns[topic].nanosec[:1])[0])
+        reference = None
+        if ref_topic is not None:
+            reference = topic_stream(columns[ref_topic], origin)
+        elif ref_tf is not None:
+            followed = bag_analysis.tf_topic(reader, ref_tf[0], ref_tf[1],
+                                             QUATERNION_TOLERANCE, lo, hi)
+            reference = tf_stream(followed, ref_tf[0], ref_tf[1], origin)
+        if reference is not None and not len(reference.stamps):
+            raise bag_read.BagError(f'{reference.name}: no usable orientation{window}')
+        hint = None if reference is not None else reference_hint(found, topic)
+    return Recording(imu_stream(columns[topic], origin), reference, hint)
+
+
+# ---------------------------------------------------------------------------------------
+# The checks, as data
+
+
+def check(recording):
+    """Return rot_tools.core.imu.check_imu's ImuChecks of a Recording."""
+    from rot_tools.core import imu as imu_checks
+    imu, ref = recording.imu, recording.reference
+    reference = None if ref is None else imu_checks.ImuReference(ref.stamps, ref.quaternions)
+    return imu_checks.check_imu(imu.stamps, imu.quaternions, imu.angular_velocity,
+                                imu.linear_acceleration, reference=reference)
+
+
+def _plain(value):
+    """Return a check's number as plain data: float, int, nested lists, or None."""
+    if value is None or isinstance(value, (str, bool)):
+        return value
+    array = np.asarray(value)
+    if array.dtype.kind in 'iub':
+        return array.tolist()
+    if array.ndim == 2 and np.all(array == np.round(array)):  # a signed permutation
+        return array.astype(int).tolist()
+    return array.astype(float).tolist()
+
+
+def numbers(result, degrees=False):
+    """
+    Return {name: value}: the numbers of one check, its fields after status and message.
+
+    Angles and rates (:data:`ANGLES`) in degrees when ``degrees``.
+    """
+    out = {}
+    for name, value in result._asdict().items():
+        if name in ('status', 'message'):
+            continue
+        value = _plain(value)
+        if degrees and name in ANGLES and value is not None:
+            value = np.degrees(value).tolist()
+        out[name] = value
+    return out
+
+
+def faulty(checks):
+    """Return the names of the checks at fault, in order."""
+    return [name for name, result in checks._asdict().items() if result.status == 'fault']
+
+
+def document(recording, checks, degrees=False):
+    """Return the ``--json`` document: imu, checks, faults, fix."""
+    imu = recording.imu
+    return {
+        'imu': {'topic': imu.topic, 'frame': imu.frame, 'messages': imu.messages,
+                'rate': imu.rate},
+        'checks': {name: {'status': result.status, 'message': result.message,
+                          **numbers(result, degrees)}
+                   for name, result in checks._asdict().items()},
+        'faults': len(faulty(checks)),
+        'fix': fixes(recording, checks, degrees)}
+
+
+# ---------------------------------------------------------------------------------------
+# What to change
+
+
+def _g(x, digits=TABLE_DIGITS):
+    """Return a number as short text: 4 significant digits, no -0."""
+    return f'{float(x) + 0.0:.{digits}g}'
+
+
+def axis_map(matrix):
+    """
+    Return the axis map of a signed permutation M (ω_true = M·ω_read) as text.
+
+    'x = +y, y = +x, z = -z': what each axis should read, from what is read now.
+    """
+    M = np.asarray(matrix)
+    parts = []
+    for i, axis in enumerate('xyz'):
+        j = int(np.argmax(np.abs(M[i])))
+        parts.append(f'{axis} = {"+" if M[i, j] > 0 else "-"}{"xyz"[j]}')
+    return ', '.join(parts)
+
+
+def static_transform(q, parent, child):
+    """Return the ``ros2 run tf2_ros static_transform_publisher`` line of rotation q."""
+    q = np.asarray(q, float)
+    q = np.round(q / np.linalg.norm(q), 6) + 0.0
+    if q[np.flatnonzero(q)[-1]] < 0:  # w > 0, or the last non-zero of x, y, z when w is 0
+        q = -q + 0.0
+    x, y, z, w = (f'{v:.6g}' for v in q)
+    return ('ros2 run tf2_ros static_transform_publisher --x 0 --y 0 --z 0 '
+            f'--qx {x} --qy {y} --qz {z} --qw {w} --frame-id {parent} --child-frame-id {child}')
+
+
+def _frames(recording, child=IMU_FRAME):
+    """
+    Return (body, IMU frame, note) of a static transform line.
+
+    The IMU frame is the IMU's frame_id; when its messages are stamped with the body's own
+    frame, ``child`` and a note that says to stamp them so.
+    """
+    ref = recording.reference
+    body = ref.body if ref is not None and ref.body else BODY_FRAME
+    frame = recording.imu.frame
+    if frame and frame != body:
+        return body, frame, ''
+    return body, child, (f" (and set the IMU's frame_id to {child}: its messages are "
+                         f'stamped {frame or "with no frame"}, the body\'s frame)')
+
+
+def _angle_between(q, p):
+    """Return the angle (rad) of the rotation between unit quaternions q and p."""
+    dot = abs(float(np.dot(np.asarray(q, float), p)))
+    return 2 * math.acos(min(1.0, dot))
+
+
+def fixes(recording, checks, degrees=False):
+    """Return the lines that say what to change for each fault, and for a turned mounting."""
+    imu = recording.imu
+    at_fault = set(faulty(checks))
+    rate_unit = ANGLES['bias'][degrees]
+    lines = []
+    for name in checks._fields:
+        result = getattr(checks, name)
+        if name == 'mounting':
+            lines += _mounting_lines(recording, result, at_fault)
+            continue
+        if name not in at_fault:
+            continue
+        if name == 'stamps':
+            lines.append(f"stamps: {imu.topic}'s header stamps should be the time of each "
+                         "measurement, increasing at the sensor's rate: check the driver's "
+                         'clock and the recorder (REP 145: "The timestamp for these messages '
+                         'should reflect the best estimate of when the observation was '
+                         'made.")')
+        elif name == 'accel_units':
+            lines.append(_accel_units_line(getattr(result, 'scale', None)))
+        elif name == 'orientation_vs_accel':
+            if at_fault & {'accel_sign', 'world_up'}:
+                continue  # the reference's checks say which of the two it is
+            lines.append(_tilt_line(getattr(result, 'angle', None), degrees))
+        elif name == 'gyro_units':
+            lines.append(_gyro_units_line(getattr(result, 'scale', None)))
+        elif name == 'gyro_axes':
+            matrix = getattr(result, 'matrix', None)
+            lines.append("gyro_axes: angular_velocity is not about the orientation's axes"
+                         + ('' if matrix is None else
+                            f': publish {axis_map(matrix)} of what it reads now'))
+        elif name == 'gyro_bias':
+            bias = getattr(result, 'bias', None)
+            lines.append('gyro_bias: calibrate the gyro at rest' + (
+                '' if bias is None else ', or subtract ('
+                + ', '.join(_g(b) for b in numbers(result, degrees)['bias'])
+                + f') {rate_unit} from angular_velocity'))
+        elif name == 'time_offset':
+            lines.append(_time_offset_line(getattr(result, 'seconds', None)))
+        elif name == 'accel_sign':
+            lines.append('accel_sign: negate linear_acceleration: it reads gravity (pointing '
+                         'down) where REP 145 wants the specific force, +9.81 m/s² along the '
+                         'axis that points up at rest')
+        elif name == 'world_up':
+            body, child, note = _frames(recording, NED_FRAME)
+            lines.append("world_up: the orientation's world is NED (z down) where REP 103 "
+                         'wants ENU: switch the driver to ENU if it can; else turn each '
+                         "orientation's world, q_ENU = (0.707107, 0.707107, 0, 0) ⊗ q_NED "
+                         "[x, y, z, w], and place the device's sensor frame on the body. A "
+                         "NED device's sensor frame is FRD (x forward, y right, z down): "
+                         f'mounted level and facing forward, it is {body} turned π about x: '
+                         f'{static_transform(FRD, body, child)}{note}')
+        else:
+            lines.append(f'{name}: {result.message}')
+    return lines
+
+
+def _tilt_line(angle, degrees):
+    if angle is not None and angle > math.pi / 2:
+        return ('orientation_vs_accel: the orientation puts up where the accelerometer reads '
+                'down: either the accelerometer reads gravity instead of the specific force '
+                '(negate linear_acceleration) or the orientation is NED (its world z down); '
+                'a reference (--ref-topic or --ref-tf) tells which (accel_sign, world_up)')
+    apart = '' if angle is None else (
+        f' ({_fixed(np.degrees(angle) if degrees else angle, 2 if degrees else 4)} '
+        f'{ANGLES["angle"][degrees]} apart)')
+    return (f'orientation_vs_accel: the orientation and the accelerometer disagree on up{apart}: '
+            'publish both in the one sensor frame (REP 145: "All data from a sensor should '
+            'be published with respect to a single consistent sensor frame.")')
+
+
+def _accel_units_line(scale):
+    if scale is None:
+        return ('accel_units: linear_acceleration does not read gravity at rest: REP 145 '
+                'wants the specific force in m/s², gravity included (a gravity-compensated '
+                'output belongs in imu_compensated/)')
+    if abs(scale / G - 1) < 0.05:
+        return (f'accel_units: linear_acceleration reads in g: multiply it by {_g(G, 6)} '
+                f'(scale {_g(scale)}) to publish m/s²')
+    if scale > 100:
+        return ('accel_units: linear_acceleration reads about 0 at rest (gravity removed?): '
+                'REP 145 wants the specific force in m/s², gravity included (a '
+                'gravity-compensated output belongs in imu_compensated/)')
+    return f'accel_units: multiply linear_acceleration by {_g(scale)} to publish m/s²'
+
+
+def _gyro_units_line(scale):
+    if scale is None:
+        return 'gyro_units: angular_velocity is not in rad/s'
+    if abs(scale / math.radians(1) - 1) < 0.05:
+        return (f'gyro_units: angular_velocity reads in deg/s: multiply it by π/180 = '
+                f'{_g(math.radians(1), 6)} (scale {_g(scale)}) to publish rad/s')
+    return f'gyro_units: multiply angular_velocity by {_g(scale)} to publish rad/s'
+
+
+def _time_offset_line(seconds):
+    if seconds is None:
+        return 'time_offset: the orientation and the gyro are not stamped alike'
+    late = 'late' if seconds > 0 else 'early'
+    return (f'time_offset: the orientation is {_g(abs(seconds))} s {late} against the gyro '
+            "(a filter's delay, or stamps of publication): stamp each message with the time "
+            f'of its measurement, or shift the orientation {_g(abs(seconds))} s '
+            f'{"earlier" if seconds > 0 else "later"}')
+
+
+def _mounting_lines(recording, result, at_fault):
+    """Return the line of a mounting turned from the identity (or, NED, from FRD), if any."""
+    q = getattr(result, 'quaternion', None)
+    if q is None or result.status == 'unknown':
+        return []
+    ned = 'world_up' in at_fault
+    if _angle_between(q, FRD if ned else (0, 0, 0, 1)) <= MOUNTING_SHOWN:
+        return []
+    body, child, note = _frames(recording, NED_FRAME if ned else IMU_FRAME)
+    turn = math.degrees(_angle_between(q, (0, 0, 0, 1)))
+    warning = getattr(result, 'warning', None)
+    return [f'mounting: the IMU is turned {turn:.1f}° on the body (a mounting, not a fault): '
+            f'its static transform {body} → {child}{note}: '
+            f'{static_transform(q, body, child)}'
+            + (" (the motion turned about one axis only: see the mounting's warning)"
+               if warning else '')]
+
+
+# ---------------------------------------------------------------------------------------
+# The table
+
+
+def _fixed(values, decimals):
+    """Numbers with a fixed number of decimals, no -0: '(0.0193, -0.0070, 0.0000)'."""
+    texts = [f'{round(float(v), decimals) + 0.0:.{decimals}f}' for v in np.ravel(values)]
+    return texts[0] if np.ndim(values) == 0 else '(' + ', '.join(texts) + ')'
+
+
+def number_text(name, value, degrees=False):
+    """Return one number of a check as the table shows it, with its unit."""
+    if value is None:
+        return '-'
+    if name == 'matrix':
+        M = np.asarray(value)
+        return 'identity' if np.array_equal(M, np.eye(3)) else axis_map(M)
+    if name in ANGLES:
+        return f'{_fixed(value, 2 if degrees else 4)} {ANGLES[name][degrees]}'
+    if name == 'quaternion':
+        return f'q {_fixed(value, 4)}'
+    if name == 'seconds':
+        return f'{_g(value)} s'
+    if isinstance(value, str):
+        return value
+    unit = UNITS.get(name, '')
+    return f'{name} {_g(value)}' + (f' {unit}' if unit else '')
+
+
+def table(data, recording, degrees=False):
+    """Return the text of the table: the IMU, a row per check, then the fixes."""
+    imu, ref = data['imu'], recording.reference
+    rate = 'no rate' if imu['rate'] is None else f'{_g(imu["rate"])} Hz'
+    lines = [f'imu: {imu["topic"]} (frame {imu["frame"] or "none"}), {imu["messages"]} '
+             f'messages, {rate}']
+    if recording.imu.dropped:
+        lines.append(f'  {recording.imu.dropped} messages left out (a NaN, an Inf or a refused '
+                     'orientation)')
+    if ref is not None:
+        body = f', {ref.body} in {ref.parent}' if ref.body and ref.parent else ''
+        lines.append(f'reference: {ref.name} ({ref.msgtype.rsplit("/", 1)[1]}{body})')
+    rows = [('check', 'status', 'numbers', 'message')]
+    notes = []
+    for name, result in data['checks'].items():
+        texts = [number_text(k, v, degrees) for k, v in result.items()
+                 if k not in ('status', 'message', 'warning')]
+        text = '-' if set(texts) <= {'-'} else ', '.join(texts)
+        rows.append((name, result['status'], text, result['message']))
+        if result.get('warning'):
+            notes.append(f'{name}: {result["warning"]}')
+    widths = [max(len(row[k]) for row in rows) for k in range(3)]
+    lines.append('')
+    lines += [f'{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:<{widths[2]}}  '
+              f'{row[3]}'.rstrip() for row in rows]
+    lines.append('')
+    faults = data['faults']
+    lines.append('no fault' if not faults else f'{faults} fault{"s" * (faults > 1)}')
+    lines += [f'  {line}' for line in data['fix']]
+    lines += [f'note: {note}' for note in notes + [recording.hint] if note]
+    return '\n'.join(lines) + '\n'
+
+
+# ---------------------------------------------------------------------------------------
+# The command
+
+
+def _seconds(text):
+    value = arguments.number(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(
+            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
+    return value
+
+
+TEXT = (
+    'Reads one sensor_msgs/Imu topic of a bag (the only one, or --imu-topic) and checks it\n'
+    'against REP 103 and REP 145: stamps, accel_units, orientation_vs_accel, gyro_units,\n'
+    'gyro_axes, gyro_bias, time_offset; with a reference orientation of the same body\n'
+    '(--ref-topic: odometry or a pose; --ref-tf PARENT CHILD: a TF frame pair) also\n'
+    'accel_sign, world_up (NED) and mounting. Each check is ok, fault or unknown, with its\n'
+    'numbers (angles in radians and rates in rad/s unless --deg; scales are plain factors).\n'
+    'Prints a table and, under it, what to change for each fault; --json prints\n'
+    '{imu, checks, faults, fix}. An IMU without orientation (orientation_covariance[0] = -1\n'
+    'or zero quaternions) leaves the orientation checks unknown. Exit status 0: no fault,\n'
+    '1: faults, 2: bad input. Needs rosbags (the bag extra). doc/imu.md explains each check.')
+"""What ``rot-tools imu-check --help`` says of the command."""
+
+
+def add_parser(subparsers):
+    """Add ``rot-tools imu-check`` to argparse's subparsers action and return its parser."""
+    p = subparsers.add_parser(
+        'imu-check', help="an IMU's conventions checked from a recording (REP 103, REP 145)",
+        usage=f'{options.PROG} imu-check BAG [--imu-topic T] [--ref-topic T | --ref-tf PARENT '
+        'CHILD]\n       [--start S] [--end S] [--deg] [--json]',
+        description=f"An IMU's conventions checked from a recording.\n\n{TEXT}",
+        epilog='examples:\n  rot-tools imu-check run.bag\n'
+        '  rot-tools imu-check run.bag --imu-topic /imu/data --ref-topic /odom\n'
+        '  rot-tools imu-check rosbag2_dir --ref-tf odom base_link --deg --json')
+    p.add_argument('path', metavar='BAG',
+                   help='a ROS 1 .bag file, a rosbag2 directory, or a file in one')
+    p.add_argument('--imu-topic', metavar='T',
+                   help="the sensor_msgs/Imu topic to check (default: the bag's only one)")
+    p.add_argument('--ref-topic', metavar='T',
+                   help="the body's orientation from this topic (Odometry, PoseStamped, "
+                   'PoseWithCovarianceStamped, TransformStamped, QuaternionStamped)')
+    p.add_argument('--ref-tf', nargs=2, metavar=('PARENT', 'CHILD'),
+                   help="the body's orientation: CHILD (the body frame, e.g. base_link) in "
+                   "PARENT (e.g. odom) from the bag's /tf and /tf_static")
+    p.add_argument('--start', type=_seconds, metavar='S',
+                   help="only messages recorded S seconds or more after the bag's start")
+    p.add_argument('--end', type=_seconds, metavar='S',
+                   help="only messages recorded at most S seconds after the bag's start")
+    common = p.add_argument_group('common options')
+    suppress = argparse.SUPPRESS
+    arguments.add_deg(common, 'angles in degrees and rates in deg/s', suppress)
+    arguments.add_json(common, 'print {imu, checks, faults, fix} as JSON instead of the table',
+                       suppress)
+    arguments.add_version(common)
+    return p
+
+
+def run(args):
+    """
+    Run ``rot-tools imu-check`` on the parsed ``args``; return the exit status.
+
+    0 when no check is at fault, 1 when one is; one error line and status 2
+    (options.error) for bad input: an option that does not apply, a bag that cannot be
+    read, no Imu topic or two without --imu-topic, a reference that is not there.
+    """
+    error = options.error
+    for option, given in (('--seq', args.seq), ('--all-sequences', args.all_sequences),
+                          ('--wxyz', args.wxyz), ('--point', args.point),
+                          ('--plot', args.plot), ('--tol', args.tol),
+                          ('--precision', args.precision != DEFAULT_PRECISION)):
+        if given:
+            error(f'{option} does not apply to imu-check')
+    if args.ref_topic is not None and args.ref_tf is not None:
+        error('--ref-topic and --ref-tf: give one reference, not both')
+    missing = bag_read.rosbags_missing()
+    if missing:
+        error(f"imu-check needs the rosbags library ({missing} is missing), the 'bag' extra: "
+              f"{arguments.install_hint('bag')}")
+    if args.start is not None and args.end is not None and args.end < args.start:
+        error(f'--end {args.end:g} is before --start {args.start:g}')
+    try:
+        recording = read(args.path, args.imu_topic, args.ref_topic, args.ref_tf, args.start,
+                         args.end)
+    except bag_read.BagError as exc:
+        error(f'imu-check: {exc}')
+    checks = check(recording)
+    data = document(recording, checks, args.deg)
+    text = to_json(data, JSON_DIGITS) if args.json else table(data, recording, args.deg)
+    output_file.to_stdout(lambda out: out.write(text))
+    return 1 if data['faults'] else 0
