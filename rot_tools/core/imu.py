@@ -240,10 +240,10 @@ def _samples(t, quaternions, angular_velocity, linear_acceleration, tol):
     gyro = _vectors(angular_velocity, 'angular_velocity', count)
     accel = _vectors(linear_acceleration, 'linear_acceleration', count)
     R = None if quaternions is None else _orientation(quaternions, 'quaternions', count, tol)
-    keep = _in_order(t, 'stamps')
-    t = t[keep]
-    return ImuSamples(t=t, R=None if R is None else R[keep], gyro=gyro[keep],
-                      accel=accel[keep], period=float(np.median(np.diff(t))))
+    if not (np.diff(t) > 0).all():
+        keep = _in_order(t, 'stamps')
+        t, gyro, accel, R = t[keep], gyro[keep], accel[keep], None if R is None else R[keep]
+    return ImuSamples(t=t, R=R, gyro=gyro, accel=accel, period=float(np.median(np.diff(t))))
 
 
 def _check_stamps(stamps, samples):

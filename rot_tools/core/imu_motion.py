@@ -27,9 +27,10 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from rot_tools.core.axis_angle import matrix_to_rotvec
+from rot_tools.core.axis_angle import axis_angle_kernel, rotvec_of
+from rot_tools.core.engine import VECTOR
 from rot_tools.core.fitting import rotation_distance
-from rot_tools.core.so3 import rot_z
+from rot_tools.core.so3 import apply_to_named_rotations, rot_z
 from rot_tools.core.trajectory import estimate_time_offset
 
 RATE_GAP = 3
@@ -98,21 +99,45 @@ class Lag(NamedTuple):
     correlation: float
 
 
+LAG_SAMPLES = 1 << 15
+"""Samples at most over which the lag is estimated (the lag is one number, and the
+correlation's FFTs grow with the samples): of a longer recording, the stretch of this many
+whose gyro speed varies most."""
+
+
 def orientation_lag(samples):
     """
     Return the Lag of the orientation behind the gyro, from their angular speeds.
 
     The gyro's speed, averaged over each step and scaled to at most 1 rad per step (the
     correlation does not see the scale), is the turn of a rotation about z; its offset to the
-    orientation is estimate_time_offset's within ±MAX_LAG. RotationError as that raises it,
-    and for a gyro that reads 0 throughout.
+    orientation is estimate_time_offset's within ±MAX_LAG, over LAG_SAMPLES at most.
+    RotationError as estimate_time_offset raises it.
     """
-    t, speed = samples.t, np.linalg.norm(samples.gyro, axis=1)
+    t, R, speed = samples.t, samples.R, np.linalg.norm(samples.gyro, axis=1)
+    if len(t) > LAG_SAMPLES:
+        chunks = len(t) // LAG_SAMPLES
+        spread = speed[:chunks * LAG_SAMPLES].reshape(chunks, LAG_SAMPLES).std(axis=1)
+        stretch = slice(int(np.argmax(spread)) * LAG_SAMPLES, None)
+        t, R, speed = (x[stretch][:LAG_SAMPLES] for x in (t, R, speed))
     steps = 0.5 * (speed[:-1] + speed[1:]) * np.diff(t)
     top = float(steps.max())
     turn = np.concatenate([[0.0], np.cumsum(steps / top if top > 0 else steps)])
-    found = estimate_time_offset(t, samples.R, t, rot_z(turn % (2 * math.pi)), MAX_LAG)
+    found = estimate_time_offset(t, R, t, rot_z(turn % (2 * math.pi)), MAX_LAG)
     return Lag(seconds=-found.offset, correlation=found.correlation)
+
+
+def _relative_rotvec_kernel(ops, m1, m2):
+    # R1ᵀ·R2, entry (i, j) = Σ_k R1[k][i]·R2[k][j]
+    m = [[m1[0][i] * m2[0][j] + m1[1][i] * m2[1][j] + m1[2][i] * m2[2][j] for j in range(3)]
+         for i in range(3)]
+    return rotvec_of(axis_angle_kernel(ops, m))
+
+
+def relative_rotvecs(R1, R2):
+    """Return the rotation vectors of R1ᵀ·R2 (..., 3), for rotations as given (unchecked)."""
+    return apply_to_named_rotations(_relative_rotvec_kernel, [(R1, 'R1'), (R2, 'R2')], False,
+                                    VECTOR)
 
 
 class Rates(NamedTuple):
@@ -127,9 +152,8 @@ def body_rates(samples, lag):
     t, R = samples.t, samples.R
     dt = np.diff(t)
     at = t[:-1] + dt / 2 - lag
-    use = np.flatnonzero((dt <= RATE_GAP * samples.period) & (at >= t[0]) & (at <= t[-1]))
-    turn = np.swapaxes(R[use], -1, -2) @ R[use + 1]
-    orientation = matrix_to_rotvec(turn, check=False) / dt[use, None]
+    use = (dt <= RATE_GAP * samples.period) & (at >= t[0]) & (at <= t[-1])
+    orientation = (relative_rotvecs(R[:-1], R[1:]) / dt[:, None])[use]
     gyro = np.stack([np.interp(at[use], t, samples.gyro[:, i]) for i in range(3)], axis=-1)
     return Rates(orientation=orientation, gyro=gyro)
 
@@ -150,13 +174,19 @@ class GyroFit(NamedTuple):
 
 def fit_gyro(rates):
     """Return the GyroFit of ω° ≈ A·ω + c (module docstring)."""
-    mean_o, mean_g = rates.orientation.mean(axis=0), rates.gyro.mean(axis=0)
-    d_o, d_g = rates.orientation - mean_o, rates.gyro - mean_g
-    S, C = d_g.T @ d_g, d_g.T @ d_o
+    # centred sums from the raw ones, as products: NumPy reduces and subtracts tall (K, 3)
+    # arrays slowly, and the means are not large against the spread here
+    g, o, count = rates.gyro, rates.orientation, len(rates.gyro)
+    ones = np.full(count, 1.0 / count)
+    mean_g, mean_o = ones @ g, ones @ o
+    S = g.T @ g - count * np.outer(mean_g, mean_g)
+    C = g.T @ o - count * np.outer(mean_g, mean_o)
+    Y = np.diag(o.T @ o) - count * mean_o * mean_o
     inverse = np.linalg.pinv(S)
     A = (inverse @ C).T
-    residual = d_o - d_g @ A.T
-    variance = np.sum(residual * residual, axis=0) / max(len(d_o) - 4, 1)
+    # Σ residual² per row, from the Gram matrix: Σ d_o² − Cᵀ·S⁻¹·C
+    residual = np.maximum(Y - np.einsum('ji,jk,ki->i', C, inverse, C), 0.0)
+    variance = residual / max(count - 4, 1)
     error = np.sqrt(variance[:, None] * np.maximum(np.diag(inverse), 0.0)[None, :])
     size = np.abs(A)
     column = np.argmax(size, axis=1)
