@@ -372,3 +372,73 @@ def test_an_unknown_reading_is_refused(capsys):
     status, out, err = run(capsys, 'bag', bh.REAL, '--input-covariance', 'body')
     assert (status, out) == (2, '')
     assert "argument --input-covariance: invalid choice: 'body'" in err.splitlines()[-1]
+
+
+# ---------------------------------------------------------------------------------------
+# Covariances at float64's ends
+
+
+def extreme_bag(path):
+    """
+    Return (bag, {topic: (quaternions, covariances)}): covariances near 1e308 and 5e-324.
+
+    /imu: 1e308·I at 24 orientations (constant: one run), then 5e-324·I at 8; /odom: a pose
+    covariance whose position block is 1 m² and rotation block 1e308·I.
+    """
+    b, rng = bh.Builder(), np.random.default_rng(11)
+    q = Rotation.random(40, random_state=7).as_quat()
+    huge, tiny = 1e308 * np.eye(3).ravel(), 5e-324 * np.eye(3).ravel()
+    pose = np.diag([1.0, 1.0, 1.0, 1e308, 1e308, 1e308]).ravel()
+    plan = {'/imu': (q[:32], [huge] * 24 + [tiny] * 8), '/odom': (q[32:], [pose] * 8)}
+    messages = []
+    for topic, (qs, covs) in plan.items():
+        for k, (qk, cov) in enumerate(zip(qs, covs)):
+            stamp = 3.0 + 0.05 * k
+            msg = (b.imu(stamp, qk, cov=cov) if topic == '/imu' else
+                   b.odometry(stamp, rng.normal(size=3), qk, cov=cov))
+            messages.append((topic, IMU_TYPE if topic == '/imu' else ODOM_TYPE,
+                             int(stamp * 1e9), msg))
+    return bh.write_bag(path, messages), {t: (qs, np.array(c)) for t, (qs, c) in plan.items()}
+
+
+def test_covariances_near_float64_s_ends_are_converted_at_the_scale_of_one(
+        capsys, tmp_path, monkeypatch):
+    """
+    σ = √max|C|·σ(C / max|C|): 1e308·I gives σ near 1e154, 5e-324·I near 2e-162, never inf or 0.
+
+    A covariance of roll, pitch, yaw beyond float64 (1e308·I far enough from level) is bad,
+    as rotation_node's ~/rpy_covariance says; every other is the reference's, whether the
+    covariances go run by run or as one batch, and the table is written whole (it raised
+    OverflowError, then RotationError, with a traceback and no CSV).
+    """
+    path, plan = extreme_bag(tmp_path / 'extreme')
+    out = tmp_path / 'rows.csv'
+    status, _, err = run(capsys, 'bag', path, '--csv', out)
+    assert (status, err) == (0, '')
+    rows = list(csv.DictReader(io.StringIO(out.read_text())))
+    analysed = []
+    for groups in (0, 10 ** 9):  # every message in one batch, or run by run
+        monkeypatch.setattr(bag_covariance, 'GROUPS', groups)
+        _, topics = cli_analyse(path, 'rotvec')
+        analysed.append({t.topic: (t.rpy_std, t.covariance_status) for t in topics})
+    limit = np.finfo(float).max
+    for topic, (q, cov) in plan.items():
+        scale = np.abs(cov).max(axis=1)[:, None]
+        unit = reference_sigma(q, cov / scale)
+        with np.errstate(over='ignore'):
+            ratio = unit ** 2 * scale / limit  # the variance against float64's largest
+        expected = np.where((ratio > 1).any(axis=1)[:, None], np.nan, unit * np.sqrt(scale))
+        clear = (np.abs(ratio - 1) > 1e-6).all(axis=1)
+        huge = scale[:, 0] > 1
+        table = cells([r for r in rows if r['topic'] == topic], STD)  # 2e-162 prints as 0
+        for got in (table[huge], analysed[0][topic][0][huge], analysed[1][topic][0][huge],
+                    analysed[1][topic][0][~huge]):
+            assert (got[np.isfinite(got)] > 0).all()
+        for got in (table[huge], *(a[topic][0] for a in analysed)):
+            part = huge if len(got) < len(q) else slice(None)
+            ok = clear[part]
+            assert (np.isnan(got) == np.isnan(expected[part]))[ok].all(), topic
+            np.testing.assert_allclose(got[ok], expected[part][ok], rtol=1e-6)
+        np.testing.assert_array_equal(analysed[0][topic][1], analysed[1][topic][1])
+        np.testing.assert_allclose(analysed[0][topic][0], analysed[1][topic][0], rtol=1e-13)
+        assert (ratio[huge] > 1).any() and not (ratio[huge] > 1).all()

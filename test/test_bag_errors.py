@@ -13,6 +13,7 @@ import io
 import json
 import math
 import os
+import re
 import subprocess
 
 import bag_helpers as bh
@@ -260,6 +261,42 @@ def test_a_bag_without_a_topic_to_read(script, tmp_path):
     one_line_error(script, 'bag', path, contains='no topic of a type read here')
 
 
+def test_a_bag_with_nothing_asked_for_is_skipped(capsys, tmp_path):
+    """
+    Check what is BagSkipped (a fleet's ``skipped``) and what a BagError (``failed``).
+
+    Skipped: no message, none of the topics asked for, no topic of a type read. A topic asked
+    for that is missing beside others, or of a type not read, is a BagError (``failed``).
+    Alone, each is one line and exit status 2.
+    """
+    from rot_tools.cli import bag_analysis
+    from rot_tools.io import bag_read
+    from rosbags.rosbag2 import Writer
+    b = bh.Builder()
+    chat = bh.write_bag(tmp_path / 'chat', [('/chatter', 'std_msgs/msg/String', 1,
+                                             b.string('hi'))])
+    both = bh.write_bag(tmp_path / 'both', [
+        ('/chatter', 'std_msgs/msg/String', 1, b.string('hi')),
+        ('/pose', 'geometry_msgs/msg/PoseStamped', 2, b.pose_stamped(1.0, (0, 0, 0),
+                                                                     (0, 0, 0, 1.0)))])
+    with Writer(tmp_path / 'none', version=8) as writer:
+        writer.add_connection('/pose', 'geometry_msgs/msg/PoseStamped', typestore=bh.store())
+    cases = [
+        (True, (chat,), 'no topic of a type read here in the bag: /chatter (std_msgs/msg/String)'),
+        (True, (tmp_path / 'none',), 'the bag holds no messages'),
+        (True, (both, '--topic', '/nope', '--topic', '/nada'),
+         'none of the topics asked for (/nope, /nada) is in the bag (its topics: /chatter, '
+         '/pose)'),
+        (False, (both, '--topic', '/pose', '--topic', '/nope'), 'no topic /nope in the bag'),
+        (False, (both, '--topic', '/chatter'), 'topic /chatter is a std_msgs/msg/String')]
+    for skipped, (bag, *options), contains in cases:
+        with pytest.raises(bag_read.BagError, match=re.escape(contains)) as caught:
+            bag_analysis.analyse(bag, options[1::2])
+        assert isinstance(caught.value, bag_read.BagSkipped) == skipped, contains
+        status, out, err = run(capsys, 'bag', bag, *options)
+        assert (status, out) == (2, '') and err.count('\n') == 1 and contains in err, err
+
+
 @pytest.mark.parametrize('args, contains', [
     (('--start', '5', '--end', '2'), '--end 2 is before --start 5'),
     (('--start', '-1'), 'must be >= 0'),
@@ -287,7 +324,7 @@ def test_without_rosbags(script, tmp_path):
     env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(fake.parent),
                                                       env.get('PYTHONPATH')]))
     one_line_error(script, 'bag', bh.REAL, env=env,
-                   contains="the 'bag' extra: pip install 'rot_tools[bag]'")
+                   contains="the 'bag' extra: pip install -e '.[bag]' in the rot_tools checkout")
 
 
 def test_progress_bar_only_on_a_terminal(script, tmp_path):

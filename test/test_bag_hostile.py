@@ -25,6 +25,8 @@ pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installe
 from rot_tools.cli import bag_analysis, bag_output  # noqa: E402
 from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
+from rot_tools.io import bag_read  # noqa: E402
+import yaml  # noqa: E402,I100
 
 
 def run(capsys, *args):
@@ -86,6 +88,13 @@ def test_an_output_that_is_the_bag_is_refused(capsys, tmp_path, small_bag):
                                ('--plot', folder / 'new.png')):
             one_error(capsys, 'bag', given, option, output, contains=f'{option} {output} would')
     assert {p: p.read_bytes() for p in folder.iterdir()} == files
+    bare = tmp_path / 'alone.db3'
+    shutil.copy(db3, bare)
+    one_error(capsys, 'bag', bare, '--csv', bare, contains='would overwrite the bag being read')
+    assert bare.read_bytes() == files[db3]
+    png = tmp_path / 'both.svg'
+    one_error(capsys, 'bag', bare, '--csv', png, '--plot', png, contains='the same file')
+    assert not png.exists()
 
 
 def test_a_failed_csv_write_leaves_the_old_file(capsys, tmp_path, monkeypatch):
@@ -125,18 +134,80 @@ def test_the_summary_on_a_full_or_closed_stdout(small_bag):
         with open('/dev/full', 'w') as full:
             proc = subprocess.run(script + ['bag', str(small_bag)] + extra, stdout=full,
                                   stderr=subprocess.PIPE, text=True, timeout=120, env=env)
-        assert proc.returncode == 2 and proc.stderr == (
-            'rot-tools: error: cannot write to the standard output: No space left on device\n')
+        assert proc.returncode == 1 and proc.stderr == (
+            'rot-tools: error: cannot write to stdout: No space left on device\n')
     proc = subprocess.run(script + ['bag', str(small_bag)], stdout=subprocess.DEVNULL,
                           stderr=subprocess.PIPE, text=True, timeout=120, env=env,
                           preexec_fn=lambda: os.close(1))
-    assert proc.returncode == 2 and proc.stderr == (
-        'rot-tools: error: cannot write to the standard output: it is closed\n')
+    assert proc.returncode == 1 and proc.stderr == (
+        'rot-tools: error: cannot write to stdout: it is closed\n')
     with subprocess.Popen(script + ['bag', str(bh.REAL)], stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, env=env) as child:
-        child.stdout.close()  # the reader went away before the summary
+        child.stdout.close()  # the reader went away before the summary: quiet, as SIGPIPE
         err = child.stderr.read()
-    assert child.returncode == 0 and err == b''
+    assert child.returncode in (-13, 141) and err == b''
+
+
+def test_an_unexpected_error_on_the_bag_is_one_line(capsys, tmp_path, small_bag, monkeypatch):
+    """Any exception of rot-tools on one bag is that bag's one line, never a traceback."""
+    out = tmp_path / 'rows.csv'
+    out.write_text('the old table\n')
+
+    def overflows(values, precision):
+        raise OverflowError('int too large to convert to float')
+    monkeypatch.setattr(bag_output, 'rounded', overflows)
+    one_error(capsys, 'bag', small_bag, '--csv', out,
+              contains=f'bag: {small_bag}: unexpected OverflowError: int too large to convert '
+              'to float (a fault of rot-tools on this bag: please report it)')
+    assert out.read_text() == 'the old table\n' and len(list(tmp_path.iterdir())) == 1
+    assert bag_analysis.failure('b.bag', ValueError()) == (
+        'b.bag: unexpected ValueError (a fault of rot-tools on this bag: please report it)')
+    assert bag_analysis.failure('b.bag', bag_read.BagError('b.bag: the file is empty')) == (
+        'b.bag: the file is empty')
+
+
+def interrupted(capsys, *args):
+    """Return the exit status of rot-tools ARGS stopped by Ctrl-C (130)."""
+    try:
+        status = run(capsys, *args)[0]
+    except KeyboardInterrupt:  # main lets it through, or says it in one line
+        status = 130
+    capsys.readouterr()
+    return status
+
+
+def test_ctrl_c_while_writing_leaves_every_output_as_it_was(
+        capsys, tmp_path, small_bag, monkeypatch):
+    """Each writer removes its partial file in ``finally``: the old file stays, nothing else."""
+    pytest.importorskip('pyarrow')
+    from matplotlib.figure import Figure
+    import pyarrow.parquet as pq
+    out, table = tmp_path / 'rows.csv', tmp_path / 'table'
+    out.write_text('the old table\n')
+    real_stamp_text = bag_output.stamp_text
+    written = []
+
+    def stamp_then_stop(ns):
+        written.append(ns)
+        if len(written) == 20:  # half the table written
+            raise KeyboardInterrupt
+        return real_stamp_text(ns)
+    monkeypatch.setattr(bag_output, 'stamp_text', stamp_then_stop)
+    assert interrupted(capsys, 'bag', small_bag, '--csv', out) == 130
+
+    def half_then_stop(self, target, **kwargs):
+        target.write(b'half a picture')
+        raise KeyboardInterrupt
+    monkeypatch.setattr(Figure, 'savefig', half_then_stop)
+    assert interrupted(capsys, 'bag', small_bag, '--plot', tmp_path / 'rpy.png') == 130
+
+    def half_a_table(data, where, **options):
+        where.write(b'PAR1 half a table')
+        raise KeyboardInterrupt
+    monkeypatch.setattr(pq, 'write_table', half_a_table)
+    assert interrupted(capsys, 'bag', small_bag, '--parquet', table) == 130
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['rows.csv', 'table']
+    assert out.read_text() == 'the old table\n' and list(table.iterdir()) == []
 
 
 # ---------------------------------------------------------------------------------------
@@ -158,6 +229,19 @@ def test_negative_stamps_are_exact(capsys, tmp_path):
                                25 * 10**7]
 
 
+def test_start_and_end_keep_every_digit_whatever_the_precision(capsys, tmp_path):
+    """--precision rounds the summary's numbers, never its stamps (1503000000.0 it printed)."""
+    stamps = [1503000000.123456789, 1503000000.987654321, 1503000061.5]
+    path = pose_bag(tmp_path / 'bag', stamps)
+    ns = [1503000000_123456789, 1503000000_987654321, 1503000061_500000000]
+    for extra in ((), ('--json',)):
+        status, out, err = run(capsys, 'bag', path, '--precision', '4', *extra)
+        assert (status, err) == (0, '')
+        s = (json.loads(out) if extra else yaml.safe_load(out))['topics']['/pose']
+        assert (s['start'], s['end']) == (ns[0] / 1e9, ns[-1] / 1e9)
+        assert (s['duration'], s['rate']) == (61.38, 0.0326)  # the others rounded
+
+
 def test_a_start_beyond_any_time_reads_nothing(capsys, small_bag):
     status, out, err = run(capsys, 'bag', small_bag, '--start', '1e300', '--json')
     assert (status, err) == (0, '')
@@ -173,6 +257,55 @@ def test_files_that_are_not_bags(capsys, tmp_path):
         (tmp_path / name).write_text('not a bag\n')
         one_error(capsys, 'bag', tmp_path / name, contains=f'{name}: not a bag')
     one_error(capsys, 'bag', Path(__file__).parents[1] / 'README.md', contains='not a bag')
+
+
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
+def test_a_bare_storage_file_is_read_as_a_bag(capsys, tmp_path, storage):
+    """A .db3 or .mcap without its metadata.yaml (NotADirectoryError, with a traceback)."""
+    folder = pose_bag(tmp_path / 'folder', [1.0 + 0.1 * k for k in range(30)], storage=storage)
+    (inner,) = [p for p in folder.iterdir() if p.name != 'metadata.yaml']
+    bare = tmp_path / f'alone{inner.suffix}'
+    shutil.copy(inner, bare)
+    assert bag_read.is_bag(bare) and bag_read.is_bag(folder) and bag_read.is_bag(inner)
+    assert not bag_read.is_bag(tmp_path) and not bag_read.is_bag(tmp_path / 'notes.txt')
+    of_folder, of_bare = (json.loads(run(capsys, 'bag', path, '--json')[1])
+                          for path in (folder, bare))
+    assert of_bare == {**of_folder, 'bag': str(bare)}
+    assert of_bare['storage'] == f'rosbag2 {storage}'
+    assert of_bare['topics']['/pose']['accepted'] == 30
+    rows = run(capsys, 'bag', bare, '--csv', '-')[1]
+    assert rows == run(capsys, 'bag', folder, '--csv', '-')[1] and rows.count('\n') == 31
+
+
+def test_files_named_as_bags_that_are_not(capsys, tmp_path):
+    """Each is one line and exit status 2: rosbags' own word on what is wrong."""
+    import sqlite3
+    (tmp_path / 'text.mcap').write_text('not a bag\n')
+    (tmp_path / 'text.db3').write_text('not a bag\n')
+    with sqlite3.connect(tmp_path / 'other.db3') as db:
+        db.execute('CREATE TABLE t (x)')
+    folder = pose_bag(tmp_path / 'folder', [1.0, 2.0], storage='mcap')
+    cut = next(folder.glob('*.mcap')).read_bytes()
+    (tmp_path / 'cut.mcap').write_bytes(cut[:len(cut) // 2])
+    (tmp_path / 'empty.db3').write_bytes(b'')
+    for name in ('text.mcap', 'text.db3', 'other.db3', 'cut.mcap'):
+        one_error(capsys, 'bag', tmp_path / name, contains=f'{name}: cannot read the bag: ')
+    one_error(capsys, 'bag', tmp_path / 'empty.db3', contains='empty.db3: the file is empty')
+
+
+def test_a_fifo_in_a_rosbag2_folder_is_refused_before_opening(capsys, tmp_path, small_bag):
+    """Refuse it by its stat: rosbags would open it and wait for a writer for ever."""
+    db3 = next(small_bag.glob('*.db3')).name
+    for name in ('metadata.yaml', db3):
+        folder = tmp_path / name.replace('.', '_')
+        shutil.copytree(small_bag, folder)
+        (folder / name).unlink()
+        os.mkfifo(folder / name)
+        with pytest.raises(bag_read.BagError, match='not a regular file'):
+            bag_read.bag_paths(folder)  # nothing opened: the command below cannot hang
+        for given in (folder, folder / db3) if name != db3 else (folder,):
+            one_error(capsys, 'bag', given, contains=f'bag: {folder / name}: not a regular '
+                      'file (a FIFO, socket or device) in the rosbag2 bag: refused')
 
 
 def test_a_fifo_is_refused_before_opening(tmp_path):

@@ -16,7 +16,7 @@ import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 pytest.importorskip('rot_tools.core.transform_tree', reason='TransformTree has not landed')
-from rot_tools.cli import main as cli  # noqa: E402
+from rot_tools.cli import bag_analysis, main as cli  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 
@@ -90,6 +90,23 @@ def test_tf_frames_that_never_appear(capsys, tf_bag, frames, contains):
 def test_tf_in_a_bag_without_tf(capsys):
     status, _, err = run(capsys, 'bag', bh.REAL, '--tf', 'odom', 'base_link')
     assert status == 2 and 'no tf2_msgs/msg/TFMessage topic' in err and err.count('\n') == 1
+
+
+def test_a_tf_only_bag_without_tf_names_the_option_and_its_frames(capsys, tf_bag):
+    """Skipped (nothing to read without --tf), with the words that read it."""
+    from rot_tools.io import bag_read
+    path = tf_bag[0]
+    status, out, err = run(capsys, 'bag', path)
+    assert (status, out) == (2, '') and err == (
+        'rot-tools: error: bag: no topic of a type read here in the bag: /tf '
+        '(tf2_msgs/msg/TFMessage), /tf_static (tf2_msgs/msg/TFMessage); its TF holds the frames '
+        'base_link, imu, map, odom, wheel (base_link -> imu, map -> odom, odom -> base_link, '
+        'odom -> wheel): give --tf PARENT CHILD to follow CHILD in PARENT\n')
+    with pytest.raises(bag_read.BagSkipped):
+        bag_analysis.analyse(path)
+    for frames in (('map', 'nowhere'), ('odom', 'base_link')):
+        with pytest.raises(bag_read.BagSkipped):
+            bag_analysis.analyse(bh.REAL if frames[1] == 'base_link' else path, tf=frames)
 
 
 def tf_bag_of(tmp_path, samples):

@@ -25,19 +25,30 @@ def one_bag(args, error):
     rot-tools bag on the one bag ``args.path``; ``error(text)`` prints one line and exits 2.
 
     :func:`run` reads the command line's paths and checks the options first, and hands one
-    bag given alone to this function.
+    bag given alone to this function. Whatever fails on this bag — the bag itself (a
+    BagError), or rot-tools on it (any other exception: bag_analysis.failure names it) — is
+    one line, never a traceback; an output file is then left as it was (written whole or
+    not at all, rot_tools.cli.output_file), and so it is when a signal stops the command.
     """
-    from rot_tools.io.report import to_json, to_yaml
-
     output_file.check_outputs([('--csv', args.csv), ('--plot', args.plot),
                                ('--parquet', args.parquet)], [args.path], error)
     try:
-        storage, topics = bag_analysis.analyse(
-            args.path, args.topic or (), args.start, args.end,
-            QUATERNION_TOLERANCE if args.tol is None else args.tol, args.seq, args.wrap,
-            tf=args.tf, reading=args.input_covariance)
+        return _one_bag(args, error)
     except bag_read.BagError as exc:
         error(f'bag: {exc}')
+    except OSError:
+        raise  # the standard output's, said by output_file.to_stdout
+    except Exception as exc:  # noqa: BLE001 - one bag's failure is one line, as in a fleet
+        error(f'bag: {bag_analysis.failure(args.path, exc)}')
+
+
+def _one_bag(args, error):
+    from rot_tools.io.report import to_json, to_yaml
+
+    storage, topics = bag_analysis.analyse(
+        args.path, args.topic or (), args.start, args.end,
+        QUATERNION_TOLERANCE if args.tol is None else args.tol, args.seq, args.wrap,
+        tf=args.tf, reading=args.input_covariance)
     if args.plot:
         drawn = topics[:MAX_PLOTTED_TOPICS]
         output_file.write_figure(lambda: write_plot(args.plot, drawn, args.deg), args.plot,
@@ -52,8 +63,7 @@ def one_bag(args, error):
         except OSError as exc:
             error(f'--parquet: cannot write {target}: {exc.strerror or exc}')
     if args.csv == '-':
-        output_file.to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision),
-                              error)
+        output_file.to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision))
         return 0
     if args.csv is not None:
         try:
@@ -63,8 +73,9 @@ def one_bag(args, error):
         except OSError as exc:
             error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
     text = to_json if args.json else to_yaml
-    data = bag_analysis.summary(args.path, storage, topics, args.deg)
-    output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
+    document = text(bag_analysis.summary(args.path, storage, topics, args.deg),
+                    precision=args.precision)
+    output_file.to_stdout(lambda out: out.write(document))
     return 0
 
 
@@ -196,7 +207,7 @@ def run(args):
     missing = bag_read.rosbags_missing()
     if missing:
         error(f"bag needs the rosbags library ({missing} is missing), the 'bag' extra: "
-              "pip install 'rot_tools[bag]'")
+              f"{arguments.install_hint('bag')}")
     if args.start is not None and args.end is not None and args.end < args.start:
         error(f'--end {args.end:g} is before --start {args.start:g}')
     if args.scheduler is not None and args.engine != 'dask':

@@ -16,10 +16,12 @@ conversion per topic, never one per message. Per accepted message, with R its ro
   ω = log(Rₖ₋₁ᵀ·Rₖ)/Δt, Δt from the header stamps (none on the first row, nor where Δt ≤ 0).
 
 Per topic the summary adds the messages' start, end and mean rate (header stamps of every
-message read), the ranges of roll, pitch and yaw, the total angle turned (the sum of the
-angles of the steps Rₖ₋₁ᵀ·Rₖ), the chordal mean orientation (rot_tools.mean_rotation), and
-for an Imu the RMS of |ω − ω_gyro|, ω_gyro the mean of the gyro's angular_velocity at the
-step's two ends: a check of the IMU's own consistency.
+message read; start and end with every digit of their float64, whatever ``--precision``
+rounds the other numbers to: rot_tools.io.report.Exact), the ranges of roll, pitch and yaw,
+the total angle turned (the sum of the angles of the steps Rₖ₋₁ᵀ·Rₖ), the chordal mean
+orientation (rot_tools.mean_rotation), and for an Imu the RMS of |ω − ω_gyro|, ω_gyro the
+mean of the gyro's angular_velocity at the step's two ends: a check of the IMU's own
+consistency.
 
 For the types that carry their orientation's covariance (Imu, PoseWithCovarianceStamped,
 Odometry), each message's standard deviations of roll, pitch and yaw, and per topic their
@@ -51,6 +53,7 @@ from rot_tools.core.fitting import mean_rotation
 from rot_tools.core.so3 import matrix_to_quaternion
 from rot_tools.io import bag_read, boundary, interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.io.report import Exact
 
 TF_REASONS = (transform_tree.BAD_FRAME, transform_tree.LOOP, transform_tree.TOO_MANY_FRAMES)
 """Refusals of a TF transform besides the boundary's: the tree's, counted as rotation_node
@@ -187,7 +190,7 @@ def topic_summary(t, degrees):
     if len(c):
         ns = stamp_ns(c.sec, c.nanosec)
         first, last = int(ns.min()), int(ns.max())
-        out['start'], out['end'] = first / NS_PER_S, last / NS_PER_S
+        out['start'], out['end'] = Exact(first / NS_PER_S), Exact(last / NS_PER_S)
         out['duration'] = (last - first) / NS_PER_S
         out['rate'] = (len(c) - 1) / out['duration'] if last > first else None
     if not len(t.R):
@@ -215,6 +218,23 @@ def topic_summary(t, degrees):
         out.update(bag_covariance.summary(t.rpy_std, t.covariance_status, t.covariance,
                                           t.reading, degrees))
     return out
+
+
+def failure(path, exc):
+    """
+    Return the one line that says why the bag at PATH failed, beginning with PATH.
+
+    A BagError's text (what is wrong with the bag); any other exception is rot-tools' own
+    fault on this bag, named by its type and text, so that one bag's failure is one line and
+    never a traceback.
+    """
+    if isinstance(exc, bag_read.BagError):
+        text = str(exc)
+    else:
+        said = ' '.join(str(exc).split())
+        text = (f'unexpected {type(exc).__name__}{": " if said else ""}{said[:300]} (a fault '
+                'of rot-tools on this bag: please report it)')
+    return text if text.startswith(f'{path}:') else f'{path}: {text}'
 
 
 def summary(path, storage, topics, degrees):
@@ -259,17 +279,52 @@ class Progress:
 # Reading a bag
 
 
+def _listed(names, most=20):
+    """Return names joined by commas, the first ``most`` of them and how many more."""
+    names = list(names)
+    more = f' and {len(names) - most} more' if len(names) > most else ''
+    return ', '.join(names[:most]) + more
+
+
+def tf_frames_hint(reader, connections):
+    """
+    Return the words that tell how to read a bag's TF: --tf PARENT CHILD, and its frames.
+
+    connections: its TFMessage connections. The frames are every transform's parent and child
+    (sorted), the transforms each pair once, in the order first read.
+    """
+    static = [c for c in connections if c.topic.endswith('tf_static')]
+    tf = bag_read.read_tf(reader, static, [c for c in connections if c not in static])
+    c = tf.columns
+    pairs = dict.fromkeys(zip(np.array(c.frame_ids, object)[c.frame].tolist(),
+                              np.array(c.child_frame_ids, object)[c.child].tolist()))
+    frames = sorted({frame for pair in pairs for frame in pair})
+    if not frames:
+        return 'its TF holds no transform'
+    transforms = _listed((f'{parent} -> {child}' for parent, child in pairs), 10)
+    return (f'its TF holds the frames {_listed(frames)} ({transforms}): give --tf PARENT '
+            'CHILD to follow CHILD in PARENT')
+
+
 def select_connections(reader, topics):
     """
     Return the connections to read: every one of a supported type, or the topics asked for.
 
-    BagError for a topic not in the bag, of an unsupported type, or no topic to read.
+    BagSkipped when the bag has none of the topics asked for, or (none asked for) no topic of
+    a type read: then, when it holds TF, the words say to use --tf PARENT CHILD and name its
+    frames. BagError for a topic asked for that is missing while others are there, or is of
+    a type not read.
     """
     connections = reader.connections
     found = {}
     for conn in connections:
         found.setdefault(conn.topic, conn.msgtype)
     if topics:
+        if not any(topic in found for topic in topics):
+            asked = (f'no topic {topics[0]}' if len(topics) == 1 else
+                     f'none of the topics asked for ({", ".join(topics)}) is')
+            raise bag_read.BagSkipped(
+                f'{asked} in the bag (its topics: {_listed(sorted(found)) or "none"})')
         for topic in topics:
             if topic not in found:
                 raise bag_read.BagError(
@@ -283,8 +338,10 @@ def select_connections(reader, topics):
         return [c for c in connections if c.topic in topics]
     chosen = [c for c in connections if c.msgtype in bag_read.SUPPORTED]
     if not chosen:
-        listed = ', '.join(f'{t} ({m})' for t, m in sorted(found.items())) or 'no topic'
-        raise bag_read.BagError(f'no topic of a type read here in the bag: {listed}')
+        listed = _listed(f'{t} ({m})' for t, m in sorted(found.items())) or 'no topic'
+        tf = [c for c in connections if c.msgtype == bag_read.TF_TYPE]
+        hint = f'; {tf_frames_hint(reader, tf)}' if tf else ''
+        raise bag_read.BagSkipped(f'no topic of a type read here in the bag: {listed}{hint}')
     return chosen
 
 
@@ -300,7 +357,7 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
     """
     connections = [c for c in reader.connections if c.msgtype == bag_read.TF_TYPE]
     if not connections:
-        raise bag_read.BagError('--tf: the bag has no tf2_msgs/msg/TFMessage topic')
+        raise bag_read.BagSkipped('--tf: the bag has no tf2_msgs/msg/TFMessage topic')
     static = [c for c in connections if c.topic.endswith('tf_static')]
     dynamic = [c for c in connections if c not in static]
     tf = bag_read.read_tf(reader, static, dynamic, lo, hi)
@@ -314,7 +371,7 @@ def tf_topic(reader, reference, body, tolerance, lo, hi):
     for frame in (reference, body):
         if frame not in named:
             known = ', '.join(sorted(named)) or 'none'
-            raise bag_read.BagError(
+            raise bag_read.BagSkipped(
                 f"--tf: frame {frame} never appears in the bag's TF (frames: {known})")
     ns = stamp_ns(c.sec[ok], c.nanosec[ok])
     origin = int(ns.min())
@@ -366,13 +423,16 @@ def analyse(path, topics=(), start=None, end=None, tolerance=QUATERNION_TOLERANC
     """
     Return the Analysis of the bag at PATH; BagError for what cannot be read.
 
+    BagSkipped (a BagError) for a bag with nothing of what was asked: no message, none of the
+    topics asked for, no topic of a type read, no TF or not the frames of ``tf``.
+
     tf: (REFERENCE, BODY) adds the TF chain between them (then topics are read only when
     asked for by name). reading: how a recorded covariance's rotation block is read,
     'rotvec' or 'rpy' (rot_tools.io.message_covariance.READINGS).
     """
     with bag_read.open_bag(path) as reader:
         if not reader.connections or not sum(c.msgcount for c in reader.connections):
-            raise bag_read.BagError(f'{path}: the bag holds no messages')
+            raise bag_read.BagSkipped(f'{path}: the bag holds no messages')
         connections = select_connections(reader, topics) if topics or not tf else []
         bag_start = reader.start_time
         lo = None if start is None else record_bound(bag_start, start)

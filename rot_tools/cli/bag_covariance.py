@@ -18,7 +18,10 @@ is checked once and converted as one batch against the run's rotations
 (rot_tools.core.covariance.rotvec_covariance_to_euler takes one covariance for many
 rotations); a topic whose covariance changes more than GROUPS times goes through
 message_covariance.rpy_covariances, every message checked and converted in one batch. Both
-give the same numbers (test_bag_covariance.py).
+give the same numbers (test_bag_covariance.py). Either way each covariance C is converted
+as C / max|C| and σ scaled back by √max|C|: a 1e308·I covariance gives σ near 1e154, a
+5e-324·I one near 2e-162, never inf or 0; one whose roll, pitch, yaw covariance is beyond
+float64 is bad, as rotation_node's ~/rpy_covariance says.
 """
 
 from typing import NamedTuple
@@ -71,12 +74,43 @@ class Stddevs(NamedTuple):
     """(N,) int8: rot_tools.io.message_covariance's OK, UNKNOWN, BAD or LOCK."""
 
 
+def _unit(cov):
+    """
+    Return (cov / s, s) per message, s = max|C| (1 where C is all zeros or not finite).
+
+    A covariance is linear in C, a standard deviation goes as √C: each is converted at the
+    scale of 1 and σ is σ(C / s)·√s, so that entries near float64's largest (1e308) or
+    smallest (5e-324) neither overflow nor lose their digits on the way. The check of C
+    (symmetric, PSD) is relative to s: the same on C / s.
+    """
+    with np.errstate(invalid='ignore'):
+        scale = np.abs(cov).max(axis=1)
+    scale = np.where(np.isfinite(scale) & (scale > 0), scale, 1.0)
+    return cov / scale[:, None], scale
+
+
+def _at_scale(C, scale, status):
+    """
+    Return Stddevs of covariances of roll, pitch, yaw C (n, k, k) converted at the scale of 1.
+
+    σ = σ(C)·√scale (n,); where status is OK but the covariance C·scale is beyond float64
+    (its diagonal: no other entry of a covariance is larger), the status becomes BAD, as
+    rot_tools.io.message_covariance says of it, and σ NaN.
+    """
+    with np.errstate(over='ignore', invalid='ignore'):
+        fits = np.isfinite(np.diagonal(C, axis1=-2, axis2=-1) * scale[:, None]).all(axis=1)
+    status = np.where((status == OK) & ~fits, BAD, status).astype(np.int8)
+    sigma = _sigma(C) * np.sqrt(scale)[:, None]
+    return Stddevs(np.where((status == OK)[:, None], sigma, np.nan), status)
+
+
 def stddevs(R, cov, reading='rotvec'):
     """
     Return Stddevs (σ (N, 3) of roll, pitch, yaw in rad, status (N,) int8) of N messages.
 
     R (N, 3, 3) their rotations; cov (N, 9) or (N, 36) their covariances, row-major
-    (rot_tools.io.message_covariance.rpy_covariances: the same status codes and numbers);
+    (rot_tools.io.message_covariance.rpy_covariances: the same status codes, a covariance of
+    roll, pitch, yaw beyond float64 BAD; each converted at the scale of 1, :func:`_unit`);
     σ is NaN where the status is not OK.
     """
     R = np.asarray(R, dtype=np.float64).reshape(-1, 3, 3)
@@ -84,27 +118,28 @@ def stddevs(R, cov, reading='rotvec'):
     n = len(cov)
     if not n:
         return Stddevs(np.zeros((0, 3)), np.zeros(0, np.int8))
+    unit, scale = _unit(cov)
     bits = cov.view(np.int64)  # bit for bit: a run of NaN is one run too
     starts = np.flatnonzero(np.append(True, (bits[1:] != bits[:-1]).any(axis=1)))
     if len(starts) > GROUPS:
-        C, status = message_covariance.rpy_covariances(R, cov, reading)
-        return Stddevs(_sigma(C), status)
-    sigma, status = np.full((n, 3), np.nan), np.empty(n, np.int8)
+        C, status = message_covariance.rpy_covariances(R, unit, reading)
+        return _at_scale(C[..., -3:, -3:], scale, status)
+    C, status = np.full((n, 3, 3), np.nan), np.empty(n, np.int8)
     # each run's covariance alone: reading 'rpy' converts nothing, it only checks
     _, checked = message_covariance.rpy_covariances(
-        np.broadcast_to(np.eye(3), (len(starts), 3, 3)), cov[starts], 'rpy')
+        np.broadcast_to(np.eye(3), (len(starts), 3, 3)), unit[starts], 'rpy')
     for start, end, code in zip(starts, np.append(starts[1:], n), checked):
         status[start:end] = code
         if code != OK:
             continue
-        C = message_covariance.square(cov[start])
+        block = message_covariance.square(unit[start])
         if reading == 'rpy':
-            sigma[start:end] = _sigma(C)
+            C[start:end] = block[-3:, -3:]
             continue
-        converted = _euler_block(R[start:end], C)
-        sigma[start:end] = _sigma(converted.cov)
+        converted = _euler_block(R[start:end], block)
+        C[start:end] = converted.cov[:, -3:, -3:]
         status[start:end][converted.degenerate] = LOCK
-    return Stddevs(sigma, status)
+    return _at_scale(C, scale, status)
 
 
 def summary(sigma, status, cov, reading, degrees):

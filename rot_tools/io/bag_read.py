@@ -13,15 +13,19 @@ a small getter per path (:func:`field_getter`) reads them from a chunk of messag
 into NumPy columns, one per field, and the messages are dropped. Everything after that runs
 on whole columns.
 
-:func:`open_bag` opens PATH (a ROS 1 ``.bag`` file, a rosbag2 directory, or a file inside
-one), :func:`read_topics` returns a :class:`Columns` per topic — record times, header stamps
-(sec, nanosec), frame ids, and the fields of its type — and :func:`read_tf` the transforms of
-the TFMessage topics. Every failure of the bag itself — missing, empty, corrupt, a message
-that does not decode — is a :class:`BagError` with one line of text.
+:func:`is_bag` says whether a path is a bag by its name and kind; :func:`open_bag` opens
+PATH (a ROS 1 ``.bag`` file, a rosbag2 directory or a file inside one, or a rosbag2 storage
+file alone: ``.db3`` or ``.mcap`` without its metadata.yaml, which rosbags' rosbag2
+``Reader`` reads as a bag), :func:`read_topics` returns a :class:`Columns` per topic —
+record times, header stamps (sec, nanosec), frame ids, and the fields of its type — and
+:func:`read_tf` the transforms of the TFMessage topics. Every failure of the bag itself —
+missing, empty, corrupt, a message that does not decode — is a :class:`BagError` with one
+line of text; a bag that holds nothing of what was asked, a :class:`BagSkipped`.
 """
 
 from contextlib import contextmanager
 from operator import attrgetter, itemgetter
+import os
 from pathlib import Path
 import stat
 from typing import NamedTuple
@@ -63,6 +67,16 @@ class BagError(Exception):
     """A bag that cannot be read as asked: one line of text for the user."""
 
 
+class BagSkipped(BagError):
+    """
+    A bag that can be read but holds nothing of what was asked.
+
+    None of the topics asked for, no topic of a type read, no TF for --tf or not the frames
+    asked for, no message at all. Alone, it is an error like any BagError; in a fleet, the
+    bag is ``skipped``, not ``failed``.
+    """
+
+
 def rosbags_missing():
     """Return the name of the missing module when rosbags cannot be imported, else None."""
     try:
@@ -76,28 +90,71 @@ def rosbags_missing():
 # Opening a bag
 
 
-def bag_paths(path):
+def is_bag(path):
     """
-    Return the paths rosbags opens for PATH: [a .bag file] or [a rosbag2 directory].
+    Tell whether PATH names a bag by its kind and name alone, opening nothing.
 
-    A file inside a rosbag2 directory stands for the directory. Anything else — missing, not
-    a regular file nor a directory (a FIFO would block the reader for ever), empty, a file
-    that is neither a ROS 1 bag nor in a rosbag2 directory — is a BagError, before opening.
+    A directory holding metadata.yaml (a rosbag2 bag), or a file whose name ends in .bag (ROS
+    1), .db3 or .mcap (a rosbag2 storage file, in its bag's directory or alone). Whether it
+    really is one, reading it says (:func:`open_bag`).
     """
     path = Path(path)
+    if path.is_dir():
+        return (path / 'metadata.yaml').exists()
+    return path.suffix in BAG_SUFFIXES
+
+
+def _mode(path):
     try:
-        mode = path.stat().st_mode
+        return path.stat().st_mode
     except FileNotFoundError:
         raise BagError(f'{path}: no such file or directory') from None
     except OSError as exc:
         raise BagError(f'{path}: cannot be read: {exc.strerror or exc}') from None
+
+
+def _regular_files_only(directory):
+    """
+    Raise BagError if an entry of a rosbag2 directory is neither a regular file nor a directory.
+
+    rosbags opens metadata.yaml and the storage files it names: a FIFO among them would block
+    the reader for ever, a device would be read as a bag. Nothing is opened here (stat only).
+    """
+    try:
+        entries = sorted(os.scandir(directory), key=lambda entry: entry.name)
+    except OSError as exc:
+        raise BagError(f'{directory}: cannot be read: {exc.strerror or exc}') from None
+    for entry in entries:
+        try:
+            mode = entry.stat().st_mode
+        except OSError:
+            continue  # a dangling link: the reader says what it misses
+        if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+            raise BagError(f'{entry.path}: not a regular file (a FIFO, socket or device) in '
+                           'the rosbag2 bag: refused')
+
+
+def bag_paths(path):
+    """
+    Return the paths rosbags opens for PATH, checked without opening anything.
+
+    [a .bag file], [a rosbag2 directory] or [a rosbag2 storage file alone]. A file inside a
+    rosbag2 directory stands for the directory. Anything else — missing, not a regular file
+    nor a directory, a rosbag2 directory holding one that is not (a FIFO would block the
+    reader for ever), empty, a file that is not named as a bag — is a BagError, before
+    opening.
+    """
+    path = Path(path)
+    mode = _mode(path)
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
         raise BagError(f'{path}: not a regular file or a directory')
     if stat.S_ISDIR(mode):
         if not (path / 'metadata.yaml').exists():
             raise BagError(f'{path}: a directory without metadata.yaml is not a rosbag2 bag')
+        _regular_files_only(path)
         return [path]
     if path.suffix != '.bag' and (path.parent / 'metadata.yaml').exists():
+        _regular_files_only(path.parent)
         return [path.parent]  # a rosbag2 storage file: its directory is the bag
     if path.stat().st_size == 0:
         raise BagError(f'{path}: the file is empty')
@@ -156,7 +213,9 @@ def storage_name(reader):
     """'rosbag1', 'rosbag2 sqlite3' or 'rosbag2 mcap'."""
     if not reader.is2:
         return 'rosbag1'
-    suffixes = {p.suffix for path in reader.paths for p in Path(path).iterdir()}
+    paths = [Path(path) for path in reader.paths]
+    suffixes = {p.suffix for path in paths
+                for p in (path.iterdir() if path.is_dir() else [path])}
     names = [name for suffix, name in (('.db3', 'sqlite3'), ('.mcap', 'mcap'))
              if suffix in suffixes]
     return ' '.join(['rosbag2'] + names)

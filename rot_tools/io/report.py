@@ -60,7 +60,8 @@ always come in both ``angle`` (rad) and ``angle_deg``.
 
 Text forms. Numbers are rounded to ``precision`` significant digits *and* decimal places
 (default 12) before they are written, so rounding noise such as 6.1e-17 prints as 0.0; −0.0
-prints as 0.0; ``precision=None`` keeps full float precision. The writers are libraries:
+prints as 0.0; ``precision=None`` keeps full float precision, as an :class:`Exact` number
+(a stamp) always does. The writers are libraries:
 
 - :func:`to_yaml`: PyYAML's safe dumper, keys in the report's order, mappings in block
   style, lists of scalars in flow style ``[0.0, 0.0, 1.0]`` (a matrix is a list of flow
@@ -227,6 +228,10 @@ def round_number(x, precision=DEFAULT_PRECISION):
     return x + 0.0  # −0.0 + 0.0 == +0.0
 
 
+class Exact(float):
+    """A number written with every digit its float64 holds, whatever the precision (a stamp)."""
+
+
 class _OneLine(dict):
     """A mapping three or more levels deep of scalars and flat lists: one line in YAML."""
 
@@ -241,6 +246,8 @@ def _rounded(x, precision, non_finite, depth=0):
     """
     Return a copy of plain data ``x`` with every float rounded (:func:`round_number`).
 
+    An :class:`Exact` is not: it keeps every digit.
+
     ``non_finite`` maps ±inf and NaN (``float`` keeps them, ``str`` spells them for JSON).
     NumPy scalars become Python ones; any other type is a TypeError. A mapping ``depth``
     >= 3 levels deep whose values are flat becomes a :class:`_OneLine` (JSON sees a dict).
@@ -254,6 +261,8 @@ def _rounded(x, precision, non_finite, depth=0):
         return bool(x)
     if isinstance(x, (int, np.integer)):
         return int(x)
+    if isinstance(x, Exact):
+        return float(x) if math.isfinite(x) else non_finite(float(x))
     if isinstance(x, (float, np.floating)):
         x = round_number(x, precision)
         return x if math.isfinite(x) else non_finite(x)
