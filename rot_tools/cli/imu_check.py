@@ -31,6 +31,8 @@ import numpy as np
 from rot_tools.cli import bag_analysis, options, output_file
 from rot_tools.cli.bag_analysis import stamp_ns
 from rot_tools.cli.bag_output import NS_PER_S
+from rot_tools.core.errors import RotationError
+from rot_tools.core.imu import check_imu, faults, ImuReference
 from rot_tools.core.so3 import matrix_to_quaternion
 from rot_tools.io import arguments, bag_read, boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
@@ -296,12 +298,15 @@ def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None):
 
 
 def check(recording):
-    """Return rot_tools.core.imu.check_imu's ImuChecks of a Recording."""
-    from rot_tools.core import imu as imu_checks
+    """
+    Return rot_tools.core.imu.check_imu's ImuChecks of a Recording.
+
+    Its quaternions are unit ones already (the boundary's tolerance, then normalised).
+    """
     imu, ref = recording.imu, recording.reference
-    reference = None if ref is None else imu_checks.ImuReference(ref.stamps, ref.quaternions)
-    return imu_checks.check_imu(imu.stamps, imu.quaternions, imu.angular_velocity,
-                                imu.linear_acceleration, reference=reference)
+    reference = None if ref is None else ImuReference(ref.stamps, ref.quaternions)
+    return check_imu(imu.stamps, imu.quaternions, imu.angular_velocity,
+                     imu.linear_acceleration, reference=reference)
 
 
 def _plain(value):
@@ -333,11 +338,6 @@ def numbers(result, degrees=False):
     return out
 
 
-def faulty(checks):
-    """Return the names of the checks at fault, in order."""
-    return [name for name, result in checks._asdict().items() if result.status == 'fault']
-
-
 def document(recording, checks, degrees=False):
     """Return the ``--json`` document: imu, checks, faults, fix."""
     imu = recording.imu
@@ -347,7 +347,7 @@ def document(recording, checks, degrees=False):
         'checks': {name: {'status': result.status, 'message': result.message,
                           **numbers(result, degrees)}
                    for name, result in checks._asdict().items()},
-        'faults': len(faulty(checks)),
+        'faults': len(faults(checks)),
         'fix': fixes(recording, checks, degrees)}
 
 
@@ -410,7 +410,7 @@ def _angle_between(q, p):
 def fixes(recording, checks, degrees=False):
     """Return the lines that say what to change for each fault, and for a turned mounting."""
     imu = recording.imu
-    at_fault = set(faulty(checks))
+    at_fault = set(faults(checks))
     rate_unit = ANGLES['bias'][degrees]
     lines = []
     for name in checks._fields:
@@ -680,7 +680,10 @@ def run(args):
                          args.end)
     except bag_read.BagError as exc:
         error(f'imu-check: {exc}')
-    checks = check(recording)
+    try:
+        checks = check(recording)
+    except RotationError as exc:  # too few samples for the checks
+        error(f'imu-check: {recording.imu.topic}: {exc}')
     data = document(recording, checks, args.deg)
     text = to_json(data, JSON_DIGITS) if args.json else table(data, recording, args.deg)
     output_file.to_stdout(lambda out: out.write(text))

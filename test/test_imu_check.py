@@ -1,0 +1,315 @@
+"""
+rot-tools imu-check end to end, in-process: faulty copies of the real recording, bad input.
+
+The real recording (a Clearpath Jackal: /imu/data in base_link at 50 Hz, wheel odometry) is
+read here with rosbags alone; a window of it is written back as small rosbag2 bags with one
+fault put in by an independent formula (scipy's Rotation): the accelerometer in g, the gyro
+in degrees/s, the whole IMU converted to NED, no orientation at all. The command must find
+each fault, say how to fix it in the user's terms, and leave the clean recording without
+fault. Bad input is one line and exit status 2. doc/imu.md's example is produced here.
+"""
+
+import json
+import math
+import re
+
+import bag_helpers as bh
+from doc_blocks import assert_doc_output, console_steps, doc_block, REPO
+import numpy as np
+import pytest
+
+pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+from rot_tools.cli import imu_check  # noqa: E402
+from rot_tools.cli.main import main  # noqa: E402
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
+IMU_TYPE, ODOM_TYPE = 'sensor_msgs/msg/Imu', 'nav_msgs/msg/Odometry'
+
+WINDOW = (0.0, 20.0)
+"""The seconds of the real recording (from its first IMU stamp) written into the test bags."""
+
+CHECKS = ('stamps', 'accel_units', 'orientation_vs_accel', 'gyro_units', 'gyro_axes',
+          'gyro_bias', 'time_offset', 'accel_sign', 'world_up', 'mounting')
+
+G = 9.80665
+
+
+class Recording:
+    """The real recording's window as arrays: record times (ns), stamps (s), fields."""
+
+    def __init__(self, imu, odom):
+        self.imu_record, self.imu_stamp = imu[:, 0].astype(np.int64), imu[:, 1]
+        self.q, self.gyro, self.accel = imu[:, 2:6], imu[:, 6:9], imu[:, 9:12]
+        self.odom_record, self.odom_stamp, self.odom_q = (
+            odom[:, 0].astype(np.int64), odom[:, 1], odom[:, 2:6])
+
+
+def read_real():
+    """Read the window of the real recording with rosbags (not through rot_tools)."""
+    from rosbags.highlevel import AnyReader
+    imu, odom = [], []
+    with AnyReader([bh.REAL]) as reader:
+        for conn, record, raw in reader.messages():
+            m = reader.deserialize(raw, conn.msgtype)
+            stamp = m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
+            if conn.topic == IMU:
+                o, w, a = m.orientation, m.angular_velocity, m.linear_acceleration
+                imu.append((record, stamp, o.x, o.y, o.z, o.w, w.x, w.y, w.z, a.x, a.y, a.z))
+            elif conn.topic == ODOM:
+                o = m.pose.pose.orientation
+                odom.append((record, stamp, o.x, o.y, o.z, o.w))
+    imu, odom = np.array(imu), np.array(odom)
+    t0 = imu[0, 1]
+    keep_imu = (imu[:, 1] >= t0 + WINDOW[0]) & (imu[:, 1] < t0 + WINDOW[1])
+    keep_odom = (odom[:, 1] >= t0 + WINDOW[0]) & (odom[:, 1] < t0 + WINDOW[1])
+    return Recording(imu[keep_imu], odom[keep_odom])
+
+
+@pytest.fixture(scope='module')
+def real():
+    return read_real()
+
+
+def imu_message(b, stamp, q, gyro, accel, cov0=0.0, frame='base_link'):
+    covariance = np.zeros(9)
+    covariance[0] = cov0
+    return b.make(IMU_TYPE, header=b.header(stamp, frame), orientation=b.quaternion(q),
+                  orientation_covariance=covariance, angular_velocity=b.vector(gyro),
+                  angular_velocity_covariance=np.zeros(9), linear_acceleration=b.vector(accel),
+                  linear_acceleration_covariance=np.zeros(9))
+
+
+def write(path, rec, q=None, gyro=None, accel=None, cov0=0.0, odom=False, topic=IMU,
+          more=()):
+    """Write the window as a rosbag2 bag, the IMU's fields replaced by those given."""
+    b = bh.Builder()
+    q = rec.q if q is None else q
+    gyro = rec.gyro if gyro is None else gyro
+    accel = rec.accel if accel is None else accel
+    messages = [(topic, IMU_TYPE, int(t), imu_message(b, s, q[k], gyro[k], accel[k], cov0))
+                for k, (t, s) in enumerate(zip(rec.imu_record, rec.imu_stamp))]
+    if odom:
+        messages += [(ODOM, ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), rec.odom_q[k]))
+                     for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))]
+    messages += list(more)
+    messages.sort(key=lambda m: m[2])
+    return bh.write_bag(path, messages)
+
+
+def run(capsys, *argv):
+    """Run rot-tools in this process; return (status, stdout, stderr)."""
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def run_json(capsys, *argv):
+    status, out, err = run(capsys, *argv, '--json')
+    assert err == ''
+    return status, json.loads(out)
+
+
+def found(data):
+    return {name for name, check in data['checks'].items() if check['status'] == 'fault'}
+
+
+def one_error_line(status, out, err, *words):
+    assert status == 2 and out == ''
+    assert err.startswith('rot-tools: error: imu-check: ') and err.count('\n') == 1, err
+    assert 'Traceback' not in err
+    for word in words:
+        assert word in err, err
+
+
+# ---------------------------------------------------------------------------------------
+# Faults put in
+
+
+def test_accelerometer_in_g(real, tmp_path, capsys):
+    accel = real.accel / G
+    bag = write(tmp_path / 'g', real, accel=accel)
+    status, data = run_json(capsys, 'imu-check', bag)
+    assert status == 1 and found(data) == {'accel_units'} and data['faults'] == 1
+    norm = np.linalg.norm(accel, axis=1)
+    still = np.linalg.norm(real.gyro, axis=1) < 0.05  # the body turning slowly, from the gyro
+    expected = G / np.median(norm[still])
+    assert data['checks']['accel_units']['scale'] == pytest.approx(expected, rel=0.03)
+    (fix,) = data['fix']
+    assert fix.startswith('accel_units: linear_acceleration reads in g: multiply it by 9.80665')
+
+
+def test_gyro_in_degrees(real, tmp_path, capsys):
+    bag = write(tmp_path / 'deg', real, gyro=np.degrees(real.gyro))
+    status, out, err = run(capsys, 'imu-check', bag)
+    assert status == 1 and err == ''
+    rows = {line.split()[0]: line.split()[1] for line in out.splitlines()
+            if line.split() and line.split()[0] in CHECKS}
+    assert [name for name, word in rows.items() if word == 'fault'] == ['gyro_units']
+    scale = float(re.search(r'gyro_units\s+fault\s+scale (\S+)', out).group(1))
+    assert scale == pytest.approx(math.pi / 180, rel=0.03)
+    assert '1 fault\n  gyro_units: angular_velocity reads in deg/s: multiply it by π/180 = ' \
+        '0.0174533' in out
+
+
+def test_ned_device_with_the_odometry(real, tmp_path, capsys):
+    """The whole IMU in NED: world north-east-down, the sensor forward-right-down."""
+    ned_enu = Rotation.from_matrix([[0, 1, 0], [1, 0, 0], [0, 0, -1]])  # ENU coordinates → NED
+    flu_frd = Rotation.from_euler('x', math.pi)  # the FRD sensor frame in the FLU one
+    q = (ned_enu * Rotation.from_quat(real.q) * flu_frd).as_quat()
+    frd = flu_frd.inv()
+    bag = write(tmp_path / 'ned', real, q=q, gyro=frd.apply(real.gyro),
+                accel=frd.apply(real.accel), odom=True)
+    status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
+    assert status == 1 and err == ''
+    faults = {line.split()[0] for line in out.splitlines()
+              if line.split()[:1] and line.split()[0] in CHECKS and line.split()[1] == 'fault'}
+    assert faults == {'orientation_vs_accel', 'world_up'}
+    lines = [line for line in out.splitlines() if 'static_transform_publisher' in line]
+    assert lines[0].startswith("  world_up: the orientation's world is NED (z down)")
+    assert lines[0].endswith(' --qx 1 --qy 0 --qz 0 --qw 0 --frame-id base_link '
+                             "--child-frame-id imu_link_ned (and set the IMU's frame_id to "
+                             "imu_link_ned: its messages are stamped base_link, the body's "
+                             'frame)')
+    for line in lines:  # FRD, and the measured mounting where the motion leaves it apart
+        command = line[line.index('ros2 run'):].split(' (')[0].split()
+        assert command[:4] == ['ros2', 'run', 'tf2_ros', 'static_transform_publisher']
+        options = dict(zip(command[4::2], command[5::2]))
+        assert options['--frame-id'] == 'base_link'
+        assert options['--child-frame-id'] == 'imu_link_ned'
+        assert [options[k] for k in ('--x', '--y', '--z')] == ['0', '0', '0']
+        q = [float(options[k]) for k in ('--qx', '--qy', '--qz', '--qw')]
+        up = Rotation.from_quat(q).apply([0, 0, 1])  # the sensor's z in the body frame: down
+        assert math.degrees(math.acos(np.clip(-up[2], -1, 1))) < 3
+
+
+def test_imu_without_orientation(real, tmp_path, capsys):
+    bag = write(tmp_path / 'no_q', real, q=np.zeros((len(real.q), 4)), cov0=-1.0)
+    status, data = run_json(capsys, 'imu-check', bag)
+    checks = data['checks']
+    for name in ('orientation_vs_accel', 'gyro_units', 'gyro_axes', 'time_offset',
+                 'accel_sign', 'world_up', 'mounting'):
+        assert checks[name]['status'] == 'unknown', name
+    assert checks['accel_units']['status'] == 'ok'
+    assert status == 0 and data['faults'] == 0 and data['fix'] == []
+
+
+def test_window_of_the_recording(real, tmp_path, capsys):
+    bag = write(tmp_path / 'window', real)
+    status, data = run_json(capsys, 'imu-check', bag, '--start', 2, '--end', 12)
+    start = real.imu_record[0]
+    inside = (real.imu_record >= start + 2e9) & (real.imu_record <= start + 12e9)
+    assert data['imu'] == {'topic': IMU, 'frame': 'base_link', 'messages': int(inside.sum()),
+                           'rate': pytest.approx(50, rel=1e-3)}
+    assert status == 0 and data['faults'] == 0
+
+
+# ---------------------------------------------------------------------------------------
+# The clean recording, its JSON and doc/imu.md's example
+
+
+def test_clean_recording_json(capsys):
+    status, data = run_json(capsys, 'imu-check', bh.REAL, '--ref-topic', ODOM)
+    assert status == 0
+    assert list(data) == ['imu', 'checks', 'faults', 'fix']
+    assert list(data['imu']) == ['topic', 'frame', 'messages', 'rate']
+    assert data['imu']['topic'] == IMU and data['imu']['messages'] == 3061
+    assert list(data['checks']) == list(CHECKS)
+    named = {'accel_units': 'scale', 'orientation_vs_accel': 'angle', 'gyro_units': 'scale',
+             'gyro_axes': 'matrix', 'gyro_bias': 'bias', 'time_offset': 'seconds',
+             'mounting': 'quaternion'}
+    for name, check in data['checks'].items():
+        assert list(check)[:2] == ['status', 'message'], name
+        assert check['status'] in ('ok', 'unknown'), (name, check)
+        if name in named:
+            assert named[name] in check, (name, check)
+    assert data['checks']['gyro_axes']['matrix'] == [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    assert data['faults'] == 0 and data['fix'] == []
+
+
+def test_doc_example_is_real_output(capsys, monkeypatch):
+    """doc/imu.md's example: its commands run here, in-process, from the repository root."""
+    monkeypatch.chdir(REPO)
+    shown = ''
+    for command, _ in console_steps(doc_block('imu-check-jackal')):
+        argv = command.split()
+        assert argv[0] == 'rot-tools'
+        status, out, err = run(capsys, *argv[1:])
+        assert status == 0 and err == ''
+        shown += f'$ {command}\n{out}'
+    assert_doc_output('imu-check-jackal', shown)  # ROT_TOOLS_UPDATE_DOCS=1 rewrites it
+
+
+# ---------------------------------------------------------------------------------------
+# Bad input: one line, exit status 2
+
+
+def test_missing_path_and_files_that_are_not_bags(tmp_path, capsys):
+    one_error_line(*run(capsys, 'imu-check', tmp_path / 'none.bag'), 'no such file')
+    text = tmp_path / 'notes.txt'
+    text.write_text('not a bag\n')
+    one_error_line(*run(capsys, 'imu-check', text), 'not a bag')
+    fake = tmp_path / 'fake.bag'
+    fake.write_bytes(b'#ROSBAG V2.0\n' + bytes(range(256)) * 4)
+    one_error_line(*run(capsys, 'imu-check', fake), 'cannot read the bag')
+
+
+def test_bag_without_an_imu_and_with_two(real, tmp_path, capsys):
+    b = bh.Builder()
+    odometry = [(ODOM, ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), real.odom_q[k]))
+                for k, (t, s) in enumerate(zip(real.odom_record[:20], real.odom_stamp[:20]))]
+    bag = bh.write_bag(tmp_path / 'odom_only', odometry)
+    one_error_line(*run(capsys, 'imu-check', bag),
+                   'no sensor_msgs/msg/Imu topic in the bag', ODOM)
+    imu = [(topic, IMU_TYPE, int(t), imu_message(b, s, real.q[k], real.gyro[k], real.accel[k]))
+           for topic in ('/imu/a', '/imu/b')
+           for k, (t, s) in enumerate(zip(real.imu_record[:20], real.imu_stamp[:20]))]
+    bag = bh.write_bag(tmp_path / 'two', imu + odometry)
+    one_error_line(*run(capsys, 'imu-check', bag), '/imu/a, /imu/b', '--imu-topic')
+    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', ODOM), 'not a sensor_msgs')
+    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/c'), 'no topic /imu/c')
+    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-topic',
+                        '/imu/b'), 'not a reference orientation')
+    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-tf', 'odom',
+                        'base_link'), 'no tf2_msgs/msg/TFMessage topic')
+    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--start', 100),
+                   'no message between --start and --end')
+    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--end', 0.1),
+                   '/imu/a: stamps has 6 sample(s): at least 10 needed')
+
+
+def test_options_that_do_not_fit(capsys):
+    for argv, words in (
+            (['--ref-topic', ODOM, '--ref-tf', 'odom', 'base_link'], ['one reference']),
+            (['--start', 10, '--end', 5], ['--end 5 is before --start 10']),
+            (['--start', -1], ['>= 0 seconds'])):
+        status, out, err = run(capsys, 'imu-check', bh.REAL, *argv)
+        assert status == 2 and out == '' and err.count('\n') == 1, err
+        assert err.startswith('rot-tools: error: ')
+        for word in words:
+            assert word in err, err
+    status, out, err = run(capsys, '--plot', 'x.png', 'imu-check', bh.REAL)
+    assert (status, out, err) == (2, '', 'rot-tools: error: --plot does not apply to '
+                                  'imu-check\n')
+
+
+# ---------------------------------------------------------------------------------------
+# The pieces
+
+
+def test_axis_map_and_static_transform_line():
+    assert imu_check.axis_map([[0, 1, 0], [1, 0, 0], [0, 0, -1]]) == 'x = +y, y = +x, z = -z'
+    line = imu_check.static_transform([-1, 0, 0, 0], 'base_link', 'imu_link')
+    assert line == ('ros2 run tf2_ros static_transform_publisher --x 0 --y 0 --z 0 --qx 1 '
+                    '--qy 0 --qz 0 --qw 0 --frame-id base_link --child-frame-id imu_link')
+
+
+def test_deg_converts_angles_and_rates_only():
+    from rot_tools.core import imu
+    bias = imu.GyroBiasCheck('fault', 'm', [0.02, -0.01, 0.0])
+    angle = imu.AngleCheck('ok', 'm', math.pi / 2)
+    offset = imu.TimeOffsetCheck('ok', 'm', 0.1)
+    assert imu_check.numbers(bias, True) == {'bias': pytest.approx([1.1459156, -0.5729578, 0])}
+    assert imu_check.numbers(angle, True) == {'angle': pytest.approx(90)}
+    assert imu_check.numbers(angle, False) == {'angle': pytest.approx(math.pi / 2)}
+    assert imu_check.numbers(offset, True) == {'seconds': 0.1}
