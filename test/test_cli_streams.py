@@ -7,10 +7,16 @@ on a full disk, a closed pipe, Ctrl-C or SIGTERM, what Python prints at exit —
 the console script, one process per behaviour; the rest in this process.
 """
 
+import io
 import os
 from pathlib import Path
+import signal
+import subprocess
+import sys
+import time
 
 import bag_helpers as bh
+from conftest import console_script, script_env
 import numpy as np
 import pytest
 import rot_tools as rt
@@ -117,3 +123,218 @@ def test_one_guard_for_every_output_and_input(tmp_path, monkeypatch):
     assert check([('--csv', os.devnull), ('--plot', os.devnull)], ['est.tum']) is None
     assert check([('--csv', 'table/rec.csv'), ('--parquet', 'table'), ('--plot', 'r.png')],
                  ['est.tum', 'rec', 'run.mcap', None]) is None
+
+
+# ---------------------------------------------------------------------------------------
+# A standard output that cannot be written: in this process, then as the console script
+
+COMMANDS = {
+    'compare': ['compare', 'ref.tum', 'ref.tum'],
+    'covariance': ['covariance', 'quaternion', 0, 0, 0, 1, '--cov', 1e-4, 0, 0, 0, 1e-4, 0, 0,
+                   0, 1e-4, '--from', 'rotvec', '--to', 'rpy'],
+    'one-shot': ['euler', 'ZYX', 30, 20, 10, '--deg', '--all-sequences'],
+}
+"""A command line of each kind of command that prints to stdout, run in ``files``."""
+
+
+def run_with(*words, stdout=io.StringIO):
+    """
+    Return (status, stdout, stderr) of rot-tools with these words, the streams swapped here.
+
+    ``stdout``: its standard output (None: closed); by default a StringIO, whose text is
+    returned (else None).
+    """
+    out = stdout() if stdout is io.StringIO else stdout
+    err = io.StringIO()
+    real = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = out, err
+    try:
+        status = cli.main([str(w) for w in words])
+    finally:
+        sys.stdout, sys.stderr = real
+    return status, out.getvalue() if stdout is io.StringIO else None, err.getvalue()
+
+
+def closed_pipe():
+    """Return the writing end of a pipe whose reader is gone (a file descriptor)."""
+    read, write = os.pipe()
+    os.close(read)
+    return write
+
+
+def test_a_full_a_closed_and_a_broken_stdout_in_every_command(files, monkeypatch):
+    """> /dev/full: one line, 1; | true: quiet, 141; >&- (no stdout): one line, 1."""
+    monkeypatch.chdir(files)
+    for name, words in COMMANDS.items():
+        for open_stdout, status, said in (
+                (lambda: open('/dev/full', 'w'), 1, 'No space left on device'),
+                (lambda: open(closed_pipe(), 'w'), 141, None),
+                (lambda: None, 1, 'it is closed')):
+            stdout = open_stdout()
+            try:
+                got = run_with(*words, stdout=stdout)
+            finally:
+                if stdout is not None:
+                    stdout.close()  # what it could not write went to /dev/null: no error
+            line = f'rot-tools: error: cannot write to stdout: {said}\n' if said else ''
+            assert got[::2] == (status, line), name
+
+
+SCRIPT = console_script('rot-tools', 'rot_tools.cli.main')
+"""The console script rot-tools of this Python (or python -m where none is installed)."""
+
+
+def test_the_console_script_on_a_full_disk_and_a_closed_pipe(files):
+    """What Python does at exit adds nothing: no traceback, no 'Exception ignored', no 120."""
+    env = script_env(SCRIPT)
+    with open('/dev/full', 'w') as full:
+        done = subprocess.run([*SCRIPT, *COMMANDS['compare']], stdout=full, cwd=files,
+                              stderr=subprocess.PIPE, text=True, timeout=120, env=env)
+    assert (done.returncode, done.stderr) == (
+        1, 'rot-tools: error: cannot write to stdout: No space left on device\n')
+    pipe = closed_pipe()
+    try:
+        done = subprocess.run([*SCRIPT, *map(str, COMMANDS['covariance'])], stdout=pipe,
+                              stderr=subprocess.PIPE, text=True, timeout=120, env=env)
+    finally:
+        os.close(pipe)
+    assert (done.returncode, done.stderr) == (141, '')
+
+
+# ---------------------------------------------------------------------------------------
+# Ctrl-C and SIGTERM
+
+
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkeypatch, signum):
+    """The signal lands as --csv's file is complete but not yet renamed: it goes, one line."""
+    monkeypatch.chdir(files)
+    real_replace, partials = os.replace, []
+
+    def signalled_replace(source, target):
+        partials.append(Path(source))
+        assert partials[0].exists()
+        signal.raise_signal(signum)
+        real_replace(source, target)
+    before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    monkeypatch.setattr(os, 'replace', signalled_replace)
+    status, out, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
+    monkeypatch.undo()
+    assert (status, out, err) == (
+        (130, '', 'rot-tools: interrupted\n') if signum == signal.SIGINT
+        else (143, '', 'rot-tools: terminated\n'))
+    assert len(partials) == 1 and list(tmp_path.iterdir()) == []
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+
+
+def test_a_forked_worker_ends_by_the_signal_itself(files, tmp_path, monkeypatch):
+    """In a process forked by rot-tools (a fleet's worker) the handler is the signal's default."""
+    monkeypatch.chdir(files)
+    ends = {}
+
+    def fork_and_signal(source, target):
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            pid = os.fork()
+            if pid == 0:  # the worker: never back into pytest, whatever happens
+                try:
+                    signal.raise_signal(signum)
+                finally:
+                    os._exit(99)
+            ends[signum] = os.waitpid(pid, 0)[1]
+        real_replace(source, target)
+    real_replace = os.replace
+    monkeypatch.setattr(os, 'replace', fork_and_signal)
+    status, _, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
+    monkeypatch.undo()
+    assert (status, err) == (0, '')
+    assert {s: (os.WIFSIGNALED(w) and os.WTERMSIG(w)) for s, w in ends.items()} == {
+        signal.SIGINT: signal.SIGINT, signal.SIGTERM: signal.SIGTERM}
+
+
+def session_processes(sid):
+    """Return the pids of the processes of session ``sid`` still alive (zombies excepted)."""
+    alive = []
+    for entry in Path('/proc').iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / 'stat').read_text().rsplit(')', 1)[1].split()
+            except OSError:
+                continue  # gone meanwhile
+            if int(fields[3]) == sid and fields[0] != 'Z':
+                alive.append(int(entry.name))
+    return alive
+
+
+def wait_for(predicate, what, timeout=60.0):
+    """Poll ``predicate()`` until it is true; fail after ``timeout`` seconds."""
+    end = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > end:
+            pytest.fail(f'waited {timeout:g} s for {what}')
+        time.sleep(0.01)
+
+
+def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
+    """
+    Ctrl-C (SIGINT to the whole process group, as a terminal sends it) while a fleet runs.
+
+    Sent once the CSV is being written and the workers are up: one line, status 130, no
+    partial file, no CSV, no worker left in the session.
+    """
+    pytest.importorskip('rosbags')
+    pytest.importorskip('pyarrow')
+    bags = tmp_path / 'bags'
+    bags.mkdir()
+    for k in range(6):  # long enough to be stopped in the middle
+        (bags / f'run{k}.bag').symlink_to(bh.REAL)
+    out = tmp_path / 'out'
+    out.mkdir()
+    with subprocess.Popen([*SCRIPT, 'bag', bags, '--jobs', '2', '--csv', out / 'all.csv',
+                           '--parquet', out / 'table'], stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True, env=script_env(SCRIPT),
+                          start_new_session=True) as child:
+        try:
+            wait_for(lambda: any(p.suffix == '.partial' for p in out.iterdir())
+                     and len(session_processes(child.pid)) > 1, 'the CSV and the workers')
+            os.killpg(child.pid, signal.SIGINT)
+            stdout, stderr = child.communicate(timeout=60)
+        finally:
+            if child.poll() is None:
+                os.killpg(child.pid, signal.SIGKILL)
+    assert (child.returncode, stdout, stderr) == (130, '', 'rot-tools: interrupted\n')
+    wait_for(lambda: not session_processes(child.pid), 'the workers to end', timeout=2.0)
+    left = sorted(p.relative_to(out).as_posix() for p in out.rglob('*')
+                  if p.suffix in ('.partial', '.csv'))
+    assert left == []
+
+
+def test_sigterm_on_compare_reading_a_fifo(tmp_path):
+    """SIGTERM while compare reads EST from a pipe (as from ``<(...)``): one line, 143."""
+    fifo = tmp_path / 'est.tum'
+    os.mkfifo(fifo)
+    ref = write_tum(tmp_path / 'ref.tum')
+    with subprocess.Popen([*SCRIPT, 'compare', fifo, ref, '--csv', tmp_path / 'e.csv'],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          env=script_env(SCRIPT)) as child:
+        writer = None
+
+        def reading():  # compare opened EST: its writer can open it now
+            nonlocal writer
+            try:
+                writer = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+            except OSError:  # ENXIO: no reader yet
+                return child.poll() is not None
+            return True
+        try:
+            wait_for(reading, 'compare to open EST')
+            assert writer is not None, child.communicate()
+            os.write(writer, ref.read_bytes()[:100])  # a line and a half, then nothing
+            child.send_signal(signal.SIGTERM)
+            stdout, stderr = child.communicate(timeout=60)
+        finally:
+            if writer is not None:
+                os.close(writer)
+            if child.poll() is None:
+                child.kill()
+    assert (child.returncode, stdout, stderr) == (143, '', 'rot-tools: terminated\n')
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['est.tum', 'ref.tum']

@@ -412,7 +412,7 @@ def run(args):
             options.error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
     data = report(result, est, ref, args)
     text = to_json if args.json else to_yaml
-    sys.stdout.write(text(data, precision=args.precision))
+    output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
     for line in warnings(result, args):
         sys.stderr.write(f'warning: {line}\n')
     return 0

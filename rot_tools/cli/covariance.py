@@ -34,7 +34,7 @@ import sys
 
 import numpy as np
 from rot_tools.cli import axis_angle, euler, frame, matrix, options, quaternion, rotvec
-from rot_tools.cli import typed_rotation
+from rot_tools.cli import output_file, typed_rotation
 from rot_tools.core.covariance import change_covariance_frame, euler_covariance_to_rotvec
 from rot_tools.core.covariance import FRAMES, rotvec_covariance_to_euler, validate_covariance
 from rot_tools.core.errors import RotationError
@@ -241,8 +241,8 @@ def run(args):
         except RotationError as exc:
             options.error(str(exc))
     text = to_json if args.json else to_yaml
-    sys.stdout.write(text(data, precision=None))
-    sys.stdout.flush()  # before the note or hint: in this order on a shared terminal or pipe
+    # flushed before the note or hint: in this order on a shared terminal or pipe
+    output_file.to_stdout(lambda out: out.write(text(data, precision=None)))
     if locked is not None:
         sys.stderr.write(f'{options.PROG}: note: {_lock_note(locked)}\n')
     for hint in args.hints:

@@ -272,7 +272,7 @@ def _write(items, args, error):
 
     if args.csv == '-':
         found = []
-        output_file.to_stdout(lambda out: found.extend(_collect(items, args, out)), error)
+        output_file.to_stdout(lambda out: found.extend(_collect(items, args, out)))
         return 1 if any(o.error is not None for o in found) else 0
     if args.csv is not None:
         try:
@@ -285,5 +285,5 @@ def _write(items, args, error):
         done = _collect(items, args, None)
     text = to_json if args.json else to_yaml
     data = fleet_summary(done)
-    output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)), error)
+    output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
     return 1 if data['fleet']['failed'] else 0

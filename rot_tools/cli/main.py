@@ -35,11 +35,15 @@ stderr and exits with status 2. An angle typed without ``--deg`` that is larger 
 only gets a one-line ``rot-tools: hint: ...`` on stderr (after the report; status 0).
 """
 
+from contextlib import contextmanager, suppress
+import os
+import signal
 import sys
+import threading
 
 from rot_tools.cli import (
-    axis_angle, bag, compare, covariance, euler, frame, imu_check, matrix, options, quaternion,
-    rotvec, screw)
+    axis_angle, bag, compare, covariance, euler, frame, imu_check, matrix, options,
+    output_file, quaternion, rotvec, screw)
 from rot_tools.io import arguments
 
 PROG = options.PROG
@@ -77,13 +81,92 @@ def parse_args(argv):
     return build_parser().parse_command_line(arguments.negative_numbers_as_values(argv))
 
 
-def main(argv=None):
-    """Run rot-tools on argv (default sys.argv[1:]); return the exit status."""
+EXIT_INTERRUPTED = 128 + signal.SIGINT
+"""Exit status after Ctrl-C (SIGINT): the shell's status for a program ended by it."""
+
+EXIT_TERMINATED = 128 + signal.SIGTERM
+"""Exit status after SIGTERM (``kill``, ``timeout``)."""
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where rot-tools is: it unwinds the command as Ctrl-C does."""
+
+
+def _set_handlers(handlers):
+    """
+    Give each signal of ``handlers`` ({signum: handler}) its handler; return the previous ones.
+
+    The one place rot-tools sets signal handlers: its handler of SIGINT and SIGTERM
+    (:func:`_stop_raising`), and the dispositions it found, set back when main returns.
+    """
+    return {signum: signal.signal(signum, handler) for signum, handler in handlers.items()}
+
+
+@contextmanager
+def _stop_raising():
+    """
+    While in this block, SIGINT raises KeyboardInterrupt and SIGTERM Terminated.
+
+    Both then unwind the command: every ``finally`` and ``with`` runs, so partial files are
+    removed and worker pools shut down, and :func:`main` says one line. Only in the process
+    that entered the block: a process forked from it (a fleet's worker) inherits the handler,
+    which there gives the signal its default action back and raises it again, so the worker
+    ends as if rot-tools had set no handler, without a traceback of its own. Outside the
+    main thread (where Python sets no handler) the block changes nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    owner = os.getpid()
+
+    def stop(signum, frame):
+        if os.getpid() != owner:
+            _set_handlers({signum: signal.SIG_DFL})
+            signal.raise_signal(signum)
+            return
+        raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+    previous = _set_handlers({signal.SIGINT: stop, signal.SIGTERM: stop})
     try:
-        args = parse_args(sys.argv[1:] if argv is None else argv)
-        return args.run(args)
-    except SystemExit as exc:  # argparse's --help (0), one-line errors (2)
-        return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+        yield
+    finally:
+        _set_handlers({signum: handler for signum, handler in previous.items()
+                       if handler is not None})
+
+
+def _say(text):
+    with suppress(OSError, ValueError, AttributeError):
+        sys.stderr.write(f'{PROG}: {text}\n')
+
+
+def main(argv=None):
+    """
+    Run rot-tools on argv (default sys.argv[1:]); return the exit status.
+
+    0 done; 1 the standard output could not be written (one line), or a fleet with a bag
+    that failed; 2 bad arguments or input (one line ``rot-tools: error: ...``);
+    EXIT_INTERRUPTED (130) after Ctrl-C and EXIT_TERMINATED (143) after SIGTERM, with one line
+    ``rot-tools: interrupted`` / ``rot-tools: terminated`` once the command has cleaned up;
+    output_file.EXIT_BROKEN_PIPE (141), quietly, when the reader of the standard output went
+    away (``| head``). Never a traceback for any of them.
+    """
+    with _stop_raising():
+        try:
+            args = parse_args(sys.argv[1:] if argv is None else argv)
+            status = args.run(args)
+            output_file.flush_stdout()
+            return status
+        except SystemExit as exc:  # argparse's --help (0), one-line errors (2), stdout's
+            return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+        except Terminated:
+            _say('terminated')
+            return EXIT_TERMINATED
+        except KeyboardInterrupt:
+            _say('interrupted')
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:  # the reader of stdout or stderr went away: nothing to say
+            output_file.release_stdout()
+            return output_file.EXIT_BROKEN_PIPE
 
 
 if __name__ == '__main__':

@@ -55,7 +55,7 @@ def run(args, rotation):
     if args.plot:
         write_plot(args.plot, R, b, args.deg)
     text = to_json if args.json else to_yaml
-    sys.stdout.write(text(report, precision=args.precision))
+    output_file.to_stdout(lambda out: out.write(text(report, precision=args.precision)))
     for hint in args.hints:
         sys.stderr.write(f'{options.PROG}: hint: {hint}\n')
     return 0

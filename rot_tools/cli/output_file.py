@@ -10,17 +10,20 @@ written directly: renaming over it would replace the device or the pipe.
 
 :func:`check_outputs` is the one guard of every command's output paths: it refuses an output
 that is an input, lies in an input bag, or is another output, before anything is written.
-:func:`to_stdout` writes to the standard output, a closed pipe ending quietly.
+:func:`to_stdout` writes to the standard output: a closed pipe ends the command quietly
+(status 141, as SIGPIPE's), a full disk with one line (status 1), never a traceback.
 """
 
 from contextlib import contextmanager, suppress
 import os
 from pathlib import Path
+import signal
 import stat
 import sys
 import tempfile
 
-from rot_tools.io import bag_read
+from rot_tools.cli import options
+from rot_tools.io import arguments, bag_read
 
 
 def _regular_or_new(path):
@@ -64,7 +67,7 @@ def write_figure(draw, path, error):
     except ImportError as exc:
         if not (exc.name or '').startswith(('matplotlib', 'mpl_toolkits')):
             raise
-        error("--plot needs matplotlib, the 'plot' extra: pip install 'rot_tools[plot]'")
+        error("--plot needs matplotlib, the 'plot' extra: " + arguments.install_hint('plot'))
     except OSError as exc:
         error(f'--plot: cannot write {path}: {exc.strerror or exc}')
 
@@ -113,8 +116,7 @@ def check_outputs(outputs, inputs, error=None):
     storage files; a bag file), or is the same file as another output. ``error(text)``
     (default rot_tools.cli.options.error: one line, exit 2) says which and why.
     """
-    if error is None:
-        from rot_tools.cli.options import error
+    error = options.error if error is None else error
     protected = [(str(path), *_protected(path)) for path in inputs if path is not None]
     seen = []
     for option, path in outputs:
@@ -137,27 +139,78 @@ def check_outputs(outputs, inputs, error=None):
         seen.append((option, path, target, found))
 
 
+EXIT_STDOUT = 1
+"""Exit status when the standard output cannot be written (a full disk, a closed stdout)."""
+
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
+"""Exit status when the reader of the standard output went away (``| head``): the shell's
+status for a program ended by SIGPIPE, as rotation_client's."""
+
+
 def release_stdout():
     """Point the standard output at /dev/null: what could not be written is dropped."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # None, or a stream of no file (a test's)
+        return
     devnull = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(devnull, sys.stdout.fileno())
+    os.dup2(devnull, fd)
     os.close(devnull)
 
 
-def to_stdout(write, error):
-    """
-    Run ``write(sys.stdout)`` and flush it.
+def _say(text):
+    with suppress(AttributeError, OSError, ValueError):  # a stderr closed too says nothing
+        sys.stderr.write(f'{options.PROG}: error: {text}\n')
 
-    A closed pipe ends quietly (status 0, as ``| head`` expects); a full disk or a closed
-    standard output is one error line (status 2).
+
+def stdout_failed(exc):
+    """
+    End the command for the standard output that ``exc`` (an OSError) could not write.
+
+    The reader gone (BrokenPipeError: ``| head``, ``| true``) ends it quietly with
+    EXIT_BROKEN_PIPE; anything else (``> /dev/full``) with one line ``rot-tools: error:
+    cannot write to stdout: ...`` and EXIT_STDOUT. The standard output then points at
+    /dev/null, so that Python's own flush at exit has nothing left to fail on.
+    """
+    release_stdout()
+    if isinstance(exc, BrokenPipeError):
+        raise SystemExit(EXIT_BROKEN_PIPE) from None
+    _say(f'cannot write to stdout: {exc.strerror or exc}')
+    raise SystemExit(EXIT_STDOUT) from None
+
+
+class _Stdout:
+    """sys.stdout as a writer sees it: what fails in writing to it ends the command."""
+
+    __slots__ = ()
+
+    def write(self, text):
+        try:
+            return sys.stdout.write(text)
+        except OSError as exc:
+            stdout_failed(exc)
+
+
+def flush_stdout():
+    """Flush the standard output; stdout_failed when it cannot be written."""
+    if sys.stdout is None:
+        return
+    try:
+        sys.stdout.flush()
+    except OSError as exc:
+        stdout_failed(exc)
+
+
+def to_stdout(write):
+    """
+    Run ``write(out)``, where ``out.write(text)`` writes to the standard output, and flush it.
+
+    Only the standard output's own failures are taken for it (stdout_failed): ``write``'s
+    other errors (reading a bag, say) go on as they are. A standard output that was closed
+    when rot-tools started is the same one line, status EXIT_STDOUT.
     """
     if sys.stdout is None:
-        error('cannot write to the standard output: it is closed')
-    try:
-        write(sys.stdout)
-        sys.stdout.flush()
-    except BrokenPipeError:  # `rot-tools bag ... --csv - | head`: the reader is done
-        release_stdout()
-    except OSError as exc:
-        release_stdout()
-        error(f'cannot write to the standard output: {exc.strerror or exc}')
+        _say('cannot write to stdout: it is closed')
+        raise SystemExit(EXIT_STDOUT)
+    write(_Stdout())
+    flush_stdout()
