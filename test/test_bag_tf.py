@@ -11,6 +11,7 @@ import io
 import json
 
 import bag_helpers as bh
+from doc_blocks import assert_doc_output
 import numpy as np
 import pytest
 
@@ -102,6 +103,7 @@ def test_a_tf_only_bag_without_tf_names_the_option_and_its_frames(capsys, tf_bag
         '(tf2_msgs/msg/TFMessage), /tf_static (tf2_msgs/msg/TFMessage); its TF holds the frames '
         'base_link, imu, map, odom, wheel (base_link -> imu, map -> odom, odom -> base_link, '
         'odom -> wheel): give --tf PARENT CHILD to follow CHILD in PARENT\n')
+    assert_doc_output('bag-tf-only', f'$ rot-tools bag tf_only_bag\n{err}')
     with pytest.raises(bag_read.BagSkipped):
         bag_analysis.analyse(path)
     for frames in (('map', 'nowhere'), ('odom', 'base_link')):
