@@ -4,7 +4,7 @@ rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 an
 Every value is checked against an independent computation from the messages as rosbags
 decodes them: scipy's Rotation (from_quat, as_euler(RPY_SEQUENCE), as_rotvec, mean), numpy.unwrap,
 and a log map written here. Runs the CLI in-process (rot_tools.cli.main.main), and as the console
-script where the exit status and the exact stderr matter (test_bag_errors.py).
+script where the process itself matters (test_bag_hostile.py: its standard output).
 """
 
 import csv

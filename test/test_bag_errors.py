@@ -5,9 +5,12 @@ Bags with bad messages are written here (rosbags' writer): zero quaternions on e
 (as a public ROS 1 bag's odometry has), NaN/Inf, non-unit quaternions, Imu messages without
 orientation, in every type read. Damaged copies of the real recording, empty and missing
 bags, and wrong options must each give exactly one ``rot-tools: error:`` line, never a
-traceback.
+traceback nor a warning: run in this process (rot_tools.cli.main.main, with Python's warnings
+caught as the lines they would print), and as the console script only where the process is
+what is tested (an environment without rosbags).
 """
 
+import contextlib
 import csv
 import io
 import json
@@ -15,6 +18,8 @@ import math
 import os
 import re
 import subprocess
+import sys
+import warnings
 
 import bag_helpers as bh
 from conftest import console_script, script_env
@@ -183,8 +188,26 @@ def script():
 
 
 def one_line_error(script, *args, env=None, contains=''):
-    proc = subprocess.run(script + [str(a) for a in args], capture_output=True, text=True,
-                          timeout=120, env=env or script_env(script))
+    """
+    Assert that rot-tools ARGS prints one error line, nothing else, and exits with status 2.
+
+    In this process (rot_tools.cli.main.main, stdout and stderr redirected, every warning
+    Python would print on stderr caught and counted as lines of it); as the console script
+    ``script`` when ``env`` is given (an environment of its own).
+    """
+    if env is None:
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+                warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter('always')
+            status = cli.main([str(a) for a in args])
+        shown = err.getvalue() + ''.join(warnings.formatwarning(w.message, w.category,
+                                                                w.filename, w.lineno)
+                                         for w in caught)
+        proc = subprocess.CompletedProcess(args, status, out.getvalue(), shown)
+    else:
+        proc = subprocess.run(script + [str(a) for a in args], capture_output=True, text=True,
+                              timeout=120, env=env)
     assert proc.returncode == 2, (proc.returncode, proc.stderr)
     assert proc.stdout == ''
     lines = proc.stderr.splitlines()
@@ -327,26 +350,22 @@ def test_without_rosbags(script, tmp_path):
                    contains="the 'bag' extra: pip install -e '.[bag]' in the rot_tools checkout")
 
 
-def test_progress_bar_only_on_a_terminal(script, tmp_path):
-    proc = subprocess.run(script + ['bag', str(bh.REAL)], capture_output=True, text=True,
-                          timeout=120, env=script_env(script))
-    assert proc.returncode == 0 and proc.stderr == ''
-    pty = pytest.importorskip('pty')
-    master, slave = pty.openpty()
-    with subprocess.Popen(script + ['bag', str(bh.REAL)], stdout=subprocess.PIPE,
-                          stderr=slave, env=script_env(script)) as child:
-        os.close(slave)
-        out, _ = child.communicate(timeout=120)
-        err = b''
-        while True:
-            try:
-                chunk = os.read(master, 4096)
-            except OSError:
-                break
-            if not chunk:
-                break
-            err += chunk
-    os.close(master)
-    assert child.returncode == 0
-    assert b'rot-tools bag: [' in err and b'6121/6121 messages' in err
-    assert out.startswith(b'bag: ')
+class Terminal(io.StringIO):
+    """A text stream that says it is a terminal, as a tty's stderr does."""
+
+    def isatty(self):
+        return True
+
+
+def test_progress_bar_only_on_a_terminal(capsys, monkeypatch, bad_bag):
+    path, plan = bad_bag
+    status, out, err = run(capsys, 'bag', path)
+    assert (status, err) == (0, '') and out.startswith('bag: ')
+    terminal = Terminal()
+    monkeypatch.setattr(sys, 'stderr', terminal)
+    status, out, _ = run(capsys, 'bag', path)
+    total = sum(len(items) for _, items in plan.values())
+    bar = terminal.getvalue()
+    assert status == 0 and out.startswith('bag: ')
+    assert bar.startswith('\rrot-tools bag: [') and f'{total}/{total} messages' in bar
+    assert bar.endswith('\r' + ' ' * 79 + '\r')  # wiped before the summary
