@@ -1,13 +1,19 @@
 """
-rotation_client as a separate process against rotation_node processes, over DDS.
+rotation_client against rotation_node processes, over DDS: in this process, and as a process.
 
-One node process (a namespace of this run) serves the tests of this module; each runs the
-installed ``rotation_client`` script (``python -m rot_tools.ros.rotation_client`` without an
-installed package) and reads its stdout, stderr and exit status. Expected values come from
+One node process (a namespace of this run) serves the tests of this module. Most tests run
+the client's commands in this process (:class:`Here`): the same parser, command and printing
+as the console script, in one rclpy context for the module (one DDS participant, discovered
+once), each command by a client node of its own. What only a process shows — the installed
+script end to end, Ctrl-C, an encoding of stdout, another publisher streaming meanwhile — runs
+the installed ``rotation_client`` script (``python -m rot_tools.ros.rotation_client`` without
+an installed package) and reads its stdout, stderr and exit status. Expected values come from
 scipy.spatial.transform.Rotation and closed forms, not from rot_tools. The client prints 12
 significant digits, so numbers are compared to that.
 """
 
+from contextlib import redirect_stderr, redirect_stdout
+import io
 import json
 import math
 import os
@@ -19,9 +25,10 @@ import subprocess
 import sys
 import threading
 import time
+from typing import NamedTuple
 
-from conftest import console_script, DISCOVERY_TIMEOUT, node_seconds, NodeProcess, REPO, RUN
-from conftest import run_delay, script_env
+from conftest import console_script, DISCOVERY_TIMEOUT, node_seconds, NodeProcess, REPO
+from conftest import RUN, run_delay, script_env
 from doc_blocks import assert_doc_output
 from geometry_msgs.msg import QuaternionStamped
 import numpy as np
@@ -38,7 +45,7 @@ DIGITS = {'rel': 1e-11, 'abs': 1e-12}
 
 def run(*args, timeout=60, **env):
     """
-    Run rotation_client with ``args`` (and ``env`` added to its environment).
+    Run rotation_client as a process with ``args`` (and ``env`` added to its environment).
 
     Return the CompletedProcess, its output read as UTF-8 text.
     """
@@ -47,12 +54,58 @@ def run(*args, timeout=60, **env):
                           env=dict(script_env(command), **env), stdin=subprocess.DEVNULL)
 
 
-def answered(*args, **env):
-    """Run rotation_client; return its YAML (or --json) output parsed, after checking it."""
-    result = run(*args, **env)
+def parsed(result, args):
+    """Return a run's YAML (or --json) output parsed, after checking status and stderr."""
     assert result.returncode == 0, result.stderr
     assert result.stderr == ''
     return json.loads(result.stdout) if '--json' in args else yaml.safe_load(result.stdout)
+
+
+def answered(*args, **env):
+    """Run rotation_client as a process; return its output parsed (:func:`parsed`)."""
+    return parsed(run(*args, **env), args)
+
+
+class Result(NamedTuple):
+    """What a command run in this process did: as subprocess.CompletedProcess names it."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+class Here:
+    """
+    rotation_client's commands run in this process, in one rclpy context.
+
+    ``here(*args)`` reads the command line as the console script does and runs its command
+    by rot_tools.ros.rotation_client.run_command — its own client node, printing, exit
+    status — in ``context``, whose DDS participant has discovered the nodes already; stdout
+    and stderr are captured. A command line with ROS arguments runs through ``main``, in a
+    context made for it, as the script does. Return a :class:`Result`.
+    """
+
+    def __init__(self, context):
+        self.context = context
+
+    def __call__(self, *args):
+        from rot_tools.ros.client_arguments import parse_args
+        from rot_tools.ros.rotation_client import main, run_command
+        words = [str(a) for a in args]
+        out, err = io.StringIO(), io.StringIO()
+        with redirect_stdout(out), redirect_stderr(err):
+            try:
+                if '--ros-args' in words:
+                    status = main(words)
+                else:
+                    status = run_command(parse_args(words), self.context)
+            except SystemExit as exc:  # the parser: --help, --version, bad arguments
+                status = exc.code
+        return Result(status, out.getvalue(), err.getvalue())
+
+    def answered(self, *args):
+        """Run a command here; return its output parsed (:func:`parsed`)."""
+        return parsed(self(*args), args)
 
 
 def one_line_error(result, status):
@@ -65,14 +118,20 @@ def one_line_error(result, status):
 
 
 @pytest.fixture(scope='module')
-def node(tmp_path_factory):
+def here(ros_context):
+    """Run rotation_client's commands in this process (:class:`Here`)."""
+    return Here(ros_context)
+
+
+@pytest.fixture(scope='module')
+def node(tmp_path_factory, here):
     """
     Return a rotation_node process (default parameters) for this module; its name.
 
     It has accepted one input, so ~/describe always has a report.
     """
     process = NodeProcess(tmp_path_factory.mktemp('client'))
-    answered('orientation', 0, 1, 0, 0, '--node', process.name)
+    here.answered('orientation', 0, 1, 0, 0, '--node', process.name, '--timeout', 20)
     yield process.name
     process.kill()
 
@@ -135,21 +194,21 @@ def test_euler_in_degrees(node):
     assert tip == approx(rotvec / np.linalg.norm(rotvec))
 
 
-def test_euler_in_radians_with_options_first(node):
-    out = answered('--node', node, '--frame', 'base_link', 'euler', 'ZYX', -0.5, 1e-3, 2.5)
+def test_euler_in_radians_with_options_first(here, node):
+    out = here.answered('--node', node, '--frame', 'base_link', 'euler', 'ZYX', -0.5, 1e-3, 2.5)
     assert out['input']['frame_id'] == 'base_link'
     check_answer(out['answer'], Rotation.from_euler('ZYX', [-0.5, 1e-3, 2.5]))
     assert out['answer']['euler_angles']['angles'] == approx([-0.5, 1e-3, 2.5])
 
 
-def test_pose_half_turn_is_a_screw(node):
+def test_pose_half_turn_is_a_screw(here, node):
     """
     Half a turn about z at (1, 0, 0.5) is a screw along the vertical through (0.5, 0, 0).
 
     The translation along it is 0.5, so the twist is (0, 0, π; θ·v) with
     v = −l̂ × c + (d/θ)·l̂ = (0, −0.5, 0.5/π).
     """
-    out = answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node)
+    out = here.answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node)
     assert out['input']['type'] == 'geometry_msgs/msg/PoseStamped'
     assert out['input']['position'] == [1.0, 0.0, 0.5]
     answer = out['answer']
@@ -159,18 +218,18 @@ def test_pose_half_turn_is_a_screw(node):
     assert answer['screw_axis']['points'] == [approx([0.5, 0, 0]), approx([0.5, 0, 1])]
 
 
-def test_orientation_as_json(node):
+def test_orientation_as_json(here, node):
     q = np.array([0.3, -0.1, 0.7, -0.6])
     q /= np.linalg.norm(q)
-    out = answered('orientation', *q, '--json', '--node', node)
+    out = here.answered('orientation', *q, '--json', '--node', node)
     assert out['input']['topic'] == f'{node}/orientation'
     assert out['input']['type'] == 'geometry_msgs/msg/QuaternionStamped'
     check_answer(out['answer'], Rotation.from_quat(q))
     assert out['answer']['quaternion']['w'] > 0  # w < 0 was sent: the canonical sign
 
 
-def test_orientation_identity_has_no_screw_axis(node):
-    answer = answered('orientation', 0, 0, 0, 1, '--node', node)['answer']
+def test_orientation_identity_has_no_screw_axis(here, node):
+    answer = here.answered('orientation', 0, 0, 0, 1, '--node', node)['answer']
     check_answer(answer, Rotation.identity())
     assert answer['rotation_matrix'] == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 
@@ -180,13 +239,13 @@ def test_orientation_identity_has_no_screw_axis(node):
     ('odometry', 'nav_msgs/msg/Odometry'),
     ('transform', 'geometry_msgs/msg/TransformStamped'),
 ])
-def test_pose_like_verbs(node, verb, topic_type):
+def test_pose_like_verbs(here, node, verb, topic_type):
     """pose, odometry and transform send X Y Z QX QY QZ QW; --wxyz reads QW QX QY QZ."""
     q = np.array([-0.2, 0.5, 0.1, 0.8])
     q /= np.linalg.norm(q)
     b = [0.5, -2.0, 1.5]
-    out = answered(verb, *b, *q, '--frame', 'odom', '--node', node)
-    wxyz = answered(verb, *b, q[3], *q[:3], '--wxyz', '--frame', 'odom', '--node', node)
+    out = here.answered(verb, *b, *q, '--frame', 'odom', '--node', node)
+    wxyz = here.answered(verb, *b, q[3], *q[:3], '--wxyz', '--frame', 'odom', '--node', node)
     for sent in (out['input'], wxyz['input']):
         assert sent['topic'] == f'{node}/{verb}' and sent['type'] == topic_type
         assert sent['frame_id'] == 'odom'
@@ -205,8 +264,8 @@ def test_pose_like_verbs(node, verb, topic_type):
         assert answer['screw']['linear'] @ axis == pytest.approx(axis @ b, **DIGITS)
 
 
-def test_odometry_child_frame(node):
-    out = answered('odometry', 0, 0, 0, 0, 0, 0, 1, '--child-frame', 'robot', '--node', node)
+def test_odometry_child_frame(here, node):
+    out = here.answered('odometry', 0, 0, 0, 0, 0, 0, 1, '--child-frame', 'robot', '--node', node)
     assert out['input']['child_frame_id'] == 'robot'
 
 
@@ -214,12 +273,12 @@ def test_odometry_child_frame(node):
     ('orientation', 'geometry_msgs/msg/QuaternionStamped'),
     ('imu', 'sensor_msgs/msg/Imu'),
 ])
-def test_orientation_like_verbs(node, verb, topic_type):
+def test_orientation_like_verbs(here, node, verb, topic_type):
     """Test that orientation and imu send QX QY QZ QW; --wxyz reads QW QX QY QZ."""
     q = np.array([0.6, -0.3, 0.2, -0.7])
     q /= np.linalg.norm(q)
-    out = answered(verb, *q, '--node', node)
-    wxyz = answered('--wxyz', verb, q[3], *q[:3], '--node', node)
+    out = here.answered(verb, *q, '--node', node)
+    wxyz = here.answered('--wxyz', verb, q[3], *q[:3], '--node', node)
     key = 'quaternion' if verb == 'orientation' else 'orientation'
     for sent in (out['input'], wxyz['input']):
         assert sent['topic'] == f'{node}/{verb}' and sent['type'] == topic_type
@@ -230,11 +289,11 @@ def test_orientation_like_verbs(node, verb, topic_type):
         assert answer['screw']['linear'] == [0.0, 0.0, 0.0]
 
 
-def test_screw_path_wxyz(node):
+def test_screw_path_wxyz(here, node):
     """--wxyz reads both quaternions of screw-path w first."""
-    xyzw = answered('screw-path', 0, 0, 0, 0, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0, '--node', node)
-    wxyz = answered('screw-path', 0, 0, 0, 1, 0, 0, 0, 0, 0, 2, 0, 0, 0, 1, '--wxyz',
-                    '--node', node)
+    xyzw = here.answered('screw-path', 0, 0, 0, 0, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0, '--node', node)
+    wxyz = here.answered('screw-path', 0, 0, 0, 1, 0, 0, 0, 0, 0, 2, 0, 0, 0, 1, '--wxyz',
+                         '--node', node)
     assert wxyz['poses'] == xyzw['poses'] and len(wxyz['poses']) == 21
     assert wxyz['poses'][-1]['orientation'] == {'x': 0.0, 'y': 0.0, 'z': 1.0, 'w': 0.0}
 
@@ -270,11 +329,11 @@ def test_answer_is_matched_among_other_inputs(node, tester):
     assert answer['euler_angles']['angles'] == approx([0.1, -0.2, 0.3])
 
 
-def test_describe_reports_the_input_just_sent(node):
-    sent = answered('orientation', 0, 0, math.sin(0.6), math.cos(0.6), '--frame', 'imu_link',
-                    '--node', node)['input']
-    for report in (answered('describe', '--node', node),
-                   answered('describe', '--json', '--node', node)):
+def test_describe_reports_the_input_just_sent(here, node):
+    sent = here.answered('orientation', 0, 0, math.sin(0.6), math.cos(0.6),
+                         '--frame', 'imu_link', '--node', node)['input']
+    for report in (here.answered('describe', '--node', node),
+                   here.answered('describe', '--json', '--node', node)):
         assert report['source'] == f'{node}/orientation'
         assert report['source_type'] == 'geometry_msgs/msg/QuaternionStamped'
         assert report['frame_id'] == 'imu_link' and report['stamp'] == sent['stamp']
@@ -289,9 +348,9 @@ COV = np.array([[4e-4, 1e-4, 0.0], [1e-4, 2e-4, -5e-5], [0.0, -5e-5, 1e-4]])
 
 
 @pytest.mark.parametrize('verb, position', [('imu', ()), ('odometry', (1.0, -2.0, 0.5))])
-def test_cov_is_sent_and_the_rpy_covariance_printed(node, verb, position):
+def test_cov_is_sent_and_the_rpy_covariance_printed(here, node, verb, position):
     q = Rotation.from_euler('xyz', [0.2, -0.4, 1.0]).as_quat()
-    out = answered(verb, *position, *q, '--cov', *COV.ravel(), '--node', node)
+    out = here.answered(verb, *position, *q, '--cov', *COV.ravel(), '--node', node)
     sent = np.asarray(out['input']['orientation_covariance' if verb == 'imu' else 'covariance'])
     np.testing.assert_array_equal(sent[-3:, -3:], COV)
     assert not sent[:-3].any() and not sent[:, :-3].any()  # a pose's other terms: 0
@@ -301,11 +360,11 @@ def test_cov_is_sent_and_the_rpy_covariance_printed(node, verb, position):
     expected = expected_covariance(q, sent)
     np.testing.assert_allclose(printed['covariance'], expected, rtol=0,
                                atol=1e-9 * np.abs(expected).max())
-    unknown = answered(verb, *position, *q, '--cov', *[0] * 9, '--node', node)
+    unknown = here.answered(verb, *position, *q, '--cov', *[0] * 9, '--node', node)
     assert unknown['answer']['rpy_covariance'] == 'unknown'
 
 
-def test_echo_rpy_covariance(node, tester):
+def test_echo_rpy_covariance(here, node, tester):
     """Check doc/client.md's example: facing +Y, an error about the fixed X axis is pitch."""
     command = CLIENT + ['echo', 'rpy_covariance', '--once', '--node', node, '--timeout', '20']
     echo = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -313,8 +372,8 @@ def test_echo_rpy_covariance(node, tester):
     topic = f'{node}/rpy_covariance'
     tester.spin_until(lambda: tester.node.count_subscribers(topic) > 0, DISCOVERY_TIMEOUT,
                       f'a subscription on {topic}')
-    answered(*'imu 0 0 0.7071068 0.7071068 --frame imu_link --cov'.split(), *COV.ravel(),
-             '--node', node)
+    here.answered(*'imu 0 0 0.7071068 0.7071068 --frame imu_link --cov'.split(), *COV.ravel(),
+                  '--node', node)
     out, err = echo.communicate(timeout=60)
     assert (echo.returncode, err) == (0, '')
     assert_doc_output('client-covariance', '$ rotation_client echo rpy_covariance --once\n'
@@ -330,33 +389,30 @@ def test_echo_rpy_covariance(node, tester):
     assert not np.asarray(printed['covariance'])[:3].any()
 
 
-@pytest.mark.parametrize('encoding', ['utf-8', 'ascii'])
-def test_frame_id_beyond_ascii_round_trips(node, encoding):
+def test_frame_id_beyond_ascii_round_trips(here, node):
     """
     Check that an emoji (beyond U+FFFF) and an accent in frame_id: sent, reported, printed as such.
 
     Over DDS to the node and back in ~/describe's YAML, then printed by the client. On a
-    UTF-8 stdout the characters are printed as themselves; on an ASCII one as escapes that
-    YAML and JSON read back to the same characters.
+    UTF-8 stdout the characters are printed as themselves (here); on an ASCII one (a process
+    with PYTHONIOENCODING=ascii) as escapes that YAML and JSON read back to the same
+    characters.
     """
     frame = 'caméra_😀'
-    env = {'PYTHONIOENCODING': encoding}
-    sent = answered('orientation', 0, 0, 0, 1, '--frame', frame, '--node', node, **env)
+    sent = here.answered('orientation', 0, 0, 0, 1, '--frame', frame, '--node', node)
     assert sent['input']['frame_id'] == frame
     for args in (('describe',), ('describe', '--json')):
-        result = run(*args, '--node', node, **env)
-        assert result.returncode == 0 and result.stderr == '', result.stderr
-        report = (json.loads if '--json' in args else yaml.safe_load)(result.stdout)
-        assert report['frame_id'] == frame and report['stamp'] == sent['input']['stamp']
-        if encoding == 'utf-8':
-            assert frame in result.stdout
-        else:
-            assert result.stdout.isascii()
+        for result in (here(*args, '--node', node),
+                       run(*args, '--node', node, PYTHONIOENCODING='ascii')):
+            assert result.returncode == 0 and result.stderr == '', result.stderr
+            report = (json.loads if '--json' in args else yaml.safe_load)(result.stdout)
+            assert report['frame_id'] == frame and report['stamp'] == sent['input']['stamp']
+            assert (frame in result.stdout) != result.stdout.isascii()
 
 
-def test_screw_path(node):
-    out = answered('screw-path', 0, 0, 0, 0, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0, '--tolerance', 2.0,
-                   '--node', node)
+def test_screw_path(here, node):
+    out = here.answered('screw-path', 0, 0, 0, 0, 0, 0, 1, 0, 0, 2, 0, 0, 1, 0,
+                        '--tolerance', 2.0, '--node', node)
     assert out['service'] == f'{node}/screw_path' and out['frame_id'] == 'map'
     half = math.sqrt(0.5)
     assert out['poses'] == [
@@ -365,8 +421,8 @@ def test_screw_path(node):
             'x': 0.0, 'y': 0.0, 'z': pytest.approx(half, **DIGITS),
             'w': pytest.approx(half, **DIGITS)}},
         {'position': [0.0, 0.0, 2.0], 'orientation': {'x': 0.0, 'y': 0.0, 'z': 1.0, 'w': 0.0}}]
-    assert len(answered('screw-path', *[0] * 6, 1, 1, *[0] * 5, 1, '--node', node,
-                        '--json')['poses']) == 21
+    assert len(here.answered('screw-path', *[0] * 6, 1, 1, *[0] * 5, 1, '--node', node,
+                             '--json')['poses']) == 21
 
 
 @pytest.mark.parametrize('args, why', [
@@ -396,27 +452,14 @@ def test_screw_path(node):
      '{node}/imu: orientation_covariance is not positive semi-definite: its lowest eigenvalue '
      'is -1, below -1e-09·max|C| = -1e-09 (bad_covariance)'),
 ])
-def test_refused_input(node, args, why):
+def test_refused_input(here, node, args, why):
     """One line: the node's sentence (what and by how much), and the reason counted."""
     reason = why.rpartition('(')[2].rstrip(')')
-    before = answered('describe', '--node', node)['refused'][reason]
-    line = one_line_error(run(*args, '--node', node), 2)
+    before = here.answered('describe', '--node', node)['refused'][reason]
+    line = one_line_error(here(*args, '--node', node), 2)
     assert line == f'rotation_client: node {node} refused the ' + why.format(node=node)
     # Counted; the node keeps serving (the next tests send it more).
-    assert answered('describe', '--node', node)['refused'][reason] > before
-
-
-def test_refused_input_before_any_accepted_one(node_process):
-    """Check a fresh node: ~/describe has no report yet, but its refusals (counts, sentences)."""
-    process = node_process()
-    line = one_line_error(run('orientation', 0, 0, 0, 0, '--node', process.name), 2)
-    assert line == (f'rotation_client: node {process.name} refused the input on '
-                    f'{process.name}/orientation: quaternion is the zero quaternion '
-                    '(zero_quaternion)')
-    line = one_line_error(run('describe', '--node', process.name), 1)
-    assert line.startswith(f'rotation_client: {process.name}/describe: Nothing has been '
-                           'accepted yet on ')
-    assert line.endswith('(1 input refused).')
+    assert here.answered('describe', '--node', node)['refused'][reason] > before
 
 
 @pytest.mark.parametrize('sequence, angles, unit', [
@@ -424,9 +467,9 @@ def test_refused_input_before_any_accepted_one(node_process):
     ('ZXZ', (0.4, -1.1, 2.9), None),
     ('yxz', (-170.0, 89.9, 45.0), '--deg'),
 ])
-def test_euler_of_another_sequence_is_converted(node, sequence, angles, unit):
+def test_euler_of_another_sequence_is_converted(here, node, sequence, angles, unit):
     """Check that the node reads ~/euler as ZYX (radians): the same rotation arrives."""
-    out = answered('euler', sequence, *angles, *filter(None, [unit]), '--node', node)
+    out = here.answered('euler', sequence, *angles, *filter(None, [unit]), '--node', node)
     rotation = Rotation.from_euler(sequence, angles, degrees=unit == '--deg')
     zyx = rotation.as_euler('ZYX')
     assert (out['input']['sequence'], out['input']['unit']) == ('ZYX', 'rad')
@@ -436,32 +479,56 @@ def test_euler_of_another_sequence_is_converted(node, sequence, angles, unit):
                                              'angles': approx(zyx)}
 
 
-def test_euler_of_another_sequence_refused_when_not_finite(node):
-    line = one_line_error(run('euler', 'xyz', 0, 'nan', 0, '--node', node), 2)
+def test_euler_of_another_sequence_refused_when_not_finite(here, node):
+    line = one_line_error(here('euler', 'xyz', 0, 'nan', 0, '--node', node), 2)
     assert line == (f'rotation_client: node {node} refused the input on {node}/euler: '
                     'vector.y is nan (non_finite)')
 
 
-def test_unreachable_node(node):
+def test_unreachable_node(here, node):
     absent = f'/{RUN}/nobody/rot_tools'
     for args in (('describe',), ('euler', 'ZYX', 1, 2, 3), ('screw-path', *[0] * 14)):
         begin = time.monotonic()
-        line = one_line_error(run(*args, '--node', absent, '--timeout', 1.0), 1)
+        line = one_line_error(here(*args, '--node', absent, '--timeout', 1.0), 1)
         assert line.startswith(f'rotation_client: cannot reach node {absent}: not found '
                                'within 1 s'), line
         assert time.monotonic() - begin < 30  # bounded (the 1 s wait plus start-up)
 
 
-def test_unreachable_topic(node_process):
-    """Check that the node runs but its ~/pose is remapped away: the client names the topic."""
-    process = node_process('-r', f'~/pose:=/{RUN}/elsewhere')
-    # Once it runs (on a loaded machine its start-up alone can take the client's timeout);
-    # the timeout also bounds the client's discovery of it.
+def test_a_fresh_and_remapped_node(here, node_process):
+    """
+    Check a node whose ~/pose and ~/imu are remapped, from its start.
+
+    Before it accepts anything, ~/describe has no report, but its refusals (counts,
+    sentences); its ~/pose is away, so the client names the topic it waited for; --topic
+    reaches the remapped ~/imu, and so do the client's own ROS arguments.
+    """
+    remapped = f'/{RUN}/robot/imu/data'
+    process = node_process('-r', f'~/pose:=/{RUN}/elsewhere', '-r', f'~/imu:={remapped}')
+    name = process.name
+    # Once it runs (on a loaded machine its start-up alone can take the client's timeout).
     process.wait_for_stderr('decomposing ')
-    line = one_line_error(run('pose', 0, 0, 0, 0, 0, 0, 1, '--node', process.name,
-                              '--timeout', 5), 1)
-    assert line == (f'rotation_client: node {process.name} has no subscription on '
-                    f'{process.name}/pose (waited 5 s)')
+    line = one_line_error(here('orientation', 0, 0, 0, 0, '--node', name, '--timeout', 20), 2)
+    assert line == (f'rotation_client: node {name} refused the input on {name}/orientation: '
+                    'quaternion is the zero quaternion (zero_quaternion)')
+    line = one_line_error(here('describe', '--node', name), 1)
+    assert line.startswith(f'rotation_client: {name}/describe: Nothing has been accepted yet '
+                           'on ')
+    assert line.endswith('(1 input refused).')
+    line = one_line_error(here('pose', 0, 0, 0, 0, 0, 0, 1, '--node', name, '--timeout', 2), 1)
+    assert line == (f'rotation_client: node {name} has no subscription on {name}/pose '
+                    '(waited 2 s)')
+    q = [0.0, 0.0, math.sin(0.3), math.cos(0.3)]
+    out = here.answered('imu', *q, '--topic', remapped, '--node', name)
+    assert out['input']['topic'] == remapped
+    assert out['answer']['axis_angle'] == approx([0.0, 0.0, 0.6])
+    # A refusal of what was sent there is the node's sentence (matched by source).
+    line = one_line_error(here('imu', 0, 0, 0, 0, '--topic', remapped, '--node', name), 2)
+    assert line == (f'rotation_client: node {name} refused the input on {remapped}: '
+                    'orientation is the zero quaternion (zero_quaternion)')
+    # Remapped by the client's own ROS arguments: the topic printed is the one used.
+    out = here.answered('imu', *q, '--node', name, '--ros-args', '-r', f'{name}/imu:={remapped}')
+    assert out['input']['topic'] == remapped
 
 
 @pytest.mark.parametrize('args, message', [
@@ -495,14 +562,14 @@ def test_unreachable_topic(node_process):
     (('describe', '--node', 'bad name'), "not a node name like /ns/name: 'bad name'"),
     (('teleport',), "invalid choice: 'teleport'"),
 ])
-def test_bad_arguments(args, message):
-    line = one_line_error(run(*args), 2)
+def test_bad_arguments(here, args, message):
+    line = one_line_error(here(*args), 2)
     assert line.startswith('rotation_client: error: ') and message in line
 
 
 @pytest.mark.parametrize('tolerance, poses', [
     ('3.4e38', 2), ('-1e-300', 21), ('-1e39', 21), ('2e-45', 'path_too_long')])
-def test_tolerances_float32_keeps_are_sent(node, tolerance, poses):
+def test_tolerances_float32_keeps_are_sent(here, node, tolerance, poses):
     """
     Tolerances whose meaning float32 keeps are sent as given.
 
@@ -512,11 +579,11 @@ def test_tolerances_float32_keeps_are_sent(node, tolerance, poses):
     path = ('screw-path', *[0] * 6, 1, 1, 0, 0, *[0] * 3, 1, '--tolerance', tolerance,
             '--node', node)
     if poses == 'path_too_long':
-        assert one_line_error(run(*path), 2).endswith(
+        assert one_line_error(here(*path), 2).endswith(
             'refused the screw_path request: tolerance 1.4013e-45 needs 7.14e+44 steps, more '
             'than 10000 (path_too_long)')
     else:
-        assert len(answered(*path)['poses']) == poses
+        assert len(here.answered(*path)['poses']) == poses
 
 
 @pytest.mark.parametrize('ros_args, message', [
@@ -525,17 +592,18 @@ def test_tolerances_float32_keeps_are_sent(node, tolerance, poses):
     (('--ros-args', '--params-file', '/nonexistent.yaml'), '/nonexistent.yaml'),
     (('--ros-args', '--no-such-flag'), '--no-such-flag'),
 ])
-def test_bad_ros_arguments(ros_args, message):
+def test_bad_ros_arguments(here, capfd, ros_args, message):
     """Bad ROS arguments are one line and exit 2, before anything is started."""
-    line = one_line_error(run('describe', *ros_args), 2)
+    line = one_line_error(here('describe', *ros_args), 2)
     assert message in line and 'Traceback' not in line, line
+    assert capfd.readouterr() == ('', '')  # nothing else, rcl's own log line included
 
 
-def test_version():
+def test_version(here):
     """--version prints the installed version and exits 0 without importing rclpy."""
     from importlib.metadata import version
     expected = f'rotation_client {version("rot_tools")}\n'
-    result = run('--version')
+    result = here('--version')
     assert (result.returncode, result.stdout, result.stderr) == (0, expected, '')
     probe = (
         'import sys\n'
@@ -552,13 +620,13 @@ def test_version():
     assert (result.returncode, result.stdout, result.stderr) == (0, expected, '')
 
 
-def test_help():
-    result = run('--help')
+def test_help(here):
+    result = here('--help')
     assert result.returncode == 0 and result.stdout.startswith('usage: rotation_client')
     for command in ('euler', 'pose', 'odometry', 'transform', 'orientation', 'imu',
                     'describe', 'screw-path', '--wxyz', '--version'):
         assert command in result.stdout
-    euler = run('euler', '--help')
+    euler = here('euler', '--help')
     assert euler.returncode == 0
     assert "same\nrotation in the node's euler_sequence and angle_unit" in euler.stdout
 
@@ -636,7 +704,7 @@ def test_interrupt_exits_promptly_and_quietly(tester):
 # doc/client.md's examples are this output
 
 
-def console(*commands, names=()):
+def console(here, *commands, names=()):
     """
     Return the transcript of rotation_client ``commands`` as doc/client.md shows it.
 
@@ -646,7 +714,7 @@ def console(*commands, names=()):
     """
     lines = []
     for shown, extra in commands:
-        result = run(*shown.split(), *extra)
+        result = here(*shown.split(), *extra)
         lines.append(f'$ rotation_client {shown}\n{result.stdout}{result.stderr}')
         if result.returncode:
             lines.append(f'$ echo $?\n{result.returncode}\n')
@@ -656,16 +724,16 @@ def console(*commands, names=()):
     return text
 
 
-def test_doc_examples(node):
+def test_doc_examples(here, node):
     shown = (node, '/rot_tools')
     assert_doc_output('client-euler', console(
-        ('euler ZYX 30 20 10 --deg', ('--node', node)), names=[shown]))
+        here, ('euler ZYX 30 20 10 --deg', ('--node', node)), names=[shown]))
     assert_doc_output('client-screw-path', console(
-        ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 2.0', ('--node', node)),
+        here, ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 2.0', ('--node', node)),
         names=[shown]))
     absent = f'/{RUN}/arm/rot_tools'
     assert_doc_output('client-errors', console(
-        ('orientation 0 0 0 0', ('--node', node)),
+        here, ('orientation 0 0 0 0', ('--node', node)),
         ('pose 1 2 3 0 0 0.5 0.5', ('--node', node)),
         ('describe --node /arm/rot_tools --timeout 2', ('--node', absent)),
         ('screw-path 0 0 0 0 0 0 1  0 0 2 0 0 1 0 --tolerance 1e-300', ()),

@@ -1,9 +1,11 @@
 """
-rotation_client's tools around the inputs: --topic, the angle hint, echo, set and tf-demo.
+rotation_client's tools around the inputs: the angle hint, echo, set and tf-demo.
 
-Each runs the client as a process against rotation_node processes of this run (conftest's
-isolated domain and namespaces), over DDS; expected values come from closed forms and
-scipy, not from rot_tools.
+Against a rotation_node process of this run (conftest's isolated domain and namespaces), over
+DDS: the commands run in this process (test_client.Here) where what is tested is the
+command, as a process where it is the process (a stream printed as it comes, Ctrl-C, a closed
+pipe, a module that does not import); expected values come from closed forms and scipy, not
+from rot_tools.
 """
 
 import json
@@ -16,8 +18,9 @@ import threading
 from conftest import DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
 from doc_blocks import assert_doc_output
 import pytest
+from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from scipy.spatial.transform import Rotation
-from test_client import answered, approx, DIGITS, interrupt, one_line_error, popen, run
+from test_client import approx, DIGITS, Here, interrupt, one_line_error, popen
 import yaml
 
 HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in degrees, '
@@ -25,10 +28,16 @@ HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in
 
 
 @pytest.fixture(scope='module')
-def node(tmp_path_factory):
+def here(ros_context):
+    """Run rotation_client's commands in this process (test_client.Here)."""
+    return Here(ros_context)
+
+
+@pytest.fixture(scope='module')
+def node(tmp_path_factory, here):
     """Return the name of a rotation_node process (default parameters) for this module."""
     process = NodeProcess(tmp_path_factory.mktemp('tools'))
-    answered('orientation', 0, 0, 0, 1, '--node', process.name)
+    here.answered('orientation', 0, 0, 0, 1, '--node', process.name, '--timeout', 20)
     yield process.name
     process.kill()
 
@@ -37,28 +46,6 @@ def wait_subscribed(tester, topic):
     """Wait until something (the client under test) subscribes to ``topic``."""
     tester.spin_until(lambda: tester.node.count_subscribers(topic) > 0, DISCOVERY_TIMEOUT,
                       f'a subscription on {topic}')
-
-
-# ---------------------------------------------------------------------------------------
-# --topic: an input remapped away from ~/NAME
-
-
-def test_topic_reaches_a_remapped_input(node_process):
-    remapped = f'/{RUN}/robot/imu/data'
-    process = node_process('-r', f'~/imu:={remapped}')
-    q = [0.0, 0.0, math.sin(0.3), math.cos(0.3)]
-    out = answered('imu', *q, '--topic', remapped, '--node', process.name)
-    assert out['input']['topic'] == remapped
-    assert out['answer']['axis_angle'] == approx([0.0, 0.0, 0.6])
-    # A refusal of what was sent there is the node's sentence (matched by source).
-    line = one_line_error(run('imu', 0, 0, 0, 0, '--topic', remapped, '--node',
-                              process.name), 2)
-    assert line == (f'rotation_client: node {process.name} refused the input on {remapped}: '
-                    'orientation is the zero quaternion (zero_quaternion)')
-    # Remapped by the client's own ROS arguments: the topic printed is the one used.
-    out = answered('imu', *q, '--node', process.name, '--ros-args', '-r',
-                   f'{process.name}/imu:={remapped}')
-    assert out['input']['topic'] == remapped
 
 
 # ---------------------------------------------------------------------------------------
@@ -71,9 +58,9 @@ def test_topic_reaches_a_remapped_input(node_process):
     (('ZYX', 30, 20, 10, '--deg'), ''),
     (('ZYX', 6.2, -6.2, 1), ''),
 ])
-def test_angle_hint(node, args, hint):
+def test_angle_hint(here, node, args, hint):
     """Radians typed beyond 2π: one hint line on stderr after the answer, status 0."""
-    result = run('euler', *args, '--node', node)
+    result = here('euler', *args, '--node', node)
     assert result.returncode == 0 and result.stderr == hint, result.stderr
     assert yaml.safe_load(result.stdout)['answer']['euler_angles']['unit'] == 'rad'
 
@@ -82,10 +69,10 @@ def test_angle_hint(node, args, hint):
 # echo
 
 
-def test_echo_once_prints_the_answer(node, tester):
+def test_echo_once_prints_the_answer(here, node, tester):
     echo = popen('echo', 'rpy', '--once', '--json', '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/rpy')
-    sent = answered('orientation', 0, math.sin(0.2), 0, math.cos(0.2), '--node', node)
+    sent = here.answered('orientation', 0, math.sin(0.2), 0, math.cos(0.2), '--node', node)
     out, err = echo.communicate(timeout=60)
     assert echo.returncode == 0 and err == '', err
     data = json.loads(out)
@@ -95,11 +82,11 @@ def test_echo_once_prints_the_answer(node, tester):
                            'unit': 'rad'}
 
 
-def test_echo_count_prints_each_message(node, tester):
+def test_echo_count_prints_each_message(here, node, tester):
     echo = popen('echo', 'quaternion', '--count', 3, '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/quaternion')
     for angle in (0.1, 0.2, 0.3):
-        answered('euler', 'ZYX', angle, 0, 0, '--node', node)
+        here.answered('euler', 'ZYX', angle, 0, 0, '--node', node)
     out, err = echo.communicate(timeout=60)
     assert echo.returncode == 0 and err == '', err
     documents = list(yaml.safe_load_all(out))
@@ -140,13 +127,13 @@ def test_echo_into_a_pipe_closed_early_ends_quietly(node, tester):
     assert (echo.wait(timeout=30), err) == (141, '')
 
 
-def test_echo_unknown_output_and_unreachable(node):
-    line = one_line_error(run('echo', 'nothing'), 2)
+def test_echo_unknown_output_and_unreachable(here, node):
+    line = one_line_error(here('echo', 'nothing'), 2)
     assert "argument OUTPUT: invalid choice: 'nothing'" in line
-    line = one_line_error(run('echo', 'rpy', '--count', '0'), 2)
+    line = one_line_error(here('echo', 'rpy', '--count', '0'), 2)
     assert "--count: must be a whole number >= 1, got '0'" in line
     absent = f'/{RUN}/nobody/rot_tools'
-    line = one_line_error(run('echo', 'rpy', '--node', absent, '--timeout', 1), 1)
+    line = one_line_error(here('echo', 'rpy', '--node', absent, '--timeout', 1), 1)
     assert line.startswith(f'rotation_client: cannot reach node {absent}')
 
 
@@ -161,19 +148,30 @@ def set_line(result):
     return lines[0]
 
 
-def test_set_types_values_as_the_node_declares_them(node_process):
-    process = node_process()
-    name = process.name
-    assert set_line(run('set', 'angle_unit', 'deg', '--node', name)) == (
+@pytest.fixture
+def restored(node, tester):
+    """Return the module's node; its parameters set back to their defaults after the test."""
+    from rclpy.parameter import Parameter
+    yield node
+    defaults = {'angle_unit': 'rad', 'euler_sequence': 'ZYX',
+                'quaternion_tolerance': QUATERNION_TOLERANCE, 'publish_markers': True}
+    results = tester.set_parameters(node, [Parameter(name, value=value)
+                                           for name, value in defaults.items()])
+    assert all(result.successful for result in results)
+
+
+def test_set_types_values_as_the_node_declares_them(here, restored):
+    name = restored
+    assert set_line(here('set', 'angle_unit', 'deg', '--node', name)) == (
         f"node {name}: angle_unit = 'deg'")
     # An integer for a double, digits for a string, 'false' for a bool.
-    assert set_line(run('set', 'quaternion_tolerance', '1', '--node', name)) == (
+    assert set_line(here('set', 'quaternion_tolerance', '1', '--node', name)) == (
         f'node {name}: quaternion_tolerance = 1.0')
-    assert set_line(run('set', 'euler_sequence', 'xyz', '--node', name)) == (
+    assert set_line(here('set', 'euler_sequence', 'xyz', '--node', name)) == (
         f"node {name}: euler_sequence = 'xyz'")
-    assert set_line(run('set', 'publish_markers', 'false', '--node', name)) == (
+    assert set_line(here('set', 'publish_markers', 'false', '--node', name)) == (
         f'node {name}: publish_markers = False')
-    answer = answered('euler', 'xyz', 90, 0, 0, '--deg', '--node', name)
+    answer = here.answered('euler', 'xyz', 90, 0, 0, '--deg', '--node', name)
     assert answer['input']['unit'] == 'deg' and answer['input']['sequence'] == 'xyz'
     assert answer['answer']['euler_angles']['angles'] == approx([90, 0, 0])
     assert 'markers' not in answer['answer']
@@ -185,8 +183,8 @@ def test_set_types_values_as_the_node_declares_them(node_process):
     (('quaternion_tolerance', 'abc'), "refused quaternion_tolerance = 'abc': "),
     (('nothing', '1'), "has no parameter 'nothing'"),
 ])
-def test_set_refused_is_the_nodes_reason(node, args, why):
-    line = one_line_error(run('set', *args, '--node', node), 1)
+def test_set_refused_is_the_nodes_reason(here, node, args, why):
+    line = one_line_error(here('set', *args, '--node', node), 1)
     assert line.startswith(f'rotation_client: node {node} {why}'), line
 
 
@@ -200,7 +198,7 @@ def remapped(namespace):
             '-r', f'/tf_static:={namespace}/tf_static')
 
 
-def test_tf_demo_publishes_the_tree(tester, namespace):
+def test_tf_demo_publishes_the_tree(here, tester, namespace):
     from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
     from tf2_msgs.msg import TFMessage
     tester.subscribe(f'{namespace}/tf', TFMessage, TF_QOS)
@@ -226,8 +224,8 @@ def test_tf_demo_publishes_the_tree(tester, namespace):
             # On the circle of radius 1 about (0, 1, 0), facing along it.
             assert [b.x, b.y, b.z] == pytest.approx([math.sin(yaw), 1 - math.cos(yaw), 0],
                                                     abs=1e-12)
-        result = run('tf', 'map', 'camera', '--once', '--deg', '--timeout', 20,
-                     *remapped(namespace))
+        result = here('tf', 'map', 'camera', '--once', '--deg', '--timeout', 20,
+                      *remapped(namespace))
         assert result.returncode == 0, result.stderr
         report = yaml.safe_load(result.stdout)
         assert report['chain'] == ['map', 'odom', 'base_link', 'camera']
@@ -242,11 +240,10 @@ def test_tf_demo_publishes_the_tree(tester, namespace):
     assert stopped == (130, '', '')
 
 
-def test_tf_demo_for_a_duration(namespace):
-    demo = popen('tf-demo', '--duration', 1, *remapped(namespace))
-    out, err = demo.communicate(timeout=60)
-    assert demo.returncode == 0 and err == '', err
-    assert out.endswith(f'{namespace}/tf_static for 1 s\n')
+def test_tf_demo_for_a_duration(here, namespace):
+    result = here('tf-demo', '--duration', 1, *remapped(namespace))
+    assert result.returncode == 0 and result.stderr == '', result.stderr
+    assert result.stdout.endswith(f'{namespace}/tf_static for 1 s\n')
 
 
 def test_tf_demo_without_tf2_msgs():
@@ -273,10 +270,10 @@ def test_tf_demo_without_tf2_msgs():
 # Ctrl-C
 
 
-def test_echo_interrupted_exits_130_quietly(node, tester):
+def test_echo_interrupted_exits_130_quietly(here, node, tester):
     echo = popen('echo', 'rpy', '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/rpy')
-    answered('orientation', 0, 0, 0, 1, '--node', node)
+    here.answered('orientation', 0, 0, 0, 1, '--node', node)
     tester.spin_for(0.2)
     status, out, err = interrupt(echo)
     assert (status, err) == (130, '')
@@ -287,11 +284,11 @@ def test_echo_interrupted_exits_130_quietly(node, tester):
 # doc/client.md's examples of echo and set
 
 
-def test_doc_examples(node, tester):
+def test_doc_examples(here, node, tester):
     shown = (node, '/rot_tools')
     echo = popen('echo', 'rpy', '--once', '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/rpy')
-    answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node)
+    here.answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node)
     out, err = echo.communicate(timeout=60)
     assert echo.returncode == 0, err
     text = '$ rotation_client echo rpy --once\n' + out
@@ -299,13 +296,13 @@ def test_doc_examples(node, tester):
     lines = []
     for args in (('set', 'angle_unit', 'deg'), ('set', 'angle_unit', 'degrees'),
                  ('euler', 'ZYX', 30, 20, 10)):
-        result = run(*args, '--node', node)
+        result = here(*args, '--node', node)
         lines.append(f'$ rotation_client {" ".join(map(str, args))}'
                      + (' > /dev/null' if args[0] == 'euler' else '') + '\n')
         lines.append(('' if args[0] == 'euler' else result.stdout) + result.stderr)
         if result.returncode:
             lines.append(f'$ echo $?\n{result.returncode}\n')
-    run('set', 'angle_unit', 'rad', '--node', node)
+    here('set', 'angle_unit', 'rad', '--node', node)
     assert_doc_output('client-set', ''.join(lines).replace(*shown))
 
 

@@ -107,15 +107,17 @@ def refusal_text(data, before, source, stamps=None):
 class Client:
     """A short-lived rclpy node that talks to one rotation_node, every wait bounded."""
 
-    def __init__(self, target, timeout):
+    def __init__(self, target, timeout, context=None):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         self.target = target
         self.timeout = timeout
-        self.node = rclpy.create_node(f'rotation_client_{os.getpid()}',
+        self.node = rclpy.create_node(f'rotation_client_{os.getpid()}', context=context,
                                       start_parameter_services=False)
-        self.executor = SingleThreadedExecutor()
+        self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
+        self.service_clients = {}
+        """The clients of the node's services called so far, by service name."""
 
     def close(self):
         self.executor.shutdown(timeout_sec=1.0)
@@ -131,32 +133,45 @@ class Client:
             self.executor.spin_once(timeout_sec=0.02)
         return done()
 
-    def missing(self, what):
-        """One line for a ``what`` (topic, service) that did not appear in time."""
+    def found(self):
+        """
+        Whether the node is in the graph: its name, or its ~/describe service.
+
+        A node's name reaches the graph by its participant's own announcements, which can
+        come seconds after its topics and services (each discovered for itself) do.
+        """
         names = {f"{namespace.rstrip('/')}/{name}"
                  for name, namespace in self.node.get_node_names_and_namespaces()}
-        if self.target not in names:
+        return self.target in names or self.node.count_services(self.topic('describe')) > 0
+
+    def missing(self, what):
+        """One line for a ``what`` (topic, service) that did not appear in time."""
+        if not self.found():
             domain = os.environ.get('ROS_DOMAIN_ID') or '0'
             return (f'cannot reach node {self.target}: not found within {self.timeout:g} s '
                     f'(is rotation_node running, with ROS_DOMAIN_ID {domain}?)')
         return f'node {self.target} has no {what} (waited {self.timeout:g} s)'
 
     def call(self, srv_type, name, request):
-        """Call the node's service ``name``; the response, or Unreachable."""
+        """
+        Call the node's service ``name``; the response, or Unreachable.
+
+        The service's client is made at the first call and kept for the next ones (a command
+        may call ~/describe several times): a new one is discovered by the node anew.
+        """
         service = self.topic(name)
-        client = self.node.create_client(srv_type, service)
-        try:
-            if not self.spin_until(client.service_is_ready, self.timeout):
-                raise Unreachable(self.missing(f'service {service}'))
-            deadline = time.monotonic() + self.timeout
-            while time.monotonic() < deadline:
-                future = client.call_async(request)
-                if self.spin_until(future.done, min(RESEND, deadline - time.monotonic())):
-                    return future.result()
-                client.remove_pending_request(future)  # the reply may have been dropped
-            raise Unreachable(f'no reply from service {service} within {self.timeout:g} s')
-        finally:
-            self.node.destroy_client(client)
+        client = self.service_clients.get(service)
+        if client is None:
+            client = self.service_clients[service] = self.node.create_client(srv_type, service)
+        if not self.spin_until(client.service_is_ready, self.timeout):
+            raise Unreachable(self.missing(f'service {service}'))
+        deadline = time.monotonic() + self.timeout
+        while time.monotonic() < deadline:
+            future = client.call_async(request)
+            if self.spin_until(future.done, min(RESEND, deadline - time.monotonic())):
+                return future.result()
+            client.remove_pending_request(future)  # the reply may have been dropped
+        raise Unreachable(f'no reply from service {service} within {self.timeout:g} s')
 
     def describe(self):
         from std_srvs.srv import Trigger

@@ -469,20 +469,22 @@ EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
 """The reader of stdout went away (``echo rpy | head -3``): the shell's status for SIGPIPE."""
 
 
-def _init_ros(argv):
+def _init_ros(argv, context):
     """
-    rclpy.init with the command line's ROS arguments; None, or one line saying why not.
+    rclpy.init of ``context`` with the command line's ROS arguments; None, or why not.
 
-    rcl refuses a malformed ``-p`` or ``-r``, a missing ``--params-file`` or an unknown flag
-    with a RuntimeError whose text names the argument; its own log line about it is kept
-    quiet, as the one line says it all.
+    rclpy's signal handlers are installed as for its default context (Ctrl-C and SIGTERM
+    shut the context down). rcl refuses a malformed ``-p`` or ``-r``, a missing
+    ``--params-file`` or an unknown flag with a RuntimeError whose text names the argument;
+    its own log line about it is kept quiet, as the one line says it all.
     """
     import rclpy
     from rclpy.logging import get_logger_level, LoggingSeverity, set_logger_level
+    from rclpy.signals import SignalHandlerOptions
     level = get_logger_level('rcl')
     set_logger_level('rcl', LoggingSeverity.FATAL)
     try:
-        rclpy.init(args=argv)
+        rclpy.init(args=argv, context=context, signal_handler_options=SignalHandlerOptions.ALL)
     except RuntimeError as exc:
         return f'bad ROS arguments (after --ros-args): {" ".join(str(exc).split())}'
     finally:
@@ -505,17 +507,18 @@ def _print_result(result, args):
         print(f'{PROG}: hint: {hint}', file=sys.stderr)
 
 
-def _run(args, argv):
-    """Start ROS, run the command, print its result; return the exit status."""
-    import rclpy
+def run_command(args, context):
+    """
+    Run the command of ``args`` (parsed) in ``context`` (rclpy, initialised); its exit status.
+
+    A client node of its own in the context talks to the node; its result is printed, its
+    failure is one line on stderr. :func:`main` runs it in a context made for it; a program
+    that has one already may run several commands in it.
+    """
     from rclpy.exceptions import NameValidationException
-    why = _init_ros(argv)
-    if why is not None:
-        print(f'{PROG}: {why}', file=sys.stderr)
-        return EXIT_USAGE
     client = None
     try:
-        client = Client(args.node, args.timeout)
+        client = Client(args.node, args.timeout, context)
         _print_result(COMMANDS[args.command](client, args), args)
         return 0
     except Unreachable as exc:
@@ -533,13 +536,31 @@ def _run(args, argv):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
     except Exception:
-        if rclpy.ok():
+        if context.ok():
             raise
         return EXIT_TERMINATED  # the context was shut down under the command: SIGTERM
     finally:
         if client is not None:
             client.close()
-        rclpy.try_shutdown()
+
+
+def _run(args, argv):
+    """
+    Start ROS, run the command, print its result; return the exit status.
+
+    The command's rclpy context is its own (not rclpy's default one), shut down at its end:
+    main may run again in the same process.
+    """
+    import rclpy
+    context = rclpy.Context()
+    why = _init_ros(argv, context)
+    if why is not None:
+        print(f'{PROG}: {why}', file=sys.stderr)
+        return EXIT_USAGE
+    try:
+        return run_command(args, context)
+    finally:
+        context.try_shutdown()
 
 
 def main(args=None):
