@@ -58,10 +58,13 @@ def test_console_scripts_point_at_plain_main_functions():
 READY = 'decomposing'
 """What the node's ready line (its INFO line once it is built) says."""
 
-FRACTIONS = tuple(k / 20 for k in range(20))
+FRACTIONS = {signal.SIGINT: tuple(k / 20 for k in range(0, 20, 2)),
+             signal.SIGTERM: tuple(k / 20 for k in range(1, 20, 2))}
 """When to signal during the start-up: fractions of the time a first start took to its ready
 line (so that the sweep covers Python's start, the imports, rclpy.init and the node's build
-on a fast machine and a loaded one alike); then at the ready line and 100 ms after it."""
+on a fast machine and a loaded one alike), every tenth of it for each signal, SIGINT's and
+SIGTERM's interleaved (the two together every twentieth); then at the ready line and 100 ms
+after it."""
 
 STOP_WITHIN = 1.0
 """Seconds of the node's own time from a signal to its end (conftest.node_seconds)."""
@@ -182,7 +185,7 @@ def signal_at(command, env, when, sig):
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
     """
-    Check that a signal at any of 22 moments of the start-up and the run ends the node cleanly.
+    Check that a signal at any of 12 moments of the start-up and the run ends the node cleanly.
 
     Within a second of its own time, with no process left in its session. Once up: status 0
     and nothing on stderr but the ready line. Before, Python's and rclpy's own handling is
@@ -197,7 +200,7 @@ def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
         start_up = first.wait_ready()
     finally:
         first.kill()
-    moments = [fraction * start_up for fraction in FRACTIONS] + ['ready', 'ready + 100 ms']
+    moments = [fraction * start_up for fraction in FRACTIONS[sig]] + ['ready', 'ready + 100 ms']
     wrong = [what for what in (signal_at(command, env, when, sig) for when in moments) if what]
     assert not wrong, '\n'.join(wrong)
 
@@ -218,8 +221,19 @@ BAD_ROS_ARGUMENTS = {
 }
 
 
-@pytest.mark.parametrize('how', sorted(NODE_COMMANDS))
-@pytest.mark.parametrize('case', sorted(BAD_ROS_ARGUMENTS))
+BY_MODULE_TOO = ('bad -r', 'invalid parameter value')
+"""The cases also run as ``python -m`` when the console script is installed: one that rcl
+refuses as it parses, one that the node refuses as it is built."""
+
+
+def ways(cases, by_module_too):
+    """(how, case): every case by the console script (or -m), some by -m as well."""
+    first = 'console script' if 'console script' in NODE_COMMANDS else 'python -m'
+    return ([(first, case) for case in cases]
+            + [('python -m', case) for case in by_module_too if first != 'python -m'])
+
+
+@pytest.mark.parametrize('how, case', ways(sorted(BAD_ROS_ARGUMENTS), BY_MODULE_TOO))
 def test_bad_ros_arguments_are_one_line_and_status_2(tmp_path, how, case):
     args, named = BAD_ROS_ARGUMENTS[case]
     malformed = tmp_path / 'malformed.yaml'
@@ -249,8 +263,8 @@ builtins.__import__ = _import
 """
 
 
-@pytest.mark.parametrize('how', sorted(NODE_COMMANDS))
-@pytest.mark.parametrize('flag', ['--help', '-h', '--version'])
+@pytest.mark.parametrize('how, flag', ways(['--help', '-h', '--version'],
+                                           ['--help', '--version']))
 def test_help_and_version_print_and_start_nothing(tmp_path, how, flag):
     from importlib.metadata import version
     from rot_tools.ros.rotation_node import INPUTS, OUTPUTS, PARAMETERS
