@@ -473,3 +473,7 @@ def test_message_covariances_at_the_ends_of_float64():
     assert np.diag(C[2]).min() == 5e-324
     assert fault(covs[1]) == ('covariance: its covariance of roll, pitch, yaw overflows float64 '
                               '(beyond ±1.8e308)')
+    with np.errstate(over='raise', invalid='raise', divide='raise'):  # read as roll, pitch, yaw
+        C, status = rpy_covariances(np.stack([R] * 3), covs, 'rpy')
+    assert status.tolist() == [OK] * 3
+    np.testing.assert_array_equal(C, covs.reshape(3, 3, 3))

@@ -56,8 +56,9 @@ def rpy_covariances(R, cov, reading='rotvec'):
     status = np.where(finite & ~C.any(axis=(-2, -1)), UNKNOWN, status).astype(np.int8)
     ok = status == OK
     out = np.full(C.shape, np.nan)
-    if reading == 'rpy':
-        out[ok] = 0.5 * (C[ok] + np.swapaxes(C[ok], -1, -2))
+    if reading == 'rpy':  # its symmetric part (C + Cᵀ overflows near 1e308; 0.5·5e-324 is 0)
+        Ct = np.swapaxes(C[ok], -1, -2)
+        out[ok] = np.where(C[ok] == Ct, C[ok], 0.5 * C[ok] + 0.5 * Ct)
     else:  # linear in C: converted at the scale of 1, then each item's beyond float64 is BAD
         scale = np.abs(C[ok]).max(axis=(-2, -1))[:, None, None]  # > 0: all zeros is UNKNOWN
         unit, lock = rotvec_covariance_to_euler(np.asarray(R)[ok], C[ok] / scale, RPY_SEQUENCE,
