@@ -36,7 +36,8 @@ import numpy as np
 from rot_tools.core._arrays import finite_array
 from rot_tools.core.errors import RotationError
 from rot_tools.core.imu_motion import (
-    body_rates, fit_gyro, ImuSamples, orientation_lag, RATE_GAP, SLOW_RATE, slow_spells)
+    body_rates, fit_gyro, ImuSamples, orientation_lag, RATE_GAP, SLOW_RATE, slow_spells,
+    steady_accel)
 from rot_tools.core.imu_mounting import HAND_EYE_STEP, imu_mounting, mounting_poses
 from rot_tools.core.so3 import matrix_to_quaternion, quaternion_to_matrix
 from rot_tools.core.trajectory import nearest_stamps
@@ -276,8 +277,8 @@ def _too_few_slow(samples, slow):
             f'{seconds:.3g} s: at least {MIN_SLOW:g} s needed')
 
 
-def _accel_units(samples, slow):
-    size = float(np.median(np.linalg.norm(samples.accel[slow], axis=1)))
+def _accel_units(force):
+    size = float(np.median(np.linalg.norm(force, axis=1)))
     scale = GRAVITY / size if size > 0 else None
     said = (f'|linear_acceleration| reads {size:.4g} when the body turns slowly'
             + (f' (scale {scale:.4g})' if scale is not None else ''))
@@ -293,13 +294,14 @@ def _accel_units(samples, slow):
     return AccelUnitsCheck(status='fault', scale=scale, message=f'{said}: {why}.')
 
 
-def _from_z(v):
-    """Return the angle (rad) between a vector (3,) and z."""
-    return float(math.atan2(math.hypot(v[0], v[1]), v[2]))
+def _median_angle(u, v):
+    """Return the median over rows of the angle (rad) between u and v (K, 3)."""
+    sin = np.linalg.norm(np.cross(u, v), axis=1)
+    return float(np.median(np.arctan2(sin, np.sum(u * v, axis=1))))
 
 
-def _orientation_vs_accel(samples, slow):
-    angle = _from_z(np.einsum('nij,nj->i', samples.R[slow], samples.accel[slow]))
+def _orientation_vs_accel(R, force):
+    angle = _median_angle(R[:, 2, :], force)  # Rᵀ·ẑ is R's last row
     said = f'Rᵀ·ẑ and the specific force are {_deg(angle)} apart when the body turns slowly'
     if angle <= ANGLE_TOL:
         return AngleCheck(status='ok', angle=angle, message=f'{said}.')
@@ -414,14 +416,14 @@ def _reference(reference, tol):
     return t[keep], Q[keep], float(np.median(np.diff(t[keep])))
 
 
-def _mounting(samples, ref_t, ref_Q, ref_period):
+def _mounting(samples, ref_t, ref_Q, ref_period, lag):
     """Return the MountingCheck, and the Mounting (None where unknown)."""
     count = len(mounting_poses(samples, ref_t))
     if count < 3:
         return _unknown(MountingCheck, f'the reference covers {count} of the IMU’s steps of '
                         f'{HAND_EYE_STEP:g} s: too few for a mounting.'), None
     try:
-        found = imu_mounting(samples, ref_t, ref_Q, ref_period)
+        found = imu_mounting(samples, ref_t, ref_Q, ref_period, lag)
     except RotationError as exc:
         return _unknown(MountingCheck, f'no mounting: {exc}.'), None
     quaternion = matrix_to_quaternion(found.X, check=False)
@@ -432,14 +434,14 @@ def _mounting(samples, ref_t, ref_Q, ref_period):
         'in the IMU frame.'), warning=found.warning), found
 
 
-def _accel_sign(samples, slow, ref_t, ref_Q, ref_period, X):
+def _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, X):
     inside = slow & (samples.t >= ref_t[0]) & (samples.t <= ref_t[-1])
     why = _too_few_slow(samples, inside)
     if why:
         return _unknown(AngleCheck, f'{why} within the reference.')
     near = nearest_stamps(ref_t, samples.t[inside], RATE_GAP * max(ref_period, samples.period))
-    a = samples.accel[inside][near.covered]
-    angle = _from_z(np.einsum('nij,jk,nk->i', ref_Q[near.index], X, a))
+    # Xᵀ·Q_kᵀ·ẑ: the body's up in the IMU frame
+    angle = _median_angle(ref_Q[near.index, 2, :] @ X, force[inside][near.covered])
     said = (f'the specific force is {_deg(angle)} from the up that the reference gives through '
             'the mounting')
     if angle <= math.pi / 2:
@@ -449,11 +451,11 @@ def _accel_sign(samples, slow, ref_t, ref_Q, ref_period, X):
         'flipped).'))
 
 
-def _world_up(samples, found):
+def _world_up(found):
     covered = np.isfinite(found.Q[:, 0, 0])
     # Q_k·X·R_kᵀ·ẑ: the orientation's world z in the reference's world
-    angle = _from_z(np.einsum('nij,jk,nk->i', found.Q[covered], found.X,
-                              samples.R[found.poses[covered], 2, :]))
+    up = np.einsum('nij,jk,nk->ni', found.Q[covered], found.X, found.R[covered, 2, :])
+    angle = _median_angle(up, np.array([[0.0, 0.0, 1.0]]))
     said = f"the orientation's world z is {_deg(angle)} from the reference's"
     if angle <= math.pi / 2:
         return AngleCheck(status='ok', angle=angle, message=f'{said}: up (ENU).')
@@ -461,20 +463,20 @@ def _world_up(samples, found):
         f'{said}: it points down, the orientation is NED (REP-103 wants ENU).'))
 
 
-def _reference_checks(samples, slow, reference, tol):
-    """Return the accel_sign, world_up and mounting checks."""
+def _reference_checks(samples, slow, force, reference, tol, lag):
+    """Return the accel_sign, world_up and mounting checks (lag: the orientation's, s)."""
     if reference is None:
         why = 'no reference orientation to compare with.'
         return (_unknown(AngleCheck, why), _unknown(AngleCheck, why),
                 _unknown(MountingCheck, why))
     ref_t, ref_Q, ref_period = _reference(reference, tol)
-    mounting, found = _mounting(samples, ref_t, ref_Q, ref_period)
+    mounting, found = _mounting(samples, ref_t, ref_Q, ref_period, lag)
     if found is None:
         why = 'no mounting, so no physical up in the IMU frame.'
         return _unknown(AngleCheck, why), _unknown(AngleCheck, why), mounting
-    sign = _accel_sign(samples, slow, ref_t, ref_Q, ref_period, found.X)
+    sign = _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, found.X)
     up = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
-          else _world_up(samples, found))
+          else _world_up(found))
     return sign, up, mounting
 
 
@@ -498,16 +500,17 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     """
     given = _stamps(stamps, 'stamps')
     samples = _samples(given, quaternions, angular_velocity, linear_acceleration, tol)
-    slow = slow_spells(samples)
+    slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
     if why:
         units, tilt = _unknown(AccelUnitsCheck, f'{why}.'), _unknown(AngleCheck, f'{why}.')
     else:
-        units = _accel_units(samples, slow)
+        units = _accel_units(force[slow])
         tilt = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
-                else _orientation_vs_accel(samples, slow))
+                else _orientation_vs_accel(samples.R[slow], force[slow]))
     offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples)
-    sign, up, mounting = _reference_checks(samples, slow, reference, tol)
+    lag = offset.seconds if offset.status != 'unknown' else 0.0
+    sign, up, mounting = _reference_checks(samples, slow, force, reference, tol, lag)
     return ImuChecks(stamps=_check_stamps(given, samples), accel_units=units,
                      orientation_vs_accel=tilt, gyro_units=gyro_units, gyro_axes=gyro_axes,
                      gyro_bias=gyro_bias, time_offset=offset, accel_sign=sign, world_up=up,

@@ -74,10 +74,29 @@ def integrated_gyro(samples):
     return np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
 
 
+def _window(samples):
+    """Return the samples per SLOW_WINDOW (≥ 1)."""
+    return max(1, int(round(SLOW_WINDOW / samples.period)))
+
+
+def steady_accel(samples):
+    """
+    Return the accelerometer averaged over SLOW_WINDOW around each sample (N, 3).
+
+    In a slow spell the IMU turns by less than SLOW_RATE·SLOW_WINDOW over the window, so the
+    average keeps the specific force's direction and drops the vibration (which would add
+    its square to |a| and scatter the direction).
+    """
+    w, count = _window(samples), len(samples.t)
+    total = np.concatenate([np.zeros((1, 3)), np.cumsum(samples.accel, axis=0)])
+    lo = np.clip(np.arange(count) - w // 2, 0, count)
+    hi = np.clip(lo + w, 0, count)
+    return (total[hi] - total[lo]) / (hi - lo)[:, None]
+
+
 def slow_spells(samples):
     """Return (N,) bool: the mean angular speed over SLOW_WINDOW around the sample < SLOW_RATE."""
-    t, count = samples.t, len(samples.t)
-    w = max(1, int(round(SLOW_WINDOW / samples.period)))
+    t, count, w = samples.t, len(samples.t), _window(samples)
     slow = np.zeros(count, dtype=bool)
     if count <= w:
         return slow

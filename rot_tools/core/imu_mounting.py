@@ -49,16 +49,17 @@ def one_axis_mounting(X, alpha):
 
 class Mounting(NamedTuple):
     """
-    The mounting X (3, 3), the HandEye it came from, and where the reference was sampled.
+    The mounting X (3, 3), why only an axis of it may be fixed, and the poses it came from.
 
-    warning: '' or why only an axis is fixed; poses: indices of the IMU samples used;
-    Q (len(poses), 3, 3): the reference there (NaN where it does not cover them).
+    warning: '' or the one-axis warning; Q, R (K, 3, 3): the reference and the IMU's
+    orientation (None without one) at the same instants HAND_EYE_STEP apart, NaN where the
+    reference does not cover them.
     """
 
     X: np.ndarray
     warning: str
-    poses: np.ndarray
-    Q: Any
+    Q: np.ndarray
+    R: Any
 
 
 def mounting_poses(samples, ref_t):
@@ -68,35 +69,42 @@ def mounting_poses(samples, ref_t):
     return np.flatnonzero(inside)[::step]
 
 
-def imu_mounting(samples, ref_t, ref_Q, ref_period):
+def imu_mounting(samples, ref_t, ref_Q, ref_period, lag=0.0):
     """
     Return the Mounting of the IMU (ImuSamples) on the body (ref_t (M,), ref_Q (M, 3, 3)).
 
     The reference at the IMU's stamps HAND_EYE_STEP apart (interpolate_poses: slerp, within
-    RATE_GAP periods), relative rotations of consecutive ones that it covers without a gap,
-    then hand_eye_rotation (one_axis_mounting where it excites one axis only). RotationError
-    as hand_eye_rotation raises it (fewer than two steps that turn).
+    RATE_GAP periods) and the IMU's orientation lag (s) after them (the nearest sample: it
+    describes the instant of the stamp lag earlier), relative rotations of consecutive ones
+    without a gap, then hand_eye_rotation (one_axis_mounting where the reference turns about
+    one axis only). RotationError as hand_eye_rotation raises it (fewer than two steps that
+    turn).
     """
     t = samples.t
     poses = mounting_poses(samples, ref_t)
     got = interpolate_poses(ref_t, ref_Q, None, t[poses],
                             max_gap=RATE_GAP * max(ref_period, samples.period))
+    late = poses + int(round(lag / samples.period))
+    covered = got.covered & (late >= 0) & (late < len(t))
     Q = np.full((len(poses), 3, 3), np.nan)
     Q[got.covered] = got.R
-    step = HAND_EYE_STEP / samples.period
-    pair = (got.covered[:-1] & got.covered[1:]
-            & (np.diff(t[poses]) <= RATE_GAP * max(step, 1) * samples.period))
-    i, j = poses[:-1][pair], poses[1:][pair]
+    Q[~covered] = np.nan
+    step = max(HAND_EYE_STEP / samples.period, 1.0)
+    pair = (covered[:-1] & covered[1:]
+            & (np.diff(t[poses]) <= RATE_GAP * step * samples.period))
     A = np.swapaxes(Q[:-1][pair], -1, -2) @ Q[1:][pair]
+    R = None
     if samples.R is not None:
-        B = np.swapaxes(samples.R[i], -1, -2) @ samples.R[j]
+        R = np.full((len(poses), 3, 3), np.nan)
+        R[covered] = samples.R[late[covered]]
+        B = np.swapaxes(R[:-1][pair], -1, -2) @ R[1:][pair]
     else:
         total = integrated_gyro(samples)
-        B = rotvec_to_matrix(total[j] - total[i])
+        B = rotvec_to_matrix(total[poses[1:][pair]] - total[poses[:-1][pair]])
     found = hand_eye_rotation(A, B)
     X, warning = found.rotation, ''
     if found.axes < 2:
         X = one_axis_mounting(X, matrix_to_rotvec(A, check=False))
         warning = (f"{found.warning}; of the turns about it, the one that best keeps the IMU's "
                    "x (then y) along the body's is given")
-    return Mounting(X=X, warning=warning, poses=poses, Q=Q)
+    return Mounting(X=X, warning=warning, Q=Q, R=R)
