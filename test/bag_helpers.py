@@ -9,10 +9,31 @@ REAL = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'jackal_
 /jackal_velocity_controller/odom (a ROS 1 bag; see its README)."""
 
 
-def convert_real(dst, storage):
-    """Return the real recording as a rosbag2 bag (storage 'sqlite3' or 'mcap'), by rosbags."""
+def convert_real(dst, storage, source=REAL):
+    """Return the real recording (or ``source``) as a rosbag2 bag (storage 'sqlite3' or 'mcap')."""
     from rosbags.convert import convert
-    convert([REAL], Path(dst), storage, 8, None, 'file', None, None, [], [], [], [])
+    convert([Path(source)], Path(dst), storage, 8, None, 'file', None, None, [], [], [], [])
+    return Path(dst)
+
+
+def real_excerpt(dst, count=300):
+    """
+    Return a ROS 1 bag of the real recording's first ``count`` messages, as recorded.
+
+    Each message's bytes, record time and connection (type, definition, md5sum) are copied
+    by rosbags' ROS 1 reader and writer: a small bag of the real data (300 messages: 150 on
+    each topic).
+    """
+    from rosbags.rosbag1 import Reader, Writer
+    with Reader(REAL) as reader, Writer(Path(dst)) as writer:
+        conns = {}
+        for k, (conn, t, raw) in enumerate(reader.messages()):
+            if k == count:
+                break
+            if conn.topic not in conns:
+                conns[conn.topic] = writer.add_connection(
+                    conn.topic, conn.msgtype, msgdef=conn.msgdef.data, md5sum=conn.digest)
+            writer.write(conns[conn.topic], t, raw)
     return Path(dst)
 
 

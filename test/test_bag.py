@@ -72,11 +72,20 @@ def reference():
     return out
 
 
+EXCERPT = 150
+"""Messages on each topic of the excerpt of the real recording (bag_helpers.real_excerpt)."""
+
+
 @pytest.fixture(scope='module')
 def converted(tmp_path_factory):
-    """Return the real recording as rosbag2 sqlite3 and MCAP bags (converted by rosbags)."""
+    """
+    Return an excerpt of the real recording: ROS 1 as recorded, rosbag2 sqlite3 and MCAP.
+
+    The rosbag2 bags are converted by rosbags from the ROS 1 excerpt (300 messages).
+    """
     tmp = tmp_path_factory.mktemp('converted')
-    return {s: bh.convert_real(tmp / s, s) for s in ('sqlite3', 'mcap')}
+    ros1 = bh.real_excerpt(tmp / 'excerpt.bag', 2 * EXCERPT)
+    return {'ros1': ros1, **{s: bh.convert_real(tmp / s, s, ros1) for s in ('sqlite3', 'mcap')}}
 
 
 def log_map(R):
@@ -225,12 +234,12 @@ def test_csv_wrap_and_degrees(capsys, reference):
 
 @pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
 def test_rosbag2_gives_what_the_ros1_bag_gives(capsys, converted, storage):
-    want = rows_of(capsys, 'bag', bh.REAL, '--seq', 'zyz')
+    want = rows_of(capsys, 'bag', converted['ros1'], '--seq', 'zyz')
     got = rows_of(capsys, 'bag', converted[storage], '--seq', 'zyz')
-    assert got == want
+    assert got == want and len(got) == 2 * EXCERPT
     s = summary_of(capsys, 'bag', converted[storage])
     assert s['storage'] == f'rosbag2 {storage}'
-    assert s['topics'] == summary_of(capsys, 'bag', bh.REAL)['topics']
+    assert s['topics'] == summary_of(capsys, 'bag', converted['ros1'])['topics']
     # a file of the bag names the bag too
     inner = next(p for p in converted[storage].iterdir() if p.suffix in ('.db3', '.mcap'))
     assert summary_of(capsys, 'bag', inner)['topics'] == s['topics']
@@ -238,23 +247,29 @@ def test_rosbag2_gives_what_the_ros1_bag_gives(capsys, converted, storage):
 
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
 def test_columns_are_the_fields_rosbags_decodes(converted, reference, storage):
-    """Each topic's columns hold the fields of its messages, as rosbags decodes them."""
+    """
+    Each topic's columns hold the fields of its messages, as rosbags decodes them.
+
+    The whole real recording (ROS 1), and the rosbag2 bags of its excerpt (their first
+    messages).
+    """
     path = bh.REAL if storage == 'ros1' else converted[storage]
+    n = {IMU: 3061, ODOM: 3060} if storage == 'ros1' else {IMU: EXCERPT, ODOM: EXCERPT}
     with bag_read.open_bag(path) as reader:
         columns = bag_read.read_topics(reader, list(reader.connections))
     assert set(columns) == {IMU, ODOM}
     for topic, c in columns.items():
-        ref = reference[topic]
+        ref = {name: values[:n[topic]] for name, values in reference[topic].items()}
         np.testing.assert_array_equal(c.orientation, ref['q'])
         np.testing.assert_array_equal(c.sec, ref['sec'])
         np.testing.assert_array_equal(c.nanosec, ref['nsec'])
         assert [c.frame_ids[i] for i in c.frame] == ref['frame']
         assert c.record.dtype == np.int64 and (np.diff(c.record) >= 0).all()
     imu, odom = columns[IMU], columns[ODOM]
-    np.testing.assert_array_equal(imu.angular_velocity, reference[IMU]['gyro'])
-    np.testing.assert_array_equal(odom.position, reference[ODOM]['p'])
+    np.testing.assert_array_equal(imu.angular_velocity, reference[IMU]['gyro'][:n[IMU]])
+    np.testing.assert_array_equal(odom.position, reference[ODOM]['p'][:n[ODOM]])
     assert imu.position is None and odom.angular_velocity is None
-    assert imu.covariance.shape == (3061, 9) and odom.covariance.shape == (3060, 36)
+    assert imu.covariance.shape == (n[IMU], 9) and odom.covariance.shape == (n[ODOM], 36)
     np.testing.assert_array_equal(imu.covariance0, imu.covariance[:, 0])
     assert odom.child_frame_ids == ['base_link'] and imu.child_frame_ids is None
 
@@ -294,10 +309,10 @@ def test_csv_to_a_file_and_the_summary_to_stdout(capsys, tmp_path):
     assert len(lines) == 3062 and lines[0].startswith('topic,stamp,frame_id,')
 
 
-def test_plot_one_panel_per_topic(capsys, tmp_path):
+def test_plot_one_panel_per_topic(capsys, tmp_path, converted):
     pytest.importorskip('matplotlib')
     svg = tmp_path / 'rpy.svg'
-    status, _, err = run(capsys, 'bag', bh.REAL, '--plot', svg)
+    status, _, err = run(capsys, 'bag', converted['ros1'], '--plot', svg)
     assert (status, err) == (0, f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {IMU}, '
                                 f'{ODOM}\n')
     text = svg.read_text()
@@ -305,7 +320,7 @@ def test_plot_one_panel_per_topic(capsys, tmp_path):
         for angle in ('roll', 'pitch', 'yaw'):
             assert f'id="{topic}:{angle}"' in text
     png = tmp_path / 'rpy.png'
-    assert run(capsys, 'bag', bh.REAL, '--plot', png, '--deg')[0] == 0
+    assert run(capsys, 'bag', converted['ros1'], '--plot', png, '--deg')[0] == 0
     assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
 
 
@@ -335,24 +350,24 @@ def test_frame_ids_of_many_lengths_are_read_as_recorded(tmp_path):
         np.testing.assert_array_equal(pose.orientation, q)
 
 
-def test_a_topic_read_in_many_chunks_is_one_table(monkeypatch, capsys):
+def test_a_topic_read_in_many_chunks_is_one_table(monkeypatch, capsys, converted):
     """Columns read a chunk of messages at a time join into one: frame ids listed once."""
-    whole = rows_of(capsys, 'bag', bh.REAL)
+    whole = rows_of(capsys, 'bag', converted['ros1'])
     monkeypatch.setattr(bag_read, 'CHUNK', 7)
-    s = summary_of(capsys, 'bag', bh.REAL)
+    s = summary_of(capsys, 'bag', converted['ros1'])
     assert s['topics'][IMU]['frame_ids'] == ['base_link']
     assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']
-    assert rows_of(capsys, 'bag', bh.REAL) == whole
+    assert rows_of(capsys, 'bag', converted['ros1']) == whole
 
 
-def test_csv_numbers_are_rounded_then_written_as_the_shortest_text(capsys):
+def test_csv_numbers_are_rounded_then_written_as_the_shortest_text(capsys, converted):
     """--precision rounds each number, written as Python's repr of the rounded float."""
     def round_number(x, digits):  # correctly rounded by Python's formatting
         return float(f'{x:.{digits}g}') if abs(x) >= 1 else round(x, digits) + 0.0
 
-    full = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '17')
-    four = rows_of(capsys, 'bag', bh.REAL, '--topic', IMU, '--precision', '4')
-    assert len(full) == len(four) == 3061
+    full = rows_of(capsys, 'bag', converted['ros1'], '--topic', IMU, '--precision', '17')
+    four = rows_of(capsys, 'bag', converted['ros1'], '--topic', IMU, '--precision', '4')
+    assert len(full) == len(four) == EXCERPT
     assert [r['stamp'] for r in full] == [r['stamp'] for r in four]  # stamps exactly
     names = [n for n in bag_output.csv_header(None) if n not in ('topic', 'stamp', 'frame_id')]
     for long, short in zip(full[1:], four[1:]):

@@ -218,16 +218,17 @@ def one_line_error(script, *args, env=None, contains=''):
 
 @pytest.fixture(scope='module')
 def damaged(tmp_path_factory):
-    """Damaged copies of the real recording, in each format."""
+    """Damaged copies of the real recording (of its first 300 messages), in each format."""
     tmp = tmp_path_factory.mktemp('damaged')
     out = {}
-    data = bh.REAL.read_bytes()
+    excerpt = bh.real_excerpt(tmp / 'excerpt.bag')
+    data = excerpt.read_bytes()
     out['truncated ros1'] = tmp / 'truncated.bag'
     out['truncated ros1'].write_bytes(data[:len(data) // 2])
     out['garbage ros1'] = tmp / 'garbage.bag'
     out['garbage ros1'].write_bytes(bytes(RNG.integers(0, 256, 4096, dtype=np.uint8)))
     for storage in ('sqlite3', 'mcap'):
-        bag = bh.convert_real(tmp / storage, storage)
+        bag = bh.convert_real(tmp / storage, storage, excerpt)
         inner = next(p for p in bag.iterdir() if p.suffix in ('.db3', '.mcap'))
         raw = inner.read_bytes()
         inner.write_bytes(raw[:len(raw) // 3])
