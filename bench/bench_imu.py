@@ -6,9 +6,10 @@ recording (../shared/data/jackal_imu_odometry.bag, /imu/data, 50 Hz) resampled t
 (scipy's Slerp for the orientation, linear for the gyro and the accelerometer), then repeated
 with shifted stamps until it lasts --minutes (60: 1,440,000 messages). Every other copy runs
 backwards in time (the samples in reverse order, the gyro negated), so the orientation goes on
-without a jump from one copy to the next and the whole hour is a consistent IMU — but for the
-recording's own orientation, stamped 10 ms early against its gyro: half a period at 50 Hz,
-four at 400 Hz, which imu-check's time_offset reports (its table is printed first).
+without a jump from one copy to the next and the whole hour is a consistent IMU. (The
+recording's orientation is stamped 10 ms early against its gyro, half a period at 50 Hz; a
+backward copy has it 10 ms late, so over many copies the two average out. imu-check's table of
+the bag is printed first.)
 
 Each side runs in a process of its own that has imported its libraries already, and only its
 job is timed (rot_tools.cli.main.main with the command line, its standard output discarded):

@@ -194,37 +194,32 @@ def test_imu_without_orientation(real, tmp_path, capsys):
     assert status == 0 and data['faults'] == 0 and data['fix'] == []
 
 
-def test_window_of_the_recording(real, tmp_path, capsys):
-    bag = write(tmp_path / 'window', real)
-    status, data = run_json(capsys, 'imu-check', bag, '--start', 2, '--end', 12)
-    start = real.imu_record[0]
-    inside = (real.imu_record >= start + 2e9) & (real.imu_record <= start + 12e9)
+def test_clean_window_with_the_odometry_json(real, tmp_path, capsys):
+    bag = write(tmp_path / 'window', real, odom=True)
+    status, data = run_json(capsys, 'imu-check', bag, '--ref-topic', ODOM, '--start', 5,
+                            '--end', 15)
+    assert status == 0 and data['faults'] == 0 and data['fix'] == []
+    start = min(real.imu_record[0], real.odom_record[0])
+    inside = (real.imu_record >= start + 5e9) & (real.imu_record <= start + 15e9)
+    assert list(data) == ['imu', 'checks', 'faults', 'fix']
     assert data['imu'] == {'topic': IMU, 'frame': 'base_link', 'messages': int(inside.sum()),
                            'rate': pytest.approx(50, rel=1e-3)}
-    assert status == 0 and data['faults'] == 0
+    assert list(data['checks']) == list(CHECKS)
+    named = {'stamps': ['period', 'gap', 'backwards'], 'accel_units': ['scale'],
+             'orientation_vs_accel': ['angle'], 'gyro_units': ['scale'],
+             'gyro_axes': ['matrix'], 'gyro_bias': ['bias'], 'time_offset': ['seconds'],
+             'accel_sign': ['angle'], 'world_up': ['angle'],
+             'mounting': ['quaternion', 'warning']}
+    for name, check in data['checks'].items():
+        assert list(check) == ['status', 'message'] + named[name], name
+        assert check['status'] == 'ok', (name, check)
+    assert data['checks']['gyro_axes']['matrix'] == [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    assert len(data['checks']['gyro_bias']['bias']) == 3
+    assert len(data['checks']['mounting']['quaternion']) == 4
 
 
 # ---------------------------------------------------------------------------------------
-# The clean recording, its JSON and doc/imu.md's example
-
-
-def test_clean_recording_json(capsys):
-    status, data = run_json(capsys, 'imu-check', bh.REAL, '--ref-topic', ODOM)
-    assert status == 0
-    assert list(data) == ['imu', 'checks', 'faults', 'fix']
-    assert list(data['imu']) == ['topic', 'frame', 'messages', 'rate']
-    assert data['imu']['topic'] == IMU and data['imu']['messages'] == 3061
-    assert list(data['checks']) == list(CHECKS)
-    named = {'accel_units': 'scale', 'orientation_vs_accel': 'angle', 'gyro_units': 'scale',
-             'gyro_axes': 'matrix', 'gyro_bias': 'bias', 'time_offset': 'seconds',
-             'mounting': 'quaternion'}
-    for name, check in data['checks'].items():
-        assert list(check)[:2] == ['status', 'message'], name
-        assert check['status'] in ('ok', 'unknown'), (name, check)
-        if name in named:
-            assert named[name] in check, (name, check)
-    assert data['checks']['gyro_axes']['matrix'] == [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
-    assert data['faults'] == 0 and data['fix'] == []
+# doc/imu.md's example: the whole real recording, without and with the odometry
 
 
 def test_doc_example_is_real_output(capsys, monkeypatch):
@@ -302,6 +297,9 @@ def test_axis_map_and_static_transform_line():
     line = imu_check.static_transform([-1, 0, 0, 0], 'base_link', 'imu_link')
     assert line == ('ros2 run tf2_ros static_transform_publisher --x 0 --y 0 --z 0 --qx 1 '
                     '--qy 0 --qz 0 --qw 0 --frame-id base_link --child-frame-id imu_link')
+    side = Rotation.from_euler('y', 90, degrees=True).as_quat()
+    line = imu_check.static_transform(side, 'base_link', 'imu_link')
+    assert f'\n{line}\n' in (REPO / 'doc' / 'imu.md').read_text()  # the doc's example
 
 
 def test_deg_converts_angles_and_rates_only():

@@ -68,9 +68,11 @@ JSON_DIGITS = 6
 TABLE_DIGITS = 4
 """Significant digits of the numbers of the table."""
 
-MOUNTING_SHOWN = math.radians(3)
+MOUNTING_SHOWN = math.radians(10)
 """A mounting turned further than this from the identity gets its static transform line
-under the table (the accuracy of the mounting's up axis is 3°)."""
+under the table: the turns that matter are by tens of degrees (an IMU on its side, upside
+down, facing back); a few degrees are a plate's tilt, or the estimate's error over a short
+recording."""
 
 G = 9.80665
 """Standard gravity (m/s²): an accelerometer in g needs this factor."""
