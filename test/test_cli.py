@@ -1,11 +1,16 @@
 """
-rot-tools as a user runs it: the installed console script, in a subprocess.
+rot-tools as a user runs it: every command through main, what the console script calls.
+
+The commands run in this process (a process each would cost a second of start-up per line);
+test_the_installed_script_runs_main runs the installed console script itself, and
+test_cli_streams.py what only a process shows (its streams at exit, signals).
 
 Output values are parsed (JSON with the standard library, YAML with PyYAML when present) and
 compared with the math module; the printed precision is 12 digits, so values agree to
 ~1e-11. Bad input must give exactly one ``rot-tools: error:`` line and exit status 2.
 """
 
+import io
 import json
 import math
 import os
@@ -14,6 +19,8 @@ import re
 import shutil
 import subprocess
 import sys
+from typing import NamedTuple
+import warnings
 
 import numpy as np
 import pytest
@@ -22,6 +29,7 @@ from rot_tools import (
     axis_angle_to_matrix, EULER_SEQUENCES, euler_to_matrix, matrix_to_axis_angle,
     matrix_to_euler, nearest_rotation, rot_x, rot_y, rot_z, screw_from_transform,
     transform_from_screw)
+from rot_tools.cli import main as cli
 from scipy.spatial.transform import Rotation
 
 PRINTED = {'rtol': 1e-11, 'atol': 1e-11}  # what 12 printed digits allow
@@ -52,14 +60,55 @@ def script():
     return path
 
 
-def run(script, *args):
-    return subprocess.run([script, *map(str, args)], capture_output=True, encoding='utf-8',
-                          errors='replace', timeout=60)
+class Done(NamedTuple):
+    """What a run of rot-tools gave: its exit status and the text of its two streams."""
+
+    returncode: int
+    stdout: str
+    stderr: str
 
 
-def ok(script, *args):
+def run(*args):
+    """
+    Run rot-tools on these words as its console script does (``sys.exit(main(argv))``).
+
+    In this process, its standard streams swapped for text buffers, COLUMNS 80 as in a pipe;
+    a Python warning goes to its stderr as Python would print it, once per place.
+    """
+    out, err = io.StringIO(), io.StringIO()
+    streams, columns = (sys.stdout, sys.stderr), os.environ.get('COLUMNS')
+    sys.stdout, sys.stderr = out, err
+    os.environ['COLUMNS'] = '80'
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter('default')
+            status = cli.main([str(a) for a in args])
+    finally:
+        sys.stdout, sys.stderr = streams
+        if columns is None:
+            del os.environ['COLUMNS']
+        else:
+            os.environ['COLUMNS'] = columns
+    said = ''.join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno)
+                   for w in caught)
+    return Done(status, out.getvalue(), said + err.getvalue())
+
+
+def test_the_installed_script_runs_main(script):
+    """The console script is installed and is main: its status and streams, a report, an error."""
+    good = subprocess.run([script, 'rotvec', '0', '0', '1', '--json'], capture_output=True,
+                          encoding='utf-8', timeout=60)
+    assert (good.returncode, good.stderr) == (0, '')
+    assert json.loads(good.stdout) == json.loads(run('rotvec', 0, 0, 1, '--json').stdout)
+    bad = subprocess.run([script, 'quaternion', '0', '0', '0', '0'], capture_output=True,
+                         encoding='utf-8', timeout=60)
+    assert (bad.returncode, bad.stdout) == (2, '')
+    assert bad.stderr == run('quaternion', 0, 0, 0, 0).stderr != ''
+
+
+def ok(*args):
     """Run, require success and a clean stderr, and return the parsed output."""
-    proc = run(script, *args)
+    proc = run(*args)
     assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
     if '--json' in args:
         return json.loads(proc.stdout, parse_constant=_no_json_constants)
@@ -129,8 +178,8 @@ def check_quaternion(printed, R):
 
 
 @pytest.mark.parametrize('fmt', ['yaml', 'json'])
-def test_euler_negative_angle_and_options_after_the_arguments(script, fmt):
-    rep = ok(script, 'euler', 'ZYX', '-30', '20', '10', '--deg', *(['--json'] * (fmt == 'json')))
+def test_euler_negative_angle_and_options_after_the_arguments(fmt):
+    rep = ok('euler', 'ZYX', '-30', '20', '10', '--deg', *(['--json'] * (fmt == 'json')))
     a, b, c = np.radians([-30.0, 20.0, 10.0])
     R = rot_z(a) @ rot_y(b) @ rot_x(c)  # Jia eq. 1
     check_rotation(rep, R, deg=True)
@@ -138,21 +187,21 @@ def test_euler_negative_angle_and_options_after_the_arguments(script, fmt):
     assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion']
 
 
-def test_euler_extrinsic_with_output_sequence_and_exponent_numbers(script):
-    rep = ok(script, 'euler', 'zyx', '-1.5e-1', '2e-1', '0.3', '--seq', 'XYZ', '--json')
+def test_euler_extrinsic_with_output_sequence_and_exponent_numbers():
+    rep = ok('euler', 'zyx', '-1.5e-1', '2e-1', '0.3', '--seq', 'XYZ', '--json')
     R = rot_x(0.3) @ rot_y(0.2) @ rot_z(-0.15)  # extrinsic: first angle applied first
     check_rotation(rep, R, seq='XYZ')
     close(rep['euler']['angles'], [0.3, 0.2, -0.15])  # 'zyx' (a, b, c) is 'XYZ' (c, b, a)
 
 
-def test_options_before_the_command(script):
-    rep = ok(script, '--json', '--deg', '--seq', 'ZXZ', 'euler', 'YXY', '10', '-120', '35')
+def test_options_before_the_command():
+    rep = ok('--json', '--deg', '--seq', 'ZXZ', 'euler', 'YXY', '10', '-120', '35')
     check_rotation(rep, euler_to_matrix(np.radians([10.0, -120.0, 35.0]), 'YXY'), 'ZXZ',
                    deg=True)
 
 
-def test_all_sequences_at_gimbal_lock(script):
-    rep = ok(script, 'euler', 'ZYX', '25', '90', '0', '--deg', '--all-sequences', '--json')
+def test_all_sequences_at_gimbal_lock():
+    rep = ok('euler', 'ZYX', '25', '90', '0', '--deg', '--all-sequences', '--json')
     R = rot_z(math.radians(25)) @ rot_y(math.pi / 2)
     check_rotation(rep, R, deg=True)
     assert rep['euler']['degenerate'] is True
@@ -166,30 +215,30 @@ def test_all_sequences_at_gimbal_lock(script):
     assert [s for s, e in table.items() if e['degenerate']] == ['ZYX', 'xyz']
 
 
-def test_matrix_typed_with_six_digits(script):
+def test_matrix_typed_with_six_digits():
     typed = [0.866025, -0.5, 0, 0.5, 0.866025, 0, 0, 0, 1]  # Rot_z(30°) to six digits
-    rep = ok(script, 'matrix', *typed, '--deg', '--seq', 'zyz')
+    rep = ok('matrix', *typed, '--deg', '--seq', 'zyz')
     R = nearest_rotation(np.reshape(typed, (3, 3)))
     check_rotation(rep, R, seq='zyz', deg=True)
     assert rep['axis_angle']['angle_deg'] == pytest.approx(30.0, abs=1e-4)
     # The same matrix is refused at a tolerance tighter than its typing error (~6e-7).
-    proc = run(script, 'matrix', *typed, '--tol', '1e-7')
+    proc = run('matrix', *typed, '--tol', '1e-7')
     assert proc.returncode == 2
     assert re.fullmatch(r'rot-tools: error: matrix: R is not orthogonal: '
                         r'max\|RᵀR − I\| = \S+ > tol 1e-07 \(the tolerance is --tol\)\n',
                         proc.stderr)
 
 
-def test_axis_angle_in_degrees_prints_exact_values(script):
-    proc = run(script, 'axis-angle', '0', '0', '1', '90', '--deg')
+def test_axis_angle_in_degrees_prints_exact_values():
+    proc = run('axis-angle', '0', '0', '1', '90', '--deg')
     assert proc.returncode == 0
     assert '-0.0' not in proc.stdout and 'e-1' not in proc.stdout  # no noise like 6e-17
     assert 'matrix:\n- [0.0, -1.0, 0.0]\n- [1.0, 0.0, 0.0]\n- [0.0, 0.0, 1.0]\n' in proc.stdout
     assert '  angle_deg: 90.0\n' in proc.stdout and '    angle_deg: 270.0\n' in proc.stdout
 
 
-def test_axis_angle_normalises_the_axis(script):
-    rep = ok(script, 'axis-angle', '2', '-1', '2', '2.5', '--json')
+def test_axis_angle_normalises_the_axis():
+    rep = ok('axis-angle', '2', '-1', '2', '2.5', '--json')
     check_rotation(rep, axis_angle_to_matrix([2.0, -1.0, 2.0], 2.5))
     close(rep['axis_angle']['axis'], [2 / 3, -1 / 3, 2 / 3])
 
@@ -199,14 +248,14 @@ def test_axis_angle_normalises_the_axis(script):
     (['0', '-90', '0', '--deg'], [0.0, -math.pi / 2, 0.0]),
     (['3', '-2', '0.5', '--precision', '17'], [3.0, -2.0, 0.5]),  # |v| > π: angle 2π − |v|
 ])
-def test_rotvec(script, args, vector):
-    rep = ok(script, 'rotvec', *args, '--json')
+def test_rotvec(args, vector):
+    rep = ok('rotvec', *args, '--json')
     check_rotation(rep, axis_angle_to_matrix(vector, np.linalg.norm(vector)),
                    deg='--deg' in args)
 
 
-def test_precision(script):
-    rep = ok(script, 'rotvec', '0.1', '0.2', '0.3', '--precision', '4', '--json')
+def test_precision():
+    rep = ok('rotvec', '0.1', '0.2', '0.3', '--precision', '4', '--json')
     assert rep['axis_angle']['angle'] == 0.3742  # |(0.1, 0.2, 0.3)| = 0.374165...
     assert rep['matrix'][0][0] == round(float(rot_tools.rotvec_to_matrix([.1, .2, .3])[0, 0]), 4)
 
@@ -230,8 +279,8 @@ def _check_screw(rep, R, b):
 
 
 @pytest.mark.parametrize('fmt', ['yaml', 'json'])
-def test_screw_from_euler(script, fmt):
-    rep = ok(script, 'screw', '--euler', 'ZYX', '90', '0', '0', '--translation', '1', '0',
+def test_screw_from_euler(fmt):
+    rep = ok('screw', '--euler', 'ZYX', '90', '0', '0', '--translation', '1', '0',
              '0.5', '--deg', *(['--json'] * (fmt == 'json')))
     R = rot_z(math.pi / 2)
     check_rotation(rep, R, deg=True)
@@ -247,31 +296,31 @@ def test_screw_from_euler(script, fmt):
     (['--axis-angle', '1', '1', '0', '-180', '--deg'], axis_angle_to_matrix([1, 1, 0], math.pi)),
     (['--rotvec', '-0.2', '0.1', '2.5'], axis_angle_to_matrix([-.2, .1, 2.5], 2.5099800796)),
 ])
-def test_screw_rotation_forms(script, rotation, R):
+def test_screw_rotation_forms(rotation, R):
     if R is None:  # the --rotation matrix is typed with six digits: projected first
         R = nearest_rotation(np.reshape([float(x) for x in rotation[1:]], (3, 3)))
     b = [-1.0, 2.0, 0.25]
-    rep = ok(script, 'screw', *rotation, '--translation', *b, '--json')
+    rep = ok('screw', *rotation, '--translation', *b, '--json')
     check_rotation(rep, R, deg='--deg' in rotation)
     _check_screw(rep, R, b)
 
 
-def test_pure_translation_pitch_is_inf_in_yaml_and_json(script):
-    proc = run(script, 'screw', '--translation', '0', '-3', '4')
+def test_pure_translation_pitch_is_inf_in_yaml_and_json():
+    proc = run('screw', '--translation', '0', '-3', '4')
     assert proc.returncode == 0 and '  pitch: .inf\n' in proc.stdout
-    rep = ok(script, 'screw', '--translation', '0', '-3', '4', '--json')
+    rep = ok('screw', '--translation', '0', '-3', '4', '--json')
     sc = rep['screw']
     assert sc['pitch'] == 'inf' and float(sc['pitch']) == math.inf
     assert (sc['direction'], sc['angle'], sc['translation']) == ([0.0, -0.6, 0.8], 0.0, 5.0)
     check_rotation(rep, np.eye(3))
 
 
-def test_yaml_and_json_carry_the_same_report(script):
+def test_yaml_and_json_carry_the_same_report():
     yaml = pytest.importorskip('yaml')
     args = ['screw', '--euler', 'xzx', '0.3', '2', '-1', '--translation', '1', '2', '3',
             '--all-sequences']
-    from_yaml = yaml.safe_load(run(script, *args).stdout)
-    from_json = ok(script, *args, '--json')
+    from_yaml = yaml.safe_load(run(*args).stdout)
+    from_json = ok(*args, '--json')
     assert from_yaml == from_json
 
 
@@ -291,8 +340,8 @@ def _four_digits(q):
     [1.0, 0.0, 0.0, 0.0],                              # half turn about x (w = 0)
     *(_four_digits(Rotation.random(random_state=seed).as_quat()) for seed in range(4)),
 ])
-def test_quaternion_typed_to_four_digits(script, q):
-    rep = ok(script, 'quaternion', *q, '--json')
+def test_quaternion_typed_to_four_digits(q):
+    rep = ok('quaternion', *q, '--json')
     R = Rotation.from_quat(q).as_matrix()  # scipy normalises q
     check_rotation(rep, R)
     n = np.linalg.norm(q)
@@ -300,23 +349,23 @@ def test_quaternion_typed_to_four_digits(script, q):
     close(list(rep['quaternion'].values()), sign * np.divide(q, n))  # normalised
 
 
-def test_quaternion_order_is_ros_and_wxyz_reads_w_first(script):
+def test_quaternion_order_is_ros_and_wxyz_reads_w_first():
     c = math.sqrt(0.5)
-    xyzw = ok(script, 'quaternion', 0, 0, c, c, '--json')  # z = w = √½: Rot_z(90°)
+    xyzw = ok('quaternion', 0, 0, c, c, '--json')  # z = w = √½: Rot_z(90°)
     close(xyzw['matrix'], [[0, -1, 0], [1, 0, 0], [0, 0, 1]])
     close(list(xyzw['quaternion'].values()), [0, 0, c, c])
-    wxyz = ok(script, 'quaternion', c, c, 0, 0, '--wxyz', '--json')  # w = x = √½: Rot_x(90°)
+    wxyz = ok('quaternion', c, c, 0, 0, '--wxyz', '--json')  # w = x = √½: Rot_x(90°)
     close(wxyz['matrix'], [[1, 0, 0], [0, 0, -1], [0, 1, 0]])
     close(list(wxyz['quaternion'].values()), [c, 0, 0, c])  # printed in ROS order
-    assert ok(script, '--wxyz', 'quaternion', c, c, 0, 0, '--json') == wxyz
+    assert ok('--wxyz', 'quaternion', c, c, 0, 0, '--json') == wxyz
     q = Rotation.random(random_state=11).as_quat()  # (x, y, z, w)
-    rep = ok(script, 'quaternion', q[3], *q[:3], '--wxyz', '--precision', '17', '--json')
+    rep = ok('quaternion', q[3], *q[:3], '--wxyz', '--precision', '17', '--json')
     check_rotation(rep, Rotation.from_quat(q).as_matrix())  # scipy reads (x, y, z, w)
 
 
-def test_quaternion_tolerance_default_and_adjustable(script):
+def test_quaternion_tolerance_default_and_adjustable():
     # |(0, 0, 0.7, 0.7)| = 0.98995: 0.0101 from unit length, refused at the default 1e-3,
-    proc = run(script, 'quaternion', 0, 0, 0.7, 0.7)
+    proc = run('quaternion', 0, 0, 0.7, 0.7)
     assert (proc.returncode, proc.stdout) == (2, '')
     assert proc.stderr == ('rot-tools: error: quaternion X Y Z W: quaternion (x, y, z, w) is '
                            'not of unit length: |q| = 0.989949494, off 1 by 0.0101 > tol '
@@ -324,33 +373,33 @@ def test_quaternion_tolerance_default_and_adjustable(script):
     # ... accepted and normalised with --tol, given before the command or after.
     for args in (['--tol', '0.02', 'quaternion', 0, 0, 0.7, 0.7],
                  ['quaternion', 0, 0, 0.7, 0.7, '--tol', '0.02']):
-        rep = ok(script, *args, '--json')
+        rep = ok(*args, '--json')
         close(rep['matrix'], rot_z(math.pi / 2))
     # Just inside and just outside the default: |q| = 1 ± 9e-4 passes, 1 + 1.1e-3 does not.
-    assert run(script, 'quaternion', 0, 0, 0, 1.0009).returncode == 0
-    assert run(script, 'quaternion', 0, 0, 0, 0.9991).returncode == 0
-    assert run(script, 'quaternion', 0, 0, 0, 1.0011).returncode == 2
+    assert run('quaternion', 0, 0, 0, 1.0009).returncode == 0
+    assert run('quaternion', 0, 0, 0, 0.9991).returncode == 0
+    assert run('quaternion', 0, 0, 0, 1.0011).returncode == 2
     # --tol 0 needs an exactly unit quaternion.
-    assert run(script, 'quaternion', 0, 0, 0.6, 0.8, '--tol', '0').returncode == 0
-    assert run(script, '--tol', '0', 'quaternion', 0, 0, 0.6, 0.8001).returncode == 2
+    assert run('quaternion', 0, 0, 0.6, 0.8, '--tol', '0').returncode == 0
+    assert run('--tol', '0', 'quaternion', 0, 0, 0.6, 0.8001).returncode == 2
 
 
-def test_tol_before_the_command_applies_to_a_matrix(script):
+def test_tol_before_the_command_applies_to_a_matrix():
     typed = [0.866025, -0.5, 0, 0.5, 0.866025, 0, 0, 0, 1]  # typing error ~6e-7
-    proc = run(script, '--tol', '1e-7', 'matrix', *typed)
+    proc = run('--tol', '1e-7', 'matrix', *typed)
     assert proc.returncode == 2 and '> tol 1e-07 (the tolerance is --tol)' in proc.stderr
-    assert run(script, '--tol', '1e-6', 'matrix', *typed).returncode == 0
-    proc = run(script, '--tol', '1e-7', 'screw', '--rotation', *typed, '--translation', 0, 0, 0)
+    assert run('--tol', '1e-6', 'matrix', *typed).returncode == 0
+    proc = run('--tol', '1e-7', 'screw', '--rotation', *typed, '--translation', 0, 0, 0)
     assert proc.returncode == 2 and '> tol 1e-07 (the tolerance is --tol)' in proc.stderr
 
 
-def test_screw_from_a_ros_pose(script):
+def test_screw_from_a_ros_pose():
     q, b = _four_digits(Rotation.random(random_state=5).as_quat()), [0.5, -1.25, 2.0]
-    rep = ok(script, 'screw', '--quaternion', *q, '--translation', *b, '--json')
+    rep = ok('screw', '--quaternion', *q, '--translation', *b, '--json')
     R = Rotation.from_quat(q).as_matrix()
     check_rotation(rep, R)
     _check_screw(rep, R, b)
-    wxyz = ok(script, 'screw', '--quaternion', q[3], *q[:3], '--wxyz', '--translation', *b,
+    wxyz = ok('screw', '--quaternion', q[3], *q[:3], '--wxyz', '--translation', *b,
               '--json')
     assert wxyz == rep
 
@@ -363,7 +412,7 @@ def _typed(values, digits=17):
     return [f'{x:.{digits}g}' for x in np.ravel(values)]
 
 
-def test_frame_of_the_tracking_example(script):
+def test_frame_of_the_tracking_example():
     # Jia example 3: the tracking frame's axes are the columns of
     # Rot_z(α)·Rot_y(β), written out in closed form; a point q of the station's frame has
     # coordinates q' = Rᵀ·q in the tracking frame (§4).
@@ -372,7 +421,7 @@ def test_frame_of_the_tracking_example(script):
     u, v, w = [ca * cb, sa * cb, -sb], [-sa, ca, 0.0], [ca * sb, sa * sb, cb]
     R = np.array([[ca * cb, -sa, ca * sb], [sa * cb, ca, sa * sb], [-sb, 0.0, cb]])
     q = np.array([1.0, -2.0, 0.5])
-    rep = ok(script, 'frame', *_typed([u, v, w]), '--point', *q, '--json')
+    rep = ok('frame', *_typed([u, v, w]), '--point', *q, '--json')
     check_rotation(rep, R)
     close(rep['point']['p'], q)
     close(rep['point']['image'], R @ q)
@@ -380,33 +429,33 @@ def test_frame_of_the_tracking_example(script):
     assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'point']
 
 
-def test_frame_axes_of_any_length_typed_with_six_digits(script):
+def test_frame_axes_of_any_length_typed_with_six_digits():
     R = Rotation.random(random_state=3).as_matrix()
     axes = (R * [2.0, 0.5, 30.0]).T  # the columns, scaled: u, v, w
-    rep = ok(script, 'frame', *_typed(axes, 6), '--json')
+    rep = ok('frame', *_typed(axes, 6), '--json')
     M = np.array(rep['matrix'])
     close(M.T @ M, np.eye(3))  # made exactly orthonormal
     np.testing.assert_allclose(M, R, rtol=0, atol=3e-6)  # within the typing error
     check_rotation(rep, M)
     # The same frame is refused at a tolerance tighter than its typing error.
-    proc = run(script, '--tol', '1e-9', 'frame', *_typed(axes, 6))
+    proc = run('--tol', '1e-9', 'frame', *_typed(axes, 6))
     assert proc.returncode == 2
     assert re.fullmatch(r'rot-tools: error: frame U V W: frame axes . and . are not orthogonal: '
                         r'\|cos\| = \S+ > tol 1e-09 .*\(the tolerance is --tol\)\n', proc.stderr)
 
 
-def test_frame_tolerance_is_adjustable(script):
+def test_frame_tolerance_is_adjustable():
     skew = [1, 0.002, 0, 0, 1, 0, 0, 0, 1]  # u and v 0.11° from orthogonal: |cos| = 0.002
-    proc = run(script, 'frame', *skew)
+    proc = run('frame', *skew)
     assert proc.returncode == 2 and '|cos| = 0.002 > tol 1e-05' in proc.stderr
-    rep = ok(script, 'frame', *skew, '--tol', '3e-3', '--json')
+    rep = ok('frame', *skew, '--tol', '3e-3', '--json')
     M = np.array(rep['matrix'])
     close(M.T @ M, np.eye(3))
     np.testing.assert_allclose(M, np.eye(3), rtol=0, atol=2e-3)
 
 
-def test_screw_from_a_frame(script):
-    rep = ok(script, 'screw', '--frame', 0, 1, 0, -1, 0, 0, 0, 0, 1, '--translation', 1, 0, 0.5,
+def test_screw_from_a_frame():
+    rep = ok('screw', '--frame', 0, 1, 0, -1, 0, 0, 0, 0, 1, '--translation', 1, 0, 0.5,
              '--json')
     _check_screw(rep, rot_z(math.pi / 2), [1.0, 0.0, 0.5])
 
@@ -417,12 +466,12 @@ def _homogeneous(R, b):
 
 
 @pytest.mark.parametrize('seed', [0, 1])
-def test_matrix_of_sixteen_numbers_is_a_homogeneous_transform(script, seed):
+def test_matrix_of_sixteen_numbers_is_a_homogeneous_transform(seed):
     R = Rotation.random(random_state=seed).as_matrix()
     b = np.random.default_rng(seed).normal(size=3) * 4
     T = _homogeneous(R, b)
     p = np.array([0.25, -3.0, 2.0])
-    rep = ok(script, 'matrix', *_typed(T), '--point', *p, '--json')
+    rep = ok('matrix', *_typed(T), '--point', *p, '--json')
     check_rotation(rep, R)
     _check_screw(rep, R, b)
     close(rep['homogeneous'], T)
@@ -432,32 +481,32 @@ def test_matrix_of_sixteen_numbers_is_a_homogeneous_transform(script, seed):
                          'homogeneous', 'screw', 'point']
 
 
-def test_homogeneous_matrix_typed_with_six_digits(script):
+def test_homogeneous_matrix_typed_with_six_digits():
     T = _homogeneous(rot_x(0.3) @ rot_z(-1.1), [1.5, -2.0, 0.125])
-    rep = ok(script, 'matrix', *_typed(T, 6), '--json')
+    rep = ok('matrix', *_typed(T, 6), '--json')
     M = np.array(rep['matrix'])
     close(M.T @ M, np.eye(3))
     np.testing.assert_allclose(M, T[:3, :3], rtol=0, atol=2e-6)
     close(rep['translation'], [1.5, -2.0, 0.125])
-    proc = run(script, 'matrix', *_typed(T, 6), '--tol', '1e-8')
+    proc = run('matrix', *_typed(T, 6), '--tol', '1e-8')
     assert proc.returncode == 2
     assert proc.stderr.startswith('rot-tools: error: matrix T[:3, :3]: R is not orthogonal: '
                                   'max|RᵀR − I| = ')
     assert proc.stderr.endswith(' > tol 1e-08 (the tolerance is --tol)\n')
 
 
-def test_every_report_with_a_translation_has_the_homogeneous_matrix(script):
+def test_every_report_with_a_translation_has_the_homogeneous_matrix():
     R, b = rot_z(math.pi / 2), [1.0, 0.0, 0.5]
     for args in (['screw', '--euler', 'ZYX', '90', '0', '0', '--deg', '--translation', *b],
                  ['screw', '--quaternion', '0', '0', '0.7071', '0.7071', '--translation', *b],
                  ['matrix', *_typed(_homogeneous(R, b))]):
-        rep = ok(script, *args, '--json')
+        rep = ok(*args, '--json')
         close(rep['homogeneous'], [[0, -1, 0, 1], [1, 0, 0, 0], [0, 0, 1, 0.5], [0, 0, 0, 1]])
-    rep = ok(script, 'screw', '--translation', '0', '-3', '4', '--json')
+    rep = ok('screw', '--translation', '0', '-3', '4', '--json')
     close(rep['homogeneous'], _homogeneous(np.eye(3), [0, -3, 4]))
     for args in (['euler', 'ZYX', '1', '2', '3'], ['matrix', *_typed(R)],
                  ['quaternion', '0', '0', '0', '1'], ['frame', *_typed(R.T)]):
-        assert 'homogeneous' not in ok(script, *args, '--json')
+        assert 'homogeneous' not in ok(*args, '--json')
 
 
 @pytest.mark.parametrize('args', [
@@ -466,11 +515,11 @@ def test_every_report_with_a_translation_has_the_homogeneous_matrix(script):
     ['screw', '--rotvec', '0.3', '-1', '2', '--translation', '-1', '2', '0.25'],
     ['screw', '--translation', '1', '2', '3'],
 ])
-def test_point_image_and_coordinates_in_the_moved_frame(script, args):
+def test_point_image_and_coordinates_in_the_moved_frame(args):
     p = [-1e-3, 2.5, -3.0]
     for where in ('after', 'before'):
         argv = [*args, '--point', *p] if where == 'after' else ['--point', *p, *args]
-        rep = ok(script, *argv, '--json')
+        rep = ok(*argv, '--json')
         R = np.array(rep['matrix'])
         b = np.array(rep.get('translation', [0.0, 0.0, 0.0]))
         pt = rep['point']
@@ -490,12 +539,12 @@ COMMON_OPTIONS = {  # option → its arguments, for a quaternion input
 
 
 @pytest.mark.parametrize('option', sorted(COMMON_OPTIONS))
-def test_every_option_before_the_command_and_after_its_arguments(script, option):
+def test_every_option_before_the_command_and_after_its_arguments(option):
     value = COMMON_OPTIONS[option]
     q = ['0.927', '0.1', '-0.2', '0.3'] if option == '--wxyz' else ['0.1', '-0.2', '0.3', '0.927']
-    before = run(script, option, *value, 'quaternion', *q)
-    after = run(script, 'quaternion', *q, option, *value)
-    plain = run(script, 'quaternion', '0.1', '-0.2', '0.3', '0.927')
+    before = run(option, *value, 'quaternion', *q)
+    after = run('quaternion', *q, option, *value)
+    plain = run('quaternion', '0.1', '-0.2', '0.3', '0.927')
     assert before.returncode == after.returncode == 0, (before.stderr, after.stderr)
     assert before.stdout == after.stdout
     assert (before.stdout == plain.stdout) is (option in ('--tol', '--wxyz'))  # it acted
@@ -509,32 +558,32 @@ def test_every_option_before_the_command_and_after_its_arguments(script, option)
     ('screw --translation 1 2 3 --deg --euler ZYX 90 0 0',
      'screw --euler ZYX 90 0 0 --translation 1 2 3 --deg'),
 ])
-def test_options_between_the_arguments(script, between, canonical):
-    mixed, plain = run(script, *between.split()), run(script, *canonical.split())
+def test_options_between_the_arguments(between, canonical):
+    mixed, plain = run(*between.split()), run(*canonical.split())
     assert (mixed.returncode, mixed.stderr) == (0, '') and mixed.stdout == plain.stdout
 
 
-def test_help_lists_every_option(script):
+def test_help_lists_every_option():
     options = [*COMMON_OPTIONS, '--plot', '--version']
     for args in ([], ['quaternion'], ['frame'], ['screw']):
-        text = run(script, *args, '--help').stdout
+        text = run(*args, '--help').stdout
         for option in options:
             assert re.search(rf'^  {option}\b', text, re.MULTILINE), (args, option)
-    text = run(script, '--help').stdout
+    text = run('--help').stdout
     for default in ('max|RᵀR − I| and |det R − 1| ≤ TOL, default 1e-05',
                     '|cos| between two axes ≤ TOL, default 1e-05',
                     '||q| − 1| ≤ TOL, default 0.001'):  # which default for which input
         assert default in ' '.join(text.split())
 
 
-def test_version_is_the_installed_distribution_and_package_xml_version(script):
+def test_version_is_the_installed_distribution_and_package_xml_version():
     from importlib.metadata import version
     xml = (Path(__file__).resolve().parents[1] / 'package.xml').read_text()
     (in_xml,) = re.findall(r'<version>([^<]+)</version>', xml)
     assert version('rot_tools') == in_xml
     for args in (['--version'], ['euler', 'ZYX', '1', '2', '3', '--version'],
                  ['--json', '--version']):
-        proc = run(script, *args)
+        proc = run(*args)
         assert (proc.returncode, proc.stdout, proc.stderr) == (0, f'rot-tools {in_xml}\n', '')
 
 
@@ -547,24 +596,24 @@ def test_version_is_the_installed_distribution_and_package_xml_version(script):
     (['screw', '--rotvec', '0', '7', '0', '--translation', '1', '0', '0'], '7'),
     (['rotvec', '1e300', '-1e300', '0'], '1.41421e+300'),  # its norm, without overflow
 ])
-def test_radians_that_look_like_degrees_get_a_hint(script, args, size):
-    proc = run(script, *args)
+def test_radians_that_look_like_degrees_get_a_hint(args, size):
+    proc = run(*args)
     assert proc.returncode == 0
     assert proc.stderr == (f'rot-tools: hint: an angle of {size} rad is more than 2π: if it '
                            'is in degrees, add --deg\n')
-    assert proc.stdout == run(script, *args, '--precision', '12').stdout  # still radians
-    assert run(script, *args, '--deg').stderr == ''
+    assert proc.stdout == run(*args, '--precision', '12').stdout  # still radians
+    assert run(*args, '--deg').stderr == ''
 
 
 @pytest.mark.parametrize('args', [
     'euler ZYX 6.28 -6.28 3', 'rotvec 3.6 3.6 3.6', 'axis-angle 1 0 0 -6.2831'])
-def test_angles_up_to_2pi_get_no_hint(script, args):
-    proc = run(script, *args.split())
+def test_angles_up_to_2pi_get_no_hint(args):
+    proc = run(*args.split())
     assert (proc.returncode, proc.stderr) == (0, '')
 
 
-def test_radians_value_is_kept_when_hinting(script):
-    rep = json.loads(run(script, 'axis-angle', 0, 0, 1, 90, '--json').stdout)
+def test_radians_value_is_kept_when_hinting():
+    rep = json.loads(run('axis-angle', 0, 0, 1, 90, '--json').stdout)
     check_rotation(rep, rot_z(90.0))  # 90 rad, as typed
 
 
@@ -574,18 +623,18 @@ def test_radians_value_is_kept_when_hinting(script):
 
 @pytest.mark.parametrize('command', ['euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion',
                                      'frame', 'screw'])
-def test_help_has_usage_and_examples_that_run(script, command):
-    proc = run(script, command, '--help')
+def test_help_has_usage_and_examples_that_run(command):
+    proc = run(command, '--help')
     assert proc.returncode == 0 and proc.stderr == ''
     assert proc.stdout.startswith(f'usage: rot-tools {command} ')
     examples = proc.stdout.split('\nexamples:\n', 1)[1].splitlines()
     assert examples and all(line.startswith('  rot-tools ') for line in examples)
     first = examples[0].split()[1:]
-    assert run(script, *first).returncode == 0
+    assert run(*first).returncode == 0
 
 
-def test_main_help(script):
-    proc = run(script, '--help')
+def test_main_help():
+    proc = run('--help')
     assert proc.returncode == 0 and proc.stdout.startswith('usage: rot-tools ')
     for command in ('euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion', 'frame', 'screw'):
         assert f'\n    {command} ' in proc.stdout
@@ -718,8 +767,8 @@ def test_main_help(script):
     ('screw --rotvec 1 2 3 --euler ZYX 1 2 3 --translation 0 0 0',
      'argument --euler: not allowed with argument --rotvec'),
 ])
-def test_bad_input_is_one_line_and_status_2(script, args, message):
-    proc = run(script, *args.split())
+def test_bad_input_is_one_line_and_status_2(args, message):
+    proc = run(*args.split())
     assert proc.returncode == 2, proc
     assert proc.stdout == ''
     assert proc.stderr.startswith(f'rot-tools: error: {message}'), proc.stderr
@@ -730,12 +779,12 @@ def test_bad_input_is_one_line_and_status_2(script, args, message):
                                          ('rpy', "extrinsic sequence 'xyz'"),
                                          ('roll-pitch-yaw', "extrinsic sequence 'xyz'"),
                                          ('YPR', "intrinsic sequence 'ZYX'")])
-def test_roll_pitch_yaw_as_a_sequence_name_gets_a_hint(script, name, meant):
-    proc = run(script, 'euler', 'ZYX', '0.1', '0.2', '0.3', '--seq', name)
+def test_roll_pitch_yaw_as_a_sequence_name_gets_a_hint(name, meant):
+    proc = run('euler', 'ZYX', '0.1', '0.2', '0.3', '--seq', name)
     assert proc.returncode == 2 and proc.stderr.count('\n') == 1, proc.stderr
     assert meant in proc.stderr and '~/rpy' in proc.stderr
     # ... and what it points to is right: rpy is the report's roll, pitch, yaw.
-    rep = ok(script, 'euler', 'xyz', '0.1', '0.2', '0.3')
+    rep = ok('euler', 'xyz', '0.1', '0.2', '0.3')
     close([rep['rpy'][k] for k in ('roll', 'pitch', 'yaw')], [0.1, 0.2, 0.3])
-    rep = ok(script, 'euler', 'ZYX', '0.3', '0.2', '0.1')
+    rep = ok('euler', 'ZYX', '0.3', '0.2', '0.1')
     close([rep['rpy'][k] for k in ('roll', 'pitch', 'yaw')], [0.1, 0.2, 0.3])

@@ -1,5 +1,5 @@
 """
-rot-tools covariance as a user runs it: the installed script, against an independent reference.
+rot-tools covariance as a user runs it (through main, as test_cli.py), against a reference.
 
 The reference is scipy's Rotation (from_euler / as_euler, from_rotvec / as_rotvec)
 differentiated by central differences: J = ∂(output coordinates)/∂(input coordinates) at the
@@ -12,26 +12,16 @@ every refusal (one ``rot-tools: error:`` line, status 2).
 
 import json
 import math
-import subprocess
 
 from conftest import REPO
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from test_cli import _find_script, ok, run
+from test_cli import ok, run
 
 H = 1e-5
 """Central-difference step (rad)."""
-
-
-@pytest.fixture(scope='module')
-def script():
-    """Return the installed rot-tools, found as test_cli.py finds it."""
-    path = _find_script()
-    if path is None:
-        pytest.fail('the rot-tools console script is not installed (see test_cli.py)')
-    return path
 
 
 ROTATIONS = Rotation.from_euler('xyz', [[0.3, -0.7, 2.1], [-2.5, 0.4, -0.9], [1.2, 1.1, 0.2]])
@@ -110,9 +100,9 @@ def _rotation_words(kind, r):
     return ['euler', seq, *_typed(np.degrees(r.as_euler(seq))), '--deg']
 
 
-def converted(script, words, C, source, target, *options):
+def converted(words, C, source, target, *options):
     """Run rot-tools covariance; return the parsed JSON report."""
-    return ok(script, 'covariance', *words, '--cov', *_typed(C), '--from', source,
+    return ok('covariance', *words, '--cov', *_typed(C), '--from', source,
               '--to', target, *options, '--json', '--precision', '17')
 
 
@@ -140,11 +130,11 @@ PAIRS = [  # (rotation input, rotation, from, to, --frame, --to-frame or None)
 
 
 @pytest.mark.parametrize('kind, index, source, target, frame, to_frame', PAIRS)
-def test_values_against_central_differences(script, kind, index, source, target, frame,
+def test_values_against_central_differences(kind, index, source, target, frame,
                                             to_frame):
     r, C = ROTATIONS[index], _random_covariance(len(source) + 10 * index)
     options = ['--frame', frame] + (['--to-frame', to_frame] if to_frame else [])
-    rep = converted(script, _rotation_words(kind, r), C, source, target, *options)
+    rep = converted(_rotation_words(kind, r), C, source, target, *options)
     want = reference(r, C, source, target, frame, to_frame or frame)
     close_to(rep['covariance'], want)
     sigma = np.sqrt(np.diag(want))
@@ -168,11 +158,11 @@ def test_the_reference_sees_the_frame_and_the_reading():
         assert np.abs(a - b).max() > 0.1 * np.abs(C).max()
 
 
-def test_json_and_yaml_carry_the_same_report_and_its_shape(script):
+def test_json_and_yaml_carry_the_same_report_and_its_shape():
     words = ['euler', 'xyz', '5', '60', '30', '--deg', '--cov', '7.6e-5', '0', '0', '0',
              '7.6e-5', '0', '0', '0', '1.2e-3', '--from', 'rotvec', '--to', 'rpy']
-    as_json = ok(script, 'covariance', *words, '--json')
-    assert ok(script, 'covariance', *words) == as_json
+    as_json = ok('covariance', *words, '--json')
+    assert ok('covariance', *words) == as_json
     assert list(as_json) == ['from', 'from_frame', 'to', 'to_frame', 'covariance', 'stddev',
                              'stddev_deg', 'correlation', 'degenerate']
     assert np.shape(as_json['covariance']) == (3, 3) and len(as_json['stddev']) == 3
@@ -180,9 +170,9 @@ def test_json_and_yaml_carry_the_same_report_and_its_shape(script):
     assert as_json['stddev'][0] == pytest.approx(2 * math.sqrt(7.6e-5), rel=1e-11)
 
 
-def test_small_covariances_keep_their_digits(script):
+def test_small_covariances_keep_their_digits():
     # rounding is to significant digits of the largest entry, not to decimal places
-    rep = ok(script, 'covariance', 'quaternion', '0', '0', '0', '1', '--cov', '2.59777776e-07',
+    rep = ok('covariance', 'quaternion', '0', '0', '0', '1', '--cov', '2.59777776e-07',
              '0', '0', '0', '2.59777776e-07', '0', '0', '0', '2.5e-05', '--from', 'rotvec',
              '--to', 'rpy', '--json')
     assert rep['covariance'][0][0] == 2.59777776e-07
@@ -198,10 +188,10 @@ def test_small_covariances_keep_their_digits(script):
     (['euler', 'ZYZ', '0.3', '0', '0'], 'ZYZ', 'rotvec', 'ZYZ'),
     (['quaternion', '0', '0', '0', '1'], 'rpy', 'zxz', 'zxz'),  # identity: zxz's θ2 = 0
 ])
-def test_gimbal_lock_is_degenerate_with_a_note(script, words, source, target, seq):
+def test_gimbal_lock_is_degenerate_with_a_note(words, source, target, seq):
     args = ['covariance', *words, '--cov', '1e-4', '0', '0', '0', '1e-4', '0', '0', '0',
             '4e-4', '--from', source, '--to', target, '--json']
-    proc = run(script, *args)
+    proc = run(*args)
     assert proc.returncode == 0
     rep = json.loads(proc.stdout)
     assert rep['degenerate'] is True
@@ -247,8 +237,8 @@ def _cov(text):
     (['--from', 'rotvec'], 'the following arguments are required: --cov, --to'),
     (COV + FROM_TO + ['--seq', 'xyz'], 'unrecognized arguments: --seq xyz'),
 ])
-def test_bad_covariance_options(script, args, message):
-    proc = run(script, 'covariance', 'euler', 'xyz', '0.1', '1.5', '0.2', *args)
+def test_bad_covariance_options(args, message):
+    proc = run('covariance', 'euler', 'xyz', '0.1', '1.5', '0.2', *args)
     assert (proc.returncode, proc.stdout) == (2, ''), proc
     assert proc.stderr.startswith(f'rot-tools: error: {message}'), proc.stderr
     assert proc.stderr.count('\n') == 1, proc.stderr
@@ -261,8 +251,8 @@ def test_bad_covariance_options(script, args, message):
      '--cov: the converted covariance overflows float64'),
     ('1e308 0 1e308 0 1 0 1e308 0 1e308', None),  # eigvalsh does not converge on it as typed
 ])
-def test_covariances_at_the_edge_of_float64(script, cov, message):
-    proc = run(script, 'covariance', 'euler', 'xyz', '0.1', '0.2', '0.3', *_cov(cov), '--from',
+def test_covariances_at_the_edge_of_float64(cov, message):
+    proc = run('covariance', 'euler', 'xyz', '0.1', '0.2', '0.3', *_cov(cov), '--from',
                'rotvec', '--to', 'ZYX', '--json')
     if message is None:
         assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
@@ -280,15 +270,15 @@ def test_covariances_at_the_edge_of_float64(script, cov, message):
     '7.6e-5 0 0 0 1.4e-3',
     'covariance --cov 3e-4 0 0 0 7.6e-5 0 0 0 1.4e-3 --to rotvec euler --from rpy xyz 5 60 30',
 ])
-def test_options_before_between_and_after_the_rotation(script, mixed):
+def test_options_before_between_and_after_the_rotation(mixed):
     """Covariance's own options and the common ones go anywhere, as for the other commands."""
     canonical = ('covariance euler xyz 5 60 30 --deg --from rpy --to rotvec --frame body --cov '
                  '3e-4 0 0  0 7.6e-5 0  0 0 1.4e-3')
     mixed += '' if '--frame' in mixed else ' --frame body'
     mixed += '' if '--deg' in mixed else ' --deg'
-    proc = run(script, *mixed.split())
+    proc = run(*mixed.split())
     assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
-    assert proc.stdout == run(script, *canonical.split()).stdout
+    assert proc.stdout == run(*canonical.split()).stdout
 
 
 @pytest.mark.parametrize('args, message', [
@@ -306,10 +296,10 @@ def test_options_before_between_and_after_the_rotation(script, mixed):
     ('covariance euler xyz 0.1 1.5707 0.2', '--cov: the converted covariance overflows '
      'float64'),
 ])
-def test_bad_rotation_or_misplaced_option(script, args, message):
+def test_bad_rotation_or_misplaced_option(args, message):
     cov = '1e307 0 0 0 1e307 0 0 0 1e307' if 'overflows' in message else '1 0 0 0 2 0 0 0 3'
     tail = f' --cov {cov} --from rotvec --to rpy' if args != 'covariance' else ''
-    proc = run(script, *(args + tail).split())
+    proc = run(*(args + tail).split())
     assert (proc.returncode, proc.stdout) == (2, ''), proc
     assert proc.stderr.startswith(f'rot-tools: error: {message}'), proc.stderr
     assert proc.stderr.count('\n') == 1, proc.stderr
@@ -319,9 +309,9 @@ def test_bad_rotation_or_misplaced_option(script, args, message):
 # Help
 
 
-def test_help_lists_the_command_its_inputs_and_examples_that_run(script):
-    assert '\n    covariance ' in run(script, '--help').stdout
-    proc = run(script, 'covariance', '--help')
+def test_help_lists_the_command_its_inputs_and_examples_that_run():
+    assert '\n    covariance ' in run('--help').stdout
+    proc = run('covariance', '--help')
     assert (proc.returncode, proc.stderr) == (0, '')
     assert proc.stdout.startswith('usage: rot-tools covariance INPUT ARGS... --cov C11 .. C33')
     for kind in ('euler', 'matrix', 'axis-angle', 'rotvec', 'quaternion', 'frame'):
@@ -329,9 +319,9 @@ def test_help_lists_the_command_its_inputs_and_examples_that_run(script):
     examples = proc.stdout.split('\nexamples:\n', 1)[1].splitlines()
     assert len(examples) == 3
     for line in examples:
-        done = run(script, *line.split()[1:])
+        done = run(*line.split()[1:])
         assert (done.returncode, done.stderr) == (0, ''), line
-    inner = run(script, 'covariance', 'quaternion', '--help').stdout
+    inner = run('covariance', 'quaternion', '--help').stdout
     assert inner.startswith('usage: rot-tools covariance quaternion X Y Z W\n')
 
 
@@ -357,7 +347,7 @@ def _most_pitched_imu_message():
     return best
 
 
-def test_doc_jackal_imu_example(script):
+def test_doc_jackal_imu_example():
     if not (REPO.parent / 'shared' / 'data' / 'jackal_imu_odometry.bag').exists():
         pytest.skip('the shared Jackal bag is not here')
     pitch, stamp, q, cov = _most_pitched_imu_message()
@@ -367,7 +357,7 @@ def test_doc_jackal_imu_example(script):
     for command, _ in console_steps(doc_block('covariance-jackal')):
         argv = command.split()
         assert ' '.join(argv[2:2 + len(rotation.split())]) == rotation  # the message's
-        done = subprocess.run([script, *argv[1:]], capture_output=True, text=True, timeout=60)
+        done = run(*argv[1:])
         assert (done.returncode, done.stderr) == (0, ''), done.stderr
         shown.append(f'$ {command}\n{done.stdout}')
     assert_doc_output('covariance-jackal', ''.join(shown))
