@@ -119,7 +119,7 @@ def real():
 
 @pytest.fixture(scope='module')
 def excerpt(tmp_path_factory):
-    """The real recording's first 300 messages, as recorded (a ROS 1 bag)."""
+    """Return the real recording's first 300 messages, as recorded (a ROS 1 bag)."""
     return bh.real_excerpt(tmp_path_factory.mktemp('excerpt') / 'excerpt.bag')
 
 
