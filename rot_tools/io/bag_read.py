@@ -130,8 +130,8 @@ def _regular_files_only(directory):
         except OSError:
             continue  # a dangling link: the reader says what it misses
         if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
-            raise BagError(f'{entry.path}: not a regular file (a FIFO, socket or device) in '
-                           'the rosbag2 bag: refused')
+            raise BagError(f'{directory}: its {entry.name} is not a regular file (a FIFO, '
+                           'socket or device): refused')
 
 
 def bag_paths(path):
