@@ -191,6 +191,16 @@ def test_a_turned_imu_gives_its_mounting(results, name):
     assert 'not determined' in checks.mounting.warning  # the odometry turns about z only
 
 
+def test_five_seconds_of_little_turn_leave_the_mounting_unknown(jackal):
+    imu, odom = jackal
+    window = {k: v[1000:1250] for k, v in imu.items()}  # the Jackal almost stands still
+    checks = run(window, odom)
+    assert faults(checks) == ()
+    assert {checks.mounting.status, checks.accel_sign.status, checks.world_up.status} == {
+        'unknown'}
+    assert "the IMU's turns have no dominant axis" in checks.mounting.message
+
+
 def test_a_ned_device_is_mounted_upside_down(results):
     mounting = results['NED', True].mounting
     assert degrees_between(up_in_imu(mounting.quaternion), [0, 0, -1]) < 3

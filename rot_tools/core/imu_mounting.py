@@ -9,10 +9,10 @@ hand-eye calibration (trajectory.hand_eye_rotation), over steps HAND_EYE_STEP ap
 an orientation, B is the turn of the gyro's rates integrated over the step (first order).
 
 A body that turns about one axis only (a ground robot's yaw) fixes the IMU axis that turns
-with it, not the turn of the mounting about that axis. Of the mountings that map the same IMU
-axis, the one given then best keeps the IMU's x (then y) along the body's (one_axis_mounting):
-the identity for an IMU that only lacks a turn about the axis, the half turn about x for a
-device turned upside down as NED devices are.
+with it (the IMU's main axis of turn: one_axis_mounting), not the turn of the mounting about
+that axis. Of the mountings that map the same IMU axis, the one given then best keeps the
+IMU's x (then y) along the body's: the identity for an IMU that only lacks a turn about the
+axis, the half turn about x for a device turned upside down as NED devices are.
 """
 
 import math
@@ -20,6 +20,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from rot_tools.core.axis_angle import axis_angle_to_matrix, matrix_to_rotvec, rotvec_to_matrix
+from rot_tools.core.errors import RotationError
 from rot_tools.core.fitting import align_vectors
 from rot_tools.core.imu_motion import integrated_gyro, RATE_GAP
 from rot_tools.core.so3 import skew
@@ -32,16 +33,33 @@ KEEP_AXES = np.diag([1.0, 0.5, 0.25])
 """Weights of tr(KEEP_AXES·X) that one_axis_mounting maximises: x first, then y, then z."""
 
 
-def one_axis_mounting(X, alpha):
-    """
-    Return the mounting that maps the same IMU axis as X and best keeps the body's x, then y.
+AXIS_DOMINANCE = 4.0
+"""σ1/σ2 of the IMU's turns at least, for their first principal axis to be the one the body
+turns about when the reference turns about one axis only."""
 
-    alpha (K, 3): the body's turns, about one axis n (their first singular vector). X₀, the
-    smallest turn taking m = Xᵀ·n onto n, then Rot(n, ψ)·X₀ maximising tr(Rot(n, ψ)·P) with
-    P = X₀·KEEP_AXES: ψ = atan2(tr([n]×·P), tr P − nᵀ·P·n).
+
+def one_axis_mounting(alpha, beta):
+    """
+    Return the mounting X of an IMU on a body that turns about one axis only.
+
+    alpha, beta (K, 3): the body's turns (about one axis n, their first singular vector) and
+    the IMU's over the same steps. The IMU axis m that turns with n is the first principal
+    axis of the IMU's turns, signed to turn as n does (Σ (α_k·n)(β_k·m) > 0): it needs the
+    reference's turns to be right in sense only, not in size (wheel odometry's are not), and
+    it takes the IMU's turns that the reference does not show (a planar odometry on uneven
+    ground) as noise about it. RotationError when those are not much smaller (σ1/σ2 of the
+    IMU's turns below AXIS_DOMINANCE). Of the mountings that map m onto n (X₀, the smallest
+    turn, then Rot(n, ψ)·X₀), the one that best keeps the body's x, then y: tr(Rot(n, ψ)·P)
+    greatest for P = X₀·KEEP_AXES, at ψ = atan2(tr([n]×·P), tr P − nᵀ·P·n).
     """
     n = np.linalg.svd(alpha, full_matrices=False)[2][0]
-    X0 = align_vectors(n[None], (X.T @ n)[None]).R
+    _, sigma, vt = np.linalg.svd(beta, full_matrices=False)
+    if sigma[1] * AXIS_DOMINANCE > sigma[0]:
+        raise RotationError(
+            "the reference turns about one axis, but the IMU's turns have no dominant axis "
+            f'(σ2/σ1 = {sigma[1] / sigma[0]:.2g} > {1 / AXIS_DOMINANCE:g}): too little turn')
+    m = vt[0] if np.sum((alpha @ n) * (beta @ vt[0])) >= 0 else -vt[0]
+    X0 = align_vectors(n[None], m[None]).R
     P = X0 @ KEEP_AXES
     psi = math.atan2(float(np.trace(skew(n) @ P)), float(np.trace(P) - n @ P @ n))
     return axis_angle_to_matrix(n, psi) @ X0
@@ -77,8 +95,8 @@ def imu_mounting(samples, ref_t, ref_Q, ref_period, lag=0.0):
     RATE_GAP periods) and the IMU's orientation lag (s) after them (the nearest sample: it
     describes the instant of the stamp lag earlier), relative rotations of consecutive ones
     without a gap, then hand_eye_rotation (one_axis_mounting where the reference turns about
-    one axis only). RotationError as hand_eye_rotation raises it (fewer than two steps that
-    turn).
+    one axis only). RotationError as those raise it (fewer than two steps that turn, no
+    dominant axis of the IMU's turns).
     """
     t = samples.t
     poses = mounting_poses(samples, ref_t)
@@ -104,7 +122,7 @@ def imu_mounting(samples, ref_t, ref_Q, ref_period, lag=0.0):
     found = hand_eye_rotation(A, B)
     X, warning = found.rotation, ''
     if found.axes < 2:
-        X = one_axis_mounting(X, matrix_to_rotvec(A, check=False))
+        X = one_axis_mounting(matrix_to_rotvec(A, check=False), matrix_to_rotvec(B, check=False))
         warning = (f"{found.warning}; of the turns about it, the one that best keeps the IMU's "
                    "x (then y) along the body's is given")
     return Mounting(X=X, warning=warning, Q=Q, R=R)
