@@ -8,6 +8,7 @@ offset and mounting rotation written into it.
 """
 
 import math
+import warnings
 
 from hypothesis import given, settings, strategies as st
 import math_helpers as h
@@ -414,6 +415,95 @@ T3 = np.array([0.0, 1.0, 2.0])
 def test_bad_input_is_refused_saying_what(call, message):
     with pytest.raises(RotationError, match=message):
         call()
+
+
+DAY = np.array(['2020-01-01T00:00:00', '2020-01-01T00:00:01', '2020-01-01T00:00:02'],
+               dtype='datetime64[s]')
+UNIX = np.array([1311868229.476, 1311868229.526, 1311868229.576])
+
+
+@pytest.mark.parametrize('call, message', [
+    (lambda: delta_pairs(3, 1e-7, 's', UNIX),
+     r'delta = 1e-07 s is within the rounding of stamps near 1311868229.576 s \(1.2e-06 s\)'),
+    (lambda: delta_pairs(3, 1e-300, 's', [0.0, 1.0, 2.0]),
+     r'delta = 1e-300 s is within the rounding of stamps near 2.0 s'),
+    (lambda: delta_pairs(3, 0.5, 's', DAY),
+     r'stamps must be numbers, got datetime64\[s\] values: seconds are needed'),
+    (lambda: interpolate_poses(DAY, EYE3, None, [0.5]), r'stamps must be numbers, got datetime64'),
+    (lambda: delta_pairs(3, 1, 's', np.array([1, 2, 3], dtype='timedelta64[ms]')),
+     r'stamps must be numbers, got timedelta64\[ms\] values'),
+    (lambda: delta_pairs('x', 1), r"count must be a whole number ≥ 0, got 'x'"),
+    (lambda: delta_pairs(-1, 1), r'count must be a whole number ≥ 0, got -1'),
+    (lambda: delta_pairs(2.5, 1), r'count must be a whole number ≥ 0, got 2.5'),
+    (lambda: delta_pairs(True, 1), r'count must be a whole number ≥ 0, got True'),
+    (lambda: delta_pairs(10 ** 30, 1), r'count must be at most 268435456 poses, got 1e\+30'),
+    (lambda: delta_pairs(3, np.float64(1.5)), r'delta in frames must be an integer ≥ 1, got 1.5$'),
+    (lambda: delta_pairs(3, 1, 's', [1e308, -1e308, 1e308]),
+     r'stamps must be strictly increasing: stamps\[1\] = -1e\+308 follows stamps\[0\] = 1e\+308'),
+    (lambda: delta_pairs(3, 1, 's', [0.0, 1e308, 1.7e308]), r'within the rounding of stamps'),
+    (lambda: delta_pairs(3, 2.0, 's', [0.0, 0.5, 1.0]), r'delta = 2.0 s leaves no pair among 3'),
+    (lambda: error_statistics([]), r'x has no value: statistics need at least one'),
+    (lambda: error_statistics([1.0, np.nan]), r'x must be finite: 1 non-finite value'),
+    (lambda: error_statistics([[1.0, 2.0]]), r'x must have shape \(K,\), got \(1, 2\)'),
+    (lambda: error_statistics(5.0), r'x must have shape \(K,\), got \(\)'),
+    (lambda: error_statistics('abc'), r'x must be numeric'),
+    (lambda: error_statistics([1 + 1j]), r'x must be real'),
+    (lambda: error_statistics(DAY), r'x must be numbers, got datetime64'),
+])
+def test_hostile_input_is_refused_saying_what(call, message):
+    with pytest.raises(RotationError, match=message):
+        call()
+
+
+def test_statistics_of_huge_errors_do_not_overflow():
+    stats = error_statistics([-1e308, 1e308, 1e308])
+    assert stats['mean'] == pytest.approx(1e308 / 3, rel=1e-15)
+    assert stats['rmse'] == pytest.approx(1e308, rel=1e-15)
+    assert stats['std'] == pytest.approx(math.sqrt(8 / 9) * 1e308, rel=1e-15)
+    assert stats['min'] == -1e308 and stats['max'] == 1e308 and stats['median'] == 1e308
+
+
+def test_pairs_in_seconds_on_unix_time_at_the_resolution_of_the_stamps():
+    t = 1311868229.576 + np.arange(6) * 2.4e-6  # steps of ten ulps
+    assert delta_pairs(6, 4e-6, 's', t).tolist() == [[0, 2], [2, 4]]
+    assert delta_pairs(6, 4e-6, 's', t, overlapping=True).tolist() == [
+        [0, 2], [1, 3], [2, 4], [3, 5]]
+    assert delta_pairs(6, 2, overlapping=True).tolist() == [[0, 2], [1, 3], [2, 4], [3, 5]]
+    assert delta_pairs(3, 1e308, 's', [0.0, 1e308, 1.7e308]).tolist() == [[0, 1]]
+
+
+HOSTILE = st.one_of(
+    st.none(), st.booleans(), st.integers(-3, 12), st.integers(-2 ** 80, 2 ** 80),
+    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=3),
+    st.complex_numbers(max_magnitude=10), st.just(np.datetime64('2020-01-01')),
+    st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=6),
+    st.lists(st.integers(-5, 5), max_size=6).map(np.array),
+    st.lists(st.floats(-1e9, 1e9), min_size=1, max_size=6).map(lambda x: np.sort(x) + 1.3e9),
+    st.just(DAY), st.just([[0.0, 1.0]]), st.just(np.zeros((0, 3))))
+
+
+def _finite(result):
+    if isinstance(result, dict):
+        return all(math.isfinite(v) for v in result.values())
+    return result.dtype.kind == 'i' and result.ndim == 2 and result.shape[1] == 2
+
+
+@settings(**{**h.HYPOTHESIS_SETTINGS, 'max_examples': 150})
+@given(HOSTILE, HOSTILE, st.sampled_from(['f', 's', 'x', None]), HOSTILE, HOSTILE,
+       st.booleans())
+def test_hostile_pairs_and_statistics_give_a_refusal_or_finite_numbers(
+        count, delta, unit, stamps, x, overlapping):
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')  # a RuntimeWarning is a failure too
+        for call in (lambda: delta_pairs(count, delta, unit, stamps, overlapping=overlapping),
+                     lambda: delta_pairs(len(stamps) if hasattr(stamps, '__len__') else 3,
+                                         delta, 's', stamps),
+                     lambda: error_statistics(x)):
+            try:
+                result = call()
+            except RotationError:
+                continue
+            assert _finite(result), result
 
 
 def test_an_offset_at_the_edge_of_the_search_is_refused():

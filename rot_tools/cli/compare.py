@@ -167,7 +167,7 @@ def read_side(name, path, topic, tf):
     missing = bag_read.rosbags_missing()
     if missing:
         raise CompareError(f'{name}: reading a bag needs the rosbags library ({missing} is '
-                           "missing), the 'bag' extra: pip install 'rot_tools[bag]'")
+                           f"missing), the 'bag' extra: {arguments.install_hint('bag')}")
     from rot_tools.cli import bag_analysis
     if tf is not None:
         _, topics = bag_analysis.analyse(path, tf=tuple(tf))
@@ -236,23 +236,15 @@ def overlapping_pairs(stamps, delta, unit):
     """
     Index pairs (k, j), one per start k: j = k + Δ frames, or the first t_j ≥ t_k + Δ s.
 
-    ≥ within rounding of the stamps, as delta_pairs decides.
-
-    The mounting averages over all of them (each pose starts one); RotationError if none fits.
+    ≥ within rounding of the stamps, as delta_pairs decides (overlapping=True). The mounting
+    averages over all of them (each pose starts one); RotationError if fewer than 2 fit.
     """
-    if unit == 'f':
-        trajectory.delta_pairs(len(stamps), delta, unit)  # the same checks as the RPE's
-        k = np.arange(len(stamps) - int(delta))
-        j = k + int(delta)
-    else:
-        k = np.arange(len(stamps))
-        slack = 4 * np.finfo(float).eps * max(abs(stamps[0]), abs(stamps[-1]))  # as the RPE's
-        j = np.searchsorted(stamps, stamps + delta - slack, side='left')
-        k, j = k[j < len(stamps)], j[j < len(stamps)]
-    if len(k) < 2:
-        raise RotationError(f'--delta {delta:g} {unit} leaves {len(k)} relative rotation(s) '
-                            f'among {len(stamps)} pairs: at least 2 needed for a mounting')
-    return k, j
+    pairs = trajectory.delta_pairs(len(stamps), delta, unit, stamps, overlapping=True)
+    if len(pairs) < 2:
+        raise RotationError(f'--delta {trajectory.plain(delta)} {unit} leaves {len(pairs)} '
+                            f'relative rotation(s) among {len(stamps)} pairs: at least 2 '
+                            'needed for a mounting')
+    return pairs[:, 0], pairs[:, 1]
 
 
 def mounting(pairs, delta, unit):

@@ -13,6 +13,7 @@ def as_float_array(x, tail, name):
     Return x as a float64 array whose shape ends in ``tail``, or raise RotationError.
 
     Refused: what is not numeric, complex numbers (casting would drop the imaginary part),
+    dates and durations (datetime64, timedelta64: casting would give their raw counts),
     numbers beyond float64's range (Python ints, Fractions, long doubles), a wrong shape.
     """
     if type(x) is not float and (type(x) is not np.ndarray or x.dtype.kind not in 'fiub'):
@@ -41,6 +42,9 @@ def _numeric_array(x, name):
         raise RotationError(f'{name} must be numeric: {exc}') from None
     if arr.dtype.kind == 'c':
         return _refuse_complex(arr, name)
+    if arr.dtype.kind in 'mM':  # NumPy would cast dates and durations to their raw counts
+        raise RotationError(f'{name} must be numbers, got {arr.dtype} values: seconds are '
+                            'needed, e.g. (t - t[0]) / np.timedelta64(1, "s")')
     if arr.dtype.kind == 'O':  # Python ints beyond int64, Fractions, complex in a list, ...
         flat = arr.ravel().tolist()
         for v in flat:

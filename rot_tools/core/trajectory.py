@@ -21,6 +21,7 @@ reference (REF, Q). R maps the body's coordinates to its reference frame's.
 """
 
 import math
+import numbers
 from typing import NamedTuple
 
 import numpy as np
@@ -45,6 +46,21 @@ MAX_GRID = 1 << 20
 # ---- checks ------------------------------------------------------------------------------
 
 
+MAX_POSES = 1 << 28
+"""Poses a count may name at most (delta_pairs): the pairs of more would not fit in memory."""
+
+
+def plain(x):
+    """
+    Write a number as messages show it: a plain decimal, the shortest that reads back the same.
+
+    1311868229.576, 1e-07, 3 — never np.float64(...) nor a 300-digit expansion.
+    """
+    if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
+        return str(int(x)) if abs(x) < 10 ** 16 else repr(float(x))
+    return repr(float(x))
+
+
 def _stamps(stamps, name, least):
     """Stamps (N,) finite and strictly increasing, N ≥ least."""
     t = finite_array(stamps, (), name)
@@ -52,11 +68,11 @@ def _stamps(stamps, name, least):
         raise RotationError(f'{name} must have shape (N,), got {t.shape}')
     if len(t) < least:
         raise RotationError(f'{name} has {len(t)} stamp(s): at least {least} needed')
-    steps = np.diff(t)
-    if (steps <= 0).any():
-        k = int(np.argmax(steps <= 0))
+    back = t[1:] <= t[:-1]  # compared, not subtracted: t_k+1 − t_k may overflow
+    if back.any():
+        k = int(np.argmax(back))
         raise RotationError(f'{name} must be strictly increasing: {name}[{k + 1}] = '
-                            f'{float(t[k + 1])!r} follows {name}[{k}] = {float(t[k])!r}')
+                            f'{plain(t[k + 1])} follows {name}[{k}] = {plain(t[k])}')
     return t
 
 
@@ -406,60 +422,128 @@ def hand_eye_rotation(A, B):
 # ---- errors ------------------------------------------------------------------------------
 
 
-def delta_pairs(count, delta=1, unit='f', stamps=None):
+def delta_pairs(count, delta=1, unit='f', stamps=None, *, overlapping=False):
     """
-    Index pairs (i, j) for relative errors, consecutive and not overlapping, as evo's RPE.
+    Index pairs (i, j) for relative errors: by default consecutive and not overlapping (evo's RPE).
 
     unit 'f' (frames): i runs over 0, delta, 2·delta, … < count and j is the next one (evo's
-    filter_pairs_by_index without all_pairs). unit 's' (seconds, given stamps (count,)):
-    from i = 0, j is the first index with t_j − t_i ≥ delta (within rounding of the stamps),
-    then i = j. Returns an int array (K, 2); RotationError when no pair fits.
+    filter_pairs_by_index without all_pairs). unit 's' (seconds, given stamps (count,),
+    strictly increasing): from i = 0, j is the first index with t_j − t_i ≥ delta (within
+    rounding of the stamps: 4·ε·max|t|), then i = j. overlapping: every pose i starts a pair
+    instead, with j = i + delta frames or the first t_j ≥ t_i + delta (the mounting's
+    intervals). count: a whole number in [0, MAX_POSES]. Returns an int array (K, 2);
+    RotationError when no pair fits, and for a delta in seconds within the rounding of the
+    stamps (at Unix times, about a microsecond), which cannot tell a pose from the next.
     """
+    count = _count(count)
     if unit == 'f':
         if not _whole(delta):
-            raise RotationError(f'delta in frames must be an integer ≥ 1, got {delta!r}')
-        ids = np.arange(0, count, int(delta))
-        pairs = np.stack([ids[:-1], ids[1:]], axis=-1)
+            raise RotationError(f'delta in frames must be an integer ≥ 1, got {_shown(delta)}')
+        step = int(min(float(delta), count + 1))
+        if overlapping:
+            i = np.arange(max(count - step, 0))
+            pairs = np.stack([i, i + step], axis=-1)
+        else:
+            ids = np.arange(0, count, step)
+            pairs = np.stack([ids[:-1], ids[1:]], axis=-1)
     elif unit == 's':
-        if stamps is None:
-            raise RotationError("delta in seconds (unit 's') needs the stamps")
-        t = _stamps(stamps, 'stamps', 1)
-        if len(t) != count:
-            raise RotationError(f'stamps has {len(t)} entries for {count} poses')
-        step = require_tolerance(delta, 'delta')
-        if step == 0:
-            raise RotationError('delta in seconds must be > 0, got 0')
-        slack = 4 * np.finfo(float).eps * max(abs(t[0]), abs(t[-1]))
-        chain = [0]
-        while True:
-            j = int(np.searchsorted(t, t[chain[-1]] + step - slack, side='left'))
-            if j >= count:
-                break
-            chain.append(j)
-        ids = np.array(chain)
-        pairs = np.stack([ids[:-1], ids[1:]], axis=-1)
+        pairs = _pairs_in_seconds(count, delta, stamps, overlapping)
     else:
         raise RotationError(f"unit must be 'f' (frames) or 's' (seconds), got {unit!r}")
     if not len(pairs):
-        raise RotationError(f'delta = {delta} {"frames" if unit == "f" else "s"} leaves no '
-                            f'pair among {count} poses')
+        raise RotationError(f'delta = {_shown(delta)} {"frames" if unit == "f" else "s"} '
+                            f'leaves no pair among {count} poses')
     return pairs
+
+
+def _pairs_in_seconds(count, delta, stamps, overlapping):
+    if stamps is None:
+        raise RotationError("delta in seconds (unit 's') needs the stamps")
+    t = _stamps(stamps, 'stamps', 1)
+    if len(t) != count:
+        raise RotationError(f'stamps has {len(t)} entries for {count} poses')
+    step = require_tolerance(delta, 'delta')
+    if step == 0:
+        raise RotationError('delta in seconds must be > 0, got 0')
+    far = max(abs(t[0]), abs(t[-1]))
+    slack = 4 * np.finfo(float).eps * far
+    if step <= slack:  # t_i + delta − slack would find i itself, again and again
+        raise RotationError(
+            f'delta = {plain(step)} s is within the rounding of stamps near {plain(far)} s '
+            f'({slack:.2g} s): give a larger delta, or one in frames')
+    reach = step - slack
+    if overlapping:
+        i = np.arange(count)
+        with np.errstate(over='ignore'):  # beyond float64: no stamp reaches it anyway
+            j = np.searchsorted(t, t + reach, side='left')
+        j = np.maximum(j, i + 1)  # t_i + reach may round to t_i; t_i+1 is then far enough
+        keep = j < count
+        return np.stack([i[keep], j[keep]], axis=-1)
+    chain = [0]
+    while True:
+        with np.errstate(over='ignore'):
+            j = int(np.searchsorted(t, t[chain[-1]] + reach, side='left'))
+        j = max(j, chain[-1] + 1)
+        if j >= count:
+            break
+        chain.append(j)
+    ids = np.array(chain)
+    return np.stack([ids[:-1], ids[1:]], axis=-1)
+
+
+def _count(count):
+    """Return count as an int in [0, MAX_POSES], or raise RotationError."""
+    whole = (isinstance(count, (int, np.integer, float, np.floating))
+             and not isinstance(count, (bool, np.bool_)) and math.isfinite(count)
+             and float(count).is_integer() and count >= 0)
+    if not whole:
+        raise RotationError(f'count must be a whole number ≥ 0, got {_shown(count)}')
+    if count > MAX_POSES:
+        raise RotationError(f'count must be at most {MAX_POSES} poses, got {plain(count)}')
+    return int(count)
+
+
+def _shown(value):
+    """Write a value for a message: a number as plain() writes it, anything else by repr()."""
+    if isinstance(value, (numbers.Real, np.floating, np.integer)) and not isinstance(
+            value, (bool, np.bool_)):
+        try:
+            return plain(value)
+        except (OverflowError, ValueError):
+            pass
+    return repr(value)
 
 
 def _whole(delta):
     """Whether delta is a whole number ≥ 1 (an int, or a float such as 2.0)."""
     try:
-        return not isinstance(delta, bool) and float(delta).is_integer() and delta >= 1
+        return not isinstance(delta, (bool, np.bool_)) and float(delta).is_integer() and (
+            delta >= 1)
     except (TypeError, ValueError, OverflowError):
         return False
 
 
 def error_statistics(x):
-    """Return rmse √mean(x²), mean, median, std (population, as evo), min, max of x (K,)."""
-    x = np.asarray(x, dtype=float)
-    return {'rmse': float(np.sqrt(np.mean(x * x))), 'mean': float(np.mean(x)),
-            'median': float(np.median(x)), 'std': float(np.std(x)),
-            'min': float(np.min(x)), 'max': float(np.max(x))}
+    """
+    Return rmse √mean(x²), mean, median, std (population, as evo), min, max of x (K,), K ≥ 1.
+
+    x finite; huge values (beyond 1e150) are scaled by a power of two first, so that x² and
+    the sums do not overflow (exactly, bit for bit, where nothing would have overflowed).
+    RotationError for x empty, not (K,), not finite, not real numbers.
+    """
+    x = finite_array(x, (), 'x')
+    if x.ndim != 1:
+        raise RotationError(f'x must have shape (K,), got {x.shape}')
+    if not len(x):
+        raise RotationError('x has no value: statistics need at least one')
+    power = 0
+    top = float(np.max(np.abs(x)))
+    if top > 1e150:
+        power = math.frexp(top)[1]
+        x = np.ldexp(x, -power)
+    stats = {'rmse': np.sqrt(np.mean(x * x)), 'mean': np.mean(x), 'median': np.median(x),
+             'std': np.std(x), 'min': np.min(x), 'max': np.max(x)}
+    return {key: math.ldexp(float(value), power) for key, value in stats.items()}
 
 
 class RotationErrors(NamedTuple):
