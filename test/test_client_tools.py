@@ -164,9 +164,14 @@ def test_set_types_values_as_the_node_declares_them(here, restored):
     name = restored
     assert set_line(here('set', 'angle_unit', 'deg', '--node', name)) == (
         f"node {name}: angle_unit = 'deg'")
-    # An integer for a double, digits for a string, 'false' for a bool.
+    # An integer for a double, digits for a string, 'false' for a bool; 1e-2, which YAML (and
+    # so ros2 param set) reads as a string, for a double.
     assert set_line(here('set', 'quaternion_tolerance', '1', '--node', name)) == (
         f'node {name}: quaternion_tolerance = 1.0')
+    assert set_line(here('set', 'quaternion_tolerance', '1e-2', '--node', name)) == (
+        f'node {name}: quaternion_tolerance = 0.01')
+    assert here('param', 'get', 'quaternion_tolerance', '--node', name).stdout == (
+        'Double value is: 0.01\n')
     assert set_line(here('set', 'euler_sequence', 'xyz', '--node', name)) == (
         f"node {name}: euler_sequence = 'xyz'")
     assert set_line(here('set', 'publish_markers', 'false', '--node', name)) == (
@@ -178,14 +183,76 @@ def test_set_types_values_as_the_node_declares_them(here, restored):
 
 
 @pytest.mark.parametrize('args, why', [
-    (('angle_unit', 'degrees'), "refused angle_unit = 'degrees': angle_unit 'degrees' is not "
-     "'rad' or 'deg'"),
-    (('quaternion_tolerance', 'abc'), "refused quaternion_tolerance = 'abc': "),
-    (('nothing', '1'), "has no parameter 'nothing'"),
+    (('angle_unit', 'degrees'), "node {node} refused angle_unit = 'degrees': angle_unit "
+     "'degrees' is not 'rad' or 'deg'"),
+    (('quaternion_tolerance', '-1'), 'node {node} refused quaternion_tolerance = -1.0: '
+     'Parameter quaternion_tolerance out of range'),
+    (('nothing', '1'), "node {node} has no parameter 'nothing'"),
 ])
 def test_set_refused_is_the_nodes_reason(here, node, args, why):
     line = one_line_error(here('set', *args, '--node', node), 1)
-    assert line.startswith(f'rotation_client: node {node} {why}'), line
+    assert line.startswith('rotation_client: ' + why.format(node=node)), line
+
+
+@pytest.mark.parametrize('args, why', [
+    (('quaternion_tolerance', 'abc'), "'abc' is not a number"),
+    (('quaternion_tolerance', 'true'), "'true' is not a number"),
+    (('publish_markers', '1'), "'1' is not true or false"),
+    (('publish_markers', 'maybe'), "'maybe' is not true or false"),
+])
+def test_set_a_value_that_does_not_fit_the_type(here, node, args, why):
+    """One line naming the parameter's type, exit 2; nothing is sent."""
+    kind = 'double' if args[0] == 'quaternion_tolerance' else 'boolean'
+    line = one_line_error(here('set', *args, '--node', node), 2)
+    assert line == (f'rotation_client: parameter {args[0]} of node {node} is a {kind}: {why}')
+
+
+# ---------------------------------------------------------------------------------------
+# param get / list
+
+
+def test_param_get_prints_as_ros2_param_get(here, node):
+    from rot_tools.io.boundary import QUATERNION_TOLERANCE
+    lines = {name: here('param', 'get', name, '--node', node)
+             for name in ('quaternion_tolerance', 'angle_unit', 'publish_markers')}
+    assert {name: (r.returncode, r.stdout, r.stderr) for name, r in lines.items()} == {
+        'quaternion_tolerance': (0, f'Double value is: {QUATERNION_TOLERANCE}\n', ''),
+        'angle_unit': (0, 'String value is: rad\n', ''),
+        'publish_markers': (0, 'Boolean value is: True\n', '')}
+    hidden = here('param', 'get', 'marker_scale', '--hide-type', '--node', node)
+    assert (hidden.returncode, hidden.stdout) == (0, '1.0\n')
+    assert here.answered('--json', 'param', 'get', 'euler_sequence', '--node', node) == {
+        'name': 'euler_sequence', 'type': 'string', 'value': 'ZYX'}
+    line = one_line_error(here('param', 'get', 'nothing', '--node', node), 1)
+    assert line == f"rotation_client: node {node} has no parameter 'nothing'"
+
+
+def test_param_list_prints_as_ros2_param_list(here, node):
+    """Every parameter of the node (rclpy's own too), sorted, indented by two spaces."""
+    from rot_tools.ros.rotation_node import PARAMETERS, RCLPY_PARAMETERS
+    names = sorted([*PARAMETERS, *RCLPY_PARAMETERS])
+    result = here('param', 'list', '--node', node)
+    assert (result.returncode, result.stderr) == (0, '')
+    assert result.stdout == ''.join(f'  {name}\n' for name in names)
+    typed = here('param', 'list', '--param-type', '--node', node).stdout.splitlines()
+    assert [line.split(' (type: ')[0] for line in typed] == [f'  {name}' for name in names]
+    assert '  quaternion_tolerance (type: double)' in typed
+    assert '  publish_markers (type: boolean)' in typed
+    assert here.answered('param', 'list', '--json', '--node', node) == names
+    absent = f'/{RUN}/nobody/rot_tools'
+    line = one_line_error(here('param', 'list', '--node', absent, '--timeout', 1), 1)
+    assert line.startswith(f'rotation_client: cannot reach node {absent}: not found')
+
+
+@pytest.mark.parametrize('args, message', [
+    (('param',), 'the following arguments are required: VERB'),
+    (('param', 'get'), 'the following arguments are required: NAME'),
+    (('param', 'set', 'x', '1'), "argument VERB: invalid choice: 'set'"),
+    (('param', 'list', 'x'), 'unrecognized arguments: x'),
+])
+def test_param_bad_arguments(here, args, message):
+    line = one_line_error(here(*args), 2)
+    assert line.startswith('rotation_client: error: ') and message in line, line
 
 
 # ---------------------------------------------------------------------------------------

@@ -26,7 +26,7 @@ NAME_LIMIT = 247
 """Most characters of a ROS topic or service name (rmw's limit, 255 − 8)."""
 
 SERVICES_USED = ('describe', 'screw_path', 'get_parameters', 'describe_parameters',
-                 'set_parameters')
+                 'set_parameters', 'list_parameters')
 """The node's services the client calls, relative to the node."""
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -127,7 +127,8 @@ def _leading_options(parser):
     _wxyz_option(parser, suppress=False)
 
 
-USAGE = {'tf': 'REFERENCE BODY', 'echo': 'OUTPUT', 'set': 'NAME VALUE'}
+USAGE = {'tf': 'REFERENCE BODY', 'echo': 'OUTPUT', 'set': 'NAME VALUE',
+         'param': '{get NAME | list}'}
 """The words of a command other than its numbers, in its usage line."""
 
 
@@ -192,9 +193,36 @@ def commands():
             + '.\nEach message is printed as it arrives, as the input commands print it.'),
         'set': Command(
             "set one of the node's parameters", '', (),
-            'VALUE is read as the type the node declares for NAME (its ~/describe_parameters);'
-            "\nthe node's answer is printed: success, or its reason for refusing (exit 1)."),
+            'VALUE is read as the type the node declares for NAME (its ~/describe_parameters):'
+            '\na double takes any number (1e-2 too), a boolean true or false; a value that '
+            "does\nnot fit is one line (exit 2). The node's answer is printed: success, or its "
+            'reason\nfor refusing (exit 1).'),
+        'param': Command(
+            "print one of the node's parameters, or their names", '', (),
+            'As ros2 param get NODE NAME and ros2 param list NODE print them (Double value '
+            'is: 0.001;\nthe names sorted, indented); --json: the value with its name and '
+            'type, or the names.'),
     }
+
+
+def _param_verbs(parser):
+    """Add param's verbs, get NAME and list, to its parser; the options before or after."""
+    verbs = parser.add_commands(lambda p: _options(p, suppress=True), dest='param_command',
+                                metavar='VERB', required=True)
+    get = verbs.add_parser('get', help="print a parameter's value, as ros2 param get does",
+                           usage=f'{PROG} param get NAME [options]',
+                           description="Print a parameter's value: 'Double value is: 0.001'.")
+    get.add_argument('name', metavar='NAME', help="the parameter's name")
+    get.add_argument('--hide-type', action='store_true', help='print the value alone')
+    listing = verbs.add_parser('list', help="print the parameters' names, as ros2 param list "
+                               'does', usage=f'{PROG} param list [--param-type] [options]',
+                               description="Print the node's parameter names, sorted, each "
+                               'indented by two spaces.')
+    listing.add_argument('--param-type', action='store_true',
+                         help="each name followed by its type: '(type: double)'")
+    for verb in (get, listing):
+        verb.set_defaults(parser=verb)
+        _options(verb, suppress=True)
 
 
 def build_parser():
@@ -218,10 +246,13 @@ def build_parser():
         '  rotation_client tf odom base_link --once --deg\n'
         '  rotation_client tf-demo --duration 60\n'
         '  rotation_client echo rpy --count 3\n'
-        '  rotation_client set angle_unit deg\n\n'
+        '  rotation_client set angle_unit deg\n'
+        '  rotation_client param get quaternion_tolerance\n'
+        '  rotation_client param list\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
-        'within --timeout,\nnothing to describe, or a parameter the node did not set; 2 '
-        'bad arguments or an input\nthe node refused; 130 Ctrl-C.')
+        'within --timeout,\nnothing to describe, or a parameter the node did not set or '
+        "does not have; 2 bad\narguments, a value not of its parameter's type, or an input "
+        'the node refused; 130 Ctrl-C.')
     sub = parser.add_commands(_leading_options, dest='command', metavar='COMMAND',
                               required=True)
     for name, command in commands().items():
@@ -268,11 +299,14 @@ def build_parser():
         elif name == 'set':
             p.add_argument('name', metavar='NAME', help="the parameter's name")
             p.add_argument('value', metavar='VALUE', help='its new value')
+        elif name == 'param':
+            _param_verbs(p)
         if command.numbers:
             arguments.add_numbers(p, 'numbers', 'NUMBER', command.numbers,
                                   type=arguments.any_number)
         p.set_defaults(parser=p, expected=len(command.numbers.split()), row=command.row)
-        _options(p, suppress=True)
+        if name != 'param':  # its verbs have them (_param_verbs)
+            _options(p, suppress=True)
         if command.quaternions:
             _wxyz_option(p, suppress=True)
     return parser

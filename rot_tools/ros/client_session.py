@@ -184,12 +184,32 @@ class Client:
         response = self.call(GetParameters, 'get_parameters', GetParameters.Request(names=names))
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
-    def parameter_type(self, name):
-        """Return the type the node declares for parameter ``name`` (ParameterType), or None."""
+    def parameter_values(self, names):
+        """Return the node's rcl_interfaces/ParameterValue of each of ``names`` (NOT_SET: none)."""
+        from rcl_interfaces.srv import GetParameters
+        return list(self.call(GetParameters, 'get_parameters',
+                              GetParameters.Request(names=names)).values)
+
+    def parameter_names(self):
+        """Return the names of the node's parameters (its ~/list_parameters)."""
+        from rcl_interfaces.srv import ListParameters
+        return list(self.call(ListParameters, 'list_parameters',
+                              ListParameters.Request()).result.names)
+
+    def parameter_types(self, names):
+        """
+        Return {name: the type the node declares for it (ParameterType)} of ``names``.
+
+        The descriptors come in the order asked, none when one of the names is not declared.
+        """
         from rcl_interfaces.srv import DescribeParameters
         descriptors = self.call(DescribeParameters, 'describe_parameters',
-                                DescribeParameters.Request(names=[name])).descriptors
-        return descriptors[0].type if descriptors else None
+                                DescribeParameters.Request(names=names)).descriptors
+        return {name: d.type for name, d in zip(names, descriptors)}
+
+    def parameter_type(self, name):
+        """Return the type the node declares for parameter ``name`` (ParameterType), or None."""
+        return self.parameter_types([name]).get(name)
 
     def set_parameter(self, parameter):
         """Set one parameter (rcl_interfaces/Parameter); return the node's SetParametersResult."""

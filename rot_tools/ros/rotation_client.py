@@ -17,6 +17,7 @@ quick start has this instead (doc/client.md is its manual)::
     rotation_client tf-demo [--duration S]
     rotation_client echo OUTPUT [--once | --count N]
     rotation_client set NAME VALUE
+    rotation_client param get NAME | param list
 
 Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
 
@@ -43,7 +44,10 @@ status 1. ``tf-demo`` publishes a small moving tree (rot_tools.ros.tf_demo) unti
 ``--duration``. ``echo OUTPUT`` prints each message of that output as it arrives, as the input
 commands print it, until Ctrl-C, ``--once`` or ``--count N``. ``set NAME VALUE`` reads the type
 the node declares for NAME (~/describe_parameters), sends VALUE as that type (~/set_parameters)
-and prints the node's answer in one line: a refusal, with the node's reason, is exit status 1.
+and prints the node's answer in one line: a refusal, with the node's reason, is exit status 1;
+a VALUE that is not of that type is one line, exit status 2, and nothing is sent. ``param get
+NAME`` and ``param list`` print what ``ros2 param get`` and ``ros2 param list`` print of the
+node (rot_tools.ros.client_parameters).
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -54,9 +58,10 @@ seconds. Every wait is bounded by ``--timeout``.
 Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
 be reached within ``--timeout``, or ~/describe has nothing to report, or the node did not
 set a parameter (one line on stderr naming what); 2 bad arguments, ROS arguments included,
-or the node refused the input (one line on stderr with the node's reason); 130 Ctrl-C;
-141 the reader of stdout went away; 143 SIGTERM. rclpy is used here only, and only once the
-command line is known to be good: ``--help``, ``--version`` and bad arguments start nothing.
+a parameter value not of the parameter's type, or the node refused the input (one line on
+stderr with the node's reason); 130 Ctrl-C; 141 the reader of stdout went away; 143 SIGTERM.
+rclpy is used here only, and only once the command line is known to be good: ``--help``,
+``--version`` and bad arguments start nothing.
 The process is the caller's: rclpy's own signal handlers, no other.
 ``rot-tools`` stays ROS-free.
 """
@@ -391,44 +396,52 @@ def _echo_command(client, args):
     return None
 
 
-def _parameter_value(kind, text):
-    """
-    Return the ParameterValue of ``text`` as the node declares it: ``kind`` (ParameterType).
-
-    A string parameter takes the text as it is; the others read it as ``ros2 param set``
-    does (YAML: 2, 2.5, true, [1, 2]), an integer given for a double made a double. A value
-    of another type is sent as read: the node says why it refuses it.
-    """
-    from rcl_interfaces.msg import ParameterType, ParameterValue
-    from rclpy.parameter import get_parameter_value
-    if kind == ParameterType.PARAMETER_STRING:
-        return ParameterValue(type=kind, string_value=text)
-    value = get_parameter_value(text)
-    if kind == ParameterType.PARAMETER_DOUBLE and value.type == ParameterType.PARAMETER_INTEGER:
-        return ParameterValue(type=kind, double_value=float(value.integer_value))
-    return value
-
-
 def _set_command(client, args):
-    """set: set one parameter as the node declares it; its answer, or Unreachable."""
+    """set: set one parameter as the node declares it; its answer, Refused or Unreachable."""
     from rcl_interfaces.msg import Parameter, ParameterType
-    from rclpy.parameter import parameter_value_to_python
+    from rot_tools.ros import client_parameters
     kind = client.parameter_type(args.name)
     if kind in (None, ParameterType.PARAMETER_NOT_SET):
         raise Unreachable(f'node {client.target} has no parameter {args.name!r}')
-    value = _parameter_value(kind, args.value)
+    try:
+        value = client_parameters.typed_value(kind, args.value)
+    except client_parameters.DoesNotFit:
+        raise Refused(client_parameters.refusal(args.name, client.target, kind,
+                                                args.value)) from None
     result = client.set_parameter(Parameter(name=args.name, value=value))
-    shown = f'{args.name} = {parameter_value_to_python(value)!r}'
+    shown = f'{args.name} = {client_parameters.shown(value)}'
     if not result.successful:
         raise Unreachable(f'node {client.target} refused {shown}: '
                           + ' '.join(result.reason.split()))
     return f'node {client.target}: {shown}\n'
 
 
+def _param_command(client, args):
+    """Print a parameter (param get NAME) or their names (param list), as ros2 param does."""
+    from rcl_interfaces.msg import ParameterType
+    from rot_tools.ros import client_parameters
+    if args.param_command == 'get':
+        values = client.parameter_values([args.name])  # none, or NOT_SET: not declared
+        if not values or values[0].type == ParameterType.PARAMETER_NOT_SET:
+            raise Unreachable(f'node {client.target} has no parameter {args.name!r}')
+        (value,) = values
+        python = client_parameters.python_value(value)
+        if args.json:
+            return {'name': args.name, 'type': client_parameters.TYPE_NAMES[value.type],
+                    'value': python}
+        return f'{python}\n' if args.hide_type else client_parameters.get_line(value) + '\n'
+    names = client.parameter_names()
+    types = client.parameter_types(names) if args.param_type else None
+    if args.json:
+        return ({name: client_parameters.TYPE_NAMES.get(types[name], 'not set')
+                 for name in sorted(names)} if types else sorted(names))
+    return ''.join(line + '\n' for line in client_parameters.list_lines(names, types))
+
+
 COMMANDS = {**{row.name: _input_command for row in interface.INPUTS},
             'describe': _describe_command, 'screw-path': _screw_path_command,
             'tf': _tf_command, 'tf-demo': _tf_demo_command, 'echo': _echo_command,
-            'set': _set_command}
+            'set': _set_command, 'param': _param_command}
 """What runs each command: every input of the node is sent by _input_command."""
 
 
