@@ -140,9 +140,13 @@ def test_accelerometer_in_g(real, tmp_path, capsys):
 
 
 def test_gyro_in_degrees(real, tmp_path, capsys):
-    bag = write(tmp_path / 'deg', real, gyro=np.degrees(real.gyro))
+    gyro = np.degrees(real.gyro)
+    gyro[7] = np.nan  # a message left out, with a warning
+    bag = write(tmp_path / 'deg', real, gyro=gyro)
     status, out, err = run(capsys, 'imu-check', bag)
-    assert status == 1 and err == ''
+    assert status == 1
+    assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out (a NaN, an Inf or a '
+                   'refused orientation)\n')
     rows = {line.split()[0]: line.split()[1] for line in out.splitlines()
             if line.split() and line.split()[0] in CHECKS}
     assert [name for name, word in rows.items() if word == 'fault'] == ['gyro_units']

@@ -25,6 +25,7 @@ path that is missing or not a bag, a bag without an Imu topic, two Imu topics an
 
 import argparse
 import math
+import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -568,9 +569,6 @@ def table(data, recording, degrees=False):
     rate = 'no rate' if imu['rate'] is None else f'{_g(imu["rate"])} Hz'
     lines = [f'imu: {imu["topic"]} (frame {imu["frame"] or "none"}), {imu["messages"]} '
              f'messages, {rate}']
-    if recording.imu.dropped:
-        lines.append(f'  {recording.imu.dropped} messages left out (a NaN, an Inf or a refused '
-                     'orientation)')
     if ref is not None:
         body = f', {ref.body} in {ref.parent}' if ref.body and ref.parent else ''
         lines.append(f'reference: {ref.name} ({ref.msgtype.rsplit("/", 1)[1]}{body})')
@@ -686,6 +684,10 @@ def run(args):
         checks = check(recording)
     except RotationError as exc:  # too few samples for the checks
         error(f'imu-check: {recording.imu.topic}: {exc}')
+    if recording.imu.dropped:
+        sys.stderr.write(f'warning: {recording.imu.topic}: {recording.imu.dropped} of '
+                         f'{recording.imu.messages} messages left out (a NaN, an Inf or a '
+                         'refused orientation)\n')
     data = document(recording, checks, args.deg)
     text = to_json(data, JSON_DIGITS) if args.json else table(data, recording, args.deg)
     output_file.to_stdout(lambda out: out.write(text))
