@@ -33,7 +33,8 @@ from rot_tools.cli import bag_analysis, options, output_file
 from rot_tools.cli.bag_analysis import stamp_ns
 from rot_tools.cli.bag_output import NS_PER_S
 from rot_tools.core.errors import RotationError
-from rot_tools.core.imu import check_imu, faults, ImuReference
+from rot_tools.core.imu import (
+    ACCEL_TOL, check_imu, faults, GRAVITY, GYRO_TOL, ImuReference)
 from rot_tools.core.so3 import matrix_to_quaternion
 from rot_tools.io import arguments, bag_read, boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
@@ -75,8 +76,9 @@ under the table: the turns that matter are by tens of degrees (an IMU on its sid
 down, facing back); a few degrees are a plate's tilt, or the estimate's error over a short
 recording."""
 
-G = 9.80665
-"""Standard gravity (m/s²): an accelerometer in g needs this factor."""
+GRAVITY_REMOVED = 10
+"""An accelerometer scale above this (|a| under a tenth of gravity when the body turns
+slowly) reads with gravity removed."""
 
 ANGLES = {'angle': ('rad', 'deg'), 'bias': ('rad/s', 'deg/s')}
 """The numbers of a check that are angles or rates: their unit without and with --deg."""
@@ -487,10 +489,10 @@ def _accel_units_line(scale):
         return ('accel_units: linear_acceleration does not read gravity at rest: REP 145 '
                 'wants the specific force in m/s², gravity included (a gravity-compensated '
                 'output belongs in imu_compensated/)')
-    if abs(scale / G - 1) < 0.05:
-        return (f'accel_units: linear_acceleration reads in g: multiply it by {_g(G, 6)} '
+    if abs(scale / GRAVITY - 1) <= ACCEL_TOL:
+        return (f'accel_units: linear_acceleration reads in g: multiply it by {_g(GRAVITY, 6)} '
                 f'(scale {_g(scale)}) to publish m/s²')
-    if scale > 100:
+    if scale > GRAVITY_REMOVED:
         return ('accel_units: linear_acceleration reads about 0 at rest (gravity removed?): '
                 'REP 145 wants the specific force in m/s², gravity included (a '
                 'gravity-compensated output belongs in imu_compensated/)')
@@ -500,7 +502,7 @@ def _accel_units_line(scale):
 def _gyro_units_line(scale):
     if scale is None:
         return 'gyro_units: angular_velocity is not in rad/s'
-    if abs(scale / math.radians(1) - 1) < 0.05:
+    if abs(scale / math.radians(1) - 1) <= GYRO_TOL:
         return (f'gyro_units: angular_velocity reads in deg/s: multiply it by π/180 = '
                 f'{_g(math.radians(1), 6)} (scale {_g(scale)}) to publish rad/s')
     return f'gyro_units: multiply angular_velocity by {_g(scale)} to publish rad/s'
