@@ -167,6 +167,99 @@ def test_bag_topic_gives_evos_numbers_and_its_tf_the_same(capsys, tmp_path, stre
             assert abs(by_tf[metric][key] - mine[metric][key]) <= 1e-9
 
 
+def as_they_come(path, t, R, b):
+    """
+    Write a TUM file as real ones come: a stamp repeated with another pose, and lines swapped.
+
+    Every 97th line is followed by one of the same stamp and a pose turned by 30° (kept, the
+    numbers would change), and every 89th pair of lines is swapped (stamps going back).
+    Returns (repeated, backwards): how many of each.
+    """
+    rows = np.column_stack([t, b, rt.matrix_to_quaternion(R)])
+    off = rt.matrix_to_quaternion(R @ rt.rot_x(np.radians(30)))
+    lines = [f'{row[0]:.9f} ' + ' '.join(f'{x:.9f}' for x in row[1:]) for row in rows]
+    out, repeated = [], 0
+    for k, line in enumerate(lines):
+        out.append(line)
+        if k % 97 == 50:
+            out.append(line.split(' ', 1)[0] + ' ' + ' '.join(
+                f'{x:.9f}' for x in np.concatenate([b[k], off[k]])))
+            repeated += 1
+    backwards = 0
+    for k in range(10, len(out) - 1, 89):
+        if out[k].split(' ', 1)[0] != out[k + 1].split(' ', 1)[0]:
+            out[k], out[k + 1] = out[k + 1], out[k]
+            backwards += 1
+    Path(path).write_text('# t x y z qx qy qz qw\n' + '\n'.join(out) + '\n')
+    return repeated, backwards
+
+
+def test_stamps_as_they_come_give_evos_numbers(capsys, tmp_path, streams):
+    pytest.importorskip('evo', reason='evo is not installed (a test requirement)')
+    from evo.tools import file_interface
+    ref_path = tmp_path / 'ref.tum'
+    repeated, backwards = as_they_come(ref_path, *streams[0])
+    est_path = write_tum(tmp_path / 'est.tum', *streams[1])
+    status, out, err = run(capsys, 'compare', est_path, ref_path, '--match', 'nearest',
+                           '--align', 'se3', '--deg', '--json', '--precision', '17')
+    assert status == 0
+    assert err == (f'warning: REF ({ref_path}): {repeated} repeated stamps dropped (the first '
+                   f'of each kept), {backwards} stamps out of order sorted\n')
+    mine = json.loads(out)
+    assert (mine['ref']['dropped_duplicates'], mine['ref']['reordered']) == (repeated, backwards)
+    assert (mine['est']['dropped_duplicates'], mine['est']['reordered']) == (0, 0)
+    assert mine['ref']['poses'] == len(streams[0][0])
+    evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path),  # as written
+                      file_interface.read_tum_trajectory_file(est_path))
+    assert_as_evo(mine, evo)
+
+
+def test_strict_stamps_refuse_them_saying_which(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    t = 1311868229.576 + np.arange(0.0, 10.0, 0.05)
+    R, b = turn(t), path_of(t)
+    write_tum(tmp_path / 'good.tum', t, R, b)
+    write_tum(tmp_path / 'twice.tum', np.insert(t, 7, t[6]), np.insert(R, 7, R[6], 0),
+              np.insert(b, 7, b[6], 0))
+    write_euroc(tmp_path / 'back.csv', t[[0, 1, 3, 2, 4, 5, 6]], R[:7], b[:7])
+    for words, says in [
+            (('twice.tum', 'good.tum'), 'twice.tum:9: duplicate stamp 1311868229.876 (as on '
+             'line 8)'),
+            (('good.tum', 'back.csv'), 'back.csv:5: stamp 1311868229.676 goes back from '
+             '1311868229.726 on line 4')]:
+        status, out, err = run(capsys, 'compare', *words, '--strict-stamps')
+        assert (status, out) == (2, '')
+        assert err == f'rot-tools: error: compare: {says}\n'
+    status, out, err = run(capsys, 'compare', 'twice.tum', 'good.tum', '--json')
+    assert status == 0 and err == ('warning: EST (twice.tum): 1 repeated stamp dropped (the '
+                                   'first of each kept)\n')
+    assert json.loads(out)['ape']['max'] == 0.0
+
+
+def test_a_bag_topic_as_it_comes(capsys, tmp_path):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    builder = bh.Builder()
+    t = 1311868229.5 + np.arange(200) / 64  # exact in nanoseconds
+    R, b = turn(t), path_of(t)
+    q = rt.matrix_to_quaternion(R)
+    order = list(range(len(t)))
+    order[10], order[11] = 11, 10  # recorded in this order: the header stamps go back
+    order.insert(30, 29)  # a message stamped again (the same pose)
+    bag = bh.write_bag(tmp_path / 'est', [
+        ('/pose', 'geometry_msgs/msg/PoseStamped', 1_000_000_000 + n,
+         builder.pose_stamped(t[k], b[k], q[k])) for n, k in enumerate(order)])
+    ref = write_tum(tmp_path / 'ref.tum', t, R, b)
+    status, out, err = run(capsys, 'compare', bag, ref, '--json')
+    assert status == 0 and err == (f'warning: EST ({bag}): 1 repeated stamp dropped (the first '
+                                   'of each kept), 1 stamp out of order sorted\n')
+    found = json.loads(out)
+    assert found['est']['poses'] == len(t) and found['ape']['max'] < 1e-7
+    status, out, err = run(capsys, 'compare', bag, ref, '--strict-stamps')
+    assert (status, out) == (2, '')
+    assert err == ('rot-tools: error: compare: EST: /pose: stamp 1311868229.65625 goes back '
+                   'from 1311868229.671875 (messages 11 and 12 as recorded)\n')
+
+
 # ---- time offset, recorded -----------------------------------------------------------------
 
 
@@ -290,6 +383,7 @@ def bad_inputs(tmp_path):
     write_tum(tmp_path / 'two.tum', t[:2], R[:2], b[:2])
     write_tum(tmp_path / 'still.tum', t, np.broadcast_to(np.eye(3), R.shape), b)
     write_tum(tmp_path / 'imu.tum', t, R, b)
+    write_tum(tmp_path / 'unix.tum', t + 1311868229.576, R, b)
     return good
 
 
@@ -297,7 +391,9 @@ def bad_inputs(tmp_path):
     ('seven.tum', (), '7 values, 8 expected'),
     ('words.tum', (), 'not a number'),
     ('zero.tum', (), 'quaternion of norm 0'),
-    ('back.tum', (), 'stamps must increase'),
+    ('back.tum', ('--strict-stamps',), 'back.tum:2: stamp 0.0 goes back from 1.0 on line 1'),
+    ('unix.tum unix.tum', ('--delta', '1e-7', '--delta-unit', 's'),
+     'delta = 1e-07 s is within the rounding of stamps near 1311868239.526 s'),
     ('short.csv', (), '3 values, 8 or more expected'),
     ('missing.tum', (), 'cannot read it'),
     ('later.tum', (), 'no overlap in time'),
@@ -314,7 +410,8 @@ def test_bad_input_is_one_line_and_status_2(capsys, tmp_path, monkeypatch, other
                                             options, says):
     bad_inputs(tmp_path)
     monkeypatch.chdir(tmp_path)
-    status, out, err = run(capsys, 'compare', other, 'good.tum', *options)
+    sides = other.split() if ' ' in other else [other, 'good.tum']
+    status, out, err = run(capsys, 'compare', *sides, *options)
     assert status == 2 and out == ''
     assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
     assert says in err, err
@@ -342,6 +439,19 @@ def test_a_bag_of_several_topics_asks_for_one(capsys, tmp_path, streams):
     status, _, err = run(capsys, 'compare', bag, ref, '--est-topic', '/a', '--align', 'se3',
                          '--est-tf', 'map', 'body')
     assert status == 2 and 'not both' in err
+
+
+def test_a_topic_whose_every_message_is_refused_is_one_line(capsys, tmp_path):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    builder = bh.Builder()
+    t = np.arange(0.0, 1.0, 0.1)
+    bag = bh.write_bag(tmp_path / 'zero', [('/imu', 'sensor_msgs/msg/Imu', int(s * 1e9) + 1,
+                                            builder.imu(s, (0, 0, 0, 0))) for s in t])
+    ref = write_tum(tmp_path / 'ref.tum', t, turn(t), path_of(t))
+    status, out, err = run(capsys, 'compare', bag, ref)
+    assert (status, out) == (2, '') and err.count('\n') == 1
+    assert err.startswith('rot-tools: error: compare: EST: /imu: no message to compare: all 10 '
+                          'refused, the first because '), err
 
 
 def test_se3_needs_positions(capsys, tmp_path):

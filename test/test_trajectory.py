@@ -18,6 +18,7 @@ from rot_tools import (
     align_rotations, angular_speeds, delta_pairs, error_statistics, estimate_time_offset,
     hand_eye_rotation, interpolate_poses, nearest_stamps, random_rotations, rot_x, rot_z,
     rotation_errors, RotationError, rotvec_to_matrix, skew)
+from rot_tools.core.trajectory import order_stamps
 from scipy import linalg, optimize
 from scipy.spatial.transform import Rotation
 
@@ -122,6 +123,29 @@ def test_nearest_is_the_brute_force_nearest_with_ties_to_the_earlier(stamps, at,
 def test_nearest_tie_goes_to_the_earlier_stamp():
     index, covered = nearest_stamps([1.0, 2.0], [1.5, 1.5000001], max_gap=0.5)
     assert index.tolist() == [0, 1] and covered.all()
+
+
+# ---- order_stamps ----------------------------------------------------------------------------
+
+
+@settings(**h.HYPOTHESIS_SETTINGS)
+@given(st.lists(st.integers(0, 8), max_size=12), st.booleans())
+def test_stamps_are_sorted_keeping_the_first_of_equal_ones(stamps, nanoseconds):
+    given_ = np.array(stamps, dtype=np.int64) if nanoseconds else np.array(stamps) / 4 + 1.3e9
+    order = order_stamps(given_)
+    first = {}  # stamp → the first index that carries it, by a plain walk
+    for k, stamp in enumerate(given_.tolist()):
+        first.setdefault(stamp, k)
+    assert order.index.tolist() == [first[stamp] for stamp in sorted(first)]
+    assert order.dropped_duplicates == len(stamps) - len(first)
+    assert order.reordered == sum(any(later < earlier for earlier in stamps[:k])
+                                  for k, later in enumerate(stamps))
+
+
+def test_ordering_nanoseconds_keeps_them_apart():
+    ns = np.array([1311868229576000100, 1311868229576000000, 1311868229576000100])
+    order = order_stamps(ns)  # as floats in seconds, all three would be one stamp
+    assert order.index.tolist() == [1, 0] and order == (order.index, 1, 1)
 
 
 # ---- estimate_time_offset --------------------------------------------------------------------

@@ -104,8 +104,8 @@ def add_parser(subparsers):
         usage='rot-tools compare EST REF [--est-topic T] [--ref-topic T] [--est-tf A B]\n'
         '       [--ref-tf A B] [--match interpolate|nearest] [--max-gap S]\n'
         '       [--align none|rotation|yaw|se3] [--offset auto|SECONDS] [--max-offset S]\n'
-        '       [--mounting] [--delta D] [--delta-unit f|s] [--deg] [--json] [--csv FILE]\n'
-        '       [--plot FILE]',
+        '       [--mounting] [--delta D] [--delta-unit f|s] [--strict-stamps] [--deg]\n'
+        '       [--json] [--csv FILE] [--plot FILE]',
         description=f'An orientation against ground truth.\n\n{TEXT}',
         epilog='examples:\n  rot-tools compare est.tum gt.csv --align se3 --deg\n'
         '  rot-tools compare run.bag gt.tum --est-topic /imu/data --offset auto --mounting\n'
@@ -137,6 +137,9 @@ def add_parser(subparsers):
                    '(default 1) or seconds')
     p.add_argument('--delta-unit', choices=('f', 's'), default='f',
                    help='--delta in frames (f, default) or seconds (s)')
+    p.add_argument('--strict-stamps', action='store_true',
+                   help='refuse a trajectory whose stamps repeat or go back (by default they '
+                   'are sorted and the first of equal stamps kept, with a warning)')
     p.add_argument('--csv', metavar='FILE',
                    help='write one row per match: stamp (s), angle, roll, pitch, yaw of E')
     common = p.add_argument_group('common options')
@@ -155,13 +158,25 @@ def add_parser(subparsers):
 
 
 def _is_bag(path):
-    return Path(path).is_dir() or Path(path).suffix.lower() in bag_read.BAG_SUFFIXES
+    return bag_read.is_bag(path) or Path(path).is_dir()
 
 
-def read_side(name, path, topic, tf):
-    """Poses of one side (name EST or REF): a bag's topic or TF chain, or a text file."""
+def _ns_text(ns):
+    """Write integer nanoseconds as exact seconds: 1311868229576000000 → 1311868229.576."""
+    whole, fraction = divmod(abs(int(ns)), 10 ** 9)
+    text = f'{whole}.{fraction:09d}'.rstrip('0')
+    return ('-' if ns < 0 else '') + (text + '0' if text.endswith('.') else text)
+
+
+def read_side(name, path, topic, tf, strict=False):
+    """
+    Poses of one side (name EST or REF): a bag's topic or TF chain, or a text file.
+
+    Stamps as they come (order_stamps): sorted, the first of equal ones kept; with strict, the
+    first that repeats or goes back is refused (CompareError, TrajectoryFileError).
+    """
     if topic is None and tf is None and not _is_bag(path):
-        return read_text(path)
+        return read_text(path, strict)
     if topic is not None and tf is not None:
         raise CompareError(f'{name}: give a topic or a TF frame pair, not both')
     missing = bag_read.rosbags_missing()
@@ -178,13 +193,37 @@ def read_side(name, path, topic, tf):
             raise CompareError(f'{name}: the bag {path} has {len(topics)} topics ({listed}): '
                                f'choose one with --{name.lower()}-topic')
     t = topics[-1]
-    order = np.argsort(t.ns, kind='stable')
-    ns = t.ns[order]
-    if len(ns) and (np.diff(ns) == 0).any():
-        k = int(np.argmax(np.diff(ns) == 0))
-        raise CompareError(f'{name}: {t.topic} has two messages stamped {ns[k]} ns')
+    if not len(t.ns):
+        refused = t.refused()['total']
+        why = t.first_refusal()
+        raise CompareError(f'{name}: {t.topic}: no message to compare' + (
+            f': all {refused} refused, the first because {why}' if refused else ''))
+    back = t.ns[1:] <= t.ns[:-1]
+    if strict and back.any():
+        k = int(np.argmax(back)) + 1
+        problem = (f'duplicate stamp {_ns_text(t.ns[k])}' if t.ns[k] == t.ns[k - 1] else
+                   f'stamp {_ns_text(t.ns[k])} goes back from {_ns_text(t.ns[k - 1])}')
+        raise CompareError(f'{name}: {t.topic}: {problem} (messages {k} and {k + 1} as '
+                           'recorded)')
+    order = trajectory.order_stamps(t.ns)
+    keep = order.index
     positions = t.chain is not None or t.columns.position is not None
-    return Poses(ns / 1e9, t.R[order], t.position[order] if positions else None, t.topic)
+    whole, fraction = np.divmod(t.ns[keep], 10 ** 9)  # ns / 1e9 would round twice
+    return Poses(whole + fraction / 1e9, t.R[keep], t.position[keep] if positions else None,
+                 t.topic, order.dropped_duplicates, order.reordered)
+
+
+def stamp_warning(name, source, poses):
+    """Return the warning of a side whose stamps were put in order, or None."""
+    parts = []
+    if poses.dropped_duplicates:
+        n = poses.dropped_duplicates
+        parts.append(f'{n} repeated stamp{"s" if n > 1 else ""} dropped (the first of each '
+                     'kept)')
+    if poses.reordered:
+        n = poses.reordered
+        parts.append(f'{n} stamp{"s" if n > 1 else ""} out of order sorted')
+    return f'{name} ({source}): {", ".join(parts)}' if parts else None
 
 
 # ---- the comparison -----------------------------------------------------------------------
@@ -306,10 +345,11 @@ def report(result, est, ref, args):
     """Return the report as plain data (to_yaml / to_json)."""
     degrees = args.deg
     e = result.errors
-    out = {'est': {'source': str(args.est), 'read': est.name, 'poses': len(est.stamps)},
-           'ref': {'source': str(args.ref), 'read': ref.name, 'poses': len(ref.stamps)},
-           'match': args.match, 'pairs': len(result.pairs.stamps),
-           'offset': result.offset.offset}
+    out = {side: {'source': str(source), 'read': poses.name, 'poses': len(poses.stamps),
+                  'dropped_duplicates': poses.dropped_duplicates, 'reordered': poses.reordered}
+           for side, source, poses in (('est', args.est, est), ('ref', args.ref, ref))}
+    out.update({
+        'match': args.match, 'pairs': len(result.pairs.stamps), 'offset': result.offset.offset})
     if args.offset == 'auto':
         out['offset_correlation'] = result.offset.correlation
     out['alignment'] = args.align
@@ -389,8 +429,8 @@ def run(args):
     output_file.check_outputs([('--csv', args.csv), ('--plot', args.plot)],
                               [args.est, args.ref])
     try:
-        est = read_side('EST', args.est, args.est_topic, args.est_tf)
-        ref = read_side('REF', args.ref, args.ref_topic, args.ref_tf)
+        est = read_side('EST', args.est, args.est_topic, args.est_tf, args.strict_stamps)
+        ref = read_side('REF', args.ref, args.ref_topic, args.ref_tf, args.strict_stamps)
         result = compare(est, ref, args)
     except (CompareError, TrajectoryFileError, bag_read.BagError, RotationError) as exc:
         options.error(f'compare: {exc}')
@@ -405,6 +445,8 @@ def run(args):
     data = report(result, est, ref, args)
     text = to_json if args.json else to_yaml
     output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
-    for line in warnings(result, args):
+    stamps = [stamp_warning(name, source, poses)
+              for name, source, poses in (('EST', args.est, est), ('REF', args.ref, ref))]
+    for line in [line for line in stamps if line] + warnings(result, args):
         sys.stderr.write(f'warning: {line}\n')
     return 0

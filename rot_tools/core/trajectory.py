@@ -101,6 +101,46 @@ def _times(at, name):
     return at
 
 
+class StampOrder(NamedTuple):
+    """
+    A stream's samples to keep, in time order (order_stamps).
+
+    index (K,): into the stamps as given; dropped_duplicates: samples left out because an
+    earlier one has the same stamp; reordered: samples stamped earlier than one before them.
+    """
+
+    index: np.ndarray
+    dropped_duplicates: int
+    reordered: int
+
+
+def order_stamps(stamps):
+    """
+    Put the samples of a stream in time order, as files and bags give them.
+
+    stamps (N,): finite numbers in any order (seconds as floats, or integer nanoseconds:
+    integers are compared as they are). The samples are sorted by stamp, stably (equal stamps
+    keep their order), and of each run of equal stamps the first is kept (as evo's matching
+    takes the first of equal stamps). Returns StampOrder(index, dropped_duplicates,
+    reordered); index is sorted and strictly increasing in stamp: t[index] satisfies the
+    other functions of this module.
+    """
+    given = stamps if isinstance(stamps, np.ndarray) else np.asarray(stamps)
+    if given.dtype.kind in 'iu' and given.ndim == 1:
+        t = given
+    else:
+        t = finite_array(stamps, (), 'stamps')
+        if t.ndim != 1:
+            raise RotationError(f'stamps must have shape (N,), got {t.shape}')
+    reordered = int(np.count_nonzero(t[1:] < np.maximum.accumulate(t)[:-1])) if len(t) else 0
+    index = np.argsort(t, kind='stable')
+    ordered = t[index]
+    first = np.ones(len(t), bool)
+    first[1:] = ordered[1:] != ordered[:-1]
+    return StampOrder(index=index[first], dropped_duplicates=int(len(t) - first.sum()),
+                      reordered=reordered)
+
+
 class _Pairs(NamedTuple):
     R_ref: np.ndarray
     R_est: np.ndarray

@@ -10,14 +10,18 @@ Trajectory text files: TUM and EuRoC ground truth, read into stamps, rotations a
 
 A quaternion q becomes R by rot_tools.quaternion_to_matrix after it is normalised; one whose
 norm is off 1 by more than rot_tools.io.boundary.QUATERNION_TOLERANCE (rotation_node's
-quaternion_tolerance: a typo, a zero) is refused. Stamps must increase strictly. Every refusal
-is a TrajectoryFileError naming the file, the line and the value.
+quaternion_tolerance: a typo, a zero) is refused. Stamps are taken as they come
+(rot_tools.core.trajectory.order_stamps): lines out of order are sorted (stably), and of lines
+with equal stamps the first is kept; Poses says how many of each. With ``strict`` the first
+such line is refused instead. Every refusal is a TrajectoryFileError naming the file, the line
+and the value.
 """
 
 from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core.so3 import quaternion_to_matrix
+from rot_tools.core.trajectory import order_stamps, plain
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 
 
@@ -26,12 +30,19 @@ class TrajectoryFileError(ValueError):
 
 
 class Poses(NamedTuple):
-    """A stream of poses: stamps (N,) s, R (N, 3, 3), b (N, 3) or None, and its format."""
+    """
+    A stream of poses: stamps (N,) s, R (N, 3, 3), b (N, 3) or None, and its format.
+
+    Stamps strictly increasing; dropped_duplicates and reordered: what putting them in order
+    took (order_stamps).
+    """
 
     stamps: np.ndarray
     R: np.ndarray
     b: np.ndarray
     name: str
+    dropped_duplicates: int = 0
+    reordered: int = 0
 
 
 def _data_lines(path):
@@ -68,14 +79,8 @@ def _table(path, lines, separator, least, exact):
     return np.array(rows), np.array(numbers, dtype=float)
 
 
-def _poses(path, rows, stamps, b, q, name):
-    """Poses of one file; its stamps increasing and its quaternions of unit norm checked."""
-    steps = np.diff(stamps)
-    if (steps <= 0).any():
-        k = int(np.argmax(steps <= 0)) + 1
-        raise TrajectoryFileError(
-            f'{path}:{rows[k]}: stamp {stamps[k]!r} does not follow {stamps[k - 1]!r} of line '
-            f'{rows[k - 1]}: stamps must increase')
+def _poses(path, rows, stamps, b, q, name, strict):
+    """Poses of one file: its quaternions of unit norm checked, its stamps put in order."""
     norm = np.linalg.norm(q, axis=1)
     off = np.abs(norm - 1)
     if (off > QUATERNION_TOLERANCE).any():
@@ -83,25 +88,43 @@ def _poses(path, rows, stamps, b, q, name):
         raise TrajectoryFileError(
             f'{path}:{rows[k]}: quaternion of norm {norm[k]:.6g}, off 1 by more than '
             f'{QUATERNION_TOLERANCE:g}')
-    return Poses(stamps, quaternion_to_matrix(q / norm[:, None]), b, name)
+    back = stamps[1:] <= stamps[:-1]
+    if strict and back.any():
+        k = int(np.argmax(back)) + 1
+        if stamps[k] == stamps[k - 1]:
+            problem = f'duplicate stamp {plain(stamps[k])} (as on line {rows[k - 1]})'
+        else:
+            problem = (f'stamp {plain(stamps[k])} goes back from {plain(stamps[k - 1])} on '
+                       f'line {rows[k - 1]}')
+        raise TrajectoryFileError(f'{path}:{rows[k]}: {problem}')
+    order = order_stamps(stamps)
+    keep = order.index
+    return Poses(stamps[keep], quaternion_to_matrix(q[keep] / norm[keep, None]), b[keep], name,
+                 order.dropped_duplicates, order.reordered)
 
 
-def read_tum(path, lines=None):
+def read_tum(path, lines=None, strict=False):
     """Poses of a TUM file (``t x y z qx qy qz qw``); lines: its _data_lines when read."""
     rows, table = _table(path, lines or _data_lines(path), None, 8, True)
-    return _poses(path, rows, table[:, 0], table[:, 1:4], table[:, 4:8], 'TUM')
+    return _poses(path, rows, table[:, 0], table[:, 1:4], table[:, 4:8], 'TUM', strict)
 
 
-def read_euroc(path, lines=None):
+def read_euroc(path, lines=None, strict=False):
     """Poses of an EuRoC ground-truth CSV (``ns, x, y, z, qw, qx, qy, qz, …``)."""
     rows, table = _table(path, lines or _data_lines(path), ',', 8, False)
     q = table[:, [5, 6, 7, 4]]  # w x y z → x y z w
-    return _poses(path, rows, table[:, 0] / 1e9, table[:, 1:4], q, 'EuRoC')
+    return _poses(path, rows, table[:, 0] / 1e9, table[:, 1:4], q, 'EuRoC', strict)
 
 
-def read_text(path):
-    """Poses of a TUM or EuRoC file: EuRoC when its first data line holds a comma."""
+def read_text(path, strict=False):
+    """
+    Poses of a TUM or EuRoC file: EuRoC when its first data line holds a comma.
+
+    strict: refuse a stamp that repeats or goes back (TrajectoryFileError) instead of
+    putting the lines in order.
+    """
     lines = _data_lines(path)
     if not lines:
         raise TrajectoryFileError(f'{path}: no pose in the file')
-    return read_euroc(path, lines) if ',' in lines[0][1] else read_tum(path, lines)
+    read = read_euroc if ',' in lines[0][1] else read_tum
+    return read(path, lines, strict)
