@@ -441,6 +441,33 @@ def test_a_bag_of_several_topics_asks_for_one(capsys, tmp_path, streams):
     assert status == 2 and 'not both' in err
 
 
+def test_a_bare_mcap_file_is_a_bag_and_no_output_lands_in_a_bag(capsys, tmp_path):
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    builder = bh.Builder()
+    t = np.arange(0.0, 4.0, 0.05)
+    R, b = turn(t), path_of(t)
+    q = rt.matrix_to_quaternion(R)
+    messages = [('/pose', 'geometry_msgs/msg/PoseStamped', int(s * 1e9) + 1,
+                 builder.pose_stamped(s, p, qk)) for s, p, qk in zip(t, b, q)]
+    folder = bh.write_bag(tmp_path / 'victim', messages, storage='mcap')
+    (storage,) = folder.glob('*.mcap')
+    bare = storage.rename(tmp_path / 'alone.mcap')
+    bh.write_bag(tmp_path / 'victim2', messages)
+    ref = write_tum(tmp_path / 'ref.tum', t, R, b)
+    status, out, err = run(capsys, 'compare', bare, ref, '--json', '--precision', 17)
+    assert status == 0 and err == '', err
+    assert json.loads(out)['pairs'] == len(t) and json.loads(out)['ape']['max'] < 1e-7
+    metadata = tmp_path / 'victim2' / 'metadata.yaml'
+    before = metadata.read_bytes()
+    db3 = next((tmp_path / 'victim2').glob('*.db3'))
+    for est, option, target in [(tmp_path / 'victim2', '--csv', metadata), (bare, '--csv', bare),
+                                (db3, '--csv', metadata), (db3, '--plot', db3.parent / 'e.png')]:
+        status, out, err = run(capsys, 'compare', est, ref, option, target)
+        assert (status, out) == (2, '') and err.count('\n') == 1
+        assert 'would overwrite the bag being read' in err, err
+    assert metadata.read_bytes() == before and bare.stat().st_size > 0
+
+
 def test_a_topic_whose_every_message_is_refused_is_one_line(capsys, tmp_path):
     pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
     builder = bh.Builder()
