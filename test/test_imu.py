@@ -209,6 +209,16 @@ def test_a_ned_device_is_mounted_upside_down(results):
     assert turn.magnitude() < math.radians(5)
 
 
+@pytest.mark.parametrize('case', ['clean', 'gyro in deg/s', 'gyro x, y swapped, z negated',
+                                  'accel sign flipped'])
+def test_every_ten_seconds_say_the_same(jackal, results, case):
+    """The node checks the last 10 s: every stretch of 10 s gives the whole recording's faults."""
+    imu = CASES[case][0](jackal[0])
+    for start in range(0, len(imu['t']) - 500, 250):
+        stretch = {k: v[start:start + 500] for k, v in imu.items()}
+        assert faults(run(stretch)) == faults(results[case, False]), start
+
+
 def test_the_reference_is_only_one_more_input(results):
     """The checks that do not need the reference give the same answer with it."""
     for case in CASES:

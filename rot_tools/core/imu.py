@@ -355,7 +355,9 @@ def _gyro_axes(fit):
     fixed = sorted(fit.rows)
     wrong = [i for i in fixed if fit.rows[i] != (i, 1)]
     left = ', '.join(AXES[i] for i in range(3) if i not in fit.rows)
-    unfixed = f'the motion does not fix {left} (too little turn about it, or rates that differ)'
+    them = 'it' if len(fixed) == 2 else 'them'
+    unfixed = (f'the motion does not fix {left} (too little turn about {them}, or rates that '
+               'differ)')
     if len(fixed) == 3:
         matrix = tuple(tuple(s if k == j else 0 for k in range(3))
                        for j, s in (fit.rows[i] for i in range(3)))
