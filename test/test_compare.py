@@ -342,6 +342,39 @@ def test_interpolated_matching_beats_nearest_at_two_rates(capsys, tmp_path):
     assert rmse['interpolate'] < 0.05 * rmse['nearest'], rmse
 
 
+# ---- alignment ----------------------------------------------------------------------------
+
+
+def test_posyaw_aligns_the_positions_by_a_yaw_and_a_shift(capsys, tmp_path):
+    from scipy import optimize
+    from scipy.spatial.transform import Rotation
+    rng = np.random.default_rng(12)
+    t = np.arange(0.0, 10.0, 0.05)
+    R_ref, b_ref = turn(t), path_of(t) * 5
+    yaw, shift = rt.rot_z(-2.0), np.array([3.0, 1.0, -0.5])
+    tilt = rt.rot_x(np.radians(2))  # a drift of gravity the yaw does not take away
+    R_est = yaw @ tilt @ noisy(R_ref, 0.2, rng)
+    b_est = (b_ref + rng.normal(scale=0.02, size=b_ref.shape)) @ (yaw @ tilt).T + shift
+    est = write_tum(tmp_path / 'est.tum', t, R_est, b_est)
+    ref = write_tum(tmp_path / 'ref.tum', t, R_ref, b_ref)
+    status, out, err = run(capsys, 'compare', est, ref, '--align', 'posyaw', '--json',
+                           '--precision', 17)
+    assert status == 0 and err == '', err
+    found = json.loads(out)
+    b_est_read = np.loadtxt(est)[:, 1:4]  # as the file holds them, and so compare reads them
+
+    def residuals(x):  # b_ref ≈ Rot_z(ψ)·b_est + t: the 4 unknowns, by scipy
+        return (b_ref - Rotation.from_euler('z', x[0]).apply(b_est_read) - x[1:]).ravel()
+
+    best = optimize.least_squares(residuals, [0.0, 0, 0, 0], xtol=1e-15, ftol=1e-15).x
+    W = Rotation.from_euler('z', best[0])
+    assert (W.inv() * Rotation.from_quat(found['alignment_quaternion'])).magnitude() < 1e-9
+    R_est_read = rt.quaternion_to_matrix(np.loadtxt(est)[:, 4:8])
+    angles = (Rotation.from_matrix(R_ref).inv() * W * Rotation.from_matrix(R_est_read)).magnitude()
+    assert abs(found['ape']['rmse'] - np.sqrt(np.mean(angles ** 2))) < 1e-9
+    assert abs(np.degrees(found['ape']['rmse']) - 2) < 0.5  # the tilt is left
+
+
 # ---- outputs ------------------------------------------------------------------------------
 
 

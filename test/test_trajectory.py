@@ -244,6 +244,28 @@ def test_se3_alignment_recovers_a_rigid_motion():
     assert angle_between(found, scipy_fit.as_matrix()) < 1e-12
 
 
+def test_posyaw_alignment_is_the_best_yaw_and_translation_of_the_positions():
+    rng = np.random.default_rng(11)
+    t = np.linspace(0, 10, 60)
+    b_est, R_est = path(t), motion(t)
+    yaw, shift = rot_z(2.2), np.array([4.0, -2.0, 1.5])
+    b_ref = b_est @ yaw.T + shift
+    found, found_t = align_rotations(yaw @ R_est, R_est, 'posyaw', b_ref=b_ref, b_est=b_est)
+    assert angle_between(found, yaw) < 1e-13 and h.max_abs(found_t - shift) < 1e-12
+    # noisy, and tilted (a yaw cannot undo a tilt): the 4-DoF least squares, by scipy
+    noisy = (b_est @ (rot_x(0.05) @ yaw).T + shift + rng.normal(scale=0.1, size=b_est.shape))
+    W, t_found = align_rotations(R_est, R_est, 'posyaw', b_ref=noisy, b_est=b_est)
+
+    def residuals(x):
+        return (noisy - b_est @ rot_z(x[0]).T - x[1:]).ravel()
+
+    best = min((optimize.least_squares(residuals, [psi, 0, 0, 0], xtol=1e-15, ftol=1e-15)
+                for psi in (-2.0, 0.0, 2.0)), key=lambda fit: fit.cost)
+    assert W[2, 2] == 1.0 and W[2, :2].tolist() == [0.0, 0.0]
+    assert abs(np.angle(np.exp(1j * (math.atan2(W[1, 0], W[0, 0]) - best.x[0])))) < 1e-9
+    assert h.max_abs(t_found - best.x[1:]) < 1e-8
+
+
 def test_no_alignment_is_the_identity():
     W, t = align_rotations(motion([1.0, 2.0]), motion([3.0, 4.0]), 'none')
     assert (W == np.eye(3)).all() and not t.any()
@@ -406,7 +428,14 @@ T3 = np.array([0.0, 1.0, 2.0])
     (lambda: estimate_time_offset(T3, rot_z(T3 ** 2), T3, rot_z(T3 ** 2), max_offset='1'),
      r"max_offset must be a number ≥ 0, got '1'"),
     (lambda: align_rotations(EYE3, EYE3, 'scale'),
-     r"method must be one of none, rotation, yaw, se3, got 'scale'"),
+     r"method must be one of none, rotation, yaw, se3, posyaw, got 'scale'"),
+    (lambda: align_rotations(EYE3, EYE3, 'posyaw', b_est=np.eye(3)),
+     r"method 'posyaw' fits positions: give b_ref and b_est"),
+    (lambda: align_rotations(EYE3[:1], EYE3[:1], 'posyaw', b_ref=np.eye(3)[:1],
+                             b_est=np.eye(3)[:1]),
+     r"method 'posyaw' needs at least 2 positions, got 1"),
+    (lambda: align_rotations(EYE3, EYE3, 'posyaw', b_ref=np.eye(3), b_est=np.diag([0, 0, 1.0])),
+     r"method 'posyaw' needs positions that move in x and y: b_est moves along z only"),
     (lambda: align_rotations(EYE3, EYE3[:2]),
      r'R_ref has 3 rotations but R_est has 2: pairs are needed'),
     (lambda: align_rotations(EYE3[0], EYE3[0]), r'R_ref must have shape \(N, 3, 3\)'),

@@ -17,7 +17,8 @@ bag``'s). Then, with the pieces of rot_tools.core.trajectory, in this order:
    ``--delta`` of every pair k, A_k = Q_kᵀQ_{k+Δ}, B_k = P_kᵀP_{k+Δ} (hand_eye_rotation,
    overlapping intervals); EST is then turned into REF's body frame, P_k → P_k·Xᵀ.
 4. **Alignment** W of the reference frames, R_ref ≈ W·R_est (align_rotations): none,
-   rotation, yaw or se3 (Umeyama on the positions, as evo's ``--align``).
+   rotation, yaw, se3 (Umeyama on the positions, as evo's ``--align``) or posyaw (a yaw and
+   a shift of the positions, as rpg_trajectory_evaluation aligns visual-inertial odometry).
 5. **Errors** of E_k = Q_kᵀ·W·P_k (rotation_errors): absolute (APE), relative over
    ``--delta`` between non-overlapping pairs (evo's RPE), and E's roll, pitch, yaw.
 """
@@ -103,9 +104,9 @@ def add_parser(subparsers):
         'compare', help='an orientation against ground truth: errors, offset, mounting',
         usage='rot-tools compare EST REF [--est-topic T] [--ref-topic T] [--est-tf A B]\n'
         '       [--ref-tf A B] [--match interpolate|nearest] [--max-gap S]\n'
-        '       [--align none|rotation|yaw|se3] [--offset auto|SECONDS] [--max-offset S]\n'
-        '       [--mounting] [--delta D] [--delta-unit f|s] [--strict-stamps] [--deg]\n'
-        '       [--json] [--csv FILE] [--plot FILE]',
+        '       [--align none|rotation|yaw|se3|posyaw] [--offset auto|SECONDS]\n'
+        '       [--max-offset S] [--mounting] [--delta D] [--delta-unit f|s]\n'
+        '       [--strict-stamps] [--deg] [--json] [--csv FILE] [--plot FILE]',
         description=f'An orientation against ground truth.\n\n{TEXT}',
         epilog='examples:\n  rot-tools compare est.tum gt.csv --align se3 --deg\n'
         '  rot-tools compare run.bag gt.tum --est-topic /imu/data --offset auto --mounting\n'
@@ -123,7 +124,8 @@ def add_parser(subparsers):
     p.add_argument('--align', choices=trajectory.ALIGNMENTS, default='none',
                    help='fit the rotation between the reference frames: none (default), '
                    'rotation (least squares on SO(3)), yaw (about z), se3 (Umeyama on the '
-                   'positions, as evo)')
+                   'positions, as evo), posyaw (a yaw and a shift that align the positions, '
+                   'as rpg_trajectory_evaluation aligns visual-inertial odometry)')
     p.add_argument('--offset', type=_offset, default=0.0, metavar='auto|SECONDS',
                    help="seconds added to EST's stamps (default 0), or auto: estimated from "
                    'the angular speeds')
@@ -315,10 +317,10 @@ def compare(est, ref, args):
     pairs = match(est, ref, found.offset, args.match, gap)
     mount = mounting(pairs, args.delta, args.delta_unit) if args.mounting else None
     R_est = pairs.R_est if mount is None else pairs.R_est @ mount.rotation.T
-    if args.align == 'se3' and (pairs.b_ref is None or pairs.b_est is None):
+    if args.align in ('se3', 'posyaw') and (pairs.b_ref is None or pairs.b_est is None):
         side = 'REF' if pairs.b_ref is None else 'EST'
-        raise CompareError(f'--align se3 fits positions, and {side} has none (an Imu): use '
-                           '--align rotation or yaw')
+        raise CompareError(f'--align {args.align} fits positions, and {side} has none (an '
+                           'Imu): use --align rotation or yaw')
     W, _ = trajectory.align_rotations(pairs.R_ref, R_est, args.align, b_ref=pairs.b_ref,
                                       b_est=pairs.b_est)
     errors = trajectory.rotation_errors(pairs.R_ref, W @ R_est, args.delta, args.delta_unit,

@@ -344,7 +344,7 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
 # ---- alignment ---------------------------------------------------------------------------
 
 
-ALIGNMENTS = ('none', 'rotation', 'yaw', 'se3')
+ALIGNMENTS = ('none', 'rotation', 'yaw', 'se3', 'posyaw')
 """The methods of align_rotations."""
 
 
@@ -369,6 +369,11 @@ def align_rotations(R_ref, R_est, method='rotation', *, b_ref=None, b_est=None):
     - 'se3': Umeyama without scale on the positions, as evo's --align: W minimises
       Σ‖(b_ref,k − b̄_ref) − W·(b_est,k − b̄_est)‖² (align_vectors), t = b̄_ref − W·b̄_est.
       Needs b_ref, b_est (N, 3), N ≥ 3.
+    - 'posyaw': the same over W = Rot_z(ψ) only, 4 degrees of freedom (ψ and t), as
+      rpg_trajectory_evaluation aligns visual-inertial odometry, whose gravity direction is
+      observable (Zhang and Scaramuzza, IROS 2018): with d = b − b̄,
+      ψ = atan2(Σ(y_ref·x_est − x_ref·y_est), Σ(x_ref·x_est + y_ref·y_est)) of the d's,
+      t = b̄_ref − W·b̄_est. Needs b_ref, b_est (N, 3), N ≥ 2, moving across z.
 
     Returns FrameAlignment(W (3, 3), t (3,)). RotationError for an unknown method, unpaired
     input and a W that is not unique.
@@ -382,6 +387,8 @@ def align_rotations(R_ref, R_est, method='rotation', *, b_ref=None, b_est=None):
         return FrameAlignment(W=np.eye(3), t=zero)
     if method == 'se3':
         return _umeyama(b_ref, b_est, len(R_ref))
+    if method == 'posyaw':
+        return _position_yaw(b_ref, b_est, len(R_ref))
     if method == 'rotation':
         return FrameAlignment(W=mean_rotation(R_ref @ np.swapaxes(R_est, -1, -2)), t=zero)
     S = np.einsum('nij,nkj->ik', R_ref, R_est)
@@ -405,6 +412,27 @@ def _umeyama(b_ref, b_est, count):
                             f"{'b_ref' if not d_ref.any() else 'b_est'} stands still")
     keep = d_ref.any(axis=1) & d_est.any(axis=1)  # a pair at a centroid pulls nowhere
     W = align_vectors(d_ref[keep], d_est[keep]).R
+    return FrameAlignment(W=W, t=mean_ref - W @ mean_est)
+
+
+def _position_yaw(b_ref, b_est, count):
+    """Fit the yaw and translation that best align the positions (align_rotations' 'posyaw')."""
+    if b_ref is None or b_est is None:
+        raise RotationError("method 'posyaw' fits positions: give b_ref and b_est")
+    if count < 2:
+        raise RotationError(f"method 'posyaw' needs at least 2 positions, got {count}")
+    b_ref, b_est = _positions(b_ref, 'b_ref', count), _positions(b_est, 'b_est', count)
+    mean_ref, mean_est = b_ref.mean(axis=0), b_est.mean(axis=0)
+    d_ref, d_est = b_ref - mean_ref, b_est - mean_est
+    cos = float(np.sum(d_ref[:, 0] * d_est[:, 0] + d_ref[:, 1] * d_est[:, 1]))
+    sin = float(np.sum(d_ref[:, 1] * d_est[:, 0] - d_ref[:, 0] * d_est[:, 1]))
+    spread = [float(np.linalg.norm(d[:, :2])) for d in (d_ref, d_est)]
+    if math.hypot(cos, sin) <= 1e-12 * spread[0] * spread[1] or not all(spread):
+        still = 'b_ref' if spread[0] <= spread[1] else 'b_est'
+        raise RotationError("method 'posyaw' needs positions that move in x and y: "
+                            f'{still} moves along z only, or the two do not correlate in x, y '
+                            f'(Σ x·x + y·y = {cos:.3g}, Σ y·x − x·y = {sin:.3g})')
+    W = rot_z(math.atan2(sin, cos))
     return FrameAlignment(W=W, t=mean_ref - W @ mean_est)
 
 
