@@ -309,6 +309,8 @@ def test_rich_motion_faults_of_the_accelerometer_and_the_world():
     checks = run(gone, reference)
     assert checks.accel_units.status == 'fault' and checks.accel_units.scale is None
     assert 'gravity is removed' in checks.accel_units.message
+    # no gravity, no up: the directions are unknown
+    assert checks.orientation_vs_accel.status == checks.accel_sign.status == 'unknown'
     assert faults(run(ned(imu), reference)) == ('orientation_vs_accel', 'world_up')
     assert faults(run(dict(imu, accel=-imu['accel']), reference)) == (
         'orientation_vs_accel', 'accel_sign')
@@ -421,6 +423,8 @@ def small():
     ({'q': np.zeros((200, 3))}, r'quaternions must have shape \(\.\.\., 4\)'),
     ({'gyro': np.full((200, 3), np.nan)}, r'angular_velocity must be finite: 600 non-finite'),
     ({'t': np.r_[np.arange(199.0), np.inf]}, r'stamps must be finite: 1 non-finite'),
+    ({'gyro': np.full((200, 3), 1e10)}, r'angular_velocity\[0\] reads 1e\+10: beyond 1e\+09, '
+                                        r'no sensor reads that \(600 such entries\)'),
 ])
 def test_bad_input_says_what_and_by_how_much(small, change, message):
     imu = dict(small[0], **change)

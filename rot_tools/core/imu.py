@@ -72,6 +72,14 @@ LAG_PERIODS = 2
 MIN_CORRELATION = 0.5
 """Correlation of the two angular speeds below which the lag is unknown."""
 
+NO_GRAVITY = 0.5
+"""Median |a| (in its units) in slow spells below which the accelerometer shows no gravity,
+so no direction of up (a gravity-compensated output; in g it reads 1)."""
+
+MAX_READING = 1e9
+"""|angular_velocity| and |linear_acceleration| entries at most: beyond, no sensor's reading
+(and sums of their squares would leave float64)."""
+
 AXES = 'xyz'
 
 
@@ -195,6 +203,11 @@ def _vectors(x, name, count):
     if x.shape != (count, 3):
         raise RotationError(f'{name} must have shape ({count}, 3), one per stamp, got '
                             f'{x.shape}')
+    big = np.abs(x) > MAX_READING
+    if big.any():
+        k, i = (int(j) for j in np.argwhere(big)[0])
+        raise RotationError(f'{name}[{k}] reads {float(x[k, i]):.3g}: beyond {MAX_READING:g}, '
+                            f'no sensor reads that ({int(big.sum())} such entries)')
     return x
 
 
@@ -277,9 +290,19 @@ def _too_few_slow(samples, slow):
             f'{seconds:.3g} s: at least {MIN_SLOW:g} s needed')
 
 
+def _no_gravity(force):
+    """Return '' when the accelerometer shows gravity in slow spells, else why not."""
+    size = float(np.median(np.linalg.norm(force, axis=1)))
+    if size >= NO_GRAVITY:
+        return ''
+    return (f'the accelerometer reads {size:.3g} when the body turns slowly: no gravity, so no '
+            'direction of up.')
+
+
 def _accel_units(force):
     size = float(np.median(np.linalg.norm(force, axis=1)))
     scale = GRAVITY / size if size > 0 else None
+    scale = scale if scale is not None and math.isfinite(scale) else None
     said = (f'|linear_acceleration| reads {size:.4g} when the body turns slowly'
             + (f' (scale {scale:.4g})' if scale is not None else ''))
     if scale is not None and abs(scale - 1) <= ACCEL_TOL:
@@ -437,13 +460,14 @@ def _mounting(samples, ref_t, ref_Q, ref_period, lag):
 
 
 def _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, X):
-    inside = slow & (samples.t >= ref_t[0]) & (samples.t <= ref_t[-1])
-    why = _too_few_slow(samples, inside)
-    if why:
-        return _unknown(AngleCheck, f'{why} within the reference.')
+    inside = np.flatnonzero(slow)
     near = nearest_stamps(ref_t, samples.t[inside], RATE_GAP * max(ref_period, samples.period))
+    inside = inside[near.covered]
+    why = _too_few_slow(samples, np.isin(np.arange(len(slow)), inside))
+    if why:
+        return _unknown(AngleCheck, f'{why} where the reference covers them.')
     # Xᵀ·Q_kᵀ·ẑ: the body's up in the IMU frame
-    angle = _median_angle(ref_Q[near.index, 2, :] @ X, force[inside][near.covered])
+    angle = _median_angle(ref_Q[near.index, 2, :] @ X, force[inside])
     said = (f'the specific force is {_deg(angle)} from the up that the reference gives through '
             'the mounting')
     if angle <= math.pi / 2:
@@ -465,7 +489,7 @@ def _world_up(found):
         f'{said}: it points down, the orientation is NED (REP-103 wants ENU).'))
 
 
-def _reference_checks(samples, slow, force, reference, tol, lag):
+def _reference_checks(samples, slow, force, reference, tol, lag, flat):
     """Return the accel_sign, world_up and mounting checks (lag: the orientation's, s)."""
     if reference is None:
         why = 'no reference orientation to compare with.'
@@ -476,7 +500,8 @@ def _reference_checks(samples, slow, force, reference, tol, lag):
     if found is None:
         why = 'no mounting, so no physical up in the IMU frame.'
         return _unknown(AngleCheck, why), _unknown(AngleCheck, why), mounting
-    sign = _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, found.X)
+    sign = (_unknown(AngleCheck, flat) if flat
+            else _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, found.X))
     up = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
           else _world_up(found))
     return sign, up, mounting
@@ -504,15 +529,17 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     samples = _samples(given, quaternions, angular_velocity, linear_acceleration, tol)
     slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
+    flat = '' if why else _no_gravity(force[slow])
     if why:
         units, tilt = _unknown(AccelUnitsCheck, f'{why}.'), _unknown(AngleCheck, f'{why}.')
     else:
         units = _accel_units(force[slow])
         tilt = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
+                else _unknown(AngleCheck, flat) if flat
                 else _orientation_vs_accel(samples.R[slow], force[slow]))
     offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples)
     lag = offset.seconds if offset.status != 'unknown' else 0.0
-    sign, up, mounting = _reference_checks(samples, slow, force, reference, tol, lag)
+    sign, up, mounting = _reference_checks(samples, slow, force, reference, tol, lag, flat)
     return ImuChecks(stamps=_check_stamps(given, samples), accel_units=units,
                      orientation_vs_accel=tilt, gyro_units=gyro_units, gyro_axes=gyro_axes,
                      gyro_bias=gyro_bias, time_offset=offset, accel_sign=sign, world_up=up,

@@ -54,6 +54,9 @@ DOMINANCE = 3.0
 SIZE_RANGE = (0.5, 2.0)
 """|A_ij| / scale within this range, to fix an axis (outside it the rates disagree)."""
 
+MIN_RATES = 10
+"""Rates (pairs of samples) at least, for the gyro fit."""
+
 BIAS_SLACK = 0.002
 """Mean orientation rate (rad/s) about an axis the fit leaves unknown, at most, for a bias."""
 
@@ -196,6 +199,8 @@ def fit_gyro(rates):
     # centred sums from the raw ones, as products: NumPy reduces and subtracts tall (K, 3)
     # arrays slowly, and the means are not large against the spread here
     g, o, count = rates.gyro, rates.orientation, len(rates.gyro)
+    if count < MIN_RATES:
+        return GyroFit(scale=None, rows={}, bias=None, mean_rate=np.zeros(3))
     ones = np.full(count, 1.0 / count)
     mean_g, mean_o = ones @ g, ones @ o
     S = g.T @ g - count * np.outer(mean_g, mean_g)
