@@ -1,5 +1,5 @@
 """
-rotation_client's tools around the inputs: the angle hint, echo, set and tf-demo.
+rotation_client's tools around the inputs: the angle hint, echo, set, param, play, tf-demo.
 
 Against a rotation_node process of this run (conftest's isolated domain and namespaces), over
 DDS: the commands run in this process (test_client.Here) where what is tested is the
@@ -8,14 +8,19 @@ pipe, a module that does not import); expected values come from closed forms and
 from rot_tools.
 """
 
+import csv
+import io
 import json
 import math
 import re
 import subprocess
 import sys
 import threading
+import time
 
-from conftest import DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
+from bag_helpers import Builder, REAL, tf_chain_messages, write_bag
+from conftest import console_script, DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
+from conftest import TIMEOUT
 from doc_blocks import assert_doc_output
 import pytest
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
@@ -253,6 +258,235 @@ def test_param_list_prints_as_ros2_param_list(here, node):
 def test_param_bad_arguments(here, args, message):
     line = one_line_error(here(*args), 2)
     assert line.startswith('rotation_client: error: ') and message in line, line
+
+
+# ---------------------------------------------------------------------------------------
+# play
+
+JACKAL = {'/imu/data': 'imu', '/jackal_velocity_controller/odom': 'odometry'}
+"""The recording's topics and the node's inputs they are remapped onto."""
+
+SUMMARY = re.compile(r'played (\d+) messages of (\S+) in [\d.]+ s \(rate ([\d.]+)\): (.*) '
+                     r'\(([\d.]+) s to ([\d.]+) s of the recording\)(.*)\n')
+
+
+def remaps(mapping):
+    """Return the ROS arguments that remap each topic of ``mapping`` onto its value."""
+    return ('--ros-args',
+            *[word for topic, to in mapping.items() for word in ('-r', f'{topic}:={to}')])
+
+
+def collect(tester, topic, count, seconds=TIMEOUT):
+    """Spin until ``count`` messages of ``topic`` arrived or ``seconds`` passed; return them."""
+    deadline = time.monotonic() + seconds
+    while len(tester.received[topic]) < count and time.monotonic() < deadline:
+        tester.spin_once()
+    return tester.received[topic]
+
+
+def bag_csv(*args):
+    """Return {(frame_id, stamp text): row} of ``rot-tools bag REAL ARGS --csv -`` (all digits)."""
+    command = console_script('rot-tools', 'rot_tools.cli.main') + [
+        'bag', str(REAL), *map(str, args), '--precision', '17', '--csv', '-']
+    result = subprocess.run(command, capture_output=True, text=True, timeout=120,
+                            env=script_env(command), stdin=subprocess.DEVNULL)
+    assert result.returncode == 0, result.stderr
+    return {(row['frame_id'], row['stamp']): row for row in csv.DictReader(io.StringIO(
+        result.stdout))}
+
+
+def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
+    """
+    Play one second of the Jackal recording (ROS 1) at twice its speed into the node.
+
+    Its Imu and Odometry topics are remapped onto ~/imu and ~/odometry: every ~/quaternion the
+    node publishes for them is the one ``rot-tools bag`` reads for that message (same frame,
+    same stamp), and the summary counts what the bag holds in that second.
+    """
+    from geometry_msgs.msg import QuaternionStamped
+    from rclpy.qos import QoSProfile
+    topic = f'{node}/quaternion'
+    tester.subscribe(topic, QuaternionStamped, QoSProfile(depth=1000))
+    tester.wait_matched([topic])
+    result = here('play', REAL, '--start', 10, '--end', 11, '--rate', 2,
+                  *remaps({bag: f'{node}/{name}' for bag, name in JACKAL.items()}))
+    assert (result.returncode, result.stderr) == (0, '')
+    total, bag, rate, counts, first, last, skipped = SUMMARY.fullmatch(result.stdout).groups()
+    assert (bag, rate, first, last, skipped) == (str(REAL), '2', '10', '11', '')
+    expected = bag_csv('--start', 10, '--end', 11)
+    assert len(expected) == int(total) == 102
+    assert counts == ', '.join(f'{t} {sum(r["topic"] == t for r in expected.values())}'
+                               for t in JACKAL)
+    received = collect(tester, topic, len(expected))
+    # Best effort into the node: a message may be lost on a loaded machine, not most.
+    assert len(received) >= len(expected) // 2, (len(received), len(expected))
+    for msg in received:
+        stamp = msg.header.stamp
+        row = expected[msg.header.frame_id, f'{stamp.sec}.{stamp.nanosec:09d}']
+        q = msg.quaternion
+        assert [q.x, q.y, q.z, q.w] == pytest.approx(
+            [float(row[k]) for k in ('qx', 'qy', 'qz', 'qw')], abs=1e-12)
+
+
+def test_play_a_rosbag2_bag_with_tf(here, tester, namespace, tmp_path):
+    """
+    A rosbag2 bag's /tf and /tf_static (TFMessage: sequences of messages) arrive whole.
+
+    The subscriptions have tf2_ros's QoS: /tf_static's transient local one matches only a
+    transient local publisher, as the player's is for /tf_static.
+    """
+    from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
+    from tf2_msgs.msg import TFMessage
+    messages, _, _ = tf_chain_messages(n=10)
+    bag = write_bag(tmp_path / 'tf_bag', messages, storage='mcap')
+    for name, qos in (('tf', TF_QOS), ('tf_static', TF_STATIC_QOS)):
+        tester.subscribe(f'{namespace}/{name}', TFMessage, qos)
+    result = here('play', bag, '--rate', 50,
+                  *remaps({'/tf': f'{namespace}/tf', '/tf_static': f'{namespace}/tf_static'}))
+    assert (result.returncode, result.stderr) == (0, '')
+    assert ': /tf_static 1, /tf 10 (0 s to 1.4 s of the recording)' in result.stdout
+    got = collect(tester, f'{namespace}/tf', 10) + collect(tester, f'{namespace}/tf_static', 1)
+    sent = [msg for topic, _, _, msg in sorted(messages, key=lambda m: (m[0] == '/tf', m[2]))]
+    assert len(got) == len(sent) == 11
+    for msg, original in zip(got[10:] + got[:10], sent):
+        assert [(t.header.frame_id, t.child_frame_id, t.header.stamp.sec, t.header.stamp.nanosec,
+                 t.transform.rotation.w, t.transform.translation.z) for t in msg.transforms] == [
+            (t.header.frame_id, t.child_frame_id, t.header.stamp.sec, t.header.stamp.nanosec,
+             t.transform.rotation.w, t.transform.translation.z) for t in original.transforms]
+
+
+def test_messages_are_converted_field_by_field():
+    """
+    Check that rosbags' objects become rclpy's: a ROS 1 header's seq dropped, arrays, sequences.
+
+    The first Imu and Odometry of the Jackal recording (ROS 1), a Path (a sequence of
+    messages) and an Image (a uint8 sequence) of ROS 2 types.
+    """
+    from nav_msgs.msg import Odometry, Path
+    from rot_tools.io.bag_read import open_bag
+    from rot_tools.ros.bag_player import converter
+    from sensor_msgs.msg import Image, Imu
+    import numpy as np
+    with open_bag(REAL) as reader:
+        first = {}
+        for connection, _, raw in reader.messages():
+            first.setdefault(connection.msgtype, reader.deserialize(raw, connection.msgtype))
+            if len(first) == 2:
+                break
+    imu = converter(Imu)(first['sensor_msgs/msg/Imu'])
+    source = first['sensor_msgs/msg/Imu']
+    assert (imu.header.stamp.sec, imu.header.stamp.nanosec, imu.header.frame_id) == (
+        source.header.stamp.sec, source.header.stamp.nanosec, source.header.frame_id)
+    assert not hasattr(imu.header, 'seq') and hasattr(source.header, 'seq')
+    o = imu.orientation
+    assert [o.x, o.y, o.z, o.w] == [source.orientation.x, source.orientation.y,
+                                    source.orientation.z, source.orientation.w]
+    np.testing.assert_array_equal(imu.orientation_covariance, source.orientation_covariance)
+    np.testing.assert_array_equal(imu.linear_acceleration_covariance,
+                                  source.linear_acceleration_covariance)
+    odometry = converter(Odometry)(first['nav_msgs/msg/Odometry'])
+    source = first['nav_msgs/msg/Odometry']
+    assert odometry.child_frame_id == source.child_frame_id
+    assert odometry.pose.pose.position.x == source.pose.pose.position.x
+    np.testing.assert_array_equal(odometry.twist.covariance, source.twist.covariance)
+    b = Builder()
+    path = b.make('nav_msgs/msg/Path', header=b.header(3.25, 'odom'), poses=[
+        b.pose_stamped(3.0 + k, (k, 0, 0), (0, 0, 0, 1)) for k in range(3)])
+    converted = converter(Path)(path)
+    assert [p.pose.position.x for p in converted.poses] == [0.0, 1.0, 2.0]
+    assert converted.header.stamp.nanosec == 250_000_000
+    image = b.make('sensor_msgs/msg/Image', header=b.header(1.0), height=1, width=3,
+                   encoding='mono8', is_bigendian=0, step=3,
+                   data=np.array([0, 7, 255], dtype=np.uint8))
+    assert list(converter(Image)(image).data) == [0, 7, 255]
+
+
+class FakeReader:
+    """Recorded messages for Player.play: (topic, stamp ns) each, a std_msgs/String."""
+
+    start_time = 1_000_000_000
+
+    def __init__(self, stamps):
+        from types import SimpleNamespace
+        self.connection = SimpleNamespace(topic='/chatter', msgtype='std_msgs/msg/String',
+                                          ext=SimpleNamespace(latching=0))
+        self.stamps = stamps
+
+    def messages(self, connections, start=None, stop=None):
+        return ((self.connection, stamp, b'') for stamp in self.stamps
+                if (start is None or stamp >= start) and (stop is None or stamp < stop))
+
+    def deserialize(self, raw, msgtype):
+        from types import SimpleNamespace
+        return SimpleNamespace(data='hello')
+
+
+def test_no_message_is_published_before_its_time():
+    """Each message waits (spinning) for its recorded offset from the first, over the rate."""
+    from rot_tools.ros.bag_player import Player
+    from std_msgs.msg import String
+
+    class Publisher:
+
+        def __init__(self):
+            self.times = []
+
+        def publish(self, msg):
+            assert msg.data == 'hello'
+            self.times.append(time.monotonic())
+
+        def wait_for_all_acked(self, timeout):
+            return True
+
+    publisher = Publisher()
+
+    class Node:
+
+        def create_publisher(self, cls, topic, qos):
+            return publisher
+
+    def spin_until(done, seconds):
+        while not done():
+            time.sleep(0.001)
+        return True
+    stamps = [FakeReader.start_time + k
+              for k in (0, 10_000_000, 10_000_000, 90_000_000, 200_000_000)]
+    reader = FakeReader(stamps)
+    player = Player(Node(), spin_until, {'/chatter': (String, [reader.connection])})
+    played = player.play(reader, 4.0, start=stamps[1])
+    assert played.counts == {'/chatter': 4} and (played.first, played.last) == (0.01, 0.2)
+    offsets = [t - publisher.times[0] for t in publisher.times]
+    assert all(offset >= (stamp - stamps[1]) / 4e9 for offset, stamp in zip(offsets, stamps[1:]))
+
+
+def test_play_refusals(here, monkeypatch, tmp_path):
+    """Each is one line: exit 2 for what was given, 1 for nothing listening or no rosbags."""
+    from rot_tools.io import bag_read
+    line = one_line_error(here('play', REAL, '--topics', '/nope'), 2)
+    assert line == (f'rotation_client: {REAL} has no topic /nope: its topics are /imu/data, '
+                    '/jackal_velocity_controller/odom')
+    text = tmp_path / 'notes.txt'
+    text.write_text('not a bag\n')
+    assert one_line_error(here('play', text), 2).startswith(f'rotation_client: {text}: not a bag')
+    assert one_line_error(here('play', REAL, '--start', 5, '--end', 2), 2) == (
+        'rotation_client: error: --end 2 is before --start 5')
+    line = one_line_error(here('play', REAL, '--topics', '/imu/data', '--timeout', 1), 1)
+    assert line == ('rotation_client: no subscription on /imu/data within 1 s: remap the topics '
+                    "onto the node's inputs (--ros-args -r /imu/data:=/rot_tools/imu)")
+    monkeypatch.setattr(bag_read, 'rosbags_missing', lambda: 'rosbags')
+    assert one_line_error(here('play', REAL), 1) == (
+        "rotation_client: play needs the rosbags library (rosbags is missing), the 'bag' extra: "
+        "pip install -e '.[bag]' in the rot_tools checkout")
+
+
+def test_play_interrupted_exits_130_quietly(tester, namespace):
+    """Ctrl-C while the whole recording plays: exit 130 within 1 s, nothing printed."""
+    from sensor_msgs.msg import Imu
+    topic = f'{namespace}/imu'
+    tester.subscribe(topic, Imu)
+    play = popen('play', REAL, '--topics', '/imu/data', *remaps({'/imu/data': topic}))
+    tester.wait_messages(topic, 5, DISCOVERY_TIMEOUT)
+    assert interrupt(play) == (130, '', '')
 
 
 # ---------------------------------------------------------------------------------------

@@ -60,6 +60,14 @@ def _positive(text):
     return value
 
 
+def _seconds(text):
+    value = arguments.number(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(
+            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
+    return value
+
+
 def _tolerance(text):
     """
     Return a number whose meaning survives float32, the type of GetPlan's tolerance.
@@ -128,7 +136,7 @@ def _leading_options(parser):
 
 
 USAGE = {'tf': 'REFERENCE BODY', 'echo': 'OUTPUT', 'set': 'NAME VALUE',
-         'param': '{get NAME | list}'}
+         'param': '{get NAME | list}', 'play': 'BAG'}
 """The words of a command other than its numbers, in its usage line."""
 
 
@@ -202,6 +210,13 @@ def commands():
             'As ros2 param get NODE NAME and ros2 param list NODE print them (Double value '
             'is: 0.001;\nthe names sorted, indented); --json: the value with its name and '
             'type, or the names.'),
+        'play': Command(
+            "publish a recording's messages on their topics, at their recorded times", '', (),
+            'BAG is a ROS 1 .bag, a rosbag2 directory or a file of one (the rosbags library,\n'
+            "the bag extra). Remap the topics onto the node's inputs with ROS arguments:\n"
+            '  rotation_client play run.bag --ros-args -r /imu/data:=/rot_tools/imu\n'
+            'Playing starts once a subscription has matched (within --timeout); a summary '
+            'line\nis printed at the end (--node and --frame are not used).'),
     }
 
 
@@ -248,7 +263,8 @@ def build_parser():
         '  rotation_client echo rpy --count 3\n'
         '  rotation_client set angle_unit deg\n'
         '  rotation_client param get quaternion_tolerance\n'
-        '  rotation_client param list\n\n'
+        '  rotation_client param list\n'
+        '  rotation_client play run.bag --rate 2 --ros-args -r /imu/data:=/rot_tools/imu\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nnothing to describe, or a parameter the node did not set or '
         "does not have; 2 bad\narguments, a value not of its parameter's type, or an input "
@@ -301,6 +317,18 @@ def build_parser():
             p.add_argument('value', metavar='VALUE', help='its new value')
         elif name == 'param':
             _param_verbs(p)
+        elif name == 'play':
+            p.add_argument('bag', metavar='BAG', help='the recording')
+            p.add_argument('--rate', type=_positive, default=1.0, metavar='R',
+                           help='play R times faster than recorded (default 1)')
+            p.add_argument('--topics', nargs='+', metavar='T',
+                           help='play these topics only (default: every topic)')
+            p.add_argument('--start', type=_seconds, metavar='S',
+                           help="only messages recorded S seconds or more after the bag's "
+                           'start')
+            p.add_argument('--end', type=_seconds, metavar='S',
+                           help="only messages recorded at most S seconds after the bag's "
+                           'start')
         if command.numbers:
             arguments.add_numbers(p, 'numbers', 'NUMBER', command.numbers,
                                   type=arguments.any_number)
@@ -323,6 +351,8 @@ def parse_args(argv):
     if args.expected and len(args.numbers) != args.expected:
         args.parser.error(f'{args.command} takes {args.expected} numbers '
                           f'({command.numbers}), got {len(args.numbers)}')
+    if args.command == 'play' and None not in (args.start, args.end) and args.end < args.start:
+        args.parser.error(f'--end {args.end:g} is before --start {args.start:g}')
     if args.wxyz:
         if not command.quaternions:
             args.parser.error(f'--wxyz: {args.command} takes no quaternion')

@@ -36,6 +36,10 @@ class Refused(Exception):
     """The node refused the input (exit 2)."""
 
 
+class BadInput(Exception):
+    """What was given cannot be used (exit 2): a value not of its parameter's type, a bag."""
+
+
 def stamped_outputs():
     """Return the names of the outputs published for every input with its header."""
     return tuple(row.name for row in interface.OUTPUTS

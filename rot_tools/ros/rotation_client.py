@@ -18,6 +18,7 @@ quick start has this instead (doc/client.md is its manual)::
     rotation_client echo OUTPUT [--once | --count N]
     rotation_client set NAME VALUE
     rotation_client param get NAME | param list
+    rotation_client play BAG [--rate R] [--topics T ...] [--start S] [--end S]
 
 Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
 
@@ -47,7 +48,9 @@ the node declares for NAME (~/describe_parameters), sends VALUE as that type (~/
 and prints the node's answer in one line: a refusal, with the node's reason, is exit status 1;
 a VALUE that is not of that type is one line, exit status 2, and nothing is sent. ``param get
 NAME`` and ``param list`` print what ``ros2 param get`` and ``ros2 param list`` print of the
-node (rot_tools.ros.client_parameters).
+node (rot_tools.ros.client_parameters). ``play BAG`` publishes a recording's messages on their
+topics at their recorded times, ``--rate`` times faster (rot_tools.ros.bag_player; the rosbags
+library, the ``bag`` extra): remapped with ``--ros-args -r``, a recording drives the node.
 
 The node's inputs are best effort, so a first message can be lost while discovery settles:
 the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
@@ -57,13 +60,13 @@ seconds. Every wait is bounded by ``--timeout``.
 
 Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
 be reached within ``--timeout``, or ~/describe has nothing to report, or the node did not
-set a parameter (one line on stderr naming what); 2 bad arguments, ROS arguments included,
-a parameter value not of the parameter's type, or the node refused the input (one line on
-stderr with the node's reason); 130 Ctrl-C; 141 the reader of stdout went away; 143 SIGTERM.
-rclpy is used here only, and only once the command line is known to be good: ``--help``,
-``--version`` and bad arguments start nothing.
-The process is the caller's: rclpy's own signal handlers, no other.
-``rot-tools`` stays ROS-free.
+set a parameter, or nothing subscribed to what play publishes, or rosbags is missing (one
+line on stderr naming what); 2 bad arguments, ROS arguments included, a parameter value not
+of the parameter's type, a bag that cannot be played, or the node refused the input (one line
+on stderr with the node's reason); 130 Ctrl-C; 141 the reader of stdout went away; 143
+SIGTERM. rclpy is used here only, and only once the command line is known to be good:
+``--help``, ``--version`` and bad arguments start nothing. The process is the caller's:
+rclpy's own signal handlers, no other. ``rot-tools`` stays ROS-free.
 """
 
 from collections import deque
@@ -77,9 +80,10 @@ import time
 import numpy as np
 from rot_tools.core.euler import euler_to_matrix, matrix_to_euler
 from rot_tools.io import interface
+from rot_tools.io.arguments import install_hint
 from rot_tools.io.report import to_json, to_yaml, transform_report
 from rot_tools.ros.client_arguments import parse_args, PROG, without_ros_args
-from rot_tools.ros.client_session import Client, describe_data, Refused, Unreachable
+from rot_tools.ros.client_session import BadInput, Client, describe_data, Refused, Unreachable
 import yaml
 
 MARKER_TYPES = ('ARROW', 'CUBE', 'SPHERE', 'CYLINDER', 'LINE_STRIP', 'LINE_LIST',
@@ -406,8 +410,8 @@ def _set_command(client, args):
     try:
         value = client_parameters.typed_value(kind, args.value)
     except client_parameters.DoesNotFit:
-        raise Refused(client_parameters.refusal(args.name, client.target, kind,
-                                                args.value)) from None
+        raise BadInput(client_parameters.refusal(args.name, client.target, kind,
+                                                 args.value)) from None
     result = client.set_parameter(Parameter(name=args.name, value=value))
     shown = f'{args.name} = {client_parameters.shown(value)}'
     if not result.successful:
@@ -438,10 +442,41 @@ def _param_command(client, args):
     return ''.join(line + '\n' for line in client_parameters.list_lines(names, types))
 
 
+def _play_command(client, args):
+    """play: publish a bag's messages on their topics at their recorded times; its summary."""
+    from rot_tools.io import bag_read
+    missing = bag_read.rosbags_missing()
+    if missing:
+        raise Unreachable(f"play needs the rosbags library ({missing} is missing), the 'bag' "
+                          f"extra: {install_hint('bag')}")
+    from rot_tools.ros import bag_player
+    try:
+        with bag_read.open_bag(args.bag) as reader:
+            try:
+                played, skipped = bag_player.topics(reader, args.topics)
+            except KeyError as exc:
+                names = sorted({c.topic for c in reader.connections})
+                raise BadInput(f'{args.bag} has no topic {exc.args[0]}: its topics are '
+                               + ', '.join(names)) from None
+            if not played:
+                raise BadInput(f'{args.bag}: nothing to play: ' + '; '.join(
+                    f'{s.topic} ({s.msgtype}: {s.why})' for s in skipped))
+            player = bag_player.Player(client.node, client.spin_until, played)
+            if len(player.wait_for_subscribers(args.timeout)) == len(played):
+                raise Unreachable(player.nobody_listens(args.timeout, client.target))
+            start, stop = (None if seconds is None
+                           else reader.start_time + int(round(seconds * 1e9)) + after
+                           for seconds, after in ((args.start, 0), (args.end, 1)))
+            result = player.play(reader, args.rate, start, stop)
+    except bag_read.BagError as exc:
+        raise BadInput(str(exc)) from None
+    return bag_player.summary(args.bag, result._replace(skipped=skipped), args.rate) + '\n'
+
+
 COMMANDS = {**{row.name: _input_command for row in interface.INPUTS},
             'describe': _describe_command, 'screw-path': _screw_path_command,
             'tf': _tf_command, 'tf-demo': _tf_demo_command, 'echo': _echo_command,
-            'set': _set_command, 'param': _param_command}
+            'set': _set_command, 'param': _param_command, 'play': _play_command}
 """What runs each command: every input of the node is sent by _input_command."""
 
 
@@ -537,7 +572,7 @@ def run_command(args, context):
     except Unreachable as exc:
         print(f'{PROG}: {exc}', file=sys.stderr)
         return EXIT_UNREACHABLE
-    except Refused as exc:
+    except (Refused, BadInput) as exc:
         print(f'{PROG}: {exc}', file=sys.stderr)
         return EXIT_USAGE
     except NameValidationException as exc:  # a -r __node:= / __ns:= that makes a bad name
