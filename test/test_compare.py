@@ -378,6 +378,47 @@ def test_posyaw_aligns_the_positions_by_a_yaw_and_a_shift(capsys, tmp_path):
 # ---- outputs ------------------------------------------------------------------------------
 
 
+def test_roll_pitch_yaw_statistics_are_of_angles_within_a_half_turn(capsys, tmp_path):
+    t = np.arange(0.0, 20.0, 0.05)
+    R = turn(t)
+    drift = rt.rot_z(0.9 * t) @ rt.rot_x(np.radians(3) * np.sin(t))  # yaw drifts 1030°
+    est = write_tum(tmp_path / 'est.tum', t, R @ drift, path_of(t))
+    ref = write_tum(tmp_path / 'ref.tum', t, R, path_of(t))
+    status, out, err = run(capsys, 'compare', est, ref, '--deg', '--json', '--csv',
+                           tmp_path / 'e.csv')
+    assert status == 0 and err == '', err
+    rpy = json.loads(out)['rpy']
+    assert all(-180 < x <= 180 for key in ('mean', 'median', 'min', 'max') for x in rpy[key])
+    assert 100 < rpy['rmse'][2] < 110  # uniform over (−180°, 180°]: 180/√3; not 600
+    table = np.loadtxt(tmp_path / 'e.csv', delimiter=',', skiprows=1)
+    assert (np.abs(table[:, 2:]) <= 180).all()
+    assert abs(np.sqrt(np.mean(table[:, 4] ** 2)) - rpy['rmse'][2]) < 1e-6  # the same angles
+
+
+def test_json_gives_matrices_as_rows_and_the_plot_names_the_alignment(capsys, tmp_path):
+    pytest.importorskip('matplotlib', reason="the 'plot' extra (matplotlib) is not installed")
+    from rot_tools.cli import compare
+    t = np.arange(0.0, 10.0, 0.05)
+    X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))
+    W, shift = rt.rot_z(0.5), np.array([1.0, 2.0, 3.0])
+    est = write_tum(tmp_path / 'est.tum', t, W.T @ turn(t) @ X, (path_of(t) - shift) @ W)
+    ref = write_tum(tmp_path / 'ref.tum', t, turn(t), path_of(t))
+    args = ['compare', est, ref, '--align', 'se3', '--mounting', '--json', '--precision', 12]
+    status, out, err = run(capsys, *args)
+    assert status == 0 and err == '', err
+    found = json.loads(out)
+    assert np.abs(np.array(found['alignment_matrix']) - W).max() < 1e-6
+    assert np.abs(np.array(found['alignment_translation']) - shift).max() < 1e-6
+    assert np.abs(np.array(found['mounting']['matrix']) - X).max() < 1e-6
+    parsed = cli.parse_args([str(a) for a in args])
+    poses = [compare.read_side(name, path, None, None) for name, path in (('EST', est),
+                                                                           ('REF', ref))]
+    figure = compare.figure(compare.compare(*poses, parsed), parsed)
+    title = figure.get_suptitle()
+    assert 'se3 alignment (Umeyama on the positions)' in title, title
+    assert 'EST turned by the mounting' in title, title
+
+
 def test_csv_has_one_row_per_pair_and_the_plot_is_drawn(capsys, tmp_path, streams):
     ref = write_tum(tmp_path / 'ref.tum', *streams[0])
     est = write_tum(tmp_path / 'est.tum', *streams[1])

@@ -354,6 +354,24 @@ def test_error_roll_pitch_yaw_against_scipy_and_continuous():
     assert h.max_abs(errors.rpy - np.stack([0.1 * np.sin(t), 0.2 * np.cos(t), yaw], -1)) < 1e-13
     wrapped = Rotation.from_matrix(np.swapaxes(R_ref, 1, 2) @ R_ref @ E.as_matrix())
     assert h.max_abs(np.angle(np.exp(1j * errors.rpy)) - wrapped.as_euler('xyz')) < 1e-12
+    # the statistics are over E's angles wrapped to (−π, π], as scipy gives them (−π → π)
+    by_scipy = wrapped.as_euler('xyz')
+    by_scipy[by_scipy <= -np.pi] += 2 * np.pi
+    for k, axis in enumerate(('roll', 'pitch', 'yaw')):
+        want = by_scipy[:, k]
+        assert errors.rpy_statistics[k] == pytest.approx(
+            {'rmse': np.sqrt(np.mean(want ** 2)), 'mean': np.mean(want),
+             'median': np.median(want), 'std': np.std(want), 'min': np.min(want),
+             'max': np.max(want)}, rel=1e-9, abs=1e-12), axis
+    assert errors.rpy_statistics[2]['max'] <= np.pi and errors.rpy_statistics[2]['min'] > -np.pi
+    assert errors.rpy_statistics[2]['rmse'] < 2 < errors.rpy[-1, 2] / 7  # not 15 rad
+
+
+def test_error_angles_at_minus_pi_wrap_to_plus_pi():
+    E = rot_x(np.pi) @ rot_z(np.pi)  # roll and yaw at ±π: either sign is the same rotation
+    errors = rotation_errors(np.repeat(np.eye(3)[None], 2, 0), np.array([E, E.T]))
+    for k in (0, 2):
+        assert errors.rpy_statistics[k]['min'] == errors.rpy_statistics[k]['max'] == np.pi
 
 
 @pytest.mark.parametrize('delta', [1, 2, 5, 7])

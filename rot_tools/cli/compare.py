@@ -301,7 +301,7 @@ class Result(NamedTuple):
 
     pairs: Matched
     offset: trajectory.TimeOffset
-    W: np.ndarray
+    alignment: trajectory.FrameAlignment
     mount: trajectory.HandEye
     errors: trajectory.RotationErrors
 
@@ -321,11 +321,11 @@ def compare(est, ref, args):
         side = 'REF' if pairs.b_ref is None else 'EST'
         raise CompareError(f'--align {args.align} fits positions, and {side} has none (an '
                            'Imu): use --align rotation or yaw')
-    W, _ = trajectory.align_rotations(pairs.R_ref, R_est, args.align, b_ref=pairs.b_ref,
-                                      b_est=pairs.b_est)
-    errors = trajectory.rotation_errors(pairs.R_ref, W @ R_est, args.delta, args.delta_unit,
-                                        pairs.stamps)
-    return Result(pairs, found, W, mount, errors)
+    alignment = trajectory.align_rotations(pairs.R_ref, R_est, args.align, b_ref=pairs.b_ref,
+                                           b_est=pairs.b_est)
+    errors = trajectory.rotation_errors(pairs.R_ref, alignment.W @ R_est, args.delta,
+                                        args.delta_unit, pairs.stamps)
+    return Result(pairs, found, alignment, mount, errors)
 
 
 # ---- output -------------------------------------------------------------------------------
@@ -343,6 +343,11 @@ def _quaternion(R):
     return [float(x) for x in matrix_to_quaternion(R, check=False)]
 
 
+def _listed(M):
+    """Return a matrix as a list of its rows (a vector as a list), plain floats."""
+    return np.asarray(M, dtype=float).tolist()
+
+
 def report(result, est, ref, args):
     """Return the report as plain data (to_yaml / to_json)."""
     degrees = args.deg
@@ -355,16 +360,18 @@ def report(result, est, ref, args):
     if args.offset == 'auto':
         out['offset_correlation'] = result.offset.correlation
     out['alignment'] = args.align
-    out['alignment_quaternion'] = _quaternion(result.W)
+    out['alignment_quaternion'] = _quaternion(result.alignment.W)
+    out['alignment_matrix'] = _listed(result.alignment.W)
+    out['alignment_translation'] = _listed(result.alignment.t)
     out['unit'] = 'deg' if degrees else 'rad'
     out['ape'] = _statistics(e.ape, degrees)
     out['rpe'] = _statistics(e.rpe, degrees)
     out['rpe_pairs'] = len(e.pairs)
-    rpy = [_statistics(trajectory.error_statistics(e.rpy[:, k]), degrees) for k in range(3)]
+    rpy = [_statistics(stats, degrees) for stats in e.rpy_statistics]  # wrapped to ±π
     out['rpy'] = {key: [axis[key] for axis in rpy] for key in rpy[0]}  # [roll, pitch, yaw]
     if result.mount is not None:
         m = result.mount
-        out['mounting'] = {'quaternion': _quaternion(m.rotation),
+        out['mounting'] = {'quaternion': _quaternion(m.rotation), 'matrix': _listed(m.rotation),
                            'residual': float(_unit(m.residual, degrees)),
                            'axes': m.axes}
         if m.warning:
@@ -385,9 +392,13 @@ def warnings(result, args):
 
 
 def write_csv(path, result, degrees, precision):
-    """One row per pair: stamp (exact), angle, roll, pitch, yaw; written whole or not at all."""
+    """
+    One row per pair: stamp (exact), angle, roll, pitch, yaw; written whole or not at all.
+
+    roll, pitch, yaw wrapped to (−π, π], as their statistics are.
+    """
     e = result.errors
-    table = _unit(np.column_stack([e.angle, e.rpy]), degrees)
+    table = _unit(np.column_stack([e.angle, trajectory.wrap_angles(e.rpy)]), degrees)
     with output_file.complete_or_nothing(path, 'w', encoding='utf-8', newline='') as out:
         out.write('stamp,angle,roll,pitch,yaw\n')
         for stamp, row in zip(result.pairs.stamps.tolist(), table.tolist()):
@@ -395,12 +406,24 @@ def write_csv(path, result, degrees, precision):
             out.write(','.join(cells) + '\n')
 
 
-def write_plot(path, result, degrees):
-    """Draw the error angle, then its roll, pitch, yaw, against time (matplotlib)."""
+ALIGNMENT_TITLES = {
+    'none': 'no alignment (W = I)', 'rotation': 'rotation alignment (least squares on SO(3))',
+    'yaw': 'yaw alignment (about z)', 'se3': 'se3 alignment (Umeyama on the positions)',
+    'posyaw': 'posyaw alignment (a yaw and a shift of the positions)'}
+"""What the plot's title says of each --align."""
+
+
+def figure(result, args):
+    """
+    Return the matplotlib Figure of the error angle, then its roll, pitch, yaw, against time.
+
+    roll, pitch, yaw drawn continuous (unwrapped: a drift through ±180° stays a line); the
+    title names the alignment, and the mounting when EST was turned by it.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    e, stamps = result.errors, result.pairs.stamps
+    e, stamps, degrees = result.errors, result.pairs.stamps, args.deg
     time = stamps - stamps[0]
     unit = 'deg' if degrees else 'rad'
     fig = Figure(figsize=(9.0, 6.0), layout='constrained')
@@ -409,14 +432,22 @@ def write_plot(path, result, degrees):
     total.plot(time, _unit(e.angle, degrees), color='black', lw=1.0, label='angle')
     for k, (name, color) in enumerate(zip(('roll', 'pitch', 'yaw'),
                                           ('tab:red', 'tab:green', 'tab:blue'))):
-        parts.plot(time, _unit(e.rpy[:, k], degrees), color=color, lw=1.0, label=name)
+        parts.plot(time, _unit(e.rpy[:, k], degrees), color=color, lw=1.0,
+                   label=f'{name} (continuous)')
     for ax in (total, parts):
         ax.set_ylabel(f'error ({unit})')
         ax.grid(True, alpha=0.3)
         ax.legend(loc='upper left', fontsize=8, ncols=3)
-    parts.set_xlabel(f'time (s) from {stamps[0]:.6f} s')
-    fig.suptitle('rotation error E = R_refᵀ·R_est: angle, and roll, pitch, yaw (REP-103)',
-                 fontsize=11)
+    parts.set_xlabel(f'time (s) from {trajectory.plain(stamps[0])} s')
+    turned = ', EST turned by the mounting X' if result.mount is not None else ''
+    fig.suptitle('rotation error E = R_refᵀ·W·R_est: angle, and roll, pitch, yaw (REP-103)\n'
+                 f'{ALIGNMENT_TITLES[args.align]}{turned}', fontsize=11)
+    return fig
+
+
+def write_plot(path, result, args):
+    """Write figure(result, args) to ``path`` (.png or .svg), whole or not at all."""
+    fig = figure(result, args)
     with output_file.complete_or_nothing(path, 'wb') as out:
         fig.savefig(out, format=os.path.splitext(str(path))[1][1:].lower())
 
@@ -437,7 +468,7 @@ def run(args):
     except (CompareError, TrajectoryFileError, bag_read.BagError, RotationError) as exc:
         options.error(f'compare: {exc}')
     if args.plot:
-        output_file.write_figure(lambda: write_plot(args.plot, result, args.deg), args.plot,
+        output_file.write_figure(lambda: write_plot(args.plot, result, args), args.plot,
                                  options.error)
     if args.csv is not None:
         try:

@@ -619,9 +619,11 @@ class RotationErrors(NamedTuple):
     Absolute and relative rotation errors of paired streams (rotation_errors).
 
     angle (N,): θ(E_k) ∈ [0, π] of E_k = R_ref,kᵀ·R_est,k; rpy (N, 3): E_k's roll, pitch,
-    yaw (RPY_SEQUENCE, each unwrapped along the stream); ape: error_statistics(angle);
-    pairs (K, 2): delta_pairs; rpe_angle (K,): the angle of (Q_iᵀQ_j)ᵀ(P_iᵀP_j);
-    rpe: error_statistics(rpe_angle). Radians.
+    yaw (RPY_SEQUENCE, each unwrapped along the stream, to be drawn: a yaw error that drifts
+    through ±π goes on growing); ape: error_statistics(angle); pairs (K, 2): delta_pairs;
+    rpe_angle (K,): the angle of (Q_iᵀQ_j)ᵀ(P_iᵀP_j); rpe: error_statistics(rpe_angle);
+    rpy_statistics: (roll, pitch, yaw), each error_statistics of that angle of E_k wrapped to
+    (−π, π] (wrap_angles: E's own angles, not the unwrapped drift). Radians.
     """
 
     angle: np.ndarray
@@ -630,6 +632,20 @@ class RotationErrors(NamedTuple):
     pairs: np.ndarray
     rpe_angle: np.ndarray
     rpe: dict
+    rpy_statistics: tuple
+
+
+def wrap_angles(x):
+    """
+    Return angles x (any shape, radians) wrapped to (−π, π]: x − 2πk for the k that fits.
+
+    Angles already in (−π, π] come back bit for bit; −π becomes π.
+    """
+    x = np.array(x, dtype=float)
+    outside = (x <= -np.pi) | (x > np.pi)
+    y = np.remainder(x[outside] + np.pi, 2 * np.pi) - np.pi  # in [−π, π)
+    x[outside] = np.where(y == -np.pi, np.pi, y)
+    return x
 
 
 def rotation_errors(R_ref, R_est, delta=1, unit='f', stamps=None):
@@ -652,5 +668,8 @@ def rotation_errors(R_ref, R_est, delta=1, unit='f', stamps=None):
     rel_ref = np.swapaxes(R_ref[i], -1, -2) @ R_ref[j]
     rel_est = np.swapaxes(R_est[i], -1, -2) @ R_est[j]
     rpe_angle = rotation_distance(rel_ref, rel_est, check=False)
+    wrapped = wrap_angles(rpy)
     return RotationErrors(angle=angle, rpy=rpy, ape=error_statistics(angle), pairs=pairs,
-                          rpe_angle=rpe_angle, rpe=error_statistics(rpe_angle))
+                          rpe_angle=rpe_angle, rpe=error_statistics(rpe_angle),
+                          rpy_statistics=tuple(error_statistics(wrapped[:, k])
+                                               for k in range(3)))
