@@ -411,8 +411,8 @@ def test_json_gives_matrices_as_rows_and_the_plot_names_the_alignment(capsys, tm
     assert np.abs(np.array(found['alignment_translation']) - shift).max() < 1e-6
     assert np.abs(np.array(found['mounting']['matrix']) - X).max() < 1e-6
     parsed = cli.parse_args([str(a) for a in args])
-    poses = [compare.read_side(name, path, None, None) for name, path in (('EST', est),
-                                                                           ('REF', ref))]
+    poses = [compare.read_side(name, path, None, None)
+             for name, path in (('EST', est), ('REF', ref))]
     figure = compare.figure(compare.compare(*poses, parsed), parsed)
     title = figure.get_suptitle()
     assert 'se3 alignment (Umeyama on the positions)' in title, title
