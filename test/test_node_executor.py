@@ -587,7 +587,8 @@ def test_the_node_adds_no_qos_event_handlers_to_the_wait_set(own_context, namesp
     bare = rclpy.create_node('bare', namespace=namespace, context=own_context)
     try:
         assert len(list(node.subscriptions)) == len(INPUTS)
-        assert len(list(node.publishers)) == len(list(bare.publishers)) + len(OUTPUTS)
+        assert len(list(node.publishers)) == len(list(bare.publishers)) + len(OUTPUTS) + 1
+        assert any(p.topic_name == '/diagnostics' for p in node.publishers)  # (the one more)
         assert len(list(node.waitables)) == len(list(bare.waitables))
     finally:
         node.destroy_node()

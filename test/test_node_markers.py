@@ -16,6 +16,7 @@ import pytest
 from rcl_interfaces.msg import Log
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 from rot_tools.ros import pictures
+from rot_tools.ros.diagnostics import PERIOD
 from rot_tools.ros.pictures import MARKER_RATE
 from scipy.spatial.transform import Rotation
 from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
@@ -204,15 +205,20 @@ def test_publish_markers_false_silences_both(make_rig):  # noqa: F811
 
 
 def test_the_picture_timer_exists_only_while_markers_are_published(make_rig):  # noqa: F811
-    # Without pictures the node has no timer for its executor to wait on.
+    # Without pictures the node has no timer of theirs for its executor to wait on (its
+    # other timer is /diagnostics', once a second).
     rig = make_rig(publish_markers=False)  # noqa: F811
-    assert list(rig.node.timers) == []
+
+    def picture_timers():
+        return [t for t in rig.node.timers if t.timer_period_ns != PERIOD * 1e9]
+
+    assert len(list(rig.node.timers)) == 1 and picture_timers() == []
     assert set_one(rig.node, 'publish_markers', True).successful
-    assert len(list(rig.node.timers)) == 1
+    assert len(picture_timers()) == 1
     stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
     markers_of(rig, stamp)
     assert set_one(rig.node, 'publish_markers', False).successful
-    assert list(rig.node.timers) == []
+    assert picture_timers() == []
 
 
 def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(

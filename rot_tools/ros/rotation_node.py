@@ -50,7 +50,7 @@ from rot_tools.io import boundary
 from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
-from rot_tools.ros import rpy_covariance, runtime, screw_path, tf_input
+from rot_tools.ros import diagnostics, rpy_covariance, runtime, screw_path, tf_input
 from rot_tools.ros.pictures import (MARKER_RATE, Pictures, WARM_UP_ROTATION,
                                     WARM_UP_TRANSLATION)
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
@@ -301,6 +301,7 @@ class RotationNode(Node):
         self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'],
                                   self._settings.publish_markers)
         self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
+        self._diagnostics = diagnostics.Diagnostics(self)  # /diagnostics, once a second
 
         # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
         # needs a tree between messages, two topics with their own QoS, and gives an output
@@ -308,6 +309,7 @@ class RotationNode(Node):
         self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
                                        quaternion_tolerance=self._settings.quaternion_tolerance)
         self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None, {})
+        self._diagnostics.tf = self._tf
         self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
 
         self._sources = []
@@ -316,8 +318,10 @@ class RotationNode(Node):
                             kind.row.convert, kind.row.fields,
                             rpy_covariance.covariance_reader(kind.row)
                             if kind.row.covariance else None)
-            self.create_subscription(kind.msg_type, kind.topic, partial(self._on_input, source),
-                                     INPUT_QOS, event_callbacks=NO_SUBSCRIPTION_EVENTS)
+            callback = self._diagnostics.counted(source.topic, partial(self._on_input, source),
+                                                 imu=kind.row.name == 'imu')
+            self.create_subscription(kind.msg_type, kind.topic, callback, INPUT_QOS,
+                                     event_callbacks=NO_SUBSCRIPTION_EVENTS)
             self._sources.append(source)
 
         self.create_service(Trigger, '~/describe', self._on_describe)
@@ -498,6 +502,7 @@ class RotationNode(Node):
         the latest of its reason for ~/describe (``header``: the refused message's).
         """
         self._refused[reason] += 1
+        self._diagnostics.refused(topic, reason)
         self._last_refusals[reason] = (topic, header, text)
         now = time.monotonic()
         if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD and (
@@ -593,18 +598,14 @@ class RotationNode(Node):
         return response
 
 
-def _rows(rows, width=99):
-    """'  name  text' lines, the text wrapped under itself."""
-    left = max(len(name) for name, _ in rows) + 4
-    lines = []
-    for name, text in rows:
-        lines += textwrap.wrap(text, width, initial_indent=f'  {name:{left - 2}}',
-                               subsequent_indent=' ' * left)
-    return lines
-
-
-def _default_text(value):
-    return ('true' if value else 'false') if isinstance(value, bool) else str(value)
+DIAGNOSTICS = [
+    ('imu conventions', "the conventions of ~/imu's last 10 s (rot-tools imu-check's checks): "
+     'OK, WARN naming the checks at fault, or STALE under 5 s of input'),
+    ('inputs', "each input's rate and refusals")]
+SERVICES = [('~/describe', "std_srvs/srv/Trigger: the latest input's report and the refusals, "
+             'as YAML'),
+            ('~/screw_path', 'nav_msgs/srv/GetPlan: the constant-screw motion from start to '
+             'goal')]
 
 
 def usage():
@@ -613,7 +614,7 @@ def usage():
     outputs = [(kind.topic, f'{kind.row.type_name}: {kind.row.help}'
                 + ('' if kind.row.value else f' (at most {MARKER_RATE:g} a second)'))
                for kind in OUTPUTS]
-    parameters = [(f'{name} = {_default_text(spec.default)}', spec.descriptor.description
+    parameters = [(f'{name} = {runtime.default_text(spec.default)}', spec.descriptor.description
                    + (f' ({spec.descriptor.additional_constraints})'
                       if spec.descriptor.additional_constraints else ''))
                   for name, spec in PARAMETERS.items()]
@@ -624,13 +625,13 @@ def usage():
             'motion (R, b) and republished as rotation matrix, quaternion, rotation vector, '
             'Euler angles, roll/pitch/yaw and screw (Chasles) decomposition, with the '
             "input's header.", 99),
-        '', 'inputs (subscribed best effort, keep last 50):', *_rows(inputs),
-        '', 'outputs (for every accepted input, reliable, depth 10):', *_rows(outputs),
-        '', 'services:', *_rows([('~/describe', "std_srvs/srv/Trigger: the latest input's "
-                                  'report and the refusals, as YAML'),
-                                 ('~/screw_path', 'nav_msgs/srv/GetPlan: the constant-screw '
-                                  'motion from start to goal')]),
-        '', 'parameters (-p NAME:=VALUE, --params-file FILE):', *_rows(parameters),
+        '', 'inputs (subscribed best effort, keep last 50):', *runtime.help_rows(inputs),
+        '', 'outputs (for every accepted input, reliable, depth 10):',
+        *runtime.help_rows(outputs),
+        '', '/diagnostics (diagnostic_msgs/msg/DiagnosticArray, once a second):',
+        *runtime.help_rows(DIAGNOSTICS),
+        '', 'services:', *runtime.help_rows(SERVICES),
+        '', 'parameters (-p NAME:=VALUE, --params-file FILE):', *runtime.help_rows(parameters),
         '', 'examples:',
         f"  {PROG} --ros-args -r __ns:=/robot -r '~/imu:=/robot/imu/data' -p angle_unit:=deg",
         f'  {PROG} --ros-args --params-file rot_tools.yaml   (copied from share/rot_tools/'

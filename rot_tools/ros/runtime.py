@@ -8,6 +8,7 @@ What rotation_node's main does around rclpy: its arguments, their errors, its lo
   or malformed ``--params-file``, a bad ``-p`` or ``-r``, an unknown ``--ros-args`` flag, an
   invalid node name or parameter value) end the program with exactly one line on stderr, the
   text of what rclpy raised, and exit status 2 — not rcl's log line and a traceback.
+- :func:`help_rows`, :func:`default_text`: the pieces of ``--help``'s text.
 - :func:`spin`: the node's loop on an executor rclpy ships.
 
 Signals are rclpy's: rclpy.init installs its handlers, which shut the context down on SIGINT
@@ -16,6 +17,7 @@ and SIGTERM; the loop then ends, and the program returns its status.
 
 import os
 import sys
+import textwrap
 import time
 import traceback
 
@@ -126,6 +128,21 @@ def init_ros(program, args=None, **kwargs):
     finally:
         if get_logger_level('rcl') == LoggingSeverity.FATAL:  # not set by --log-level
             set_logger_level('rcl', level)
+
+
+def help_rows(rows, width=99):
+    """Return --help's '  name  text' lines of (name, text) pairs, each text wrapped."""
+    left = max(len(name) for name, _ in rows) + 4
+    lines = []
+    for name, text in rows:
+        lines += textwrap.wrap(text, width, initial_indent=f'  {name:{left - 2}}',
+                               subsequent_indent=' ' * left)
+    return lines
+
+
+def default_text(value):
+    """Return a parameter's default as ``--help`` shows it (true/false for a bool)."""
+    return ('true' if value else 'false') if isinstance(value, bool) else str(value)
 
 
 def spin(node, executor):

@@ -178,6 +178,8 @@ class TfFollower:
         self._newest = {}  # child: (seconds, ns) of its edge's newest sample
         self._heard = {}  # child of a dynamic edge: time.monotonic() of its latest sample
         self._swept = time.monotonic()
+        self.messages = 0
+        """TFMessages of /tf taken since the start (rot_tools.ros.diagnostics' rate)."""
 
     @property
     def following(self):
@@ -238,6 +240,7 @@ class TfFollower:
 
     def on_tf(self, msg):
         """Take a tf2_msgs/TFMessage of /tf."""
+        self.messages += 1
         self.on_message(msg, False)
 
     def on_tf_static(self, msg):
