@@ -308,9 +308,15 @@ def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
     topic = f'{node}/quaternion'
     tester.subscribe(topic, QuaternionStamped, QoSProfile(depth=1000))
     tester.wait_matched([topic])
-    result = here('play', REAL, '--start', 10, '--end', 11, '--rate', 2,
+    slice_ = ('--start', 10, '--end', 11, '--rate', 2)
+    result = here('play', REAL, *slice_,
                   *remaps({bag: f'{node}/{name}' for bag, name in JACKAL.items()}))
     assert (result.returncode, result.stderr) == (0, '')
+    shown = ' '.join(['play', '../shared/data/jackal_imu_odometry.bag', *map(str, slice_),
+                      *remaps({bag: f'/rot_tools/{name}' for bag, name in JACKAL.items()})])
+    assert_doc_output('client-play', f'$ rotation_client {shown}\n' + re.sub(
+        r' in [\d.]+ s ', ' in ... s ', result.stdout.replace(
+            str(REAL), '../shared/data/jackal_imu_odometry.bag')))
     total, bag, rate, counts, first, last, skipped = SUMMARY.fullmatch(result.stdout).groups()
     assert (bag, rate, first, last, skipped) == (str(REAL), '2', '10', '11', '')
     expected = bag_csv('--start', 10, '--end', 11)
@@ -582,7 +588,7 @@ def test_echo_interrupted_exits_130_quietly(here, node, tester):
 
 
 # ---------------------------------------------------------------------------------------
-# doc/client.md's examples of echo and set
+# doc/client.md's examples of echo, set and param
 
 
 def test_doc_examples(here, node, tester):
@@ -605,6 +611,16 @@ def test_doc_examples(here, node, tester):
             lines.append(f'$ echo $?\n{result.returncode}\n')
     here('set', 'angle_unit', 'rad', '--node', node)
     assert_doc_output('client-set', ''.join(lines).replace(*shown))
+    lines = []
+    for args in (('param', 'get', 'quaternion_tolerance'),
+                 ('set', 'quaternion_tolerance', '1e-2'), ('set', 'quaternion_tolerance', 'abc'),
+                 ('param', 'list')):
+        result = here(*args, '--node', node)
+        lines.append(f'$ rotation_client {" ".join(args)}\n{result.stdout}{result.stderr}')
+        if result.returncode:
+            lines.append(f'$ echo $?\n{result.returncode}\n')
+    here('set', 'quaternion_tolerance', QUATERNION_TOLERANCE, '--node', node)
+    assert_doc_output('client-param', ''.join(lines).replace(*shown))
 
 
 def _stamps_elided(text):
