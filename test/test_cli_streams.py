@@ -227,6 +227,27 @@ def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkey
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
 
 
+def test_a_signal_where_python_ignores_exceptions_still_stops(files, tmp_path, monkeypatch):
+    """Ctrl-C landing in a __del__ (or a function os.fork runs): raised at the next step."""
+    monkeypatch.chdir(files)
+    real_replace, after = os.replace, []
+
+    class Signalling:
+
+        def __del__(self):
+            signal.raise_signal(signal.SIGINT)  # KeyboardInterrupt here: Python ignores it
+
+    def replace(source, target):
+        Signalling()  # gone at once
+        after.append(source)  # the command goes on here, one step more at most
+        real_replace(source, target)
+    monkeypatch.setattr(os, 'replace', replace)
+    status, out, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
+    monkeypatch.undo()
+    assert (status, out, err) == (130, '', 'rot-tools: interrupted\n')
+    assert after == [] and list(tmp_path.iterdir()) == [] and sys.getprofile() is None
+
+
 def test_a_forked_worker_ends_by_the_signal_itself(files, tmp_path, monkeypatch):
     """In a process forked by rot-tools (a fleet's worker) the handler is the signal's default."""
     monkeypatch.chdir(files)
@@ -278,8 +299,8 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
     """
     Ctrl-C (SIGINT to the whole process group, as a terminal sends it) while a fleet runs.
 
-    Sent once the CSV is being written and the workers are up: one line, status 130, no
-    partial file, no CSV, no worker left in the session.
+    Sent once the workers are up: one line, status 130, no partial file, no CSV, no worker
+    left in the session.
     """
     pytest.importorskip('rosbags')
     pytest.importorskip('pyarrow')
@@ -294,8 +315,8 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
                           stderr=subprocess.PIPE, text=True, env=script_env(SCRIPT),
                           start_new_session=True) as child:
         try:
-            wait_for(lambda: any(p.suffix == '.partial' for p in out.iterdir())
-                     and len(session_processes(child.pid)) > 1, 'the CSV and the workers')
+            wait_for(lambda: child.poll() is not None or len(session_processes(child.pid)) > 1,
+                     'the workers')
             os.killpg(child.pid, signal.SIGINT)
             stdout, stderr = child.communicate(timeout=60)
         finally:
@@ -303,9 +324,7 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
                 os.killpg(child.pid, signal.SIGKILL)
     assert (child.returncode, stdout, stderr) == (130, '', 'rot-tools: interrupted\n')
     wait_for(lambda: not session_processes(child.pid), 'the workers to end', timeout=2.0)
-    left = sorted(p.relative_to(out).as_posix() for p in out.rglob('*')
-                  if p.suffix in ('.partial', '.csv'))
-    assert left == []
+    assert [p.name for p in out.rglob('*') if p.suffix in ('.partial', '.csv')] == []
 
 
 def test_sigterm_on_compare_reading_a_fifo(tmp_path):
@@ -338,3 +357,22 @@ def test_sigterm_on_compare_reading_a_fifo(tmp_path):
                 child.kill()
     assert (child.returncode, stdout, stderr) == (143, '', 'rot-tools: terminated\n')
     assert sorted(p.name for p in tmp_path.iterdir()) == ['est.tum', 'ref.tum']
+
+
+def test_a_signal_ignored_by_who_started_rot_tools_stays_ignored(files, tmp_path, monkeypatch):
+    """SIGINT ignored, as for a background job of a script: main leaves it so, SIGTERM not."""
+    monkeypatch.chdir(files)
+    real_replace, during = os.replace, []
+
+    def look(source, target):
+        during.append((signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)))
+        real_replace(source, target)
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        monkeypatch.setattr(os, 'replace', look)
+        assert run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')[::2] == (0, '')
+        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, before)
+    (sigint, sigterm), = during
+    assert sigint == signal.SIG_IGN and callable(sigterm)

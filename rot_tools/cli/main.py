@@ -111,8 +111,13 @@ def _stop_raising():
     removed and worker pools shut down, and :func:`main` says one line. Only in the process
     that entered the block: a process forked from it (a fleet's worker) inherits the handler,
     which there gives the signal its default action back and raises it again, so the worker
-    ends as if rot-tools had set no handler, without a traceback of its own. Outside the
-    main thread (where Python sets no handler) the block changes nothing.
+    ends as if rot-tools had set no handler, without a traceback of its own. Where Python
+    ignores an exception (a function run by os.fork, a ``__del__``: it only prints
+    "Exception ignored"), the exception is raised again at the next Python call or return
+    out of there (a profile function of one event), so it still reaches the command. A
+    signal ignored when rot-tools started (SIGINT for a background job of a script,
+    ``nohup``) stays ignored. Outside the main thread (where Python sets no handler) the
+    block changes nothing.
     """
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -126,10 +131,26 @@ def _stop_raising():
             return
         raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
-    previous = _set_handlers({signal.SIGINT: stop, signal.SIGTERM: stop})
+    def swallowed(unraisable):
+        stopped = unraisable.exc_value
+        if os.getpid() != owner or not isinstance(stopped, KeyboardInterrupt):  # not stop's
+            hook(unraisable)
+            return
+
+        def again(frame, event, arg):  # at the next call or return out of this hook
+            if frame.f_code is not swallowed.__code__:
+                sys.setprofile(None)
+                raise stopped.with_traceback(None)
+        sys.setprofile(again)
+
+    previous = _set_handlers({signum: stop for signum in (signal.SIGINT, signal.SIGTERM)
+                              if signal.getsignal(signum) != signal.SIG_IGN})
+    hook, sys.unraisablehook = sys.unraisablehook, swallowed
     try:
         yield
     finally:
+        sys.unraisablehook = hook
+        sys.setprofile(None)
         _set_handlers({signum: handler for signum, handler in previous.items()
                        if handler is not None})
 
