@@ -8,21 +8,25 @@ the accelerometer to read the specific force (+9.80665 m/s² along the IMU's up 
 REP-145), and all three at one instant. The checks (ImuChecks, in order):
 
 - stamps: increasing, no gap longer than GAP_PERIODS sample periods.
-- accel_units (scale = 9.80665 / median |a_k| in slow spells, imu_motion.slow_spells): fault
-  beyond ACCEL_TOL (g instead of m/s², gravity removed).
+- accel_units (scale = 9.80665 / median |ā_k| in slow spells, imu_motion.slow_spells; ā_k
+  the accelerometer averaged over the slow window, imu_motion.steady_accel): fault beyond
+  ACCEL_TOL (g instead of m/s², gravity removed).
 - orientation_vs_accel (angle): the world z seen from the IMU, Rᵀ·ẑ, against the specific
-  force in slow spells: the angle between ẑ and the mean of R_k·a_k there. Fault beyond
-  ANGLE_TOL; near 180° the accelerometer reads gravity, or the orientation's world is NED.
+  force's direction in slow spells: the median over those samples of the angle between
+  R_kᵀ·ẑ and ā_k (a tilt shows at every attitude; a mean of vectors would let the attitudes
+  cancel it). Fault beyond ANGLE_TOL; near 180° the accelerometer reads gravity, or the
+  orientation's world is NED. Unknown where the accelerometer shows no gravity.
 - gyro_units (scale), gyro_axes (matrix, a signed permutation M), gyro_bias (bias): the fit
   ω° ≈ scale·M·(ω − bias/scale) of the orientation's rates (imu_motion.fit_gyro). Faults:
   |scale − 1| > GYRO_TOL, M ≠ I on the axes the motion fixes, |bias| > BIAS_TOL rad/s.
 - time_offset (seconds): how late the orientation is (imu_motion.orientation_lag); fault
   beyond LAG_PERIODS periods.
 - With a reference (ImuReference: the body's orientation Q_k): mounting (quaternion, the
-  IMU frame in the body frame, imu_mounting), accel_sign (angle: the mean of Q_k·X·a_k in
-  slow spells against the reference's z; fault beyond 90°, the accelerometer's sign
-  flipped), world_up (angle: the mean of Q_k·X·R_kᵀ·ẑ, the orientation's world z in the
-  reference's world; fault beyond 90°, NED).
+  IMU frame X in the body frame, imu_mounting); accel_sign (angle: the median over slow
+  spells of the angle between the body's up in the IMU frame, Xᵀ·Q_kᵀ·ẑ, and ā_k; fault
+  beyond 90°, the accelerometer's sign flipped); world_up (angle: the median over the
+  mounting's poses of the angle between the orientation's world z in the reference's world,
+  Q_k·X·R_kᵀ·ẑ, and ẑ; fault beyond 90°, NED).
 
 Each check is ok, fault or unknown (where the data cannot tell: no orientation, no slow
 spells, too little motion, no reference), with a one-sentence message and its numbers
@@ -33,20 +37,16 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from rot_tools.core._arrays import finite_array
 from rot_tools.core.errors import RotationError
 from rot_tools.core.imu_motion import (
-    body_rates, fit_gyro, ImuSamples, orientation_lag, RATE_GAP, SLOW_RATE, slow_spells,
-    steady_accel)
+    body_rates, fit_gyro, orientation_lag, RATE_GAP, SLOW_RATE, slow_spells, steady_accel)
 from rot_tools.core.imu_mounting import HAND_EYE_STEP, imu_mounting, mounting_poses
-from rot_tools.core.so3 import matrix_to_quaternion, quaternion_to_matrix
+from rot_tools.core.imu_samples import imu_samples, reference_samples, stamps_array
+from rot_tools.core.so3 import matrix_to_quaternion
 from rot_tools.core.trajectory import nearest_stamps
 
 GRAVITY = 9.80665
 """Standard gravity (m/s²): what |linear_acceleration| reads at rest."""
-
-MIN_SAMPLES = 10
-"""Samples (distinct stamps) at least, of the IMU and of a reference."""
 
 GAP_PERIODS = 10
 """A step longer than this many median periods is a gap (stamps: fault)."""
@@ -75,10 +75,6 @@ MIN_CORRELATION = 0.5
 NO_GRAVITY = 0.5
 """Median |a| (in its units) in slow spells below which the accelerometer shows no gravity,
 so no direction of up (a gravity-compensated output; in g it reads 1)."""
-
-MAX_READING = 1e9
-"""|angular_velocity| and |linear_acceleration| entries at most: beyond, no sensor's reading
-(and sums of their squares would leave float64)."""
 
 AXES = 'xyz'
 
@@ -193,71 +189,6 @@ def _status(fault):
 
 def _deg(angle):
     return f'{math.degrees(angle):.1f}°'
-
-
-# ---- input -------------------------------------------------------------------------------
-
-
-def _vectors(x, name, count):
-    x = finite_array(x, (3,), name)
-    if x.shape != (count, 3):
-        raise RotationError(f'{name} must have shape ({count}, 3), one per stamp, got '
-                            f'{x.shape}')
-    big = np.abs(x) > MAX_READING
-    if big.any():
-        k, i = (int(j) for j in np.argwhere(big)[0])
-        raise RotationError(f'{name}[{k}] reads {float(x[k, i]):.3g}: beyond {MAX_READING:g}, '
-                            f'no sensor reads that ({int(big.sum())} such entries)')
-    return x
-
-
-def _orientation(q, name, count, tol):
-    """Rotations (count, 3, 3) of quaternions (count, 4), or None when every q is 0."""
-    q = finite_array(q, (4,), name)
-    if q.shape != (count, 4):
-        raise RotationError(f'{name} must have shape ({count}, 4), one per stamp, got '
-                            f'{q.shape}')
-    zero = ~q.any(axis=1)
-    if zero.all():
-        return None
-    if zero.any():
-        k = int(np.argmax(zero))
-        raise RotationError(f'{name}[{k}] is (0, 0, 0, 0) but {int((~zero).sum())} of {count} '
-                            'are not: give None for an IMU without orientation')
-    try:
-        return quaternion_to_matrix(q, tol=tol)
-    except RotationError as exc:
-        raise RotationError(f'{name}: {exc}') from None
-
-
-def _stamps(stamps, name):
-    t = finite_array(stamps, (), name)
-    if t.ndim != 1:
-        raise RotationError(f'{name} must have shape (N,), got {t.shape}')
-    if len(t) < MIN_SAMPLES:
-        raise RotationError(f'{name} has {len(t)} sample(s): at least {MIN_SAMPLES} needed')
-    return t
-
-
-def _in_order(t, name):
-    """Return the indices that put t in order, each stamp once (the first of equal ones)."""
-    order = np.argsort(t, kind='stable')
-    keep = np.concatenate([[True], np.diff(t[order]) > 0])
-    if keep.sum() < MIN_SAMPLES:
-        raise RotationError(f'{name} has {int(keep.sum())} distinct stamp(s): at least '
-                            f'{MIN_SAMPLES} needed')
-    return order[keep]
-
-
-def _samples(t, quaternions, angular_velocity, linear_acceleration, tol):
-    count = len(t)
-    gyro = _vectors(angular_velocity, 'angular_velocity', count)
-    accel = _vectors(linear_acceleration, 'linear_acceleration', count)
-    R = None if quaternions is None else _orientation(quaternions, 'quaternions', count, tol)
-    if not (np.diff(t) > 0).all():
-        keep = _in_order(t, 'stamps')
-        t, gyro, accel, R = t[keep], gyro[keep], accel[keep], None if R is None else R[keep]
-    return ImuSamples(t=t, R=R, gyro=gyro, accel=accel, period=float(np.median(np.diff(t))))
 
 
 def _check_stamps(stamps, samples):
@@ -426,21 +357,6 @@ def _gyro_checks(samples):
 # ---- against a reference -------------------------------------------------------------------
 
 
-def _reference(reference, tol):
-    """Return the reference's stamps and rotations in order, and its median period."""
-    try:
-        stamps, quaternions = reference
-    except (TypeError, ValueError):
-        raise RotationError('reference must be ImuReference(stamps, quaternions), got '
-                            f'{type(reference).__name__}') from None
-    t = _stamps(stamps, 'reference.stamps')
-    Q = _orientation(quaternions, 'reference.quaternions', len(t), tol)
-    if Q is None:
-        raise RotationError('reference.quaternions are all (0, 0, 0, 0): no orientation')
-    keep = _in_order(t, 'reference.stamps')
-    return t[keep], Q[keep], float(np.median(np.diff(t[keep])))
-
-
 def _mounting(samples, ref_t, ref_Q, ref_period, lag):
     """Return the MountingCheck, and the Mounting (None where unknown)."""
     count = len(mounting_poses(samples, ref_t))
@@ -495,7 +411,7 @@ def _reference_checks(samples, slow, force, reference, tol, lag, flat):
         why = 'no reference orientation to compare with.'
         return (_unknown(AngleCheck, why), _unknown(AngleCheck, why),
                 _unknown(MountingCheck, why))
-    ref_t, ref_Q, ref_period = _reference(reference, tol)
+    ref_t, ref_Q, ref_period = reference_samples(reference, tol)
     mounting, found = _mounting(samples, ref_t, ref_Q, ref_period, lag)
     if found is None:
         why = 'no mounting, so no physical up in the IMU frame.'
@@ -515,18 +431,18 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     """
     Check an IMU's samples against ROS's conventions (REP-103, REP-145): return ImuChecks.
 
-    stamps (N,) s, N ≥ MIN_SAMPLES, in any order (the stamps check says where they do not
-    increase; the other checks take the samples in order, each stamp once); quaternions
-    (N, 4) [x, y, z, w], or None for an IMU without orientation (all zeros count as None);
+    stamps (N,) s, N ≥ 10, in any order (the stamps check says where they do not increase;
+    the other checks take the samples in order, each stamp once); quaternions (N, 4)
+    [x, y, z, w], or None for an IMU without orientation (all zeros count as None);
     angular_velocity (N, 3) rad/s; linear_acceleration (N, 3) m/s²; reference None or
     ImuReference(stamps (M,), quaternions (M, 4)), the orientation of the body that carries
     the IMU in its world (odometry, a pose, TF). tol: None takes any non-zero quaternion as
     its normalised self; a number refuses ||q| − 1| > tol. Each check is ok, fault or unknown
-    (module docstring). RotationError for a shape, NaN or Inf, a zero or non-unit
-    quaternion, fewer than MIN_SAMPLES distinct stamps.
+    (module docstring). RotationError (imu_samples) for a shape, NaN or Inf, a reading beyond
+    1e9, a zero or non-unit quaternion, fewer than 10 distinct stamps.
     """
-    given = _stamps(stamps, 'stamps')
-    samples = _samples(given, quaternions, angular_velocity, linear_acceleration, tol)
+    given = stamps_array(stamps, 'stamps')
+    samples = imu_samples(given, quaternions, angular_velocity, linear_acceleration, tol)
     slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
     flat = '' if why else _no_gravity(force[slow])

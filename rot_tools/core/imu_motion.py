@@ -1,7 +1,7 @@
 """
 An IMU's motion: its slow spells, its orientation's lag, its gyro against its orientation.
 
-Samples in time order (ImuSamples): stamps t_k, orientations R_k (the IMU frame in the
+Samples in time order (imu_samples.ImuSamples): stamps t_k, orientations R_k (the IMU frame in the
 orientation's world) or none, gyro ω_k and accelerometer a_k on the IMU's axes.
 
 - **Slow spells** (slow_spells): samples where the body turns slower than SLOW_RATE on
@@ -59,16 +59,6 @@ MIN_RATES = 10
 
 BIAS_SLACK = 0.002
 """Mean orientation rate (rad/s) about an axis the fit leaves unknown, at most, for a bias."""
-
-
-class ImuSamples(NamedTuple):
-    """Samples in time order, each stamp once: t (N,), R (N, 3, 3) or None, gyro, accel (N, 3)."""
-
-    t: np.ndarray
-    R: Any
-    gyro: np.ndarray
-    accel: np.ndarray
-    period: float
 
 
 def integrated_gyro(samples):
