@@ -4,15 +4,21 @@
 The columns are typed: ``bag``, ``topic`` and ``frame_id`` strings; ``stamp`` the header
 stamp as int64 nanoseconds (sec·10⁹ + nanosec, exact); every other column float64, in
 degrees with ``--deg``, and null where the CSV leaves a cell empty (ω on a topic's first
-row). A file is written under a temporary name that does not end in ``.parquet`` and renamed
-when complete (rot_tools.cli.output_file), so a killed run leaves no file that looks whole,
-and ``'DIR/*.parquet'`` (DuckDB) or ``pandas.read_parquet(DIR)`` reads the bags as one table.
-pyarrow is imported only here, when a table is made: it comes with the ``bag`` extra.
+row). A file has no name until it is complete (:func:`complete_or_unseen`), so a run ended
+by any signal leaves no file that looks whole, and ``'DIR/*.parquet'`` (DuckDB) or
+``pandas.read_parquet(DIR)`` reads the bags as one table. A fleet's run ends by writing its
+manifest (:func:`finish`): which bags it read into which files, and ``_SUCCESS`` when none
+failed. pyarrow is imported only here, when a table is made: it comes with the ``bag`` extra.
 """
 
+from contextlib import contextmanager, suppress
+import hashlib
+import json
 import os
 from pathlib import Path
 import re
+import secrets
+import stat
 
 import numpy as np
 from rot_tools.cli import output_file
@@ -67,8 +73,113 @@ def table(topics, bag, degrees, seq):
 def write(path, data):
     """Write the Table ``data`` to ``path`` whole, or leave nothing under that name."""
     import pyarrow.parquet as pq
-    with output_file.complete_or_nothing(path, 'wb') as out:
+    with complete_or_unseen(path, 'wb') as out:
         pq.write_table(data, out)
+
+
+# ---------------------------------------------------------------------------------------
+# Files that no one sees until they are complete
+
+
+_PARTIAL = set()
+"""The temporary names this process writes under (where a file cannot be unnamed)."""
+
+
+def _unnamed(directory):
+    """Return a descriptor of a new file without a name in ``directory``, or None."""
+    if not hasattr(os, 'O_TMPFILE') or not os.path.isdir('/proc/self/fd'):
+        return None  # not Linux: no unnamed files, or no way to name one
+    try:
+        return os.open(directory, os.O_TMPFILE | os.O_WRONLY, 0o666)  # umask applies
+    except OSError:  # a file system without them (NFS, overlayfs of older kernels)
+        return None
+
+
+def _temporary(name):
+    """Return a temporary name for ``name``: never its suffix, within 255 bytes."""
+    return f'.{name[:200]}.{secrets.token_hex(4)}.partial'
+
+
+def _regular_or_new(path):
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except FileNotFoundError:
+        return True
+
+
+@contextmanager
+def complete_or_unseen(path, mode='w', **open_args):
+    """
+    Yield a file object on a file that no one sees until it is complete, then is ``path``.
+
+    On Linux the file is made without a name (O_TMPFILE) in ``path``'s directory: whatever
+    ends the process while it is written — an exception, SIGTERM, SIGKILL, the OOM killer —
+    leaves nothing behind, as the kernel drops an unnamed file with its last descriptor. Once
+    complete it is linked under a temporary name and renamed to ``path`` (atomic in one
+    directory); ``path``, if it was there, holds its old content until then. Where files
+    cannot be unnamed, it is written under a temporary name (``.NAME.XXXXXXXX.partial``)
+    that an exception removes, and :func:`remove_partials` too before a worker ends itself.
+    A ``path`` that is not a regular file (/dev/null, a FIFO) is written directly
+    (rot_tools.cli.output_file.complete_or_nothing).
+    """
+    if not _regular_or_new(path):
+        with output_file.complete_or_nothing(path, mode, **open_args) as out:
+            yield out
+        return
+    directory, name = os.path.split(os.path.abspath(path))
+    fd = _unnamed(directory)
+    if fd is not None:
+        with open(fd, mode, **open_args) as out:
+            yield out
+            out.flush()
+            where = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+            try:
+                temporary = _temporary(name)
+                os.link(f'/proc/self/fd/{fd}', temporary, dst_dir_fd=where)  # linkat, follows
+                try:
+                    os.replace(temporary, name, src_dir_fd=where, dst_dir_fd=where)
+                except BaseException:
+                    with suppress(OSError):
+                        os.unlink(temporary, dir_fd=where)
+                    raise
+            finally:
+                os.close(where)
+        return
+    partial = os.path.join(directory, _temporary(name))
+    fd = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    _PARTIAL.add(partial)
+    try:
+        with open(fd, mode, **open_args) as out:
+            yield out
+        os.replace(partial, path)
+    except BaseException:
+        with suppress(OSError):
+            os.unlink(partial)
+        raise
+    finally:
+        _PARTIAL.discard(partial)
+
+
+def remove_partials():
+    """Remove the temporary files this process is writing: it is about to end abruptly."""
+    for partial in list(_PARTIAL):
+        with suppress(OSError):
+            os.unlink(partial)
+
+
+# ---------------------------------------------------------------------------------------
+# The files of a run
+
+
+STEM_BYTES = 180
+"""The longest name made before ``.parquet`` and a ``-2`` (file systems allow 255 bytes)."""
+
+
+def _short(stem):
+    """``stem``, or within STEM_BYTES: its start, ``~`` and 16 hex digits of its SHA-256."""
+    if len(stem) <= STEM_BYTES:  # ASCII only: characters are bytes
+        return stem
+    return f'{stem[:STEM_BYTES - 17]}~{hashlib.sha256(stem.encode()).hexdigest()[:16]}'
 
 
 def file_names(paths):
@@ -77,12 +188,15 @@ def file_names(paths):
 
     ``runs/day1/robot.bag`` is ``runs_day1_robot.bag.parquet``; ``.``, ``..`` and the root
     are dropped, characters other than letters, digits, ``.``, ``-`` and ``_`` become ``_``,
-    and a name already taken (letter case aside) gets ``-2``, ``-3``, ... before its suffix.
+    a name longer than STEM_BYTES keeps its start and a hash of the whole (``~`` and 16 hex
+    digits: two paths that differ only past the cut keep different names), and a name
+    already taken (letter case aside) gets ``-2``, ``-3``, ... before its suffix.
     """
     names, taken = [], set()
     for path in paths:
         parts = [p for p in Path(path).parts if p not in ('.', '..', '/')]
-        stem = re.sub(r'[^\w.-]', '_', '_'.join(parts), flags=re.ASCII).lstrip('.') or 'bag'
+        stem = _short(re.sub(r'[^\w.-]', '_', '_'.join(parts), flags=re.ASCII).lstrip('.')
+                      or 'bag')
         name, k = stem, 1
         while name.lower() in taken:
             k += 1
@@ -90,3 +204,36 @@ def file_names(paths):
         taken.add(name.lower())
         names.append(name + '.parquet')
     return names
+
+
+MANIFEST = '_manifest.json'
+"""The file that says what a run wrote: each bag's path, status and file, and the files."""
+
+SUCCESS = '_SUCCESS'
+"""An empty file, written after the manifest when no bag failed (as Spark's writers do)."""
+
+
+def begin(directory):
+    """Remove DIR's manifest and _SUCCESS: while a run writes DIR, it has neither."""
+    for name in (SUCCESS, MANIFEST):
+        with suppress(FileNotFoundError):
+            os.unlink(os.path.join(directory, name))
+
+
+def finish(directory, bags):
+    """
+    Write DIR's manifest, then _SUCCESS if no bag failed: the last files of a run.
+
+    bags: [(path, status, file name)] in the run's order, status ``ok``, ``skipped`` or
+    ``failed``; the manifest lists every bag, and under ``files`` the files of the ``ok``
+    ones — the run's table, whatever else DIR holds.
+    """
+    data = {'bags': [{'path': path, 'status': status, 'file': name if status == 'ok' else None}
+                     for path, status, name in bags],
+            'files': [name for _, status, name in bags if status == 'ok']}
+    with complete_or_unseen(os.path.join(directory, MANIFEST), 'w', encoding='utf-8') as out:
+        json.dump(data, out, indent=2, ensure_ascii=False)
+        out.write('\n')
+    if all(status != 'failed' for _, status, _ in bags):
+        with complete_or_unseen(os.path.join(directory, SUCCESS), 'w'):
+            pass

@@ -1,0 +1,85 @@
+"""
+A fleet ended by a signal: no worker left, no file left half written, the caller sees EOF.
+
+``rot-tools bag DIR --jobs 2 --csv F --parquet D`` is sent SIGTERM (as ``timeout`` and
+``kill`` send it) or SIGKILL (as the OOM killer, or ``kill -9``) once its two workers are up.
+Within 2 s the caller must read the end of the command's standard output and error (which
+``| tee``, ``timeout`` and CI wait for), no worker may be left, and no file: neither F nor a
+temporary one, nor a manifest in D; D may hold only whole Parquet files of bags done. Ctrl-C
+on a fleet: test_cli_streams.py.
+"""
+
+from pathlib import Path
+import shutil
+import signal
+import subprocess
+import time
+
+import bag_helpers as bh
+from conftest import console_script, script_env
+import pytest
+
+pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+pq = pytest.importorskip('pyarrow.parquet', reason="the 'bag' extra (pyarrow) is not installed")
+
+BAGS = 6
+"""Copies of the real recording: enough work for the fleet to be stopped in the middle."""
+
+
+def children(pid):
+    """Return the pids of the live children of ``pid`` (zombies excepted)."""
+    found = []
+    for entry in Path('/proc').iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / 'stat').read_text().rsplit(')', 1)[1].split()
+            except OSError:
+                continue  # gone meanwhile
+            if int(fields[1]) == pid and fields[0] != 'Z':
+                found.append(int(entry.name))
+    return found
+
+
+def alive(pid):
+    """Whether process ``pid`` runs (a zombie, dead but not yet reaped, does not)."""
+    try:
+        return Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0] != 'Z'
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGKILL])
+def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
+    bags = tmp_path / 'bags'
+    bags.mkdir()
+    for k in range(BAGS):
+        shutil.copy(bh.REAL, bags / f'run{k}.bag')
+    script = console_script('rot-tools', 'rot_tools.cli.main')
+    with subprocess.Popen([*script, 'bag', 'bags', '--jobs', '2', '--csv', 'all.csv',
+                           '--parquet', 'table'], cwd=tmp_path, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True, env=script_env(script)) as child:
+        try:
+            deadline = time.monotonic() + 120
+            while len(workers := children(child.pid)) < 2:
+                assert child.poll() is None and time.monotonic() < deadline, \
+                    'the fleet ended before its two workers were up'
+                time.sleep(0.01)
+            child.send_signal(signum)
+            end = time.monotonic() + 2
+            stdout, stderr = child.communicate(timeout=2)  # EOF on both: no worker holds them
+            while [pid for pid in workers if alive(pid)] and time.monotonic() < end:
+                time.sleep(0.01)  # one closed them as it ended, and is ending
+        finally:
+            if child.poll() is None:
+                child.kill()
+                child.wait()
+    terminated = (128 + signal.SIGTERM, '', 'rot-tools: terminated\n')
+    assert (child.returncode, stdout, stderr) == (
+        (-signal.SIGKILL, '', '') if signum == signal.SIGKILL else terminated)
+    assert [pid for pid in workers if alive(pid)] == []
+    left = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob('*')
+                  if p.parent != bags and p != bags)
+    done = [name for name in left if name.endswith('.parquet')]
+    assert left == ['table'] + done  # no CSV, no temporary file, no manifest
+    for name in done:  # a bag done before the signal: whole
+        assert pq.read_table(tmp_path / name).num_rows == 3061 + 3060
