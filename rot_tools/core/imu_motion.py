@@ -80,11 +80,15 @@ def steady_accel(samples):
     average keeps the specific force's direction and drops the vibration (which would add
     its square to |a| and scatter the direction).
     """
-    w, count = _window(samples), len(samples.t)
+    count = len(samples.t)
+    w = min(_window(samples), count)
     total = np.concatenate([np.zeros((1, 3)), np.cumsum(samples.accel, axis=0)])
-    lo = np.clip(np.arange(count) - w // 2, 0, count)
-    hi = np.clip(lo + w, 0, count)
-    return (total[hi] - total[lo]) / (hi - lo)[:, None]
+    mean = (total[w:] - total[:-w]) / w  # the windows starting at 0 … count − w
+    out = np.empty((count, 3))
+    start, end = w // 2, w // 2 + len(mean)
+    out[start:end] = mean
+    out[:start], out[end:] = mean[0], mean[-1]  # the ends: the first and last whole windows
+    return out
 
 
 def slow_spells(samples):
@@ -166,7 +170,9 @@ def body_rates(samples, lag):
     at = t[:-1] + dt / 2 - lag
     use = (dt <= RATE_GAP * samples.period) & (at >= t[0]) & (at <= t[-1])
     orientation = (relative_rotvecs(R[:-1], R[1:]) / dt[:, None])[use]
-    gyro = np.stack([np.interp(at[use], t, samples.gyro[:, i]) for i in range(3)], axis=-1)
+    gyro = np.empty_like(orientation)
+    for i in range(3):
+        gyro[:, i] = np.interp(at[use], t, samples.gyro[:, i])
     return Rates(orientation=orientation, gyro=gyro)
 
 
