@@ -36,8 +36,6 @@ def one_bag(args, error):
         return _one_bag(args, error)
     except bag_read.BagError as exc:
         error(f'bag: {exc}')
-    except OSError:
-        raise  # the standard output's, said by output_file.to_stdout
     except Exception as exc:  # noqa: BLE001 - one bag's failure is one line, as in a fleet
         error(f'bag: {bag_analysis.failure(args.path, exc)}')
 
