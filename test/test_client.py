@@ -82,7 +82,8 @@ class Here:
     by rot_tools.ros.rotation_client.run_command — its own client node, printing, exit
     status — in ``context``, whose DDS participant has discovered the nodes already; stdout
     and stderr are captured. A command line with ROS arguments runs through ``main``, in a
-    context made for it, as the script does. Return a :class:`Result`.
+    context made for it, as the script does (rclpy's signal handlers, which its rclpy.init
+    installs, are uninstalled after it: this process keeps its own). Return a Result.
     """
 
     def __init__(self, context):
@@ -90,13 +91,17 @@ class Here:
 
     def __call__(self, *args):
         from rot_tools.ros.client_arguments import parse_args
+        from rclpy.signals import uninstall_signal_handlers
         from rot_tools.ros.rotation_client import main, run_command
         words = [str(a) for a in args]
         out, err = io.StringIO(), io.StringIO()
         with redirect_stdout(out), redirect_stderr(err):
             try:
                 if '--ros-args' in words:
-                    status = main(words)
+                    try:
+                        status = main(words)
+                    finally:
+                        uninstall_signal_handlers()
                 else:
                     status = run_command(parse_args(words), self.context)
             except SystemExit as exc:  # the parser: --help, --version, bad arguments
@@ -624,7 +629,7 @@ def test_help(here):
     result = here('--help')
     assert result.returncode == 0 and result.stdout.startswith('usage: rotation_client')
     for command in ('euler', 'pose', 'odometry', 'transform', 'orientation', 'imu',
-                    'describe', 'screw-path', '--wxyz', '--version'):
+                    'describe', 'screw-path', 'param', 'play', '--wxyz', '--version'):
         assert command in result.stdout
     euler = here('euler', '--help')
     assert euler.returncode == 0

@@ -139,11 +139,14 @@ class Client:
 
     def found(self):
         """
-        Whether the node is in the graph: its name, or its ~/describe service.
+        Whether the node is there: a service of it answered, or the graph has it.
 
         A node's name reaches the graph by its participant's own announcements, which can
-        come seconds after its topics and services (each discovered for itself) do.
+        come seconds after its topics and services (each discovered for itself) do; the graph
+        may also hear of its services after a client of ours has matched them.
         """
+        if any(client.service_is_ready() for client in self.service_clients.values()):
+            return True
         names = {f"{namespace.rstrip('/')}/{name}"
                  for name, namespace in self.node.get_node_names_and_namespaces()}
         return self.target in names or self.node.count_services(self.topic('describe')) > 0
