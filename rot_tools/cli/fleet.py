@@ -329,9 +329,28 @@ def _dask(items, jobs, scheduler):
                     said = ' '.join(str(exc).split())
                     yield Outcome(item[0], error=f'{item[0]}: its Dask task failed: '
                                   f'{type(exc).__name__}{": " if said else ""}{said[:300]}')
+    except BaseException:  # stopped (Ctrl-C, SIGTERM, stdout gone): no bag is waited for
+        if cluster is not None:
+            _stop_at_once(cluster)
+        raise
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _stop_at_once(cluster):
+    """
+    End a local cluster's workers at once, quietly, in the middle of their bags.
+
+    Closed as usual, a nanny waits for its worker's bag to be done (up to 4 s), then kills it
+    and logs how on stderr; its worker logs the tasks it drops. Here the worker processes,
+    this process's children, are killed first, and Dask's logging of the ended cluster
+    dropped with the run.
+    """
+    import logging
+    logging.getLogger('distributed').setLevel(logging.CRITICAL)
+    for worker in multiprocessing.active_children():
+        worker.kill()
 
 
 def outcomes(items, jobs, engine, scheduler):
