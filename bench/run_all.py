@@ -1,5 +1,5 @@
 """
-Run every benchmark (``make bench``): math, first calls, node, memory, overload, bags, goals.
+Run every benchmark (``make bench``): math, first calls, node, memory, overload, bags, IMU, goals.
 
 Each script runs in its own process with this interpreter and prints its own tables; this
 script then collects their figures (JSON) and prints every goal with the figure measured
@@ -8,7 +8,7 @@ in each of TF_OVERLOADS' scenarios (bench_overload.py --tf; ``large`` at 100 msg
 bare rclpy /tf subscriber), each flooded back to back.
 
 Run: ``.venv/bin/python bench/run_all.py [--quick]
-[--skip math|first|node|memory|overload|overload-tf|bag|fleet] [--json-dir DIR]``. ``--quick``
+[--skip math|first|node|memory|overload|overload-tf|bag|fleet|imu] [--json-dir DIR]``. ``--quick``
 is a smoke run (smaller batch, fewer repetitions and rates, a short flood): its figures are
 not the ones to quote.
 """
@@ -78,7 +78,7 @@ def overload_rows(overload):
 
 
 def goal_rows(math, node, memory, first=None, overload=None, fleet=None, tf_overloads=None,
-              bag=None, flood=None):
+              bag=None, flood=None, imu=None):
     rows = []
     if math:
         for r in math.get('batch', []):
@@ -144,6 +144,10 @@ def goal_rows(math, node, memory, first=None, overload=None, fleet=None, tf_over
                      benchlib.verdict(fleet['read_ratio'], fleet['read_goal'])])
         rows.append(['  (the machine then: a CPU loop, 2 processes / 1)', 'no goal',
                      f"{fleet['ceiling']:.2f}", '-', '-'])
+    if imu:
+        rows.append([f"rot-tools imu-check, {imu['messages']:,} Imu messages",
+                     'rot-tools bag on the same', f"{imu['ratio']:.2f}",
+                     f"<= {imu['goal']:g}", benchlib.verdict(imu['ratio'], imu['goal'])])
     return rows
 
 
@@ -151,7 +155,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='smoke run, figures not quotable')
     parser.add_argument('--skip', choices=['math', 'first', 'node', 'memory', 'overload',
-                                           'overload-tf', 'bag', 'fleet'],
+                                           'overload-tf', 'bag', 'fleet', 'imu'],
                         action='append', default=[])
     parser.add_argument('--json-dir', help='keep the JSON figures here')
     args = parser.parse_args(argv)
@@ -166,11 +170,12 @@ def main(argv=None):
     overload_args = ['--seconds', '5', '--after', '3'] if args.quick else []
     fleet_args = ['--repeat', '1'] if args.quick else []
     bag_args = ['--repeat', '1'] if args.quick else []
+    imu_args = ['--minutes', '2', '--repeat', '1'] if args.quick else []
     start = time.monotonic()
     with tempfile.TemporaryDirectory(prefix='rot_tools_bench_') as tmp:
         out = Path(args.json_dir or tmp)
         os.makedirs(out, exist_ok=True)
-        math = first = node = memory = overload = flood = bag = fleet = None
+        math = first = node = memory = overload = flood = bag = fleet = imu = None
         if 'math' not in args.skip:
             math = run('bench_math.py', math_args, out / 'bench_math.json')
         if 'first' not in args.skip:
@@ -194,8 +199,10 @@ def main(argv=None):
             bag = run('bench_bag.py', bag_args, out / 'bench_bag.json')
         if 'fleet' not in args.skip:
             fleet = run('bench_fleet.py', fleet_args, out / 'bench_fleet.json')
+        if 'imu' not in args.skip:
+            imu = run('bench_imu.py', imu_args, out / 'bench_imu.json')
         rows = goal_rows(math, node, memory, first, overload, fleet,
-                         [tf for tf in tf_overloads if tf], bag, flood)
+                         [tf for tf in tf_overloads if tf], bag, flood, imu)
     benchlib.print_table(f'Goals (ratios rot_tools / reference, first calls in ms; '
                          f'{time.monotonic() - start:.0f} s in all)',
                          ['figure', 'against', 'measured', 'goal', 'met?'], rows)
@@ -205,7 +212,8 @@ def main(argv=None):
     print(f'\n{len(goals) - len(missed)} of {len(goals)} goals met{tail}')
     failed = [s for s, res in (('math', math), ('first', first), ('node', node),
                                ('memory', memory), ('overload', overload),
-                               ('overload', flood), ('bag', bag), ('fleet', fleet))
+                               ('overload', flood), ('bag', bag), ('fleet', fleet),
+                               ('imu', imu))
               if s not in args.skip and res is None]
     failed += [f'overload --tf {scenario}' for scenario, res in zip(TF_OVERLOADS, tf_overloads)
                if res is None]
