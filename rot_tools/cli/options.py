@@ -34,8 +34,8 @@ def plot_file(text):
 def add_plot(parser, text, default=None):
     """Add --plot FILE: ``text`` says what is drawn; the file is .png or .svg (matplotlib)."""
     parser.add_argument('--plot', type=plot_file, default=default, metavar='FILE',
-                        help=f'{text} in FILE (.png or .svg); needs matplotlib (pip install '
-                        "'rot_tools[plot]')")
+                        help=f'{text} in FILE (.png or .svg); needs matplotlib, the plot '
+                        f"extra ({arguments.install_hint('plot')})")
 
 
 def tolerance(text):
