@@ -11,6 +11,7 @@ skip and say so.
 import json
 from pathlib import Path
 import shlex
+import warnings
 
 import bag_helpers as bh
 from doc_blocks import assert_doc_output, console_steps, doc_block
@@ -18,6 +19,7 @@ import numpy as np
 import pytest
 import rot_tools as rt
 from rot_tools.cli import main as cli
+import yaml
 
 STATS = ('rmse', 'mean', 'median', 'std', 'min', 'max')
 
@@ -489,6 +491,54 @@ def test_bad_input_is_one_line_and_status_2(capsys, tmp_path, monkeypatch, other
     assert status == 2 and out == ''
     assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
     assert says in err, err
+
+
+def hostile_files(directory):
+    """Write small TUM files at float64's edges: stamps, steps and positions."""
+    t = np.arange(20) / 10
+    R = rt.rot_z((t * 3) ** 2)
+    for name, stamps, b in [
+            ('ok', t, path_of(t)), ('huge', np.linspace(-1, 1, 20) * 1e308, path_of(t)),
+            ('tiny', t * 1e-319, path_of(t)), ('far', t, np.where(path_of(t) > 0, 1e308, -1e308)),
+            ('unix', 1.3e9 + t, path_of(t)), ('late', 1e16 + t * 1e4, path_of(t))]:
+        np.savetxt(directory / f'{name}.tum', np.column_stack(
+            [stamps, b, rt.matrix_to_quaternion(R)]), fmt='%.17g')
+
+
+@pytest.mark.parametrize('words, says', [
+    ('huge ok --offset auto', 'stamps of R_est span -1e+308 to 1e+308 s: their differences '
+     'overflow float64'),
+    ('tiny ok --offset auto', 'R_est turns faster than float64 holds'),
+    ('ok tiny --offset auto', 'R_ref turns faster than float64 holds'),
+    ('far ok --align se3', None), ('ok far --align posyaw --match nearest', None),
+    ('ok far --align posyaw', 'R0ᵀ·(b1 − b0) of screw_interpolate overflows float64'),
+    ('unix ok --offset auto --max-offset 1e300', None),  # the offset is -1.3e9 s
+    ('unix ok --offset auto --max-offset 1e8', 'the streams do not overlap within '
+     'max_offset = 100000000.0 s: R_ref spans [0.05, 1.85] s, R_est [1300000000.05, '
+     '1300000001.85] s'),
+    ('unix ok --offset 1e300', 'no overlap in time: EST spans [1e+300, 1e+300] s (offset 1e+300 '
+     's added), REF [0.0, 1.9] s'),
+    ('ok ok --offset 1e10', 'no overlap in time: EST spans [10000000000.0, 10000000001.9] s '
+     '(offset 10000000000.0 s added)'),
+    ('ok late --offset 1e16', "the offset 1e+16 s swallows the steps of EST's stamps: 0.0 and "
+     '0.1 s both become 1e+16 s'),
+    ('ok ok --offset -1.3e9 --match nearest', 'no overlap in time: EST spans [-1300000000.0, '
+     '-1299999998.1] s (offset -1300000000.0 s added), REF [0.0, 1.9] s'),
+])
+def test_edges_of_float64_are_one_plain_line_without_numpy_warnings(
+        capsys, tmp_path, monkeypatch, words, says):
+    hostile_files(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    est, ref, *options = words.split()
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')  # a RuntimeWarning would reach stderr
+        status, out, err = run(capsys, 'compare', f'{est}.tum', f'{ref}.tum', *options)
+    if says is None:  # the fit scales the positions; the offset search finds -1.3e9 s
+        assert status == 0 and err == '', err
+        assert abs(yaml.safe_load(out)['offset'] - (-1.3e9 if est == 'unix' else 0)) < 0.01
+        return
+    assert (status, out) == (2, '') and err.count('\n') == 1, err
+    assert err.startswith('rot-tools: error: compare: ') and says in err, err
 
 
 def test_an_option_of_the_other_commands_before_compare(capsys, tmp_path, monkeypatch):

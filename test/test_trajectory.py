@@ -8,6 +8,7 @@ offset and mounting rotation written into it.
 """
 
 import math
+import tracemalloc
 import warnings
 
 from hypothesis import given, settings, strategies as st
@@ -184,6 +185,21 @@ def test_the_offset_is_found_under_gyro_noise():
     found = estimate_time_offset(t, R_est, t, R_ref, max_offset=0.5)
     assert abs(found.offset + 0.0525) < 0.1 * 0.005, found  # measured: 0.0002 s
     assert found.correlation > 0.9
+
+
+@pytest.mark.parametrize('max_offset', [1e6, 1e300])
+def test_a_huge_max_offset_searches_only_where_the_streams_overlap(max_offset):
+    t_ref = 1.3e9 + np.arange(0.0, 12.0, 0.01)
+    t_est = 1.3e9 + np.arange(0.003, 12.0, 0.02)
+    R_est, R_ref = motion(t_est - 1.3e9 + 0.25), motion(t_ref - 1.3e9)
+    tracemalloc.start()
+    try:
+        found = estimate_time_offset(t_est, R_est, t_ref, R_ref, max_offset=max_offset)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert abs(found.offset - 0.25) < 0.2 * 0.01, found  # not a grid of max_offset / 2^20
+    assert peak < 20e6  # the 24 s of overlap, not max_offset, size the search
 
 
 def test_angular_speed_of_a_uniform_turn():
@@ -416,6 +432,7 @@ def test_error_statistics_of_known_numbers():
 
 EYE3 = np.repeat(np.eye(3)[None], 3, axis=0)
 T3 = np.array([0.0, 1.0, 2.0])
+FAR = 1.5e308 + 1e306 * np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 
 
 @pytest.mark.parametrize('call, message', [
@@ -442,7 +459,8 @@ T3 = np.array([0.0, 1.0, 2.0])
     (lambda: estimate_time_offset(T3, EYE3, T3, EYE3),
      r'R_est turns at a constant speed \(0 rad/s\): no feature to align in time'),
     (lambda: estimate_time_offset(T3, rot_z(T3 ** 2), T3 + 10, rot_z(T3 ** 2)),
-     r'the streams do not overlap within max_offset = 1 s: R_ref spans \[10.5'),
+     r'the streams do not overlap within max_offset = 1.0 s: R_ref spans \[10.5, 11.5\] s, '
+     r'R_est \[0.5, 1.5\] s'),
     (lambda: estimate_time_offset(T3, rot_z(T3 ** 2), T3, rot_z(T3 ** 2), max_offset='1'),
      r"max_offset must be a number ≥ 0, got '1'"),
     (lambda: align_rotations(EYE3, EYE3, 'scale'),
@@ -462,6 +480,14 @@ T3 = np.array([0.0, 1.0, 2.0])
      r"method 'se3' needs at least 3 positions, got 2"),
     (lambda: align_rotations(EYE3, EYE3, 'se3', b_ref=np.eye(3), b_est=np.ones((3, 3))),
      r"method 'se3' needs positions that move: b_est stands still"),
+    (lambda: align_rotations(EYE3, EYE3, 'se3', b_ref=-FAR, b_est=FAR),
+     r'b_ref, b_est: positions of ±1.5e\+308 leave float64 in the fit'),
+    (lambda: align_rotations(EYE3, EYE3, 'posyaw', b_ref=-FAR, b_est=FAR),
+     r'b_ref, b_est: positions of ±1.5e\+308 leave float64 in the fit'),
+    (lambda: angular_speeds([0.0, 5e-324], EYE3[:2] @ rot_x([0.0, 1.0])),
+     r'R turns faster than float64 holds: 1.0 rad in 5e-324 s at stamp 0.0'),
+    (lambda: angular_speeds([-1e308, 1e308], EYE3[:2]),
+     r'stamps of R span -1e\+308 to 1e\+308 s: their differences overflow float64'),
     (lambda: align_rotations(EYE3, EYE3, 'se3', b_ref=np.eye(3), b_est=np.eye(3)[:2]),
      r'b_est must have shape \(3, 3\), one per stamp, got \(2, 3\)'),
     (lambda: align_rotations(rot_x([np.pi]), np.eye(3)[None], 'yaw'),

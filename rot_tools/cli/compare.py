@@ -247,12 +247,21 @@ def _rows(b, rows):
 
 def match(est, ref, offset, how, max_gap):
     """Pairs of EST (stamps shifted by offset) and REF: interpolated or nearest (Matched)."""
-    t_est = est.stamps + offset
+    plain = trajectory.plain
+    with np.errstate(over='ignore'):
+        t_est = est.stamps + offset
     lo, hi = max(t_est[0], ref.stamps[0]), min(t_est[-1], ref.stamps[-1])
-    if lo > hi + max_gap:
+    if not lo <= hi + max_gap:  # (an infinite t_est too)
         raise CompareError(
-            f'no overlap in time: EST spans [{t_est[0]:.6f}, {t_est[-1]:.6f}] s (offset '
-            f'{offset:g} s added), REF [{ref.stamps[0]:.6f}, {ref.stamps[-1]:.6f}] s')
+            f'no overlap in time: EST spans [{plain(t_est[0])}, {plain(t_est[-1])}] s (offset '
+            f'{plain(offset)} s added), REF [{plain(ref.stamps[0])}, {plain(ref.stamps[-1])}] s')
+    same = t_est[1:] <= t_est[:-1]
+    if same.any():
+        k = int(np.argmax(same))
+        raise CompareError(
+            f"the offset {plain(offset)} s swallows the steps of EST's stamps: "
+            f'{plain(est.stamps[k])} and {plain(est.stamps[k + 1])} s both become '
+            f'{plain(t_est[k])} s')
     if how == 'interpolate':
         if len(ref.stamps) < 2:
             raise CompareError('REF has 1 pose: at least 2 are needed to interpolate')
@@ -268,7 +277,7 @@ def match(est, ref, offset, how, max_gap):
                         _rows(ref.b, covered), _rows(est.b, index))
     if len(pairs.stamps) < LEAST_PAIRS:
         raise CompareError(
-            f'{len(pairs.stamps)} matched pair(s) within --max-gap {max_gap:g} s: at least '
+            f'{len(pairs.stamps)} matched pair(s) within --max-gap {plain(max_gap)} s: at least '
             f'{LEAST_PAIRS} needed (EST: {len(est.stamps)} poses, REF: {len(ref.stamps)})')
     return pairs
 

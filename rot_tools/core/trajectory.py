@@ -73,6 +73,11 @@ def _stamps(stamps, name, least):
         k = int(np.argmax(back))
         raise RotationError(f'{name} must be strictly increasing: {name}[{k + 1}] = '
                             f'{plain(t[k + 1])} follows {name}[{k}] = {plain(t[k])}')
+    with np.errstate(over='ignore'):
+        span = t[-1] - t[0] if len(t) else 0.0
+    if not math.isfinite(span):
+        raise RotationError(f'{name} span {plain(t[0])} to {plain(t[-1])} s: their '
+                            'differences overflow float64')
     return t
 
 
@@ -242,8 +247,15 @@ def angular_speeds(stamps, R, name='R'):
     """
     t = _stamps(stamps, f'stamps of {name}', 2)
     R = _rotations(R, name, len(t))
-    return Speeds(t=(t[:-1] + t[1:]) / 2,
-                  speed=rotation_distance(R[:-1], R[1:], check=False) / np.diff(t))
+    steps = np.diff(t)
+    with np.errstate(over='ignore'):
+        speed = rotation_distance(R[:-1], R[1:], check=False) / steps
+    if not np.isfinite(speed).all():
+        k = int(np.argmax(~np.isfinite(speed)))
+        raise RotationError(f'{name} turns faster than float64 holds: '
+                            f'{plain(rotation_distance(R[k], R[k + 1], check=False))} rad in '
+                            f'{plain(steps[k])} s at stamp {plain(t[k])}')
+    return Speeds(t=t[:-1] / 2 + t[1:] / 2, speed=speed)  # (t_k + t_k+1)/2 would overflow
 
 
 def _on_grid(grid, t, v):
@@ -301,14 +313,16 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
     Time offset between two orientation streams, from their angular speeds.
 
     Both speeds (angular_speeds) are put on one grid of step h = the shorter of the streams'
-    median sample periods (coarser when the overlap would exceed MAX_GRID samples), and the
-    Pearson correlation r(o) of |ω_ref|(t) with |ω_est|(t − o) is taken for o = j·h within
-    ±max_offset (s); the best j is refined below one sample by the parabola through r at
-    j − 1, j, j + 1: o = (j + ½(r₋ − r₊)/(r₋ − 2r₀ + r₊))·h. Returns TimeOffset(offset,
-    correlation): offset is the value to add to EST's stamps before matching (evo's
-    --t_offset), correlation r at the best sample, in [−1, 1]. RotationError when the streams
-    do not overlap within max_offset, a stream never turns, or the best offset is at
-    ±max_offset (the true one may lie beyond).
+    median sample periods (coarser when the overlap or the search would exceed MAX_GRID
+    samples), and the Pearson correlation r(o) of |ω_ref|(t) with |ω_est|(t − o) is taken for
+    o = c + j·h over the offsets within ±max_offset (s) at which the streams overlap at all
+    (c the middle of them: max_offset never sizes the search beyond the streams' own span);
+    the best j is refined below one sample by the parabola through r at j − 1, j, j + 1:
+    o = c + (j + ½(r₋ − r₊)/(r₋ − 2r₀ + r₊))·h. Returns TimeOffset(offset, correlation):
+    offset is the value to add to EST's stamps before matching (evo's --t_offset),
+    correlation r at the best sample, in [−1, 1]. RotationError when the streams do not
+    overlap within max_offset, a stream never turns, or the best offset is at ±max_offset
+    (the true one may lie beyond).
     """
     est = angular_speeds(stamps_est, R_est, 'R_est')
     ref = angular_speeds(stamps_ref, R_ref, 'R_ref')
@@ -318,27 +332,33 @@ def estimate_time_offset(stamps_est, R_est, stamps_ref, R_ref, max_offset=1.0):
         if np.ptp(speed) == 0:
             raise RotationError(f'{name} turns at a constant speed ({speed[0]:.3g} rad/s): '
                                 'no feature to align in time')
-    lo, hi = max(tr[0], te[0] - reach), min(tr[-1], te[-1] + reach)
     h = min(np.median(np.diff(te)), np.median(np.diff(tr)))
-    if hi - lo < 2 * h:
+    low, high = max(-reach, tr[0] - te[-1]), min(reach, tr[-1] - te[0])  # EST + o meets REF
+    if high - low < 2 * h:
         raise RotationError(
-            f'the streams do not overlap within max_offset = {reach:g} s: R_ref spans '
-            f'[{tr[0]:.6f}, {tr[-1]:.6f}] s, R_est [{te[0]:.6f}, {te[-1]:.6f}] s')
-    h = max(h, (hi - lo) / MAX_GRID, reach / MAX_GRID)
-    lags, n = math.ceil(reach / h - 1e-9), int((hi - lo) / h) + 1  # (0.2/0.01 = 20.000…04)
+            f'the streams do not overlap within max_offset = {plain(reach)} s: R_ref spans '
+            f'[{plain(tr[0])}, {plain(tr[-1])}] s, R_est [{plain(te[0])}, {plain(te[-1])}] s')
+    centre, half = (low + high) / 2, (high - low) / 2
+    te = te + centre  # the search is then ±half about 0
+    lo, hi = max(tr[0], te[0] - half), min(tr[-1], te[-1] + half)
+    h = max(h, (hi - lo) / MAX_GRID, half / MAX_GRID)
+    lags, n = math.ceil(half / h - 1e-9), int((hi - lo) / h) + 1  # (0.2/0.01 = 20.000…04)
     grid = lo + h * np.arange(-lags, n + lags)
     r = _correlations(_on_grid(grid[lags:lags + n], tr, wr), _on_grid(grid, te, we), lags).r
     if not np.isfinite(r).any():
         raise RotationError('the angular speeds do not correlate at any offset within '
-                            f'±{reach:g} s (too little overlap, or a speed constant there)')
+                            f'±{plain(reach)} s (too little overlap, or a speed constant there)')
     best = int(np.nanargmax(r))
     if best in (0, 2 * lags):
-        raise RotationError(f'the best offset lies at the edge, {(best - lags) * h:+.6g} s: '
-                            f'the true one may lie beyond max_offset = {reach:g} s')
+        edge = centre + (best - lags) * h
+        limit = 'max_offset' if abs(abs(edge) - reach) <= h else 'the overlap of the streams'
+        raise RotationError(f'the best offset lies at the edge, {edge:+.6g} s: the true one '
+                            f'may lie beyond {limit}' + (
+                                f' = {plain(reach)} s' if limit == 'max_offset' else ''))
     r_minus, r_0, r_plus = r[best - 1], r[best], r[best + 1]
     curve = r_minus - 2 * r_0 + r_plus
     step = 0.5 * (r_minus - r_plus) / curve if curve < 0 else 0.0  # NaN compares False: 0
-    return TimeOffset(offset=float((best - lags + step) * h), correlation=float(r_0))
+    return TimeOffset(offset=float(centre + (best - lags + step) * h), correlation=float(r_0))
 
 
 # ---- alignment ---------------------------------------------------------------------------
@@ -399,20 +419,52 @@ def align_rotations(R_ref, R_est, method='rotation', *, b_ref=None, b_est=None):
     return FrameAlignment(W=rot_z(math.atan2(sin, cos)), t=zero)
 
 
+class _Centred(NamedTuple):
+    mean: np.ndarray
+    d: np.ndarray
+
+
+def _centred(b, name):
+    """
+    Return the mean of positions b (K, 3) and b − mean scaled by a power of two (_Centred).
+
+    Near float64's range the mean and the differences would overflow: b is scaled by 2^−e
+    (e: max|b|'s exponent) first, exactly; the fits below do not depend on the scale of d.
+    """
+    e = math.frexp(float(np.max(np.abs(b))))[1] if b.size else 0
+    scaled = np.ldexp(b, -e)
+    mean = scaled.mean(axis=0)
+    with np.errstate(over='ignore'):
+        back = np.ldexp(mean, e)
+    if not np.isfinite(back).all():
+        raise RotationError(f'{name}: positions of ±{np.max(np.abs(b)):.3g} leave float64 in '
+                            'the fit')
+    return _Centred(mean=back, d=scaled - mean)
+
+
+def _translation(W, mean_ref, mean_est):
+    """Return the translation b̄_ref − W·b̄_est, refused where it leaves float64."""
+    with np.errstate(over='ignore', invalid='ignore'):
+        t = mean_ref - W @ mean_est
+    if not np.isfinite(t).all():
+        top = max(np.max(np.abs(mean_ref)), np.max(np.abs(mean_est)))
+        raise RotationError(f'b_ref, b_est: positions of ±{top:.3g} leave float64 in the fit')
+    return t
+
+
 def _umeyama(b_ref, b_est, count):
     if b_ref is None or b_est is None:
         raise RotationError("method 'se3' fits positions: give b_ref and b_est")
     if count < 3:
         raise RotationError(f"method 'se3' needs at least 3 positions, got {count}")
     b_ref, b_est = _positions(b_ref, 'b_ref', count), _positions(b_est, 'b_est', count)
-    mean_ref, mean_est = b_ref.mean(axis=0), b_est.mean(axis=0)
-    d_ref, d_est = b_ref - mean_ref, b_est - mean_est
+    (mean_ref, d_ref), (mean_est, d_est) = _centred(b_ref, 'b_ref'), _centred(b_est, 'b_est')
     if not d_ref.any() or not d_est.any():
         raise RotationError("method 'se3' needs positions that move: "
                             f"{'b_ref' if not d_ref.any() else 'b_est'} stands still")
     keep = d_ref.any(axis=1) & d_est.any(axis=1)  # a pair at a centroid pulls nowhere
     W = align_vectors(d_ref[keep], d_est[keep]).R
-    return FrameAlignment(W=W, t=mean_ref - W @ mean_est)
+    return FrameAlignment(W=W, t=_translation(W, mean_ref, mean_est))
 
 
 def _position_yaw(b_ref, b_est, count):
@@ -422,8 +474,7 @@ def _position_yaw(b_ref, b_est, count):
     if count < 2:
         raise RotationError(f"method 'posyaw' needs at least 2 positions, got {count}")
     b_ref, b_est = _positions(b_ref, 'b_ref', count), _positions(b_est, 'b_est', count)
-    mean_ref, mean_est = b_ref.mean(axis=0), b_est.mean(axis=0)
-    d_ref, d_est = b_ref - mean_ref, b_est - mean_est
+    (mean_ref, d_ref), (mean_est, d_est) = _centred(b_ref, 'b_ref'), _centred(b_est, 'b_est')
     cos = float(np.sum(d_ref[:, 0] * d_est[:, 0] + d_ref[:, 1] * d_est[:, 1]))
     sin = float(np.sum(d_ref[:, 1] * d_est[:, 0] - d_ref[:, 0] * d_est[:, 1]))
     spread = [float(np.linalg.norm(d[:, :2])) for d in (d_ref, d_est)]
@@ -433,7 +484,7 @@ def _position_yaw(b_ref, b_est, count):
                             f'{still} moves along z only, or the two do not correlate in x, y '
                             f'(Σ x·x + y·y = {cos:.3g}, Σ y·x − x·y = {sin:.3g})')
     W = rot_z(math.atan2(sin, cos))
-    return FrameAlignment(W=W, t=mean_ref - W @ mean_est)
+    return FrameAlignment(W=W, t=_translation(W, mean_ref, mean_est))
 
 
 # ---- mounting ----------------------------------------------------------------------------
