@@ -1,13 +1,13 @@
 """
 rot-tools bag over many bags: --jobs, --parquet and its manifest, --engine dask, bags that fail.
 
-Most tests read a small fleet (a few hundred messages a bag, written here by rosbags) as a ROS
-1 bag, rosbag2 sqlite3 and MCAP, in this process with ``--jobs 1``; what needs processes of
-its own (``--jobs 2``, a local Dask cluster, a worker killed) runs the console script. Whatever
-runs the per-bag jobs (one after the other, two processes, a two-worker Dask cluster), the
-summary is the same byte for byte and the Parquet tables are equal; each bag's entry is the
-summary the bag gives alone. The docs' fleet reads the real recording (../shared/data) three
-times. Signals sent to a fleet: test_fleet_signals.py.
+Most tests read a small fleet (a hundred and twenty messages a bag, written here by rosbags)
+as a ROS 1 bag, rosbag2 sqlite3 and MCAP, in this process with ``--jobs 1``; what needs
+processes of its own (``--jobs 2``, a local Dask cluster, a worker killed) runs the console
+script. Whatever runs the per-bag jobs (one after the other, two processes, a Dask cluster),
+the summary is the same byte for byte and the Parquet tables are equal; each bag's entry is
+the summary the bag gives alone. The docs' fleet reads the real recording (../shared/data)
+three times. Signals sent to a fleet: test_fleet_signals.py.
 """
 
 import contextlib
@@ -130,8 +130,9 @@ def test_serial_processes_and_dask_give_the_same_output(small, capsys, monkeypat
     root, paths = small
     monkeypatch.chdir(root)
     runs = {}
+    # a local Dask cluster of one worker process (two: the cluster at an address, below)
     for name, options in (('serial', ['--jobs', '1']), ('processes', ['--jobs', '2']),
-                          ('dask', ['--engine', 'dask', '--jobs', '2'])):
+                          ('dask', ['--engine', 'dask', '--jobs', '1'])):
         common = [*paths, *options, '--parquet', f'pq-{name}', '--csv', f'{name}.csv']
         if name == 'serial':  # here; the others in processes of their own
             status, out, err = bag_here(capsys, *common)
@@ -624,7 +625,8 @@ def test_duckdb_reads_the_files_of_the_manifest_as_one_table(bags, capsys, monke
     command = line.split()
     assert command[:3] == ['rot-tools', 'bag', 'fleet/']
     monkeypatch.chdir(root)
-    status, out, err = bag_here(capsys, *command[2:])
+    # here, one bag after the other (the same output whatever --jobs is): no fork of pytest
+    status, out, err = bag_here(capsys, *command[2:], '--jobs', '1')
     assert (status, err) == (0, '')
     assert_doc_output('bag-fleet-command', f'$ {line}\n{out}')
     pq.write_table(pq.read_table(root / 'table' / 'fleet_mcap.parquet'),

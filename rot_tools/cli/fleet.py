@@ -220,6 +220,7 @@ def _processes(items, jobs):
                 try:
                     process.start()
                 except OSError as exc:
+                    results.close()
                     raise FleetError(f'cannot start a worker process: {exc.strerror or exc}'
                                      ) from None
                 finally:
@@ -236,8 +237,9 @@ def _processes(items, jobs):
                 if outcome is None and not again:
                     waiting.appendleft((index, True))
                     continue
-                done[index] = outcome or Outcome(items[index][0],
-                                                 error=_ended(items[index][0], process))
+                if outcome is None:
+                    outcome = Outcome(items[index][0], error=_ended(items[index][0], process))
+                done[index] = outcome
             while given in done:
                 yield done.pop(given)
                 given += 1
