@@ -542,7 +542,7 @@ def test_edges_of_float64_are_one_plain_line_without_numpy_warnings(
 
 
 @pytest.mark.xfail(strict=True, reason="argparse drops the '--' after the command and "
-                   "parse_intermixed_args mishandles it: rot_tools.io.arguments must keep the "
+                   'parse_intermixed_args mishandles it: rot_tools.io.arguments must keep the '
                    "words after '--' as values")
 def test_a_file_named_like_an_option_after_a_double_dash(capsys, tmp_path, monkeypatch):
     bad_inputs(tmp_path)
