@@ -19,7 +19,7 @@ from rot_tools import (
     align_rotations, angular_speeds, delta_pairs, error_statistics, estimate_time_offset,
     hand_eye_rotation, interpolate_poses, nearest_stamps, random_rotations, rot_x, rot_z,
     rotation_errors, RotationError, rotvec_to_matrix, skew)
-from rot_tools.core.trajectory import order_stamps
+from rot_tools.core.stamps import order_stamps
 from scipy import linalg, optimize
 from scipy.spatial.transform import Rotation
 

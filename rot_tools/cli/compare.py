@@ -35,6 +35,7 @@ from rot_tools.cli import options, output_file
 from rot_tools.core import trajectory
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import matrix_to_quaternion
+from rot_tools.core.stamps import delta_pairs, order_stamps, plain
 from rot_tools.io import arguments, bag_read
 from rot_tools.io.report import round_number, to_json, to_yaml
 from rot_tools.io.trajectory_files import Poses, read_text, TrajectoryFileError
@@ -207,7 +208,7 @@ def read_side(name, path, topic, tf, strict=False):
                    f'stamp {_ns_text(t.ns[k])} goes back from {_ns_text(t.ns[k - 1])}')
         raise CompareError(f'{name}: {t.topic}: {problem} (messages {k} and {k + 1} as '
                            'recorded)')
-    order = trajectory.order_stamps(t.ns)
+    order = order_stamps(t.ns)
     keep = order.index
     positions = t.chain is not None or t.columns.position is not None
     whole, fraction = np.divmod(t.ns[keep], 10 ** 9)  # ns / 1e9 would round twice
@@ -247,7 +248,6 @@ def _rows(b, rows):
 
 def match(est, ref, offset, how, max_gap):
     """Pairs of EST (stamps shifted by offset) and REF: interpolated or nearest (Matched)."""
-    plain = trajectory.plain
     with np.errstate(over='ignore'):
         t_est = est.stamps + offset
     lo, hi = max(t_est[0], ref.stamps[0]), min(t_est[-1], ref.stamps[-1])
@@ -289,9 +289,9 @@ def overlapping_pairs(stamps, delta, unit):
     ≥ within rounding of the stamps, as delta_pairs decides (overlapping=True). The mounting
     averages over all of them (each pose starts one); RotationError if fewer than 2 fit.
     """
-    pairs = trajectory.delta_pairs(len(stamps), delta, unit, stamps, overlapping=True)
+    pairs = delta_pairs(len(stamps), delta, unit, stamps, overlapping=True)
     if len(pairs) < 2:
-        raise RotationError(f'--delta {trajectory.plain(delta)} {unit} leaves {len(pairs)} '
+        raise RotationError(f'--delta {plain(delta)} {unit} leaves {len(pairs)} '
                             f'relative rotation(s) among {len(stamps)} pairs: at least 2 '
                             'needed for a mounting')
     return pairs[:, 0], pairs[:, 1]
@@ -447,7 +447,7 @@ def figure(result, args):
         ax.set_ylabel(f'error ({unit})')
         ax.grid(True, alpha=0.3)
         ax.legend(loc='upper left', fontsize=8, ncols=3)
-    parts.set_xlabel(f'time (s) from {trajectory.plain(stamps[0])} s')
+    parts.set_xlabel(f'time (s) from {plain(stamps[0])} s')
     turned = ', EST turned by the mounting X' if result.mount is not None else ''
     fig.suptitle('rotation error E = R_refᵀ·W·R_est: angle, and roll, pitch, yaw (REP-103)\n'
                  f'{ALIGNMENT_TITLES[args.align]}{turned}', fontsize=11)
@@ -487,8 +487,8 @@ def run(args):
     data = report(result, est, ref, args)
     text = to_json if args.json else to_yaml
     output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
-    stamps = [stamp_warning(name, source, poses)
-              for name, source, poses in (('EST', args.est, est), ('REF', args.ref, ref))]
-    for line in [line for line in stamps if line] + warnings(result, args):
+    ordered = [stamp_warning(name, source, poses)
+               for name, source, poses in (('EST', args.est, est), ('REF', args.ref, ref))]
+    for line in [line for line in ordered if line] + warnings(result, args):
         sys.stderr.write(f'warning: {line}\n')
     return 0

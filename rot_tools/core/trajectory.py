@@ -12,16 +12,18 @@ reference (REF, Q). R maps the body's coordinates to its reference frame's.
   (angle of R_kᵀR_{k+1} / Δt), does not depend on either frame: the offset is the shift that
   best correlates the two speeds (estimate_time_offset).
 - **Alignment.** A constant rotation W between the two reference frames, R_ref ≈ W·R_est
-  (align_rotations): least squares on SO(3), about z only, or evo's Umeyama fit of positions.
+  (align_rotations): least squares on SO(3), about z only, evo's Umeyama fit of positions,
+  or rpg_trajectory_evaluation's yaw and shift of positions.
 - **Mounting.** A constant rotation X between the two body frames, R_ref ≈ W·R_est·Xᵀ, shows
   in the relative rotations A_k = Q_iᵀQ_j, B_k = P_iᵀP_j as A_k·X = X·B_k: the rotation part
   of hand-eye calibration (hand_eye_rotation).
 - **Errors.** E = R_refᵀ·R_est per pair, its angle and its roll/pitch/yaw, and evo's relative
   error over pairs of poses delta apart (rotation_errors).
+
+The stamps themselves — checked, put in order, paired Δ apart — are rot_tools.core.stamps'.
 """
 
 import math
-import numbers
 from typing import NamedTuple
 
 import numpy as np
@@ -32,6 +34,7 @@ from rot_tools.core.euler import matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.fitting import align_vectors, mean_rotation, rotation_distance
 from rot_tools.core.screw import screw_interpolate
 from rot_tools.core.so3 import checked_rotation, rot_z
+from rot_tools.core.stamps import checked_stamps, delta_pairs, plain
 
 EXCITED_RATIO = 0.05
 """σ_i/σ_1 of the stacked rotation vectors α_k at or above which axis i counts as excited.
@@ -43,42 +46,7 @@ MAX_GRID = 1 << 20
 """Samples of the common grid of estimate_time_offset at most; a longer overlap coarsens it."""
 
 
-# ---- checks ------------------------------------------------------------------------------
-
-
-MAX_POSES = 1 << 28
-"""Poses a count may name at most (delta_pairs): the pairs of more would not fit in memory."""
-
-
-def plain(x):
-    """
-    Write a number as messages show it: a plain decimal, the shortest that reads back the same.
-
-    1311868229.576, 1e-07, 3 — never np.float64(...) nor a 300-digit expansion.
-    """
-    if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
-        return str(int(x)) if abs(x) < 10 ** 16 else repr(float(x))
-    return repr(float(x))
-
-
-def _stamps(stamps, name, least):
-    """Stamps (N,) finite and strictly increasing, N ≥ least."""
-    t = finite_array(stamps, (), name)
-    if t.ndim != 1:
-        raise RotationError(f'{name} must have shape (N,), got {t.shape}')
-    if len(t) < least:
-        raise RotationError(f'{name} has {len(t)} stamp(s): at least {least} needed')
-    back = t[1:] <= t[:-1]  # compared, not subtracted: t_k+1 − t_k may overflow
-    if back.any():
-        k = int(np.argmax(back))
-        raise RotationError(f'{name} must be strictly increasing: {name}[{k + 1}] = '
-                            f'{plain(t[k + 1])} follows {name}[{k}] = {plain(t[k])}')
-    with np.errstate(over='ignore'):
-        span = t[-1] - t[0] if len(t) else 0.0
-    if not math.isfinite(span):
-        raise RotationError(f'{name} span {plain(t[0])} to {plain(t[-1])} s: their '
-                            'differences overflow float64')
-    return t
+# ---- checks (the stamps': rot_tools.core.stamps) -----------------------------------------
 
 
 def _rotations(R, name, count=None):
@@ -104,46 +72,6 @@ def _times(at, name):
     if at.ndim != 1:
         raise RotationError(f'{name} must have shape (M,), got {at.shape}')
     return at
-
-
-class StampOrder(NamedTuple):
-    """
-    A stream's samples to keep, in time order (order_stamps).
-
-    index (K,): into the stamps as given; dropped_duplicates: samples left out because an
-    earlier one has the same stamp; reordered: samples stamped earlier than one before them.
-    """
-
-    index: np.ndarray
-    dropped_duplicates: int
-    reordered: int
-
-
-def order_stamps(stamps):
-    """
-    Put the samples of a stream in time order, as files and bags give them.
-
-    stamps (N,): finite numbers in any order (seconds as floats, or integer nanoseconds:
-    integers are compared as they are). The samples are sorted by stamp, stably (equal stamps
-    keep their order), and of each run of equal stamps the first is kept (as evo's matching
-    takes the first of equal stamps). Returns StampOrder(index, dropped_duplicates,
-    reordered); index is sorted and strictly increasing in stamp: t[index] satisfies the
-    other functions of this module.
-    """
-    given = stamps if isinstance(stamps, np.ndarray) else np.asarray(stamps)
-    if given.dtype.kind in 'iu' and given.ndim == 1:
-        t = given
-    else:
-        t = finite_array(stamps, (), 'stamps')
-        if t.ndim != 1:
-            raise RotationError(f'stamps must have shape (N,), got {t.shape}')
-    reordered = int(np.count_nonzero(t[1:] < np.maximum.accumulate(t)[:-1])) if len(t) else 0
-    index = np.argsort(t, kind='stable')
-    ordered = t[index]
-    first = np.ones(len(t), bool)
-    first[1:] = ordered[1:] != ordered[:-1]
-    return StampOrder(index=index[first], dropped_duplicates=int(len(t) - first.sum()),
-                      reordered=reordered)
 
 
 class _Pairs(NamedTuple):
@@ -184,7 +112,7 @@ def interpolate_poses(stamps, R, b, at, max_gap=0.1):
     Returns Interpolated(R (K, 3, 3), b (K, 3) or None, covered (M,) bool) with K =
     covered.sum(): the poses at at[covered], in order.
     """
-    t = _stamps(stamps, 'stamps', 2)
+    t = checked_stamps(stamps, 'stamps', 2)
     R = _rotations(R, 'R', len(t))
     positions = np.zeros((len(t), 3)) if b is None else _positions(b, 'b', len(t))
     at = _times(at, 'at')
@@ -215,7 +143,7 @@ def nearest_stamps(stamps, at, max_gap=0.01):
     stream with fewer poses and looks each of its stamps up in the other: to reproduce its pairs,
     pass the shorter stream as ``at``.
     """
-    t = _stamps(stamps, 'stamps', 1)
+    t = checked_stamps(stamps, 'stamps', 1)
     at = _times(at, 'at')
     gap = require_tolerance(max_gap, 'max_gap')
     upper = np.searchsorted(t, at, side='right')
@@ -245,7 +173,7 @@ def angular_speeds(stamps, R, name='R'):
     between two samples aliases). stamps (N,) strictly increasing, N ≥ 2; returns
     Speeds(t: midpoints (N − 1,), speed (N − 1,)).
     """
-    t = _stamps(stamps, f'stamps of {name}', 2)
+    t = checked_stamps(stamps, f'stamps of {name}', 2)
     R = _rotations(R, name, len(t))
     steps = np.diff(t)
     with np.errstate(over='ignore'):
@@ -539,107 +467,6 @@ def hand_eye_rotation(A, B):
 
 
 # ---- errors ------------------------------------------------------------------------------
-
-
-def delta_pairs(count, delta=1, unit='f', stamps=None, *, overlapping=False):
-    """
-    Index pairs (i, j) for relative errors: by default consecutive and not overlapping (evo's RPE).
-
-    unit 'f' (frames): i runs over 0, delta, 2·delta, … < count and j is the next one (evo's
-    filter_pairs_by_index without all_pairs). unit 's' (seconds, given stamps (count,),
-    strictly increasing): from i = 0, j is the first index with t_j − t_i ≥ delta (within
-    rounding of the stamps: 4·ε·max|t|), then i = j. overlapping: every pose i starts a pair
-    instead, with j = i + delta frames or the first t_j ≥ t_i + delta (the mounting's
-    intervals). count: a whole number in [0, MAX_POSES]. Returns an int array (K, 2);
-    RotationError when no pair fits, and for a delta in seconds within the rounding of the
-    stamps (at Unix times, about a microsecond), which cannot tell a pose from the next.
-    """
-    count = _count(count)
-    if unit == 'f':
-        if not _whole(delta):
-            raise RotationError(f'delta in frames must be an integer ≥ 1, got {_shown(delta)}')
-        step = int(min(float(delta), count + 1))
-        if overlapping:
-            i = np.arange(max(count - step, 0))
-            pairs = np.stack([i, i + step], axis=-1)
-        else:
-            ids = np.arange(0, count, step)
-            pairs = np.stack([ids[:-1], ids[1:]], axis=-1)
-    elif unit == 's':
-        pairs = _pairs_in_seconds(count, delta, stamps, overlapping)
-    else:
-        raise RotationError(f"unit must be 'f' (frames) or 's' (seconds), got {unit!r}")
-    if not len(pairs):
-        raise RotationError(f'delta = {_shown(delta)} {"frames" if unit == "f" else "s"} '
-                            f'leaves no pair among {count} poses')
-    return pairs
-
-
-def _pairs_in_seconds(count, delta, stamps, overlapping):
-    if stamps is None:
-        raise RotationError("delta in seconds (unit 's') needs the stamps")
-    t = _stamps(stamps, 'stamps', 1)
-    if len(t) != count:
-        raise RotationError(f'stamps has {len(t)} entries for {count} poses')
-    step = require_tolerance(delta, 'delta')
-    if step == 0:
-        raise RotationError('delta in seconds must be > 0, got 0')
-    far = max(abs(t[0]), abs(t[-1]))
-    slack = 4 * np.finfo(float).eps * far
-    if step <= slack:  # t_i + delta − slack would find i itself, again and again
-        raise RotationError(
-            f'delta = {plain(step)} s is within the rounding of stamps near {plain(far)} s '
-            f'({slack:.2g} s): give a larger delta, or one in frames')
-    reach = step - slack
-    if overlapping:
-        i = np.arange(count)
-        with np.errstate(over='ignore'):  # beyond float64: no stamp reaches it anyway
-            j = np.searchsorted(t, t + reach, side='left')
-        j = np.maximum(j, i + 1)  # t_i + reach may round to t_i; t_i+1 is then far enough
-        keep = j < count
-        return np.stack([i[keep], j[keep]], axis=-1)
-    chain = [0]
-    while True:
-        with np.errstate(over='ignore'):
-            j = int(np.searchsorted(t, t[chain[-1]] + reach, side='left'))
-        j = max(j, chain[-1] + 1)
-        if j >= count:
-            break
-        chain.append(j)
-    ids = np.array(chain)
-    return np.stack([ids[:-1], ids[1:]], axis=-1)
-
-
-def _count(count):
-    """Return count as an int in [0, MAX_POSES], or raise RotationError."""
-    whole = (isinstance(count, (int, np.integer, float, np.floating))
-             and not isinstance(count, (bool, np.bool_)) and math.isfinite(count)
-             and float(count).is_integer() and count >= 0)
-    if not whole:
-        raise RotationError(f'count must be a whole number ≥ 0, got {_shown(count)}')
-    if count > MAX_POSES:
-        raise RotationError(f'count must be at most {MAX_POSES} poses, got {plain(count)}')
-    return int(count)
-
-
-def _shown(value):
-    """Write a value for a message: a number as plain() writes it, anything else by repr()."""
-    if isinstance(value, (numbers.Real, np.floating, np.integer)) and not isinstance(
-            value, (bool, np.bool_)):
-        try:
-            return plain(value)
-        except (OverflowError, ValueError):
-            pass
-    return repr(value)
-
-
-def _whole(delta):
-    """Whether delta is a whole number ≥ 1 (an int, or a float such as 2.0)."""
-    try:
-        return not isinstance(delta, (bool, np.bool_)) and float(delta).is_integer() and (
-            delta >= 1)
-    except (TypeError, ValueError, OverflowError):
-        return False
 
 
 def error_statistics(x):

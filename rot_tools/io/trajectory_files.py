@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 from rot_tools.core.so3 import quaternion_to_matrix
-from rot_tools.core.trajectory import order_stamps, plain
+from rot_tools.core.stamps import order_stamps, plain
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 
 
