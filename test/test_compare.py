@@ -174,8 +174,10 @@ def as_they_come(path, t, R, b):
     Write a TUM file as real ones come: a stamp repeated with another pose, and lines swapped.
 
     Every 97th line is followed by one of the same stamp and a pose turned by 30° (kept, the
-    numbers would change), and every 89th pair of lines is swapped (stamps going back).
-    Returns (repeated, backwards): how many of each.
+    numbers would change), and every 89th pair of lines is swapped (stamps going back: evo
+    then searches the file linearly, taking the first of equal stamps; in a sorted file its
+    binary search takes the last for a stamp at or after them). Returns (repeated, backwards):
+    how many of each.
     """
     rows = np.column_stack([t, b, rt.matrix_to_quaternion(R)])
     off = rt.matrix_to_quaternion(R @ rt.rot_x(np.radians(30)))
