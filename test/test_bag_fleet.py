@@ -32,7 +32,7 @@ import pytest
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 pa = pytest.importorskip('pyarrow', reason="the 'bag' extra (pyarrow) is not installed")
 pq = pytest.importorskip('pyarrow.parquet')
-from rot_tools.cli import bag_parquet, fleet, main as cli  # noqa: E402
+from rot_tools.cli import bag_parquet, fleet, main as cli, output_file  # noqa: E402
 
 REAL_MESSAGES = 3061 + 3060
 """Messages of the real recording (Imu and Odometry), every one accepted."""
@@ -536,30 +536,30 @@ def test_files_that_cannot_be_unnamed_have_a_temporary_name(tmp_path, monkeypatc
 
     A worker removes its temporary files so before it ends itself, the command gone.
     """
-    monkeypatch.setattr(bag_parquet, '_unnamed', lambda directory: None)
+    monkeypatch.setattr(output_file, '_unnamed', lambda directory: None)
     target = tmp_path / 'out.csv'
     target.write_text('before\n')
     with pytest.raises(ZeroDivisionError):
-        with bag_parquet.complete_or_unseen(target) as out:
+        with output_file.complete_or_nothing(target) as out:
             out.write('half')
             (partial,) = [p for p in tmp_path.iterdir() if p != target]
             assert partial.name.startswith('.out.csv.') and partial.name.endswith('.partial')
             1 / 0
     assert list(tmp_path.iterdir()) == [target] and target.read_text() == 'before\n'
     with pytest.raises(FileNotFoundError):  # the worker is killed before it gets there
-        with bag_parquet.complete_or_unseen(target) as out:
+        with output_file.complete_or_nothing(target) as out:
             out.write('half')
-            bag_parquet.remove_partials()
+            output_file.remove_partials()
             assert list(tmp_path.iterdir()) == [target]
     assert target.read_text() == 'before\n'
-    with bag_parquet.complete_or_unseen(target) as out:
+    with output_file.complete_or_nothing(target) as out:
         out.write('whole\n')
     assert list(tmp_path.iterdir()) == [target] and target.read_text() == 'whole\n'
 
 
 def test_an_unnamed_file_has_no_name_until_complete(tmp_path):
     target = tmp_path / 'out.csv'
-    with bag_parquet.complete_or_unseen(target) as out:
+    with output_file.complete_or_nothing(target) as out:
         out.write('x' * 100_000)
         out.flush()
         assert list(tmp_path.iterdir()) == []  # on Linux; elsewhere a temporary name

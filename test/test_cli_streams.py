@@ -205,6 +205,18 @@ def test_the_console_script_on_a_full_disk_and_a_closed_pipe(files):
 # Ctrl-C and SIGTERM
 
 
+@pytest.fixture
+def named_partials(monkeypatch):
+    """
+    Files written under a temporary name, renamed by os.replace(source, target) once whole.
+
+    On Linux an output file is unnamed until complete (O_TMPFILE); these tests reach the
+    moment of its rename by patching os.replace, which the portable path calls so.
+    """
+    monkeypatch.setattr(output_file, '_unnamed', lambda directory: None)
+
+
+@pytest.mark.usefixtures('named_partials')
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkeypatch, signum):
     """The signal lands as --csv's file is complete but not yet renamed: it goes, one line."""
@@ -227,6 +239,7 @@ def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkey
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
 
 
+@pytest.mark.usefixtures('named_partials')
 def test_a_signal_where_python_ignores_exceptions_still_stops(files, tmp_path, monkeypatch):
     """Ctrl-C landing in a __del__ (or a function os.fork runs): raised at the next step."""
     monkeypatch.chdir(files)
@@ -248,6 +261,7 @@ def test_a_signal_where_python_ignores_exceptions_still_stops(files, tmp_path, m
     assert after == [] and list(tmp_path.iterdir()) == [] and sys.getprofile() is None
 
 
+@pytest.mark.usefixtures('named_partials')
 def test_a_forked_worker_ends_by_the_signal_itself(files, tmp_path, monkeypatch):
     """In a process forked by rot-tools (a fleet's worker) the handler is the signal's default."""
     monkeypatch.chdir(files)
@@ -359,6 +373,7 @@ def test_sigterm_on_compare_reading_a_fifo(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ['est.tum', 'ref.tum']
 
 
+@pytest.mark.usefixtures('named_partials')
 def test_a_signal_ignored_by_who_started_rot_tools_stays_ignored(files, tmp_path, monkeypatch):
     """SIGINT ignored, as for a background job of a script: main leaves it so, SIGTERM not."""
     monkeypatch.chdir(files)

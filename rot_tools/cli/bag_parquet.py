@@ -4,21 +4,19 @@
 The columns are typed: ``bag``, ``topic`` and ``frame_id`` strings; ``stamp`` the header
 stamp as int64 nanoseconds (sec·10⁹ + nanosec, exact); every other column float64, in
 degrees with ``--deg``, and null where the CSV leaves a cell empty (ω on a topic's first
-row). A file has no name until it is complete (:func:`complete_or_unseen`), so a run ended
-by any signal leaves no file that looks whole, and ``'DIR/*.parquet'`` (DuckDB) or
+row). A file has no name until it is complete (rot_tools.cli.output_file.complete_or_nothing),
+so a run ended by any signal leaves no file that looks whole, and ``'DIR/*.parquet'`` (DuckDB) or
 ``pandas.read_parquet(DIR)`` reads the bags as one table. A fleet's run ends by writing its
 manifest (:func:`finish`): which bags it read into which files, and ``_SUCCESS`` when none
 failed. pyarrow is imported only here, when a table is made: it comes with the ``bag`` extra.
 """
 
-from contextlib import contextmanager, suppress
+from contextlib import suppress
 import hashlib
 import json
 import os
 from pathlib import Path
 import re
-import secrets
-import stat
 
 import numpy as np
 from rot_tools.cli import output_file
@@ -73,98 +71,8 @@ def table(topics, bag, degrees, seq):
 def write(path, data):
     """Write the Table ``data`` to ``path`` whole, or leave nothing under that name."""
     import pyarrow.parquet as pq
-    with complete_or_unseen(path, 'wb') as out:
+    with output_file.complete_or_nothing(path, 'wb') as out:
         pq.write_table(data, out)
-
-
-# ---------------------------------------------------------------------------------------
-# Files that no one sees until they are complete
-
-
-_PARTIAL = set()
-"""The temporary names this process writes under (where a file cannot be unnamed)."""
-
-
-def _unnamed(directory):
-    """Return a descriptor of a new file without a name in ``directory``, or None."""
-    if not hasattr(os, 'O_TMPFILE') or not os.path.isdir('/proc/self/fd'):
-        return None  # not Linux: no unnamed files, or no way to name one
-    try:
-        return os.open(directory, os.O_TMPFILE | os.O_WRONLY, 0o666)  # umask applies
-    except OSError:  # a file system without them (NFS, overlayfs of older kernels)
-        return None
-
-
-def _temporary(name):
-    """Return a temporary name for ``name``: never its suffix, within 255 bytes."""
-    return f'.{name[:200]}.{secrets.token_hex(4)}.partial'
-
-
-def _regular_or_new(path):
-    try:
-        return stat.S_ISREG(os.stat(path).st_mode)
-    except FileNotFoundError:
-        return True
-
-
-@contextmanager
-def complete_or_unseen(path, mode='w', **open_args):
-    """
-    Yield a file object on a file that no one sees until it is complete, then is ``path``.
-
-    On Linux the file is made without a name (O_TMPFILE) in ``path``'s directory: whatever
-    ends the process while it is written — an exception, SIGTERM, SIGKILL, the OOM killer —
-    leaves nothing behind, as the kernel drops an unnamed file with its last descriptor. Once
-    complete it is linked under a temporary name and renamed to ``path`` (atomic in one
-    directory); ``path``, if it was there, holds its old content until then. Where files
-    cannot be unnamed, it is written under a temporary name (``.NAME.XXXXXXXX.partial``)
-    that an exception removes, and :func:`remove_partials` too before a worker ends itself.
-    A ``path`` that is not a regular file (/dev/null, a FIFO) is written directly
-    (rot_tools.cli.output_file.complete_or_nothing).
-    """
-    if not _regular_or_new(path):
-        with output_file.complete_or_nothing(path, mode, **open_args) as out:
-            yield out
-        return
-    directory, name = os.path.split(os.path.abspath(path))
-    fd = _unnamed(directory)
-    if fd is not None:
-        with open(fd, mode, **open_args) as out:
-            yield out
-            out.flush()
-            where = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
-            try:
-                temporary = _temporary(name)
-                os.link(f'/proc/self/fd/{fd}', temporary, dst_dir_fd=where)  # linkat, follows
-                try:
-                    os.replace(temporary, name, src_dir_fd=where, dst_dir_fd=where)
-                except BaseException:
-                    with suppress(OSError):
-                        os.unlink(temporary, dir_fd=where)
-                    raise
-            finally:
-                os.close(where)
-        return
-    partial = os.path.join(directory, _temporary(name))
-    fd = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    _PARTIAL.add(partial)
-    try:
-        with open(fd, mode, **open_args) as out:
-            yield out
-        os.replace(partial, path)
-    except BaseException:
-        with suppress(OSError):
-            os.unlink(partial)
-        raise
-    finally:
-        _PARTIAL.discard(partial)
-
-
-def remove_partials():
-    """Remove the temporary files this process is writing: it is about to end abruptly."""
-    for partial in list(_PARTIAL):
-        with suppress(OSError):
-            os.unlink(partial)
 
 
 # ---------------------------------------------------------------------------------------
@@ -231,9 +139,10 @@ def finish(directory, bags):
     data = {'bags': [{'path': path, 'status': status, 'file': name if status == 'ok' else None}
                      for path, status, name in bags],
             'files': [name for _, status, name in bags if status == 'ok']}
-    with complete_or_unseen(os.path.join(directory, MANIFEST), 'w', encoding='utf-8') as out:
+    manifest = os.path.join(directory, MANIFEST)
+    with output_file.complete_or_nothing(manifest, 'w', encoding='utf-8') as out:
         json.dump(data, out, indent=2, ensure_ascii=False)
         out.write('\n')
     if all(status != 'failed' for _, status, _ in bags):
-        with complete_or_unseen(os.path.join(directory, SUCCESS), 'w'):
+        with output_file.complete_or_nothing(os.path.join(directory, SUCCESS), 'w'):
             pass

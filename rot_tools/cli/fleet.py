@@ -13,7 +13,7 @@ Every bag ends ``ok``, ``skipped`` (it holds nothing of what was asked: a line o
 the exit status stays 0) or ``failed`` (one line on stderr; the others go on, and the exit
 status is 1) — whatever went wrong on it, its process killed twice included. A worker
 process ends with the command, however the command ends; the outputs have no name until they
-are complete (rot_tools.cli.bag_parquet.complete_or_unseen), and a ``--parquet`` directory
+are complete (rot_tools.cli.output_file.complete_or_nothing), and a ``--parquet`` directory
 holds a manifest of the run, written last.
 """
 
@@ -161,7 +161,7 @@ def _end_with_command(lifeline):
     """
     while os.read(lifeline, 1):  # nothing is ever written: only the end of file comes
         pass
-    bag_parquet.remove_partials()
+    output_file.remove_partials()
     os.kill(os.getpid(), signal.SIGKILL)  # at once, whatever the worker is doing
 
 
@@ -505,8 +505,8 @@ def _write(items, args, error):
         output_file.to_stdout(lambda out: done.extend(_collect(items, args, out)))
     elif args.csv is not None:
         try:
-            with bag_parquet.complete_or_unseen(args.csv, 'w', encoding='utf-8',
-                                                newline='') as out:
+            with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
+                                                 newline='') as out:
                 done = _collect(items, args, out)
         except OSError as exc:
             error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')

@@ -1,12 +1,13 @@
 """
 Output files written whole or not at all (``--csv FILE``, ``--plot FILE``), never over an input.
 
-A file is written under a temporary name in its own directory (``.NAME.XXXXXXXX.partial``:
-never the final suffix, so nothing mistakes it for the finished file) and renamed to NAME
-only once it is complete and closed; a write that fails (a full disk, a signal) removes
-the temporary file and leaves whatever NAME held before. ``os.replace`` in one directory is
-atomic on POSIX. A NAME that exists and is not a regular file (``/dev/null``, a FIFO) is
-written directly: renaming over it would replace the device or the pipe.
+A file has no name until it is complete (:func:`complete_or_nothing`): on Linux it is made
+unnamed (O_TMPFILE) in its directory and linked into place once whole, so whatever ends the
+process meanwhile — an exception, SIGTERM, SIGKILL, the OOM killer — leaves nothing that
+looks like the finished file, and NAME keeps what it held before. Elsewhere a temporary name
+(``.NAME.XXXXXXXX.partial``, never the final suffix) is renamed once complete. A NAME that
+exists and is not a regular file (``/dev/null``, a FIFO) is written directly: renaming over
+it would replace the device or the pipe.
 
 :func:`check_outputs` is the one guard of every command's output paths: it refuses an output
 that is an input, lies in an input bag, or is another output, before anything is written.
@@ -17,13 +18,32 @@ that is an input, lies in an input bag, or is another output, before anything is
 from contextlib import contextmanager, suppress
 import os
 from pathlib import Path
+import secrets
 import signal
 import stat
 import sys
-import tempfile
 
 from rot_tools.cli import options
 from rot_tools.io import arguments, bag_read
+
+
+_PARTIAL = set()
+"""The temporary names this process writes under (where a file cannot be unnamed)."""
+
+
+def _unnamed(directory):
+    """Return a descriptor of a new file without a name in ``directory``, or None."""
+    if not hasattr(os, 'O_TMPFILE') or not os.path.isdir('/proc/self/fd'):
+        return None  # not Linux: no unnamed files, or no way to name one
+    try:
+        return os.open(directory, os.O_TMPFILE | os.O_WRONLY, 0o666)  # umask applies
+    except OSError:  # a file system without them (NFS, overlayfs of older kernels)
+        return None
+
+
+def _temporary(name):
+    """Return a temporary name for ``name``: never its suffix, within 255 bytes."""
+    return f'.{name[:200]}.{secrets.token_hex(4)}.partial'
 
 
 def _regular_or_new(path):
@@ -35,17 +55,46 @@ def _regular_or_new(path):
 
 @contextmanager
 def complete_or_nothing(path, mode='w', **open_args):
-    """Yield a file object open on a temporary name; rename it to ``path`` when complete."""
+    """
+    Yield a file object on a file that no one sees until it is complete, then is ``path``.
+
+    On Linux the file is made without a name (O_TMPFILE) in ``path``'s directory: whatever
+    ends the process while it is written — an exception, SIGTERM, SIGKILL, the OOM killer —
+    leaves nothing behind, as the kernel drops an unnamed file with its last descriptor. Once
+    complete it is linked under a temporary name and renamed to ``path`` (atomic in one
+    directory); ``path``, if it was there, holds its old content until then. Where files
+    cannot be unnamed, it is written under a temporary name (``.NAME.XXXXXXXX.partial``)
+    that an exception removes, and :func:`remove_partials` too before a worker ends itself.
+    A ``path`` that is not a regular file (/dev/null, a FIFO) is written directly: renaming
+    over it would replace the device or the pipe.
+    """
     if not _regular_or_new(path):
         with open(path, mode, **open_args) as out:
             yield out
         return
     directory, name = os.path.split(os.path.abspath(path))
-    fd, partial = tempfile.mkstemp(prefix=f'.{name}.', suffix='.partial', dir=directory)
+    fd = _unnamed(directory)
+    if fd is not None:
+        with open(fd, mode, **open_args) as out:
+            yield out
+            out.flush()
+            where = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+            try:
+                temporary = _temporary(name)
+                os.link(f'/proc/self/fd/{fd}', temporary, dst_dir_fd=where)  # linkat, follows
+                try:
+                    os.replace(temporary, name, src_dir_fd=where, dst_dir_fd=where)
+                except BaseException:
+                    with suppress(OSError):
+                        os.unlink(temporary, dir_fd=where)
+                    raise
+            finally:
+                os.close(where)
+        return
+    partial = os.path.join(directory, _temporary(name))
+    fd = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    _PARTIAL.add(partial)
     try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.fchmod(fd, 0o666 & ~umask)  # as open() would create it, not mkstemp's 0600
         with open(fd, mode, **open_args) as out:
             yield out
         os.replace(partial, path)
@@ -53,6 +102,15 @@ def complete_or_nothing(path, mode='w', **open_args):
         with suppress(OSError):
             os.unlink(partial)
         raise
+    finally:
+        _PARTIAL.discard(partial)
+
+
+def remove_partials():
+    """Remove the temporary files this process is writing: it is about to end abruptly."""
+    for partial in list(_PARTIAL):
+        with suppress(OSError):
+            os.unlink(partial)
 
 
 def write_figure(draw, path, error):
