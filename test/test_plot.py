@@ -252,7 +252,7 @@ def test_missing_matplotlib_is_one_line_and_exit_2(tmp_path):
     assert done.returncode == 2
     assert done.stdout == ''
     assert done.stderr.count('\n') == 1 and 'Traceback' not in done.stderr
-    assert "pip install 'rot_tools[plot]'" in done.stderr
+    assert "pip install -e '.[plot]' in the rot_tools checkout" in done.stderr
     assert not out.exists()
 
 

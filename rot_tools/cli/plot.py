@@ -1,8 +1,8 @@
 """
 A 3-D picture of a rigid motion with matplotlib: what ``rot-tools ... --plot FILE`` draws.
 
-matplotlib is the optional ``plot`` extra (``pip install 'rot_tools[plot]'``); this module
-imports it, so rot-tools imports this module only when --plot is given. It uses no pyplot
+matplotlib is the optional ``plot`` extra (``pip install -e '.[plot]'`` in the checkout); this
+module imports it, so rot-tools imports this module only when --plot is given. It uses no pyplot
 and no display: the Figure is drawn on an Agg canvas and saved by the file's extension
 (PNG, SVG, or any other format matplotlib writes).
 
