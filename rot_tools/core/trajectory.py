@@ -194,8 +194,13 @@ def _on_grid(grid, t, v):
 
 
 def _sliding_sums(a, b, lags):
-    """Σ_g a[g]·b[g + k] for k = 0 … 2·lags, by FFT (len(b) = len(a) + 2·lags)."""
-    size = len(b)
+    """
+    Return Σ_g a[g]·b[g + k] for k = 0 … 2·lags, by FFT (len(b) = len(a) + 2·lags).
+
+    The FFTs are taken at the power of two ≥ len(b) (a length with a large prime factor is
+    many times slower): g + k ≤ len(b) − 1 never wraps, so the zeros added change nothing.
+    """
+    size = 1 << (len(b) - 1).bit_length()
     sums = np.fft.irfft(np.conj(np.fft.rfft(a, size)) * np.fft.rfft(b, size), size)
     return sums[:2 * lags + 1]
 
