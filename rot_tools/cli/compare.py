@@ -53,7 +53,9 @@ TEXT = (
     'EST and REF are each a bag (a topic with --est-topic/--ref-topic, or the transform of\n'
     "BODY in REFERENCE from the bag's TF with --est-tf/--ref-tf; a bag with one topic of a\n"
     "type 'rot-tools bag' reads needs neither), a TUM file (t x y z qx qy qz qw) or an\n"
-    'EuRoC ground-truth CSV (ns, x, y, z, qw, qx, qy, qz, ...).\n\n'
+    'EuRoC ground-truth CSV (ns, x, y, z, qw, qx, qy, qz, ...). Stamps are taken as\n'
+    'they come: sorted, the first of equal ones kept, with a warning (--strict-stamps\n'
+    'refuses them instead).\n\n'
     "The offset is added to EST's stamps; REF is then interpolated at each EST stamp\n"
     '(along the constant screw between its neighbours, each within --max-gap, default\n'
     '0.1 s) or, with --match nearest, its nearest stamp is taken (within --max-gap,\n'
@@ -61,7 +63,8 @@ TEXT = (
     'frames (A_k X = X B_k over --delta) and compares EST turned by X. The alignment W\n'
     '(R_ref = W R_est) is then fitted, and the error E = R_refᵀ W R_est reported: APE and\n'
     "RPE angle statistics (rmse, mean, median, std, min, max; RPE as evo's, over --delta\n"
-    "between non-overlapping pairs) and E's roll, pitch, yaw (REP-103, continuous).\n"
+    "between non-overlapping pairs) and of E's roll, pitch, yaw (REP-103, each wrapped\n"
+    'to (-180°, 180°]).\n'
     'Angles in radians unless --deg. Needs rosbags for bags (the bag extra).')
 
 
