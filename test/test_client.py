@@ -80,19 +80,27 @@ class Here:
     rotation_client's commands run in this process, in one rclpy context.
 
     ``here(*args)`` reads the command line as the console script does and runs its command
-    by rot_tools.ros.rotation_client.run_command — its own client node, printing, exit
-    status — in ``context``, whose DDS participant has discovered the nodes already; stdout
-    and stderr are captured. A command line with ROS arguments runs through ``main``, in a
-    context made for it, as the script does (rclpy's signal handlers, which its rclpy.init
-    installs, are uninstalled after it: this process keeps its own). Return a Result.
+    by rot_tools.ros.rotation_client.run_command — printing, exit status — in ``context``,
+    whose DDS participant has discovered the nodes already, with one Client for every
+    command (its endpoints discovered by the nodes once); stdout and stderr are captured. A
+    command line with ROS arguments runs through ``main``, in a context made for it, as the
+    script does (rclpy's signal handlers, which its rclpy.init installs, are uninstalled
+    after it: this process keeps its own). Return a Result.
     """
 
     def __init__(self, context):
         self.context = context
+        self.client = None
+
+    def close(self):
+        """Destroy the Client's node."""
+        if self.client is not None:
+            self.client.close()
 
     def __call__(self, *args):
         from rot_tools.ros.client_arguments import parse_args
         from rclpy.signals import uninstall_signal_handlers
+        from rot_tools.ros.client_session import Client
         from rot_tools.ros.rotation_client import main, run_command
         words = [str(a) for a in args]
         out, err = io.StringIO(), io.StringIO()
@@ -104,7 +112,10 @@ class Here:
                     finally:
                         uninstall_signal_handlers()
                 else:
-                    status = run_command(parse_args(words), self.context)
+                    args = parse_args(words)
+                    if self.client is None:
+                        self.client = Client(args.node, args.timeout, self.context)
+                    status = run_command(args, self.context, self.client)
             except SystemExit as exc:  # the parser: --help, --version, bad arguments
                 status = exc.code
         return Result(status, out.getvalue(), err.getvalue())
@@ -126,7 +137,9 @@ def one_line_error(result, status):
 @pytest.fixture(scope='module')
 def here(ros_context):
     """Run rotation_client's commands in this process (:class:`Here`)."""
-    return Here(ros_context)
+    runner = Here(ros_context)
+    yield runner
+    runner.close()
 
 
 @pytest.fixture(scope='module')
@@ -370,6 +383,23 @@ def test_cov_is_sent_and_the_rpy_covariance_printed(here, node, verb, position):
     assert unknown['answer']['rpy_covariance'] == 'unknown'
 
 
+def send_until(done, send, tries=40):
+    """
+    Call send() until done(), waiting half a second after each; fail after ``tries``.
+
+    For an echo started just before: the node's publisher may match its subscription a moment
+    after the subscription is in the graph, and a message published before is not its.
+    """
+    for _ in range(tries):
+        send()
+        deadline = time.monotonic() + 0.5
+        while not done() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if done():
+            return
+    pytest.fail(f'not done after {tries} sends')
+
+
 def test_echo_rpy_covariance(here, node, tester):
     """Check doc/client.md's example: facing +Y, an error about the fixed X axis is pitch."""
     command = CLIENT + ['echo', 'rpy_covariance', '--once', '--node', node, '--timeout', '20']
@@ -378,8 +408,9 @@ def test_echo_rpy_covariance(here, node, tester):
     topic = f'{node}/rpy_covariance'
     tester.spin_until(lambda: tester.node.count_subscribers(topic) > 0, DISCOVERY_TIMEOUT,
                       f'a subscription on {topic}')
-    here.answered(*'imu 0 0 0.7071068 0.7071068 --frame imu_link --cov'.split(), *COV.ravel(),
-                  '--node', node)
+    send_until(lambda: echo.poll() is not None, lambda: here.answered(
+        *'imu 0 0 0.7071068 0.7071068 --frame imu_link --cov'.split(), *COV.ravel(),
+        '--node', node))
     out, err = echo.communicate(timeout=60)
     assert (echo.returncode, err) == (0, '')
     assert_doc_output('client-covariance', '$ rotation_client echo rpy_covariance --once\n'

@@ -25,7 +25,7 @@ from doc_blocks import assert_doc_output
 import pytest
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from scipy.spatial.transform import Rotation
-from test_client import approx, DIGITS, Here, interrupt, one_line_error, popen
+from test_client import approx, DIGITS, Here, interrupt, one_line_error, popen, send_until
 import yaml
 
 HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in degrees, '
@@ -35,7 +35,9 @@ HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in
 @pytest.fixture(scope='module')
 def here(ros_context):
     """Run rotation_client's commands in this process (test_client.Here)."""
-    return Here(ros_context)
+    runner = Here(ros_context)
+    yield runner
+    runner.close()
 
 
 @pytest.fixture(scope='module')
@@ -78,6 +80,8 @@ def test_echo_once_prints_the_answer(here, node, tester):
     echo = popen('echo', 'rpy', '--once', '--json', '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/rpy')
     sent = here.answered('orientation', 0, math.sin(0.2), 0, math.cos(0.2), '--node', node)
+    send_until(lambda: echo.poll() is not None, lambda: here.answered(
+        'orientation', 0, math.sin(0.2), 0, math.cos(0.2), '--node', node))
     out, err = echo.communicate(timeout=60)
     assert echo.returncode == 0 and err == '', err
     data = json.loads(out)
@@ -90,15 +94,20 @@ def test_echo_once_prints_the_answer(here, node, tester):
 def test_echo_count_prints_each_message(here, node, tester):
     echo = popen('echo', 'quaternion', '--count', 3, '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/quaternion')
-    for angle in (0.1, 0.2, 0.3):
+    for angle in (0.1, 0.2):
         here.answered('euler', 'ZYX', angle, 0, 0, '--node', node)
+    send_until(lambda: echo.poll() is not None,
+               lambda: here.answered('euler', 'ZYX', 0.3, 0, 0, '--node', node))
     out, err = echo.communicate(timeout=60)
     assert echo.returncode == 0 and err == '', err
     documents = list(yaml.safe_load_all(out))
     assert len(documents) == 3
-    # Each input is sent until answered, so one may come twice; the last is the last sent.
-    assert documents[-1]['quaternion'] == {'x': 0.0, 'y': 0.0, 'z': approx(math.sin(0.15)),
-                                           'w': approx(math.cos(0.15))}
+    # Each in the order sent (an input is sent until answered, so one may come twice), the
+    # last one the last sent.
+    z = [d['quaternion']['z'] for d in documents]
+    assert z == sorted(z) and z[-1] == approx(math.sin(0.15))
+    assert all(min(abs(v - math.sin(angle / 2)) for angle in (0.1, 0.2, 0.3)) < 1e-12
+               for v in z)
 
 
 def test_echo_into_a_pipe_closed_early_ends_quietly(node, tester):
@@ -580,11 +589,13 @@ def test_tf_demo_without_tf2_msgs():
 def test_echo_interrupted_exits_130_quietly(here, node, tester):
     echo = popen('echo', 'rpy', '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/rpy')
-    here.answered('orientation', 0, 0, 0, 1, '--node', node)
-    tester.spin_for(0.2)
+    first = []
+    reader = threading.Thread(target=lambda: first.append(echo.stdout.readline()), daemon=True)
+    reader.start()
+    send_until(lambda: first, lambda: here.answered('orientation', 0, 0, 0, 1, '--node', node))
     status, out, err = interrupt(echo)
     assert (status, err) == (130, '')
-    assert out.startswith('---\n')
+    assert first == ['---\n']
 
 
 # ---------------------------------------------------------------------------------------
@@ -595,7 +606,8 @@ def test_doc_examples(here, node, tester):
     shown = (node, '/rot_tools')
     echo = popen('echo', 'rpy', '--once', '--node', node, '--timeout', 20)
     wait_subscribed(tester, f'{node}/rpy')
-    here.answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node)
+    send_until(lambda: echo.poll() is not None,
+               lambda: here.answered('pose', 1, 0, 0.5, 0, 0, 1, 0, '--node', node))
     out, err = echo.communicate(timeout=60)
     assert echo.returncode == 0, err
     text = '$ rotation_client echo rpy --once\n' + out

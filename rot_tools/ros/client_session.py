@@ -108,8 +108,19 @@ def refusal_text(data, before, source, stamps=None):
     return '; '.join(texts)
 
 
+def _ignore(msg):
+    """Drop a message: the callback of a subscription that no command listens to now."""
+
+
 class Client:
-    """A short-lived rclpy node that talks to one rotation_node, every wait bounded."""
+    """
+    A short-lived rclpy node that talks to one rotation_node, every wait bounded.
+
+    Its endpoints — service clients, publishers, subscriptions — are made when first needed
+    and kept: a command calls ~/describe several times, and a program that runs several
+    commands with one Client (:meth:`aim` at each) has each endpoint discovered by the node
+    once, not once a command.
+    """
 
     def __init__(self, target, timeout, context=None):
         import rclpy
@@ -121,11 +132,48 @@ class Client:
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
         self.service_clients = {}
-        """The clients of the node's services called so far, by service name."""
+        """The clients of the services called so far, by service name."""
+        self.publishers = {}
+        """The publishers made so far, by (topic, message class)."""
+        self.subscriptions = {}
+        """(subscription, [its callback now]) of the topics listened to, by (topic, class)."""
+
+    def aim(self, target, timeout):
+        """Talk to node ``target`` with waits of ``timeout`` seconds from now on."""
+        self.target, self.timeout = target, timeout
+
+    def release(self):
+        """Stop handing messages to the callbacks of the command that ended."""
+        for _, callback in self.subscriptions.values():
+            callback[0] = _ignore
 
     def close(self):
         self.executor.shutdown(timeout_sec=1.0)
         self.node.destroy_node()
+
+    def publisher(self, msg_type, topic, qos=10):
+        """Return the publisher of ``msg_type`` on ``topic``, made at the first call."""
+        key = topic, msg_type
+        if key not in self.publishers:
+            self.publishers[key] = self.node.create_publisher(msg_type, topic, qos)
+        return self.publishers[key]
+
+    def subscribe(self, msg_type, topic, callback, qos):
+        """
+        Hand the messages of ``topic`` to ``callback`` from now on; return the subscription.
+
+        The subscription is made at the first call and kept; a later call replaces its
+        callback (``qos``, that of the first, stays).
+        """
+        key = topic, msg_type
+        if key not in self.subscriptions:
+            current = [callback]
+            sub = self.node.create_subscription(msg_type, topic,
+                                                lambda msg: current[0](msg), qos)
+            self.subscriptions[key] = sub, current
+        sub, current = self.subscriptions[key]
+        current[0] = callback
+        return sub
 
     def topic(self, name):
         return f'{self.target}/{name}'
@@ -145,7 +193,8 @@ class Client:
         come seconds after its topics and services (each discovered for itself) do; the graph
         may also hear of its services after a client of ours has matched them.
         """
-        if any(client.service_is_ready() for client in self.service_clients.values()):
+        if any(client.service_is_ready() for service, client in self.service_clients.items()
+               if service.startswith(self.target + '/')):
             return True
         names = {f"{namespace.rstrip('/')}/{name}"
                  for name, namespace in self.node.get_node_names_and_namespaces()}
@@ -263,14 +312,12 @@ class Client:
         qos = QoSProfile(depth=100)
         covariances = covariance_outputs() if covariance else ()
         wanted = stamped_outputs() + covariances + (picture_outputs() if pictures else ())
-        subs = [self.node.create_subscription(
-                    message_class(interface.output_named(name).type_name), self.topic(name),
-                    answers.collector(name), qos)
+        subs = [self.subscribe(message_class(interface.output_named(name).type_name),
+                               self.topic(name), answers.collector(name), qos)
                 for name in wanted]
-        subs.append(self.node.create_subscription(
-            message_class(interface.output_named(matrix).type_name), self.topic(matrix),
-            lambda m: answers.matrices.append(m), qos))
-        pub = self.node.create_publisher(type(msg), topic or self.topic(name), 10)
+        subs.append(self.subscribe(message_class(interface.output_named(matrix).type_name),
+                                   self.topic(matrix), answers.matrices.append, qos))
+        pub = self.publisher(type(msg), topic or self.topic(name))
         topic = pub.topic_name
         self.wait_for_match(pub, subs)
         before = self.refusal_counts()

@@ -380,10 +380,8 @@ def _echo_command(client, args):
     row = interface.output_named(args.output)
     parameters = client.parameters(['euler_sequence', 'angle_unit'])
     received = deque()
-    sub = client.node.create_subscription(message_class(row.type_name),
-                                          args.topic or client.topic(row.name),
-                                          lambda m: received.append(m),
-                                          QoSProfile(depth=100))
+    sub = client.subscribe(message_class(row.type_name), args.topic or client.topic(row.name),
+                           received.append, QoSProfile(depth=100))
     if not client.spin_until(lambda: sub.get_publisher_count() > 0, args.timeout):
         raise Unreachable(client.missing(f'publisher on {sub.topic_name}'))
     left = 1 if args.once else args.count or math.inf
@@ -555,18 +553,22 @@ def _print_result(result, args):
         print(f'{PROG}: hint: {hint}', file=sys.stderr)
 
 
-def run_command(args, context):
+def run_command(args, context, client=None):
     """
     Run the command of ``args`` (parsed) in ``context`` (rclpy, initialised); its exit status.
 
-    A client node of its own in the context talks to the node; its result is printed, its
-    failure is one line on stderr. :func:`main` runs it in a context made for it; a program
-    that has one already may run several commands in it.
+    A client node of its own in the context talks to the node, or ``client`` (a Client of
+    that context, kept by the caller: :meth:`Client.aim` at ``args``' node); the result is
+    printed, a failure is one line on stderr. :func:`main` runs it in a context made for it;
+    a program that has one already may run several commands in it, with one Client.
     """
     from rclpy.exceptions import NameValidationException
-    client = None
+    kept = client is not None
     try:
-        client = Client(args.node, args.timeout, context)
+        if kept:
+            client.aim(args.node, args.timeout)
+        else:
+            client = Client(args.node, args.timeout, context)
         _print_result(COMMANDS[args.command](client, args), args)
         return 0
     except Unreachable as exc:
@@ -588,7 +590,9 @@ def run_command(args, context):
             raise
         return EXIT_TERMINATED  # the context was shut down under the command: SIGTERM
     finally:
-        if client is not None:
+        if kept:
+            client.release()
+        elif client is not None:
             client.close()
 
 
