@@ -30,7 +30,7 @@ ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
 # Modules of an optional extra of setup.py that have no rosdep key: {module: extra}. They
 # are not exec_depends; rot_tools imports them only inside functions, so that everything
 # else works without them.
-OPTIONAL_EXTRAS = {'rosbags': 'bag', 'pyarrow': 'bag', 'dask': 'fleet'}
+OPTIONAL_EXTRAS = {'rosbags': 'bag', 'pyarrow': 'bag', 'dask': 'fleet', 'distributed': 'fleet'}
 # Packages the ROS wheels registered in this environment's ament index (sys.prefix/share).
 AMENT_INDEX = Path(sys.prefix, 'share', 'ament_index', 'resource_index', 'packages')
 COLCON_TIMEOUT = 300  # seconds; the build itself takes about 1 s
