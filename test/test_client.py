@@ -562,9 +562,9 @@ def test_a_fresh_and_remapped_node(here, node_process):
     assert line.startswith(f'rotation_client: {name}/describe: Nothing has been accepted yet '
                            'on ')
     assert line.endswith('(1 input refused).')
-    line = one_line_error(here('pose', 0, 0, 0, 0, 0, 0, 1, '--node', name, '--timeout', 5), 1)
+    line = one_line_error(here('pose', 0, 0, 0, 0, 0, 0, 1, '--node', name, '--timeout', 2), 1)
     assert line == (f'rotation_client: node {name} has no subscription on {name}/pose '
-                    '(waited 5 s)')
+                    '(waited 2 s)')
     q = [0.0, 0.0, math.sin(0.3), math.cos(0.3)]
     out = here.answered('imu', *q, '--topic', remapped, '--node', name)
     assert out['input']['topic'] == remapped

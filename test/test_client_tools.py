@@ -455,11 +455,6 @@ def test_no_message_is_published_before_its_time():
 
     publisher = Publisher()
 
-    class Node:
-
-        def create_publisher(self, cls, topic, qos):
-            return publisher
-
     def spin_until(done, seconds):
         while not done():
             time.sleep(0.001)
@@ -467,7 +462,8 @@ def test_no_message_is_published_before_its_time():
     stamps = [FakeReader.start_time + k
               for k in (0, 10_000_000, 10_000_000, 90_000_000, 200_000_000)]
     reader = FakeReader(stamps)
-    player = Player(Node(), spin_until, {'/chatter': (String, [reader.connection])})
+    player = Player(lambda cls, topic, qos: publisher, spin_until,
+                    {'/chatter': (String, [reader.connection])})
     played = player.play(reader, 4.0, start=stamps[1])
     assert played.counts == {'/chatter': 4} and (played.first, played.last) == (0.01, 0.2)
     offsets = [t - publisher.times[0] for t in publisher.times]

@@ -197,18 +197,19 @@ def _deserialize(reader, raw, connection, stamp):
 
 class Player:
     """
-    The publishers of a bag's topics (:func:`topics`' ``played``) on ``node``, and their play.
+    The publishers of a bag's topics (:func:`topics`' ``played``), and their play.
 
-    ``spin_until(done, seconds)`` spins the node's executor while waiting (so that Ctrl-C ends
-    any wait at once) and returns done().
+    ``publisher(msg_type, topic, qos)`` returns a publisher of a node (rclpy's
+    create_publisher, or a Client's that keeps them); ``spin_until(done, seconds)`` spins the
+    node's executor while waiting (so that Ctrl-C ends any wait at once) and returns done().
     """
 
-    def __init__(self, node, spin_until, played):
+    def __init__(self, publisher, spin_until, played):
         self.spin_until = spin_until
         self.publishers, self.convert = {}, {}
         cache = {}
         for topic, (cls, connections) in played.items():
-            self.publishers[topic] = node.create_publisher(cls, topic, qos(connections))
+            self.publishers[topic] = publisher(cls, topic, qos(connections))
             self.convert[topic] = converter(cls, cache)
         self.connections = [c for _, cs in played.values() for c in cs]
 

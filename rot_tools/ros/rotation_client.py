@@ -459,7 +459,7 @@ def _play_command(client, args):
             if not played:
                 raise BadInput(f'{args.bag}: nothing to play: ' + '; '.join(
                     f'{s.topic} ({s.msgtype}: {s.why})' for s in skipped))
-            player = bag_player.Player(client.node, client.spin_until, played)
+            player = bag_player.Player(client.publisher, client.spin_until, played)
             if len(player.wait_for_subscribers(args.timeout)) == len(played):
                 raise Unreachable(player.nobody_listens(args.timeout, client.target))
             start, stop = (None if seconds is None
