@@ -543,9 +543,6 @@ def test_edges_of_float64_are_one_plain_line_without_numpy_warnings(
     assert err.startswith('rot-tools: error: compare: ') and says in err, err
 
 
-@pytest.mark.xfail(strict=True, reason="argparse drops the '--' after the command and "
-                   'parse_intermixed_args mishandles it: rot_tools.io.arguments must keep the '
-                   "words after '--' as values")
 def test_a_file_named_like_an_option_after_a_double_dash(capsys, tmp_path, monkeypatch):
     bad_inputs(tmp_path)
     monkeypatch.chdir(tmp_path)

@@ -59,7 +59,8 @@ class Parser(argparse.ArgumentParser):
     with commands (:meth:`add_commands`) reads a command line in two steps
     (:meth:`parse_command_line`): its options before the command, the command's name and the
     command's words as they are (``nargs=argparse.REMAINDER``); then those words, by the
-    command's own parser, the same way (parse_intermixed_args when it has no commands).
+    command's own parser, the same way (parse_intermixed_args when it has no commands, or
+    parse_args when the words hold ``--``, after which every word is a value as typed).
     """
 
     def __init__(self, *args, **kwargs):
@@ -102,6 +103,8 @@ class Parser(argparse.ArgumentParser):
         parser it follows and exits 0.
         """
         if self.commands is None:
+            if '--' in argv:  # the words after it are values as typed, which argparse's
+                return self.parse_args(argv, namespace)  # intermixed reading mishandles
             return self.parse_intermixed_args(argv, namespace)
         leading = Parser(prog=self.prog, add_help=False)
         self.add_options(leading)
@@ -119,6 +122,8 @@ class Parser(argparse.ArgumentParser):
             return self.parse_args(argv, namespace)
         words = found.words
         del found.words
+        if len(words) < len(argv) and argv[len(argv) - len(words) - 1] == '--':
+            words = ['--', *words]  # argparse drops a '--' right after the command's name
         return command.parse_command_line(words, found)
 
 
