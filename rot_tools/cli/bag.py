@@ -81,22 +81,15 @@ def _one_bag(args, error):
 # The command
 
 
-def _seconds(text):
-    value = arguments.number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(
-            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
-    return value
-
-
 TEXT = (
-    'Reads rosbag2 (sqlite3, MCAP) and ROS 1 bags without ROS (the rosbags library: pip\n'
-    "install 'rot_tools[bag]'). Topics of type PoseStamped, PoseWithCovarianceStamped,\n"
-    'Odometry, Imu, QuaternionStamped and TransformStamped are read (default: all of\n'
-    "them). Each message passes the checks of rotation_node's inputs: a NaN/Inf, a zero or\n"
-    f'non-unit quaternion (|q| off 1 by more than --tol, default {QUATERNION_TOLERANCE:g}), an '
-    'Imu without\n'
-    'orientation is refused and counted by reason.\n\n'
+    'Reads rosbag2 (sqlite3, MCAP: a folder or a bare file) and ROS 1 bags without ROS (the\n'
+    'rosbags library, the bag extra:\n'
+    f"{arguments.install_hint('bag')}). Topics of type PoseStamped,\n"
+    'PoseWithCovarianceStamped, Odometry, Imu, QuaternionStamped and TransformStamped are\n'
+    "read (default: all of them). Each message passes the checks of rotation_node's\n"
+    'inputs: a NaN/Inf, a zero or non-unit quaternion (|q| off 1 by more than --tol,\n'
+    f'default {QUATERNION_TOLERANCE:g}), an Imu without orientation is refused and counted '
+    'by reason.\n\n'
     'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
     'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
     'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
@@ -151,10 +144,7 @@ def add_parser(subparsers):
                    "rotation_node's input_covariance: rotvec (default, ROS's "
                    "PoseWithCovariance: rotations about the parent's fixed X, Y, Z) or rpy "
                    '(already roll, pitch, yaw)')
-    p.add_argument('--start', type=_seconds, metavar='S',
-                   help="only messages recorded S seconds or more after the bag's start")
-    p.add_argument('--end', type=_seconds, metavar='S',
-                   help="only messages recorded at most S seconds after the bag's start")
+    arguments.add_bag_window(p)
     p.add_argument('--jobs', type=arguments.whole_number, metavar='N',
                    help='read the bags in N processes (default: one per CPU; 1: here, one '
                    'after the other); the output is the same whatever N is')

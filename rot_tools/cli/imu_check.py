@@ -599,14 +599,6 @@ def table(data, recording, degrees=False):
 # The command
 
 
-def _seconds(text):
-    value = arguments.number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(
-            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
-    return value
-
-
 TEXT = (
     'Reads one sensor_msgs/Imu topic of a bag (the only one, or --imu-topic) and checks it\n'
     'against REP 103 and REP 145: stamps, accel_units, orientation_vs_accel, gyro_units,\n'
@@ -641,10 +633,7 @@ def add_parser(subparsers):
     p.add_argument('--ref-tf', nargs=2, metavar=('PARENT', 'CHILD'),
                    help="the body's orientation: CHILD (the body frame, e.g. base_link) in "
                    "PARENT (e.g. odom) from the bag's /tf and /tf_static")
-    p.add_argument('--start', type=_seconds, metavar='S',
-                   help="only messages recorded S seconds or more after the bag's start")
-    p.add_argument('--end', type=_seconds, metavar='S',
-                   help="only messages recorded at most S seconds after the bag's start")
+    arguments.add_bag_window(p)
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
     arguments.add_deg(common, 'angles in degrees and rates in deg/s', suppress)

@@ -236,6 +236,23 @@ def negative_numbers_as_values(argv):
 # before the command.
 
 
+def seconds_from_start(text):
+    """Parse a number of seconds from a bag's start (>= 0)."""
+    value = number(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(
+            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
+    return value
+
+
+def add_bag_window(parser):
+    """Add --start S and --end S: the messages recorded between S seconds from a bag's start."""
+    parser.add_argument('--start', type=seconds_from_start, metavar='S',
+                        help="only messages recorded S seconds or more after the bag's start")
+    parser.add_argument('--end', type=seconds_from_start, metavar='S',
+                        help="only messages recorded at most S seconds after the bag's start")
+
+
 def add_deg(parser, text, default=False):
     """Add --deg: angles in degrees (``text`` says which)."""
     parser.add_argument('--deg', action='store_true', default=default, help=text)

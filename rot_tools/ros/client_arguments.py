@@ -60,14 +60,6 @@ def _positive(text):
     return value
 
 
-def _seconds(text):
-    value = arguments.number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(
-            f"must be >= 0 seconds from the bag's start, got {text.strip()!r}")
-    return value
-
-
 def _tolerance(text):
     """
     Return a number whose meaning survives float32, the type of GetPlan's tolerance.
@@ -323,12 +315,7 @@ def build_parser():
                            help='play R times faster than recorded (default 1)')
             p.add_argument('--topics', nargs='+', metavar='T',
                            help='play these topics only (default: every topic)')
-            p.add_argument('--start', type=_seconds, metavar='S',
-                           help="only messages recorded S seconds or more after the bag's "
-                           'start')
-            p.add_argument('--end', type=_seconds, metavar='S',
-                           help="only messages recorded at most S seconds after the bag's "
-                           'start')
+            arguments.add_bag_window(p)
         if command.numbers:
             arguments.add_numbers(p, 'numbers', 'NUMBER', command.numbers,
                                   type=arguments.any_number)
