@@ -84,6 +84,21 @@ def rss_mb(pid='self'):
     pytest.fail(f'no VmRSS in /proc/{pid}/status')
 
 
+def live_pids(*, parent=None, session=None):
+    """Return the pids of the live processes (zombies excepted) of a parent or a session."""
+    found = []
+    for entry in Path('/proc').iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / 'stat').read_text().rsplit(')', 1)[1].split()
+            except OSError:
+                continue  # gone meanwhile
+            if fields[0] != 'Z' and (parent is None or int(fields[1]) == parent) and (
+                    session is None or int(fields[3]) == session):
+                found.append(int(entry.name))
+    return found
+
+
 def run_delay(pid, tid=None):
     """
     Return the seconds thread ``tid`` of process ``pid`` has waited for a CPU, or None.

@@ -16,7 +16,7 @@ import sys
 import time
 
 import bag_helpers as bh
-from conftest import console_script, script_env
+from conftest import console_script, live_pids, script_env
 import numpy as np
 import pytest
 import rot_tools as rt
@@ -286,20 +286,6 @@ def test_a_forked_worker_ends_by_the_signal_itself(files, tmp_path, monkeypatch)
         signal.SIGINT: signal.SIGINT, signal.SIGTERM: signal.SIGTERM}
 
 
-def session_processes(sid):
-    """Return the pids of the processes of session ``sid`` still alive (zombies excepted)."""
-    alive = []
-    for entry in Path('/proc').iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / 'stat').read_text().rsplit(')', 1)[1].split()
-            except OSError:
-                continue  # gone meanwhile
-            if int(fields[3]) == sid and fields[0] != 'Z':
-                alive.append(int(entry.name))
-    return alive
-
-
 def wait_for(predicate, what, timeout=60.0):
     """Poll ``predicate()`` until it is true; fail after ``timeout`` seconds."""
     end = time.monotonic() + timeout
@@ -329,7 +315,7 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
                           stderr=subprocess.PIPE, text=True, env=script_env(SCRIPT),
                           start_new_session=True) as child:
         try:
-            wait_for(lambda: child.poll() is not None or len(session_processes(child.pid)) > 1,
+            wait_for(lambda: child.poll() is not None or len(live_pids(session=child.pid)) > 1,
                      'the workers')
             os.killpg(child.pid, signal.SIGINT)
             stdout, stderr = child.communicate(timeout=60)
@@ -337,7 +323,7 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
             if child.poll() is None:
                 os.killpg(child.pid, signal.SIGKILL)
     assert (child.returncode, stdout, stderr) == (130, '', 'rot-tools: interrupted\n')
-    wait_for(lambda: not session_processes(child.pid), 'the workers to end', timeout=2.0)
+    wait_for(lambda: not live_pids(session=child.pid), 'the workers to end', timeout=2.0)
     assert [p.name for p in out.rglob('*') if p.suffix in ('.partial', '.csv')] == []
 
 

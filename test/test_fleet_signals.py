@@ -16,7 +16,7 @@ import subprocess
 import time
 
 import bag_helpers as bh
-from conftest import console_script, script_env
+from conftest import console_script, live_pids, script_env
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
@@ -24,20 +24,6 @@ pq = pytest.importorskip('pyarrow.parquet', reason="the 'bag' extra (pyarrow) is
 
 BAGS = 6
 """Copies of the real recording: enough work for the fleet to be stopped in the middle."""
-
-
-def children(pid):
-    """Return the pids of the live children of ``pid`` (zombies excepted)."""
-    found = []
-    for entry in Path('/proc').iterdir():
-        if entry.name.isdigit():
-            try:
-                fields = (entry / 'stat').read_text().rsplit(')', 1)[1].split()
-            except OSError:
-                continue  # gone meanwhile
-            if int(fields[1]) == pid and fields[0] != 'Z':
-                found.append(int(entry.name))
-    return found
 
 
 def alive(pid):
@@ -60,7 +46,7 @@ def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
                           stderr=subprocess.PIPE, text=True, env=script_env(script)) as child:
         try:
             deadline = time.monotonic() + 120
-            while len(workers := children(child.pid)) < 2:
+            while len(workers := live_pids(parent=child.pid)) < 2:
                 assert child.poll() is None and time.monotonic() < deadline, \
                     'the fleet ended before its two workers were up'
                 time.sleep(0.01)
