@@ -385,13 +385,18 @@ def _translation(W, mean_ref, mean_est):
     return t
 
 
-def _umeyama(b_ref, b_est, count):
+def _centred_positions(method, b_ref, b_est, count, least):
+    """The positions a fit by ``method`` needs (at least ``least``), checked and centred."""
     if b_ref is None or b_est is None:
-        raise RotationError("method 'se3' fits positions: give b_ref and b_est")
-    if count < 3:
-        raise RotationError(f"method 'se3' needs at least 3 positions, got {count}")
+        raise RotationError(f"method '{method}' fits positions: give b_ref and b_est")
+    if count < least:
+        raise RotationError(f"method '{method}' needs at least {least} positions, got {count}")
     b_ref, b_est = _positions(b_ref, 'b_ref', count), _positions(b_est, 'b_est', count)
-    (mean_ref, d_ref), (mean_est, d_est) = _centred(b_ref, 'b_ref'), _centred(b_est, 'b_est')
+    return _centred(b_ref, 'b_ref'), _centred(b_est, 'b_est')
+
+
+def _umeyama(b_ref, b_est, count):
+    (mean_ref, d_ref), (mean_est, d_est) = _centred_positions('se3', b_ref, b_est, count, 3)
     if not d_ref.any() or not d_est.any():
         raise RotationError("method 'se3' needs positions that move: "
                             f"{'b_ref' if not d_ref.any() else 'b_est'} stands still")
@@ -402,12 +407,7 @@ def _umeyama(b_ref, b_est, count):
 
 def _position_yaw(b_ref, b_est, count):
     """Fit the yaw and translation that best align the positions (align_rotations' 'posyaw')."""
-    if b_ref is None or b_est is None:
-        raise RotationError("method 'posyaw' fits positions: give b_ref and b_est")
-    if count < 2:
-        raise RotationError(f"method 'posyaw' needs at least 2 positions, got {count}")
-    b_ref, b_est = _positions(b_ref, 'b_ref', count), _positions(b_est, 'b_est', count)
-    (mean_ref, d_ref), (mean_est, d_est) = _centred(b_ref, 'b_ref'), _centred(b_est, 'b_est')
+    (mean_ref, d_ref), (mean_est, d_est) = _centred_positions('posyaw', b_ref, b_est, count, 2)
     cos = float(np.sum(d_ref[:, 0] * d_est[:, 0] + d_ref[:, 1] * d_est[:, 1]))
     sin = float(np.sum(d_ref[:, 1] * d_est[:, 0] - d_ref[:, 0] * d_est[:, 1]))
     spread = [float(np.linalg.norm(d[:, :2])) for d in (d_ref, d_est)]
