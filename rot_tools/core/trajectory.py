@@ -386,7 +386,7 @@ def _translation(W, mean_ref, mean_est):
 
 
 def _centred_positions(method, b_ref, b_est, count, least):
-    """The positions a fit by ``method`` needs (at least ``least``), checked and centred."""
+    """Check and centre the positions a fit by ``method`` needs (at least ``least``)."""
     if b_ref is None or b_est is None:
         raise RotationError(f"method '{method}' fits positions: give b_ref and b_est")
     if count < least:
