@@ -77,7 +77,7 @@ def ref_skew(v):
                      np.stack([-y, x, z], -1)], -2)
 
 
-def seed_rodrigues_eq7(axis, angle):
+def notes_rodrigues_eq7(axis, angle):
     """Rot_l(theta), Jia eq. 7, element by element as printed (axis must be unit)."""
     axis = np.asarray(axis, dtype=float)
     t = np.asarray(angle, dtype=float)
@@ -91,7 +91,7 @@ def seed_rodrigues_eq7(axis, angle):
     ], -2)
 
 
-def seed_rodrigues_eq18(u, phi):
+def notes_rodrigues_eq18(u, phi):
     """R(u, phi) = I cos(phi) + (1 - cos(phi)) u u^T + sin(phi) [u]x (Cayero eq. 18)."""
     u = np.asarray(u, dtype=float)
     phi = np.asarray(phi, dtype=float)[..., None, None]
@@ -185,10 +185,10 @@ def random_unit_vectors(rng, n):
 
 
 def random_axis_angle(rng, n):
-    """Return (axis (n,3), angle (n,) in [0, pi], R (n,3,3)) built with seed eq. 7."""
+    """Return (axis (n,3), angle (n,) in [0, pi], R (n,3,3)) built with Jia eq. 7."""
     axis = random_unit_vectors(rng, n)
     angle = rng.uniform(0.0, PI, size=n)
-    return axis, angle, seed_rodrigues_eq7(axis, angle)
+    return axis, angle, notes_rodrigues_eq7(axis, angle)
 
 
 def random_euler_angles(rng, n, seq):

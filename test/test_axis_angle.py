@@ -10,10 +10,10 @@ from rot_tools import (
 
 N = 10_000
 PI = h.PI
-# Angles within 1e-12 of 0 and of pi, exactly 0 and pi, and the seed formulas' trouble spots.
+# Angles within 1e-12 of 0 and of pi, exactly 0 and pi, and the notes' formulas' trouble spots.
 ADVERSARIAL_ANGLES = (0.0, 1e-300, 1e-16, 1e-15, 1e-13, 1e-12, 1e-10, 1e-8, 1e-6,
                       PI - 1e-6, PI - 1e-9, PI - 1e-12, PI - 1e-13, PI - 1e-15, PI)
-# Axes: random, coordinate axes both signs, and axes with l_z = 0 (seed eq. 15 divides by l_z).
+# Axes: random, coordinate axes both signs, and axes with l_z = 0 (notes' eq. 15 divides by l_z).
 SPECIAL_AXES = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 0], [0, -1, 0], [0, 0, -1],
                          [0.6, 0.8, 0.0], [-0.6, 0.8, 0.0], [1, 1, 1], [1, -2, 3e-12]])
 
@@ -24,7 +24,7 @@ def adversarial_set():
     axes = axes / np.linalg.norm(axes, axis=-1, keepdims=True)
     axis = np.repeat(axes, len(ADVERSARIAL_ANGLES), axis=0)
     angle = np.tile(ADVERSARIAL_ANGLES, len(axes))
-    return axis, angle, h.seed_rodrigues_eq7(axis, angle)
+    return axis, angle, h.notes_rodrigues_eq7(axis, angle)
 
 
 def rotvec_error(got_axis, got_angle, axis, angle):
@@ -114,7 +114,7 @@ def test_accuracy_targets(angle):
     rng = np.random.default_rng(25)
     axis = np.concatenate([SPECIAL_AXES / np.linalg.norm(SPECIAL_AXES, axis=-1)[:, None],
                            h.random_unit_vectors(rng, 200)])
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     got_axis, got_angle = matrix_to_axis_angle(r)
     assert h.max_abs(got_angle - angle) <= 1e-14
     rv = matrix_to_rotvec(r)
@@ -155,7 +155,7 @@ def test_the_24_cube_rotations():
         count = nonzero.sum(-1)
         assert np.all(np.abs(np.abs(axis) - np.where(nonzero, 1 / np.sqrt(
             np.maximum(count, 1))[:, None], 0.0)) <= 1e-15 * 2)
-        assert h.max_abs(h.seed_rodrigues_eq7(axis, angle) - r) <= 1e-15 * 4
+        assert h.max_abs(h.notes_rodrigues_eq7(axis, angle) - r) <= 1e-15 * 4
 
 
 def test_round_trips():
@@ -212,7 +212,7 @@ def test_single_and_batch_shapes():
 def test_check_false_uses_the_matrix_as_given():
     # θ = atan2(|w|, (tr R − 1)/2), axis w/|w| with w = ½(r32 − r23, r13 − r31, r21 − r12),
     # read from the perturbed matrix as given (no projection onto a rotation).
-    r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
+    r = h.notes_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
     with pytest.raises(RotationError, match='not orthogonal'):
         matrix_to_axis_angle(r)
@@ -284,14 +284,14 @@ def test_any_non_zero_axis_is_normalised_never_refused(size):
         got = axis_angle_to_matrix(axis, 1.0)
         assert h.max_abs(got - h.ref_elementary('x', 1.0)) <= 1e-15 * 4
     both = axis_angle_to_matrix([size, -size, 0.0], 0.5)
-    assert h.max_abs(both - h.seed_rodrigues_eq7(np.array([1.0, -1.0, 0.0]) / np.sqrt(2), 0.5)
+    assert h.max_abs(both - h.notes_rodrigues_eq7(np.array([1.0, -1.0, 0.0]) / np.sqrt(2), 0.5)
                      ) <= 1e-15 * 4
 
 
 @settings(**h.HYPOTHESIS_SETTINGS)
 @given(axis=h.unit_vectors(), angle=h.angles_in(0.0, PI))
 def test_round_trip_property(axis, angle):
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     got_axis, got_angle = matrix_to_axis_angle(r)
     assert abs(got_angle - angle) <= 1e-14
     assert h.max_abs(rotvec_error(got_axis, got_angle, axis, angle)) <= 1e-14

@@ -18,7 +18,7 @@ N = 10_000
 PI = h.PI
 
 
-def seed_rot_zyx_eq1(phi, theta, psi):
+def notes_rot_zyx_eq1(phi, theta, psi):
     """Jia eq. 1, the closed form of Rot_z(phi) Rot_y(theta) Rot_x(psi) as printed."""
     cf, sf = np.cos(phi), np.sin(phi)
     ct, st = np.cos(theta), np.sin(theta)
@@ -30,7 +30,7 @@ def seed_rot_zyx_eq1(phi, theta, psi):
     ], -2)
 
 
-def seed_tracking_matrix(alpha, beta):
+def notes_tracking_matrix(alpha, beta):
     """Jia example 3: R = Rot_z(alpha) Rot_y(beta), closed form as printed."""
     ca, sa, cb, sb = np.cos(alpha), np.sin(alpha), np.cos(beta), np.sin(beta)
     zero = np.zeros_like(ca * cb)
@@ -41,7 +41,7 @@ def seed_tracking_matrix(alpha, beta):
     ], -2)
 
 
-def seed_q_eq11(r):
+def notes_q_eq11(r):
     """Jia eq. 11: l = q = (r23 - r32, r31 - r13, r12 - r21)."""
     return np.stack([r[..., 1, 2] - r[..., 2, 1], r[..., 2, 0] - r[..., 0, 2],
                      r[..., 0, 1] - r[..., 1, 0]], -1)
@@ -54,13 +54,13 @@ def seed_q_eq11(r):
 def test_000_eq1_rot_zyx_closed_form():
     rng = np.random.default_rng(60)
     a = rng.uniform(-PI, PI, size=(N, 3))
-    printed = seed_rot_zyx_eq1(a[:, 0], a[:, 1], a[:, 2])
+    printed = notes_rot_zyx_eq1(a[:, 0], a[:, 1], a[:, 2])
     assert h.max_abs(euler_to_matrix(a, 'ZYX') - printed) <= 1e-15 * 4
     product = rot_z(a[:, 0]) @ rot_y(a[:, 1]) @ rot_x(a[:, 2])
     assert h.max_abs(product - printed) <= 1e-15 * 4
     # ... and matrix_to_euler gives the angles back (pitch kept inside (-pi/2, pi/2))
     a[:, 1] = rng.uniform(-1.5, 1.5, N)
-    got, degenerate = matrix_to_euler(seed_rot_zyx_eq1(a[:, 0], a[:, 1], a[:, 2]), 'ZYX')
+    got, degenerate = matrix_to_euler(notes_rot_zyx_eq1(a[:, 0], a[:, 1], a[:, 2]), 'ZYX')
     assert not degenerate.any()
     assert h.angle_error(got, a) <= 1e-12
 
@@ -69,7 +69,7 @@ def test_000_eq7_rodrigues_matrix():
     rng = np.random.default_rng(61)
     axis, angle, _ = h.random_axis_angle(rng, N)
     angle = angle * rng.choice([-2.0, 1.0], N)        # any sign, up to 2 pi
-    printed = h.seed_rodrigues_eq7(axis, angle)
+    printed = h.notes_rodrigues_eq7(axis, angle)
     assert h.max_abs(axis_angle_to_matrix(axis, angle) - printed) <= 1e-15 * 4
 
 
@@ -77,7 +77,7 @@ def test_001_eq18_rodrigues_matrix_and_eq14_vector_form():
     rng = np.random.default_rng(62)
     u = h.random_unit_vectors(rng, N)
     phi = rng.uniform(-2 * PI, 2 * PI, N)
-    printed = h.seed_rodrigues_eq18(u, phi)
+    printed = h.notes_rodrigues_eq18(u, phi)
     got = axis_angle_to_matrix(u, phi)
     assert h.max_abs(got - printed) <= 1e-15 * 4
     # eq. 14: p' = p cos(phi) + (1 - cos(phi)) (p.u) u + sin(phi) (u x p)
@@ -91,7 +91,7 @@ def test_000_example3_tracking_matrix():
     rng = np.random.default_rng(63)
     alpha = rng.uniform(-PI, PI, N)
     beta = rng.uniform(-PI / 2, PI / 2, N)
-    printed = seed_tracking_matrix(alpha, beta)
+    printed = notes_tracking_matrix(alpha, beta)
     angles = np.stack([alpha, beta, np.zeros(N)], -1)
     assert h.max_abs(euler_to_matrix(angles, 'ZYX') - printed) <= 1e-15 * 4
     assert h.max_abs(rot_z(alpha) @ rot_y(beta) - printed) <= 1e-15 * 4
@@ -104,7 +104,7 @@ def test_000_example3_tracking_matrix():
 @pytest.mark.parametrize('lock', [PI / 2, -PI / 2])
 def test_000_example3_gimbal_lock_at_elevation_pm_half_pi(lock):
     for alpha in (0.0, 0.7, -2.0, 3.0, PI):
-        got, degenerate = matrix_to_euler(seed_tracking_matrix(alpha, lock), 'ZYX')
+        got, degenerate = matrix_to_euler(notes_tracking_matrix(alpha, lock), 'ZYX')
         assert degenerate
         assert got[2] == 0.0                       # theta3 = 0 ...
         assert h.angle_error(got[0], alpha) <= 1e-12   # ... theta1 carries the free angle
@@ -121,8 +121,8 @@ def test_000_example3_heading_jumps_by_pi_across_the_lock(lock, eps):
     inside = lock - np.sign(lock) * eps
     outside = lock + np.sign(lock) * eps
     for alpha in (0.0, 0.7, -2.0, 3.0):
-        before, flag_before = matrix_to_euler(seed_tracking_matrix(alpha, inside), 'ZYX')
-        after, flag_after = matrix_to_euler(seed_tracking_matrix(alpha, outside), 'ZYX')
+        before, flag_before = matrix_to_euler(notes_tracking_matrix(alpha, inside), 'ZYX')
+        after, flag_after = matrix_to_euler(notes_tracking_matrix(alpha, outside), 'ZYX')
         assert not flag_before and not flag_after
         tol = 1e-15 / eps * 10
         assert h.angle_error(before, [alpha, inside, 0.0]) <= tol
@@ -131,7 +131,7 @@ def test_000_example3_heading_jumps_by_pi_across_the_lock(lock, eps):
         assert h.angle_error(after[2], PI) <= tol              # roll turns over
         for angles, beta in ((before, inside), (after, outside)):
             assert h.max_abs(euler_to_matrix(angles, 'ZYX')
-                             - seed_tracking_matrix(alpha, beta)) <= 1e-12
+                             - notes_tracking_matrix(alpha, beta)) <= 1e-12
 
 
 @pytest.mark.parametrize('lock', [PI / 2, -PI / 2])
@@ -140,7 +140,7 @@ def test_000_example3_no_jump_inside_the_flagged_band(lock):
     # stays at alpha (the heading is continuous there).
     for alpha in (0.0, 0.7, -2.0, 3.0):
         for delta in (-1e-9, 1e-9):
-            r = seed_tracking_matrix(alpha, lock + delta)
+            r = notes_tracking_matrix(alpha, lock + delta)
             got, degenerate = matrix_to_euler(r, 'ZYX')
             assert degenerate and got[2] == 0.0
             assert h.angle_error(got[0], alpha) <= 2e-9 + 1e-12
@@ -155,13 +155,13 @@ def test_000_sec1_pitch_range_is_minus_half_pi_to_half_pi():
     # §1 gives the Z-Y-X pitch range as [0, pi] (and calls eq. 1 "Z-Y-Z"). By eq. 1,
     # r31 = -sin(pitch); a nose-down pitch has r31 > 0, i.e. sin(pitch) < 0: no pitch in
     # [0, pi] can produce it.  The code reports pitch in [-pi/2, pi/2].
-    r = seed_rot_zyx_eq1(0.0, -0.5, 0.0)
+    r = notes_rot_zyx_eq1(0.0, -0.5, 0.0)
     assert r[2, 0] > 0
     got, _ = matrix_to_euler(r, 'ZYX')
     assert abs(got[1] + 0.5) <= 1e-15
     # [0, pi] also double-covers: (phi + pi, pi - theta, psi + pi) is the same rotation.
-    assert h.max_abs(seed_rot_zyx_eq1(0.3 + PI, PI - 0.4, 0.2 + PI)
-                     - seed_rot_zyx_eq1(0.3, 0.4, 0.2)) <= 1e-15 * 4
+    assert h.max_abs(notes_rot_zyx_eq1(0.3 + PI, PI - 0.4, 0.2 + PI)
+                     - notes_rot_zyx_eq1(0.3, 0.4, 0.2)) <= 1e-15 * 4
     rng = np.random.default_rng(64)
     _, _, rs = h.random_axis_angle(rng, 1000)
     pitch = matrix_to_euler(rs, 'ZYX')[0][:, 1]
@@ -169,7 +169,7 @@ def test_000_sec1_pitch_range_is_minus_half_pi_to_half_pi():
     assert np.all(np.abs(pitch) <= PI / 2)
     # eq. 1 is Z-Y-X, not Z-Y-Z
     assert h.max_abs(euler_to_matrix([0.3, 0.4, 0.2], 'ZYZ')
-                     - seed_rot_zyx_eq1(0.3, 0.4, 0.2)) > 0.1
+                     - notes_rot_zyx_eq1(0.3, 0.4, 0.2)) > 0.1
 
 
 def test_000_eq10_sign_of_the_cross_product():
@@ -177,7 +177,7 @@ def test_000_eq10_sign_of_the_cross_product():
     # the printed matrix is -[q]x, so (R - R^T) v = -q x v = v x q.
     rng = np.random.default_rng(65)
     axis, angle, r = h.random_axis_angle(rng, N)
-    q = seed_q_eq11(r)
+    q = notes_q_eq11(r)
     q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
     z = np.zeros(N)
     printed = np.stack([np.stack([z, q3, -q2], -1), np.stack([-q3, z, q1], -1),
@@ -200,14 +200,14 @@ def test_000_eq11_axis_is_minus_two_sin_theta_times_the_axis():
     rng = np.random.default_rng(66)
     _, _, r = h.random_axis_angle(rng, N)
     axis, angle = matrix_to_axis_angle(r)
-    q = seed_q_eq11(r)
+    q = notes_q_eq11(r)
     assert h.max_abs(q + 2 * np.sin(angle)[:, None] * axis) <= 1e-14
     # so eq. 11 points along -l for angles in (0, pi) ...
     assert np.all(np.sum(q * axis, -1) < 0)
     # ... and vanishes at angle pi, where our axis is still a unit vector (up to sign).
     u = np.array([2.0, -1.0, 2.0]) / 3.0
     half_turn = 2 * np.outer(u, u) - np.eye(3)
-    assert h.max_abs(seed_q_eq11(half_turn)) <= 1e-16
+    assert h.max_abs(notes_q_eq11(half_turn)) <= 1e-16
     got_axis, got_angle = matrix_to_axis_angle(half_turn)
     assert abs(got_angle - PI) <= 1e-15
     assert min(h.max_abs(got_axis - u), h.max_abs(got_axis + u)) <= 1e-15
@@ -216,9 +216,9 @@ def test_000_eq11_axis_is_minus_two_sin_theta_times_the_axis():
 def test_000_eq12_acos_loses_small_angles_ours_does_not():
     # Eq. 12 (theta = acos((Tr - 1) / 2)) returns 0 for every angle below ~1e-8.
     for angle in (1e-12, 1e-9):
-        r = h.seed_rodrigues_eq7([0.0, 0.0, 1.0], angle)
-        seed = np.arccos(np.clip((np.trace(r) - 1) / 2, -1, 1))
-        assert abs(seed - angle) >= 0.9 * angle
+        r = h.notes_rodrigues_eq7([0.0, 0.0, 1.0], angle)
+        acos_angle = np.arccos(np.clip((np.trace(r) - 1) / 2, -1, 1))
+        assert abs(acos_angle - angle) >= 0.9 * angle
         _, got = matrix_to_axis_angle(r)
         assert abs(got - angle) <= 1e-14 * angle
 
@@ -252,37 +252,37 @@ def test_000_eq15_divides_by_lz():
     # and loses all digits for lz ~ 1e-12; our recovery works for every axis.
     for axis in ([1.0, 0.0, 0.0], [0.6, 0.8, 0.0], [0.0, -1.0, 0.0]):
         axis = np.array(axis)
-        r = h.seed_rodrigues_eq7(axis, 1.0)
+        r = h.notes_rodrigues_eq7(axis, 1.0)
         num = 2 * r[1, 0] - axis[0] * axis[1] * (3 - np.trace(r))
         assert abs(num) <= 1e-15 and axis[2] == 0.0                  # 0 / 0
         got_axis, got_angle = matrix_to_axis_angle(r)
         assert abs(got_angle - 1.0) <= 1e-14 and h.max_abs(got_axis - axis) <= 1e-14
     axis = np.array([0.6, 0.8, 1e-12])
     axis /= np.linalg.norm(axis)
-    r = h.seed_rodrigues_eq7(axis, 1.0)
-    seed_sin = (2 * r[1, 0] - axis[0] * axis[1] * (3 - np.trace(r))) / (2 * axis[2])
-    assert abs(seed_sin - np.sin(1.0)) > 1e-6
+    r = h.notes_rodrigues_eq7(axis, 1.0)
+    notes_sin = (2 * r[1, 0] - axis[0] * axis[1] * (3 - np.trace(r))) / (2 * axis[2])
+    assert abs(notes_sin - np.sin(1.0)) > 1e-6
     got_axis, got_angle = matrix_to_axis_angle(r)
     assert abs(got_angle - 1.0) <= 1e-14 and h.max_abs(got_axis - axis) <= 1e-14
 
 
 def test_000_eq15_with_eq11_axis_gives_the_angle_two_pi_minus_theta():
-    # The notes' own pair (l = q / |q|, theta_seed from eqs. 12 and 15) is consistent: q points
-    # along -l, eq. 15 then yields sin(theta_seed) = -sin(theta), i.e. theta_seed = 2 pi - theta.
+    # The notes' own pair (l = q / |q|, theta_notes from eqs. 12 and 15) is consistent: q points
+    # along -l, eq. 15 then yields sin(theta_notes) = -sin(theta), i.e. theta_notes = 2 pi - theta.
     rng = np.random.default_rng(67)
     _, _, r = h.random_axis_angle(rng, 1000)
-    q = seed_q_eq11(r)
-    l_seed = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    q = notes_q_eq11(r)
+    l_notes = q / np.linalg.norm(q, axis=-1, keepdims=True)
     tr = np.trace(r, axis1=-2, axis2=-1)
-    cos_seed = (tr - 1) / 2
-    keep = np.abs(l_seed[:, 2]) > 0.1
-    sin_seed = ((2 * r[:, 1, 0] - l_seed[:, 0] * l_seed[:, 1] * (3 - tr)) / (2 * l_seed[:, 2]))
-    theta_seed = np.mod(np.arctan2(sin_seed, cos_seed), 2 * PI)
+    cos_notes = (tr - 1) / 2
+    keep = np.abs(l_notes[:, 2]) > 0.1
+    sin_notes = ((2 * r[:, 1, 0] - l_notes[:, 0] * l_notes[:, 1] * (3 - tr)) / (2 * l_notes[:, 2]))
+    theta_notes = np.mod(np.arctan2(sin_notes, cos_notes), 2 * PI)
     axis, angle = matrix_to_axis_angle(r)
-    assert h.max_abs((theta_seed - (2 * PI - angle))[keep]) <= 1e-12
-    assert h.max_abs((l_seed + axis)[keep]) <= 1e-12
+    assert h.max_abs((theta_notes - (2 * PI - angle))[keep]) <= 1e-12
+    assert h.max_abs((l_notes + axis)[keep]) <= 1e-12
     # (eq. 15 amplifies rounding by 1 / |l_z| <= 10, so this pins consistency, not accuracy)
-    assert h.max_abs((axis_angle_to_matrix(l_seed, theta_seed) - r)[keep]) <= 1e-12
+    assert h.max_abs((axis_angle_to_matrix(l_notes, theta_notes) - r)[keep]) <= 1e-12
 
 
 def test_000_eq16_half_angle_vector_points_along_minus_axis():
@@ -293,10 +293,10 @@ def test_000_eq16_half_angle_vector_points_along_minus_axis():
     rng = np.random.default_rng(68)
     alpha = rng.uniform(-PI + 1e-3, PI - 1e-3, N)
     beta = rng.uniform(-PI / 2, PI / 2, N)
-    r = seed_tracking_matrix(alpha, beta)
+    r = notes_tracking_matrix(alpha, beta)
     sa, ca, sb, cb = np.sin(alpha), np.cos(alpha), np.sin(beta), np.cos(beta)
     printed_q = np.stack([sa * sb, -ca * sb - sb, -sa * cb - sa], -1)
-    assert h.max_abs(printed_q - seed_q_eq11(r)) <= 1e-15 * 4
+    assert h.max_abs(printed_q - notes_q_eq11(r)) <= 1e-15 * 4
     s2a, c2a, s2b, c2b = (np.sin(alpha / 2), np.cos(alpha / 2), np.sin(beta / 2),
                           np.cos(beta / 2))
     half = np.stack([s2a * s2b, -c2a * s2b, -s2a * c2b], -1)
@@ -353,7 +353,7 @@ def test_000_eq17_eq18_moment_sign():
     two_sin = 2 * np.sin(angle)[:, None]
     scale = 1 + np.linalg.norm(b, axis=-1)
     assert np.all(np.abs(m18 + two_sin * scr.moment).max(-1) <= 1e-12 * scale)
-    q = seed_q_eq11(r)
+    q = notes_q_eq11(r)
     l_cross_c = np.cross(q, scr.point)
     assert np.all(np.abs(l_cross_c - two_sin * scr.moment).max(-1) <= 1e-12 * scale)
     assert np.all(np.abs(l_cross_c + m18).max(-1) <= 1e-12 * scale)

@@ -506,7 +506,7 @@ def test_screw_log_that_fits_is_returned_though_b_dot_the_axis_overflows():
     # on the way, but the twist (θ·l̂, d·l̂) = (θ·l̂, b) fits.
     axis = np.array([1.0, 1.0, 0.0]) / np.sqrt(2)
     b = np.array([1.7e308, 1.7e308, 0.0])
-    twist = screw_log(h.seed_rodrigues_eq7(axis, 0.5), b)
+    twist = screw_log(h.notes_rodrigues_eq7(axis, 0.5), b)
     assert h.max_abs(twist[:3] - 0.5 * axis) <= 1e-15 * 8
     assert h.max_abs(twist[3:] / 1e308 - b / 1e308) <= 1e-15 * 8
 

@@ -30,7 +30,7 @@ def scipy_rotations(n, seed):
 
 def rodrigues(axis, angle):
     axis = np.asarray(axis, dtype=float)
-    return h.seed_rodrigues_eq7(axis / np.linalg.norm(axis, axis=-1, keepdims=True), angle)
+    return h.notes_rodrigues_eq7(axis / np.linalg.norm(axis, axis=-1, keepdims=True), angle)
 
 
 # ---- rotation_distance ---------------------------------------------------------------------
@@ -52,7 +52,7 @@ def test_distance_is_accurate_to_rounding_at_0_and_pi(angle):
     rng = np.random.default_rng(100)
     r1 = scipy_rotations(200, 3)
     axis = h.random_unit_vectors(rng, 200)
-    r2 = r1 @ h.seed_rodrigues_eq7(axis, np.full(200, angle))
+    r2 = r1 @ h.notes_rodrigues_eq7(axis, np.full(200, angle))
     got = rotation_distance(r1, r2)
     assert h.max_abs(got - angle) <= 8 * EPS
     # acos((tr R1ᵀR2 − 1)/2) loses half the digits here; the atan2 form does not
@@ -117,7 +117,7 @@ def clusters(n_sets, size, spread, seed):
     centre = scipy_rotations(n_sets, seed)
     axis = h.random_unit_vectors(rng, n_sets * size).reshape(n_sets, size, 3)
     angle = rng.uniform(0, spread, (n_sets, size))
-    return centre[:, None] @ h.seed_rodrigues_eq7(axis, angle)
+    return centre[:, None] @ h.notes_rodrigues_eq7(axis, angle)
 
 
 @pytest.mark.parametrize('spread', [0.1, 1.0, 2.5])
@@ -308,7 +308,7 @@ def test_align_minimises_the_weighted_residual():
     R, rmsd = align_vectors(a, b, w)
     cost = np.sum(w * np.sum((a - b @ R.T) ** 2, -1))
     assert abs(np.sqrt(cost / w.sum()) - rmsd) <= 1e-14 * rmsd
-    bumps = h.seed_rodrigues_eq7(h.random_unit_vectors(rng, 500), rng.uniform(0, 1e-3, 500))
+    bumps = h.notes_rodrigues_eq7(h.random_unit_vectors(rng, 500), rng.uniform(0, 1e-3, 500))
     costs = np.sum(w * np.sum((a - np.einsum('kij,nj->kni', R @ bumps, b)) ** 2, -1), -1)
     assert np.all(costs >= cost - 1e-12 * cost)
 

@@ -66,7 +66,7 @@ def test_frame_columns_are_the_normalised_axes():
     assert one.shape == (3, 3) and h.max_abs(one - got[7]) == 0.0
 
 
-def test_frame_point_coordinates_seed_000_sec4():
+def test_frame_point_coordinates_notes_sec4():
     # A point with coordinates p in u-v-w is p_u·û + p_v·v̂ + p_w·ŵ = R·p in x-y-z; a point
     # q of x-y-z has coordinates q' = Rᵀ·q in u-v-w, and R·q' gives q back.
     rng = np.random.default_rng(201)
@@ -214,7 +214,7 @@ def test_transform_points_broadcasting():
         transform_points(r, b, p)
 
 
-def test_a_translation_before_a_rotation_seed_000_sec5():
+def test_a_translation_before_a_rotation_notes_sec5():
     # R(p + b) = R·p + R·b: "a translation b followed by R" is R followed by R·b.
     rng = np.random.default_rng(205)
     r, b = motions(rng, 1000)
@@ -226,13 +226,13 @@ def test_a_translation_before_a_rotation_seed_000_sec5():
                   <= 1e-15 * 8 * scale_of(b, p))
 
 
-def test_rotation_about_a_line_through_a_point_seed_000_sec5():
+def test_rotation_about_a_line_through_a_point_notes_sec5():
     # R(p − q) + q = R·p + (I − R)·q: the motion (R, (I − R)·q), which is also the screw of
     # angle θ and no translation about the line through q.
     rng = np.random.default_rng(206)
     axis = h.random_unit_vectors(rng, 1000)
     angle = rng.uniform(-PI, PI, 1000)
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     q = rng.normal(size=(1000, 3)) * 10
     p = rng.normal(size=(1000, 3)) * 10
     b = q - np.einsum('nij,nj->ni', r, q)

@@ -22,7 +22,7 @@ PI = h.PI
 def build(axis, point, angle, d):
     """Transform (R, b) of the screw (axis, point, angle, d); `point` is any axis point."""
     axis = np.asarray(axis, dtype=float)
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     b = -h.rotate_minus_identity(axis, angle, point) + np.asarray(d)[..., None] * axis
     return r, b
 
@@ -174,7 +174,7 @@ def test_pure_translation():
 def test_angle_below_threshold_is_a_pure_translation():
     assert 0.0 < PURE_TRANSLATION_ANGLE <= 1e-9
     angle = PURE_TRANSLATION_ANGLE / 10
-    r = h.seed_rodrigues_eq7([0.0, 1.0, 0.0], angle)
+    r = h.notes_rodrigues_eq7([0.0, 1.0, 0.0], angle)
     b = np.array([3.0, 0.0, 4.0])
     scr = screw_from_transform(r, b)
     assert scr.angle == 0.0 and np.isinf(scr.pitch)
@@ -324,7 +324,7 @@ def test_single_items_match_the_batch():
     r, b = build(axis, point, angle, d)
     cube = h.cube_rotations()
     extra_r = np.concatenate([cube, np.eye(3)[None], np.eye(3)[None],
-                              h.seed_rodrigues_eq7([0.0, 0.0, 1.0], [1e-13, 1e-13])])
+                              h.notes_rodrigues_eq7([0.0, 0.0, 1.0], [1e-13, 1e-13])])
     extra_b = np.concatenate([np.full((24, 3), 2.0), np.zeros((1, 3)), [[0.0, 3.0, 4.0]],
                               np.zeros((1, 3)), [[1.0, 0.0, 0.0]]])
     r, b = np.concatenate([r, extra_r]), np.concatenate([b, extra_b])
@@ -351,7 +351,7 @@ def test_single_items_match_the_batch():
 
 
 def test_below_threshold_without_translation_is_the_identity():
-    r = h.seed_rodrigues_eq7([0.6, 0.0, 0.8], [1e-13, 0.0])
+    r = h.notes_rodrigues_eq7([0.6, 0.0, 0.8], [1e-13, 0.0])
     for scr in (screw_from_transform(r, np.zeros((2, 3))),
                 screw_from_transform(r[0], np.zeros(3))):
         assert np.array_equal(scr.direction, np.broadcast_to([0.0, 0.0, 1.0],
@@ -393,7 +393,7 @@ def test_check_false_uses_the_matrix_as_given():
     # θ and l̂ read from the perturbed matrix as given (skew part and trace), then the
     # defining formulas with them: d = b·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), h = d/θ, and the
     # twist (θ·l̂, −(θ/2)·l̂ × b + (θ/2)cot(θ/2)·b⊥ + d·l̂).
-    r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
+    r = h.notes_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
     b = np.array([1.0, -2.0, 0.5])
     with pytest.raises(RotationError, match='not orthogonal'):
@@ -482,7 +482,7 @@ def test_tiny_angle_with_large_translation(angle):
     b = np.array([1e3, -2e3, 5e2])
     bperp = b - (b @ axis) * axis
     c = 0.5 * (bperp + np.cross(axis, bperp) / np.tan(angle / 2))
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     scr = screw_from_transform(r, b)
     scale = 1.0 + np.linalg.norm(b)
     assert abs(scr.angle - angle) <= 1e-14 * angle
@@ -504,7 +504,7 @@ def test_screw_log_keeps_the_rotation_vector_at_tiny_angles(angle):
     # θ·l̂ keeps its digits for every θ > 0; θ·v is the matrix logarithm's translation part,
     # checked by the exponential series of the twist (math_helpers.expm_twist).
     axis = np.array([0.36, -0.48, 0.8])
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     b = np.array([3.0, -1.0, 2.0])
     for tw in (screw_log(r, b), screw_log(np.stack([r, r]), b)[1]):
         assert np.all(np.abs(tw[:3] - angle * axis) <= 1e-15 * angle), tw
@@ -527,7 +527,7 @@ def test_screw_log_of_a_tiny_pure_rotation_is_its_rotation_vector():
     rng = np.random.default_rng(53)
     axis = h.random_unit_vectors(rng, 200)
     angle = 10.0 ** rng.uniform(-320, -2, 200)
-    r = h.seed_rodrigues_eq7(axis, angle)
+    r = h.notes_rodrigues_eq7(axis, angle)
     tw = screw_log(r, np.zeros(3))
     assert np.all(np.abs(tw[:, :3] - angle[:, None] * axis).max(-1) <= 1e-15 * angle + 1e-323)
     assert h.max_abs(tw[:, 3:]) == 0.0
@@ -536,7 +536,7 @@ def test_screw_log_of_a_tiny_pure_rotation_is_its_rotation_vector():
 def test_decompose_twist_is_screw_log_at_tiny_angles():
     from rot_tools import decompose
     for angle in TINY_ANGLES:
-        r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], angle)
+        r = h.notes_rodrigues_eq7([0.0, 0.6, 0.8], angle)
         b = np.array([1.0, 2.0, -4.0])
         assert np.array_equal(decompose(r, b).twist, screw_log(r, b))
 

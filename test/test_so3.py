@@ -14,7 +14,7 @@ ELEMENTARY = {'x': rot_x, 'y': rot_y, 'z': rot_z}
 
 
 @pytest.mark.parametrize('axis', 'xyz')
-def test_elementary_rotations_match_seed_matrices(axis):
+def test_elementary_rotations_match_the_notes_matrices(axis):
     rng = np.random.default_rng(1)
     special = np.array([0.0, h.PI, -h.PI, h.PI / 2, -h.PI / 2, 1e-12, 2 * h.PI, 7.0])
     angles = np.concatenate([rng.uniform(-2 * h.PI, 2 * h.PI, N), special])
@@ -227,7 +227,7 @@ def test_quaternion_of_any_finite_scale_is_normalised_never_refused(scale):
 @given(axis=h.unit_vectors(), angle=h.angles_in(-10.0, 10.0))
 def test_quaternion_property_is_rodrigues(axis, angle):
     q = np.append(np.sin(angle / 2) * axis, np.cos(angle / 2))
-    assert h.max_abs(quaternion_to_matrix(q) - h.seed_rodrigues_eq7(axis, angle)) <= 1e-14
+    assert h.max_abs(quaternion_to_matrix(q) - h.notes_rodrigues_eq7(axis, angle)) <= 1e-14
 
 
 def test_matrix_to_quaternion_matches_scipy_canonical():
@@ -288,7 +288,7 @@ def adversarial_rotations():
     cube = h.cube_rotations()
     lock = h.ref_euler(np.stack([rng.uniform(-PI, PI, 20), np.full(20, PI / 2),
                                  rng.uniform(-PI, PI, 20)], -1), 'ZYX')
-    return np.concatenate([h.seed_rodrigues_eq7(axis, angle), cube,
+    return np.concatenate([h.notes_rodrigues_eq7(axis, angle), cube,
                            np.where(cube == 0, -0.0, cube), lock]), axis, angle
 
 
@@ -361,7 +361,7 @@ def test_matrix_to_quaternion_matches_scipy_on_adversarial_sets():
 def test_matrix_to_quaternion_check_false_uses_the_matrix_as_given():
     # Without the check a slightly non-orthogonal matrix still gives a unit quaternion, within
     # the perturbation of the rotation's own.
-    r = h.seed_rodrigues_eq7([0.0, 0.6, 0.8], 2.0)
+    r = h.notes_rodrigues_eq7([0.0, 0.6, 0.8], 2.0)
     bad = r.copy()
     bad[0, 1] += 1e-6
     with pytest.raises(RotationError, match='not orthogonal'):
