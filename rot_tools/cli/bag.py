@@ -62,18 +62,20 @@ def _one_bag(args, error):
             error(f'--parquet: cannot write {target}: {exc.strerror or exc}')
     if args.csv == '-':
         output_file.to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision))
-        return 0
-    if args.csv is not None:
-        try:
-            with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
-                                                 newline='') as out:
-                write_csv(out, topics, args.deg, args.precision)
-        except OSError as exc:
-            error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
-    text = to_json if args.json else to_yaml
-    document = text(bag_analysis.summary(args.path, storage, topics, args.deg),
-                    precision=args.precision)
-    output_file.to_stdout(lambda out: out.write(document))
+    else:
+        if args.csv is not None:
+            try:
+                with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
+                                                     newline='') as out:
+                    write_csv(out, topics, args.deg, args.precision)
+            except OSError as exc:
+                error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
+        text = to_json if args.json else to_yaml
+        document = text(bag_analysis.summary(args.path, storage, topics, args.deg),
+                        precision=args.precision)
+        output_file.to_stdout(lambda out: out.write(document))
+    for line in bag_analysis.warnings(topics, args.deg):
+        sys.stderr.write(f'warning: {line}\n')
     return 0
 
 
@@ -92,8 +94,9 @@ TEXT = (
     'by reason.\n\n'
     'Prints a summary per topic (YAML, or JSON with --json): type, frame ids, messages\n'
     'accepted and refused, start, end, rate, roll/pitch/yaw ranges, total angle turned,\n'
-    'mean orientation, and for an Imu how far the angular velocity of its orientations is\n'
-    'from its gyro (RMS). For Imu, PoseWithCovarianceStamped and Odometry, the median\n'
+    'mean orientation; for a topic with positions their ranges and the largest speed; for an\n'
+    'Imu how far the angular velocity of its orientations is from its gyro (RMS), with a\n'
+    'warning beyond a threshold. For Imu, PoseWithCovarianceStamped and Odometry, the median\n'
     'standard deviations of roll, pitch and yaw from their covariances, and how many were\n'
     "unknown or bad. roll, pitch, yaw are REP-103's (about the fixed X, Y, Z axes,\n"
     f'the extrinsic sequence {RPY_SEQUENCE}) and continuous along each topic (no jump at ±180°)\n'

@@ -1,40 +1,9 @@
 """
 The analysis of ``rot-tools bag``: the orientations recorded in a bag, topic by topic.
 
-A topic's messages are read into NumPy columns (rot_tools.io.bag_read), pass the same boundary
-as rotation_node's inputs (rot_tools.io.boundary: same checks, same refusal reasons, counted
-per topic), and are converted as batches by the vectorised engine: one call of each
-conversion per topic, never one per message. Per accepted message, with R its rotation:
-
-- the canonical quaternion (rot_tools.matrix_to_quaternion: w > 0);
-- roll, pitch, yaw: REP-103's angles about the fixed X, Y, Z axes (the extrinsic sequence
-  rot_tools.core.euler.RPY_SEQUENCE), and the angles of ``--seq SEQ`` when asked; each made
-  continuous along the topic's stream with numpy.unwrap (so a heading goes on past ±180°
-  instead of jumping), unless ``--wrap``;
-- the rotation vector and angle of R (rot_tools.matrix_to_axis_angle);
-- the body angular velocity from the previous accepted message of the topic:
-  ω = log(Rₖ₋₁ᵀ·Rₖ)/Δt, Δt from the header stamps (none on the first row, nor where Δt ≤ 0).
-
-Per topic the summary adds the messages' start, end and mean rate (header stamps of every
-message read; start and end with every digit of their float64, whatever ``--precision``
-rounds the other numbers to: rot_tools.io.report.Exact), the ranges of roll, pitch and yaw,
-the total angle turned (the sum of the angles of the steps Rₖ₋₁ᵀ·Rₖ), the chordal mean
-orientation (rot_tools.mean_rotation), and for an Imu the RMS of |ω − ω_gyro|, ω_gyro the
-mean of the gyro's angular_velocity at the step's two ends: a check of the IMU's own
-consistency.
-
-For the types that carry their orientation's covariance (Imu, PoseWithCovarianceStamped,
-Odometry), each message's standard deviations of roll, pitch and yaw, and per topic their
-median and the counts of unknown and bad covariances (rot_tools.cli.bag_covariance; read as
-``--input-covariance`` says, as rotation_node's parameter input_covariance).
-
-Messages are taken in the order they were recorded; ``--start``/``--end`` select them by
-record time, in seconds from the bag's start.
-
-``--tf REFERENCE BODY``: the transforms of the bag's TFMessage topics pass the same boundary
-(counted) and feed a rot_tools.TransformTree, which follows BODY in REFERENCE over the
-recording (TransformTree.follow: the chain looked up as one batch at every stamp of its
-dynamic edges); it is one more topic, ``tf:REFERENCE->BODY``.
+Each topic's messages pass rotation_node's boundary checks (refusals counted by reason), then
+every representation comes from one batch decomposition (rot_tools.core.decomposition), and
+the summary adds ranges, rates, positions and an Imu's agreement with its own gyro.
 """
 
 import math
@@ -46,11 +15,12 @@ import numpy as np
 from rot_tools.cli import bag_covariance
 from rot_tools.cli.bag_output import in_unit, NS_PER_S
 from rot_tools.core import transform_tree
-from rot_tools.core.axis_angle import matrix_to_axis_angle, matrix_to_rotvec
+from rot_tools.core.axis_angle import matrix_to_rotvec
+from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import matrix_to_euler, RPY_SEQUENCE
+from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.core.fitting import mean_rotation
-from rot_tools.core.so3 import matrix_to_quaternion
+from rot_tools.core.imu import GYRO_TOL
 from rot_tools.io import bag_read, boundary, interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import Exact
@@ -86,6 +56,50 @@ class TfTopic(NamedTuple):
     chain: TfChain
 
 
+GYRO_NOISE = math.radians(5)
+"""RMS of |ω − ω_gyro| (rad/s) allowed to the noise of an Imu's gyro and of the rates
+differentiated from its consecutive orientations, whatever it turns at."""
+
+
+def gyro_threshold(gyro_rms):
+    """
+    Return the RMS of |ω − ω_gyro| (rad/s) beyond which an orientation disagrees with its gyro.
+
+    GYRO_NOISE, plus what a gyro whose scale is off by imu-check's GYRO_TOL adds at the
+    gyro's RMS rate ``gyro_rms`` (rad/s): a gyro imu-check accepts stays within it.
+    """
+    return GYRO_NOISE + GYRO_TOL * gyro_rms
+
+
+class GyroAgreement(NamedTuple):
+    """An Imu's rates from its orientations against its gyro: RMS difference, threshold (rad/s)."""
+
+    rms: float
+    threshold: float
+
+
+def gyro_agreement(omega, gyro):
+    """
+    Return the GyroAgreement of body rates ω (n, 3) (NaN on rows without one) and the gyro.
+
+    ω_k is the rate of the step to message k (log(Rₖ₋₁ᵀRₖ)/Δt); gyro (n, 3) the messages'
+    angular_velocity, taken at each step as the mean of its two ends. None without a step.
+    """
+    steps = np.isfinite(omega[1:, 0])
+    if not steps.any():
+        return None
+    at_step = 0.5 * (gyro[:-1] + gyro[1:])[steps]
+    diff = omega[1:][steps] - at_step
+    rms = float(np.sqrt(np.mean(np.sum(diff * diff, axis=1))))
+    rate = float(np.sqrt(np.mean(np.sum(at_step * at_step, axis=1))))
+    return GyroAgreement(rms, gyro_threshold(rate))
+
+
+def continuous(angles, wrap):
+    """Return angles (n, 3) as they are when ``wrap``, else unwrapped along the stream."""
+    return angles if wrap or not len(angles) else np.unwrap(angles, axis=0)
+
+
 class Topic:
     """One topic's accepted messages and everything computed from them (radians)."""
 
@@ -105,13 +119,14 @@ class Topic:
             self.R = chain.R
         ok, n = self.ok, len(self.R)
         self.ns, self.frame = stamp_ns(c.sec[ok], c.nanosec[ok]), c.frame[ok]
+        self.has_position = chain is not None or c.position is not None
         self.position = c.position[ok] if c.position is not None else np.zeros((n, 3))
-        self.quaternion = matrix_to_quaternion(self.R, check=False)
-        self.rpy = self._angles(RPY_SEQUENCE, wrap)
         self.seq = seq
-        self.seq_angles = self._angles(seq, wrap) if seq else None
-        axis, self.angle = matrix_to_axis_angle(self.R, check=False)
-        self.rotvec = axis * self.angle[:, None]
+        # The rotations only: the positions are not part of any column computed from it.
+        d = decompose(self.R, np.zeros(3), seq or RPY_SEQUENCE, check=False)
+        self.quaternion, self.rotvec, self.angle = d.quaternion, d.rotvec, d.angle
+        self.rpy = continuous(d.rpy, wrap)
+        self.seq_angles = continuous(d.euler, wrap) if seq else None
         self.omega = np.full((n, 3), np.nan)
         self.steps = np.zeros(0)
         if n > 1:
@@ -121,23 +136,15 @@ class Topic:
             dt = 1e-9 * np.diff(self.ns)
             good = dt > 0
             self.omega[1:][good] = step[good] / dt[good][:, None]
-        self.gyro_rms = None
+        self.gyro = None
         if c.angular_velocity is not None and n > 1:
-            gyro = c.angular_velocity[ok]
-            diff = self.omega[1:] - 0.5 * (gyro[:-1] + gyro[1:])
-            diff = diff[np.isfinite(self.omega[1:, 0])]
-            if len(diff):
-                self.gyro_rms = float(np.sqrt(np.mean(np.sum(diff * diff, axis=1))))
+            self.gyro = gyro_agreement(self.omega, c.angular_velocity[ok])
         self.reading = reading
         self.rpy_std, self.covariance_status = np.full((n, 3), np.nan), None
         if chain is None and c.covariance is not None:
             self.covariance = c.covariance[ok]
             self.rpy_std, self.covariance_status = bag_covariance.stddevs(
                 self.R, self.covariance, reading)
-
-    def _angles(self, seq, wrap):
-        angles = matrix_to_euler(self.R, seq, check=False)[0]
-        return angles if wrap or not len(angles) else np.unwrap(angles, axis=0)
 
     def refused(self):
         """{'total': n, reason: n, ...} over every reason of the boundary."""
@@ -206,17 +213,71 @@ def topic_summary(t, degrees):
     except RotationError as exc:
         out['mean_orientation'] = f'not unique: {exc}'
     else:
-        q = matrix_to_quaternion(mean)
-        rpy = in_unit(matrix_to_euler(mean, RPY_SEQUENCE)[0], degrees)
+        d = decompose(mean, np.zeros(3), check=False)
         out['mean_orientation'] = {
-            'quaternion': dict(zip('xyzw', map(float, q))),
-            'rpy': dict(zip(('roll', 'pitch', 'yaw'), map(float, rpy)))}
-    if t.gyro_rms is not None:
-        out['gyro_rms_difference'] = float(in_unit(t.gyro_rms, degrees))
-        out['gyro_rms_difference_unit'] = f'{unit}/s'
+            'quaternion': dict(zip('xyzw', map(float, d.quaternion))),
+            'rpy': dict(zip(('roll', 'pitch', 'yaw'), in_unit(d.rpy, degrees).tolist()))}
+    if t.has_position:
+        out.update(motion_summary(t.position, t.ns))
+    if t.gyro is not None:
+        out.update(gyro_summary(t.gyro, degrees))
     if t.covariance_status is not None:
         out.update(bag_covariance.summary(t.rpy_std, t.covariance_status, t.covariance,
                                           t.reading, degrees))
+    return out
+
+
+def motion_summary(position, ns):
+    """
+    Return the summary of a topic's positions (m): their ranges, and the largest speed.
+
+    position (n, 3), n ≥ 1; ns (n,) header stamps. The speed of a step is |bₖ − bₖ₋₁| over
+    its Δt (m/s), over the steps whose Δt > 0; ``max_speed_stamp`` is the stamp of its end.
+    """
+    out = {'position_range': {
+        name: [float(position[:, k].min()), float(position[:, k].max())]
+        for k, name in enumerate('xyz')}}
+    dt = np.diff(ns) / NS_PER_S
+    forward = np.flatnonzero(dt > 0)
+    if len(forward):
+        with np.errstate(over='ignore', invalid='ignore'):
+            speed = np.linalg.norm(np.diff(position, axis=0)[forward], axis=1) / dt[forward]
+        k = int(np.nanargmax(speed)) if not np.isnan(speed).all() else 0
+        out['max_speed'] = float(speed[k])
+        out['max_speed_stamp'] = Exact(int(ns[forward[k] + 1]) / NS_PER_S)
+    return out
+
+
+def gyro_warning(gyro, degrees):
+    """Return why an Imu's orientation disagrees with its gyro (GyroAgreement), or None."""
+    if not gyro.rms > gyro.threshold:
+        return None
+    unit = 'deg/s' if degrees else 'rad/s'
+    rms, threshold = in_unit([gyro.rms, gyro.threshold], degrees)
+    return (f'the orientation disagrees with the gyro: the RMS difference of their rates, '
+            f'{rms:.4g} {unit}, exceeds {threshold:.4g} {unit} (its quaternion may be written '
+            'w-first or inverted, or the gyro be on other axes: rot-tools imu-check says which)')
+
+
+def gyro_summary(gyro, degrees):
+    """Return the summary of an Imu's GyroAgreement (and its warning when it disagrees)."""
+    unit = 'deg' if degrees else 'rad'
+    out = {'gyro_rms_difference': float(in_unit(gyro.rms, degrees)),
+           'gyro_rms_difference_unit': f'{unit}/s',
+           'gyro_rms_threshold': float(in_unit(gyro.threshold, degrees))}
+    warning = gyro_warning(gyro, degrees)
+    if warning is not None:
+        out['gyro_warning'] = warning
+    return out
+
+
+def warnings(topics, degrees):
+    """Return the one-line warnings of a bag's topics: ['TOPIC: why', ...]."""
+    out = []
+    for t in topics:
+        warning = gyro_warning(t.gyro, degrees) if t.gyro is not None else None
+        if warning is not None:
+            out.append(f'{t.topic}: {warning}')
     return out
 
 
