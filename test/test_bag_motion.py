@@ -137,7 +137,7 @@ def test_an_imu_has_no_positions(capsys):
 
 
 def falling_odometry(path):
-    """An odometry still for 1 s, then falling at 80 m/s to z = −3,754 m (10 Hz)."""
+    """Return a bag of an odometry still for 1 s, then falling at 80 m/s to z = −3,754 m."""
     b = bh.Builder()
     messages = []
     for k in range(500):
