@@ -238,19 +238,36 @@ def damaged(tmp_path_factory):
     out['truncated ros1'].write_bytes(data[:len(data) // 2])
     out['garbage ros1'] = tmp / 'garbage.bag'
     out['garbage ros1'].write_bytes(bytes(RNG.integers(0, 256, 4096, dtype=np.uint8)))
+    out['flipped ros1'] = tmp / 'flipped.bag'  # a record header's bytes inverted
+    out['flipped ros1'].write_bytes(flipped(data, len(data) // 2, 5, 97))
+    out['zeroed ros1'] = tmp / 'zeroed.bag'  # 2,000 bytes zeroed: a chunk's records
+    middle = len(data) // 2
+    out['zeroed ros1'].write_bytes(data[:middle] + bytes(2000) + data[middle + 2000:])
     for storage in ('sqlite3', 'mcap'):
         bag = bh.convert_real(tmp / storage, storage, excerpt)
         inner = next(p for p in bag.iterdir() if p.suffix in ('.db3', '.mcap'))
         raw = inner.read_bytes()
         inner.write_bytes(raw[:len(raw) // 3])
         out[f'truncated {storage}'] = bag
+        if storage == 'mcap':  # a message's bytes inverted: it no longer decodes
+            out['flipped mcap'] = tmp / 'flipped.mcap'
+            out['flipped mcap'].write_bytes(flipped(raw, len(raw) // 3, 20, 131))
     return out
 
 
-@pytest.mark.parametrize('which', ['truncated ros1', 'garbage ros1', 'truncated sqlite3',
-                                   'truncated mcap'])
-def test_damaged_bags(script, damaged, which):
-    one_line_error(script, 'bag', damaged[which], contains='bag: ')
+def flipped(data, start, count, step):
+    """Return bytes with ``count`` of them inverted, every ``step`` from ``start``."""
+    data = bytearray(data)
+    for k in range(count):
+        data[start + k * step] ^= 0xff
+    return bytes(data)
+
+
+@pytest.mark.parametrize('which', ['truncated ros1', 'garbage ros1', 'flipped ros1',
+                                   'zeroed ros1', 'truncated sqlite3', 'truncated mcap',
+                                   'flipped mcap'])
+def test_damaged_bags_are_one_line_naming_the_bag(script, damaged, which):
+    one_line_error(script, 'bag', damaged[which], contains=f'bag: {damaged[which]}: ')
 
 
 def test_a_message_that_does_not_decode(script, tmp_path):

@@ -1,26 +1,10 @@
 """
 Reading the orientation fields of recorded bags into NumPy columns, without ROS.
 
-The bags are read by the ``rosbags`` library (the optional ``bag`` extra), through its
-documented reader: rosbag2 (sqlite3 and MCAP) and ROS 1 bags are opened by ``AnyReader``,
-their topics are ``reader.connections``, ``reader.messages(connections=...)`` yields each
-message's bytes, and ``reader.deserialize`` turns them into a message object of the bag's own
-type definitions (or ROS 2 Jazzy's, from a ``typesys`` store, for a bag without them).
-
-From those objects each topic keeps only the fields its boundary check and conversions need,
-found by their paths in rot_tools.io.interface (``recorded_inputs()``: {type: {role: path}}):
-a small getter per path (:func:`field_getter`) reads them from a chunk of messages at a time
-into NumPy columns, one per field, and the messages are dropped. Everything after that runs
-on whole columns.
-
-:func:`is_bag` says whether a path is a bag by its name and kind; :func:`open_bag` opens
-PATH (a ROS 1 ``.bag`` file, a rosbag2 directory or a file inside one, or a rosbag2 storage
-file alone: ``.db3`` or ``.mcap`` without its metadata.yaml, which rosbags' rosbag2
-``Reader`` reads as a bag), :func:`read_topics` returns a :class:`Columns` per topic —
-record times, header stamps (sec, nanosec), frame ids, and the fields of its type — and
-:func:`read_tf` the transforms of the TFMessage topics. Every failure of the bag itself —
-missing, empty, corrupt, a message that does not decode — is a :class:`BagError` with one
-line of text; a bag that holds nothing of what was asked, a :class:`BagSkipped`.
+rosbags (the ``bag`` extra) opens ROS 1 and rosbag2 (sqlite3, MCAP) bags and decodes their
+messages; each topic keeps only the fields rot_tools.io.interface names, as columns. Every
+failure of a bag is a BagError of one line that names the bag; a bag that holds nothing of
+what was asked, a BagSkipped.
 """
 
 from contextlib import contextmanager
@@ -399,17 +383,22 @@ def fields_of(msgtype, vectors=None):
     return _Fields(SUPPORTED[msgtype], COVARIANCE.get(msgtype), vectors)
 
 
+def bag_name(reader):
+    """Return the path of the bag an open reader reads (a rosbag2 bag: its directory)."""
+    return ', '.join(str(path) for path in reader.paths)
+
+
 def _decode(reader, raw, conn, index):
     """
-    Return the message object of ``raw``; BagError naming the message if it does not decode.
+    Return the message object of ``raw``; BagError naming the bag and the message if not.
 
     index(): the message's index among its topic's (asked only then).
     """
     try:
         return reader.deserialize(raw, conn.msgtype)
     except Exception as exc:  # noqa: BLE001 - rosbags' serde errors vary
-        raise BagError(f'{conn.topic}: message {index()} cannot be decoded as {conn.msgtype}: '
-                       f'{_one_line(exc)}') from None
+        raise BagError(f'{bag_name(reader)}: {conn.topic}: message {index()} cannot be decoded '
+                       f'as {conn.msgtype}: {_one_line(exc)}') from None
 
 
 def read_topics(reader, connections, start=None, stop=None, progress=None, vectors=None):
@@ -439,7 +428,7 @@ def read_topics(reader, connections, start=None, stop=None, progress=None, vecto
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags' reader
-        raise BagError(f'cannot read the bag: {_one_line(exc)}') from None
+        raise BagError(f'{bag_name(reader)}: cannot read the bag: {_one_line(exc)}') from None
     if progress is not None:
         progress(count)
     return {name: topic.finish() for name, topic in topics.items()}
@@ -485,5 +474,5 @@ def read_tf(reader, static, dynamic, start=None, stop=None):
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags
-        raise BagError(f'cannot read the bag: {_one_line(exc)}') from None
+        raise BagError(f'{bag_name(reader)}: cannot read the bag: {_one_line(exc)}') from None
     return TfColumns(topic.finish(), np.array(kinds, bool))
