@@ -290,6 +290,43 @@ def test_offset_of_the_recorded_imu_is_recovered_within_a_sample(capsys, tmp_pat
     assert found['ape']['rmse'] < np.radians(0.5)
 
 
+def test_unrelated_streams_matched_by_a_weak_correlation_get_a_warning(capsys, tmp_path):
+    """
+    Check two stretches of the recorded IMU 30 s apart, given as one time span.
+
+    No offset matches them, yet a wide search finds one where their angular speeds correlate
+    by chance.
+    """
+    pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
+    from rot_tools.cli import bag_analysis
+    _, (imu,) = bag_analysis.analyse(bh.REAL, ('/imu/data',))
+    t = (imu.ns - imu.ns[0]) / 1e9
+    first, later = t < 15, (t >= 30) & (t < 45)
+    zero = np.zeros((len(t), 3))
+    est = write_tum(tmp_path / 'est.tum', t[first], imu.R[first], zero[first])
+    ref = write_tum(tmp_path / 'ref.tum', t[later] - 30, imu.R[later], zero[later])
+    status, out, err = run(capsys, 'compare', est, ref, '--offset', 'auto', '--max-offset',
+                           '200000', '--json')
+    found = json.loads(out)
+    assert status == 0
+    assert found['offset_correlation'] < 0.9
+    assert found['offset_warning'].startswith(
+        'the angular speeds correlate weakly at the offset found (r = '
+        f"{found['offset_correlation']:.2f} < 0.9)")
+    assert err == f"warning: {found['offset_warning']}\n"
+
+
+def test_csv_dash_is_the_standard_output(capsys, tmp_path, monkeypatch, streams):
+    monkeypatch.chdir(tmp_path)
+    est = write_tum(tmp_path / 'est.tum', *streams[1])
+    ref = write_tum(tmp_path / 'ref.tum', *streams[0])
+    status, out, err = run(capsys, 'compare', est, ref, '--csv', '-')
+    assert (status, err) == (0, '')
+    run(capsys, 'compare', est, ref, '--csv', 'e.csv')
+    assert out == (tmp_path / 'e.csv').read_text()
+    assert not (tmp_path / '-').exists()
+
+
 # ---- mounting, simulated -------------------------------------------------------------------
 
 

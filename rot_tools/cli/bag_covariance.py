@@ -1,27 +1,9 @@
 """
 ``rot-tools bag``: each recorded covariance as standard deviations of roll, pitch and yaw.
 
-For the types that carry their orientation's covariance (rot_tools.io.bag_read.COVARIANCE:
-an Imu's orientation_covariance, the pose.covariance of PoseWithCovarianceStamped and
-Odometry), each accepted message's covariance is read as rotation_node reads it
-(rot_tools.io.message_covariance): all zeros is unknown; not finite, not symmetric or not
-positive semi-definite is bad (the message is still used: only its covariance is not); with
-``--input-covariance rotvec`` (the default, ROS's PoseWithCovariance) the rotation block is
-the covariance of a small rotation about the parent's fixed X, Y, Z, carried to roll, pitch,
-yaw by the inverse of the Euler-rate matrix — which does not exist at gimbal lock (pitch
-±90°); with ``rpy`` it already is the covariance of roll, pitch, yaw. The columns
-``roll_std, pitch_std, yaw_std`` are the square roots of its diagonal, NaN (an empty cell)
-where there is none.
-
-Drivers write the same covariance in message after message. A run of identical covariances
-is checked once and converted as one batch against the run's rotations
-(rot_tools.core.covariance.rotvec_covariance_to_euler takes one covariance for many
-rotations); a topic whose covariance changes more than GROUPS times goes through
-message_covariance.rpy_covariances, every message checked and converted in one batch. Both
-give the same numbers (test_bag_covariance.py). Either way each covariance C is converted
-as C / max|C| and σ scaled back by √max|C|: a 1e308·I covariance gives σ near 1e154, a
-5e-324·I one near 2e-162, never inf or 0; one whose roll, pitch, yaw covariance is beyond
-float64 is bad, as rotation_node's ~/rpy_covariance says.
+Each accepted message's orientation covariance (an Imu's, a PoseWithCovarianceStamped's, an
+Odometry's) is read as rotation_node reads it (rot_tools.io.message_covariance) and carried
+to roll, pitch and yaw; runs of identical covariances are converted once, as one batch.
 """
 
 from typing import NamedTuple

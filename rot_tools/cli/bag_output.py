@@ -1,13 +1,9 @@
 """
 The table and the plot of a bag's topics: ``rot-tools bag --csv`` and ``--plot``.
 
-The CSV has one row per accepted message (csv_header names the columns), written by Python's
-``csv`` module: each number is rounded to ``--precision`` as a number first (:func:`rounded`),
-then written as the shortest text that reads back as the same float (Python's ``repr``);
-a stamp is written exactly, from its integer nanoseconds (:func:`stamp_text`); text cells a
-spreadsheet would run as a formula are escaped. The plot draws each topic's roll and pitch on
-one axis and its yaw on another (a heading that turns many times would flatten the tilt to
-lines at 0), for at most MAX_PLOTTED_TOPICS topics, and says which.
+The CSV has one row per accepted message (csv_header names the columns), numbers rounded to
+``--precision``, stamps exact; the plot draws each topic's roll and pitch on one axis and its
+yaw on another.
 """
 
 import csv
@@ -169,8 +165,8 @@ def write_plot(path, topics, degrees):
     """
     Roll and pitch, then yaw (continuous), against time: two axes per topic (matplotlib).
 
-    Roll and pitch have an axis of their own: beside a yaw that turns through 2,000°, their
-    ±10° would be flat lines at 0. Every topic given is drawn (the caller bounds them); the
+    Roll and pitch have an axis of their own: beside a yaw that turns many times, a small tilt
+    would be a flat line at 0. Every topic given is drawn (the caller bounds them); the
     file is written whole or not at all (rot_tools.cli.output_file), in the format of its
     extension.
     """

@@ -1,26 +1,10 @@
 """
 ``rot-tools compare EST REF``: an orientation stream against ground truth, and its mounting.
 
-Each side is read into stamps t (s), rotations R and positions b where it has them
-(rot_tools.io.trajectory_files for TUM and EuRoC files; a bag's topic or TF frame pair
-through rot_tools.cli.bag_analysis, whose messages pass the same checks as ``rot-tools
-bag``'s). Then, with the pieces of rot_tools.core.trajectory, in this order:
-
-1. **Time offset** o, added to EST's stamps: ``--offset SECONDS`` (default 0), or ``auto``:
-   the shift that best correlates the two angular speeds |ω| (estimate_time_offset); a
-   warning when that correlation is below LOW_CORRELATION.
-2. **Matching**: REF at each EST stamp t + o along the constant screw between its two
-   neighbours, each within ``--max-gap`` (interpolate_poses), or ``--match nearest``: the
-   nearest stamp within ``--max-gap``, as evo pairs poses (nearest_stamps, walking the stream
-   with fewer poses, EST when they are as long). Fewer than 3 pairs is an error.
-3. **Mounting** (``--mounting``): X with A_k·X = X·B_k for the relative rotations over
-   ``--delta`` of every pair k, A_k = Q_kᵀQ_{k+Δ}, B_k = P_kᵀP_{k+Δ} (hand_eye_rotation,
-   overlapping intervals); EST is then turned into REF's body frame, P_k → P_k·Xᵀ.
-4. **Alignment** W of the reference frames, R_ref ≈ W·R_est (align_rotations): none,
-   rotation, yaw, se3 (Umeyama on the positions, as evo's ``--align``) or posyaw (a yaw and
-   a shift of the positions, as rpg_trajectory_evaluation aligns visual-inertial odometry).
-5. **Errors** of E_k = Q_kᵀ·W·P_k (rotation_errors): absolute (APE), relative over
-   ``--delta`` between non-overlapping pairs (evo's RPE), and E's roll, pitch, yaw.
+Each side (a bag's topic or TF frame pair, a TUM or EuRoC file) is read into stamps,
+rotations and positions; then, with rot_tools.core.trajectory: the time offset, the matching,
+the mounting, the alignment of the reference frames, and the errors (APE, RPE, roll, pitch,
+yaw of E = R_refᵀ·W·R_est).
 """
 
 import argparse
@@ -43,8 +27,10 @@ from rot_tools.io.trajectory_files import Poses, read_text, TrajectoryFileError
 DEFAULT_GAP = {'interpolate': 0.1, 'nearest': 0.01}
 """--max-gap (s) by --match: evo's 0.01 s for nearest."""
 
-LOW_CORRELATION = 0.5
-"""Correlation of the angular speeds below which an automatic offset gets a warning."""
+LOW_CORRELATION = 0.9
+"""Correlation of the angular speeds below which an automatic offset gets a warning: the same
+motion measured well by both streams correlates near 1, while unrelated streams searched over
+a wide --max-offset can reach far above one half."""
 
 LEAST_PAIRS = 3
 """Matched pairs needed (three positions fix an se3 alignment)."""
@@ -110,7 +96,7 @@ def add_parser(subparsers):
         '       [--ref-tf A B] [--match interpolate|nearest] [--max-gap S]\n'
         '       [--align none|rotation|yaw|se3|posyaw] [--offset auto|SECONDS]\n'
         '       [--max-offset S] [--mounting] [--delta D] [--delta-unit f|s]\n'
-        '       [--strict-stamps] [--deg] [--json] [--csv FILE] [--plot FILE]',
+        '       [--strict-stamps] [--deg] [--json] [--csv FILE|-] [--plot FILE]',
         description=f'An orientation against ground truth.\n\n{TEXT}',
         epilog='examples:\n  rot-tools compare est.tum gt.csv --align se3 --deg\n'
         '  rot-tools compare run.bag gt.tum --est-topic /imu/data --offset auto --mounting\n'
@@ -147,7 +133,8 @@ def add_parser(subparsers):
                    help='refuse a trajectory whose stamps repeat or go back (by default they '
                    'are sorted and the first of equal stamps kept, with a warning)')
     p.add_argument('--csv', metavar='FILE',
-                   help='write one row per match: stamp (s), angle, roll, pitch, yaw of E')
+                   help='write one row per match: stamp (s), angle, roll, pitch, yaw of E '
+                   '(- = standard output, which then gets no report)')
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
     arguments.add_deg(common, 'angles in degrees', suppress)
@@ -371,6 +358,9 @@ def report(result, est, ref, args):
         'match': args.match, 'pairs': len(result.pairs.stamps), 'offset': result.offset.offset})
     if args.offset == 'auto':
         out['offset_correlation'] = result.offset.correlation
+        warning = offset_warning(result.offset)
+        if warning:
+            out['offset_warning'] = warning
     out['alignment'] = args.align
     out['alignment_quaternion'] = _quaternion(result.alignment.W)
     out['alignment_matrix'] = _listed(result.alignment.W)
@@ -391,31 +381,37 @@ def report(result, est, ref, args):
     return out
 
 
+def offset_warning(found):
+    """Return why an automatic offset (trajectory.TimeOffset) may be wrong, or None."""
+    if found.correlation >= LOW_CORRELATION:
+        return None
+    return (f'the angular speeds correlate weakly at the offset found (r = '
+            f'{found.correlation:.2f} < {LOW_CORRELATION:g}): the offset {found.offset:+.6g} s '
+            'may be wrong, or the streams not of one motion; give --offset SECONDS')
+
+
 def warnings(result, args):
     """Return the one-line warnings of a result (without the ``warning:`` prefix)."""
     out = []
-    if args.offset == 'auto' and not result.offset.correlation >= LOW_CORRELATION:
-        out.append(f'the angular speeds correlate poorly at the offset found (r = '
-                   f'{result.offset.correlation:.2f} < {LOW_CORRELATION:g}): the offset '
-                   f'{result.offset.offset:+.6g} s may be wrong; give --offset SECONDS')
+    if args.offset == 'auto' and offset_warning(result.offset):
+        out.append(offset_warning(result.offset))
     if result.mount is not None and result.mount.warning:
         out.append(f'mounting: {result.mount.warning}')
     return out
 
 
-def write_csv(path, result, degrees, precision):
+def write_csv(out, result, degrees, precision):
     """
-    One row per pair: stamp (exact), angle, roll, pitch, yaw; written whole or not at all.
+    Write one row per pair to the text stream ``out``: stamp (exact), angle, roll, pitch, yaw.
 
     roll, pitch, yaw wrapped to (−π, π], as their statistics are.
     """
     e = result.errors
     table = _unit(np.column_stack([e.angle, trajectory.wrap_angles(e.rpy)]), degrees)
-    with output_file.complete_or_nothing(path, 'w', encoding='utf-8', newline='') as out:
-        out.write('stamp,angle,roll,pitch,yaw\n')
-        for stamp, row in zip(result.pairs.stamps.tolist(), table.tolist()):
-            cells = [repr(stamp)] + [repr(round_number(x, precision)) for x in row]
-            out.write(','.join(cells) + '\n')
+    out.write('stamp,angle,roll,pitch,yaw\n')
+    for stamp, row in zip(result.pairs.stamps.tolist(), table.tolist()):
+        cells = [repr(stamp)] + [repr(round_number(x, precision)) for x in row]
+        out.write(','.join(cells) + '\n')
 
 
 ALIGNMENT_TITLES = {
@@ -482,14 +478,19 @@ def run(args):
     if args.plot:
         output_file.write_figure(lambda: write_plot(args.plot, result, args), args.plot,
                                  options.error)
-    if args.csv is not None:
-        try:
-            write_csv(args.csv, result, args.deg, args.precision)
-        except OSError as exc:
-            options.error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
-    data = report(result, est, ref, args)
-    text = to_json if args.json else to_yaml
-    output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
+    if args.csv == '-':
+        output_file.to_stdout(lambda out: write_csv(out, result, args.deg, args.precision))
+    else:
+        if args.csv is not None:
+            try:
+                with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
+                                                     newline='') as out:
+                    write_csv(out, result, args.deg, args.precision)
+            except OSError as exc:
+                options.error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
+        data = report(result, est, ref, args)
+        text = to_json if args.json else to_yaml
+        output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
     ordered = [stamp_warning(name, source, poses)
                for name, source, poses in (('EST', args.est, est), ('REF', args.ref, ref))]
     for line in [line for line in ordered if line] + warnings(result, args):

@@ -1,20 +1,9 @@
 """
 Trajectory text files: TUM and EuRoC ground truth, read into stamps, rotations and positions.
 
-- **TUM** (``t x y z qx qy qz qw``): one pose a line, separated by spaces, t in seconds,
-  the quaternion in the ROS order (x, y, z, w); lines starting with ``#`` are comments.
-- **EuRoC** ground-truth CSV (``state_groundtruth_estimate0/data.csv`` and the like):
-  ``timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z[, …]``, comma separated, at least 8
-  columns (the rest, velocities and biases, ignored); lines starting with ``#`` are comments.
-  Stamps become seconds as t = ns / 10⁹ (as evo reads them).
-
-A quaternion q becomes R by rot_tools.quaternion_to_matrix after it is normalised; one whose
-norm is off 1 by more than rot_tools.io.boundary.QUATERNION_TOLERANCE (rotation_node's
-quaternion_tolerance: a typo, a zero) is refused. Stamps are taken as they come
-(rot_tools.core.trajectory.order_stamps): lines out of order are sorted (stably), and of lines
-with equal stamps the first is kept; Poses says how many of each. With ``strict`` the first
-such line is refused instead. Every refusal is a TrajectoryFileError naming the file, the line
-and the value.
+TUM: ``t x y z qx qy qz qw`` (the ROS order), separated by spaces. EuRoC: ``timestamp [ns],
+p_x, p_y, p_z, q_w, q_x, q_y, q_z[, …]``, comma separated. Lines starting with ``#`` are
+comments. Every refusal is a TrajectoryFileError naming the file, the line and the value.
 """
 
 from typing import NamedTuple
