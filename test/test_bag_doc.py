@@ -14,11 +14,11 @@ pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installe
 REPO = Path(__file__).resolve().parents[1]
 
 
-def _shell(command):
+def _shell(command, cwd=REPO):
     env = dict(os.environ)
     env['PATH'] = os.pathsep.join([str(Path(sys.executable).parent), env.get('PATH', '')])
     return subprocess.run(['bash', '-c', f'set -o pipefail; {command}'], capture_output=True,
-                          text=True, cwd=REPO, env=env, timeout=120)
+                          text=True, cwd=cwd, env=env, timeout=120)
 
 
 @pytest.mark.parametrize('tag', ['bag-summary', 'bag-csv', 'bag-covariance'])
@@ -29,6 +29,18 @@ def test_doc_example_is_real_output(tag):
         assert done.returncode in (0, 141) and done.stderr == '', done.stderr  # 141: head
         shown += f'$ {command}\n{done.stdout}'
     assert_doc_output(tag, shown)  # ROT_TOOLS_UPDATE_DOCS=1 rewrites a block that drifted
+
+
+def test_doc_conversion_to_rosbag2_is_real_output(tmp_path):
+    """Check the doc's rosbags-convert line, run in an empty directory on the recording."""
+    import bag_helpers as bh
+    shown = ''
+    for command, _ in console_steps(doc_block('bag-convert')):
+        done = _shell(command.replace('../shared/data/jackal_imu_odometry.bag', str(bh.REAL)),
+                      tmp_path)
+        assert done.returncode == 0 and done.stderr == '', done.stderr
+        shown += f'$ {command}\n{done.stdout}'
+    assert_doc_output('bag-convert', shown)
 
 
 def test_doc_plot_is_what_the_command_draws(tmp_path):
