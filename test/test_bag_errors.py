@@ -252,6 +252,10 @@ def damaged(tmp_path_factory):
         if storage == 'mcap':  # a message's bytes inverted: it no longer decodes
             out['flipped mcap'] = tmp / 'flipped.mcap'
             out['flipped mcap'].write_bytes(flipped(raw, len(raw) // 3, 20, 131))
+            # 2,000 bytes zeroed: rosbags' reader skips the chunk they hit, saying nothing
+            out['zeroed mcap'] = tmp / 'zeroed.mcap'
+            middle = len(raw) // 2
+            out['zeroed mcap'].write_bytes(raw[:middle] + bytes(2000) + raw[middle + 2000:])
     return out
 
 
@@ -265,9 +269,14 @@ def flipped(data, start, count, step):
 
 @pytest.mark.parametrize('which', ['truncated ros1', 'garbage ros1', 'flipped ros1',
                                    'zeroed ros1', 'truncated sqlite3', 'truncated mcap',
-                                   'flipped mcap'])
+                                   'flipped mcap', 'zeroed mcap'])
 def test_damaged_bags_are_one_line_naming_the_bag(script, damaged, which):
     one_line_error(script, 'bag', damaged[which], contains=f'bag: {damaged[which]}: ')
+
+
+def test_a_chunk_the_reader_skips_is_an_error_not_a_shorter_topic(script, damaged):
+    one_line_error(script, 'bag', damaged['zeroed mcap'],
+                   contains='messages its index lists could be read: the bag is damaged')
 
 
 def test_a_message_that_does_not_decode(script, tmp_path):

@@ -431,7 +431,23 @@ def read_topics(reader, connections, start=None, stop=None, progress=None, vecto
         raise BagError(f'{bag_name(reader)}: cannot read the bag: {_one_line(exc)}') from None
     if progress is not None:
         progress(count)
+    if start is None and stop is None:
+        _check_complete(reader, connections, topics)
     return {name: topic.finish() for name, topic in topics.items()}
+
+
+def _check_complete(reader, connections, topics):
+    """
+    Raise BagError if a topic read whole gave fewer messages than the bag's index lists.
+
+    A damaged chunk of an MCAP file can be skipped by the reader without an error: the count
+    the bag's index (or metadata.yaml) holds is the only sign of it.
+    """
+    for name, topic in topics.items():
+        listed = sum(conn.msgcount for conn in connections if conn.topic == name)
+        if topic.index() < listed:
+            raise BagError(f'{bag_name(reader)}: {name}: {topic.index()} of the {listed} '
+                           'messages its index lists could be read: the bag is damaged')
 
 
 # ---------------------------------------------------------------------------------------
