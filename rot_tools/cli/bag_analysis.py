@@ -65,8 +65,8 @@ def gyro_threshold(gyro_rms):
     """
     Return the RMS of |ω − ω_gyro| (rad/s) beyond which an orientation disagrees with its gyro.
 
-    GYRO_NOISE, plus what a gyro whose scale is off by imu-check's GYRO_TOL adds at the
-    gyro's RMS rate ``gyro_rms`` (rad/s): a gyro imu-check accepts stays within it.
+    GYRO_NOISE, plus GYRO_TOL (imu-check's tolerance on the gyro's scale) times the gyro's
+    RMS rate ``gyro_rms`` (rad/s): what a scale off by that much adds at most.
     """
     return GYRO_NOISE + GYRO_TOL * gyro_rms
 
@@ -240,9 +240,9 @@ def motion_summary(position, ns):
     dt = np.diff(ns) / NS_PER_S
     forward = np.flatnonzero(dt > 0)
     if len(forward):
-        with np.errstate(over='ignore', invalid='ignore'):
+        with np.errstate(over='ignore'):  # steps beyond float64: an infinite speed
             speed = np.linalg.norm(np.diff(position, axis=0)[forward], axis=1) / dt[forward]
-        k = int(np.nanargmax(speed)) if not np.isnan(speed).all() else 0
+        k = int(np.argmax(speed))
         out['max_speed'] = float(speed[k])
         out['max_speed_stamp'] = Exact(int(ns[forward[k] + 1]) / NS_PER_S)
     return out
