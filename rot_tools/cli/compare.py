@@ -393,8 +393,9 @@ def offset_warning(found):
 def warnings(result, args):
     """Return the one-line warnings of a result (without the ``warning:`` prefix)."""
     out = []
-    if args.offset == 'auto' and offset_warning(result.offset):
-        out.append(offset_warning(result.offset))
+    offset = offset_warning(result.offset) if args.offset == 'auto' else None
+    if offset:
+        out.append(offset)
     if result.mount is not None and result.mount.warning:
         out.append(f'mounting: {result.mount.warning}')
     return out
