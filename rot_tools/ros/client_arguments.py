@@ -48,6 +48,27 @@ COV_TEXT = ("C11 C12 ... C33: the rotation's covariance, row-major, rad² (rotat
             "printed as ~/rpy_covariance (default: all 0, ROS's unknown)")
 
 
+SHOWN = 40
+"""The most characters of a value typed that a message shows."""
+
+RATES = (1e-3, 1e3)
+"""The rates play accepts: slower, a second of recording lasts hours; faster, no timing."""
+
+
+def quoted(text):
+    """Return ``text`` quoted as a message shows it: its first SHOWN characters if longer."""
+    if len(text) <= SHOWN:
+        return repr(text)
+    return f'{text[:SHOWN]!r}… ({len(text)} characters)'
+
+
+def shortened(line, text):
+    """Return ``line`` with each ``text`` in it cut to its first SHOWN characters."""
+    if len(text) <= SHOWN:
+        return line
+    return line.replace(text, f'{text[:SHOWN]}… ({len(text)} characters)')
+
+
 def names_used():
     """Return the node's topics and services the client uses, relative to the node."""
     return tuple(row.name for row in interface.INPUTS + interface.OUTPUTS) + SERVICES_USED
@@ -56,7 +77,16 @@ def names_used():
 def _positive(text):
     value = arguments.any_number(text)
     if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f'must be a number > 0, got {text.strip()!r}')
+        raise argparse.ArgumentTypeError(f'must be a number > 0, got {quoted(text.strip())}')
+    return value
+
+
+def _rate(text):
+    value = arguments.any_number(text)
+    low, high = RATES
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(
+            f'must be a number from {low:g} to {high:g}, got {quoted(text.strip())}')
     return value
 
 
@@ -86,7 +116,7 @@ def _tolerance(text):
 def _node_name(text):
     name = text if text.startswith('/') else '/' + text
     if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
-        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text.strip()!r}')
+        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {quoted(text.strip())}')
     longest = max(names_used(), key=len)
     if len(name) + 1 + len(longest) > NAME_LIMIT:
         raise argparse.ArgumentTypeError(
@@ -191,6 +221,10 @@ def commands():
             "print each message of one of the node's outputs until Ctrl-C", '', (),
             'OUTPUT is the name of an output:\n' + ', '.join(r.name for r in interface.OUTPUTS)
             + '.\nEach message is printed as it arrives, as the input commands print it.'),
+        'diagnostics': Command(
+            "print the node's /diagnostics as they arrive, until Ctrl-C", '', (),
+            'One block per status: its name, its level (OK, WARN, ERROR or STALE), its message\n'
+            'and its values by key. Nothing within --timeout is one line (exit 1).'),
         'set': Command(
             "set one of the node's parameters", '', (),
             'VALUE is read as the type the node declares for NAME (its ~/describe_parameters):'
@@ -205,10 +239,12 @@ def commands():
         'play': Command(
             "publish a recording's messages on their topics, at their recorded times", '', (),
             'BAG is a ROS 1 .bag, a rosbag2 directory or a file of one (the rosbags library,\n'
-            "the bag extra). Remap the topics onto the node's inputs with ROS arguments:\n"
-            '  rotation_client play run.bag --ros-args -r /imu/data:=/rot_tools/imu\n'
-            'Playing starts once a subscription has matched (within --timeout); a summary '
-            'line\nis printed at the end (--node and --frame are not used).'),
+            "the bag extra). Remap the topics onto the node's inputs with ROS arguments, and\n"
+            "name them with --topics (a bag's own /diagnostics or /tf would go live too):\n"
+            '  rotation_client play run.bag --topics /imu/data --ros-args -r '
+            '/imu/data:=/rot_tools/imu\n'
+            'The topics played are printed first; playing starts once a subscription has '
+            'matched\n(within --timeout); a summary line is printed at the end.'),
     }
 
 
@@ -253,10 +289,12 @@ def build_parser():
         '  rotation_client tf odom base_link --once --deg\n'
         '  rotation_client tf-demo --duration 60\n'
         '  rotation_client echo rpy --count 3\n'
+        '  rotation_client diagnostics --once\n'
         '  rotation_client set angle_unit deg\n'
         '  rotation_client param get quaternion_tolerance\n'
         '  rotation_client param list\n'
-        '  rotation_client play run.bag --rate 2 --ros-args -r /imu/data:=/rot_tools/imu\n\n'
+        '  rotation_client play run.bag --topics /imu/data --ros-args -r '
+        '/imu/data:=/rot_tools/imu\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nnothing to describe, or a parameter the node did not set or '
         "does not have; 2 bad\narguments, a value not of its parameter's type, or an input "
@@ -304,6 +342,10 @@ def build_parser():
             p.add_argument('--once', action='store_true', help='print one message and exit')
             p.add_argument('--count', type=arguments.whole_number, metavar='N',
                            help='print N messages and exit')
+        elif name == 'diagnostics':
+            p.add_argument('--topic', default='/diagnostics', metavar='TOPIC',
+                           help='the topic to listen to (default /diagnostics)')
+            p.add_argument('--once', action='store_true', help='print one array and exit')
         elif name == 'set':
             p.add_argument('name', metavar='NAME', help="the parameter's name")
             p.add_argument('value', metavar='VALUE', help='its new value')
@@ -311,8 +353,9 @@ def build_parser():
             _param_verbs(p)
         elif name == 'play':
             p.add_argument('bag', metavar='BAG', help='the recording')
-            p.add_argument('--rate', type=_positive, default=1.0, metavar='R',
-                           help='play R times faster than recorded (default 1)')
+            p.add_argument('--rate', type=_rate, default=1.0, metavar='R',
+                           help=f'play R times faster than recorded, {RATES[0]:g} to '
+                           f'{RATES[1]:g} (default 1)')
             p.add_argument('--topics', nargs='+', metavar='T',
                            help='play these topics only (default: every topic)')
             arguments.add_bag_window(p)

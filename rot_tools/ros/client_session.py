@@ -175,6 +175,13 @@ class Client:
         current[0] = callback
         return sub
 
+    def unsubscribe(self, sub):
+        """Destroy a subscription of :meth:`subscribe` (a topic is one type in a node)."""
+        for key, (kept, _) in list(self.subscriptions.items()):
+            if kept is sub:
+                del self.subscriptions[key]
+        self.node.destroy_subscription(sub)
+
     def topic(self, name):
         return f'{self.target}/{name}'
 

@@ -69,6 +69,7 @@ SIGTERM. rclpy is used here only, and only once the command line is known to be 
 rclpy's own signal handlers, no other. ``rot-tools`` stays ROS-free.
 """
 
+import array
 from collections import deque
 import math
 import os
@@ -82,7 +83,8 @@ from rot_tools.core.euler import euler_to_matrix, matrix_to_euler
 from rot_tools.io import interface
 from rot_tools.io.arguments import install_hint
 from rot_tools.io.report import to_json, to_yaml, transform_report
-from rot_tools.ros.client_arguments import parse_args, PROG, without_ros_args
+from rot_tools.ros.client_arguments import parse_args, PROG, quoted, shortened
+from rot_tools.ros.client_arguments import without_ros_args
 from rot_tools.ros.client_session import BadInput, Client, describe_data, Refused, Unreachable
 import yaml
 
@@ -139,10 +141,21 @@ def _marker_data(marker):
     return data
 
 
+def message_data(msg):
+    """Return a message as plain data: {field: value}, nested alike; bytes as numbers."""
+    if hasattr(msg, 'get_fields_and_field_types'):
+        return {name: message_data(getattr(msg, name))
+                for name in msg.get_fields_and_field_types()}
+    if isinstance(msg, bytes):
+        return msg[0] if len(msg) == 1 else list(msg)
+    if isinstance(msg, (list, tuple, array.array, np.ndarray)):
+        return [message_data(item) for item in msg]
+    return msg.item() if isinstance(msg, np.generic) else msg
+
+
 def _values(msg, row, parameters):
-    """Return {field path: value} of an output's message (an output without a printer)."""
-    from rot_tools.io.fields import field_value
-    return {path: field_value(msg, path) for path in row.fields}
+    """Return the fields of an output's message but its header (an output without a printer)."""
+    return {name: value for name, value in message_data(msg).items() if name != 'header'}
 
 
 def _angles(msg, row, parameters):
@@ -316,6 +329,15 @@ def _tf_report(follower, header, R, b, args):
             **transform_report(R, b, args.seq, args.deg)}
 
 
+def _print_document(data, args):
+    """Print one document of a stream at once: YAML after '---', or JSON with --json."""
+    if args.json:
+        write(to_json(data), json_text=True)
+    else:
+        write('---\n' + to_yaml(data))
+    flush()
+
+
 def _tf_command(client, args):
     """tf: print BODY in REFERENCE from /tf and /tf_static, once or once a second."""
     from rot_tools.ros import tf_input  # tf2_msgs: only this command needs it
@@ -334,11 +356,7 @@ def _tf_command(client, args):
         report = _tf_report(follower, *latest[0], args)
         if args.once:
             return report
-        if args.json:
-            write(to_json(report), json_text=True)
-        else:
-            write('---\n' + to_yaml(report))
-        sys.stdout.flush()
+        _print_document(report, args)
         due = time.monotonic() + 1.0
         client.spin_until(lambda: time.monotonic() >= due, 1.0)
 
@@ -354,7 +372,7 @@ def _tf_demo_command(client, args):
         until = 'until Ctrl-C' if args.duration is None else f'for {args.duration:g} s'
         write(f'publishing {tf_demo.frames()} on {demo.tf.topic_name} and '
               f'{demo.tf_static.topic_name} {until}\n')
-        sys.stdout.flush()
+        flush()
         end = math.inf if args.duration is None else time.monotonic() + args.duration
         while time.monotonic() < end:
             client.spin_until(lambda: time.monotonic() >= end, 1.0)
@@ -364,7 +382,14 @@ def _tf_demo_command(client, args):
 
 
 def _echo_data(msg, row, parameters):
-    """One message of an output as plain data: its header's stamp and frame, and its values."""
+    """
+    One message of an output as plain data: its header's stamp and frame, and its values.
+
+    A message of another type than the output's (``--topic`` elsewhere) is printed whole.
+    """
+    from rot_tools.ros.messages import type_name
+    if type_name(type(msg)) != row.type_name:
+        return message_data(msg)
     data = {}
     if hasattr(msg, 'header'):
         stamp = msg.header.stamp
@@ -374,28 +399,73 @@ def _echo_data(msg, row, parameters):
 
 
 def _echo_command(client, args):
-    """echo: print each message of the node's output until Ctrl-C, --once or --count N."""
+    """
+    echo: print each message of the node's output until Ctrl-C, --once or --count N.
+
+    The subscription is made first, so that nothing published once it has matched is missed;
+    a topic of another type (``--topic``) is then listened to with the type it has.
+    """
     from rclpy.qos import QoSProfile
     from rot_tools.ros.messages import message_class
     row = interface.output_named(args.output)
-    parameters = client.parameters(['euler_sequence', 'angle_unit'])
     received = deque()
+    qos = QoSProfile(depth=100)
     sub = client.subscribe(message_class(row.type_name), args.topic or client.topic(row.name),
-                           received.append, QoSProfile(depth=100))
-    if not client.spin_until(lambda: sub.get_publisher_count() > 0, args.timeout):
-        raise Unreachable(client.missing(f'publisher on {sub.topic_name}'))
+                           received.append, qos)
+    parameters = client.parameters(['euler_sequence', 'angle_unit'])
+
+    topic = sub.topic_name  # remapped
+
+    def other_types():
+        return sorted({info.topic_type for info in
+                       client.node.get_publishers_info_by_topic(topic)} - {row.type_name})
+    if not client.spin_until(lambda: sub.get_publisher_count() > 0 or other_types(),
+                             args.timeout):
+        raise Unreachable(client.missing(f'publisher on {topic}'))
+    if not sub.get_publisher_count():
+        client.unsubscribe(sub)
+        client.subscribe(message_class(other_types()[0]), topic, received.append, qos)
     left = 1 if args.once else args.count or math.inf
     while left > 0:
         client.spin_until(lambda: received, 1.0)
         while received and left > 0:
-            data = _echo_data(received.popleft(), row, parameters)
-            if args.json:
-                write(to_json(data), json_text=True)
-            else:
-                write('---\n' + to_yaml(data))
-            sys.stdout.flush()
+            _print_document(_echo_data(received.popleft(), row, parameters), args)
             left -= 1
     return None
+
+
+LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
+"""diagnostic_msgs/DiagnosticStatus' levels by their number, as words."""
+
+
+def _status_data(status, stamp):
+    """One DiagnosticStatus as plain data: its level as a word, its values by key."""
+    (level,) = status.level  # one byte
+    return {'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec}, 'name': status.name,
+            'level': LEVELS[level] if level < len(LEVELS) else level,
+            'message': status.message, 'hardware_id': status.hardware_id,
+            'values': {kv.key: kv.value for kv in status.values}}
+
+
+def _diagnostics_command(client, args):
+    """diagnostics: print each status on /diagnostics as it arrives, until Ctrl-C or --once."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.qos import QoSProfile
+    received = deque()
+    sub = client.subscribe(DiagnosticArray, args.topic, received.append, QoSProfile(depth=100))
+    if not client.spin_until(lambda: received, args.timeout):
+        domain = os.environ.get('ROS_DOMAIN_ID') or '0'
+        raise Unreachable(f'nothing on {sub.topic_name} within {args.timeout:g} s' + (
+            '' if sub.get_publisher_count() else
+            f' (no publisher: is rotation_node running, with ROS_DOMAIN_ID {domain}?)'))
+    while True:
+        while received:
+            array = received.popleft()
+            for status in array.status:
+                _print_document(_status_data(status, array.header.stamp), args)
+            if args.once:
+                return None
+        client.spin_until(lambda: received, 1.0)
 
 
 def _set_command(client, args):
@@ -404,17 +474,17 @@ def _set_command(client, args):
     from rot_tools.ros import client_parameters
     kind = client.parameter_type(args.name)
     if kind in (None, ParameterType.PARAMETER_NOT_SET):
-        raise Unreachable(f'node {client.target} has no parameter {args.name!r}')
+        raise Unreachable(f'node {client.target} has no parameter {quoted(args.name)}')
     try:
         value = client_parameters.typed_value(kind, args.value)
-    except client_parameters.DoesNotFit:
-        raise BadInput(client_parameters.refusal(args.name, client.target, kind,
-                                                 args.value)) from None
+    except client_parameters.DoesNotFit as exc:
+        raise BadInput(client_parameters.refusal(args.name, client.target, kind, args.value,
+                                                 *exc.args)) from None
     result = client.set_parameter(Parameter(name=args.name, value=value))
     shown = f'{args.name} = {client_parameters.shown(value)}'
     if not result.successful:
-        raise Unreachable(f'node {client.target} refused {shown}: '
-                          + ' '.join(result.reason.split()))
+        raise Unreachable(shortened(f'node {client.target} refused {shown}: '
+                                    + ' '.join(result.reason.split()), args.value))
     return f'node {client.target}: {shown}\n'
 
 
@@ -425,7 +495,7 @@ def _param_command(client, args):
     if args.param_command == 'get':
         values = client.parameter_values([args.name])  # none, or NOT_SET: not declared
         if not values or values[0].type == ParameterType.PARAMETER_NOT_SET:
-            raise Unreachable(f'node {client.target} has no parameter {args.name!r}')
+            raise Unreachable(f'node {client.target} has no parameter {quoted(args.name)}')
         (value,) = values
         python = client_parameters.python_value(value)
         if args.json:
@@ -454,28 +524,36 @@ def _play_command(client, args):
                 played, skipped = bag_player.topics(reader, args.topics)
             except KeyError as exc:
                 names = sorted({c.topic for c in reader.connections})
-                raise BadInput(f'{args.bag} has no topic {exc.args[0]}: its topics are '
-                               + ', '.join(names)) from None
+                raise BadInput(shortened(f'{args.bag} has no topic {exc.args[0]}: its topics '
+                                         'are ' + ', '.join(names), exc.args[0])) from None
             if not played:
                 raise BadInput(f'{args.bag}: nothing to play: ' + '; '.join(
                     f'{s.topic} ({s.msgtype}: {s.why})' for s in skipped))
             player = bag_player.Player(client.publisher, client.spin_until, played)
+            write(''.join(line + '\n' for line in player.plan(skipped)))
+            flush()
             if len(player.wait_for_subscribers(args.timeout)) == len(played):
-                raise Unreachable(player.nobody_listens(args.timeout, client.target))
+                raise Unreachable(player.nobody_listens(args.timeout, client.target,
+                                                        client.found()))
             start, stop = (None if seconds is None
                            else reader.start_time + int(round(seconds * 1e9)) + after
                            for seconds, after in ((args.start, 0), (args.end, 1)))
             result = player.play(reader, args.rate, start, stop)
     except bag_read.BagError as exc:
         raise BadInput(str(exc)) from None
-    return bag_player.summary(args.bag, result._replace(skipped=skipped), args.rate) + '\n'
+    return bag_player.summary(args.bag, result, args.rate) + '\n'
 
 
 COMMANDS = {**{row.name: _input_command for row in interface.INPUTS},
             'describe': _describe_command, 'screw-path': _screw_path_command,
             'tf': _tf_command, 'tf-demo': _tf_demo_command, 'echo': _echo_command,
+            'diagnostics': _diagnostics_command,
             'set': _set_command, 'param': _param_command, 'play': _play_command}
 """What runs each command: every input of the node is sent by _input_command."""
+
+
+class StdoutFailed(Exception):
+    """Stdout could not be written: its reader went away (BrokenPipeError) or a full disk."""
 
 
 def write(text, json_text=False):
@@ -493,7 +571,18 @@ def write(text, json_text=False):
             text = re.sub(r'[^\x00-\x7f]', lambda m: _json_escape(m.group()), text)
         else:
             sys.stdout.reconfigure(errors='backslashreplace')
-    sys.stdout.write(text)
+    try:
+        sys.stdout.write(text)
+    except OSError as exc:
+        raise StdoutFailed(exc) from None
+
+
+def flush():
+    """Flush stdout; StdoutFailed if it cannot be written."""
+    try:
+        sys.stdout.flush()
+    except OSError as exc:
+        raise StdoutFailed(exc) from None
 
 
 def _json_escape(c):
@@ -505,6 +594,8 @@ def _json_escape(c):
 
 
 EXIT_UNREACHABLE = 1
+EXIT_STDOUT = 1
+"""Stdout cannot be written (``> /dev/full``)."""
 EXIT_USAGE = 2
 """Bad arguments (ROS arguments included), or an input the node refused."""
 EXIT_INTERRUPTED = 128 + signal.SIGINT
@@ -513,6 +604,22 @@ EXIT_TERMINATED = 128 + signal.SIGTERM
 """SIGTERM: rclpy's handler shut the context down under the command."""
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE
 """The reader of stdout went away (``echo rpy | head -3``): the shell's status for SIGPIPE."""
+
+
+def stdout_failed(exc):
+    """
+    Return the exit status for stdout that ``exc`` (an OSError) could not write.
+
+    Its reader gone (``| head``): EXIT_BROKEN_PIPE, quietly; else one line, EXIT_STDOUT.
+    Stdout then goes to /dev/null, so that Python's own flush at exit has nothing to fail on.
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    if isinstance(exc, BrokenPipeError):
+        return EXIT_BROKEN_PIPE
+    print(f'{PROG}: cannot write to stdout: {exc.strerror or exc}', file=sys.stderr)
+    return EXIT_STDOUT
 
 
 def _init_ros(argv, context):
@@ -549,7 +656,7 @@ def _print_result(result, args):
     else:
         write(to_yaml(result))
     for hint in args.hints:
-        sys.stdout.flush()
+        flush()
         print(f'{PROG}: hint: {hint}', file=sys.stderr)
 
 
@@ -570,6 +677,7 @@ def run_command(args, context, client=None):
         else:
             client = Client(args.node, args.timeout, context)
         _print_result(COMMANDS[args.command](client, args), args)
+        flush()
         return 0
     except Unreachable as exc:
         print(f'{PROG}: {exc}', file=sys.stderr)
@@ -581,10 +689,8 @@ def run_command(args, context, client=None):
         print(f'{PROG}: bad ROS arguments (after --ros-args): {str(exc).splitlines()[0]}',
               file=sys.stderr)
         return EXIT_USAGE
-    except BrokenPipeError:
-        # Python's own flush of stdout at exit would fail again: stdout goes nowhere now.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return EXIT_BROKEN_PIPE
+    except StdoutFailed as exc:
+        return stdout_failed(exc.args[0])
     except Exception:
         if context.ok():
             raise
@@ -626,7 +732,16 @@ def main(args=None):
     context shuts down alike, and the command ends with 143.
     """
     argv = [PROG, *(sys.argv[1:] if args is None else args)]
-    parsed = parse_args(without_ros_args(argv)[1:])
+    try:
+        parsed = parse_args(without_ros_args(argv)[1:])
+    except OSError as exc:  # --help or --version printed where it cannot be written
+        return stdout_failed(exc)
+    except SystemExit:  # --help or --version printed, or a bad argument said
+        try:
+            flush()
+        except StdoutFailed as exc:
+            return stdout_failed(exc.args[0])
+        raise
     try:
         return _run(parsed, argv)
     except KeyboardInterrupt:
