@@ -854,3 +854,10 @@ def test_report_strings_round_trip(text):
         # (not the newline: it also ends the YAML and JSON lines)
         for c in set(text) - set(' "\\\n') - set(string.ascii_letters + string.digits):
             assert (c in written) != must_escape(c), (c, written)
+
+
+def test_every_input_of_the_node_has_a_verb():
+    """The client fills each input's message by name: a new input needs its verb."""
+    from rot_tools.io import interface
+    from rot_tools.ros.client_arguments import INPUTS
+    assert set(INPUTS) == {row.name for row in interface.INPUTS}

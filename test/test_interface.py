@@ -136,7 +136,7 @@ def collect(messages):
     stamp = answers.complete()
     assert stamp == (7, 8)
     answer = dict(answers.by_stamp[stamp])
-    answer[client_session.matrix_output()] = answers.matrix(np.eye(3))
+    answer[client_session.MATRIX] = answers.matrix(np.eye(3))
     return answer
 
 
@@ -169,8 +169,8 @@ def test_a_new_output_row_is_printed_by_its_fields(monkeypatch):
     messages = answer_messages()
     answer = rotation_client._answer_data(collect(messages), PARAMETERS)
     k = len(interface.OUTPUTS) - 1
-    assert answer['rotvec_again'] == {'vector.x': 10.0 * k, 'vector.y': 10.0 * k + 1,
-                                      'vector.z': 10.0 * k + 2}
+    assert answer['rotvec_again'] == {'vector': {'x': 10.0 * k, 'y': 10.0 * k + 1,
+                                                 'z': 10.0 * k + 2}}
     assert client_session.stamped_outputs()[-1] == 'rotvec_again'  # awaited like the others
 
 

@@ -32,16 +32,32 @@ SERVICES_USED = ('describe', 'screw_path', 'get_parameters', 'describe_parameter
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 FLOAT32_TINY = float(np.finfo(np.float32).smallest_subnormal)
 
-ARGUMENTS = {'position': 'X Y Z', 'orientation': 'QX QY QZ QW', 'angles': 'A1 A2 A3'}
-"""The numbers given for each role of an input's fields (the others are not given: an
-Imu's orientation_covariance is sent zero, or as --cov says)."""
-
 EULER_TEXT = (
     'A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n'
     "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, SEQ),"
     '\nthen matrix_to_euler(R, node sequence).')
 CHILD_TEXT = 'The body is --child-frame (default base_link).'
 POSE = 'X Y Z QX QY QZ QW'
+QUATERNION = 'QX QY QZ QW'
+
+INPUTS = {
+    'pose': (POSE, 'pose.position = X Y Z, pose.orientation = QX QY QZ QW'),
+    'euler': ('A1 A2 A3', 'vector = A1 A2 A3'),
+    'transform': (POSE, 'transform.translation = X Y Z, transform.rotation = QX QY QZ QW'),
+    'pose_with_covariance': (POSE, 'pose.pose.position = X Y Z, '
+                             'pose.pose.orientation = QX QY QZ QW'),
+    'odometry': (POSE, 'pose.pose.position = X Y Z, pose.pose.orientation = QX QY QZ QW'),
+    'imu': (QUATERNION, 'orientation = QX QY QZ QW'),
+    'orientation': (QUATERNION, 'quaternion = QX QY QZ QW'),
+}
+"""The verb of each input of the node (its name): the numbers it takes, and where they go
+(rot_tools.ros.rotation_client fills the message)."""
+
+WITH_CHILD_FRAME = ('transform', 'odometry')
+"""The inputs whose message names the body: child_frame_id = --child-frame."""
+
+WITH_COVARIANCE = ('pose_with_covariance', 'odometry', 'imu')
+"""The inputs whose message carries the rotation's covariance: --cov."""
 TOPIC_TEXT = "the topic to send to, when the node's input is remapped (default NODE/{name})"
 COV_TEXT = ("C11 C12 ... C33: the rotation's covariance, row-major, rad² (rotations about the "
             "parent's fixed X, Y, Z, or roll, pitch, yaw: the node's input_covariance); "
@@ -175,33 +191,25 @@ class Command:
             summary, numbers, quaternions, text, row)
 
 
-def input_command(row):
-    """
-    Return the Command sending to an input row: its numbers, role by role, and its help.
-
-    E.g. ~/pose: X Y Z QX QY QZ QW, "pose.position = X Y Z, pose.orientation = QX QY QZ QW".
-    """
-    given = [(role, path) for role, path in row.fields.items() if role in ARGUMENTS]
-    numbers, quaternions, offset = [], [], 0
-    for role, _ in given:
-        if role == 'orientation':
-            quaternions.append(offset)
-        numbers.append(ARGUMENTS[role])
-        offset += len(ARGUMENTS[role].split())
-    lines = [f'{row.topic}: {row.help}.',
-             ', '.join(f'{path} = {ARGUMENTS[role]}' for role, path in given) + '.']
-    if 'angles' in row.fields:
+def input_command(name):
+    """Return the Command sending to the node's input ``name``: its numbers and its help."""
+    row = interface.input_named(name)
+    numbers, where = INPUTS[name]
+    words = numbers.split()
+    lines = [f'~/{name}: {row.help}.', where + '.']
+    if name == 'euler':
         lines.append(EULER_TEXT)
-    if 'child_frame_id' in row.fields:
+    if name in WITH_CHILD_FRAME:
         lines.append(CHILD_TEXT)
-    return Command(f'send a {row.type_name} to {row.topic}', ' '.join(numbers),
-                   tuple(quaternions), '\n'.join(lines), row)
+    quaternions = (words.index('QX'),) if 'QX' in words else ()
+    return Command(f'send a {row.type_name} to ~/{name}', numbers, quaternions,
+                   '\n'.join(lines), row)
 
 
 def commands():
     """Return {name: Command}: a command per input of the node, then the others."""
     return {
-        **{row.name: input_command(row) for row in interface.INPUTS},
+        **{name: input_command(name) for name in INPUTS},
         'describe': Command("print ~/describe's report of the latest input", ''),
         'screw-path': Command(
             'call ~/screw_path from one pose to another', f'{POSE} {POSE}', (3, 10),
@@ -302,22 +310,21 @@ def build_parser():
     sub = parser.add_commands(_leading_options, dest='command', metavar='COMMAND',
                               required=True)
     for name, command in commands().items():
-        fields = command.row.fields if command.row is not None else {}
-        usage = ' '.join(filter(None, [PROG, name, 'SEQ' if 'angles' in fields else '',
+        usage = ' '.join(filter(None, [PROG, name, 'SEQ' if name == 'euler' else '',
                                        USAGE.get(name, ''),
                                        command.numbers, '[options]']))
         summary = command.summary
         p = sub.add_parser(name, help=summary, usage=usage,
                            description=f'{summary[0].upper()}{summary[1:]}.\n'
                            f'{command.text}'.strip())
-        if 'angles' in fields:
+        if name == 'euler':
             arguments.add_sequence(p)
             arguments.add_deg(p, 'the angles are in degrees')
         if command.row is not None:
             p.add_argument('--topic', metavar='TOPIC', help=TOPIC_TEXT.format(name=name))
-        if command.row is not None and command.row.covariance:
+        if name in WITH_COVARIANCE:
             arguments.add_cov(p, COV_TEXT, type=arguments.any_number, metavar='C')
-        if 'child_frame_id' in fields:
+        if name in WITH_CHILD_FRAME:
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
         if name == 'screw-path':
@@ -389,8 +396,7 @@ def parse_args(argv):
         for i in command.quaternions:
             w, *xyz = args.numbers[i:i + 4]
             args.numbers[i:i + 4] = [*xyz, w]
-    fields = command.row.fields if command.row is not None else {}
-    hint = angle_hint(args.numbers) if 'angles' in fields and not args.deg else ''
+    hint = angle_hint(args.numbers) if args.command == 'euler' and not args.deg else ''
     args.hints = [hint] if hint else []
     return args
 

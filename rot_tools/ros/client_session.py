@@ -40,26 +40,20 @@ class BadInput(Exception):
     """What was given cannot be used (exit 2): a value not of its parameter's type, a bag."""
 
 
+MATRIX = 'rotation_matrix'
+"""The output without a header, matched by its content."""
+
+PICTURES = ('screw_axis', 'markers')
+"""The pictures: drawn at a limited rate, the latest input winning."""
+
+COVARIANCES = ('rpy_covariance',)
+"""The outputs published only for an input that carries a covariance."""
+
+
 def stamped_outputs():
-    """Return the names of the outputs published for every input with its header."""
+    """Return the names of the outputs published for every input, with its header."""
     return tuple(row.name for row in interface.OUTPUTS
-                 if row.value and row.stamped and not row.covariance)
-
-
-def covariance_outputs():
-    """Return the names of the outputs published only for an input with a covariance."""
-    return tuple(row.name for row in interface.OUTPUTS if row.covariance)
-
-
-def picture_outputs():
-    """Return the names of the pictures (published at a limited rate, the latest wins)."""
-    return tuple(row.name for row in interface.OUTPUTS if row.value is None)
-
-
-def matrix_output():
-    """Return the name of the output without a header, matched by content: the matrix."""
-    (name,) = [row.name for row in interface.OUTPUTS if row.value and not row.stamped]
-    return name
+                 if row.name not in (MATRIX, *PICTURES, *COVARIANCES))
 
 
 def describe_data(response):
@@ -315,10 +309,10 @@ class Client:
         from rclpy.qos import QoSProfile
         from rot_tools.ros.messages import message_class
         answers = Answers(msg.header.frame_id)
-        matrix = matrix_output()
+        matrix = MATRIX
         qos = QoSProfile(depth=100)
-        covariances = covariance_outputs() if covariance else ()
-        wanted = stamped_outputs() + covariances + (picture_outputs() if pictures else ())
+        covariances = COVARIANCES if covariance else ()
+        wanted = stamped_outputs() + covariances + (PICTURES if pictures else ())
         subs = [self.subscribe(message_class(interface.output_named(name).type_name),
                                self.topic(name), answers.collector(name), qos)
                 for name in wanted]
@@ -354,7 +348,7 @@ class Client:
         if covariances:
             self.covariance_answer(answer, covariances, before, topic, answers.sent)
         if pictures:
-            self.spin_until(lambda: set(picture_outputs()) <= set(answer),
+            self.spin_until(lambda: set(PICTURES) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
         return topic, stamp, {**answer, matrix: matrix_msg}
 

@@ -226,56 +226,50 @@ def node_angles(angles, sequence, degrees, node_sequence, node_degrees):
 
 def _input_message(args, parameters):
     """
-    Return (message, what was sent as plain data) of an input command, from its row.
+    Return (message, what was sent as plain data) of an input command.
 
-    Each role of the row's fields takes its numbers in turn (a position X Y Z, an
-    orientation QX QY QZ QW, Euler angles sent in the node's sequence and unit); a
-    child_frame_id is --child-frame. Keyed by each field's last name (orientation,
-    rotation, quaternion, ...); Euler angles by sequence, unit, angles.
+    Euler angles are sent in the node's sequence and unit (``parameters``); the rotation's
+    covariance --cov, 9 numbers row-major, is an Imu's orientation_covariance or the rotation
+    block of a pose's 6×6 (the rest 0).
     """
-    from rot_tools.io.fields import field_value
     from rot_tools.ros.messages import message_class
-    row = args.row
-    msg = message_class(row.type_name)()
-    numbers = iter(args.numbers)
+    name, numbers = args.command, list(args.numbers)
+    msg = message_class(args.row.type_name)()
+    cov = None if getattr(args, 'cov', None) is None else np.reshape(args.cov, (3, 3))
+    if name == 'euler':
+        sequence, unit = parameters['euler_sequence'], parameters['angle_unit']
+        angles = node_angles(numbers, args.sequence, args.deg, sequence, unit == 'deg')
+        _set_xyz(msg.vector, angles)
+        return msg, {'sequence': sequence, 'unit': unit, 'angles': list(angles)}
+    if name == 'orientation':
+        _set_quaternion(msg.quaternion, numbers)
+        return msg, {'quaternion': _quaternion(msg.quaternion)}
+    if name == 'imu':
+        _set_quaternion(msg.orientation, numbers)
+        sent = {'orientation': _quaternion(msg.orientation)}
+        if cov is not None:
+            msg.orientation_covariance = cov.ravel()
+            sent['orientation_covariance'] = cov.tolist()
+        return msg, sent
+    if name == 'transform':
+        msg.child_frame_id = args.child_frame
+        _set_xyz(msg.transform.translation, numbers[:3])
+        _set_quaternion(msg.transform.rotation, numbers[3:])
+        return msg, {'child_frame_id': msg.child_frame_id,
+                     'translation': _xyz(msg.transform.translation),
+                     'rotation': _quaternion(msg.transform.rotation)}
     sent = {}
-    for role, path in row.fields.items():
-        parent, _, name = path.rpartition('.')
-        if role == 'child_frame_id':
-            setattr(field_value(msg, parent) if parent else msg, name, args.child_frame)
-            sent[name] = args.child_frame
-        elif role == 'position':
-            _set_xyz(field_value(msg, path), [next(numbers) for _ in range(3)])
-            sent[name] = _xyz(field_value(msg, path))
-        elif role == 'orientation':
-            _set_quaternion(field_value(msg, path), [next(numbers) for _ in range(4)])
-            sent[name] = _quaternion(field_value(msg, path))
-        elif role == 'angles':
-            sequence, unit = parameters['euler_sequence'], parameters['angle_unit']
-            angles = node_angles([next(numbers) for _ in range(3)], args.sequence, args.deg,
-                                 sequence, unit == 'deg')
-            _set_xyz(field_value(msg, path), angles)
-            sent.update(sequence=sequence, unit=unit, angles=list(angles))
-    if getattr(args, 'cov', None) is not None:
-        sent.update(_set_covariance(msg, row.covariance, args.cov))
+    if name == 'odometry':
+        msg.child_frame_id = sent['child_frame_id'] = args.child_frame
+    pose = msg.pose if name == 'pose' else msg.pose.pose  # pose_with_covariance, odometry
+    _set_pose(pose, numbers)
+    sent.update(_pose_data(pose))
+    if cov is not None:
+        C = np.zeros((6, 6))
+        C[3:, 3:] = cov
+        msg.pose.covariance = C.ravel()
+        sent['covariance'] = C.tolist()
     return msg, sent
-
-
-def _set_covariance(msg, covariance, rotation):
-    """
-    Put the 9 numbers of ``rotation`` (row-major) in the covariance array (path, size) of msg.
-
-    9 numbers: the array itself (an Imu's orientation_covariance); 36: its rotation block,
-    the rest 0. Return {the array's name: its rows} as sent.
-    """
-    from rot_tools.io.fields import field_value
-    path, size = covariance
-    n = 3 if size == 9 else 6
-    C = np.zeros((n, n))
-    C[n - 3:, n - 3:] = np.reshape(rotation, (3, 3))
-    parent, _, name = path.rpartition('.')
-    setattr(field_value(msg, parent) if parent else msg, name, C.ravel().tolist())
-    return {name: C.tolist()}
 
 
 def _input_command(client, args):
