@@ -197,8 +197,8 @@ class StreamDuringCall:
 
 def test_echo_prints_a_stream_from_its_start():
     """Echo subscribes before it asks the node anything: the stream's first message is printed."""
-    from rot_tools.ros.client_arguments import parse_args
-    from rot_tools.ros.rotation_client import COMMANDS
+    from rot_tools.ros.client.arguments import parse_args
+    from rot_tools.ros.client.rotation_client import COMMANDS
     out = io.StringIO()
     with redirect_stdout(out):
         COMMANDS['echo'](StreamDuringCall(), parse_args(['echo', 'rpy', '--once']))
@@ -519,7 +519,7 @@ class FakeReader:
 
 def test_no_message_is_published_before_its_time():
     """Each message waits (spinning) for its recorded offset from the first, over the rate."""
-    from rot_tools.ros.bag_player import Player
+    from rot_tools.ros.client.bag_player import Player
     from std_msgs.msg import String
 
     class Publisher:
@@ -674,7 +674,7 @@ def test_tf_demo_without_tf2_msgs():
         "        if name.split('.')[0] == 'tf2_msgs':\n"
         "            raise ImportError('refused: ' + name)\n"
         'sys.meta_path.insert(0, Refuse())\n'
-        'from rot_tools.ros.rotation_client import main\n'
+        'from rot_tools.ros.client.rotation_client import main\n'
         "sys.exit(main(['tf-demo']))\n")
     command = [sys.executable, '-c', probe]
     result = subprocess.run(command, capture_output=True, text=True, timeout=60,

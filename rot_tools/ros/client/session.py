@@ -1,12 +1,8 @@
 """
 rotation_client's conversation with a node: a short-lived rclpy node, every wait bounded.
 
-It publishes one input until the node answers, and collects the answer output by output,
-by the output's name (rot_tools.io.interface.OUTPUTS): the outputs that carry a header are
-matched by the stamp sent, ``~/rotation_matrix`` (no header) by its content against the
-answer's quaternion. It calls the node's services, repeating a call whose reply Fast DDS
-dropped, and reads ~/describe's refusal counts to tell a refused input from a lost one.
-rclpy is imported only when a Client is made.
+It publishes one input until the node answers and collects the answer output by output, by
+the output's name; it calls the node's services and reads ~/describe's refusal counts.
 """
 
 from collections import deque

@@ -1,14 +1,8 @@
 """
 rotation_client's parameter commands: ``set NAME VALUE``, ``param get NAME``, ``param list``.
 
-``set`` reads VALUE as the type the node declares for NAME (its ~/describe_parameters): a
-string takes the text as it is; a double any number Python's float() or YAML reads (``1e-2``,
-which YAML — and so ``ros2 param set`` — reads as a string, ``2``, ``nan``); an integer a
-whole number; a boolean what YAML reads as one (``true``, ``False``, ``yes``); an array a YAML
-list of such elements. A value that does not fit is one line naming the type (exit status 2),
-and nothing is sent. ``param get`` and ``param list`` print what ``ros2 param get NODE NAME``
-and ``ros2 param list NODE`` print: ``Double value is: 0.001``, the names sorted, each
-indented by two spaces.
+``set`` reads VALUE as the type the node declares for NAME; ``param get`` and ``param list``
+print what ``ros2 param get`` and ``ros2 param list`` print.
 """
 
 import math
@@ -17,7 +11,7 @@ import sys
 
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rclpy.parameter import parameter_value_to_python
-from rot_tools.ros.client_arguments import quoted
+from rot_tools.ros.client.arguments import quoted
 import yaml
 
 SMALLEST = 5e-324

@@ -1,75 +1,10 @@
 """
 rotation_client: send one input to a running rotation_node and print what it answered.
 
-ros2cli (``ros2 topic pub``/``echo``, ``ros2 service call``) is not on PyPI, so the pip-only
-quick start has this instead (doc/client.md is its manual)::
-
-    rotation_client euler ZYX 30 20 10 --deg
-    rotation_client pose X Y Z QX QY QZ QW
-    rotation_client pose_with_covariance X Y Z QX QY QZ QW [--cov C11 C12 ... C33]
-    rotation_client odometry X Y Z QX QY QZ QW [--cov C11 C12 ... C33]
-    rotation_client transform X Y Z QX QY QZ QW
-    rotation_client orientation QX QY QZ QW
-    rotation_client imu QX QY QZ QW [--cov C11 C12 ... C33]
-    rotation_client describe
-    rotation_client screw-path X Y Z QX QY QZ QW  X Y Z QX QY QZ QW [--tolerance T]
-    rotation_client tf REFERENCE BODY [--once] [--seq SEQ] [--deg]
-    rotation_client tf-demo [--duration S]
-    rotation_client echo OUTPUT [--once | --count N]
-    rotation_client set NAME VALUE
-    rotation_client param get NAME | param list
-    rotation_client play BAG [--rate R] [--topics T ...] [--start S] [--end S]
-
-Quaternions are read in the ROS order, w last, or w first with ``--wxyz``.
-
-An input command — one per input of the node, rot_tools.io.interface.INPUTS — publishes one
-message, stamped with the current time, on the node's input of that name (Euler angles of any
-sequence and unit are sent as the same rotation in the node's euler_sequence and angle_unit:
-:func:`node_angles`) and prints the node's answer on its output topics for that message, output
-by output by name (rot_tools.ros.client_session) — as YAML, or JSON with ``--json``
-(rot_tools.io.report's writers). ``--topic`` sends to an input remapped away from
-``NODE/NAME``; the topic printed is the one used. ``--cov`` (an input that carries a
-covariance) sends 9 numbers, row-major, rad², as the rotation's covariance (the rest of a
-pose's 6×6 is 0; without it all is 0, ROS's "unknown"), and the answer adds
-``~/rpy_covariance``, or ~/describe's word for why the node published none. Euler angles
-typed in radians larger than 2π get rot-tools' hint on stderr (rot_tools.io.report.angle_hint).
-The command line is parsed by rot_tools.ros.client_arguments. The node draws pictures
-(``~/screw_axis``, ``~/markers``) at a limited rate, the latest input winning, so they are
-printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
-seconds. ``describe`` prints ~/describe's
-report; ``screw-path`` calls ~/screw_path and prints the path. ``tf`` needs no node: it listens
-to /tf and /tf_static itself (rot_tools.ros.tf_input) and prints the report of BODY in
-REFERENCE — tf2_echo's job, with every representation — once a second until Ctrl-C, or once
-with ``--once``; a frame that does not appear within ``--timeout`` is one line on stderr, exit
-status 1. ``tf-demo`` publishes a small moving tree (rot_tools.ros.tf_demo) until Ctrl-C or
-``--duration``. ``echo OUTPUT`` prints each message of that output as it arrives, as the input
-commands print it, until Ctrl-C, ``--once`` or ``--count N``. ``set NAME VALUE`` reads the type
-the node declares for NAME (~/describe_parameters), sends VALUE as that type (~/set_parameters)
-and prints the node's answer in one line: a refusal, with the node's reason, is exit status 1;
-a VALUE that is not of that type is one line, exit status 2, and nothing is sent. ``param get
-NAME`` and ``param list`` print what ``ros2 param get`` and ``ros2 param list`` print of the
-node (rot_tools.ros.client_parameters). ``play BAG`` publishes a recording's messages on their
-topics at their recorded times, ``--rate`` times faster (rot_tools.ros.bag_player; the rosbags
-library, the ``bag`` extra): remapped with ``--ros-args -r``, a recording drives the node.
-
-The node's inputs are best effort, so a first message can be lost while discovery settles:
-the input is sent again, with a new stamp, every ``RESEND`` seconds until an answer comes.
-When none comes, ~/describe's refusal counts tell whether the node refused it. Fast DDS can
-drop the reply to a brand-new service client, so a call is repeated after ``RESEND``
-seconds. Every wait is bounded by ``--timeout``.
-
-Exit status: 0 answered; 1 the node, one of its topics or services, or an answer could not
-be reached within ``--timeout``, or ~/describe has nothing to report, or the node did not
-set a parameter, or nothing subscribed to what play publishes, or rosbags is missing (one
-line on stderr naming what); 2 bad arguments, ROS arguments included, a parameter value not
-of the parameter's type, a bag that cannot be played, or the node refused the input (one line
-on stderr with the node's reason); 130 Ctrl-C; 141 the reader of stdout went away; 143
-SIGTERM. rclpy is used here only, and only once the command line is known to be good:
-``--help``, ``--version`` and bad arguments start nothing. The process is the caller's:
-rclpy's own signal handlers, no other. ``rot-tools`` stays ROS-free.
+One function per command (COMMANDS), run by :func:`run_command` in an rclpy context of its
+own; doc/client.md is the manual, ``rotation_client --help`` the summary.
 """
 
-import array
 from collections import deque
 import math
 import os
@@ -78,204 +13,20 @@ import signal
 import sys
 import time
 
-import numpy as np
-from rot_tools.core.euler import euler_to_matrix, matrix_to_euler
 from rot_tools.io import interface
 from rot_tools.io.arguments import install_hint
 from rot_tools.io.report import to_json, to_yaml, transform_report
-from rot_tools.ros.client_arguments import parse_args, PROG, quoted, shortened
-from rot_tools.ros.client_arguments import without_ros_args
-from rot_tools.ros.client_session import BadInput, Client, describe_data, Refused, Unreachable
+from rot_tools.ros.client import message_data
+from rot_tools.ros.client.arguments import INPUTS, parse_args, PROG, quoted, shortened
+from rot_tools.ros.client.arguments import without_ros_args
+from rot_tools.ros.client.session import BadInput, Client, describe_data, Refused, Unreachable
 import yaml
-
-MARKER_TYPES = ('ARROW', 'CUBE', 'SPHERE', 'CYLINDER', 'LINE_STRIP', 'LINE_LIST',
-                'CUBE_LIST', 'SPHERE_LIST', 'POINTS', 'TEXT_VIEW_FACING', 'MESH_RESOURCE',
-                'TRIANGLE_LIST')
-MARKER_ACTIONS = ('ADD', 'DELETE', 'DELETEALL')
-
-
-# ---------------------------------------------------------------------------------------
-# Messages and plain data
-
-
-def _xyz(v):
-    return [v.x, v.y, v.z]
-
-
-def _quaternion(q):
-    return {'x': q.x, 'y': q.y, 'z': q.z, 'w': q.w}
-
-
-def _set_xyz(v, values):
-    v.x, v.y, v.z = values
-
-
-def _set_quaternion(q, values):
-    q.x, q.y, q.z, q.w = values
-
-
-def _set_pose(pose, values):
-    """Fill a geometry_msgs/Pose from X Y Z QX QY QZ QW."""
-    _set_xyz(pose.position, values[:3])
-    _set_quaternion(pose.orientation, values[3:])
-
-
-def _pose_data(pose):
-    return {'position': _xyz(pose.position), 'orientation': _quaternion(pose.orientation)}
-
-
-# ---------------------------------------------------------------------------------------
-# The answer, output by output
-
-
-def _marker_data(marker):
-    """{id, action} of a Marker, and for an ADD its type and points."""
-    from visualization_msgs.msg import Marker
-    types = {getattr(Marker, name): name for name in MARKER_TYPES}
-    actions = {getattr(Marker, name): name for name in MARKER_ACTIONS}
-    data = {'id': marker.id, 'action': actions.get(marker.action, marker.action)}
-    if marker.action == Marker.ADD:
-        data['type'] = types.get(marker.type, marker.type)
-        if marker.points:
-            data['points'] = [_xyz(p) for p in marker.points]
-    return data
-
-
-def message_data(msg):
-    """Return a message as plain data: {field: value}, nested alike; bytes as numbers."""
-    if hasattr(msg, 'get_fields_and_field_types'):
-        return {name: message_data(getattr(msg, name))
-                for name in msg.get_fields_and_field_types()}
-    if isinstance(msg, bytes):
-        return msg[0] if len(msg) == 1 else list(msg)
-    if isinstance(msg, (list, tuple, array.array, np.ndarray)):
-        return [message_data(item) for item in msg]
-    return msg.item() if isinstance(msg, np.generic) else msg
-
-
-def _values(msg, row, parameters):
-    """Return the fields of an output's message but its header (an output without a printer)."""
-    return {name: value for name, value in message_data(msg).items() if name != 'header'}
-
-
-def _angles(msg, row, parameters):
-    return {'sequence': parameters['euler_sequence'], 'unit': parameters['angle_unit'],
-            'angles': _xyz(msg.vector)}
-
-
-def _rpy(msg, row, parameters):
-    return dict(zip(('roll', 'pitch', 'yaw'), _xyz(msg.vector)),
-                unit=parameters['angle_unit'])
-
-
-def _markers(msg, row, parameters):
-    return [{k: v for k, v in _marker_data(m).items() if k != 'points'} for m in msg.markers]
-
-
-def _pose_covariance(msg, row, parameters):
-    """Return the pose and the 6×6 covariance (x, y, z, roll, pitch, yaw), or why there is none."""
-    if isinstance(msg, str):  # not published: ~/describe's phrase (unknown, gimbal lock)
-        return msg
-    return {**_pose_data(msg.pose.pose),
-            'covariance': np.reshape(msg.pose.covariance, (6, 6)).tolist()}
-
-
-PRINTED = {
-    'rotation_matrix': lambda msg, row, parameters: np.reshape(msg.data, (3, 3)).tolist(),
-    'quaternion': lambda msg, row, parameters: _quaternion(msg.quaternion),
-    'axis_angle': lambda msg, row, parameters: _xyz(msg.vector),
-    'euler_angles': _angles,
-    'rpy': _rpy,
-    'screw': lambda msg, row, parameters: {'angular': _xyz(msg.twist.angular),
-                                           'linear': _xyz(msg.twist.linear)},
-    'screw_axis': lambda msg, row, parameters: _marker_data(msg),
-    'markers': _markers,
-    'rpy_covariance': _pose_covariance,
-}
-"""How each output is printed, by its name: printer(message, row, the node's parameters).
-An output not here is printed as {field path: value} (_values)."""
-
-
-def _answer_data(answer, parameters):
-    """Return the node's answer as plain data, keyed by output name, in the table's order."""
-    return {row.name: PRINTED.get(row.name, _values)(answer[row.name], row, parameters)
-            for row in interface.OUTPUTS if row.name in answer}
-
-
-# ---------------------------------------------------------------------------------------
-# Commands
-
-
-def node_angles(angles, sequence, degrees, node_sequence, node_degrees):
-    """
-    Euler angles of ``sequence`` (degrees when ``degrees``) as the node reads ~/euler.
-
-    The same rotation R = euler_to_matrix(angles, sequence), as the angles of the node's
-    euler_sequence (matrix_to_euler of R; at gimbal lock its choice of the pair) in its
-    angle_unit. Angles already of the node's sequence are only converted in unit; so are
-    NaN and Inf, which have no rotation: the node refuses them.
-    """
-    values = np.asarray(angles, dtype=np.float64)
-    if sequence != node_sequence and np.isfinite(values).all():
-        R = euler_to_matrix(np.radians(values) if degrees else values, sequence)
-        values, degrees = matrix_to_euler(R, node_sequence)[0], False
-    if degrees != node_degrees:
-        values = np.degrees(values) if node_degrees else np.radians(values)
-    return tuple(values.tolist())
-
-
-def _input_message(args, parameters):
-    """
-    Return (message, what was sent as plain data) of an input command.
-
-    Euler angles are sent in the node's sequence and unit (``parameters``); the rotation's
-    covariance --cov, 9 numbers row-major, is an Imu's orientation_covariance or the rotation
-    block of a pose's 6×6 (the rest 0).
-    """
-    from rot_tools.ros.messages import message_class
-    name, numbers = args.command, list(args.numbers)
-    msg = message_class(args.row.type_name)()
-    cov = None if getattr(args, 'cov', None) is None else np.reshape(args.cov, (3, 3))
-    if name == 'euler':
-        sequence, unit = parameters['euler_sequence'], parameters['angle_unit']
-        angles = node_angles(numbers, args.sequence, args.deg, sequence, unit == 'deg')
-        _set_xyz(msg.vector, angles)
-        return msg, {'sequence': sequence, 'unit': unit, 'angles': list(angles)}
-    if name == 'orientation':
-        _set_quaternion(msg.quaternion, numbers)
-        return msg, {'quaternion': _quaternion(msg.quaternion)}
-    if name == 'imu':
-        _set_quaternion(msg.orientation, numbers)
-        sent = {'orientation': _quaternion(msg.orientation)}
-        if cov is not None:
-            msg.orientation_covariance = cov.ravel()
-            sent['orientation_covariance'] = cov.tolist()
-        return msg, sent
-    if name == 'transform':
-        msg.child_frame_id = args.child_frame
-        _set_xyz(msg.transform.translation, numbers[:3])
-        _set_quaternion(msg.transform.rotation, numbers[3:])
-        return msg, {'child_frame_id': msg.child_frame_id,
-                     'translation': _xyz(msg.transform.translation),
-                     'rotation': _quaternion(msg.transform.rotation)}
-    sent = {}
-    if name == 'odometry':
-        msg.child_frame_id = sent['child_frame_id'] = args.child_frame
-    pose = msg.pose if name == 'pose' else msg.pose.pose  # pose_with_covariance, odometry
-    _set_pose(pose, numbers)
-    sent.update(_pose_data(pose))
-    if cov is not None:
-        C = np.zeros((6, 6))
-        C[3:, 3:] = cov
-        msg.pose.covariance = C.ravel()
-        sent['covariance'] = C.tolist()
-    return msg, sent
 
 
 def _input_command(client, args):
     """Send one input message (euler, pose, odometry, ...); return the answer's report."""
     parameters = client.parameters(['euler_sequence', 'angle_unit', 'publish_markers'])
-    msg, sent = _input_message(args, parameters)
+    msg, sent = message_data.input_message(args, parameters)
     msg.header.frame_id = args.frame
     topic, (sec, nanosec), answer = client.send(args.command, msg,
                                                 parameters['publish_markers'], args.topic,
@@ -284,7 +35,7 @@ def _input_command(client, args):
             'input': {'topic': topic, 'type': args.row.type_name,
                       'frame_id': args.frame, 'stamp': {'sec': sec, 'nanosec': nanosec},
                       **sent},
-            'answer': _answer_data(answer, parameters)}
+            'answer': message_data.answer_data(answer, parameters)}
 
 
 def _describe_command(client, args):
@@ -301,7 +52,7 @@ def _screw_path_command(client, args):
     for pose, values in ((request.start, args.numbers[:7]), (request.goal, args.numbers[7:])):
         pose.header.frame_id = args.frame
         pose.header.stamp = client.node.get_clock().now().to_msg()
-        _set_pose(pose.pose, values)
+        message_data.set_pose(pose.pose, values)
     before = client.refusal_counts()
     plan = client.call(GetPlan, 'screw_path', request).plan
     if not plan.poses:
@@ -312,7 +63,7 @@ def _screw_path_command(client, args):
                       + (refused or 'an empty path'))
     return {'node': client.target, 'service': client.topic('screw_path'),
             'frame_id': plan.header.frame_id,
-            'poses': [_pose_data(p.pose) for p in plan.poses]}
+            'poses': [message_data.pose_data(p.pose) for p in plan.poses]}
 
 
 def _tf_report(follower, header, R, b, args):
@@ -357,7 +108,8 @@ def _tf_command(client, args):
 
 def _tf_demo_command(client, args):
     """tf-demo: publish the demo tree until Ctrl-C or --duration; nothing to print after."""
-    from rot_tools.ros import tf_demo, tf_input
+    from rot_tools.ros import tf_input
+    from rot_tools.ros.client import tf_demo
     missing = tf_input.tf2_msgs_missing()
     if missing:
         raise Unreachable(missing)
@@ -373,23 +125,6 @@ def _tf_demo_command(client, args):
     finally:
         demo.close()
     return None
-
-
-def _echo_data(msg, row, parameters):
-    """
-    One message of an output as plain data: its header's stamp and frame, and its values.
-
-    A message of another type than the output's (``--topic`` elsewhere) is printed whole.
-    """
-    from rot_tools.ros.messages import type_name
-    if type_name(type(msg)) != row.type_name:
-        return message_data(msg)
-    data = {}
-    if hasattr(msg, 'header'):
-        stamp = msg.header.stamp
-        data = {'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec},
-                'frame_id': msg.header.frame_id}
-    return {**data, row.name: PRINTED.get(row.name, _values)(msg, row, parameters)}
 
 
 def _echo_command(client, args):
@@ -423,22 +158,10 @@ def _echo_command(client, args):
     while left > 0:
         client.spin_until(lambda: received, 1.0)
         while received and left > 0:
-            _print_document(_echo_data(received.popleft(), row, parameters), args)
+            _print_document(message_data.echo_data(received.popleft(), row, parameters),
+                            args)
             left -= 1
     return None
-
-
-LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')
-"""diagnostic_msgs/DiagnosticStatus' levels by their number, as words."""
-
-
-def _status_data(status, stamp):
-    """One DiagnosticStatus as plain data: its level as a word, its values by key."""
-    (level,) = status.level  # one byte
-    return {'stamp': {'sec': stamp.sec, 'nanosec': stamp.nanosec}, 'name': status.name,
-            'level': LEVELS[level] if level < len(LEVELS) else level,
-            'message': status.message, 'hardware_id': status.hardware_id,
-            'values': {kv.key: kv.value for kv in status.values}}
 
 
 def _diagnostics_command(client, args):
@@ -454,9 +177,10 @@ def _diagnostics_command(client, args):
             f' (no publisher: is rotation_node running, with ROS_DOMAIN_ID {domain}?)'))
     while True:
         while received:
-            array = received.popleft()
-            for status in array.status:
-                _print_document(_status_data(status, array.header.stamp), args)
+            statuses = received.popleft()
+            for status in statuses.status:
+                stamp = statuses.header.stamp
+                _print_document(message_data.status_data(status, stamp), args)
             if args.once:
                 return None
         client.spin_until(lambda: received, 1.0)
@@ -465,17 +189,17 @@ def _diagnostics_command(client, args):
 def _set_command(client, args):
     """set: set one parameter as the node declares it; its answer, Refused or Unreachable."""
     from rcl_interfaces.msg import Parameter, ParameterType
-    from rot_tools.ros import client_parameters
+    from rot_tools.ros.client import param
     kind = client.parameter_type(args.name)
     if kind in (None, ParameterType.PARAMETER_NOT_SET):
         raise Unreachable(f'node {client.target} has no parameter {quoted(args.name)}')
     try:
-        value = client_parameters.typed_value(kind, args.value)
-    except client_parameters.DoesNotFit as exc:
-        raise BadInput(client_parameters.refusal(args.name, client.target, kind, args.value,
-                                                 *exc.args)) from None
+        value = param.typed_value(kind, args.value)
+    except param.DoesNotFit as exc:
+        raise BadInput(param.refusal(args.name, client.target, kind, args.value,
+                                     *exc.args)) from None
     result = client.set_parameter(Parameter(name=args.name, value=value))
-    shown = f'{args.name} = {client_parameters.shown(value)}'
+    shown = f'{args.name} = {param.shown(value)}'
     if not result.successful:
         raise Unreachable(shortened(f'node {client.target} refused {shown}: '
                                     + ' '.join(result.reason.split()), args.value))
@@ -485,23 +209,23 @@ def _set_command(client, args):
 def _param_command(client, args):
     """Print a parameter (param get NAME) or their names (param list), as ros2 param does."""
     from rcl_interfaces.msg import ParameterType
-    from rot_tools.ros import client_parameters
+    from rot_tools.ros.client import param
     if args.param_command == 'get':
         values = client.parameter_values([args.name])  # none, or NOT_SET: not declared
         if not values or values[0].type == ParameterType.PARAMETER_NOT_SET:
             raise Unreachable(f'node {client.target} has no parameter {quoted(args.name)}')
         (value,) = values
-        python = client_parameters.python_value(value)
+        python = param.python_value(value)
         if args.json:
-            return {'name': args.name, 'type': client_parameters.TYPE_NAMES[value.type],
+            return {'name': args.name, 'type': param.TYPE_NAMES[value.type],
                     'value': python}
-        return f'{python}\n' if args.hide_type else client_parameters.get_line(value) + '\n'
+        return f'{python}\n' if args.hide_type else param.get_line(value) + '\n'
     names = client.parameter_names()
     types = client.parameter_types(names) if args.param_type else None
     if args.json:
-        return ({name: client_parameters.TYPE_NAMES.get(types[name], 'not set')
+        return ({name: param.TYPE_NAMES.get(types[name], 'not set')
                  for name in sorted(names)} if types else sorted(names))
-    return ''.join(line + '\n' for line in client_parameters.list_lines(names, types))
+    return ''.join(line + '\n' for line in param.list_lines(names, types))
 
 
 def _play_command(client, args):
@@ -511,7 +235,7 @@ def _play_command(client, args):
     if missing:
         raise Unreachable(f"play needs the rosbags library ({missing} is missing), the 'bag' "
                           f"extra: {install_hint('bag')}")
-    from rot_tools.ros import bag_player
+    from rot_tools.ros.client import bag_player
     try:
         with bag_read.open_bag(args.bag) as reader:
             try:
@@ -538,7 +262,7 @@ def _play_command(client, args):
     return bag_player.summary(args.bag, result, args.rate) + '\n'
 
 
-COMMANDS = {**{row.name: _input_command for row in interface.INPUTS},
+COMMANDS = {**dict.fromkeys(INPUTS, _input_command),
             'describe': _describe_command, 'screw-path': _screw_path_command,
             'tf': _tf_command, 'tf-demo': _tf_demo_command, 'echo': _echo_command,
             'diagnostics': _diagnostics_command,

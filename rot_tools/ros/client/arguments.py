@@ -1,12 +1,8 @@
 """
 rotation_client's command line: its commands, their arguments and help, parsed without ROS.
 
-The input commands are the node's inputs (rot_tools.io.interface): a verb per input row, its
-numbers from the roles of the row's fields (a position X Y Z, an orientation QX QY QZ QW,
-Euler angles A1 A2 A3 of a sequence SEQ), ``--child-frame`` for a child_frame_id,
-``--topic`` for an input remapped away from ``~/NAME``. ``echo`` takes an output's name.
-Nothing here starts ROS: ``--help``, ``--version`` and bad arguments end before rclpy is
-imported.
+A verb per input of the node (:data:`INPUTS`), then the other commands; ``--help``,
+``--version`` and bad arguments end before rclpy is imported.
 """
 
 import argparse
@@ -51,7 +47,7 @@ INPUTS = {
     'orientation': (QUATERNION, 'quaternion = QX QY QZ QW'),
 }
 """The verb of each input of the node (its name): the numbers it takes, and where they go
-(rot_tools.ros.rotation_client fills the message)."""
+(rot_tools.ros.client.rotation_client fills the message)."""
 
 WITH_CHILD_FRAME = ('transform', 'odometry')
 """The inputs whose message names the body: child_frame_id = --child-frame."""
