@@ -228,7 +228,8 @@ def commands():
         'diagnostics': Command(
             "print the node's /diagnostics as they arrive, until Ctrl-C", '', (),
             'One block per status: its name, its level (OK, WARN, ERROR or STALE), its message\n'
-            'and its values by key. Nothing within --timeout is one line (exit 1).'),
+            'and its values by key. Nothing within --timeout is one line (exit 1) (--node and\n'
+            '--frame are not used).'),
         'set': Command(
             "set one of the node's parameters", '', (),
             'VALUE is read as the type the node declares for NAME (its ~/describe_parameters):'
