@@ -5,7 +5,7 @@ package_name = 'rot_tools'
 setup(
     name=package_name,
     version='0.1.0',
-    packages=[package_name] + [package_name + '.' + sub for sub in ('core', 'io', 'cli', 'ros')],
+    packages=[package_name] + [package_name + '.' + sub for sub in ('core', 'io', 'cli', 'ros', 'ros.client')],
     data_files=[
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
@@ -31,7 +31,7 @@ setup(
     entry_points={
         'console_scripts': [
             'rotation_node = rot_tools.ros.rotation_node:main',
-            'rotation_client = rot_tools.ros.rotation_client:main',
+            'rotation_client = rot_tools.ros.client.rotation_client:main',
             'rot-tools = rot_tools.cli.main:main',
         ],
     },

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from rot_tools.cli import main as cli
 from rot_tools.io import arguments
-from rot_tools.ros import client_arguments
+from rot_tools.ros.client import arguments as client_arguments
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'rot_tools'
 

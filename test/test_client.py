@@ -6,10 +6,10 @@ the client's commands in this process (:class:`Here`): the same parser, command 
 as the console script, in one rclpy context for the module (one DDS participant, discovered
 once), each command by a client node of its own. What only a process shows — the installed
 script end to end, Ctrl-C, an encoding of stdout, another publisher streaming meanwhile — runs
-the installed ``rotation_client`` script (``python -m rot_tools.ros.rotation_client`` without
-an installed package) and reads its stdout, stderr and exit status. Expected values come from
-scipy.spatial.transform.Rotation and closed forms, not from rot_tools. The client prints 12
-significant digits, so numbers are compared to that.
+the installed ``rotation_client`` script (``python -m rot_tools.ros.client.rotation_client``
+without an installed package) and reads its stdout, stderr and exit status. Expected values
+come from scipy.spatial.transform.Rotation and closed forms, not from rot_tools. The client
+prints 12 significant digits, so numbers are compared to that.
 """
 
 from collections import Counter
@@ -39,7 +39,7 @@ from scipy.spatial.transform import Rotation
 from test_node_covariance import expected_covariance
 import yaml
 
-CLIENT = console_script('rotation_client', 'rot_tools.ros.rotation_client')
+CLIENT = console_script('rotation_client', 'rot_tools.ros.client.rotation_client')
 DIGITS = {'rel': 1e-11, 'abs': 1e-12}
 """Tolerance of a printed number (12 significant digits and decimal places)."""
 
@@ -80,7 +80,7 @@ class Here:
     rotation_client's commands run in this process, in one rclpy context.
 
     ``here(*args)`` reads the command line as the console script does and runs its command
-    by rot_tools.ros.rotation_client.run_command — printing, exit status — in ``context``,
+    by rot_tools.ros.client.rotation_client.run_command — printing, exit status — in ``context``,
     whose DDS participant has discovered the nodes already, with one Client for every
     command (its endpoints discovered by the nodes once); stdout and stderr are captured. A
     command line with ROS arguments runs through ``main``, in a context made for it, as the
@@ -98,10 +98,10 @@ class Here:
             self.client.close()
 
     def __call__(self, *args):
-        from rot_tools.ros.client_arguments import parse_args
+        from rot_tools.ros.client.arguments import parse_args
         from rclpy.signals import uninstall_signal_handlers
-        from rot_tools.ros.client_session import Client
-        from rot_tools.ros.rotation_client import main, run_command
+        from rot_tools.ros.client.session import Client
+        from rot_tools.ros.client.rotation_client import main, run_command
         words = [str(a) for a in args]
         out, err = io.StringIO(), io.StringIO()
         with redirect_stdout(out), redirect_stderr(err):
@@ -659,7 +659,7 @@ def test_version(here):
         "        if name.split('.')[0] in ('rclpy', 'rosidl_parser', 'std_srvs'):\n"
         "            raise ImportError('refused: ' + name)\n"
         'sys.meta_path.insert(0, RefuseRos())\n'
-        'from rot_tools.ros.rotation_client import main\n'
+        'from rot_tools.ros.client.rotation_client import main\n'
         "main(['--version', '--ros-args', '-p', 'foo'])\n")
     command = [sys.executable, '-c', probe]
     result = subprocess.run(command, capture_output=True, text=True, timeout=60,
@@ -792,7 +792,7 @@ def test_doc_examples(here, node):
 
 
 def test_refusal_text_uses_the_nodes_sentence():
-    from rot_tools.ros.client_session import refusal_text
+    from rot_tools.ros.client.session import refusal_text
     topic = '/rot_tools/orientation'
     data = {'refused': {'total': 3, 'non_finite': 1, 'non_unit_quaternion': 2},
             'last_refusals': {
@@ -854,3 +854,10 @@ def test_report_strings_round_trip(text):
         # (not the newline: it also ends the YAML and JSON lines)
         for c in set(text) - set(' "\\\n') - set(string.ascii_letters + string.digits):
             assert (c in written) != must_escape(c), (c, written)
+
+
+def test_every_input_of_the_node_has_a_verb():
+    """The client fills each input's message by name: a new input needs its verb."""
+    from rot_tools.io import interface
+    from rot_tools.ros.client.arguments import INPUTS
+    assert set(INPUTS) == {row.name for row in interface.INPUTS}

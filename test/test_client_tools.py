@@ -8,24 +8,28 @@ pipe, a module that does not import); expected values come from closed forms and
 from rot_tools.
 """
 
+from contextlib import redirect_stdout
 import csv
 import io
 import json
 import math
+import os
 import re
 import subprocess
 import sys
 import threading
 import time
 
-from bag_helpers import Builder, REAL, tf_chain_messages, write_bag
+from bag_helpers import REAL, tf_chain_messages, write_bag
 from conftest import console_script, DISCOVERY_TIMEOUT, NodeProcess, REPO, RUN, script_env
 from conftest import TIMEOUT
 from doc_blocks import assert_doc_output
 import pytest
+from rot_tools.io import interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from scipy.spatial.transform import Rotation
-from test_client import approx, DIGITS, Here, interrupt, one_line_error, popen, send_until
+from test_client import approx, CLIENT, DIGITS, Here, interrupt, one_line_error, popen
+from test_client import send_until
 import yaml
 
 HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in degrees, '
@@ -151,6 +155,103 @@ def test_echo_unknown_output_and_unreachable(here, node):
     assert line.startswith(f'rotation_client: cannot reach node {absent}')
 
 
+class StreamDuringCall:
+    """
+    A Client as echo sees it, whose node publishes a stream from the moment echo asks it.
+
+    The message published during the parameters call (stamp 1) reaches echo only if echo
+    subscribed before; each later spin brings the next (stamps 2, 3, ...).
+    """
+
+    def __init__(self):
+        from types import SimpleNamespace
+        self.callbacks = []
+        self.sent = 0
+        self.node = SimpleNamespace(get_publishers_info_by_topic=lambda topic: [])
+
+    def publish(self):
+        from geometry_msgs.msg import Vector3Stamped
+        self.sent += 1
+        msg = Vector3Stamped()
+        msg.header.stamp.sec = self.sent
+        for callback in self.callbacks:
+            callback(msg)
+
+    def subscribe(self, msg_type, topic, callback, qos):
+        from types import SimpleNamespace
+        self.callbacks.append(callback)
+        return SimpleNamespace(topic_name=topic, get_publisher_count=lambda: 1)
+
+    def topic(self, name):
+        return f'/rot_tools/{name}'
+
+    def parameters(self, names):
+        self.publish()
+        return {'euler_sequence': 'ZYX', 'angle_unit': 'rad'}
+
+    def spin_until(self, done, seconds):
+        if not done():
+            self.publish()
+        return done()
+
+
+def test_echo_prints_a_stream_from_its_start():
+    """Echo subscribes before it asks the node anything: the stream's first message is printed."""
+    from rot_tools.ros.client.arguments import parse_args
+    from rot_tools.ros.client.rotation_client import COMMANDS
+    out = io.StringIO()
+    with redirect_stdout(out):
+        COMMANDS['echo'](StreamDuringCall(), parse_args(['echo', 'rpy', '--once']))
+    assert yaml.safe_load(out.getvalue())['stamp'] == {'sec': 1, 'nanosec': 0}
+
+
+@pytest.fixture(scope='module')
+def diagnosed(tmp_path_factory, here):
+    """Return (name, its /diagnostics topic) of a rotation_node whose /diagnostics is remapped."""
+    topic = f'/{RUN}/diagnosed/diagnostics'
+    process = NodeProcess(tmp_path_factory.mktemp('diagnosed'), '-r', f'/diagnostics:={topic}')
+    here.answered('orientation', 0, 0, 0, 1, '--node', process.name, '--timeout', 20)
+    yield process.name, topic
+    process.kill()
+
+
+def test_echo_of_a_topic_of_another_type_prints_it_whole(here, diagnosed):
+    """Echo rpy --topic /diagnostics: the node publishes a DiagnosticArray there, printed whole."""
+    name, topic = diagnosed
+    data = here.answered('echo', 'rpy', '--topic', topic, '--once', '--node', name,
+                         '--timeout', 20)
+    assert set(data) == {'header', 'status'}
+    inputs = [s for s in data['status'] if s['name'] == 'rot_tools: inputs']
+    assert [s['hardware_id'] for s in inputs] == [name] and inputs[0]['level'] == 0
+
+
+def test_diagnostics_prints_each_status(here, diagnosed):
+    """One block per status: its level as a word, its message, its values by key."""
+    name, topic = diagnosed
+    result = here('diagnostics', '--once', '--topic', topic, '--timeout', 20)
+    assert (result.returncode, result.stderr) == (0, '')
+    imu, inputs = yaml.safe_load_all(result.stdout)
+    assert (imu['name'], imu['level'], imu['hardware_id']) == (
+        'rot_tools: imu conventions', 'STALE', '')
+    assert imu['message'].startswith('0.0 s of ~/imu in the last 10 s')
+    assert (inputs['name'], inputs['level'], inputs['hardware_id']) == (
+        'rot_tools: inputs', 'OK', name)
+    assert inputs['values'][f'{name}/orientation'].endswith(' msg/s, 0 refused')
+    assert set(inputs['values']) == {f'{name}/{row.name}' for row in interface.INPUTS}
+    shown = re.sub(r'(\n  sec: )\d+(\n  nanosec: )\d+', r'\1...\2...', result.stdout)
+    shown = re.sub(r'(: )[\d.]+( msg/s)', r'\1...\2', shown.replace(name, '/rot_tools'))
+    assert_doc_output('client-diagnostics', '$ rotation_client diagnostics --once\n'
+                      + re.sub(r'last \d+ s', 'last ... s', shown))
+
+
+def test_diagnostics_with_nothing_published(here, namespace):
+    line = one_line_error(here('diagnostics', '--topic', f'{namespace}/diagnostics',
+                               '--timeout', 1), 1)
+    assert line == (f'rotation_client: nothing on {namespace}/diagnostics within 1 s (no '
+                    'publisher: is rotation_node running, with ROS_DOMAIN_ID '
+                    f"{os.environ['ROS_DOMAIN_ID']}?)")
+
+
 # ---------------------------------------------------------------------------------------
 # set
 
@@ -208,6 +309,29 @@ def test_set_refused_is_the_nodes_reason(here, node, args, why):
     assert line.startswith('rotation_client: ' + why.format(node=node)), line
 
 
+@pytest.mark.parametrize('value, why', [
+    ('0.' + '0' * 130_000 + '1', 'is below the smallest double, 4.9e-324: it would be sent as 0'),
+    ('1e-400', 'is below the smallest double, 4.9e-324: it would be sent as 0'),
+    ('1' + '0' * 400, 'is beyond the largest double, 1.798e+308: it would be sent as infinity'),
+    ('-1e309', 'is beyond the largest double, 1.798e+308: it would be sent as infinity'),
+])
+def test_set_a_double_float64_cannot_hold(here, node, value, why):
+    """A number typed that float64 rounds to 0 or infinity: one line, exit 2, nothing sent."""
+    line = one_line_error(here('set', 'quaternion_tolerance', value, '--node', node), 2)
+    shown = repr(value) if len(value) <= 40 else f'{value[:40]!r}… ({len(value)} characters)'
+    assert line == (f'rotation_client: parameter quaternion_tolerance of node {node} is a '
+                    f'double: {shown} {why}')
+
+
+def test_set_refused_long_value_is_shortened(here, node):
+    """The node's refusal of a 131 KB value: the value cut to its first 40 characters."""
+    value = 'x' * 131_072
+    line = one_line_error(here('set', 'euler_sequence', value, '--node', node), 1)
+    short = f"{'x' * 40}… (131072 characters)"
+    assert line.startswith(f"rotation_client: node {node} refused euler_sequence = '{short}': ")
+    assert 'x' * 41 not in line and len(line) < 400, line
+
+
 @pytest.mark.parametrize('args, why', [
     (('quaternion_tolerance', 'abc'), "'abc' is not a number"),
     (('quaternion_tolerance', 'true'), "'true' is not a number"),
@@ -226,7 +350,6 @@ def test_set_a_value_that_does_not_fit_the_type(here, node, args, why):
 
 
 def test_param_get_prints_as_ros2_param_get(here, node):
-    from rot_tools.io.boundary import QUATERNION_TOLERANCE
     lines = {name: here('param', 'get', name, '--node', node)
              for name in ('quaternion_tolerance', 'angle_unit', 'publish_markers')}
     assert {name: (r.returncode, r.stdout, r.stderr) for name, r in lines.items()} == {
@@ -274,9 +397,10 @@ def test_param_bad_arguments(here, args, message):
 
 JACKAL = {'/imu/data': 'imu', '/jackal_velocity_controller/odom': 'odometry'}
 """The recording's topics and the node's inputs they are remapped onto."""
+JACKAL_TYPES = ('sensor_msgs/msg/Imu', 'nav_msgs/msg/Odometry')
 
 SUMMARY = re.compile(r'played (\d+) messages of (\S+) in [\d.]+ s \(rate ([\d.]+)\): (.*) '
-                     r'\(([\d.]+) s to ([\d.]+) s of the recording\)(.*)\n')
+                     r'\(([\d.]+) s to ([\d.]+) s of the recording\)\n')
 
 
 def remaps(mapping):
@@ -317,7 +441,7 @@ def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
     topic = f'{node}/quaternion'
     tester.subscribe(topic, QuaternionStamped, QoSProfile(depth=1000))
     tester.wait_matched([topic])
-    slice_ = ('--start', 10, '--end', 11, '--rate', 2)
+    slice_ = ('--topics', *JACKAL, '--start', 10, '--end', 11, '--rate', 2)
     result = here('play', REAL, *slice_,
                   *remaps({bag: f'{node}/{name}' for bag, name in JACKAL.items()}))
     assert (result.returncode, result.stderr) == (0, '')
@@ -325,9 +449,12 @@ def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
                       *remaps({bag: f'/rot_tools/{name}' for bag, name in JACKAL.items()})])
     assert_doc_output('client-play', f'$ rotation_client {shown}\n' + re.sub(
         r' in [\d.]+ s ', ' in ... s ', result.stdout.replace(
-            str(REAL), '../shared/data/jackal_imu_odometry.bag')))
-    total, bag, rate, counts, first, last, skipped = SUMMARY.fullmatch(result.stdout).groups()
-    assert (bag, rate, first, last, skipped) == (str(REAL), '2', '10', '11', '')
+            str(REAL), '../shared/data/jackal_imu_odometry.bag').replace(node, '/rot_tools')))
+    *plan, summary = result.stdout.splitlines(keepends=True)
+    assert plan == [f'playing {bag} ({msgtype}) on {node}/{name}\n'
+                    for (bag, name), msgtype in zip(JACKAL.items(), JACKAL_TYPES)]
+    total, bag, rate, counts, first, last = SUMMARY.fullmatch(summary).groups()
+    assert (bag, rate, first, last) == (str(REAL), '2', '10', '11')
     expected = bag_csv('--start', 10, '--end', 11)
     assert len(expected) == int(total) == 102
     assert counts == ', '.join(f'{t} {sum(r["topic"] == t for r in expected.values())}'
@@ -370,52 +497,6 @@ def test_play_a_rosbag2_bag_with_tf(here, tester, namespace, tmp_path):
              t.transform.rotation.w, t.transform.translation.z) for t in original.transforms]
 
 
-def test_messages_are_converted_field_by_field():
-    """
-    Check that rosbags' objects become rclpy's: a ROS 1 header's seq dropped, arrays, sequences.
-
-    The first Imu and Odometry of the Jackal recording (ROS 1), a Path (a sequence of
-    messages) and an Image (a uint8 sequence) of ROS 2 types.
-    """
-    from nav_msgs.msg import Odometry, Path
-    from rot_tools.io.bag_read import open_bag
-    from rot_tools.ros.bag_player import converter
-    from sensor_msgs.msg import Image, Imu
-    import numpy as np
-    with open_bag(REAL) as reader:
-        first = {}
-        for connection, _, raw in reader.messages():
-            first.setdefault(connection.msgtype, reader.deserialize(raw, connection.msgtype))
-            if len(first) == 2:
-                break
-    imu = converter(Imu)(first['sensor_msgs/msg/Imu'])
-    source = first['sensor_msgs/msg/Imu']
-    assert (imu.header.stamp.sec, imu.header.stamp.nanosec, imu.header.frame_id) == (
-        source.header.stamp.sec, source.header.stamp.nanosec, source.header.frame_id)
-    assert not hasattr(imu.header, 'seq') and hasattr(source.header, 'seq')
-    o = imu.orientation
-    assert [o.x, o.y, o.z, o.w] == [source.orientation.x, source.orientation.y,
-                                    source.orientation.z, source.orientation.w]
-    np.testing.assert_array_equal(imu.orientation_covariance, source.orientation_covariance)
-    np.testing.assert_array_equal(imu.linear_acceleration_covariance,
-                                  source.linear_acceleration_covariance)
-    odometry = converter(Odometry)(first['nav_msgs/msg/Odometry'])
-    source = first['nav_msgs/msg/Odometry']
-    assert odometry.child_frame_id == source.child_frame_id
-    assert odometry.pose.pose.position.x == source.pose.pose.position.x
-    np.testing.assert_array_equal(odometry.twist.covariance, source.twist.covariance)
-    b = Builder()
-    path = b.make('nav_msgs/msg/Path', header=b.header(3.25, 'odom'), poses=[
-        b.pose_stamped(3.0 + k, (k, 0, 0), (0, 0, 0, 1)) for k in range(3)])
-    converted = converter(Path)(path)
-    assert [p.pose.position.x for p in converted.poses] == [0.0, 1.0, 2.0]
-    assert converted.header.stamp.nanosec == 250_000_000
-    image = b.make('sensor_msgs/msg/Image', header=b.header(1.0), height=1, width=3,
-                   encoding='mono8', is_bigendian=0, step=3,
-                   data=np.array([0, 7, 255], dtype=np.uint8))
-    assert list(converter(Image)(image).data) == [0, 7, 255]
-
-
 class FakeReader:
     """Recorded messages for Player.play: (topic, stamp ns) each, a std_msgs/String."""
 
@@ -438,7 +519,7 @@ class FakeReader:
 
 def test_no_message_is_published_before_its_time():
     """Each message waits (spinning) for its recorded offset from the first, over the rate."""
-    from rot_tools.ros.bag_player import Player
+    from rot_tools.ros.client.bag_player import Player
     from std_msgs.msg import String
 
     class Publisher:
@@ -481,13 +562,39 @@ def test_play_refusals(here, monkeypatch, tmp_path):
     assert one_line_error(here('play', text), 2).startswith(f'rotation_client: {text}: not a bag')
     assert one_line_error(here('play', REAL, '--start', 5, '--end', 2), 2) == (
         'rotation_client: error: --end 2 is before --start 5')
-    line = one_line_error(here('play', REAL, '--topics', '/imu/data', '--timeout', 1), 1)
-    assert line == ('rotation_client: no subscription on /imu/data within 1 s: remap the topics '
-                    "onto the node's inputs (--ros-args -r /imu/data:=/rot_tools/imu)")
     monkeypatch.setattr(bag_read, 'rosbags_missing', lambda: 'rosbags')
     assert one_line_error(here('play', REAL), 1) == (
         "rotation_client: play needs the rosbags library (rosbags is missing), the 'bag' extra: "
         "pip install -e '.[bag]' in the rot_tools checkout")
+
+
+def play_unheard(here, node):
+    """Play /imu/data to nobody (1 s); return (exit status, stdout, the stderr line)."""
+    result = here('play', REAL, '--topics', '/imu/data', '--timeout', 1, '--node', node)
+    assert result.stdout == 'playing /imu/data (sensor_msgs/msg/Imu)\n'
+    assert result.stderr.count('\n') == 1, result.stderr
+    return result.returncode, result.stderr
+
+
+def test_play_to_nobody_advises_a_remap(here, node):
+    """The node is up, nothing listens to the bag's topics: remap them onto its inputs."""
+    assert play_unheard(here, node) == (1, (
+        'rotation_client: no subscription on /imu/data within 1 s: remap the topics onto the '
+        f"node's inputs (--ros-args -r /imu/data:={node}/imu)\n"))
+
+
+def test_play_with_the_node_down_says_so(here):
+    absent = f'/{RUN}/nobody/rot_tools'
+    domain = os.environ['ROS_DOMAIN_ID']
+    assert play_unheard(here, absent) == (1, (
+        f'rotation_client: no subscription on /imu/data within 1 s, and node {absent} is not '
+        f'running (not found with ROS_DOMAIN_ID {domain})\n'))
+
+
+@pytest.mark.parametrize('rate', ['1e-320', '0.0009', '1001', 'inf', 'nan', '-1'])
+def test_play_refuses_a_rate_beyond_its_range(here, rate):
+    line = one_line_error(here('play', REAL, '--rate', rate), 2)
+    assert line.endswith(f"--rate: must be a number from 0.001 to 1000, got '{rate}'"), line
 
 
 def test_play_interrupted_exits_130_quietly(tester, namespace):
@@ -497,7 +604,7 @@ def test_play_interrupted_exits_130_quietly(tester, namespace):
     tester.subscribe(topic, Imu)
     play = popen('play', REAL, '--topics', '/imu/data', *remaps({'/imu/data': topic}))
     tester.wait_messages(topic, 5, DISCOVERY_TIMEOUT)
-    assert interrupt(play) == (130, '', '')
+    assert interrupt(play) == (130, f'playing /imu/data (sensor_msgs/msg/Imu) on {topic}\n', '')
 
 
 # ---------------------------------------------------------------------------------------
@@ -567,7 +674,7 @@ def test_tf_demo_without_tf2_msgs():
         "        if name.split('.')[0] == 'tf2_msgs':\n"
         "            raise ImportError('refused: ' + name)\n"
         'sys.meta_path.insert(0, Refuse())\n'
-        'from rot_tools.ros.rotation_client import main\n'
+        'from rot_tools.ros.client.rotation_client import main\n'
         "sys.exit(main(['tf-demo']))\n")
     command = [sys.executable, '-c', probe]
     result = subprocess.run(command, capture_output=True, text=True, timeout=60,
@@ -633,3 +740,26 @@ def test_doc_examples(here, node, tester):
 
 def _stamps_elided(text):
     return re.sub(r'(\n\s*sec: )\d+(\n\s*nanosec: )\d+', r'\1...\2...', text)
+
+
+# ---------------------------------------------------------------------------------------
+# A full disk
+
+
+@pytest.mark.parametrize('args', [
+    ('--version',), ('describe',), ('param', 'list'), ('param', 'get', 'angle_unit'),
+    ('set', 'angle_unit', 'rad'), ('orientation', 0, 0, 0, 1), ('play', REAL),
+    ('tf-demo', '--duration', 1, '--ros-args', '-r', f'/tf:=/{RUN}/full/tf', '-r',
+     f'/tf_static:=/{RUN}/full/tf_static'),
+])
+def test_a_full_disk_is_one_line(node, args):
+    """rotation_client ... > /dev/full: one line on stderr, exit 1, no traceback."""
+    command = CLIENT + [*map(str, args), '--node', node, '--timeout', '20']
+    if '--ros-args' in args:  # --node and --timeout before the ROS arguments
+        at = args.index('--ros-args')
+        command = CLIENT + [*map(str, args[:at]), '--node', node, *args[at:]]
+    with open('/dev/full', 'w') as full:
+        result = subprocess.run(command, stdout=full, stderr=subprocess.PIPE, text=True,
+                                timeout=60, env=script_env(command), stdin=subprocess.DEVNULL)
+    assert (result.returncode, result.stderr) == (
+        1, 'rotation_client: cannot write to stdout: No space left on device\n')

@@ -16,7 +16,7 @@ from conftest import console_script, NodeProcess, REPO, script_env
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import pytest
 
-CLIENT = console_script('rotation_client', 'rot_tools.ros.rotation_client')
+CLIENT = console_script('rotation_client', 'rot_tools.ros.client.rotation_client')
 NODE = console_script('rotation_node', 'rot_tools.ros.rotation_node')
 
 

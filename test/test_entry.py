@@ -49,7 +49,7 @@ def test_console_scripts_point_at_plain_main_functions():
     from importlib.metadata import entry_points
     scripts = {ep.name: ep.value for ep in entry_points(group='console_scripts')}
     assert scripts['rotation_node'] == 'rot_tools.ros.rotation_node:main'
-    assert scripts['rotation_client'] == 'rot_tools.ros.rotation_client:main'
+    assert scripts['rotation_client'] == 'rot_tools.ros.client.rotation_client:main'
 
 
 # ---------------------------------------------------------------------------------------

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from rot_tools.io import bag_read, interface
 from rot_tools.io.fields import field_value
-from rot_tools.ros import client_session, rotation_client
-from rot_tools.ros.client_arguments import parse_args
+from rot_tools.ros.client import message_data, session
+from rot_tools.ros.client.arguments import parse_args
 from rot_tools.ros.messages import message_class
 from rot_tools.ros.rotation_node import RotationNode
 
@@ -69,7 +69,7 @@ def test_every_input_is_a_client_verb_that_fills_the_rows_fields(row):
                       if 'child_frame_id' in row.fields else
                       [row.name, *sequence, *numbers_of(count)])
     assert args.row is row
-    msg, sent = rotation_client._input_message(args, PARAMETERS)
+    msg, sent = message_data.input_message(args, PARAMETERS)
     assert isinstance(msg, message_class(row.type_name))
     written = [field_value(msg, path) for path in row.floats()
                if not path.endswith('[0]')]  # an Imu's covariance is not given: 0
@@ -126,7 +126,7 @@ def answer_messages():
 
 def collect(messages):
     """Feed an Answers the messages as the subscriptions would; return the complete answer."""
-    answers = client_session.Answers('map')
+    answers = session.Answers('map')
     answers.sent.add((7, 8))
     for row in interface.OUTPUTS:  # the table as it is now (reordered or not)
         if row.stamped:
@@ -136,13 +136,13 @@ def collect(messages):
     stamp = answers.complete()
     assert stamp == (7, 8)
     answer = dict(answers.by_stamp[stamp])
-    answer[client_session.matrix_output()] = answers.matrix(np.eye(3))
+    answer[session.MATRIX] = answers.matrix(np.eye(3))
     return answer
 
 
 def test_the_client_prints_each_answer_under_its_output_name(monkeypatch):
     messages = answer_messages()
-    expected = rotation_client._answer_data(collect(messages), PARAMETERS)
+    expected = message_data.answer_data(collect(messages), PARAMETERS)
     assert list(expected) == [row.name for row in interface.OUTPUTS]
     assert expected['axis_angle'] == [20.0, 21.0, 22.0]
     assert expected['screw'] == {'angular': [50.0, 51.0, 52.0], 'linear': [53.0, 54.0, 55.0]}
@@ -154,11 +154,11 @@ def test_the_client_prints_each_answer_under_its_output_name(monkeypatch):
                         'w': 10.0 * k + 6},
         'covariance': (10.0 * k + 7 + np.arange(36).reshape(6, 6)).tolist()}
     monkeypatch.setattr(interface, 'OUTPUTS', interface.OUTPUTS[::-1])
-    reordered = rotation_client._answer_data(collect(messages), PARAMETERS)
+    reordered = message_data.answer_data(collect(messages), PARAMETERS)
     assert reordered == expected and list(reordered) == list(expected)[::-1]
     dropped = tuple(row for row in interface.OUTPUTS if row.name != 'euler_angles')
     monkeypatch.setattr(interface, 'OUTPUTS', dropped)
-    fewer = rotation_client._answer_data(collect(messages), PARAMETERS)
+    fewer = message_data.answer_data(collect(messages), PARAMETERS)
     assert fewer == {name: value for name, value in reordered.items() if name != 'euler_angles'}
 
 
@@ -167,11 +167,11 @@ def test_a_new_output_row_is_printed_by_its_fields(monkeypatch):
                            interface.members('vector', 'xyz'), 'rotvec')
     monkeypatch.setattr(interface, 'OUTPUTS', interface.OUTPUTS + (row,))
     messages = answer_messages()
-    answer = rotation_client._answer_data(collect(messages), PARAMETERS)
+    answer = message_data.answer_data(collect(messages), PARAMETERS)
     k = len(interface.OUTPUTS) - 1
-    assert answer['rotvec_again'] == {'vector.x': 10.0 * k, 'vector.y': 10.0 * k + 1,
-                                      'vector.z': 10.0 * k + 2}
-    assert client_session.stamped_outputs()[-1] == 'rotvec_again'  # awaited like the others
+    assert answer['rotvec_again'] == {'vector': {'x': 10.0 * k, 'y': 10.0 * k + 1,
+                                                 'z': 10.0 * k + 2}}
+    assert session.stamped_outputs()[-1] == 'rotvec_again'  # awaited like the others
 
 
 def test_every_output_names_what_it_publishes():

@@ -510,7 +510,8 @@ def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
 
 
 def run_client(*args, timeout=60):
-    command = console_script('rotation_client', 'rot_tools.ros.rotation_client') + list(args)
+    command = console_script('rotation_client',
+                             'rot_tools.ros.client.rotation_client') + list(args)
     return subprocess.run(command, env=script_env(command), capture_output=True, text=True,
                           timeout=timeout)
 
@@ -535,7 +536,7 @@ def test_client_tf_once_against_the_reference(real_tf):
 
 
 def test_client_tf_prints_once_a_second_in_the_reference_frame(real_tf):
-    command = console_script('rotation_client', 'rot_tools.ros.rotation_client') + [
+    command = console_script('rotation_client', 'rot_tools.ros.client.rotation_client') + [
         'tf', 'base_link', 'gimbal', '--deg', '--timeout', '20']
     process = subprocess.Popen(command, env=script_env(command), stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
@@ -775,7 +776,7 @@ def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
     for command, status in [
             (console_script('rotation_node', 'rot_tools.ros.rotation_node')
              + ['--ros-args', '-p', 'tf_reference_frame:=odom', '-p', 'tf_body_frame:=a'], 2),
-            (console_script('rotation_client', 'rot_tools.ros.rotation_client')
+            (console_script('rotation_client', 'rot_tools.ros.client.rotation_client')
              + ['tf', 'odom', 'a'], 1)]:
         env = script_env(command)
         env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(tmp_path),

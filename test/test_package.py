@@ -16,7 +16,7 @@ REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
 CONSOLE_SCRIPTS = {
     'rotation_node': 'rot_tools.ros.rotation_node:main',
-    'rotation_client': 'rot_tools.ros.rotation_client:main',
+    'rotation_client': 'rot_tools.ros.client.rotation_client:main',
     'rot-tools': 'rot_tools.cli.main:main',
 }
 # exec_depends the node needs whatever the code happens to import today.

@@ -1,12 +1,8 @@
 """
 rotation_client's conversation with a node: a short-lived rclpy node, every wait bounded.
 
-It publishes one input until the node answers, and collects the answer output by output,
-by the output's name (rot_tools.io.interface.OUTPUTS): the outputs that carry a header are
-matched by the stamp sent, ``~/rotation_matrix`` (no header) by its content against the
-answer's quaternion. It calls the node's services, repeating a call whose reply Fast DDS
-dropped, and reads ~/describe's refusal counts to tell a refused input from a lost one.
-rclpy is imported only when a Client is made.
+It publishes one input until the node answers and collects the answer output by output, by
+the output's name; it calls the node's services and reads ~/describe's refusal counts.
 """
 
 from collections import deque
@@ -40,26 +36,20 @@ class BadInput(Exception):
     """What was given cannot be used (exit 2): a value not of its parameter's type, a bag."""
 
 
+MATRIX = 'rotation_matrix'
+"""The output without a header, matched by its content."""
+
+PICTURES = ('screw_axis', 'markers')
+"""The pictures: drawn at a limited rate, the latest input winning."""
+
+COVARIANCES = ('rpy_covariance',)
+"""The outputs published only for an input that carries a covariance."""
+
+
 def stamped_outputs():
-    """Return the names of the outputs published for every input with its header."""
+    """Return the names of the outputs published for every input, with its header."""
     return tuple(row.name for row in interface.OUTPUTS
-                 if row.value and row.stamped and not row.covariance)
-
-
-def covariance_outputs():
-    """Return the names of the outputs published only for an input with a covariance."""
-    return tuple(row.name for row in interface.OUTPUTS if row.covariance)
-
-
-def picture_outputs():
-    """Return the names of the pictures (published at a limited rate, the latest wins)."""
-    return tuple(row.name for row in interface.OUTPUTS if row.value is None)
-
-
-def matrix_output():
-    """Return the name of the output without a header, matched by content: the matrix."""
-    (name,) = [row.name for row in interface.OUTPUTS if row.value and not row.stamped]
-    return name
+                 if row.name not in (MATRIX, *PICTURES, *COVARIANCES))
 
 
 def describe_data(response):
@@ -174,6 +164,13 @@ class Client:
         sub, current = self.subscriptions[key]
         current[0] = callback
         return sub
+
+    def unsubscribe(self, sub):
+        """Destroy a subscription of :meth:`subscribe` (a topic is one type in a node)."""
+        for key, (kept, _) in list(self.subscriptions.items()):
+            if kept is sub:
+                del self.subscriptions[key]
+        self.node.destroy_subscription(sub)
 
     def topic(self, name):
         return f'{self.target}/{name}'
@@ -308,10 +305,10 @@ class Client:
         from rclpy.qos import QoSProfile
         from rot_tools.ros.messages import message_class
         answers = Answers(msg.header.frame_id)
-        matrix = matrix_output()
+        matrix = MATRIX
         qos = QoSProfile(depth=100)
-        covariances = covariance_outputs() if covariance else ()
-        wanted = stamped_outputs() + covariances + (picture_outputs() if pictures else ())
+        covariances = COVARIANCES if covariance else ()
+        wanted = stamped_outputs() + covariances + (PICTURES if pictures else ())
         subs = [self.subscribe(message_class(interface.output_named(name).type_name),
                                self.topic(name), answers.collector(name), qos)
                 for name in wanted]
@@ -347,7 +344,7 @@ class Client:
         if covariances:
             self.covariance_answer(answer, covariances, before, topic, answers.sent)
         if pictures:
-            self.spin_until(lambda: set(picture_outputs()) <= set(answer),
+            self.spin_until(lambda: set(PICTURES) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
         return topic, stamp, {**answer, matrix: matrix_msg}
 

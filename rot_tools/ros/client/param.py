@@ -1,21 +1,22 @@
 """
 rotation_client's parameter commands: ``set NAME VALUE``, ``param get NAME``, ``param list``.
 
-``set`` reads VALUE as the type the node declares for NAME (its ~/describe_parameters): a
-string takes the text as it is; a double any number Python's float() or YAML reads (``1e-2``,
-which YAML — and so ``ros2 param set`` — reads as a string, ``2``, ``nan``); an integer a
-whole number; a boolean what YAML reads as one (``true``, ``False``, ``yes``); an array a YAML
-list of such elements. A value that does not fit is one line naming the type (exit status 2),
-and nothing is sent. ``param get`` and ``param list`` print what ``ros2 param get NODE NAME``
-and ``ros2 param list NODE`` print: ``Double value is: 0.001``, the names sorted, each
-indented by two spaces.
+``set`` reads VALUE as the type the node declares for NAME; ``param get`` and ``param list``
+print what ``ros2 param get`` and ``ros2 param list`` print.
 """
 
 import math
+import re
+import sys
 
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rclpy.parameter import parameter_value_to_python
+from rot_tools.ros.client.arguments import quoted
 import yaml
+
+SMALLEST = 5e-324
+"""The smallest positive double."""
+LARGEST = sys.float_info.max
 
 T = ParameterType
 TYPE_NAMES = {T.PARAMETER_BOOL: 'boolean', T.PARAMETER_INTEGER: 'integer',
@@ -61,7 +62,7 @@ NOT_A = {T.PARAMETER_BOOL: 'true or false', T.PARAMETER_INTEGER: 'an integer',
 
 
 class DoesNotFit(Exception):
-    """A value typed for a parameter that is not of the parameter's type."""
+    """A value typed for a parameter that is not of the parameter's type (args: why, or none)."""
 
 
 def _yaml(text):
@@ -86,11 +87,22 @@ def _element(kind, value):
 
 
 def _double(text):
-    """Read a double: what float() reads ('1e-2', ' 2 ', 'nan'), or YAML ('.inf')."""
+    """
+    Read a double: what float() reads ('1e-2', ' 2 ', 'nan'), or YAML ('.inf').
+
+    A number float64 rounds to 0 or to infinity is DoesNotFit, unless it was typed so.
+    """
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         return _element(T.PARAMETER_DOUBLE, _yaml(text))
+    digits = re.split('[eE]', text)[0]
+    if value == 0.0 and re.search('[1-9]', digits):
+        raise DoesNotFit(f'is below the smallest double, {SMALLEST:.2g}: it would be sent as 0')
+    if math.isinf(value) and 'inf' not in text.lower():
+        raise DoesNotFit(f'is beyond the largest double, {LARGEST:.4g}: it would be sent as '
+                         'infinity')
+    return value
 
 
 def typed_value(kind, text):
@@ -119,10 +131,14 @@ def typed_value(kind, text):
     return ParameterValue(type=kind, **{FIELDS[kind]: value})
 
 
-def refusal(name, target, kind, text):
-    """Return the line for ``text`` that does not fit parameter ``name`` of type ``kind``."""
-    return (f'parameter {name} of node {target} is a {TYPE_NAMES[kind]}: {text!r} is not '
-            f'{NOT_A[kind]}')
+def refusal(name, target, kind, text, why=None):
+    """
+    Return the line for ``text`` that does not fit parameter ``name`` of type ``kind``.
+
+    ``why``: what is wrong with it (DoesNotFit's), or None: it is not of that type.
+    """
+    return (f'parameter {name} of node {target} is a {TYPE_NAMES[kind]}: {quoted(text.strip())} '
+            + (why or f'is not {NOT_A[kind]}'))
 
 
 def python_value(value):

@@ -1,38 +1,18 @@
 """
-rotation_client play: a recording's messages published on their topics, as they were recorded.
+rotation_client play: a recording's messages published on their topics, as recorded.
 
-For a user without rosbag2 (ros2 bag play), so that a recording can drive rotation_node. The bag
-— a ROS 1 ``.bag``, a rosbag2 directory or a file of one — is read by rosbags' ``AnyReader``
-(rot_tools.io.bag_read.open_bag): its topics are ``reader.connections``, its messages come from
-``reader.messages(connections, start, stop)`` in the order recorded, each made an object by
-``reader.deserialize``. Each object is then copied field by field into a message of the rclpy
-class of its type (:func:`converter`: the fields that the class's
-``get_fields_and_field_types()`` names, nested messages and sequences of them alike), so a ROS 1
-message becomes its ROS 2 counterpart: a field the ROS 2 type lacks (a ROS 1 header's ``seq``)
-is dropped, one the recording lacks keeps its default. Nothing is serialised by hand.
-
-Each message is published when its recorded time (the time the recorder received it, as ros2
-bag play uses it) comes, counted from the first message played, ``rate`` times faster when
-``rate`` > 1; its header keeps its recorded stamp. The publishers are reliable, volatile, 100
-deep — every subscription matches them, rotation_node's best-effort inputs included — except
-``/tf_static`` and the topics recorded latched (ROS 1) or transient local (rosbag2), which are
-transient local, as tf2_ros's static broadcaster, so a late subscriber still gets them. A topic
-whose type has no Python message class here (a package not installed) is skipped and named.
-Playing starts once some subscription has matched a publisher, within the client's timeout:
-nothing listening is one line, exit status 1 (the topics are to be remapped onto the node's
-inputs with ``--ros-args -r``).
+The bag is read by rosbags' ``AnyReader`` (rot_tools.io.bag_read.open_bag); each message,
+ROS 1 or ROS 2, is copied field by field into the rclpy message of its type (:func:`converter`)
+and published when its recorded time comes, ``rate`` times faster.
 """
 
-import re
+import array
+import os
 import time
 from typing import NamedTuple
 
 import numpy as np
 from rot_tools.ros.messages import type_name
-
-MESSAGE_TYPE = r'([A-Za-z]\w*)/([A-Za-z]\w*)'
-"""A message type inside a field type of get_fields_and_field_types(): 'geometry_msgs/Point'
-in 'geometry_msgs/Point', 'sequence<geometry_msgs/Point>', 'geometry_msgs/Point[3]'."""
 
 DEPTH = 100
 """The publishers' history depth."""
@@ -63,71 +43,77 @@ class Played(NamedTuple):
     """The recorded time of the last message played, seconds after the bag's start."""
     seconds: float
     """The seconds the play took, from the first message to the last."""
-    skipped: list
 
 
 # ---------------------------------------------------------------------------------------
 # Message objects: rosbags' -> rclpy's
 
 
-def _copy(value, default):
-    """
-    Return a plain field's value as the rclpy class takes it, from the kind of its default.
+def _octets(value):
+    """Return bytes (ROS 1 byte: int8; octet: uint8) as rclpy keeps them: one bytes each."""
+    data = np.asarray(value).astype(np.uint8).tobytes()
+    return [data[k:k + 1] for k in range(len(data))]
 
-    A fixed-size numeric array is a NumPy array of the default's dtype; a numeric sequence
-    an array.array of the default's typecode; bytes (octet) a list of one-byte bytes; a NumPy
-    scalar its Python number.
-    """
-    if isinstance(default, np.ndarray):
-        return np.asarray(value, dtype=default.dtype)
-    if isinstance(value, np.ndarray):
-        if isinstance(default, list):  # octets: rclpy keeps each as one byte
-            return [bytes([v]) for v in value.tolist()]
-        return type(default)(default.typecode, value.tolist())
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
+
+def _numbers(default):
+    """Return how a numeric array or sequence is taken, from the rclpy default's kind."""
+    if isinstance(default, np.ndarray):  # a fixed-size array
+        return lambda value: np.asarray(value, dtype=default.dtype)
+    code = default.typecode  # a sequence: an array.array
+    return lambda value: array.array(code, np.asarray(value, dtype=code).tobytes())
+
+
+def _scalar(value):
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _field(slot, default, cache):
+    """Return convert(value) of one field, from its rosidl type ``slot`` (SLOT_TYPES)."""
+    from rosidl_parser.definition import AbstractNestedType, NamespacedType, OCTET_TYPE
+    from rot_tools.ros.messages import message_class
+    if isinstance(slot, NamespacedType):
+        return converter(message_class('/'.join([*slot.namespaces, slot.name])), cache)
+    if isinstance(slot, AbstractNestedType):
+        item = slot.value_type
+        if isinstance(item, NamespacedType):
+            inner = _field(item, None, cache)
+            return lambda value: [inner(v) for v in value]
+        if getattr(item, 'typename', None) == OCTET_TYPE:
+            return _octets
+        if isinstance(default, (np.ndarray, array.array)):
+            return _numbers(default)
+        return lambda value: [_scalar(v) for v in value]  # strings, booleans
+    if getattr(slot, 'typename', None) == OCTET_TYPE:
+        return lambda value: bytes([int(value) & 0xFF])
+    return _scalar
 
 
 def converter(cls, cache=None):
     """
-    Return convert(obj): a message of rclpy class ``cls`` with the fields of ``obj``.
+    Return convert(obj): a message of rclpy class ``cls`` holding the fields of ``obj``.
 
-    ``obj`` is any object with the message's field names (rosbags' message objects). The
-    plan — which fields are messages, sequences of messages, or plain values — is made once
-    per class from ``cls.get_fields_and_field_types()``; ``cache`` ({class: convert}) shares
-    the plans of the classes met along.
+    ``obj`` is a rosbags message object (ROS 1 or ROS 2). Each field of ``cls`` is taken
+    from obj's field of that name as ``cls.SLOT_TYPES`` says: a message in turn, bytes as
+    bytes, numbers as the array kind rclpy keeps; a field obj lacks keeps its default (a
+    ROS 1 header's ``seq`` has no place and is dropped). ``cache`` ({class: convert})
+    shares the converters of the classes met along.
     """
-    from rot_tools.ros.messages import message_class
     cache = {} if cache is None else cache
-    if cls in cache:
-        return cache[cls]
-    plan = []
+    if cls not in cache:
+        fields = []
 
-    def convert(obj):
-        msg = cls()
-        for name, kind, inner in plan:
-            value = getattr(obj, name, None)
-            if value is None:
-                continue  # not in the recording's type: the default stays
-            if kind == 'message':
-                value = inner(value)
-            elif kind == 'messages':
-                value = [inner(item) for item in value]
-            else:
-                value = _copy(value, getattr(msg, name))
-            setattr(msg, name, value)
-        return msg
-    cache[cls] = convert
-    for name, field_type in cls.get_fields_and_field_types().items():
-        found = re.search(MESSAGE_TYPE, field_type)
-        if found is None:
-            plan.append((name, 'value', None))
-            continue
-        inner = converter(message_class(f'{found[1]}/msg/{found[2]}'), cache)
-        many = field_type.startswith('sequence<') or field_type.endswith(']')
-        plan.append((name, 'messages' if many else 'message', inner))
-    return convert
+        def convert(obj):
+            msg = cls()
+            for name, take in fields:
+                value = getattr(obj, name, None)
+                if value is not None:
+                    setattr(msg, name, take(value))
+            return msg
+        default = cls()
+        for name, slot in zip(cls.get_fields_and_field_types(), cls.SLOT_TYPES):
+            fields.append((name, _field(slot, getattr(default, name), cache)))
+        cache[cls] = convert
+    return cache[cls]
 
 
 # ---------------------------------------------------------------------------------------
@@ -227,15 +213,27 @@ class Player:
             self.spin_until(lambda: not unmatched(), SETTLE)
         return unmatched()
 
-    def nobody_listens(self, timeout, node_name):
+    def plan(self, skipped):
+        """Return the lines that say what is played: each topic, its type, where it goes."""
+        lines = []
+        for topic, publisher in self.publishers.items():
+            to = '' if publisher.topic_name == topic else f' on {publisher.topic_name}'
+            lines.append(f'playing {topic} ({type_name(publisher.msg_type)}){to}')
+        return lines + [f'not playing {s.topic} ({s.msgtype}): {s.why}' for s in skipped]
+
+    def nobody_listens(self, timeout, node_name, node_running):
         """
         Return the line for topics no subscription matched within ``timeout`` seconds.
 
-        It shows how to remap the topics of the node's input types onto the inputs of the
-        node ``node_name`` (rot_tools.io.interface.INPUTS).
+        The node ``node_name`` not running is said so; else the line shows how to remap the
+        topics of the node's input types onto its inputs (rot_tools.io.interface.INPUTS).
         """
         from rot_tools.io import interface
         names = [p.topic_name for p in self.publishers.values()]
+        if not node_running:
+            domain = os.environ.get('ROS_DOMAIN_ID') or '0'
+            return (f'no subscription on {", ".join(names)} within {timeout:g} s, and node '
+                    f'{node_name} is not running (not found with ROS_DOMAIN_ID {domain})')
         inputs = {row.type_name: row.name for row in interface.INPUTS}
         remaps = [f'-r {p.topic_name}:={node_name}/{inputs[type_name(p.msg_type)]}'
                   for p in self.publishers.values() if type_name(p.msg_type) in inputs]
@@ -268,7 +266,7 @@ class Player:
         self.flush()
         origin = reader.start_time
         return Played(counts, 0.0 if first is None else (first - origin) / 1e9,
-                      0.0 if last is None else (last - origin) / 1e9, seconds, [])
+                      0.0 if last is None else (last - origin) / 1e9, seconds)
 
     def flush(self):
         """Wait, FLUSH seconds at most in all, for the subscriptions to acknowledge the last."""
@@ -285,13 +283,10 @@ def summary(bag, result, rate):
     Return the summary line of a play.
 
     ``played 200 messages of BAG in 0.51 s (rate 2): /imu/data 100, /odom 100 (10 s to 10.99 s
-    of the recording)``; then each topic skipped, with why.
+    of the recording)``.
     """
     total = sum(result.counts.values())
     topics_text = ', '.join(f'{topic} {n}' for topic, n in result.counts.items())
-    line = (f'played {total} message{"" if total == 1 else "s"} of {bag} in '
+    return (f'played {total} message{"" if total == 1 else "s"} of {bag} in '
             f'{result.seconds:.2f} s (rate {rate:g}): {topics_text or "none"} '
             f'({result.first:g} s to {result.last:g} s of the recording)')
-    for s in result.skipped:
-        line += f'; skipped {s.topic} ({s.msgtype}: {s.why})'
-    return line

@@ -1,16 +1,8 @@
 """
 A demo TF tree on /tf and /tf_static: ``rotation_client tf-demo``.
 
-    map ──(static)── odom ──(moving)── base_link ──(static)── camera
-
-``map → odom``: odom 2 m along map's x, turned 90° about z. ``odom → base_link``: a robot
-driving a circle of radius RADIUS at TURN_RATE rad/s, starting at odom's origin facing x:
-yaw ψ = ω·t, position (r·sin ψ, r·(1 − cos ψ), 0), t the seconds since the start.
-``base_link → camera``: 0.2 m ahead and 0.5 m up, tilted down by 15° (pitch about y).
-/tf_static carries the static edges once (transient local: late listeners get them), /tf the
-moving one RATE times a second, both with tf2_ros's broadcasters' QoS
-(rot_tools.ros.tf_input's). Enough for ``rotation_client tf map camera`` and for a
-rotation_node following two frames.
+map → odom (static), odom → base_link (a robot driving a circle), base_link → camera
+(static, tilted down), with tf2_ros's broadcasters' QoS.
 """
 
 import math

@@ -1,12 +1,8 @@
 """
 rotation_client's command line: its commands, their arguments and help, parsed without ROS.
 
-The input commands are the node's inputs (rot_tools.io.interface): a verb per input row, its
-numbers from the roles of the row's fields (a position X Y Z, an orientation QX QY QZ QW,
-Euler angles A1 A2 A3 of a sequence SEQ), ``--child-frame`` for a child_frame_id,
-``--topic`` for an input remapped away from ``~/NAME``. ``echo`` takes an output's name.
-Nothing here starts ROS: ``--help``, ``--version`` and bad arguments end before rclpy is
-imported.
+A verb per input of the node (:data:`INPUTS`), then the other commands; ``--help``,
+``--version`` and bad arguments end before rclpy is imported.
 """
 
 import argparse
@@ -32,20 +28,57 @@ SERVICES_USED = ('describe', 'screw_path', 'get_parameters', 'describe_parameter
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 FLOAT32_TINY = float(np.finfo(np.float32).smallest_subnormal)
 
-ARGUMENTS = {'position': 'X Y Z', 'orientation': 'QX QY QZ QW', 'angles': 'A1 A2 A3'}
-"""The numbers given for each role of an input's fields (the others are not given: an
-Imu's orientation_covariance is sent zero, or as --cov says)."""
-
 EULER_TEXT = (
     'A1 A2 A3 of sequence SEQ (radians, or degrees with --deg) are sent as the same\n'
     "rotation in the node's euler_sequence and angle_unit: R = euler_to_matrix(A, SEQ),"
     '\nthen matrix_to_euler(R, node sequence).')
 CHILD_TEXT = 'The body is --child-frame (default base_link).'
 POSE = 'X Y Z QX QY QZ QW'
+QUATERNION = 'QX QY QZ QW'
+
+INPUTS = {
+    'pose': (POSE, 'pose.position = X Y Z, pose.orientation = QX QY QZ QW'),
+    'euler': ('A1 A2 A3', 'vector = A1 A2 A3'),
+    'transform': (POSE, 'transform.translation = X Y Z, transform.rotation = QX QY QZ QW'),
+    'pose_with_covariance': (POSE, 'pose.pose.position = X Y Z, '
+                             'pose.pose.orientation = QX QY QZ QW'),
+    'odometry': (POSE, 'pose.pose.position = X Y Z, pose.pose.orientation = QX QY QZ QW'),
+    'imu': (QUATERNION, 'orientation = QX QY QZ QW'),
+    'orientation': (QUATERNION, 'quaternion = QX QY QZ QW'),
+}
+"""The verb of each input of the node (its name): the numbers it takes, and where they go
+(rot_tools.ros.client.rotation_client fills the message)."""
+
+WITH_CHILD_FRAME = ('transform', 'odometry')
+"""The inputs whose message names the body: child_frame_id = --child-frame."""
+
+WITH_COVARIANCE = ('pose_with_covariance', 'odometry', 'imu')
+"""The inputs whose message carries the rotation's covariance: --cov."""
 TOPIC_TEXT = "the topic to send to, when the node's input is remapped (default NODE/{name})"
 COV_TEXT = ("C11 C12 ... C33: the rotation's covariance, row-major, rad² (rotations about the "
             "parent's fixed X, Y, Z, or roll, pitch, yaw: the node's input_covariance); "
             "printed as ~/rpy_covariance (default: all 0, ROS's unknown)")
+
+
+SHOWN = 40
+"""The most characters of a value typed that a message shows."""
+
+RATES = (1e-3, 1e3)
+"""The rates play accepts: slower, a second of recording lasts hours; faster, no timing."""
+
+
+def quoted(text):
+    """Return ``text`` quoted as a message shows it: its first SHOWN characters if longer."""
+    if len(text) <= SHOWN:
+        return repr(text)
+    return f'{text[:SHOWN]!r}… ({len(text)} characters)'
+
+
+def shortened(line, text):
+    """Return ``line`` with each ``text`` in it cut to its first SHOWN characters."""
+    if len(text) <= SHOWN:
+        return line
+    return line.replace(text, f'{text[:SHOWN]}… ({len(text)} characters)')
 
 
 def names_used():
@@ -56,7 +89,16 @@ def names_used():
 def _positive(text):
     value = arguments.any_number(text)
     if not (math.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(f'must be a number > 0, got {text.strip()!r}')
+        raise argparse.ArgumentTypeError(f'must be a number > 0, got {quoted(text.strip())}')
+    return value
+
+
+def _rate(text):
+    value = arguments.any_number(text)
+    low, high = RATES
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(
+            f'must be a number from {low:g} to {high:g}, got {quoted(text.strip())}')
     return value
 
 
@@ -86,7 +128,7 @@ def _tolerance(text):
 def _node_name(text):
     name = text if text.startswith('/') else '/' + text
     if not re.fullmatch(r'(/[A-Za-z_][A-Za-z0-9_]*)+', name):
-        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {text.strip()!r}')
+        raise argparse.ArgumentTypeError(f'not a node name like /ns/name: {quoted(text.strip())}')
     longest = max(names_used(), key=len)
     if len(name) + 1 + len(longest) > NAME_LIMIT:
         raise argparse.ArgumentTypeError(
@@ -145,33 +187,25 @@ class Command:
             summary, numbers, quaternions, text, row)
 
 
-def input_command(row):
-    """
-    Return the Command sending to an input row: its numbers, role by role, and its help.
-
-    E.g. ~/pose: X Y Z QX QY QZ QW, "pose.position = X Y Z, pose.orientation = QX QY QZ QW".
-    """
-    given = [(role, path) for role, path in row.fields.items() if role in ARGUMENTS]
-    numbers, quaternions, offset = [], [], 0
-    for role, _ in given:
-        if role == 'orientation':
-            quaternions.append(offset)
-        numbers.append(ARGUMENTS[role])
-        offset += len(ARGUMENTS[role].split())
-    lines = [f'{row.topic}: {row.help}.',
-             ', '.join(f'{path} = {ARGUMENTS[role]}' for role, path in given) + '.']
-    if 'angles' in row.fields:
+def input_command(name):
+    """Return the Command sending to the node's input ``name``: its numbers and its help."""
+    row = interface.input_named(name)
+    numbers, where = INPUTS[name]
+    words = numbers.split()
+    lines = [f'~/{name}: {row.help}.', where + '.']
+    if name == 'euler':
         lines.append(EULER_TEXT)
-    if 'child_frame_id' in row.fields:
+    if name in WITH_CHILD_FRAME:
         lines.append(CHILD_TEXT)
-    return Command(f'send a {row.type_name} to {row.topic}', ' '.join(numbers),
-                   tuple(quaternions), '\n'.join(lines), row)
+    quaternions = (words.index('QX'),) if 'QX' in words else ()
+    return Command(f'send a {row.type_name} to ~/{name}', numbers, quaternions,
+                   '\n'.join(lines), row)
 
 
 def commands():
     """Return {name: Command}: a command per input of the node, then the others."""
     return {
-        **{row.name: input_command(row) for row in interface.INPUTS},
+        **{name: input_command(name) for name in INPUTS},
         'describe': Command("print ~/describe's report of the latest input", ''),
         'screw-path': Command(
             'call ~/screw_path from one pose to another', f'{POSE} {POSE}', (3, 10),
@@ -191,6 +225,11 @@ def commands():
             "print each message of one of the node's outputs until Ctrl-C", '', (),
             'OUTPUT is the name of an output:\n' + ', '.join(r.name for r in interface.OUTPUTS)
             + '.\nEach message is printed as it arrives, as the input commands print it.'),
+        'diagnostics': Command(
+            "print the node's /diagnostics as they arrive, until Ctrl-C", '', (),
+            'One block per status: its name, its level (OK, WARN, ERROR or STALE), its message\n'
+            'and its values by key. Nothing within --timeout is one line (exit 1) (--node and\n'
+            '--frame are not used).'),
         'set': Command(
             "set one of the node's parameters", '', (),
             'VALUE is read as the type the node declares for NAME (its ~/describe_parameters):'
@@ -205,10 +244,12 @@ def commands():
         'play': Command(
             "publish a recording's messages on their topics, at their recorded times", '', (),
             'BAG is a ROS 1 .bag, a rosbag2 directory or a file of one (the rosbags library,\n'
-            "the bag extra). Remap the topics onto the node's inputs with ROS arguments:\n"
-            '  rotation_client play run.bag --ros-args -r /imu/data:=/rot_tools/imu\n'
-            'Playing starts once a subscription has matched (within --timeout); a summary '
-            'line\nis printed at the end (--node and --frame are not used).'),
+            "the bag extra). Remap the topics onto the node's inputs with ROS arguments, and\n"
+            "name them with --topics (a bag's own /diagnostics or /tf would go live too):\n"
+            '  rotation_client play run.bag --topics /imu/data --ros-args -r '
+            '/imu/data:=/rot_tools/imu\n'
+            'The topics played are printed first; playing starts once a subscription has '
+            'matched\n(within --timeout); a summary line is printed at the end.'),
     }
 
 
@@ -253,10 +294,12 @@ def build_parser():
         '  rotation_client tf odom base_link --once --deg\n'
         '  rotation_client tf-demo --duration 60\n'
         '  rotation_client echo rpy --count 3\n'
+        '  rotation_client diagnostics --once\n'
         '  rotation_client set angle_unit deg\n'
         '  rotation_client param get quaternion_tolerance\n'
         '  rotation_client param list\n'
-        '  rotation_client play run.bag --rate 2 --ros-args -r /imu/data:=/rot_tools/imu\n\n'
+        '  rotation_client play run.bag --topics /imu/data --ros-args -r '
+        '/imu/data:=/rot_tools/imu\n\n'
         'exit status: 0 answered; 1 the node (or a topic, service, answer) not reached '
         'within --timeout,\nnothing to describe, or a parameter the node did not set or '
         "does not have; 2 bad\narguments, a value not of its parameter's type, or an input "
@@ -264,22 +307,21 @@ def build_parser():
     sub = parser.add_commands(_leading_options, dest='command', metavar='COMMAND',
                               required=True)
     for name, command in commands().items():
-        fields = command.row.fields if command.row is not None else {}
-        usage = ' '.join(filter(None, [PROG, name, 'SEQ' if 'angles' in fields else '',
+        usage = ' '.join(filter(None, [PROG, name, 'SEQ' if name == 'euler' else '',
                                        USAGE.get(name, ''),
                                        command.numbers, '[options]']))
         summary = command.summary
         p = sub.add_parser(name, help=summary, usage=usage,
                            description=f'{summary[0].upper()}{summary[1:]}.\n'
                            f'{command.text}'.strip())
-        if 'angles' in fields:
+        if name == 'euler':
             arguments.add_sequence(p)
             arguments.add_deg(p, 'the angles are in degrees')
         if command.row is not None:
             p.add_argument('--topic', metavar='TOPIC', help=TOPIC_TEXT.format(name=name))
-        if command.row is not None and command.row.covariance:
+        if name in WITH_COVARIANCE:
             arguments.add_cov(p, COV_TEXT, type=arguments.any_number, metavar='C')
-        if 'child_frame_id' in fields:
+        if name in WITH_CHILD_FRAME:
             p.add_argument('--child-frame', default=DEFAULT_CHILD_FRAME, metavar='FRAME',
                            help=f'child_frame_id: the body (default {DEFAULT_CHILD_FRAME})')
         if name == 'screw-path':
@@ -304,6 +346,10 @@ def build_parser():
             p.add_argument('--once', action='store_true', help='print one message and exit')
             p.add_argument('--count', type=arguments.whole_number, metavar='N',
                            help='print N messages and exit')
+        elif name == 'diagnostics':
+            p.add_argument('--topic', default='/diagnostics', metavar='TOPIC',
+                           help='the topic to listen to (default /diagnostics)')
+            p.add_argument('--once', action='store_true', help='print one array and exit')
         elif name == 'set':
             p.add_argument('name', metavar='NAME', help="the parameter's name")
             p.add_argument('value', metavar='VALUE', help='its new value')
@@ -311,8 +357,9 @@ def build_parser():
             _param_verbs(p)
         elif name == 'play':
             p.add_argument('bag', metavar='BAG', help='the recording')
-            p.add_argument('--rate', type=_positive, default=1.0, metavar='R',
-                           help='play R times faster than recorded (default 1)')
+            p.add_argument('--rate', type=_rate, default=1.0, metavar='R',
+                           help=f'play R times faster than recorded, {RATES[0]:g} to '
+                           f'{RATES[1]:g} (default 1)')
             p.add_argument('--topics', nargs='+', metavar='T',
                            help='play these topics only (default: every topic)')
             arguments.add_bag_window(p)
@@ -346,8 +393,7 @@ def parse_args(argv):
         for i in command.quaternions:
             w, *xyz = args.numbers[i:i + 4]
             args.numbers[i:i + 4] = [*xyz, w]
-    fields = command.row.fields if command.row is not None else {}
-    hint = angle_hint(args.numbers) if 'angles' in fields and not args.deg else ''
+    hint = angle_hint(args.numbers) if args.command == 'euler' and not args.deg else ''
     args.hints = [hint] if hint else []
     return args
 

@@ -1,0 +1,1 @@
+"""rotation_client: the command line that talks to a running rotation_node."""
