@@ -139,3 +139,48 @@ def test_dir_shows_the_public_names_and_the_sub_packages_only():
         shown = {n for n in line.split() if not n.startswith('_')}
         assert shown <= set(rot_tools.__all__) | set(LAYERS), shown - set(rot_tools.__all__)
     assert set(rot_tools.__all__) <= set(done.stdout.splitlines()[1].split())
+
+
+REFUSE_PLUGIN = r"""
+import sys
+
+REFUSED = set(sys.argv[-1].split(','))
+
+
+class Refuse:
+    def find_spec(self, name, path=None, target=None):
+        if name.split('.')[0] in REFUSED:
+            raise ModuleNotFoundError(f'No module named {name!r}', name=name)
+
+
+sys.meta_path.insert(0, Refuse())
+"""
+
+
+def collect_without(tmp_path, refused, *test_files):
+    """Collect ``test_files`` in a pytest whose imports of ``refused`` fail; return its run."""
+    (tmp_path / 'refuse_imports.py').write_text(REFUSE_PLUGIN.replace(
+        'sys.argv[-1]', repr(','.join(refused))))
+    root = PACKAGE.parent
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        filter(None, [str(tmp_path), str(root), os.environ.get('PYTHONPATH')])))
+    return subprocess.run(
+        [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider', '-p', 'refuse_imports',
+         '--collect-only', '-q', '-rs', *(f'test/{name}' for name in test_files)],
+        capture_output=True, text=True, env=env, cwd=root, timeout=120)
+
+
+def test_test_modules_that_need_ros_or_scipy_are_skipped_without_them(tmp_path):
+    done = collect_without(tmp_path, ['rclpy', 'geometry_msgs', 'scipy'],
+                           'test_messages.py', 'test_client_tools.py', 'test_fitting.py',
+                           'test_euler.py')
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert 'needs geometry_msgs, not installed' in done.stdout
+    assert 'needs scipy, not installed' in done.stdout
+    assert 'test_euler.py::' in done.stdout and 'test_fitting.py::' not in done.stdout
+
+
+def test_a_missing_required_package_is_an_error_not_a_skip(tmp_path):
+    done = collect_without(tmp_path, ['hypothesis'], 'test_euler.py')
+    assert done.returncode != 0
+    assert "No module named 'hypothesis'" in done.stdout, done.stdout
