@@ -148,6 +148,14 @@ def rotate_minus_identity(axis, angle, p):
     return np.sin(t) * np.cross(axis, p) - 2.0 * np.sin(t / 2.0) ** 2 * perp
 
 
+def homogeneous(R, b):
+    """Return the 4 × 4 matrices [R b; 0 1] of any R (..., 3, 3) and b (..., 3), unchecked."""
+    R, b = np.asarray(R, dtype=float), np.asarray(b, dtype=float)
+    T = np.zeros(np.broadcast_shapes(R.shape[:-2], b.shape[:-1]) + (4, 4))
+    T[..., :3, :3], T[..., :3, 3], T[..., 3, 3] = R, b, 1.0
+    return T
+
+
 def ref_quaternion_to_matrix(q):
     """Textbook unit-quaternion matrix with q = (x, y, z, w), the ROS order."""
     q = np.asarray(q, dtype=float)

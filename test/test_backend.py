@@ -64,13 +64,6 @@ def _pose_covariance(cov):
     return cov6
 
 
-def _homogeneous(R, b):
-    """Return the 4 × 4 [R b; 0 1] of any R and b (unchecked)."""
-    T = np.zeros(R.shape[:-2] + (4, 4))
-    T[..., :3, :3], T[..., :3, 3], T[..., 3, 3] = R, b, 1.0
-    return T
-
-
 def _public_calls():
     """(label, function of one item or a batch, items): every public function of items."""
     R = np.array(ROTATIONS)
@@ -92,7 +85,7 @@ def _public_calls():
         ('invert_transform', lambda R, b: rt.invert_transform(R, b)),
         ('transform_to_homogeneous', lambda R, b: rt.transform_to_homogeneous(R, b)),
         ('homogeneous_to_transform', lambda R, b: rt.homogeneous_to_transform(
-            _homogeneous(R, b))),
+            h.homogeneous(R, b))),
         ('frame_to_matrix', lambda R, b: rt.frame_to_matrix(R[..., 0], R[..., 1], R[..., 2])),
         ('rotation_distance', lambda R, b: rt.rotation_distance(R, R[..., ::-1, :].swapaxes(
             -1, -2) @ R, check=False)),
@@ -284,7 +277,7 @@ def _fail_alike_calls():
         ('transform_to_homogeneous', lambda m, v: rt.transform_to_homogeneous(
             m, v[..., :3], check=False)),
         ('homogeneous_to_transform', lambda m, v: rt.homogeneous_to_transform(
-            _homogeneous(m, v[..., :3]), check=False)),
+            h.homogeneous(m, v[..., :3]), check=False)),
         ('rotation_distance', lambda m, v: rt.rotation_distance(m, m, check=False)),
         ('mean_rotation', lambda m, v: rt.mean_rotation(
             np.stack([m, np.broadcast_to(I3, m.shape)], -3), check=False)),
