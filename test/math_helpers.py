@@ -258,7 +258,7 @@ def _normalised(v):
 def unit_vectors():
     """Hypothesis strategy: unit 3-vectors (rejecting near-zero draws)."""
     comp = st.floats(-1.0, 1.0, allow_nan=False)
-    # (named functions: the stock install's Hypothesis 6.98 re-reads a lambda's source per draw)
+    # (named functions, not lambdas: Hypothesis may look up a lambda's source per draw)
     return st.tuples(comp, comp, comp).map(np.array).filter(_not_tiny).map(_normalised)
 
 

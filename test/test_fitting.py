@@ -24,7 +24,7 @@ EPS = np.finfo(float).eps
 
 
 def scipy_rotations(n, seed):
-    # random_state and a Generator: SciPy 1.11 has no rng=, and both draw the same rotations
+    # random_state and a Generator: older SciPy takes no rng=, and both draw the same rotations
     return Rotation.random(n, random_state=np.random.default_rng(seed)).as_matrix()
 
 
@@ -606,8 +606,8 @@ def scipy_primary(a, b, weights, primary):
 def test_align_dominant_weight_still_fits_the_second_pair(ratio):
     # scipy's test_align_vectors_align_constrain with a finite weight: the primary +x of b
     # goes onto +y of a, then the turn about it takes the rest of b's [1, 1, 0] onto a's
-    # [0, 1, 1]. Weights ≥ 1e9 made the SVD's H rank one to UNIQUE_TOL, and every pair but
-    # the first was ignored: the answer came back 90° off.
+    # [0, 1, 1]. Weights ≥ 1e9 make the SVD's H rank one to UNIQUE_TOL: the second pair must
+    # still count.
     a = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 1.0]])
     expected = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     R, rmsd = align_vectors(a, [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [ratio, 1.0])

@@ -232,7 +232,7 @@ def test_quaternion_property_is_rodrigues(axis, angle):
 
 def test_matrix_to_quaternion_matches_scipy_canonical():
     from scipy.spatial.transform import Rotation
-    # random_state and a Generator: SciPy 1.11 has no rng=, and both draw the same rotations
+    # random_state and a Generator: older SciPy takes no rng=, and both draw the same rotations
     R = Rotation.random(N, random_state=np.random.default_rng(7)).as_matrix()
     q = matrix_to_quaternion(R)
     assert q.shape == (N, 4)
@@ -266,7 +266,7 @@ def test_matrix_to_quaternion_half_turn_sign(R, q):
 
 def scipy_rotations(n, seed):
     from scipy.spatial.transform import Rotation
-    # random_state and a Generator: SciPy 1.11 has no rng=, and both draw the same rotations
+    # random_state and a Generator: older SciPy takes no rng=, and both draw the same rotations
     return Rotation.random(n, random_state=np.random.default_rng(seed)).as_matrix()
 
 
