@@ -211,6 +211,26 @@ def random_translations(rng, n):
     return random_unit_vectors(rng, n) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
 
 
+def unit(v):
+    """Return v / |v|."""
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+def screw_motion(direction, point, angle, d):
+    """Return (R, b) of the screw: a turn ``angle`` about the line through ``point``, a slide d."""
+    u = unit(direction)
+    R = notes_rodrigues_eq7(u, angle)
+    return R, (np.eye(3) - R) @ np.asarray(point, dtype=float) + d * u
+
+
+def scipy_rotations(n, seed):
+    """Return n rotations (n, 3, 3) drawn by scipy's Rotation.random, an outside sampler."""
+    from scipy.spatial.transform import Rotation
+    # random_state and a Generator: older SciPy takes no rng=, and both draw the same rotations
+    return Rotation.random(n, random_state=np.random.default_rng(seed)).as_matrix()
+
+
 def wrap(a):
     """Wrap angles to (-pi, pi]."""
     a = np.asarray(a, dtype=float)
