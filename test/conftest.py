@@ -1,18 +1,12 @@
 """
 Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
 
-Node tests use real DDS on the loopback. To keep test runs (and anything else on the
-machine) apart, this module sets, before rclpy is first initialised, a ROS_DOMAIN_ID of its
-own for this run (derived from the pid, in 1..101) and ROS_AUTOMATIC_DISCOVERY_RANGE=
-LOCALHOST. A domain alone is not enough — another program may use the same ID (a stray
-rotation_node answered a test once) — so every node under test and every tester also lives
-in a namespace unique to this run (:data:`RUN`, from the pid and a random token), and each
-test gets a namespace of its own below it. rclpy is imported lazily: the math tests must
-run without it.
-
-Nothing here sleeps for discovery: :class:`Tester` waits for the graph (matched publishers
-and subscriptions, available services) with bounded timeouts, and retries service calls,
-since Fast DDS sometimes drops the reply to a brand-new client.
+Node tests use real DDS on the loopback, in a ROS_DOMAIN_ID of this run's own (from the
+pid, in 1..101) limited to LOCALHOST, and in a namespace unique to this run (:data:`RUN`),
+with one namespace per test below it: other programs on the same domain cannot answer. A
+test module that imports a package this machine lacks (ROS, scipy, rosbags, ...) is skipped,
+not an error; numpy, PyYAML, pytest and hypothesis are required. Waits are bounded waits for
+the graph, never sleeps.
 """
 
 import errno
@@ -49,10 +43,12 @@ TIMEOUT = 5.0
 
 DISCOVERY_TIMEOUT = 4 * TIMEOUT
 """Upper bound of a wait for the graph (a matched publisher or subscription, a service): it
-may include a node process's whole start-up (NumPy, rclpy, DDS), which took more than 5 s
-with the 2 cores shared by two busy processes and seven sessions' tests."""
+may include a node process's whole start-up (NumPy, rclpy, DDS) on a loaded machine."""
 
 REPO = Path(__file__).resolve().parents[1]
+
+REQUIRED = ('numpy', 'yaml', 'pytest', 'hypothesis')
+"""The packages every test module may import: one missing is an error, not a skip."""
 
 _namespaces = itertools.count(1)
 
@@ -230,8 +226,7 @@ class Tester:
 
         An executor's shutdown drops the generator of its last wait, which may still hold
         the handles of the node's entities; it is collected here, while the node lives, not
-        by a later garbage collection at a random point after the node is gone (a segfault
-        in destroy_node, seen once in a whole run).
+        by a later garbage collection after the node is gone.
         """
         for executor in self.executors:
             executor.remove_node(self.node)
@@ -362,8 +357,33 @@ class Tester:
         return self.call(SetParameters, f'{node_name}/set_parameters', request).results
 
 
+class SkippableModule(pytest.Module):
+    """A test module, skipped when it imports a package this machine does not have."""
+
+    def collect(self):
+        try:
+            return super().collect()
+        except self.CollectError as error:
+            missing = error.__cause__
+            if isinstance(missing, ModuleNotFoundError) and optional(missing.name or ''):
+                pytest.skip(f'needs {missing.name}, not installed', allow_module_level=True)
+            raise
+
+
+def optional(module):
+    """Tell whether a test module may be skipped for lack of ``module``: not a required one."""
+    top = module.split('.')[0]
+    local = top == 'rot_tools' or (REPO / 'test' / f'{top}.py').exists()
+    return top not in REQUIRED and not local
+
+
+def pytest_pycollect_makemodule(module_path, parent):
+    """Collect every test module as a SkippableModule."""
+    return SkippableModule.from_parent(parent, path=module_path)
+
+
 def _context():
-    import rclpy
+    rclpy = pytest.importorskip('rclpy')
     context = rclpy.Context()
     rclpy.init(context=context)
     return context
@@ -418,6 +438,7 @@ def node_process(tmp_path):
     start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args;
     start(..., env_extra={NAME: VALUE}) sets environment variables of the process.
     """
+    pytest.importorskip('rclpy')
     started = []
 
     def start(*ros_args, env_extra=None):

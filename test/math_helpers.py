@@ -148,6 +148,14 @@ def rotate_minus_identity(axis, angle, p):
     return np.sin(t) * np.cross(axis, p) - 2.0 * np.sin(t / 2.0) ** 2 * perp
 
 
+def homogeneous(R, b):
+    """Return the 4 × 4 matrices [R b; 0 1] of any R (..., 3, 3) and b (..., 3), unchecked."""
+    R, b = np.asarray(R, dtype=float), np.asarray(b, dtype=float)
+    T = np.zeros(np.broadcast_shapes(R.shape[:-2], b.shape[:-1]) + (4, 4))
+    T[..., :3, :3], T[..., :3, 3], T[..., 3, 3] = R, b, 1.0
+    return T
+
+
 def ref_quaternion_to_matrix(q):
     """Textbook unit-quaternion matrix with q = (x, y, z, w), the ROS order."""
     q = np.asarray(q, dtype=float)
@@ -203,6 +211,26 @@ def random_translations(rng, n):
     return random_unit_vectors(rng, n) * 10.0 ** rng.uniform(-3, 3, size=(n, 1))
 
 
+def unit(v):
+    """Return v / |v|."""
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v)
+
+
+def screw_motion(direction, point, angle, d):
+    """Return (R, b) of the screw: a turn ``angle`` about the line through ``point``, a slide d."""
+    u = unit(direction)
+    R = notes_rodrigues_eq7(u, angle)
+    return R, (np.eye(3) - R) @ np.asarray(point, dtype=float) + d * u
+
+
+def scipy_rotations(n, seed):
+    """Return n rotations (n, 3, 3) drawn by scipy's Rotation.random, an outside sampler."""
+    from scipy.spatial.transform import Rotation
+    # random_state and a Generator: older SciPy takes no rng=, and both draw the same rotations
+    return Rotation.random(n, random_state=np.random.default_rng(seed)).as_matrix()
+
+
 def wrap(a):
     """Wrap angles to (-pi, pi]."""
     a = np.asarray(a, dtype=float)
@@ -250,7 +278,7 @@ def _normalised(v):
 def unit_vectors():
     """Hypothesis strategy: unit 3-vectors (rejecting near-zero draws)."""
     comp = st.floats(-1.0, 1.0, allow_nan=False)
-    # (named functions: the stock install's Hypothesis 6.98 re-reads a lambda's source per draw)
+    # (named functions, not lambdas: Hypothesis may look up a lambda's source per draw)
     return st.tuples(comp, comp, comp).map(np.array).filter(_not_tiny).map(_normalised)
 
 

@@ -9,16 +9,12 @@ reads its command line the same way.
 """
 
 import argparse
-import ast
 from importlib.metadata import version
-from pathlib import Path
 
 import pytest
 from rot_tools.cli import main as cli
 from rot_tools.io import arguments
 from rot_tools.ros.client import arguments as client_arguments
-
-PACKAGE = Path(__file__).resolve().parents[1] / 'rot_tools'
 
 
 def toy():
@@ -135,25 +131,6 @@ def test_version_without_the_distribution_is_one_error_line(monkeypatch, capsys)
     assert capsys.readouterr() == (
         '', 'rot-tools: error: --version: rot_tools is not installed (no distribution '
         'metadata)\n')
-
-
-def test_parsing_is_argparse_own():
-    """
-    No parser of rot_tools replaces one of argparse's parsing methods.
-
-    A parse_known_args of our own, calling parse_known_intermixed_args, relied on argparse
-    calling parse_known_args again for its two passes, which CPython 3.12.8 and 3.13.1 no
-    longer do.
-    """
-    parsing = {'parse_args', 'parse_known_args', 'parse_intermixed_args',
-               'parse_known_intermixed_args', '_parse_known_args', '_parse_known_args2'}
-    found = [f'{path.relative_to(PACKAGE.parent)}: {cls.name}.{method.name}'
-             for path in sorted(PACKAGE.rglob('*.py'))
-             for cls in ast.walk(ast.parse(path.read_text()))
-             if isinstance(cls, ast.ClassDef)
-             for method in cls.body
-             if isinstance(method, ast.FunctionDef) and method.name in parsing]
-    assert found == []
 
 
 # ---------------------------------------------------------------------------------------

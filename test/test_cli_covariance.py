@@ -15,6 +15,7 @@ import math
 
 from conftest import REPO
 from doc_blocks import assert_doc_output, console_steps, doc_block
+import math_helpers as h
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -35,11 +36,6 @@ def _random_covariance(seed, scale=0.05):
     return (C + C.T) / 2
 
 
-def _wrapped(d):
-    """Angle differences in (−π, π]: a central difference never straddles the ±π seam."""
-    return (d + np.pi) % (2 * np.pi) - np.pi
-
-
 def _jacobian(f, x, wrap):
     """∂f/∂x at x (3,) by central differences, f: (3,) → (3,)."""
     columns = []
@@ -47,7 +43,7 @@ def _jacobian(f, x, wrap):
         step = np.zeros(3)
         step[k] = H
         d = f(x + step) - f(x - step)
-        columns.append((_wrapped(d) if wrap else d) / (2 * H))
+        columns.append((h.wrap(d) if wrap else d) / (2 * H))
     return np.stack(columns, axis=1)
 
 

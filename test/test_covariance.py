@@ -11,6 +11,7 @@ matrix_to_rotvec give the Jacobian to ~1e-10, so the closed form must match to 1
 from fractions import Fraction
 import re
 
+import math_helpers as h
 import numpy as np
 import pytest
 import rot_tools as rt
@@ -56,10 +57,6 @@ def _relative(got, want):
     return np.linalg.norm(got - want) / np.linalg.norm(want)
 
 
-def _wrapped(a):
-    return (a + np.pi) % (2 * np.pi) - np.pi
-
-
 @pytest.fixture(scope='module')
 def errors():
     """10^5 draws of N(0, C0), and the rotations of them as rotation vectors."""
@@ -78,7 +75,7 @@ def test_rotvec_to_euler_agrees_with_monte_carlo(seq, frame, errors):
     d, exp_d = errors
     mean = rt.matrix_to_euler(R0, seq)[0]
     angles = rt.matrix_to_euler(_perturbed(R0, exp_d, frame), seq)[0]
-    sampled = np.cov(_wrapped(angles - mean).T)
+    sampled = np.cov(h.wrap(angles - mean).T)
     cov, degenerate = rotvec_covariance_to_euler(R0, C0, seq, frame)
     assert not degenerate
     assert _relative(sampled, cov) < 0.03

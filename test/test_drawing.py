@@ -1,15 +1,16 @@
 """
 rot_tools.io.drawing: the geometry both renderers draw, against independent closed forms.
 
-Motions are built here from a screw chosen by the test (l̂, c, θ, d) with scipy's Rotation:
-R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the helix
-p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ of the constant-screw motion, point by point.
+Motions are built from a screw chosen by the test (l̂, c, θ, d) with Jia's eq. 7
+(math_helpers.screw_motion): R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the
+helix p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ of the constant-screw motion (scipy's
+Rotation), point by point.
 """
 
 import math
 
 from hypothesis import example, given, settings, strategies as st
-from math_helpers import HYPOTHESIS_SETTINGS
+import math_helpers as h
 import numpy as np
 import pytest
 from rot_tools import RotationError
@@ -20,26 +21,15 @@ from scipy.spatial.transform import Rotation
 RNG = np.random.default_rng(1010)
 
 
-def unit(v):
-    v = np.asarray(v, dtype=np.float64)
-    return v / np.linalg.norm(v)
-
-
-def motion(direction, point, angle, d):
-    """(R, b) of the screw (l̂, c, θ, d), computed with scipy (independent of rot_tools)."""
-    R = Rotation.from_rotvec(angle * unit(direction)).as_matrix()
-    return R, (np.eye(3) - R) @ point + d * unit(direction)
-
-
 def helix(direction, point, angle, d, p0, s):
     """Points (len(s), 3) of p0 carried by the constant screw motion at fractions s."""
-    turns = Rotation.from_rotvec(np.outer(s, angle * unit(direction)))
-    return point + turns.apply(p0 - point) + np.outer(s * d, unit(direction))
+    turns = Rotation.from_rotvec(np.outer(s, angle * h.unit(direction)))
+    return point + turns.apply(p0 - point) + np.outer(s * d, h.unit(direction))
 
 
 def perpendicular(direction, point):
     """Return the component of point ⊥ direction (the axis point closest to the origin)."""
-    u = unit(direction)
+    u = h.unit(direction)
     return point - (point @ u) * u
 
 
@@ -58,7 +48,7 @@ SCREWS = {
 def test_screw_picture(case, scale):
     direction, point, angle, d = SCREWS[case]
     point = perpendicular(direction, np.asarray(point, dtype=np.float64))
-    R, b = motion(direction, point, angle, d)
+    R, b = h.screw_motion(direction, point, angle, d)
     pic = picture(R, b, scale=scale)
     assert pic.kind == drawing.SCREW and pic.traced == 'origin'
     size = 1.0 + np.linalg.norm(point) + abs(d)
@@ -82,7 +72,7 @@ def test_screw_picture(case, scale):
     assert off.max() <= drawing.SAGITTA * scale * (1 + 1e-9)
     # The axis: through c along +l̂, covering the origin, b, the path and the moved frame.
     start, end = pic.axis
-    u = unit(direction)
+    u = h.unit(direction)
     for e in (start, end):
         assert np.linalg.norm(np.cross(e - point, u)) <= 1e-12 * size
     assert (end - start) @ u > 0
@@ -109,10 +99,10 @@ def test_the_label_sits_beside_the_path(case, scale):
     """LABEL_OFFSET·scale from the helix, never out at the axis (|c| ~ |b|/θ for a small θ)."""
     direction, point, angle, d, p0 = BESIDE_THE_PATH[case]
     p0 = np.zeros(3) if p0 is None else scale * np.asarray(p0, dtype=np.float64)
-    R, b = motion(direction, np.asarray(point, dtype=np.float64), angle, d)
+    R, b = h.screw_motion(direction, np.asarray(point, dtype=np.float64), angle, d)
     pic = picture(R, b, scale=scale)
-    sign = np.sign(pic.screw.direction @ unit(direction)) if angle else 1.0  # ± at θ = π
-    curve = helix(sign * unit(direction), np.asarray(point, dtype=np.float64), angle,
+    sign = np.sign(pic.screw.direction @ h.unit(direction)) if angle else 1.0  # ± at θ = π
+    curve = helix(sign * h.unit(direction), np.asarray(point, dtype=np.float64), angle,
                   sign * d, p0, np.linspace(0.0, 1.0, 20001))
     off = np.linalg.norm(curve - pic.label_at, axis=1).min()
     assert 0.5 * drawing.LABEL_OFFSET * scale <= off
@@ -124,9 +114,9 @@ def test_the_label_sits_beside_the_path(case, scale):
 def test_a_far_axis_is_drawn_at_a_visible_length(angle, scale):
     # A small turn with a translation: the axis is |b|/θ away, its segment still spans the
     # rise along it (0 to d, the frame tips up to scale further) and scale beyond each end.
-    direction, d = unit((1, 2, 2)), 0.4
+    direction, d = h.unit((1, 2, 2)), 0.4
     point = perpendicular(direction, np.array([3.0, 0.0, -1.0]) / angle)
-    R, b = motion(direction, point, angle, d)
+    R, b = h.screw_motion(direction, point, angle, d)
     start, end = picture(R, b, scale=scale).axis
     length = (end - start) @ direction
     assert np.linalg.norm(end - start) == pytest.approx(length, rel=1e-9)
@@ -135,20 +125,20 @@ def test_a_far_axis_is_drawn_at_a_visible_length(angle, scale):
 
 
 def test_far_axis_is_sampled_by_the_sagitta():
-    pic = picture(*motion((0, 0, 1), (40.0, 0.0, 0.0), 1.0, 0.0))
+    pic = picture(*h.screw_motion((0, 0, 1), (40.0, 0.0, 0.0), 1.0, 0.0))
     # 40·Δ²/8 ≤ 2e-3 → Δ ≤ 0.02 rad: 50 steps for 1 rad, more than 1 rad / 3° = 20.
     assert len(pic.path) - 1 == math.ceil(1.0 / math.sqrt(8 * drawing.SAGITTA / 40.0))
 
 
 def test_segments_are_capped():
-    pic = picture(*motion((0, 0, 1), (1e6, 0.0, 0.0), 3.0, 0.0))
+    pic = picture(*h.screw_motion((0, 0, 1), (1e6, 0.0, 0.0), 3.0, 0.0))
     assert len(pic.path) - 1 == drawing.MAX_SEGMENTS
 
 
 def test_half_turn_lies_on_the_helix_of_the_reported_axis_sign():
     # At θ = π the sign of l̂ is the implementation's; the path follows the one it reports.
     point = np.array([0.0, 1.0, 0.0])
-    R, b = motion((1, 0, 0), point, math.pi, 0.5)
+    R, b = h.screw_motion((1, 0, 0), point, math.pi, 0.5)
     pic = picture(R, b)
     sign = np.sign(pic.screw.direction @ (1, 0, 0))
     s = np.linspace(0.0, 1.0, len(pic.path))
@@ -162,7 +152,7 @@ def test_half_turn_lies_on_the_helix_of_the_reported_axis_sign():
     ((0.1, 1, 1), 'x-axis tip', 0), ((1, 1, 1), 'x-axis tip', 0)])
 def test_pure_rotation_draws_the_arc_of_an_axis_tip(direction, traced, k):
     scale = 0.8
-    R, _ = motion(direction, np.zeros(3), 1.2, 0.0)
+    R, _ = h.screw_motion(direction, np.zeros(3), 1.2, 0.0)
     pic = picture(R, np.zeros(3), scale=scale)
     assert (pic.kind, pic.traced) == (drawing.ROTATION, traced)
     tip = scale * np.eye(3)[k]
@@ -172,8 +162,8 @@ def test_pure_rotation_draws_the_arc_of_an_axis_tip(direction, traced, k):
     np.testing.assert_allclose(pic.path, helix(direction, np.zeros(3), 1.2, 0.0, tip, s),
                                rtol=0, atol=1e-14)
     start, end = pic.axis
-    assert np.linalg.norm(np.cross(start, unit(direction))) <= 1e-15
-    assert np.linalg.norm(np.cross(end, unit(direction))) <= 1e-15
+    assert np.linalg.norm(np.cross(start, h.unit(direction))) <= 1e-15
+    assert np.linalg.norm(np.cross(end, h.unit(direction))) <= 1e-15
 
 
 def test_pure_translation_is_a_straight_path_without_axis():
@@ -199,7 +189,7 @@ def test_identity_has_nothing_to_draw():
 def test_label_direction(chord, across):
     # A straight path of 3 points (middle point = the middle): the label goes
     # LABEL_OFFSET·scale across the chord, towards +z unless within 60° of z.
-    chord, across = np.array(chord), unit(across)
+    chord, across = np.array(chord), h.unit(across)
     path = np.array([np.zeros(3), chord / 2, chord])
     np.testing.assert_allclose(drawing.label_point(path, 2.0),
                                chord / 2 + 2.0 * drawing.LABEL_OFFSET * across,
@@ -208,11 +198,11 @@ def test_label_direction(chord, across):
 
 def test_labels_of_the_worked_example():
     # 90° about z through (0.5, 0.5, 0), rising 0.5: pitch 0.5/(π/2) = 0.3183.
-    R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, 0.5)
+    R, b = h.screw_motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, 0.5)
     assert picture(R, b, degrees=True).label == (
         'theta = 90 deg, d = 0.5, screw pitch = 0.3183 /rad')
     assert picture(R, b).label == 'theta = 1.571 rad, d = 0.5, screw pitch = 0.3183 /rad'
-    R, b = motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, -0.5)
+    R, b = h.screw_motion((0, 0, 1), np.array([0.5, 0.5, 0.0]), math.pi / 2, -0.5)
     assert picture(R, b, degrees=True).label == (
         'theta = 90 deg, d = -0.5, screw pitch = -0.3183 /rad')
     assert picture(R, np.zeros(3), degrees=True).label == (
@@ -221,7 +211,7 @@ def test_labels_of_the_worked_example():
 
 def test_a_given_decomposition_is_used():
     from rot_tools import decompose
-    R, b = motion((0, 1, 0), np.array([1.0, 0.0, 0.0]), 0.7, 0.1)
+    R, b = h.screw_motion((0, 1, 0), np.array([1.0, 0.0, 0.0]), 0.7, 0.1)
     a, c = picture(R, b), picture(R, b, decomposition=decompose(R, b))
     np.testing.assert_array_equal(a.path, c.path)
     np.testing.assert_array_equal(a.axis, c.axis)
@@ -234,11 +224,11 @@ def test_path_segments():
 
 
 def test_a_picture_that_overflows_float64_is_refused():
-    R, b = motion((0, 0, 1), np.zeros(3), 1.0, 1.0)
+    R, b = h.screw_motion((0, 0, 1), np.zeros(3), 1.0, 1.0)
     with pytest.raises(RotationError, match=r'overflows float64 \(scale 1e\+308, max\|b_i\| = 1,'):
         picture(R, b, scale=1e308)
     # The largest finite motions still draw (their axis 1e211 away; capped segments).
-    pic = picture(*motion((0, 0, 1), np.zeros(3), 1e-11, 0.0)[:1], (0.0, 1e200, 0.0))
+    pic = picture(*h.screw_motion((0, 0, 1), np.zeros(3), 1e-11, 0.0)[:1], (0.0, 1e200, 0.0))
     assert len(pic.path) == drawing.MAX_SEGMENTS + 1 and np.isfinite(pic.path).all()
 
 
@@ -254,7 +244,7 @@ HUGE = st.floats(allow_nan=False, allow_infinity=False) | st.sampled_from(
     [1e308, -1.7e308, 1e200, 1e-300, 5e-324, 0.0])
 
 
-@settings(**HYPOTHESIS_SETTINGS)
+@settings(**h.HYPOTHESIS_SETTINGS)
 @given(st.tuples(HUGE, HUGE, HUGE), st.floats(0.0, 4.0), st.tuples(HUGE, HUGE, HUGE),
        st.floats(1e-300, 1e308) | st.sampled_from([1.0, 1e308]))
 @example((0.0, 0.0, 1.0), 1e-11, (1.7e308, -1.7e308, 1.7e308), 1.0)
@@ -265,7 +255,7 @@ def test_any_motion_draws_or_is_refused_with_a_rotation_error(direction, angle, 
     if not any(direction):
         direction = (0.0, 0.0, 1.0)
     direction = np.array(direction) / np.abs(direction).max()
-    R = Rotation.from_rotvec(angle * unit(direction)).as_matrix()
+    R = Rotation.from_rotvec(angle * h.unit(direction)).as_matrix()
     try:
         pic = picture(R, np.array(b), scale=scale)
     except RotationError as exc:

@@ -1,4 +1,12 @@
-"""The sub-packages keep their layers: core and io import no ROS, and no import points up."""
+"""
+What the package imports, and what the tests need of the machine.
+
+core and io import no ROS, no import points up, no module uses another library's private
+names; a test module that needs what this machine lacks is skipped, not an error.
+
+A name starting with ``_`` is a library's own business (so is ``rclpy.impl``): its next
+release may rename it. Dunder names and the documented namedtuple methods are public.
+"""
 
 import ast
 import os
@@ -139,3 +147,158 @@ def test_dir_shows_the_public_names_and_the_sub_packages_only():
         shown = {n for n in line.split() if not n.startswith('_')}
         assert shown <= set(rot_tools.__all__) | set(LAYERS), shown - set(rot_tools.__all__)
     assert set(rot_tools.__all__) <= set(done.stdout.splitlines()[1].split())
+
+
+PUBLIC_UNDERSCORED = {(None, '_replace'), (None, '_asdict'),
+                      (None, '_fields'), (None, '_make'), (None, '_field_defaults')}
+"""Documented names that start with ``_``: (the object's name or None for any, attribute)."""
+
+PRIVATE_MODULES = ('rclpy.impl',)
+"""Modules private though no part of their name starts with ``_``."""
+
+
+def _private(name):
+    return name.startswith('_') and not (name.startswith('__') and name.endswith('__'))
+
+
+def _own_names(trees):
+    """Return every underscored name rot_tools defines itself."""
+    own = set()
+    for tree in trees:
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                own.add(node.name)
+            elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+                own.add(node.id)
+            elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+                own.add(node.attr)
+            elif isinstance(node, ast.alias) and node.asname:
+                own.add(node.asname)
+            elif isinstance(node, ast.arg):
+                own.add(node.arg)
+    return {name for name in own if _private(name)}
+
+
+def _foreign_module(module):
+    return module is not None and module.split('.')[0] != 'rot_tools'
+
+
+def _private_module(module):
+    return (any(_private(part) for part in module.split('.'))
+            or any(module == p or module.startswith(p + '.') for p in PRIVATE_MODULES))
+
+
+def private_uses(tree, own):
+    """Return (line, what) for each use of another library's private name in ``tree``."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                if _foreign_module(alias.name) and _private_module(alias.name):
+                    found.append((node.lineno, f'import {alias.name}'))
+        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+            if not _foreign_module(node.module):
+                continue
+            if _private_module(node.module):
+                found.append((node.lineno, f'from {node.module} import ...'))
+                continue
+            for alias in node.names:
+                if _private(alias.name) or _private_module(f'{node.module}.{alias.name}'):
+                    found.append((node.lineno, f'from {node.module} import {alias.name}'))
+        elif isinstance(node, ast.Attribute):
+            owner = node.value.id if isinstance(node.value, ast.Name) else None
+            if (_private(node.attr) and node.attr not in own
+                    and (owner, node.attr) not in PUBLIC_UNDERSCORED
+                    and (None, node.attr) not in PUBLIC_UNDERSCORED):
+                found.append((node.lineno, f'{owner or "..."}.{node.attr}'))
+            if node.attr == 'impl' and owner == 'rclpy':
+                found.append((node.lineno, 'rclpy.impl'))
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+              and node.func.id in ('getattr', 'hasattr', 'setattr', 'delattr')
+              and len(node.args) >= 2 and isinstance(node.args[1], ast.Constant)
+              and isinstance(node.args[1].value, str) and _private(node.args[1].value)
+              and node.args[1].value not in own):
+            found.append((node.lineno, f'{node.func.id}(..., {node.args[1].value!r})'))
+    return found
+
+
+def _trees():
+    return {path: ast.parse(path.read_text(encoding='utf-8'), str(path))
+            for path in sorted(PACKAGE.rglob('*.py'))}
+
+
+def test_rot_tools_uses_no_private_name_of_another_library():
+    trees = _trees()
+    own = _own_names(trees.values())
+    found = [f'{path.relative_to(PACKAGE.parent)}:{line}: {what}'
+             for path, tree in trees.items() for line, what in private_uses(tree, own)]
+    assert not found, 'private names of other libraries:\n' + '\n'.join(found)
+
+
+@pytest.mark.parametrize('source, what', [
+    ('import rclpy._rclpy_pybind11', 'import rclpy._rclpy_pybind11'),
+    ('from rclpy import _rclpy_pybind11', 'from rclpy import _rclpy_pybind11'),
+    ('import rclpy.impl.rcutils_logger', 'import rclpy.impl.rcutils_logger'),
+    ('from rclpy import impl', 'from rclpy import impl'),
+    ('import rclpy\nrclpy.impl.x', 'rclpy.impl'),
+    ('from rpyutils import _x', 'from rpyutils import _x'),
+    ('node._parameter_overrides', 'node._parameter_overrides'),
+    ('hasattr(node, "_guard")', "hasattr(..., '_guard')"),
+])
+def test_the_check_catches_each_form(source, what):
+    tree = ast.parse(source)
+    assert what in {found for _, found in private_uses(tree, _own_names([tree]))}
+
+
+def test_the_check_passes_own_and_documented_names():
+    source = ('import os\nclass A:\n    def __init__(self):\n        self._x = 1\n'
+              '    def _f(self):\n        return self._x, self._f, self.__dict__\n'
+              'p = point._replace(x=1)\n'
+              'from rot_tools.core._arrays import apart\n')
+    tree = ast.parse(source)
+    assert private_uses(tree, _own_names([tree])) == []
+
+
+REFUSE_PLUGIN = r"""
+import sys
+
+REFUSED = set(sys.argv[-1].split(','))
+
+
+class Refuse:
+    def find_spec(self, name, path=None, target=None):
+        if name.split('.')[0] in REFUSED:
+            raise ModuleNotFoundError(f'No module named {name!r}', name=name)
+
+
+sys.meta_path.insert(0, Refuse())
+"""
+
+
+def collect_without(tmp_path, refused, *test_files):
+    """Collect ``test_files`` in a pytest whose imports of ``refused`` fail; return its run."""
+    (tmp_path / 'refuse_imports.py').write_text(REFUSE_PLUGIN.replace(
+        'sys.argv[-1]', repr(','.join(refused))))
+    root = PACKAGE.parent
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        filter(None, [str(tmp_path), str(root), os.environ.get('PYTHONPATH')])))
+    return subprocess.run(
+        [sys.executable, '-m', 'pytest', '-p', 'no:cacheprovider', '-p', 'refuse_imports',
+         '--collect-only', '-q', '-rs', *(f'test/{name}' for name in test_files)],
+        capture_output=True, text=True, env=env, cwd=root, timeout=120)
+
+
+def test_test_modules_that_need_ros_or_scipy_are_skipped_without_them(tmp_path):
+    done = collect_without(tmp_path, ['rclpy', 'geometry_msgs', 'scipy'],
+                           'test_messages.py', 'test_client_tools.py', 'test_fitting.py',
+                           'test_euler.py')
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert 'needs geometry_msgs, not installed' in done.stdout
+    assert 'needs scipy, not installed' in done.stdout
+    assert 'test_euler.py::' in done.stdout and 'test_fitting.py::' not in done.stdout
+
+
+def test_a_missing_required_package_is_an_error_not_a_skip(tmp_path):
+    done = collect_without(tmp_path, ['hypothesis'], 'test_euler.py')
+    assert done.returncode != 0
+    assert "No module named 'hypothesis'" in done.stdout, done.stdout

@@ -4,6 +4,7 @@ import ast
 import importlib.metadata
 import os
 from pathlib import Path
+import re
 import shutil
 import subprocess
 import sys
@@ -19,20 +20,19 @@ CONSOLE_SCRIPTS = {
     'rotation_client': 'rot_tools.ros.client.rotation_client:main',
     'rot-tools': 'rot_tools.cli.main:main',
 }
-# exec_depends the node needs whatever the code happens to import today.
-REQUIRED_EXEC_DEPENDS = {
-    'rclpy', 'geometry_msgs', 'std_msgs', 'std_srvs', 'nav_msgs', 'sensor_msgs',
-    'visualization_msgs', 'rcl_interfaces', 'builtin_interfaces', 'python3-numpy', 'tf2_msgs',
-}
-# rosdep keys of the non-ROS third-party modules rot_tools may import.
-ROSDEP_KEYS = {'numpy': 'python3-numpy', 'yaml': 'python3-yaml',
-               'matplotlib': 'python3-matplotlib'}
-# Modules of an optional extra of setup.py that have no rosdep key: {module: extra}. They
-# are not exec_depends; rot_tools imports them only inside functions, so that everything
-# else works without them.
-OPTIONAL_EXTRAS = {'rosbags': 'bag', 'pyarrow': 'bag', 'dask': 'fleet', 'distributed': 'fleet'}
-# Packages the ROS wheels registered in this environment's ament index (sys.prefix/share).
+ROSDEP_KEYS = {
+    'numpy': 'python3-numpy', 'yaml': 'python3-yaml', 'matplotlib': 'python3-matplotlib',
+    'scipy': 'python3-scipy', 'pytest': 'python3-pytest', 'hypothesis': 'python3-hypothesis',
+    'setuptools': 'python3-setuptools', 'catkin_pkg': 'python3-catkin-pkg-modules'}
+"""The rosdep key of each third-party module that is not a ROS package (a ROS package's key
+is its name: rclpy, geometry_msgs, ament_flake8, ...)."""
+PIP_ONLY = {'rosbags': 'bag', 'pyarrow': 'bag', 'dask': 'fleet', 'distributed': 'fleet',
+            'duckdb': 'test', 'evo': 'test'}
+"""Modules without a rosdep key, and the setup.py extra that installs them: not in
+package.xml; rot_tools imports them where they are used, and a test module that needs one is
+skipped without it (conftest.py)."""
 AMENT_INDEX = Path(sys.prefix, 'share', 'ament_index', 'resource_index', 'packages')
+"""The packages the ROS wheels registered in this environment (sys.prefix/share)."""
 COLCON_TIMEOUT = 300  # seconds; the build itself takes about 1 s
 SOURCE_IGNORE = shutil.ignore_patterns(
     '.*', 'build', 'install', 'log', '__pycache__', '*.egg-info')
@@ -65,53 +65,87 @@ def _imported_top_level_modules(path, module_level_only=False):
     return names
 
 
-def test_package_xml_parses_with_catkin_pkg(manifest):
-    assert manifest.package_format == 3
-    assert manifest.name == PACKAGE
-    assert manifest.version == importlib.metadata.version(PACKAGE)
-    assert manifest.licenses == ['Apache-2.0']
-    assert manifest.get_build_type() == 'ament_python'
-    description = ' '.join(manifest.description.split())
-    for part in ('odometry', 'IMU', 'PoseWithCovarianceStamped', 'QuaternionStamped',
-                 'quaternion', 'markers', 'rotation_client'):
-        assert part in description, part
-    assert REQUIRED_EXEC_DEPENDS <= {dep.name for dep in manifest.exec_depends}
-    assert {'python3-pytest', 'python3-hypothesis'} <= {dep.name for dep in manifest.test_depends}
+def undeclared_imports(paths, declared):
+    """
+    Return {rosdep key: [file names]} for the imports of ``paths`` not in ``declared``.
 
-
-def test_package_xml_declares_every_package_the_code_imports(manifest):
-    sources = sorted((REPO / PACKAGE).rglob('*.py'))  # every sub-package
-    assert len(sources) > 10, 'no rot_tools/**/*.py found'
-    declared = {dep.name for dep in manifest.exec_depends}
-    assert AMENT_INDEX.is_dir(), f'no ament index at {AMENT_INDEX}: are the ROS wheels installed?'
+    Standard library, rot_tools, the test directory's own modules and PIP_ONLY modules need
+    no key; any other module must be a ROS package of the ament index or in ROSDEP_KEYS.
+    """
+    local = {path.stem for path in (REPO / 'test').glob('*.py')} | {PACKAGE}
     missing = {}
-    for path in sources:
+    for path in paths:
         for name in _imported_top_level_modules(path):
-            if name in sys.stdlib_module_names or name == PACKAGE:
-                continue
-            if name in OPTIONAL_EXTRAS:
-                assert name not in _imported_top_level_modules(path, module_level_only=True), (
-                    f'{path.name} imports {name!r} (optional extra '
-                    f'{OPTIONAL_EXTRAS[name]!r}) at module level: import it where it is used')
+            if name in sys.stdlib_module_names or name in local or name in PIP_ONLY:
                 continue
             if (AMENT_INDEX / name).is_file():
                 key = name
             else:
                 assert name in ROSDEP_KEYS, (
                     f'{path.name} imports {name!r}, which is neither a ROS package nor in '
-                    'ROSDEP_KEYS: add its rosdep key to package.xml and ROSDEP_KEYS')
+                    'ROSDEP_KEYS nor PIP_ONLY: add its rosdep key to package.xml and here')
                 key = ROSDEP_KEYS[name]
             if key not in declared:
                 missing.setdefault(key, []).append(path.name)
-    assert missing == {}, f'imported but not an <exec_depend> in package.xml: {missing}'
+    return missing
 
 
-def test_optional_extras_name_their_modules():
-    requires = importlib.metadata.distribution(PACKAGE).requires
-    for module, extra in OPTIONAL_EXTRAS.items():
-        assert any(req.startswith((f'{module}==', f'{module}['))
-                   and f'extra == "{extra}"' in req
-                   for req in requires), (module, extra, requires)
+def _package_sources():
+    sources = sorted((REPO / PACKAGE).rglob('*.py'))
+    assert len(sources) > 10, 'no rot_tools/**/*.py found'
+    return sources
+
+
+@pytest.fixture(scope='module')
+def ament_index():
+    if not AMENT_INDEX.is_dir():
+        pytest.skip(f'no ament index at {AMENT_INDEX}: ROS is not installed')
+    return AMENT_INDEX
+
+
+def test_package_xml_parses_with_catkin_pkg(manifest):
+    assert manifest.package_format == 3
+    assert manifest.name == PACKAGE
+    assert manifest.licenses == ['Apache-2.0']
+    assert manifest.get_build_type() == 'ament_python'
+
+
+def test_package_xml_has_the_version_of_setup_py(manifest):
+    assert manifest.version == importlib.metadata.version(PACKAGE)
+
+
+def test_package_xml_describes_the_node_inputs_and_outputs(manifest):
+    description = ' '.join(manifest.description.split())
+    for part in ('odometry', 'IMU', 'PoseWithCovarianceStamped', 'QuaternionStamped',
+                 'quaternion', 'markers', 'rotation_client'):
+        assert part in description, part
+
+
+def test_package_xml_exec_depends_on_every_package_rot_tools_imports(manifest, ament_index):
+    declared = {dep.name for dep in manifest.exec_depends}
+    assert undeclared_imports(_package_sources(), declared) == {}
+
+
+def test_package_xml_test_depends_on_every_package_the_tests_import(manifest, ament_index):
+    declared = {dep.name for dep in manifest.exec_depends + manifest.test_depends}
+    tests = sorted((REPO / 'test').glob('*.py'))
+    assert undeclared_imports(tests, declared) == {}
+
+
+def test_the_dependency_check_names_an_import_left_undeclared(manifest, ament_index):
+    declared = {dep.name for dep in manifest.exec_depends + manifest.test_depends}
+    missing = undeclared_imports(sorted((REPO / 'test').glob('*.py')),
+                                 declared - {'python3-scipy', 'geometry_msgs'})
+    assert set(missing) == {'python3-scipy', 'geometry_msgs'}
+    assert 'test_fitting.py' in missing['python3-scipy']
+
+
+def test_rot_tools_imports_pip_only_modules_where_they_are_used():
+    """A module of an extra is imported inside functions: the rest works without it."""
+    found = [f'{path.name} imports {name}' for path in _package_sources()
+             for name in _imported_top_level_modules(path, module_level_only=True)
+             if name in PIP_ONLY]
+    assert found == []
 
 
 def test_installed_distribution_matches_setup():
@@ -140,6 +174,31 @@ def colcon_install(tmp_path_factory):
         pytest.fail(f'colcon build took more than {COLCON_TIMEOUT} s')
     assert result.returncode == 0, f'colcon build failed:\n{result.stdout}\n{result.stderr}'
     return workspace / 'install' / PACKAGE
+
+
+def _requirements_of(colcon_install):
+    """Return {(name, extra): specifier} of the rot_tools colcon installed, from its metadata."""
+    info = next(colcon_install.glob(f'lib/python3*/site-packages/{PACKAGE}-*-info'))
+    found = {}
+    for line in importlib.metadata.Distribution.at(info).requires:
+        requirement, _, marker = line.partition(';')
+        name = re.match(r'[\w.-]+', requirement).group()
+        extra = re.search(r'extra == "(\w+)"', marker)
+        found[name, extra and extra.group(1)] = requirement[len(name):].strip()
+    return found
+
+
+def test_extras_install_every_pip_only_module(colcon_install):
+    requirements = _requirements_of(colcon_install)
+    for module, extra in PIP_ONLY.items():
+        assert (module, extra) in requirements, (module, extra, sorted(requirements))
+
+
+def test_extras_take_a_range_of_versions_not_one(colcon_install):
+    """setup.py's extras are ranges; the requirements files hold the exact pins."""
+    pinned = {name: specifier for name, specifier in _requirements_of(colcon_install).items()
+              if '==' in specifier}
+    assert pinned == {}
 
 
 def _run_in_workspace(prefix, *command):

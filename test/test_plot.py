@@ -13,6 +13,7 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
+import math_helpers as h
 import numpy as np
 import pytest
 from rot_tools.cli import plot
@@ -31,15 +32,10 @@ def points(line):
     return np.transpose(line.get_data_3d())
 
 
-def screw_motion(direction, point, angle, d):
-    u = np.asarray(direction, dtype=np.float64) / np.linalg.norm(direction)
-    R = Rotation.from_rotvec(angle * u).as_matrix()
-    return u, R, (np.eye(3) - R) @ point + d * u
-
-
 def test_screw_figure_holds_frames_axis_and_helix():
     c, theta, d = np.array([0.5, 0.5, 0.0]), math.pi / 2, 0.5
-    u, R, b = screw_motion((0, 0, 1), c, theta, d)
+    u = np.array([0.0, 0.0, 1.0])
+    R, b = h.screw_motion(u, c, theta, d)
     fig = plot.figure(R, b, degrees=True)
     lines = lines_by_gid(fig)
     assert set(lines) == {*plot.REFERENCE_GIDS, *plot.MOVED_GIDS, 'screw_axis', 'path'}
@@ -69,7 +65,7 @@ def test_screw_figure_holds_frames_axis_and_helix():
 
 def test_rotation_figure_draws_the_arc_of_the_x_tip():
     theta = 1.0
-    _, R, _ = screw_motion((0, 0, 1), np.zeros(3), theta, 0.0)
+    R, _ = h.screw_motion((0, 0, 1), np.zeros(3), theta, 0.0)
     fig = plot.figure(R, None)
     lines = lines_by_gid(fig)
     arc = points(lines['path'])

@@ -24,17 +24,6 @@ def random_rotations(rng, n):
     return h.random_axis_angle(rng, n)[2]
 
 
-def homogeneous(r, b):
-    """[[R, b], [0, 0, 0, 1]] built with NumPy, batched."""
-    r, b = np.asarray(r, dtype=float), np.asarray(b, dtype=float)
-    shape = np.broadcast_shapes(r.shape[:-2], b.shape[:-1])
-    t = np.zeros(shape + (4, 4))
-    t[..., :3, :3] = r
-    t[..., :3, 3] = b
-    t[..., 3, 3] = 1.0
-    return t
-
-
 def apply_h(t, p):
     """Image of points p (..., 3) under homogeneous matrices t (..., 4, 4)."""
     p1 = np.concatenate([p, np.ones(p.shape[:-1] + (1,))], -1)
@@ -186,7 +175,7 @@ def test_transform_points_is_the_homogeneous_product():
     p = h.random_translations(rng, N)
     got = transform_points(r, b, p)
     assert got.shape == (N, 3)
-    ref = apply_h(homogeneous(r, b), p)
+    ref = apply_h(h.homogeneous(r, b), p)
     assert np.all(np.abs(got - ref).max(-1) <= 1e-15 * 4 * scale_of(b, p))
 
 
@@ -255,7 +244,7 @@ def test_compose_is_the_product_of_homogeneous_matrices():
     r2, b2 = motions(rng, N)
     R, b = compose_transforms(r1, b1, r2, b2)
     assert R.shape == (N, 3, 3) and b.shape == (N, 3)
-    ref = homogeneous(r1, b1) @ homogeneous(r2, b2)
+    ref = h.homogeneous(r1, b1) @ h.homogeneous(r2, b2)
     assert h.max_abs(R - ref[:, :3, :3]) <= 1e-15 * 4
     assert np.all(np.abs(b - ref[:, :3, 3]).max(-1) <= 1e-15 * 4 * scale_of(b1, b2))
     # T2 is applied first
@@ -297,7 +286,7 @@ def test_invert_is_the_inverse_homogeneous_matrix():
     r, b = motions(rng, N)
     Rt, back = invert_transform(r, b)
     assert np.array_equal(Rt, np.swapaxes(r, -1, -2))
-    ref = np.linalg.inv(homogeneous(r, b))
+    ref = np.linalg.inv(h.homogeneous(r, b))
     assert np.all(np.abs(back - ref[:, :3, 3]).max(-1) <= 1e-14 * scale_of(b))
     assert np.array_equal(invert_transform(np.eye(3), np.zeros(3))[1], np.zeros(3))
     assert not np.signbit(invert_transform(np.eye(3), np.zeros(3))[1]).any()
@@ -346,7 +335,7 @@ def test_homogeneous_round_trip_is_exact():
     r, b = motions(rng, N)
     T = transform_to_homogeneous(r, b)
     assert T.shape == (N, 4, 4)
-    assert np.array_equal(T, homogeneous(r, b))
+    assert np.array_equal(T, h.homogeneous(r, b))
     R2, b2 = homogeneous_to_transform(T)
     assert np.array_equal(R2, r) and np.array_equal(b2, b)
     one = transform_to_homogeneous(r[3], b[3])
@@ -367,7 +356,7 @@ def test_homogeneous_product_is_compose():
 
 
 def test_homogeneous_last_row_within_tolerance_is_accepted():
-    T = homogeneous(h.ref_elementary('x', 0.4), [1.0, 2.0, 3.0])
+    T = h.homogeneous(h.ref_elementary('x', 0.4), [1.0, 2.0, 3.0])
     T[3] = [5e-10, -5e-10, 0.0, 1.0 + 5e-10]
     R, b = homogeneous_to_transform(T)
     assert np.array_equal(R, T[:3, :3]) and np.array_equal(b, [1.0, 2.0, 3.0])
@@ -375,7 +364,7 @@ def test_homogeneous_last_row_within_tolerance_is_accepted():
 
 @pytest.mark.parametrize('index, value', [(0, 1e-3), (1, -2e-9), (2, 0.5), (3, 2.0), (3, 0.0)])
 def test_homogeneous_last_row_not_0001(index, value):
-    T = homogeneous(np.eye(3), [1.0, 2.0, 3.0])
+    T = h.homogeneous(np.eye(3), [1.0, 2.0, 3.0])
     T[3, index] = value
     off = abs(value - (index == 3))
     with pytest.raises(RotationError, match=r'last row is .* not \[0, 0, 0, 1\]') as info:
@@ -394,13 +383,13 @@ def test_homogeneous_last_row_inside_a_batch():
 
 
 def test_homogeneous_rotation_block_is_validated():
-    T = homogeneous(np.eye(3), [0.0, 0.0, 1.0])
+    T = h.homogeneous(np.eye(3), [0.0, 0.0, 1.0])
     T[0, 1] = 1e-3
     with pytest.raises(RotationError, match=r'R \(T\[:3, :3\]\) is not orthogonal'):
         homogeneous_to_transform(T)
     R, b = homogeneous_to_transform(T, check=False)
     assert np.array_equal(R, T[:3, :3]) and np.array_equal(b, [0.0, 0.0, 1.0])
-    T = homogeneous(np.diag([1.0, -1.0, 1.0]), np.zeros(3))
+    T = h.homogeneous(np.diag([1.0, -1.0, 1.0]), np.zeros(3))
     with pytest.raises(RotationError, match=r'R \(T\[:3, :3\]\) is a reflection: det R = -1'):
         homogeneous_to_transform(T)
 
@@ -457,7 +446,7 @@ def test_check_false_computes_with_the_matrix_as_given():
     assert h.max_abs(R - m @ m2) <= 1e-14 and h.max_abs(bb - (m @ b2 + b)) <= 1e-14
     Rt, back = invert_transform(m, b, check=False)
     assert np.array_equal(Rt, m.T) and h.max_abs(back + m.T @ b) <= 1e-14
-    assert np.array_equal(transform_to_homogeneous(m, b, check=False), homogeneous(m, b))
+    assert np.array_equal(transform_to_homogeneous(m, b, check=False), h.homogeneous(m, b))
     with pytest.raises(RotationError):
         transform_points(m, b, p)
 

@@ -232,7 +232,7 @@ def test_quaternion_property_is_rodrigues(axis, angle):
 
 def test_matrix_to_quaternion_matches_scipy_canonical():
     from scipy.spatial.transform import Rotation
-    # random_state and a Generator: SciPy 1.11 has no rng=, and both draw the same rotations
+    # random_state and a Generator: older SciPy takes no rng=, and both draw the same rotations
     R = Rotation.random(N, random_state=np.random.default_rng(7)).as_matrix()
     q = matrix_to_quaternion(R)
     assert q.shape == (N, 4)
@@ -262,12 +262,6 @@ def test_matrix_to_quaternion_closed_form(axis, angle):
 def test_matrix_to_quaternion_half_turn_sign(R, q):
     # Exactly π (w = 0): the first non-zero of x, y, z is positive.
     assert h.max_abs(matrix_to_quaternion(R) - np.array(q)) <= 2e-16
-
-
-def scipy_rotations(n, seed):
-    from scipy.spatial.transform import Rotation
-    # random_state and a Generator: SciPy 1.11 has no rng=, and both draw the same rotations
-    return Rotation.random(n, random_state=np.random.default_rng(seed)).as_matrix()
 
 
 def adversarial_rotations():
@@ -311,7 +305,7 @@ def test_matrix_to_quaternion_adversarial_closed_forms():
 
 def test_quaternion_round_trip_random_and_adversarial():
     r_adv, _, _ = adversarial_rotations()
-    for r in (scipy_rotations(N, 81), r_adv):
+    for r in (h.scipy_rotations(N, 81), r_adv):
         q = matrix_to_quaternion(r)
         assert h.max_abs(np.linalg.norm(q, axis=-1) - 1.0) <= 2e-16 * 2
         assert h.max_abs(quaternion_to_matrix(q) - r) <= 1e-15
@@ -335,7 +329,7 @@ def test_quaternion_round_trip_from_quaternions():
 
 def test_matrix_to_quaternion_canonical_sign_everywhere():
     r_adv, _, _ = adversarial_rotations()
-    for r in (scipy_rotations(N, 83), r_adv):
+    for r in (h.scipy_rotations(N, 83), r_adv):
         q = matrix_to_quaternion(r)
         w = q[:, 3]
         assert np.all(w >= 0)
@@ -373,7 +367,7 @@ def test_matrix_to_quaternion_check_false_uses_the_matrix_as_given():
 
 
 def test_matrix_to_quaternion_shapes():
-    r = scipy_rotations(24, 84).reshape(2, 3, 4, 3, 3)
+    r = h.scipy_rotations(24, 84).reshape(2, 3, 4, 3, 3)
     q = matrix_to_quaternion(r)
     assert q.shape == (2, 3, 4, 4)
     assert matrix_to_quaternion(np.eye(3)).shape == (4,)

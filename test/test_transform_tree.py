@@ -506,32 +506,51 @@ def test_nan_and_inf_are_refused(R, b, stamp, what, static):
     assert tree.time_range('odom', 'base_link') == (0.0, 5.0)
 
 
-def test_not_a_rotation_bad_frames_and_bad_shapes_are_refused():
+@pytest.mark.parametrize('R, message', [
+    (1.001 * np.eye(3), 'not orthogonal'), (-np.eye(3), 'reflection')])
+def test_a_matrix_that_is_not_a_rotation_is_refused(R, message):
     tree = TransformTree()
-    with pytest.raises(TransformTreeError, match='not orthogonal') as excinfo:
-        tree.set_transform('a', 'b', 1.001 * np.eye(3), [0.0, 0.0, 0.0], 0.0)
+    with pytest.raises(TransformTreeError, match=message) as excinfo:
+        tree.set_transform('a', 'b', R, [0.0, 0.0, 0.0], 0.0)
     assert excinfo.value.reason == 'not_rotation'
-    with pytest.raises(TransformTreeError, match='reflection') as excinfo:
-        tree.set_transform('a', 'b', -np.eye(3), [0.0, 0.0, 0.0], 0.0)
-    assert excinfo.value.reason == 'not_rotation'
-    for parent, child in [('', 'b'), ('a', ''), (None, 'b'), ('a', 3)]:
-        with pytest.raises(TransformTreeError, match='non-empty string') as excinfo:
-            tree.set_transform(parent, child, np.eye(3), [0.0, 0.0, 0.0], 0.0)
-        assert excinfo.value.reason == 'bad_frame'
-    for R, b, stamp in [(np.eye(4), [0, 0, 0], 0.0), (np.eye(3), [0, 0], 0.0),
-                        (np.eye(3), [0, 0, 0], [0.0, 1.0]), (np.eye(3), [0, 0, 0], 'now')]:
-        with pytest.raises(TransformTreeError) as excinfo:
-            tree.set_transform('a', 'b', R, b, stamp)
-        assert excinfo.value.reason == 'bad_value'
+    assert tree.frames == []
+
+
+@pytest.mark.parametrize('parent, child', [('', 'b'), ('a', ''), (None, 'b'), ('a', 3)])
+def test_an_empty_or_non_string_frame_name_is_refused(parent, child):
+    tree = TransformTree()
+    with pytest.raises(TransformTreeError, match='non-empty string') as excinfo:
+        tree.set_transform(parent, child, np.eye(3), [0.0, 0.0, 0.0], 0.0)
+    assert excinfo.value.reason == 'bad_frame'
+    assert tree.frames == []
+
+
+@pytest.mark.parametrize('R, b, stamp', [
+    (np.eye(4), [0, 0, 0], 0.0), (np.eye(3), [0, 0], 0.0), (np.eye(3), [0, 0, 0], [0.0, 1.0]),
+    (np.eye(3), [0, 0, 0], 'now')])
+def test_a_value_that_is_not_a_transform_is_refused(R, b, stamp):
+    tree = TransformTree()
+    with pytest.raises(TransformTreeError) as excinfo:
+        tree.set_transform('a', 'b', R, b, stamp)
+    assert excinfo.value.reason == 'bad_value'
+    assert tree.frames == []
+
+
+def test_a_static_edge_takes_one_transform():
+    tree = TransformTree()
     with pytest.raises(TransformTreeError, match='static edge takes one'):
         tree.set_transform('a', 'b', np.stack([np.eye(3)] * 2), np.zeros((2, 3)), [0.0, 1.0],
                            static=True)
     assert tree.frames == []
-    for bad in [0.0, -1.0, math.nan, 'ten']:
-        with pytest.raises(RotationError, match='cache_seconds'):
-            TransformTree(cache_seconds=bad)
-    with pytest.raises(RotationError, match='max_samples'):
-        TransformTree(max_samples=1)
+
+
+@pytest.mark.parametrize('options, message', [
+    ({'cache_seconds': 0.0}, 'cache_seconds'), ({'cache_seconds': -1.0}, 'cache_seconds'),
+    ({'cache_seconds': math.nan}, 'cache_seconds'), ({'cache_seconds': 'ten'}, 'cache_seconds'),
+    ({'max_samples': 1}, 'max_samples')])
+def test_a_tree_refuses_a_bad_cache(options, message):
+    with pytest.raises(RotationError, match=message):
+        TransformTree(**options)
 
 
 def test_a_lookup_at_a_non_finite_stamp_is_refused():

@@ -1,31 +1,9 @@
 """
 ``rot-tools covariance INPUT ARGS... --cov C11 .. C33 --from A --to B``: one covariance, re-read.
 
-The rotation is typed as the one-shot commands take it (``quaternion X Y Z W``, ``euler SEQ
-A1 A2 A3``, ``matrix``, ``axis-angle``, ``rotvec``, ``frame``: read by those commands'
-modules); the covariance of its small error is 9 numbers, row by row, in rad². A and B are each
-
-- ``rotvec``: a small rotation vector δ, about the parent's fixed X, Y, Z (``--frame
-  parent``, R_true = exp([δ]×)·R, as geometry_msgs/PoseWithCovariance documents it) or about
-  the body's own axes (``--frame body``, R_true = R·exp([δ]×));
-- ``rpy``: roll, pitch, yaw (REP 103: about the fixed X, Y, Z axes, the extrinsic sequence
-  ``xyz``);
-- any of the 24 Euler sequences (upper case intrinsic, lower case extrinsic).
-
-The conversion is first order, through rot_tools.core.covariance (Σ_θ = E⁻¹·Σ_δ·E⁻ᵀ,
-Σ_δ = E·Σ_θ·Eᵀ, E the Euler-rate matrix of the sequence at R's angles as ``rot-tools
-euler`` prints them); one sequence to another goes through the rotation vector, a rotation
-vector from one frame to the other is R·Σ·Rᵀ or Rᵀ·Σ·R. ``--to-frame`` gives the output
-rotation vector a frame other than ``--frame``.
-
-Printed (YAML, or JSON with ``--json``): ``from``, ``from_frame``, ``to``, ``to_frame``
-(null for Euler angles, which have no frame), ``covariance`` (3 rows, rad²), ``stddev``
-(rad), ``stddev_deg``, ``correlation`` and ``degenerate``. Each matrix or list is rounded to
-``--precision`` significant digits of its largest entry: a variance of 1e-7 rad² keeps its
-digits, rounding noise still prints as 0.0. At gimbal lock of a sequence on either side its
-covariance does not exist: ``degenerate: true``, the numbers null, a one-line note on stderr,
-exit status 0. A covariance that is not one (not symmetric, not positive semi-definite), a
-wrong count, an unknown representation: one ``rot-tools: error:`` line, exit status 2.
+The rotation is typed as the one-shot commands take it; its error's covariance (9 numbers,
+rad²) is converted between a rotation vector in the parent or body frame, roll-pitch-yaw
+and any Euler sequence (rot_tools.core.covariance), and printed as YAML or JSON.
 """
 
 import argparse
@@ -192,7 +170,14 @@ def _rounded(values, precision):
 
 
 def report(R, C, source, target, frames, precision=DEFAULT_PRECISION):
-    """Return (the report's plain data, the locked sequence or None); see the module docstring."""
+    """
+    Return (the report's plain data, the locked sequence or None).
+
+    The data: from, from_frame, to, to_frame (None for Euler angles), covariance (rad²),
+    stddev (rad), stddev_deg, correlation and degenerate; each matrix or list rounded to
+    ``precision`` significant digits of its largest entry. At gimbal lock of either
+    sequence the covariance does not exist: degenerate True and the numbers None.
+    """
     scale = float(np.abs(C).max()) or 1.0  # linear in C: converted as C / max|C|, so that
     out, locked = convert(R, C / scale, source, target, *(f or 'parent' for f in frames))
     out = None if out is None else out * scale  # entries near 1e308 do not overflow on the way

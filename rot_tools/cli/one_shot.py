@@ -1,11 +1,8 @@
 """
 What the one-shot commands share: their parser's shape, and the report they print.
 
-A one-shot command (euler, matrix, axis-angle, rotvec, quaternion, frame, screw: a module
-each) reads one typed input into (R, b, input sequence) with its ``rotation(args)``, and
-:func:`run` prints ``transform_report`` (keys documented in rot_tools.io.report) as YAML,
-or JSON with ``--json``; ``--plot FILE`` also draws it (rot_tools.cli.plot). Hints about the
-input (radians that look like degrees) follow the report on stderr.
+Each one-shot command (a module each) reads one typed input into (R, b, sequence); run
+prints the report as YAML, or JSON with ``--json``, and draws it with ``--plot FILE``.
 """
 
 import sys

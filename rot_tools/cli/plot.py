@@ -1,26 +1,9 @@
 """
 A 3-D picture of a rigid motion with matplotlib: what ``rot-tools ... --plot FILE`` draws.
 
-matplotlib is the optional ``plot`` extra (``pip install -e '.[plot]'`` in the checkout); this
-module imports it, so rot-tools imports this module only when --plot is given. It uses no pyplot
-and no display: the Figure is drawn on an Agg canvas and saved by the file's extension
-(PNG, SVG, or any other format matplotlib writes).
-
-The geometry is rot_tools.io.drawing's :class:`~rot_tools.io.drawing.Picture`, the same that
-rotation_node's ``~/markers`` shows in RViz. In one 3-D axes with equal scales on x, y and
-z: the reference frame (dashed, at the origin), the moved frame (solid, at b, its axes the
-columns of R; x red, y green, z blue), the screw axis through its point c (orange; for a pure
-rotation the rotation axis), the path (magenta: the helix of the origin, the arc of an axis
-tip for a pure rotation, the straight path for a pure translation) and a title with θ, d and
-the pitch. Every drawn line has a gid (REFERENCE_GIDS, MOVED_GIDS, 'screw_axis', 'path',
-'toward_axis'), which SVG keeps as the element id.
-
-The frames and the view are sized by the motion — |b| and the reach of the path — never by
-the axis: for a small turn θ with a translation b the axis lies about |b|/θ away (28.6 for
-2° and |b| = 1), and a view that held it would shrink the motion to a dot. An axis that
-passes within AXIS_REACH half-widths of the view's centre is drawn whole (the view grows to
-hold it); a farther one is left out of the view, and a dotted orange line from the view's
-centre to its edge points at it, with its distance in the legend.
+matplotlib is the optional ``plot`` extra: rot-tools imports this module only when --plot
+is given. No pyplot and no display: the Figure is drawn on an Agg canvas and saved in the
+format of the file's extension. The geometry is rot_tools.io.drawing's Picture.
 """
 
 import math
@@ -117,7 +100,15 @@ def _draw_axis(ax, pic, drawn):
 
 def figure(R, b=None, degrees=False, scale=None):
     """
-    Return the matplotlib Figure of p ↦ R·p + b (b = 0 when None); see the module docstring.
+    Return the matplotlib Figure of p ↦ R·p + b (b = 0 when None).
+
+    One 3-D axes with equal scales: the reference frame (dashed), the moved frame (solid, at
+    b; x red, y green, z blue), the screw axis (orange), the path (magenta) and a title with
+    θ, d and the pitch; each line has a gid (REFERENCE_GIDS, MOVED_GIDS, 'screw_axis',
+    'path', 'toward_axis'), kept as the SVG element id. The view is sized by the motion,
+    never by the axis (about |b|/θ away for a small turn): an axis within AXIS_REACH
+    half-widths of the view's centre is drawn whole, a farther one is pointed at by a dotted
+    line, its distance in the legend.
 
     R (3, 3) is validated (rot_tools.decompose); θ in the title is in degrees when
     ``degrees``; ``scale`` is the length of the frame axes (default: default_scale).

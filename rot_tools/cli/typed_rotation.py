@@ -1,18 +1,9 @@
 """
 A rotation typed on the command line: counted, checked at ``--tol``, then made exact.
 
-Typed inputs are validated with a tolerance ``--tol``, then made exact before the math,
-which checks at 1e-9. A matrix (9 numbers, or the rotation block of a homogeneous 4×4):
-max|RᵀR − I| and |det R − 1| ≤ tol (default ``MATRIX_TOL`` = 1e-5, so six significant
-digits are enough), then the nearest rotation (rot_tools.nearest_rotation). A frame: its
-axes normalised, |cos| between any two ≤ tol (same default), then the nearest rotation. A
-quaternion, (x, y, z, w) — the ROS order — or (w, x, y, z) with ``--wxyz``: ||q| − 1| ≤ tol
-(default rot_tools.io.boundary.QUATERNION_TOLERANCE, the node's quaternion_tolerance, so that
-four significant digits are enough), then normalised.
-
-Angles are radians unless ``--deg``; radians that look like degrees (larger than 2π) add a
-hint to ``args.hints``, printed after the report. Every refusal is one ``rot-tools: error:``
-line (rot_tools.cli.options.error).
+A matrix or a frame within ``--tol`` of a rotation becomes the nearest rotation, a quaternion
+(x, y, z, w, or w, x, y, z with ``--wxyz``) within it of unit length is normalised; the math
+then checks at 1e-9. Angles are radians unless ``--deg``. Refusals are one error line.
 """
 
 import numpy as np

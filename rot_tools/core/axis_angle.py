@@ -1,14 +1,9 @@
 """
 Axis-angle: Rodrigues' formula and its robust inverse.
 
-A rotation by θ about the unit axis l̂ (right-hand rule) is (Jia, Rotation in the Space,
-eq. 7; Cayero, Relations between Rotation Matrix and Euler axis-angle parametrization,
-eq. 18)::
-
-    Rot_l̂(θ) = cos θ·I + (1 − cos θ)·l̂l̂ᵀ + sin θ·[l̂]×
-
-The rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit axis; (l̂, θ) and
-(−l̂, 2π − θ) — equivalently (−l̂, −θ) — describe the same rotation (Jia §3.3).
+Rot_l̂(θ) = cos θ·I + (1 − cos θ)·l̂l̂ᵀ + sin θ·[l̂]× (Jia, Rotation in the Space, eq. 7;
+Cayero, Relations between Rotation Matrix and Euler axis-angle parametrization, eq. 18); the
+rotation vector is θ·l̂. The inverse returns θ ∈ [0, π] and a unit axis.
 """
 
 import math

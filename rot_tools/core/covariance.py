@@ -1,24 +1,10 @@
 """
 Covariance of a rotation's small error in every representation, to first order.
 
-A rotation R with a small error δ (a rotation vector) is R_true = exp([δ]×)·R in the
-**parent** frame (ROS's PoseWithCovariance: rotations about the parent's fixed X, Y, Z) or
-R_true = R·exp([δ]×) in the **body** frame. For the Euler angles θ of a sequence, the
-Euler-rate matrix E(θ) takes angle rates to angular velocity, ω = E(θ)·θ̇, so a small change
-of the angles is the error δ ≈ E(θ)·dθ, and
-
-    Σ_δ = E·Σ_θ·Eᵀ        Σ_θ = E⁻¹·Σ_δ·E⁻ᵀ.
-
-With the sequence written as R = Rot_a(φ1)·Rot_b(φ2)·Rot_c(φ3) (an extrinsic sequence is the
-reversed intrinsic one, θ = (φ3, φ2, φ1)), the columns of E for φ1, φ2, φ3 are
-
-    parent:  e_a,   Rot_a(φ1)·e_b,   Rot_a(φ1)·Rot_b(φ2)·e_c
-    body:    Rᵀ·(the parent columns) = Rot_c(φ3)ᵀ·Rot_b(φ2)ᵀ·e_a,   Rot_c(φ3)ᵀ·e_b,   e_c
-
-and det E = ±cos φ2 (Tait–Bryan) or ±sin φ2 (proper Euler): E is singular at gimbal lock,
-where the covariance of the angles does not exist. E⁻¹ is its adjugate over det E (rows
-c2 × c3, c3 × c1, c1 × c2 of the columns c1, c2, c3). Jia, "Rotation in the Space", §1 for
-the sequences, §3 for the rotation vector.
+The error δ is a rotation vector in the parent frame (R_true = exp([δ]×)·R, as
+PoseWithCovariance has it) or the body frame (R_true = R·exp([δ]×)); Euler angles take it
+through their rate matrix E, Σ_δ = E·Σ_θ·Eᵀ, which is singular at gimbal lock (Jia,
+Rotation in the Space, §1 and §3).
 """
 
 from typing import NamedTuple
@@ -132,8 +118,11 @@ def _rate_matrix(angles, spec, frame):
     """
     Return the _Rates of Euler angles θ.
 
-    E's columns are the angular velocity per unit rate of θ1, θ2, θ3 (see the module
-    docstring); the distance is that of φ2 to the nearest ±π/2 (Tait–Bryan) or 0, π (proper).
+    E's columns are the angular velocity per unit rate of θ1, θ2, θ3. With the sequence
+    written R = Rot_a(φ1)·Rot_b(φ2)·Rot_c(φ3) (extrinsic: θ = (φ3, φ2, φ1)) they are, for
+    φ1, φ2, φ3: in the parent frame e_a, Rot_a(φ1)·e_b, Rot_a(φ1)·Rot_b(φ2)·e_c; in the body
+    frame Rᵀ times those. det E = ±cos φ2 (Tait–Bryan) or ±sin φ2 (proper). The distance is
+    that of φ2 to the nearest ±π/2 (Tait–Bryan) or 0, π (proper).
     """
     i, j, k, proper = spec.i, spec.j, spec.k, spec.proper
     phi = angles[..., ::-1] if spec.extrinsic else angles
@@ -161,8 +150,8 @@ def gimbal_lock_distance(angles, seq=RPY_SEQUENCE):
     Distance (rad, in [0, π/2]) of Euler angles (..., 3) of ``seq`` from gimbal lock.
 
     That of the middle angle θ2 to ±π/2 (Tait–Bryan: pitch for roll, pitch, yaw) or to 0, π
-    (proper Euler). Near it the covariance of the angles grows as 1/distance² (E⁻¹ of the
-    module docstring), and a first-order covariance stops meaning much once the middle
+    (proper Euler). Near it the covariance of the angles grows as 1/distance² (det E → 0),
+    and a first-order covariance stops meaning much once the middle
     angle's own standard deviation is not small against the distance.
     """
     spec = parse_sequence(seq)

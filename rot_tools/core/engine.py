@@ -1,30 +1,10 @@
 """
 One formula, two ways to run it: Python floats for a single item, NumPy chunks for a batch.
 
-Every conversion in rot_tools is written once as a *kernel*: a function of an ops namespace
-and of the entries of its inputs (a matrix as ``m[row][col]``, a vector as ``v[i]``, a scalar
-as itself), returning its output, as scipy's ``_rotation_xp.py`` writes its formulas against
-``xp``. A kernel with several outputs returns a NamedTuple of them, and ``apply`` is told
-the same NamedTuple with a :class:`Spec` (trailing shape, dtype) in each field: it returns
-that NamedTuple again, with arrays in it, so every caller reads an output by its name.
-``apply`` runs a kernel
-
-- on a single item as ``kernel(FLOATS, ...)``: Python floats and the ``math`` module; or
-- on a batch as ``kernel(ARRAYS, ...)``, chunk by chunk (CHUNK items whose entries are
-  contiguous NumPy arrays), so that the temporaries stay small and in cache.
-
-``apply_to_one`` runs a kernel on one item too, and hands its output back as the kernel
-gave it (Python floats and lists, no NumPy value made), for a caller that uses the numbers
-as Python numbers.
-
-Kernels select between branches with ``ops.where`` (both sides are evaluated), so they must
-not divide by zero on the branch that is thrown away: guard divisors with ``ops.where``.
-Where a result can overflow float64 for finite inputs, the kernel returns an ``in_range``
-flag beside it (an :class:`InRange`) and the caller refuses the flagged items
-(floating-point warnings of the batch engine are silenced). ``ops.rare(c)`` is the only
-data-dependent branch a kernel may take (true when c holds for the item, or for any item of
-a chunk): work that an item or a chunk without c skips — a huge or tiny vector rescaled,
-gimbal lock. doc/engine.md tells how to add a conversion.
+A conversion is written once as a kernel of an ops namespace and its inputs' entries;
+``apply`` runs it on FLOATS for one item or on ARRAYS chunk by chunk for a batch, and gives
+its outputs back by name (a NamedTuple). doc/engine.md tells the rules a kernel follows and
+how to add a conversion.
 """
 
 from dataclasses import dataclass
@@ -285,8 +265,8 @@ def _rows(count, length, dtype=np.float64):
     """
     Return an empty (count, length) array whose rows are 64 bytes apart, not adjacent.
 
-    NumPy 1.26 takes an output that ends where an input begins, or begins where it ends, for
-    an overlap and runs arctan2 (and others) in its scalar loop instead of its SIMD one,
+    NumPy may take an output that ends where an input begins, or begins where it ends, for
+    an overlap and run arctan2 (and others) in its scalar loop instead of its SIMD one,
     which rounds differently: with rows apart, a chunk's results do not depend on which rows
     its buffers happened to get.
     """

@@ -1,29 +1,10 @@
 """
 Euler angles in all twelve axis sequences, intrinsic and extrinsic, with gimbal lock.
 
-A sequence is three axis letters, e.g. ``'ZYX'``, with no letter repeated twice in a row:
-six Tait–Bryan sequences (three different axes: XYZ XZY YXZ YZX ZXY ZYX) and six proper Euler
-sequences (first axis = third: XYX XZX YXY YZY ZXZ ZYZ) — Jia, Rotation in the Space, §1,
-counts them as 3·2·2.
-
-Upper case is **intrinsic**: the rotations are about the body's moving axes, applied in the
-order written, so (Jia, eq. 1 for Z-Y-X, yaw ϕ, pitch θ, roll ψ)::
-
-    'ZYX':  R = Rot_z(θ1) · Rot_y(θ2) · Rot_x(θ3)
-
-Lower case is **extrinsic**: the rotations are about the fixed world axes, the first written
-applied first, so the matrix product is reversed::
-
-    'zyx':  R = Rot_x(θ3) · Rot_y(θ2) · Rot_z(θ1)
-
-This is scipy's naming. An extrinsic sequence equals the reversed intrinsic one with the angles
-reversed ('zyx' (a, b, c) is 'XYZ' (c, b, a)). R maps body coordinates to world coordinates.
-
-Ranges returned by matrix_to_euler: θ1, θ3 ∈ (−π, π]; θ2 ∈ [−π/2, π/2] for Tait–Bryan and
-[0, π] for proper Euler sequences. Gimbal lock: when θ2 is within ``lock_tol`` of ±π/2
-(Tait–Bryan) or of 0 or π (proper), the first and third axes line up and only θ1 ± θ3 is
-defined; the result is flagged ``degenerate``, θ3 is set to 0 and θ1 carries the whole free
-angle (for lower-case sequences too).
+A sequence is three axes, no axis twice in a row (Jia, Rotation in the Space, §1). Upper case
+is intrinsic, about the body's moving axes ('ZYX': R = Rot_z(θ1)·Rot_y(θ2)·Rot_x(θ3)); lower
+case extrinsic, about the fixed axes, the product reversed ('zyx': R = Rot_x(θ3)·Rot_y(θ2)·
+Rot_z(θ1)), as scipy names them. R maps body coordinates to world coordinates.
 """
 
 import math

@@ -1,25 +1,9 @@
 """
 Comparing, averaging, fitting and sampling rotations — quaternion-free.
 
-- **Distance.** The geodesic distance of R1 and R2 is the angle of the rotation R1ᵀR2 that
-  takes one to the other: θ ∈ [0, π], from atan2(|w|, (tr − 1)/2) as in matrix_to_axis_angle,
-  so it is accurate to rounding at 0 and at π (acos of the trace loses half the digits).
-- **Mean.** The chordal L2 mean of R1 … RN with weights wᵢ ≥ 0 minimises Σ wᵢ‖M − Rᵢ‖²
-  (Frobenius) over rotations M, i.e. maximises tr(Mᵀ·S) with S = Σ wᵢRᵢ: from the SVD
-  S = U·diag(σ1, σ2, σ3)·Vᵀ, M = U·diag(1, 1, s)·Vᵀ with s = det(U·Vᵀ) = ±1. It is unique
-  unless σ2 + s·σ3 = 0 (two rotations π apart with equal weights give S of rank 1).
-- **Fit (Wahba's problem, Kabsch).** The rotation R minimising Σ wᵢ‖aᵢ − R·bᵢ‖² maximises
-  tr(Rᵀ·H) with H = Σ wᵢ·aᵢbᵢᵀ, so it is the same SVD construction on H. It takes H's
-  first right singular vector onto its first left one; when that direction dominates H
-  (σ2 ≤ DOMINANT·σ1: one weight or one length far above the others), the turn about it is
-  fitted from the pairs directly, since H's rounding (~ε·σ1) would swamp the small pairs.
-  When H has rank 1 (a single pair, or all pairs parallel) every rotation about â does as
-  well; the smallest rotation taking b̂ onto â is returned.
-- **Sampling.** Haar-uniform rotations: Gram–Schmidt on two Gaussian vectors (their
-  distribution is invariant under every rotation, and so is the frame built from them). The
-  rotation angle of a uniform rotation has density (1 − cos θ)/π on [0, π].
-
-The SVD functions use NumPy's batched linalg directly; any leading batch shape works.
+The geodesic distance, the chordal mean, the fit of rotated vectors (Wahba's problem) and
+Haar-uniform sampling; the mean and the fit are the nearest rotation to a matrix, by its SVD
+(NumPy's batched linalg: any leading batch shape).
 """
 
 import math
@@ -124,7 +108,10 @@ def _nearest_rotations(s, what, matrix, rank_one_below=UNIQUE_TOL):
 
 def mean_rotation(R, weights=None, *, check=True):
     """
-    Chordal L2 mean of rotations: the rotation nearest to Σ wᵢRᵢ (module docstring).
+    Chordal L2 mean of rotations: the rotation nearest to S = Σ wᵢRᵢ.
+
+    It minimises Σ wᵢ‖M − Rᵢ‖² (Frobenius): M = U·diag(1, 1, det(U·Vᵀ))·Vᵀ from the SVD
+    S = U·diag(σ)·Vᵀ.
 
     R (..., N, 3, 3) → (..., 3, 3); weights (N,) or (..., N), ≥ 0, not all 0 (default
     equal). RotationError when the mean is not unique (Σ wᵢRᵢ rank-deficient, e.g. two
@@ -285,7 +272,7 @@ def align_vectors(a, b, weights=None):
 
     a, b (..., N, 3) → (R (..., 3, 3), rmsd (...)), rmsd = sqrt(Σ wᵢ‖aᵢ − R·bᵢ‖² / Σ wᵢ) in
     the units of a and b; weights (N,) or (..., N), ≥ 0, not all 0 (default equal). R comes
-    from the SVD of H = Σ wᵢ·aᵢbᵢᵀ (module docstring); when one direction dominates H
+    from the SVD of H = Σ wᵢ·aᵢbᵢᵀ, as mean_rotation's; when one direction dominates H
     (σ2 ≤ DOMINANT·σ1: a weight or a length far above the rest), R takes its first right
     singular vector onto its first left one and the turn about that axis is fitted from the
     pairs directly, so the small pairs still count however large the ratio (1e9, 1e16, ...).
@@ -362,8 +349,8 @@ def random_rotations(n=None, rng=None):
 
 
 _BYTES_PER_SAMPLE = 200
-"""Peak memory of random_rotations per rotation: the Gaussian pairs, u, v, the result and
-the temporaries between them (tracemalloc measured 201 bytes at n = 1e5)."""
+"""Peak memory of random_rotations per rotation, in bytes: the Gaussian pairs, u, v, the
+result and the temporaries between them."""
 
 
 def _count(n):

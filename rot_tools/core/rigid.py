@@ -1,29 +1,9 @@
 """
 Frames and rigid motions (Jia, Rotation in the Space, §4 and §5), one item or a batch.
 
-**Frames** (Jia §4). A frame u-v-w turned from the reference frame x-y-z is the
-rotation whose columns are its axes written in x-y-z::
-
-    R = (û v̂ ŵ)
-
-A point rigidly attached to the frame, with coordinates p in u-v-w, has coordinates R·p in
-x-y-z; conversely a point q of x-y-z has coordinates q' = Rᵀ·q in u-v-w.
-
-**Rigid motions** (Jia §5). T(p) = R·p + b, a rotation followed by a translation::
-
-    T1∘T2 (T2 first)              = (R1·R2, R1·b2 + b1)
-    a translation b, then R       = R then the translation R·b      (R(p + b) = R·p + R·b)
-    T⁻¹                           = (Rᵀ, −Rᵀ·b)
-    rotation about a line through q = (R, (I − R)·q)             (transform_from_screw)
-
-so with b ≠ 0 a point p of x-y-z has coordinates Rᵀ·(p − b) in the moved frame:
-transform_points(*invert_transform(R, b), p). In homogeneous coordinates T is the 4×4
-matrix [[R, b], [0, 0, 0, 1]], and composition is the matrix product.
-
-Functions that take R validate it (tol 1e-9) unless called with check=False, which trusts R
-to be a rotation (a matrix that is not one gives a meaningless result, NaN or inf included:
-see rot_tools.core.so3). Results that leave float64's range (translations near 1.8e308) raise
-RotationError instead of returning inf.
+A frame u-v-w is the rotation whose columns are its axes in the reference frame; a rigid
+motion is p ↦ R·p + b, the 4×4 [[R, b], [0, 0, 0, 1]], composed by the matrix product.
+Functions that take R validate it unless called with check=False (rot_tools.core.so3).
 """
 
 from typing import Any, NamedTuple

@@ -1,33 +1,10 @@
 """
 Chasles' screw decomposition of rigid motions, and its exponential coordinates.
 
-A rigid motion T(p) = R·p + b (Jia, Rotation in the Space, §5) is a rotation by θ about a
-line — the screw axis, direction l̂ through the point c — followed by a translation d along
-that same line (Chasles' theorem)::
-
-    T(p) = R·(p − c) + c + d·l̂,      so  b = (I − R)·c + d·l̂
-
-The axis is reported in Plücker coordinates (l̂, m) with the moment m = c × l̂, and the pitch
-h = d/θ (metres per radian). Jia (§5) finds c from (I − R)⁻¹·b⊥, but I − R is singular
-along l̂; c is instead solved in the plane ⊥ l̂, where the 2-D rotation by θ is invertible::
-
-    c = ½·(b⊥ + cot(θ/2)·l̂ × b⊥),     b⊥ = b − (b·l̂)·l̂,   d = b·l̂
-
-(Jia's moment −(Rᵀ + I)·b⊥ of eqs. 17–18 is −2 sin θ times this m: its l is −2 sin θ·l̂).
-
-Exponential coordinates (a twist, screw_log / screw_exp) are the 6-vector (θ·l̂, θ·v) with
-v = −l̂ × c + h·l̂, so that T = exp(θ·[l̂, v]). Written with b instead of c they need no
-division by θ and are smooth at θ = 0, where θ·v → b::
-
-    θ·v = −(θ/2)·l̂ × b + (θ/2)·cot(θ/2)·b⊥ + d·l̂
-
-so they have no threshold: θ·l̂ keeps its digits for every θ > 0 (1e-15 rad included).
-
-Special cases of the Screw: θ below PURE_TRANSLATION_ANGLE is a pure translation (direction
-b/|b|, point 0, angle 0, translation |b|, pitch inf); the identity has direction (0, 0, 1) and
-all else 0. At θ = π the direction's sign is the one matrix_to_axis_angle picks, and
-translation, moment and twist follow it. The axis point and the pitch grow like |b|/θ: where
-they leave float64's range (|b| = 1e300 at θ = 1e-11) a RotationError says so.
+Every rigid motion p ↦ R·p + b (Jia, Rotation in the Space, §5) is a turn θ about a line
+(direction l̂ through c) and a slide d along it: b = (I − R)·c + d·l̂. The axis is found in
+the plane ⊥ l̂, where I − R is invertible; the twist (θ·l̂, θ·v) is written with b, so it
+is smooth at θ = 0. Each function states its formula.
 """
 
 import math
@@ -57,6 +34,11 @@ class Screw(NamedTuple):
     direction: unit l̂ (..., 3); point: the axis point closest to the origin, ⊥ l̂ (..., 3);
     moment: point × direction (..., 3); angle: θ ∈ [0, π]; translation: d along l̂ (signed);
     pitch: d/θ, inf for a pure translation, 0 for the identity.
+
+    θ below PURE_TRANSLATION_ANGLE is a pure translation: direction b/|b|, point 0, angle 0,
+    translation |b|. The identity has direction (0, 0, 1) and all else 0. At θ = π the
+    direction's sign is the one matrix_to_axis_angle picks; the translation, moment and
+    twist follow it.
     """
 
     direction: np.ndarray
@@ -135,10 +117,12 @@ def _screw_kernel(ops, m, b):
 
 def screw_from_transform(R, b, *, check=True):
     """
-    Chasles decomposition of p ↦ R·p + b as a Screw (formulas in the module docstring).
+    Chasles decomposition of p ↦ R·p + b as a Screw: b = (I − R)·c + d·l̂.
 
     R (..., 3, 3), b (..., 3), broadcasting. θ and l̂ as matrix_to_axis_angle gives them;
-    then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), m = c × l̂, h = d/θ.
+    then d = b·l̂, b⊥ = b − d·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥) (solved in the plane ⊥ l̂,
+    where I − R is invertible), m = c × l̂, h = d/θ. Jia's moment −(Rᵀ + I)·b⊥ (§5, eqs.
+    17–18) is −2 sin θ times this m.
     RotationError where c or h overflow float64 (|b|/θ beyond ~1e308).
     """
     screw = _apply_rigid(_screw_kernel, R, b, check, InRange(value=_SCREW, fits=FLAG))

@@ -1,20 +1,10 @@
 """
 Rotation matrices: elementary rotations, the skew matrix, validity checks, quaternions.
 
-Quaternions appear only at the boundary (messages, people pasting them), always in the ROS
-message order (x, y, z, w): quaternion_to_matrix and its twin matrix_to_quaternion. The
-rest of rot_tools never uses them.
-
-Conventions used throughout rot_tools: column vectors, active rotations, ``p' = R p``;
-a rotation matrix R is 3x3 orthogonal with det R = +1 (Jia, Rotation in the Space,
-Theorem 1). Every function takes one item or a batch with any leading shape ``...``.
-
-Functions that take R validate it as validate_rotation does, unless called with
-``check=False``: for callers that built R as a rotation themselves (the node, the report),
-the formula is then applied to the matrix as given. A matrix that is not a rotation gives a
-result that means nothing — NaN or ±inf included (rotation_distance of two matrices full of
-1e200 is NaN) — and no exception but RotationError; mean_rotation refuses NaN/Inf, which
-its SVD cannot take.
+Column vectors, active rotations, p' = R·p; a rotation is 3×3 orthogonal with det R = +1
+(Jia, Rotation in the Space, Theorem 1); any leading batch shape. Quaternions are only for
+the boundary, in the ROS order (x, y, z, w). check=False trusts R to be a rotation: the
+formula is applied to the matrix as given, whatever it means.
 """
 
 import math

@@ -1,26 +1,9 @@
 """
 An orientation stream against ground truth: matching, time offset, alignment, mounting, errors.
 
-Two streams of poses, each stamps t (N,) strictly increasing in seconds, rotations R (N, 3, 3)
-and, where they exist, positions b (N, 3): the estimate (EST, P in the formulas) and the
-reference (REF, Q). R maps the body's coordinates to its reference frame's.
-
-- **Matching.** REF is evaluated at EST's stamps, either along the constant-screw motion
-  between the two REF poses around each stamp (interpolate_poses), or as the nearest REF pose
-  (nearest_stamps, as evo pairs poses). A time offset o is added to EST's stamps first.
-- **Time offset.** The angular speed |ω| of each stream, from consecutive rotations
-  (angle of R_kᵀR_{k+1} / Δt), does not depend on either frame: the offset is the shift that
-  best correlates the two speeds (estimate_time_offset).
-- **Alignment.** A constant rotation W between the two reference frames, R_ref ≈ W·R_est
-  (align_rotations): least squares on SO(3), about z only, evo's Umeyama fit of positions,
-  or rpg_trajectory_evaluation's yaw and shift of positions.
-- **Mounting.** A constant rotation X between the two body frames, R_ref ≈ W·R_est·Xᵀ, shows
-  in the relative rotations A_k = Q_iᵀQ_j, B_k = P_iᵀP_j as A_k·X = X·B_k: the rotation part
-  of hand-eye calibration (hand_eye_rotation).
-- **Errors.** E = R_refᵀ·R_est per pair, its angle and its roll/pitch/yaw, and evo's relative
-  error over pairs of poses delta apart (rotation_errors).
-
-The stamps themselves — checked, put in order, paired Δ apart — are rot_tools.core.stamps'.
+Two streams of poses (stamps (N,), R (N, 3, 3), positions (N, 3) where they exist): the
+estimate and the reference, R mapping the body's coordinates to its reference frame's.
+Their stamps are checked and paired by rot_tools.core.stamps.
 """
 
 import math

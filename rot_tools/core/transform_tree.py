@@ -1,63 +1,9 @@
 """
-A tree of coordinate frames joined by rigid motions, looked up at any time (TF's job).
+TransformTree: a tree of frames joined by rigid motions, looked up at any time (TF's job).
 
-Each frame but a root has one parent, and its edge is the rigid motion from the child to the
-parent, ``p_parent = R·p_child + b`` — a ROS TransformStamped with header.frame_id = parent
-and child_frame_id = child. An edge is **static** (one value, true at every time) or
-**dynamic** (samples in time: the last ``cache_seconds`` of them are kept).
-
-``lookup(reference, body, t)`` composes the edges on the path between the two frames: up
-from ``body`` to the common ancestor, then down to ``reference`` (each edge walked down is
-inverted)::
-
-    T_reference_body = T_common_referenceᵀ · T_common_body,
-    T_common_x = E(x_k) ··· E(x_1)·E(x)      (E(y) = (R, b) of y's edge to its parent)
-
-so that ``p_reference = R·p_body + b``, with the 4×4 homogeneous matrices of Jia, Rotation in
-the Space, §5 multiplied in that order.
-
-**Time.** At time t every dynamic edge is evaluated between its two samples around t, T0 at
-t0 ≤ t and T1 at t1 ≥ t, by the constant-screw motion (rot_tools.screw_interpolate)::
-
-    T(t) = T0 · exp(s · log(T0⁻¹·T1)),     s = (t − t0) / (t1 − t0)
-
-every point of the child frame moving along one helix at constant speed: exact in SE(3),
-where tf2 interpolates the translation linearly and the rotation by slerp, separately (the
-two agree for a pure rotation about the child's origin or a pure translation). A t at a
-sample's stamp gives that sample exactly. A t outside an edge's samples is refused
-(extrapolation) — a dynamic edge with one sample answers only at its stamp.
-
-``lookup(reference, body)`` (no time) answers at the **latest common time**: the newest time
-at which every dynamic edge of the chain has data (the smallest of their newest stamps; tf2's
-"time 0"). A chain of static edges only has no such time: it answers with the newest stamp its
-static edges were set with (tf2 gives 0 there), and a frame looked up in itself with the
-newest stamp of its own edge (0 for a root, as tf2).
-
-**Refusals.** A lookup that cannot be answered raises TransformLookupError (a RotationError)
-whose ``reason`` is one of ``unknown_frame``, ``not_connected`` (no common ancestor: two
-trees) or ``extrapolation`` (the message names the edge, the data it has and by how many
-seconds t is outside it; ``edge`` and ``seconds`` carry them). ``set_transform`` refuses with
-a TransformTreeError (the parent class, also a RotationError) whose reason is ``bad_frame``
-(an empty or non-string frame name, or one longer than MAX_FRAME_NAME), ``loop`` (the child is
-the parent or one of its ancestors: a loop published by mistake), ``too_many_frames`` (beyond
-``max_frames``), ``non_finite`` (NaN/Inf in R, b or the stamp), ``not_rotation`` (R fails
-validate_rotation) or ``bad_value`` (a shape or type that is not a transform).
-
-**Memory.** Samples of a dynamic edge older than ``cache_seconds`` before its newest are
-dropped, and at most ``max_samples`` (the newest) are kept, so a flood cannot grow the tree
-without bound; nor can frames beyond ``max_frames``. A sample older than the window is not
-stored (set_transform returns 0); a sample at the stamp of a stored one replaces it. A frame
-that gets a new parent, or an edge that turns static or dynamic, replaces its old edge and
-forgets its samples. A frame stays known until ``forget`` drops its edge and no edge names
-it. An edge's arrays hold at most ``max_samples`` + 1 samples and shrink as it empties.
-Messages show frame names cut to SHOWN_NAME characters.
-
-Batches: ``set_transform`` takes many samples of one edge at once (stamps (n,), R (n, 3, 3),
-b (n, 3)) and ``lookup`` many stamps at once (t (...) → R (..., 3, 3), b (..., 3), t (...)),
-each edge interpolated as one NumPy batch; one stamp is a batch of one, by the same formulas.
-``follow`` looks one frame up in another over a whole recording (a bag's /tf and /tf_static):
-the tree fed as the recording goes, the chain looked up at every stamp of its dynamic edges.
-The tree is safe to share between threads.
+An edge is the motion from a child frame to its parent, p_parent = R·p_child + b, static or
+sampled in time; a lookup composes the edges between two frames, each dynamic one
+interpolated by its constant screw. doc/tf.md has the rules of time, refusals and memory.
 """
 
 import math
@@ -359,7 +305,16 @@ class TransformTree:
     cache_seconds: how long a dynamic edge keeps its samples (before its newest), > 0, inf
     allowed (a bag read whole). max_samples: the most samples a dynamic edge keeps.
     max_frames: the most frames the tree holds (a transform adding more is refused).
-    See the module docstring for the conventions, the time rules and the refusals.
+
+    Each frame but a root has one parent; its edge (set_transform) is the motion from the
+    child to the parent, a ROS TransformStamped with header.frame_id = parent. A lookup goes
+    up from ``body`` to the common ancestor and down to ``reference``, each edge walked down
+    inverted. At a time t a dynamic edge is interpolated between its samples around t by
+    the constant screw, T(t) = T0·exp(s·log(T0⁻¹·T1)), s = (t − t0)/(t1 − t0), exact in
+    SE(3); a t outside its samples is refused (TransformLookupError, reason
+    ``extrapolation``); no t means the latest common time of the chain's dynamic edges.
+    A dynamic edge keeps its last ``cache_seconds`` of samples, at most ``max_samples``.
+    The tree is safe to share between threads.
     """
 
     def __init__(self, cache_seconds=10.0, *, max_samples=DEFAULT_MAX_SAMPLES,
@@ -547,7 +502,13 @@ class TransformTree:
             return TimeRange(max(e.oldest for e in dynamic), min(e.newest for e in dynamic))
 
     def latest_common_time(self, reference, body):
-        """Return the time ``lookup(reference, body)`` answers at (see the module docstring)."""
+        """
+        Return the time ``lookup(reference, body)`` answers at: the latest common time.
+
+        The newest time at which every dynamic edge of the chain has data (tf2's "time 0");
+        with static edges only, the newest stamp they were set with; a frame in itself, the
+        newest stamp of its own edge (0 for a root).
+        """
         with self._lock:
             return self._latest(*self._path(reference, body), reference)
 

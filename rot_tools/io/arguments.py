@@ -1,18 +1,8 @@
 """
 Command-line pieces shared by rot-tools and rotation_client: argparse, no ROS.
 
-- :class:`Parser`: an ArgumentParser whose errors are one line, ``PROGRAM: error: ...``, with
-  exit status 2 (no usage block), and whose commands take their options anywhere:
-  ``rot-tools euler ZYX --deg 30 20 10`` as well as ``rot-tools --deg euler ZYX 30 20 10``.
-- ``--version`` (:class:`Version`, :func:`version_line`): the installed distribution's
-  version.
-- Value types: :func:`number` (finite), :func:`any_number`, :func:`sequence`,
-  :func:`precision`, :func:`whole_number`.
-- Options both programs take: :func:`add_deg`, :func:`add_json`, :func:`add_precision`,
-  :func:`add_wxyz`, :func:`add_cov`; and the words of an input: :func:`add_sequence` (an
-  Euler sequence SEQ) and :func:`add_numbers` (its numbers, counted by the command so that a
-  wrong count is one line that names them).
-- :func:`negative_numbers_as_values`: ``-1e-3`` read as a number, not as an option.
+Parser (one-line errors, exit status 2, options anywhere among a command's words),
+``--version``, value types, the options both programs take and the words of an input.
 """
 
 import argparse

@@ -2,33 +2,8 @@
 The geometry of a picture of one rigid motion, for every renderer (plain NumPy).
 
 ``rot-tools --plot`` (rot_tools.cli.plot, matplotlib) and rotation_node's ``~/markers``
-(rot_tools.ros.messages, RViz) draw the same :class:`Picture`, computed here once. The motion
-p ↦ R·p + b has the Chasles screw (l̂, c, θ, d) and the twist ξ = screw_log(R, b); a picture
-of it holds, in the reference frame:
-
-- the moved frame: its axes are the columns of R (Jia, Rotation in the Space, §4), drawn
-  from b with length ``scale``;
-- the screw axis: the line through c along l̂, as a segment from c + t_lo·l̂ to c + t_hi·l̂
-  (pointing along +l̂: θ turns right-handed about it) that covers the projections onto the
-  axis of the origin, the path and the moved frame, plus ``scale`` beyond each end;
-- the path: the constant-screw motion T(s) = exp(s·ξ), s ∈ [0, 1], applied to a point p0,
-  p(s) = R(s)·p0 + b(s) — a helix about the axis of radius dist(p0, axis) that turns s·θ and
-  rises s·d (Jia §5, Chasles). p0 is the frame origin, whose path ends at b;
-- a label: θ (in degrees or radians), d and the screw pitch h = d/θ, placed LABEL_OFFSET·scale off
-  the middle of the path, across its chord (towards +z, or +x when the chord is within 60° of
-  z) — beside the motion, however far away its axis is (|c| grows like |b|/θ as θ → 0).
-
-Special cases. A pure rotation (b = 0) leaves the origin where it is, so the path is the arc
-of the tip of a reference axis, p0 = scale·e_k, k the axis farthest from the rotation axis
-(smallest |l̂_k|, x first on ties; about z it is the x tip), ending at the tip of the moved
-axis k. A pure translation (θ = 0) has no axis to draw (its pitch is inf): the path is the
-straight segment from 0 to b. The identity has nothing to draw.
-
-The path is sampled with a step of at most MAX_STEP_ANGLE of turn and at most SAGITTA·scale
-between a chord and the helix (a chord of a turn Δ at radius r is r(1 − cos(Δ/2)) ≈ r·Δ²/8
-off the curve), and at most MAX_SEGMENTS segments; a straight path is one segment.
-
-A motion whose picture overflows float64 (an axis 1e300 away) raises RotationError.
+(RViz) draw the same Picture, computed here once: the moved frame, the screw axis, the
+path of the constant-screw motion and a label.
 """
 
 import math
@@ -56,7 +31,7 @@ IDENTITY, ROTATION, TRANSLATION, SCREW = 'identity', 'rotation', 'translation', 
 
 class Picture(NamedTuple):
     """
-    What to draw of one rigid motion p ↦ R·p + b; see the module docstring.
+    What to draw of one rigid motion p ↦ R·p + b, in the reference frame (see picture).
 
     kind: IDENTITY, ROTATION, TRANSLATION or SCREW. origin: b (3,), where the moved frame
     is drawn; frame: R (3, 3), the moved axes x, y, z are its columns; scale: the length of
@@ -193,9 +168,19 @@ def picture(R, b, scale=1.0, degrees=False, decomposition=None):
     """
     Return the Picture of p ↦ R·p + b, R (3, 3) and b (3,); frame axes ``scale`` long.
 
+    The moved frame is drawn at b, its axes the columns of R (Jia, Rotation in the Space,
+    §4). The screw axis (l̂ through c) is a segment along +l̂ covering the projections of the
+    origin, the path and the moved frame, ``scale`` beyond each end. The path is that of a
+    point p0 under the constant-screw motion exp(s·screw_log(R, b)), s ∈ [0, 1]: a helix
+    (Jia §5); p0 is the origin, or for a pure rotation the tip of the reference axis
+    farthest from the rotation axis; a pure translation is the segment from 0 to b. It is
+    sampled at most MAX_STEP_ANGLE of turn and SAGITTA·scale off the helix per segment, at
+    most MAX_SEGMENTS segments. The label (θ, d, the pitch) sits LABEL_OFFSET·scale off the
+    path's middle, beside the motion however far its axis is. The identity draws nothing.
+
     ``decomposition`` is rot_tools.decompose(R, b) when the caller has it already; the label
     gives θ in degrees when ``degrees``. R is validated (by screw_from_transform) when it is
-    not given.
+    not given. RotationError for a picture beyond float64 (an axis 1e300 away).
     """
     R = np.asarray(R, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)

@@ -1,0 +1,37 @@
+"""The public functions of rot_tools, from rot_tools.__all__, for the tests that sweep them."""
+
+import inspect
+
+import rot_tools
+
+TIME_SERIES = {
+    name: 'takes one sequence in time (stamps, N samples), not items or a batch of them'
+    for name in ('align_rotations', 'angular_speeds', 'check_imu', 'delta_pairs',
+                 'error_statistics', 'estimate_time_offset', 'hand_eye_rotation',
+                 'interpolate_poses', 'nearest_stamps', 'rotation_errors')}
+"""The public functions of a whole trajectory or stream: a sweep over items excuses them."""
+
+
+def public_functions():
+    """Return the names of rot_tools' public functions (its classes and constants left out)."""
+    return {name for name in rot_tools.__all__ if inspect.isfunction(getattr(rot_tools, name))}
+
+
+def parameters(name):
+    """Return the parameter names of public function ``name``."""
+    return set(inspect.signature(getattr(rot_tools, name)).parameters)
+
+
+def assert_sweeps_every_public_function(swept, excused):
+    """
+    Fail naming each public function that ``swept`` does not call and ``excused`` does not excuse.
+
+    ``swept``: the names a sweep calls; ``excused``: {name: why the sweep cannot call it}. A
+    new public function fails the sweep until it is given inputs or a reason; a name that is
+    no longer public fails it too.
+    """
+    public = public_functions()
+    unswept = sorted(public - set(swept) - set(excused))
+    assert not unswept, f'public functions without inputs in this sweep: {unswept}'
+    stale = sorted((set(swept) | set(excused)) - public)
+    assert not stale, f'not public functions of rot_tools: {stale}'
