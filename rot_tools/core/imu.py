@@ -551,7 +551,7 @@ def _said(name, found):
     accel = ('the accelerometer cannot tell' if found.angle is None
              else f'{_deg(found.angle)} from the accelerometer')
     gyro = ('the gyro cannot tell' if found.residual is None
-            else f'the gyro follows to {found.residual:.2g} rad/s RMS')
+            else f'the gyro differs by {found.residual:.2g} rad/s RMS')
     return f'{name}: {accel}, {gyro}'
 
 
