@@ -105,7 +105,7 @@ def stamp_steps(stamps):
                             len(steps) < 1 else 'the steps between the stamps overflow float64')
     period = float(np.median(steps))
     if not period >= MIN_PERIOD:
-        raise RotationError(f'the stamps step by {period:.3g} s at the median: under '
+        raise RotationError(f'the median step is {period:.3g} s: under '
                             f'{MIN_PERIOD:g} s, the resolution of ROS stamps')
     near = np.sort(steps[np.abs(steps - period) <= period / 2])
     least = int(math.ceil(MODE_SHARE * len(near)))
