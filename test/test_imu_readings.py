@@ -126,11 +126,11 @@ def test_stamps_going_back_are_the_only_fault(jackal):  # noqa: F811
 
 
 def test_windows_of_a_clean_recording_have_no_fault(jackal):  # noqa: F811
-    """120 windows of 2 to 10 s, every other one with the odometry: no fault."""
+    """100 windows of 2 to 10 s, every other one with the odometry: no fault."""
     imu, odom = jackal
     rng = np.random.default_rng(11)
     t = imu['t'] - imu['t'][0]
-    for k in range(120):
+    for k in range(100):
         length = rng.uniform(2, 10)
         start = rng.uniform(0, t[-1] - length)
         inside = (t >= start) & (t < start + length)
