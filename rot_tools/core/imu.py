@@ -546,13 +546,13 @@ def _reading(samples):
     return _Reading(angle=angle, residual=fit.residual, plain=plain)
 
 
-def _said(name, found):
-    """Write one reading's agreement in words."""
+def _said(found):
+    """Write one reading's agreement (a _Reading) in words."""
     accel = ('the accelerometer cannot tell' if found.angle is None
              else f'{_deg(found.angle)} from the accelerometer')
     gyro = ('the gyro cannot tell' if found.residual is None
             else f'the gyro differs by {found.residual:.2g} rad/s RMS')
-    return f'{name}: {accel}, {gyro}'
+    return f'{accel}, {gyro}'
 
 
 def _choose_reading(found):
@@ -577,7 +577,7 @@ def _choose_reading(found):
     def faults_needed(name):
         return (name != 'as recorded') + (not found[name].plain)
 
-    said = '; '.join(_said(n, f) for n, f in found.items())
+    said = '; '.join(f'{n}: {_said(f)}' for n, f in found.items())
     both = [n for n, f in found.items()
             if f.angle is not None and f.angle <= ANGLE_TOL and gyro_agrees(f)]
     least = min(map(faults_needed, both), default=None)
@@ -596,8 +596,8 @@ def _choose_reading(found):
         return QuaternionCheck(status='fault', reading=name, message=(
             f'{what}; read so, the orientation agrees with the accelerometer '
             f'({_deg(found[name].angle)}) and the gyro follows it ({found[name].residual:.2g} '
-            f"rad/s RMS), as it does not read as recorded ({_said('as recorded', recorded)[13:]})"
-            '; the other checks take it so.')), ''
+            f'rad/s RMS); read as recorded, {_said(recorded)}; the other checks take it so '
+            'read.')), ''
     if chosen:
         why = f'{" and ".join(chosen)} agree with both the gyro and the accelerometer alike'
     elif recorded.angle is None or best is None:
