@@ -381,13 +381,13 @@ def _orientation_vs_accel(angle):
 
 
 def _lag(samples):
-    """Return the orientation's lag (s) and why it is unknown ('' when known)."""
+    """Return the orientation's Lag (imu_motion) and why it is unknown ('' when known)."""
     try:
         lag = orientation_lag(samples)
     except RotationError as exc:
-        return 0.0, f'{exc}.'
+        return None, f'{exc}.'
     if not lag.correlation >= MIN_CORRELATION:
-        return 0.0, ('the angular speeds of the gyro and the orientation correlate at '
+        return None, ('the angular speeds of the gyro and the orientation correlate at '
                      f'{lag.correlation:.2f} at best (< {MIN_CORRELATION:g}): too little '
                      'motion to align them.')
     return lag, ''
@@ -409,17 +409,15 @@ def _time_offset(samples, lag, why):
 
 
 def _gyro_fit(samples):
-    """Return the lag (s), why it is unknown, and the GyroFit of the orientation's rates."""
+    """Return the Lag, why it is unknown, and the GyroFit of the rates (taken 0 s apart then)."""
     lag, why = _lag(samples)
-    seconds = lag.seconds if not why else 0.0
-    return lag, why, fit_gyro(body_rates(samples, seconds))
+    return lag, why, fit_gyro(body_rates(samples, 0.0 if why else lag.seconds))
 
 
-def _follows(fit):
-    """Return whether the gyro follows an orientation that turns clearly (None: no turn)."""
-    if fit.explained is None or fit.spread < TURNS:
-        return None
-    return bool(fit.explained >= FOLLOWS)
+def _dead(fit):
+    """Return whether the orientation turns clearly and the gyro does not follow it at all."""
+    return bool(fit.scale is None and fit.explained is not None and fit.spread >= TURNS
+                and fit.explained < FOLLOWS)
 
 
 def _axis_map(rows, axes):
@@ -499,7 +497,7 @@ def _gyro_checks(samples, doubt):
         return (_unknown(TimeOffsetCheck, why), _unknown(GyroUnitsCheck, why),
                 _unknown(GyroAxesCheck, why), _unknown(GyroBiasCheck, why))
     lag, lag_unknown, fit = _gyro_fit(samples)
-    if _follows(fit) is False:
+    if _dead(fit):
         why = 'the gyro does not follow the orientation, so this is not known.'
         dead = GyroUnitsCheck(status='fault', scale=None, message=(
             f'the orientation turns clearly (its rates vary by {fit.spread:.2g} rad/s RMS) '
@@ -540,7 +538,7 @@ def _reading(samples):
     if not _too_few_slow(samples, slow) and not _no_gravity(force[slow]):
         angle = _tilt_angle(samples, slow, force)
     fit = _gyro_fit(samples)[2]
-    if fit.scale is None and not _follows(fit):
+    if fit.scale is None:
         return _Reading(angle=angle, residual=None, plain=None)
     plain = bool(fit.rows) and all(fit.rows[i] == (i, 1) for i in fit.rows)
     return _Reading(angle=angle, residual=fit.residual, plain=plain)
