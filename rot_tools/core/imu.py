@@ -388,8 +388,8 @@ def _lag(samples):
         return None, f'{exc}.'
     if not lag.correlation >= MIN_CORRELATION:
         return None, ('the angular speeds of the gyro and the orientation correlate at '
-                     f'{lag.correlation:.2f} at best (< {MIN_CORRELATION:g}): too little '
-                     'motion to align them.')
+                      f'{lag.correlation:.2f} at best (< {MIN_CORRELATION:g}): too little '
+                      'motion to align them.')
     return lag, ''
 
 
