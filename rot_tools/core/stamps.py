@@ -69,11 +69,10 @@ class StampSteps(NamedTuple):
     """
     The steps between a stream's stamps (stamp_steps).
 
-    period: the median step (s); spread: the steps' scatter about it (s, 1.4826 × their median
-    absolute deviation: the standard deviation of normally scattered steps); rate: 1/period
-    (Hz); arrival_time: the steps fall into two groups (stamps taken as messages arrive, in
-    the bursts a driver reads them in, rather than by the sensor's clock); modes: the two
-    groups' median steps (s), or None.
+    period: the median step (s); spread: the standard deviation of the steps within half a
+    period of it (s: gaps left out); rate: 1/period (Hz); arrival_time: the steps fall into
+    two groups (stamps taken as messages arrive, in the bursts a driver reads them in, rather
+    than by the sensor's clock); modes: the two groups' median steps (s), or None.
     """
 
     period: float
@@ -84,7 +83,7 @@ class StampSteps(NamedTuple):
 
 
 def _spread(steps):
-    """Return 1.4826 × the median absolute deviation of steps (s)."""
+    """Return 1.4826 × the median absolute deviation of steps (s): a group's robust spread."""
     return 1.4826 * float(np.median(np.abs(steps - np.median(steps))))
 
 
@@ -118,7 +117,7 @@ def stamp_steps(stamps):
         if gap >= MODE_SEPARATION * period and gap >= MODE_CLEARANCE * max(
                 _spread(low), _spread(high)):
             modes, arrival = (float(np.median(low)), float(np.median(high))), True
-    return StampSteps(period=period, spread=_spread(steps), rate=1 / period,
+    return StampSteps(period=period, spread=float(np.std(near)), rate=1 / period,
                       arrival_time=arrival, modes=modes)
 
 
