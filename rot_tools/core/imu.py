@@ -70,10 +70,6 @@ READING_SLACK = 1.5
 """A reading of the quaternion agrees with the gyro when what the gyro leaves of its rates is
 at most this many times what the best reading leaves."""
 
-REGULAR = 1e-6
-"""Spread of the steps, as a share of the period, at most for the steps to be equal (the
-rest is the stamps' rounding)."""
-
 AXES = 'xyz'
 
 READINGS = ('as recorded', 'w-first', 'inverted')
@@ -131,7 +127,7 @@ def _check_stamps(stamps, samples):
     backwards = int((stamps[1:] <= stamps[:-1]).sum())  # compared: a step may overflow
     steps = stamp_steps(samples.t)
     period, gap = steps.period, float(np.diff(samples.t).max())
-    spread = ('equal steps' if steps.spread <= REGULAR * period
+    spread = ('equal steps' if steps.spread == 0
               else f'the steps spread {_seconds(steps.spread)}')
     rate = f'{len(stamps)} samples every {_seconds(period)} ({steps.rate:.4g} Hz, {spread})'
 

@@ -70,9 +70,10 @@ class StampSteps(NamedTuple):
     The steps between a stream's stamps (stamp_steps).
 
     period: the median step (s); spread: the standard deviation of the steps within half a
-    period of it (s: gaps left out); rate: 1/period (Hz); arrival_time: the steps fall into
-    two groups (stamps taken as messages arrive, in the bursts a driver reads them in, rather
-    than by the sensor's clock); modes: the two groups' median steps (s), or None.
+    period of it (s: gaps left out; 0 within the stamps' rounding); rate: 1/period (Hz);
+    arrival_time: the steps fall into two groups (stamps taken as messages arrive, in the
+    bursts a driver reads them in, rather than by the sensor's clock); modes: the two groups'
+    median steps (s), or None.
     """
 
     period: float
@@ -117,7 +118,9 @@ def stamp_steps(stamps):
         if gap >= MODE_SEPARATION * period and gap >= MODE_CLEARANCE * max(
                 _spread(low), _spread(high)):
             modes, arrival = (float(np.median(low)), float(np.median(high))), True
-    return StampSteps(period=period, spread=float(np.std(near)), rate=1 / period,
+    spread = float(np.std(near))
+    rounding = 4 * np.finfo(float).eps * max(abs(t[0]), abs(t[-1]))
+    return StampSteps(period=period, spread=spread if spread > rounding else 0.0, rate=1 / period,
                       arrival_time=arrival, modes=modes)
 
 
