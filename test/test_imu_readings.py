@@ -232,6 +232,6 @@ def test_the_three_readings_of_a_quaternion():
     assert np.array_equal(read_quaternions(q, 'as recorded'), q)
     assert np.array_equal(read_quaternions(q, 'w-first'), [[0.2, 0.3, 0.9, 0.1]])
     assert np.array_equal(read_quaternions(q, 'inverted'), [[-0.1, -0.2, -0.3, 0.9]])
-    with pytest.raises(RotationError, match=r"reading must be one of as recorded, w-first, "
-                                            r"inverted, got 'x-first'"):
+    with pytest.raises(RotationError, match='reading must be one of as recorded, w-first, '
+                                            "inverted, got 'x-first'"):
         read_quaternions(q, 'x-first')
