@@ -831,11 +831,7 @@ def test_good_arguments_of_the_sweep_are_accepted(name):
     f(*args)  # the sweeps below corrupt these: they must be valid to begin with
 
 
-@pytest.mark.parametrize('name', [
-    pytest.param(name, marks=pytest.mark.xfail(
-        raises=OverflowError, strict=True,
-        reason='stamps._count calls math.isfinite on a count beyond float64'))
-    if name == 'delta_pairs' else name for name in sorted(CALLS)])
+@pytest.mark.parametrize('name', sorted(CALLS))
 def test_python_int_beyond_float64_is_a_rotation_error(name):
     # (float() of such an int raises OverflowError: the functions must say what is wrong)
     f, args = CALLS[name]
