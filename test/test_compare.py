@@ -362,7 +362,8 @@ def test_motion_about_one_axis_gets_the_warning(capsys, tmp_path):
                            '--delta-unit', 's', '--json')
     assert status == 0
     lines = err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith('warning: mounting: the motion excited 1')
+    assert len(lines) == 1 and lines[0].startswith(
+        'warning: mounting: the motion turned about one axis only')
     assert 'not determined' in json.loads(out)['mounting']['warning']
 
 

@@ -447,9 +447,13 @@ def hand_eye_rotation(A, B):
     residual = rotation_distance(A @ X, X @ B, check=False)
     warning = ''
     if axes < 2:
-        warning = (f'the motion excited {axes} rotation axis (σ2/σ1 = {sigma[1] / sigma[0]:.2g}'
-                   f' < {EXCITED_RATIO:g}): the turn of the mounting about it is not '
-                   'determined')
+        ratio = sigma[1] / sigma[0]
+        # A ratio at round-off level means one axis exactly: said in words, as its digits
+        # depend on the platform's rounding and mean nothing.
+        how = ('the motion turned about one axis only' if ratio < 1e-9 else
+               f'the motion excited {axes} rotation axis (σ2/σ1 = {ratio:.2g} < '
+               f'{EXCITED_RATIO:g})')
+        warning = f'{how}: the turn of the mounting about it is not determined'
     return HandEye(rotation=X, residual=float(np.sqrt(np.mean(residual ** 2))),
                    singular_values=sigma, axes=axes, warning=warning)
 
