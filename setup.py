@@ -17,7 +17,8 @@ setup(
     install_requires=['setuptools', 'numpy', 'pyyaml'],
     extras_require={
         'test': ['pytest', 'hypothesis', 'scipy', 'matplotlib', 'rosbags==0.11.9',
-                 'pyarrow==25.0.1', 'duckdb==2.0.0', 'dask==2026.8.0', 'distributed==2026.8.0'],
+                 'pyarrow==25.0.1', 'duckdb==2.0.0', 'dask==2026.8.0', 'distributed==2026.8.0',
+                 'opencv-python-headless>=4.10'],
         'plot': ['matplotlib'],
         'bag': ['rosbags==0.11.9', 'pyarrow==25.0.1'],
         'fleet': ['dask==2026.8.0', 'distributed==2026.8.0'],
