@@ -254,21 +254,21 @@ def _reject(congruence, stamps, length):
     pairs = congruence.pairs
     count = len(stamps)
     checks = (
-        (congruence.angle_b - congruence.angle_a, 1e-9, 'turn',
+        (congruence.angle_b - congruence.angle_a, 1e-9, 'screw angles',
          lambda x: f'{math.degrees(x):.3g}°'),
         (congruence.translation_b - congruence.translation_a, 1e-9 * length,
-         'move along their screw axes', lambda x: f'{x:.3g}'))
+         'translations along the screw axis', lambda x: f'{x:.3g}'))
     keep = np.ones(count, bool)
     reasons = {}
-    for difference, floor, verb, shown in checks:
+    for difference, floor, what, shown in checks:
         centre = float(np.median(difference))
         scale = _robust_scale(difference, floor)
         medians = _sample_medians(pairs, difference - centre, count)
         bad = medians > REJECT_LIMIT * scale
         for k in np.flatnonzero(bad & keep):
             n = int(np.sum(pairs == k))
-            reasons[k] = (f'its motions {verb} {shown(medians[k])} more or less in B than in A '
-                          f'(median over its {n} pairs; the pairs spread by {shown(scale)})')
+            reasons[k] = (f'its motions differ in A and B by {shown(medians[k])} in their {what} '
+                          f'(median over its {n} pairs; all pairs spread by {shown(scale)})')
         keep &= ~bad
     return keep, tuple(Rejection(float(stamps[k]), reasons[k]) for k in sorted(reasons))
 
