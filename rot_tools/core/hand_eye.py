@@ -490,7 +490,7 @@ def _matched(stamps_a, R_a, b_a, stamps_b, R_b, b_b, offset, max_gap):
     return stamps_a[covered], R_a[covered], b_a[covered], pose.R, pose.b
 
 
-def _turning_pairs(R_a, b_a, min_angle):
+def _turning_pairs(R_a, min_angle):
     """Return the sample pairs whose motion in A turns by at least min_angle; error if none."""
     pairs = sample_pairs(len(R_a))
     angle = np.linalg.norm(matrix_to_rotvec(
@@ -503,9 +503,8 @@ def _turning_pairs(R_a, b_a, min_angle):
 
 
 def _initial(p, basis, axes):
-    """X's rotation and translation before refinement."""
-    A, B = p.RA, p.RB
-    R = hand_eye_rotation(A, B).rotation
+    """Return X's rotation and translation before refinement."""
+    R = hand_eye_rotation(p.RA, p.RB).rotation
     if len(axes):
         return _turn_about_axis(p, R, axes[0], basis)
     return R, basis @ _translation(p, R, basis)
@@ -542,7 +541,7 @@ def hand_eye(stamps_a, R_a, b_a, stamps_b, R_b, b_b, *, offset=0.0, max_offset=1
     offset = float(offset)
     stamps, R_a, b_a, R_b, b_b = _matched(stamps_a, R_a, b_a, stamps_b, R_b, b_b, offset,
                                           max_gap)
-    pairs = _turning_pairs(R_a, b_a, min_angle)
+    pairs = _turning_pairs(R_a, min_angle)
     length = max(float(np.sqrt(np.mean(b_a ** 2))), float(np.sqrt(np.mean(b_b ** 2))), 1e-6)
     keep, rejected = _reject(screw_congruence(R_a, b_a, R_b, b_b, pairs), stamps, length)
     if keep.sum() < LEAST_SAMPLES:
