@@ -18,7 +18,8 @@ setup(
     extras_require={
         'test': ['pytest>=7.4', 'hypothesis>=6.98', 'scipy>=1.11', 'matplotlib>=3.8',
                  'rosbags>=0.11.9,<0.12', 'pyarrow>=25', 'duckdb>=2', 'dask>=2026.8',
-                 'distributed>=2026.8', 'evo>=1.38'],
+                 'distributed>=2026.8', 'evo>=1.38',
+                 'opencv-python-headless>=4.10'],
         'plot': ['matplotlib>=3.8'],
         'bag': ['rosbags>=0.11.9,<0.12', 'pyarrow>=25'],
         'fleet': ['dask>=2026.8', 'distributed>=2026.8'],

@@ -16,6 +16,8 @@ from rot_tools.core.euler import (
     EULER_SEQUENCES, euler_to_matrix, GIMBAL_LOCK_TOL, matrix_to_euler)
 from rot_tools.core.fitting import (
     align_vectors, mean_rotation, random_rotations, rotation_distance, UNIQUE_TOL)
+from rot_tools.core.hand_eye import (
+    hand_eye, HandEyeCalibration, screw_congruence, ScrewCongruence)
 from rot_tools.core.imu import check_imu, ImuChecks, ImuReference
 from rot_tools.core.rigid import (
     compose_transforms, frame_to_matrix, homogeneous_to_transform, invert_transform,
@@ -35,17 +37,18 @@ from rot_tools.core.transform_tree import (
 
 __all__ = [
     'ALIGNMENTS', 'Decomposition', 'EULER_SEQUENCES', 'GIMBAL_LOCK_TOL', 'HandEye',
-    'ImuChecks', 'ImuReference',
+    'HandEyeCalibration', 'ImuChecks', 'ImuReference', 'ScrewCongruence',
     'PURE_TRANSLATION_ANGLE', 'ROTATION_TOL', 'RotationError', 'RotationErrors', 'Screw',
     'TimeOffset', 'TransformLookupError', 'TransformTree', 'TransformTreeError', 'UNIQUE_TOL',
     'align_rotations', 'align_vectors', 'angular_speeds', 'axis_angle_to_matrix',
     'change_covariance_frame', 'check_imu', 'compose_transforms', 'decompose', 'delta_pairs',
     'error_statistics', 'estimate_time_offset', 'euler_covariance_to_rotvec',
     'euler_to_matrix', 'frame_to_matrix', 'hand_eye_rotation', 'homogeneous_to_transform',
-    'interpolate_poses', 'invert_transform', 'is_rotation', 'matrix_to_axis_angle',
+    'hand_eye', 'interpolate_poses', 'invert_transform', 'is_rotation', 'matrix_to_axis_angle',
     'matrix_to_euler', 'matrix_to_quaternion', 'matrix_to_rotvec', 'mean_rotation',
     'nearest_rotation', 'nearest_stamps', 'quaternion_to_matrix', 'random_rotations',
     'rot_x', 'rot_y', 'rot_z', 'rotation_distance', 'rotation_errors',
-    'rotvec_covariance_to_euler', 'rotvec_to_matrix', 'screw_exp', 'screw_from_transform',
+    'rotvec_covariance_to_euler', 'rotvec_to_matrix', 'screw_congruence', 'screw_exp',
+    'screw_from_transform',
     'screw_interpolate', 'screw_log', 'skew', 'transform_from_screw', 'transform_points',
     'transform_pose_covariance', 'transform_to_homogeneous', 'validate_rotation']
