@@ -261,12 +261,10 @@ def _dask(items, jobs, scheduler):
     ``jobs`` worker processes (no more than the items) of one thread each, closed at the end.
     A task whose workers died (Dask tries it on others first) is that item's failed Outcome.
     """
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client
     if scheduler is not None:
         _reach(scheduler)
-    # dashboard_address ':0': a free port (the default 8787 may be another cluster's)
-    cluster = None if scheduler is not None else LocalCluster(
-        n_workers=min(jobs, len(items)), threads_per_worker=1, dashboard_address=':0')
+    cluster = None if scheduler is not None else _local_cluster(min(jobs, len(items)))
     try:
         try:
             client = Client(cluster or scheduler, timeout=CONNECT_TIMEOUT)
@@ -288,6 +286,20 @@ def _dask(items, jobs, scheduler):
     finally:
         if cluster is not None:
             cluster.close()
+
+
+def _local_cluster(workers):
+    """
+    Start a local Dask cluster of ``workers`` processes of one thread each.
+
+    Its worker processes are forked: spawned ones need named semaphores, which
+    multiprocessing's resource tracker reports as leaked when the command is killed.
+    The dashboard gets a free port (the default 8787 may be another cluster's).
+    """
+    import dask
+    from dask.distributed import LocalCluster
+    with dask.config.set({'distributed.worker.multiprocessing-method': 'fork'}):
+        return LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=':0')
 
 
 def _stop_at_once(cluster):
