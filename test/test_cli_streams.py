@@ -138,7 +138,7 @@ def recordings(tmp_path):
 
 def test_an_output_over_a_recording_is_refused_without_force(files, recordings, capsys,
                                                              monkeypatch):
-    """compare --csv over a bag it does not read: one line naming it and --force, exit 2."""
+    """A compare --csv over a bag it does not read: one line naming it and --force, exit 2."""
     monkeypatch.chdir(files)
     targets = [recordings / name for name in ('old.bag', 'old.mcap', 'old.db3')] + [
         recordings / 'rec' / 'metadata.yaml', recordings / 'rec' / 'rec_0.db3']
@@ -173,8 +173,8 @@ def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, 
     status, out, err = run(capsys, 'bag', 'victim', '--parquet', recordings / 'rec')
     assert (status, out, err) == (2, '', f'rot-tools: error: --parquet {recordings / "rec"} is '
                                   'a recording (a bag): refused; --force writes over it\n')
-    assert sorted(p.name for p in (recordings / 'rec').iterdir()) == ['metadata.yaml',
-                                                                       'rec_0.db3']
+    left = sorted(p.name for p in (recordings / 'rec').iterdir())
+    assert left == ['metadata.yaml', 'rec_0.db3']
 
 
 # ---------------------------------------------------------------------------------------

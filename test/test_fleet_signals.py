@@ -5,7 +5,8 @@ A fleet ended by a signal: no worker left, no file left half written, the caller
 workers are up. Within a generous bound the caller reads the end of the command's output, no
 worker is left, and neither F nor a manifest is in D; D holds only whole Parquet files of
 bags done, and after SIGTERM no temporary file either (SIGKILL may leave a hidden
-``.NAME.XXXXXXXX.partial``). Ctrl-C on a fleet: test_cli_streams.py.
+``.NAME.XXXXXXXX.partial``). The same with ``--engine dask`` (a local cluster) and SIGKILL.
+Ctrl-C on a fleet: test_cli_streams.py.
 """
 
 from pathlib import Path
@@ -36,16 +37,20 @@ def alive(pid):
         return False
 
 
-@pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGKILL])
-def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
+def signalled(tmp_path, options, signum):
+    """
+    Run ``rot-tools bag bags OPTIONS`` in tmp_path; send ``signum`` once two workers are up.
+
+    Returns (status, stdout, stderr, the workers still alive BOUND s after the signal).
+    """
     bags = tmp_path / 'bags'
     bags.mkdir()
     for k in range(BAGS):
         shutil.copy(bh.REAL, bags / f'run{k}.bag')
     script = console_script('rot-tools', 'rot_tools.cli.main')
-    with subprocess.Popen([*script, 'bag', 'bags', '--jobs', '2', '--csv', 'all.csv',
-                           '--parquet', 'table'], cwd=tmp_path, stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True, env=script_env(script)) as child:
+    with subprocess.Popen([*script, 'bag', 'bags', *options], cwd=tmp_path,
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          env=script_env(script)) as child:
         try:
             deadline = time.monotonic() + 120
             while len(workers := live_pids(parent=child.pid)) < 2:
@@ -61,14 +66,29 @@ def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
             if child.poll() is None:
                 child.kill()
                 child.wait()
-    assert (child.returncode, stdout, stderr) == (
+    return child.returncode, stdout, stderr, [pid for pid in workers if alive(pid)]
+
+
+@pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGKILL])
+def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
+    status, stdout, stderr, left_alive = signalled(
+        tmp_path, ['--jobs', '2', '--csv', 'all.csv', '--parquet', 'table'], signum)
+    assert (status, stdout, stderr) == (
         (-signal.SIGKILL, '', '') if signum == signal.SIGKILL else (128 + signal.SIGTERM, '', ''))
-    assert [pid for pid in workers if alive(pid)] == []
+    assert left_alive == []
     left = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob('*')
-                  if p.parent != bags and p != bags)
+                  if p.parent.name != 'bags' and p.name != 'bags')
     if signum == signal.SIGKILL:  # nothing can remove a temporary file then
         left = [name for name in left if not Path(name).name.endswith('.partial')]
     done = [name for name in left if name.endswith('.parquet')]
     assert left == ['table'] + done  # no CSV, no temporary file, no manifest
     for name in done:  # a bag done before the signal: whole
         assert pq.read_table(tmp_path / name).num_rows == 3061 + 3060
+
+
+def test_a_local_dask_fleet_killed_leaves_no_process_and_says_nothing(tmp_path):
+    """SIGKILL: no worker left, and nothing on stderr (no resource tracker's leak warning)."""
+    pytest.importorskip('distributed')
+    status, stdout, stderr, left_alive = signalled(
+        tmp_path, ['--engine', 'dask', '--jobs', '2'], signal.SIGKILL)
+    assert (status, stdout, stderr, left_alive) == (-signal.SIGKILL, '', '', [])

@@ -171,8 +171,8 @@ def _alone(item):
     try:
         return pool.submit(read_bag, *item).result()
     except BrokenProcessPool:
-        return Outcome(item[0], error=f'{item[0]}: the process reading this bag died before it '
-                       'was done, twice (the second time alone); out of memory?')
+        return Outcome(item[0], error=f'{item[0]}: the process reading this bag, alone, died '
+                       'before it was done; out of memory?')
     finally:
         _stop(pool)
 

@@ -68,18 +68,18 @@ def _sigterm_unwinds():
     While in this block, SIGTERM raises SystemExit(EXIT_TERMINATED) in the main thread.
 
     Only where SIGTERM has its default action (a caller's own handler, or SIGTERM ignored,
-    stays), and only in the main thread (where Python runs signal handlers). The previous
+    stays), and only in the main thread (where Python runs signal handlers). The default
     action is back when the block ends.
     """
     if (threading.current_thread() is not threading.main_thread()
             or signal.getsignal(signal.SIGTERM) != signal.SIG_DFL):
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _terminated)
+    signal.signal(signal.SIGTERM, _terminated)
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _parse(argv):

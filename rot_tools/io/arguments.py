@@ -83,7 +83,7 @@ class Parser(argparse.ArgumentParser):
         fail(program_name(self), message)
 
     def print_help(self, file=None):
-        """Print the help to ``file`` (default stdout); a failed write raises (argparse's hides it)."""
+        """Print the help to ``file`` (default stdout); a failed write raises, unlike argparse."""
         (file or sys.stdout).write(self.format_help())
 
     def add_commands(self, add_options, **kwargs):
