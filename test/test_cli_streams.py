@@ -273,7 +273,7 @@ def test_the_console_script_on_a_full_disk_and_a_closed_pipe(files):
 
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkeypatch, signum):
-    """The signal lands as --csv's file is complete but not yet renamed: it goes; 130 or 143."""
+    """The signal lands as --csv's file is complete but not yet renamed: it goes, one line."""
     monkeypatch.chdir(files)
     real_replace, partials = os.replace, []
 
@@ -287,7 +287,8 @@ def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkey
     status, out, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
     monkeypatch.undo()
     assert (status, out, err) == (
-        (130, '', 'rot-tools: interrupted\n') if signum == signal.SIGINT else (143, '', ''))
+        (130, '', 'rot-tools: interrupted\n') if signum == signal.SIGINT
+        else (143, '', 'rot-tools: terminated\n'))
     assert len(partials) == 1 and list(tmp_path.iterdir()) == []
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
 
@@ -371,7 +372,7 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
 
 
 def test_sigterm_on_compare_reading_a_fifo(tmp_path):
-    """SIGTERM while compare reads EST from a pipe (as from ``<(...)``): 143, no file left."""
+    """SIGTERM while compare reads EST from a pipe (as from ``<(...)``): one line, 143."""
     fifo = tmp_path / 'est.tum'
     os.mkfifo(fifo)
     ref = write_tum(tmp_path / 'ref.tum')
@@ -398,5 +399,5 @@ def test_sigterm_on_compare_reading_a_fifo(tmp_path):
                 os.close(writer)
             if child.poll() is None:
                 child.kill()
-    assert (child.returncode, stdout, stderr) == (143, '', '')
+    assert (child.returncode, stdout, stderr) == (143, '', 'rot-tools: terminated\n')
     assert sorted(p.name for p in tmp_path.iterdir()) == ['est.tum', 'ref.tum']

@@ -13,6 +13,7 @@ from pathlib import Path
 import shutil
 import signal
 import subprocess
+import sys
 import time
 
 import bag_helpers as bh
@@ -37,26 +38,26 @@ def alive(pid):
         return False
 
 
-def signalled(tmp_path, options, signum):
+def signalled(tmp_path, command, signum, ready):
     """
-    Run ``rot-tools bag bags OPTIONS`` in tmp_path; send ``signum`` once two workers are up.
+    Run ``command`` in tmp_path over bags/; send ``signum`` once ``ready(pid)`` is true.
 
-    Returns (status, stdout, stderr, the workers still alive BOUND s after the signal).
+    Returns (status, stdout, stderr, the command's children at the signal still alive BOUND
+    s after it).
     """
     bags = tmp_path / 'bags'
     bags.mkdir()
     for k in range(BAGS):
         shutil.copy(bh.REAL, bags / f'run{k}.bag')
-    script = console_script('rot-tools', 'rot_tools.cli.main')
-    with subprocess.Popen([*script, 'bag', 'bags', *options], cwd=tmp_path,
-                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                          env=script_env(script)) as child:
+    with subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True, env=script_env(command)) as child:
         try:
             deadline = time.monotonic() + 120
-            while len(workers := live_pids(parent=child.pid)) < 2:
+            while not ready(child.pid):
                 assert child.poll() is None and time.monotonic() < deadline, \
-                    'the fleet ended before its two workers were up'
+                    'the fleet ended before it was at work'
                 time.sleep(0.01)
+            workers = live_pids(parent=child.pid)
             child.send_signal(signum)
             end = time.monotonic() + BOUND
             stdout, stderr = child.communicate(timeout=BOUND)  # EOF: no worker holds them
@@ -69,12 +70,19 @@ def signalled(tmp_path, options, signum):
     return child.returncode, stdout, stderr, [pid for pid in workers if alive(pid)]
 
 
+def two_workers(pid):
+    return len(live_pids(parent=pid)) >= 2
+
+
 @pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGKILL])
 def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
+    script = console_script('rot-tools', 'rot_tools.cli.main')
     status, stdout, stderr, left_alive = signalled(
-        tmp_path, ['--jobs', '2', '--csv', 'all.csv', '--parquet', 'table'], signum)
+        tmp_path, [*script, 'bag', 'bags', '--jobs', '2', '--csv', 'all.csv', '--parquet',
+                   'table'], signum, two_workers)
     assert (status, stdout, stderr) == (
-        (-signal.SIGKILL, '', '') if signum == signal.SIGKILL else (128 + signal.SIGTERM, '', ''))
+        (-signal.SIGKILL, '', '') if signum == signal.SIGKILL
+        else (128 + signal.SIGTERM, '', 'rot-tools: terminated\n'))
     assert left_alive == []
     left = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob('*')
                   if p.parent.name != 'bags' and p.name != 'bags')
@@ -86,9 +94,30 @@ def test_a_fleet_ended_by_a_signal_leaves_nothing(tmp_path, signum):
         assert pq.read_table(tmp_path / name).num_rows == 3061 + 3060
 
 
+STARTED = r"""
+import sys
+from pathlib import Path
+from rot_tools.cli import bag_analysis, main
+
+analyse = bag_analysis.analyse
+
+
+def started(path, *args, **kwargs):
+    # a bag's job has begun here (a cluster of threads): the test may send its signal
+    Path('started').touch()
+    return analyse(path, *args, **kwargs)
+
+
+bag_analysis.analyse = started
+sys.exit(main.main(sys.argv[1:]))
+"""
+
+
 def test_a_local_dask_fleet_killed_leaves_no_process_and_says_nothing(tmp_path):
-    """SIGKILL: no worker left, and nothing on stderr (no resource tracker's leak warning)."""
+    """SIGKILL while its bags are read: nothing left, nothing said (no leak warning)."""
     pytest.importorskip('distributed')
     status, stdout, stderr, left_alive = signalled(
-        tmp_path, ['--engine', 'dask', '--jobs', '2'], signal.SIGKILL)
+        tmp_path, [sys.executable, '-c', STARTED, 'bag', 'bags', '--engine', 'dask', '--jobs',
+                   '2'], signal.SIGKILL,
+        lambda pid: (tmp_path / 'started').exists() or two_workers(pid))
     assert (status, stdout, stderr, left_alive) == (-signal.SIGKILL, '', '', [])

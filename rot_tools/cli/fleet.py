@@ -290,16 +290,14 @@ def _dask(items, jobs, scheduler):
 
 def _local_cluster(workers):
     """
-    Start a local Dask cluster of ``workers`` processes of one thread each.
+    Start a local Dask cluster of ``workers`` threads, in this process.
 
-    Its worker processes are forked: spawned ones need named semaphores, which
-    multiprocessing's resource tracker reports as leaked when the command is killed.
-    The dashboard gets a free port (the default 8787 may be another cluster's).
+    Threads leave no process behind, however the command ends. The dashboard gets a free
+    port (the default 8787 may be another cluster's).
     """
-    import dask
     from dask.distributed import LocalCluster
-    with dask.config.set({'distributed.worker.multiprocessing-method': 'fork'}):
-        return LocalCluster(n_workers=workers, threads_per_worker=1, dashboard_address=':0')
+    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=False,
+                        dashboard_address=':0')
 
 
 def _stop_at_once(cluster):

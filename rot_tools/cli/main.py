@@ -100,9 +100,10 @@ def main(argv=None):
 
     0 done; 1 the standard output could not be written (one line), or a fleet with a bag
     that failed; 2 bad arguments or input (one line ``rot-tools: error: ...``);
-    EXIT_INTERRUPTED (130) after Ctrl-C, with one line ``rot-tools: interrupted``;
-    EXIT_TERMINATED (143) after SIGTERM; output_file.EXIT_BROKEN_PIPE (141), quietly, when
-    the reader of the standard output went away (``| head``). Never a traceback for these.
+    EXIT_INTERRUPTED (130) after Ctrl-C and EXIT_TERMINATED (143) after SIGTERM, with one
+    line ``rot-tools: interrupted`` / ``terminated``; output_file.EXIT_BROKEN_PIPE (141),
+    quietly, when the reader of the standard output went away (``| head``). Never a
+    traceback for these.
     """
     with _sigterm_unwinds():
         try:
@@ -110,7 +111,9 @@ def main(argv=None):
             status = 0 if args is None else args.run(args)
             output_file.flush_stdout()
             return status
-        except SystemExit as exc:  # one-line errors (2), stdout's, SIGTERM
+        except SystemExit as exc:  # one-line errors (2), stdout's, SIGTERM's
+            if exc.code == EXIT_TERMINATED:
+                _say('terminated')
             return exc.code if isinstance(exc.code, int) else 2
         except KeyboardInterrupt:
             _say('interrupted')
