@@ -166,7 +166,7 @@ def _stop(pool):
 
 
 def _alone(item):
-    """Return read_bag(*item) from a worker of its own: a bag whose worker died once."""
+    """Return read_bag(*item) from a worker of its own: a bag that a broken pool held."""
     pool = _pool(1)
     try:
         return pool.submit(read_bag, *item).result()
@@ -215,7 +215,7 @@ CONNECT_TIMEOUT = 5.0
 def _connection_failure(scheduler, exc):
     """Return the line that says why no scheduler answered at ``scheduler``."""
     scheme = scheduler.split('://', 1)[0] if '://' in scheduler else ''
-    if isinstance(exc, TimeoutError):
+    if isinstance(exc, OSError):  # TimeoutError too; Dask's connect retries until its bound
         said = (f'no Dask scheduler answered within {CONNECT_TIMEOUT:g} s (the '
                 "dashboard's HTTP port is not the scheduler's)")
     elif isinstance(exc, TypeError) and scheme == 'tls':
@@ -230,11 +230,11 @@ def _connection_failure(scheduler, exc):
 
 def _reach(scheduler):
     """
-    Connect once to the Dask scheduler at ``scheduler``, answer included, within the bound.
+    Connect once to the Dask scheduler at ``scheduler``, its answer included, or FleetError.
 
     Dask's client waits for a first answer without a bound (a port that accepts and says
-    nothing), and for a refused connection the 30 s of Dask's own connect timeout: here both
-    get CONNECT_TIMEOUT. FleetError otherwise.
+    nothing), and retries a refused connection for Dask's connect timeout (30 s): here
+    both get CONNECT_TIMEOUT.
     """
     import asyncio
     from distributed.comm import connect
@@ -247,9 +247,7 @@ def _reach(scheduler):
 
     try:
         asyncio.run(asyncio.wait_for(answered(), CONNECT_TIMEOUT))
-    except (OSError, ValueError, TypeError, asyncio.TimeoutError) as exc:
-        if isinstance(exc, OSError) and 'Timed out' in str(exc):
-            exc = TimeoutError()
+    except (OSError, ValueError, TypeError) as exc:
         raise FleetError(_connection_failure(scheduler, exc)) from None
 
 
@@ -258,16 +256,20 @@ def _dask(items, jobs, scheduler):
     Yield read_bag(*item) for each item, in order, from a Dask cluster's workers.
 
     scheduler: the address of a running cluster's scheduler; None starts a local cluster of
-    ``jobs`` worker processes (no more than the items) of one thread each, closed at the end.
-    A task whose workers died (Dask tries it on others first) is that item's failed Outcome.
+    ``jobs`` threads in this process (no more than the items), closed at the end. A task
+    whose workers died (Dask tries it on others first) is that item's failed Outcome.
     """
-    from dask.distributed import Client
+    import logging
+    from dask.distributed import Client, LocalCluster
     if scheduler is not None:
         _reach(scheduler)
-    cluster = None if scheduler is not None else _local_cluster(min(jobs, len(items)))
+    # dashboard_address ':0': a free port (the default 8787 may be another cluster's)
+    cluster = None if scheduler is not None else LocalCluster(
+        n_workers=min(jobs, len(items)), threads_per_worker=1, processes=False,
+        dashboard_address=':0')
     try:
         try:
-            client = Client(cluster or scheduler, timeout=CONNECT_TIMEOUT)
+            client = Client(scheduler if cluster is None else cluster, timeout=CONNECT_TIMEOUT)
         except (OSError, ValueError, TypeError) as exc:
             raise FleetError(_connection_failure(scheduler, exc)) from None
         with client:
@@ -279,38 +281,12 @@ def _dask(items, jobs, scheduler):
                     said = ' '.join(str(exc).split())
                     yield Outcome(item[0], error=f'{item[0]}: its Dask task failed: '
                                   f'{type(exc).__name__}{": " if said else ""}{said[:300]}')
-    except BaseException:  # stopped (Ctrl-C, SIGTERM, stdout gone): no bag is waited for
-        if cluster is not None:
-            _stop_at_once(cluster)
+    except BaseException:  # stopped (Ctrl-C, SIGTERM, stdout gone): Dask's logs of it dropped
+        logging.getLogger('distributed').setLevel(logging.CRITICAL)
         raise
     finally:
         if cluster is not None:
             cluster.close()
-
-
-def _local_cluster(workers):
-    """
-    Start a local Dask cluster of ``workers`` threads, in this process.
-
-    Threads leave no process behind, however the command ends. The dashboard gets a free
-    port (the default 8787 may be another cluster's).
-    """
-    from dask.distributed import LocalCluster
-    return LocalCluster(n_workers=workers, threads_per_worker=1, processes=False,
-                        dashboard_address=':0')
-
-
-def _stop_at_once(cluster):
-    """
-    End a local cluster's workers at once, quietly, in the middle of their bags.
-
-    Its worker processes, this process's children, are killed (they write no file), and
-    Dask's logging of the ended cluster dropped with the run.
-    """
-    import logging
-    logging.getLogger('distributed').setLevel(logging.CRITICAL)
-    for worker in multiprocessing.active_children():
-        worker.kill()
 
 
 def outcomes(items, jobs, engine, scheduler):
