@@ -170,6 +170,15 @@ def test_serial_processes_and_dask_give_the_same_output(small, capsys, monkeypat
     assert [r[0] for r in rows[1::2 * N]] == paths
 
 
+def test_the_csv_on_stdout_is_the_same_whatever_jobs_is(small, capsys, monkeypatch):
+    """--csv -: the header once, then the rows, with --jobs 2 as with --jobs 1."""
+    root, paths = small
+    monkeypatch.chdir(root)
+    serial = bag_here(capsys, *paths, '--jobs', '1', '--csv', '-')
+    assert rot_tools_bag(root, *paths, '--jobs', '2', '--csv', '-') == serial
+    assert serial[0] == 0 and serial[1].count('bag,topic,stamp') == 1
+
+
 def test_an_existing_dask_cluster_by_its_address(small, capsys, monkeypatch):
     """--scheduler ADDRESS: the jobs run on the workers of a cluster started here."""
     distributed = pytest.importorskip('distributed')

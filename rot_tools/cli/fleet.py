@@ -153,7 +153,6 @@ def _end_with_command(command):
 
 def _pool(workers):
     """Return a pool of ``workers`` processes forked from this one (its modules loaded)."""
-    output_file.flush_stdout()  # else a worker, a copy of this process, flushes it again
     return ProcessPoolExecutor(workers, multiprocessing.get_context('fork'),
                                initializer=_worker_start, initargs=(os.getpid(),))
 
