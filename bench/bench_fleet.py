@@ -1,25 +1,11 @@
 """
 ``rot-tools bag`` over a fleet: --jobs 2 against --jobs 1, and one bag against a bare read.
 
-The fleet is --copies copies (default 8) of the real recording
-(../shared/data/jackal_imu_odometry.bag: 3,061 Imu and 3,060 Odometry messages, a ROS 1 bag)
-in one directory. Each command runs as a user runs it (the console script, a subprocess,
-its summary discarded), --repeat times, the repetitions interleaved (the order rotating from
-one to the next), and the median of each taken:
-
-- the job ``rot-tools bag FLEET --jobs 1`` and ``--jobs 2``: goal, the second ≥ 1.6 × as
-  fast on 2 cores. The job is the command's ``main`` timed in a process that has imported
-  the package and rosbags already (``JOB``): start-up (Python, NumPy, rosbags: the same for
-  any fleet, and several times one small bag's job) would otherwise bound the ratio. The
-  whole commands are timed too, and their ratio printed beside it;
-- ``rot-tools bag ONE`` against reading the same bag with rosbags alone, deserialising every
-  message (its AnyReader, the loop users write): goal, ≤ 1.5 × the bare read's time. Both
-  are whole commands, Python's start-up included. Messages per second are printed for each.
-
-Both goals are ratios of wall times measured side by side; on a machine shared with other
-work they move with its load (printed at the start). So the same run also times a plain CPU
-loop, the same work in 1 and in 2 forked processes: the speed-up the machine offers at that
-moment, the ceiling of --jobs 2's.
+The fleet is --copies copies of the real recording. Each command runs as a user runs it
+(the console script), --repeat times, interleaved; medians are compared. Goals: the job
+``--jobs 2`` ≥ 1.6 × ``--jobs 1`` (timed after start-up, in a process that imported the
+package already: ``JOB``), and one bag ≤ 1.5 × reading it with rosbags alone (whole
+commands). A CPU loop in 1 and 2 processes shows the speed-up the machine offers meanwhile.
 
     .venv/bin/python bench/bench_fleet.py [--copies 8] [--repeat 5] [--json FILE]
 """

@@ -170,6 +170,15 @@ def test_serial_processes_and_dask_give_the_same_output(small, capsys, monkeypat
     assert [r[0] for r in rows[1::2 * N]] == paths
 
 
+def test_the_csv_on_stdout_is_the_same_whatever_jobs_is(small, capsys, monkeypatch):
+    """--csv -: the header once, then the rows, with --jobs 2 as with --jobs 1."""
+    root, paths = small
+    monkeypatch.chdir(root)
+    serial = bag_here(capsys, *paths, '--jobs', '1', '--csv', '-')
+    assert rot_tools_bag(root, *paths, '--jobs', '2', '--csv', '-') == serial
+    assert serial[0] == 0 and serial[1].count('bag,topic,stamp') == 1
+
+
 def test_an_existing_dask_cluster_by_its_address(small, capsys, monkeypatch):
     """--scheduler ADDRESS: the jobs run on the workers of a cluster started here."""
     distributed = pytest.importorskip('distributed')
@@ -219,7 +228,7 @@ class Dashboard:
 
 
 def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypatch):
-    """Each address is one line and status 2, within Dask's connect bound (set to 0.3 s)."""
+    """Each address is one line and status 2, within the connect bound (set to 0.3 s)."""
     root, paths = small
     monkeypatch.chdir(root)
     status, out, err = bag_here(capsys, *paths, '--scheduler', 'tcp://127.0.0.1:8786')
@@ -227,11 +236,10 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypat
     status, out, err = bag_here(capsys, *paths, '--engine', 'dask', '--scheduler', '')
     assert (status, out, err) == (2, '', "rot-tools: error: --scheduler '': no address (a "
                                   "Dask scheduler's, such as tcp://HOST:8786)\n")
-    dask = pytest.importorskip('dask')
     pytest.importorskip('distributed')
+    monkeypatch.setattr(fleet, 'CONNECT_TIMEOUT', 0.3)
     said = {}
-    with dask.config.set({'distributed.comm.timeouts.connect': '0.3s'}), Silent() as silent, \
-            Dashboard() as dashboard:
+    with Silent() as silent, Dashboard() as dashboard:
         for name, address in (('silent', silent), ('dashboard', dashboard),
                               ('refused', 'tcp://127.0.0.1:9'), ('tls', 'tls://127.0.0.1:9'),
                               ('ucx', 'ucx://127.0.0.1:9'), ('http', 'http://127.0.0.1:9')):
@@ -241,16 +249,22 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypat
             prefix = f'rot-tools: error: --scheduler {address}: cannot connect: '
             assert err.startswith(prefix), (name, err)
             said[name] = err[len(prefix):-1]
-    for name in ('silent', 'dashboard'):
-        assert said[name] == ('no Dask scheduler answered within 0.3 s (distributed.comm.'
-                              "timeouts.connect; the dashboard's HTTP port is not the "
-                              "scheduler's)")
-    assert said['refused'].startswith(('Timed out trying to connect to tcp://127.0.0.1:9',
-                                       'no Dask scheduler answered'))
+    for name in ('silent', 'dashboard', 'refused'):
+        assert said[name] == ("no Dask scheduler answered within 0.3 s (the dashboard's HTTP "
+                              "port is not the scheduler's)"), name
     assert said['tls'].startswith("tls:// needs Dask's TLS settings")
     assert said['ucx'].startswith("ucx:// needs Dask's UCX support")
     assert said['http'].startswith("unknown address scheme 'http'")
     assert not (root / 'pq-unreached' / '_manifest.json').exists()
+
+
+def test_an_in_process_scheduler_address_is_one_line(small, capsys, monkeypatch):
+    root, paths = small
+    monkeypatch.chdir(root)
+    status, out, err = bag_here(capsys, *paths, '--engine', 'dask', '--scheduler', 'inproc://x')
+    assert (status, out, err) == (
+        2, '', 'rot-tools: error: --scheduler inproc://x: an inproc:// address is reachable only '
+        "inside the Python process that made it; give the scheduler's tcp://HOST:PORT\n")
 
 
 def test_a_local_dask_cluster_has_no_more_workers_than_bags(small, capsys, monkeypatch):
@@ -343,7 +357,8 @@ def test_a_worker_killed_is_tried_again_once_and_a_rerun_owns_its_files(small, t
     """
     --jobs 2: the worker of a.bag is killed once, b.bag's every time (as the OOM killer does).
 
-    a.bag is read again and is whole; b.bag, killed again, is failed and the rest go on. The
+    The bags the broken pool held are read again, each alone: a.bag is whole; b.bag, killed
+    alone, is failed and the rest go on. The
     Parquet directory held an earlier run's files: its file of b.bag goes (the bag has none
     in this run), the file of a bag not in this run stays, and the manifest lists this run's.
     """
@@ -366,12 +381,14 @@ def test_a_worker_killed_is_tried_again_once_and_a_rerun_owns_its_files(small, t
                           cwd=tmp_path, capture_output=True, text=True, timeout=300,
                           env=script_env([sys.executable]))
     assert done.returncode == 1, done.stderr
-    assert ((tmp_path / 'a.died').read_text(), (tmp_path / 'b.died').read_text()) == ('x', 'xx')
+    # a.bag died in the pool, then was read alone; b.bag died alone (and in the pool, if
+    # its worker had begun it before a.bag's died)
+    assert (tmp_path / 'a.died').read_text() == 'x'
+    assert (tmp_path / 'b.died').read_text() in ('x', 'xx')
     data = json.loads(done.stdout)
     assert [e['status'] for e in data['bags']] == ['ok', 'failed', 'ok', 'failed', 'skipped']
     assert data['bags'][1]['error'] == (
-        'b.bag: the process reading this bag was killed by SIGKILL before it was done, twice '
-        '(the second time alone); out of memory?')
+        'b.bag: the process reading this bag, alone, died before it was done; out of memory?')
     assert data['fleet'] == {'bags': 5, 'failed': 2, 'skipped': 1, 'messages': 2 * 2 * N}
     lines = done.stderr.splitlines()
     assert [line.split(':')[:3] for line in lines] == [
@@ -530,41 +547,58 @@ def test_a_rerun_in_which_a_bag_fails_removes_its_earlier_file(small, tmp_path, 
     assert manifest('pq')['files'] == ['a.bag.parquet']
 
 
-def test_files_that_cannot_be_unnamed_have_a_temporary_name(tmp_path, monkeypatch):
-    """
-    Where O_TMPFILE is missing: a temporary name, removed by an error or remove_partials.
+def test_a_run_of_one_bag_keeps_its_parquet_directory_as_a_fleet_does(
+        small, capsys, monkeypatch):
+    """One bag alone, and the same bag as a fleet (its directory searched): same files."""
+    root, paths = small
+    monkeypatch.chdir(root)
+    assert bag_here(capsys, paths[0], '--parquet', 'pq-alone')[0] == 0
+    assert bag_here(capsys, str(Path(paths[0]).parent), '--parquet', 'pq-fleet')[0] == 0
+    name = 'fleet_ros1_run.bag.parquet'
+    for directory in ('pq-alone', 'pq-fleet'):
+        assert sorted(p.name for p in Path(directory).iterdir()) == [
+            '_SUCCESS', '_manifest.json', name]
+        assert manifest(directory) == {
+            'bags': [{'path': paths[0], 'status': 'ok', 'file': name}], 'files': [name]}
+    assert tables('pq-alone')[name].equals(tables('pq-fleet')[name], check_metadata=True)
 
-    A worker removes its temporary files so before it ends itself, the command gone.
-    """
-    monkeypatch.setattr(output_file, '_unnamed', lambda directory: None)
+
+def test_a_failed_run_of_one_bag_leaves_no_directory_that_reads_as_ok(
+        small, tmp_path, capsys, monkeypatch):
+    root, paths = small
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(root / paths[0], 'x.bag')
+    assert bag_here(capsys, 'x.bag', '--parquet', 'pq')[0] == 0
+    Path('x.bag').write_bytes(b'\0' * 100)  # damaged since
+    status, out, err = bag_here(capsys, 'x.bag', '--parquet', 'pq')
+    assert (status, out) == (2, '') and err.startswith('rot-tools: error: bag: x.bag: ')
+    assert sorted(p.name for p in Path('pq').iterdir()) == ['_manifest.json']
+    assert manifest('pq') == {'bags': [{'path': 'x.bag', 'status': 'failed', 'file': None}],
+                              'files': []}
+
+
+def test_a_file_has_a_temporary_name_until_complete(tmp_path):
     target = tmp_path / 'out.csv'
     target.write_text('before\n')
-    with pytest.raises(ZeroDivisionError):
-        with output_file.complete_or_nothing(target) as out:
-            out.write('half')
-            (partial,) = [p for p in tmp_path.iterdir() if p != target]
-            assert partial.name.startswith('.out.csv.') and partial.name.endswith('.partial')
-            1 / 0
-    assert list(tmp_path.iterdir()) == [target] and target.read_text() == 'before\n'
-    with pytest.raises(FileNotFoundError):  # the worker is killed before it gets there
-        with output_file.complete_or_nothing(target) as out:
-            out.write('half')
-            output_file.remove_partials()
-            assert list(tmp_path.iterdir()) == [target]
-    assert target.read_text() == 'before\n'
     with output_file.complete_or_nothing(target) as out:
         out.write('whole\n')
-    assert list(tmp_path.iterdir()) == [target] and target.read_text() == 'whole\n'
-
-
-def test_an_unnamed_file_has_no_name_until_complete(tmp_path):
-    target = tmp_path / 'out.csv'
-    with output_file.complete_or_nothing(target) as out:
-        out.write('x' * 100_000)
         out.flush()
-        assert list(tmp_path.iterdir()) == []  # on Linux; elsewhere a temporary name
-    assert list(tmp_path.iterdir()) == [target] and target.stat().st_size == 100_000
+        (partial,) = [p for p in tmp_path.iterdir() if p != target]
+        assert partial.name.startswith('.out.csv.') and partial.name.endswith('.partial')
+        assert target.read_text() == 'before\n'
+    assert list(tmp_path.iterdir()) == [target] and target.read_text() == 'whole\n'
     assert oct(target.stat().st_mode & 0o777) == oct(0o666 & ~current_umask())
+
+
+@pytest.mark.parametrize('stop', [ZeroDivisionError, KeyboardInterrupt])
+def test_an_error_or_ctrl_c_removes_the_temporary_file(tmp_path, stop):
+    target = tmp_path / 'out.csv'
+    target.write_text('before\n')
+    with pytest.raises(stop):
+        with output_file.complete_or_nothing(target) as out:
+            out.write('half')
+            raise stop()
+    assert list(tmp_path.iterdir()) == [target] and target.read_text() == 'before\n'
 
 
 def current_umask():
@@ -575,46 +609,37 @@ def current_umask():
 
 KILLER = r"""
 import os, signal, sys
-import pyarrow.parquet as pq
 from rot_tools.cli import main
 
-write_table, writes = pq.write_table, [0]
+replace, renames = os.replace, [0]
 
 
-class Dying:
-    '''A file that takes the first half of what is written, then the process is killed.'''
-
-    def __init__(self, out):
-        self.out, self.closed = out, False
-
-    def write(self, data):
-        self.out.write(bytes(data)[:len(data) // 2])
-        self.out.flush()
+def dying_replace(source, target):
+    # the second file is complete under its temporary name: the process is killed
+    renames[0] += 1
+    if renames[0] == 2:
         os.kill(os.getpid(), signal.SIGKILL)
+    return replace(source, target)
 
 
-def dying_write(table, where, **options):
-    writes[0] += 1
-    if writes[0] < 2:
-        return write_table(table, where, **options)
-    return write_table(table, Dying(where), **options)
-
-
-pq.write_table = dying_write
+os.replace = dying_replace
 sys.exit(main.main(sys.argv[1:]))
 """
 
 
-def test_a_run_killed_while_writing_a_parquet_file_leaves_nothing_of_it(small):
-    """SIGKILL while the Parquet file of the second bag is half written (--jobs 1)."""
+def test_a_run_killed_while_writing_a_parquet_file_leaves_nothing_that_looks_whole(small):
+    """SIGKILL as the second bag's file is complete, not yet renamed: a hidden name only."""
     root, paths = small
     out = root / 'pq-killed'
     done = subprocess.run([sys.executable, '-c', KILLER, 'bag', *paths, '--jobs', '1',
                            '--parquet', str(out)], cwd=root, capture_output=True,
                           timeout=300, env=script_env([sys.executable]))
     assert done.returncode == -9, done.stderr
-    assert sorted(p.name for p in out.iterdir()) == ['fleet_ros1_run.bag.parquet']
-    assert tables(out)['fleet_ros1_run.bag.parquet'].num_rows == 2 * N
+    partial, whole = sorted(p.name for p in out.iterdir())
+    assert whole == 'fleet_ros1_run.bag.parquet'
+    assert partial.startswith('.fleet_sqlite3.parquet.') and partial.endswith('.partial')
+    assert list(tables(out)) == [whole]  # DIR/*.parquet: the whole file only
+    assert tables(out)[whole].num_rows == 2 * N
 
 
 def test_duckdb_reads_the_files_of_the_manifest_as_one_table(bags, capsys, monkeypatch):

@@ -1,10 +1,10 @@
 """
 rot-tools' outputs and streams: the one output guard, a full or closed stdout, signals.
 
-Every command checks all its output paths against all its input paths and each other before
-writing (rot_tools.cli.output_file.check_outputs). What the process does — its exit status
-on a full disk, a closed pipe, Ctrl-C or SIGTERM, what Python prints at exit — is tested on
-the console script, one process per behaviour; the rest in this process.
+Every command checks all its output paths against its inputs, each other and recordings
+before writing (rot_tools.cli.output_file.check_outputs). What the process does on a full
+disk, a closed pipe, Ctrl-C or SIGTERM is tested on the console script where Python's own
+exit takes part, in this process otherwise.
 """
 
 import io
@@ -125,6 +125,58 @@ def test_one_guard_for_every_output_and_input(tmp_path, monkeypatch):
                  ['est.tum', 'rec', 'run.mcap', None]) is None
 
 
+@pytest.fixture
+def recordings(tmp_path):
+    """Return a directory of recordings no command reads: a .bag, .mcap, .db3, a rosbag2 one."""
+    for name in ('old.bag', 'old.mcap', 'old.db3'):
+        (tmp_path / name).write_bytes(b'a recording')
+    (tmp_path / 'rec').mkdir()
+    (tmp_path / 'rec' / 'metadata.yaml').write_text('rosbag2_bagfile_information: {}\n')
+    (tmp_path / 'rec' / 'rec_0.db3').write_bytes(b'SQLite')
+    return tmp_path
+
+
+def test_an_output_over_a_recording_is_refused_without_force(files, recordings, capsys,
+                                                             monkeypatch):
+    """A compare --csv over a bag it does not read: one line naming it and --force, exit 2."""
+    monkeypatch.chdir(files)
+    targets = [recordings / name for name in ('old.bag', 'old.mcap', 'old.db3')] + [
+        recordings / 'rec' / 'metadata.yaml', recordings / 'rec' / 'rec_0.db3']
+    for target in targets:
+        before = target.read_bytes()
+        status, out, err = run(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv', target)
+        assert (status, out, err) == (2, '', f'rot-tools: error: --csv {target} is a recording '
+                                      '(a bag): refused; --force writes over it\n')
+        assert target.read_bytes() == before
+
+
+def test_force_writes_over_a_recording(files, recordings, capsys, monkeypatch):
+    monkeypatch.chdir(files)
+    status, _, err = run(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv',
+                         recordings / 'old.bag', '--force')
+    assert (status, err) == (0, '')
+    assert (recordings / 'old.bag').read_text().startswith('stamp,angle')
+
+
+def test_force_does_not_let_an_output_overwrite_an_input(files, capsys, monkeypatch):
+    monkeypatch.chdir(files)
+    storage = next(Path('victim').glob('*.db3'))
+    status, out, err = run(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force')
+    assert (status, out) == (2, '') and 'would overwrite the bag being read' in err
+
+
+def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, capsys,
+                                                             monkeypatch):
+    """rot-tools bag's --csv and --parquet get the same guard (a rosbag2 directory as DIR)."""
+    pytest.importorskip('pyarrow')
+    monkeypatch.chdir(files)
+    status, out, err = run(capsys, 'bag', 'victim', '--parquet', recordings / 'rec')
+    assert (status, out, err) == (2, '', f'rot-tools: error: --parquet {recordings / "rec"} is '
+                                  'a recording (a bag): refused; --force writes over it\n')
+    left = sorted(p.name for p in (recordings / 'rec').iterdir())
+    assert left == ['metadata.yaml', 'rec_0.db3']
+
+
 # ---------------------------------------------------------------------------------------
 # A standard output that cannot be written: in this process, then as the console script
 
@@ -180,6 +232,15 @@ def test_a_full_a_closed_and_a_broken_stdout_in_every_command(files, monkeypatch
             assert got[::2] == (status, line), name
 
 
+@pytest.mark.parametrize('words', [['--version'], ['--help'], ['bag', '--help']])
+def test_help_and_version_on_a_full_disk(words):
+    """Written a line at a time (as to a terminal), so that the failure comes as they print."""
+    with open('/dev/full', 'w', buffering=1) as full:
+        status, _, err = run_with(*words, stdout=full)
+    assert (status, err) == (1, 'rot-tools: error: cannot write to stdout: No space left on '
+                             'device\n')
+
+
 SCRIPT = console_script('rot-tools', 'rot_tools.cli.main')
 """The console script rot-tools of this Python (or python -m where none is installed)."""
 
@@ -199,24 +260,17 @@ def test_the_console_script_on_a_full_disk_and_a_closed_pipe(files):
     finally:
         os.close(pipe)
     assert (done.returncode, done.stderr) == (141, '')
+    with open('/dev/full', 'w') as full:
+        done = subprocess.run([*SCRIPT, '--version'], stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=120, env=env)
+    assert (done.returncode, done.stderr) == (
+        1, 'rot-tools: error: cannot write to stdout: No space left on device\n')
 
 
 # ---------------------------------------------------------------------------------------
 # Ctrl-C and SIGTERM
 
 
-@pytest.fixture
-def named_partials(monkeypatch):
-    """
-    Files written under a temporary name, renamed by os.replace(source, target) once whole.
-
-    On Linux an output file is unnamed until complete (O_TMPFILE); these tests reach the
-    moment of its rename by patching os.replace, which the portable path calls so.
-    """
-    monkeypatch.setattr(output_file, '_unnamed', lambda directory: None)
-
-
-@pytest.mark.usefixtures('named_partials')
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkeypatch, signum):
     """The signal lands as --csv's file is complete but not yet renamed: it goes, one line."""
@@ -239,51 +293,30 @@ def test_a_signal_while_a_file_is_written_leaves_nothing(files, tmp_path, monkey
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
 
 
-@pytest.mark.usefixtures('named_partials')
-def test_a_signal_where_python_ignores_exceptions_still_stops(files, tmp_path, monkeypatch):
-    """Ctrl-C landing in a __del__ (or a function os.fork runs): raised at the next step."""
+def test_a_callers_profiler_and_signal_handlers_stay(files, tmp_path, monkeypatch):
+    """rot-tools' main in a caller's process: its profiler, SIGTERM handler and SIG_IGN kept."""
     monkeypatch.chdir(files)
-    real_replace, after = os.replace, []
+    calls = []
 
-    class Signalling:
+    def profiler(frame, event, arg):
+        calls.append(event)
 
-        def __del__(self):
-            signal.raise_signal(signal.SIGINT)  # KeyboardInterrupt here: Python ignores it
+    def handler(signum, frame):
+        pass
 
-    def replace(source, target):
-        Signalling()  # gone at once
-        after.append(source)  # the command goes on here, one step more at most
-        real_replace(source, target)
-    monkeypatch.setattr(os, 'replace', replace)
-    status, out, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
-    monkeypatch.undo()
-    assert (status, out, err) == (130, '', 'rot-tools: interrupted\n')
-    assert after == [] and list(tmp_path.iterdir()) == [] and sys.getprofile() is None
-
-
-@pytest.mark.usefixtures('named_partials')
-def test_a_forked_worker_ends_by_the_signal_itself(files, tmp_path, monkeypatch):
-    """In a process forked by rot-tools (a fleet's worker) the handler is the signal's default."""
-    monkeypatch.chdir(files)
-    ends = {}
-
-    def fork_and_signal(source, target):
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            pid = os.fork()
-            if pid == 0:  # the worker: never back into pytest, whatever happens
-                try:
-                    signal.raise_signal(signum)
-                finally:
-                    os._exit(99)
-            ends[signum] = os.waitpid(pid, 0)[1]
-        real_replace(source, target)
-    real_replace = os.replace
-    monkeypatch.setattr(os, 'replace', fork_and_signal)
-    status, _, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
-    monkeypatch.undo()
+    before = (signal.signal(signal.SIGINT, signal.SIG_IGN),
+              signal.signal(signal.SIGTERM, handler))
+    sys.setprofile(profiler)
+    try:
+        status, _, err = run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')
+        after = (sys.getprofile(), signal.getsignal(signal.SIGINT),
+                 signal.getsignal(signal.SIGTERM))
+    finally:
+        sys.setprofile(None)
+        signal.signal(signal.SIGINT, before[0])
+        signal.signal(signal.SIGTERM, before[1])
     assert (status, err) == (0, '')
-    assert {s: (os.WIFSIGNALED(w) and os.WTERMSIG(w)) for s, w in ends.items()} == {
-        signal.SIGINT: signal.SIGINT, signal.SIGTERM: signal.SIGTERM}
+    assert after == (profiler, signal.SIG_IGN, handler) and calls
 
 
 def wait_for(predicate, what, timeout=60.0):
@@ -295,12 +328,22 @@ def wait_for(predicate, what, timeout=60.0):
         time.sleep(0.01)
 
 
+def ignores_sigint(pid):
+    """Whether process ``pid`` ignores SIGINT (/proc/PID/status, SigIgn: a mask in hex)."""
+    try:
+        status = Path(f'/proc/{pid}/status').read_text()
+    except OSError:
+        return False
+    mask = next(line.split()[1] for line in status.splitlines() if line.startswith('SigIgn:'))
+    return bool(int(mask, 16) & 1 << (signal.SIGINT - 1))
+
+
 def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
     """
     Ctrl-C (SIGINT to the whole process group, as a terminal sends it) while a fleet runs.
 
-    Sent once the workers are up: one line, status 130, no partial file, no CSV, no worker
-    left in the session.
+    Sent once the two workers are up (they leave Ctrl-C to the command, which stops them):
+    one line, status 130, no partial file, no CSV, no worker left in the session.
     """
     pytest.importorskip('rosbags')
     pytest.importorskip('pyarrow')
@@ -315,8 +358,9 @@ def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
                           stderr=subprocess.PIPE, text=True, env=script_env(SCRIPT),
                           start_new_session=True) as child:
         try:
-            wait_for(lambda: child.poll() is not None or len(live_pids(session=child.pid)) > 1,
-                     'the workers')
+            wait_for(lambda: child.poll() is not None or len(
+                [pid for pid in live_pids(session=child.pid) if ignores_sigint(pid)]) == 2,
+                'the workers')
             os.killpg(child.pid, signal.SIGINT)
             stdout, stderr = child.communicate(timeout=60)
         finally:
@@ -357,23 +401,3 @@ def test_sigterm_on_compare_reading_a_fifo(tmp_path):
                 child.kill()
     assert (child.returncode, stdout, stderr) == (143, '', 'rot-tools: terminated\n')
     assert sorted(p.name for p in tmp_path.iterdir()) == ['est.tum', 'ref.tum']
-
-
-@pytest.mark.usefixtures('named_partials')
-def test_a_signal_ignored_by_who_started_rot_tools_stays_ignored(files, tmp_path, monkeypatch):
-    """SIGINT ignored, as for a background job of a script: main leaves it so, SIGTERM not."""
-    monkeypatch.chdir(files)
-    real_replace, during = os.replace, []
-
-    def look(source, target):
-        during.append((signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)))
-        real_replace(source, target)
-    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        monkeypatch.setattr(os, 'replace', look)
-        assert run_with(*COMMANDS['compare'], '--csv', tmp_path / 'errors.csv')[::2] == (0, '')
-        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
-    finally:
-        signal.signal(signal.SIGINT, before)
-    (sigint, sigterm), = during
-    assert sigint == signal.SIG_IGN and callable(sigterm)

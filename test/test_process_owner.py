@@ -9,9 +9,10 @@ code), every module of rot_tools/ is refused:
   ``import struct``;
 - taking over the process: ``os._exit``, ``gc.freeze`` / ``gc.disable``, ``ctypes`` (and so
   ``mallopt``), an environment variable set, changed or removed (``os.environ[k] = v``,
-  ``os.environ.setdefault/update/pop/...``, ``os.putenv``), signal handlers anywhere but in
-  one place (rot-tools' main, whose one handler turns SIGINT and SIGTERM into exceptions that
-  unwind the command; giving SIGPIPE back its default passes too), signal masks;
+  ``os.environ.setdefault/update/pop/...``, ``os.putenv``), a signal handler (a function)
+  anywhere but in rot-tools' main (SIGTERM unwinds the command), signal masks; a signal's
+  default or ignoring it (SIG_DFL, SIG_IGN: a fleet's workers leave Ctrl-C to the command)
+  passes;
 - reaching into rclpy's objects: ``.callback = ...`` on anything (rclpy's subscriptions,
   timers and services own their callbacks);
 - rosbags' internals: its message definitions walked (``fielddefs``), a reader's
@@ -70,6 +71,11 @@ def _constant_name(node):
     return _name(node).rsplit('.', 1)[-1]
 
 
+def _disposition(call):
+    """Whether a call signal.signal(SIG, X) gives SIG its default or ignores it (no handler)."""
+    return len(call.args) == 2 and _constant_name(call.args[1]) in ('SIG_DFL', 'SIG_IGN')
+
+
 def takeovers(tree):
     """(line, what) of every use the module docstring refuses, in one module's tree."""
     found = []
@@ -109,15 +115,13 @@ def takeovers(tree):
             if any(k.arg == 'raw' and isinstance(k.value, ast.Constant) and k.value.value
                    for k in node.keywords):
                 found.append((node.lineno, 'raw=True'))
-            if _name(node.func) in ('signal.signal', 'signal') and not (
-                    len(node.args) == 2 and _constant_name(node.args[0]) == 'SIGPIPE'
-                    and _constant_name(node.args[1]) == 'SIG_DFL'):
+            if _name(node.func) in ('signal.signal', 'signal') and not _disposition(node):
                 found.append((node.lineno, 'a signal handler'))
     return found
 
 
 SIGNAL_OWNER = PACKAGE / 'cli' / 'main.py'
-"""The one module that sets a signal handler: rot-tools' main (SIGINT, SIGTERM)."""
+"""The one module that sets a signal handler: rot-tools' main (SIGTERM)."""
 
 
 def test_rot_tools_leaves_the_process_and_the_wire_to_its_libraries():
@@ -132,7 +136,8 @@ def test_at_most_one_signal_handler():
     """One call site at most in the whole package, in rot-tools' main."""
     calls = [(path, node.lineno) for path in _sources()
              for node in ast.walk(ast.parse(path.read_text(encoding='utf-8')))
-             if isinstance(node, ast.Call) and _name(node.func) == 'signal.signal']
+             if isinstance(node, ast.Call) and _name(node.func) == 'signal.signal'
+             and not _disposition(node)]
     assert len(calls) <= 1, calls
     assert all(path == SIGNAL_OWNER for path, _ in calls), calls
 
@@ -166,6 +171,7 @@ def test_each_takeover_is_caught(what):
 
 @pytest.mark.parametrize('code', [
     'signal.signal(signal.SIGPIPE, signal.SIG_DFL)',
+    'signal.signal(signal.SIGINT, signal.SIG_IGN)',
     "env = dict(os.environ, ROS_DOMAIN_ID='7')",
     "value = os.environ.get('HOME')",
     'from rosbags.highlevel import AnyReader',

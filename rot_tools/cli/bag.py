@@ -8,7 +8,6 @@ rot_tools.cli.bag_parquet.
 """
 
 import argparse
-import os
 import sys
 
 from rot_tools.cli import bag_analysis, bag_parquet, fleet, options, output_file
@@ -31,16 +30,17 @@ def one_bag(args, error):
     not at all, rot_tools.cli.output_file), and so it is when a signal stops the command.
     """
     output_file.check_outputs([('--csv', args.csv), ('--plot', args.plot),
-                               ('--parquet', args.parquet)], [args.path], error)
+                               ('--parquet', args.parquet)], [args.path], error, args.force)
     try:
-        return _one_bag(args, error)
+        with bag_parquet.run_of_one(args.parquet, args.path, error) as parquet:
+            return _one_bag(args, error, parquet)
     except bag_read.BagError as exc:
         error(f'bag: {exc}')
     except Exception as exc:  # noqa: BLE001 - one bag's failure is one line, as in a fleet
         error(f'bag: {bag_analysis.failure(args.path, exc)}')
 
 
-def _one_bag(args, error):
+def _one_bag(args, error, parquet):
     from rot_tools.io.report import to_json, to_yaml
 
     storage, topics = bag_analysis.analyse(
@@ -52,14 +52,12 @@ def _one_bag(args, error):
         output_file.write_figure(lambda: write_plot(args.plot, drawn, args.deg), args.plot,
                                  error)
         sys.stderr.write(plot_note(args.plot, drawn, topics[MAX_PLOTTED_TOPICS:]))
-    if args.parquet is not None:
-        bag_parquet.directory(args.parquet, error)
-        target = os.path.join(args.parquet, bag_parquet.file_names([args.path])[0])
+    if parquet is not None:
+        table = bag_parquet.table(topics, str(args.path), args.deg, args.seq)
         try:
-            bag_parquet.write(target, bag_parquet.table(topics, str(args.path), args.deg,
-                                                        args.seq))
+            bag_parquet.keep(parquet, bag_parquet.to_bytes(table))
         except OSError as exc:
-            error(f'--parquet: cannot write {target}: {exc.strerror or exc}')
+            error(f'--parquet: cannot write {parquet}: {exc.strerror or exc}')
     if args.csv == '-':
         output_file.to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision))
     else:
@@ -154,6 +152,7 @@ def add_parser(subparsers):
     p.add_argument('--parquet', metavar='DIR',
                    help='write one Parquet file per bag in DIR: the --csv columns plus bag, '
                    'stamp as int64 nanoseconds (needs pyarrow, the bag extra)')
+    options.add_force(p)
     p.add_argument('--engine', choices=('processes', 'dask'), default='processes',
                    help='processes: --jobs N processes here (default); dask: each bag a '
                    'task on a Dask cluster (the fleet extra), a local one of N workers '

@@ -1,18 +1,14 @@
 """
 ``rot-tools bag --parquet DIR``: one Parquet file per bag, the ``--csv`` columns plus ``bag``.
 
-The columns are typed: ``bag``, ``topic`` and ``frame_id`` strings; ``stamp`` the header
-stamp as int64 nanoseconds (sec·10⁹ + nanosec, exact); every other column float64, in
-degrees with ``--deg``, and null where the CSV leaves a cell empty (ω on a topic's first
-row). A file has no name until it is complete (rot_tools.cli.output_file.complete_or_nothing),
-so a run ended by any signal leaves no file that looks whole, and ``'DIR/*.parquet'`` (DuckDB) or
-``pandas.read_parquet(DIR)`` reads the bags as one table. A fleet's run ends by writing its
-manifest (:func:`finish`): which bags it read into which files, and ``_SUCCESS`` when none
-failed. pyarrow is imported only here, when a table is made: it comes with the ``bag`` extra.
+The columns are typed (:func:`schema`); a run of one bag or of many writes its bags' files,
+then DIR's manifest and ``_SUCCESS`` (:func:`begin`, :func:`keep`, :func:`finish`). pyarrow,
+the ``bag`` extra, is imported only when a table is made.
 """
 
-from contextlib import suppress
+from contextlib import contextmanager, suppress
 import hashlib
+import io
 import json
 import os
 from pathlib import Path
@@ -21,16 +17,7 @@ import re
 import numpy as np
 from rot_tools.cli import output_file
 from rot_tools.cli.bag_output import csv_header, row_values
-
-
-def directory(directory, error):
-    """Create the --parquet directory if needed; ``error`` if it cannot be written to."""
-    try:
-        os.makedirs(directory, exist_ok=True)
-    except OSError as exc:
-        error(f'--parquet: cannot create {directory}: {exc.strerror or exc}')
-    if not os.access(directory, os.W_OK | os.X_OK):
-        error(f'--parquet: cannot write in {directory}: permission denied')
+from rot_tools.io.bag_read import BagSkipped
 
 
 TEXT_COLUMNS = ('bag', 'topic', 'frame_id')
@@ -68,11 +55,12 @@ def table(topics, bag, degrees, seq):
     return pa.table(columns, schema=schema(seq, degrees))
 
 
-def write(path, data):
-    """Write the Table ``data`` to ``path`` whole, or leave nothing under that name."""
+def to_bytes(data):
+    """Return the Table ``data`` as the bytes of a Parquet file."""
     import pyarrow.parquet as pq
-    with output_file.complete_or_nothing(path, 'wb') as out:
-        pq.write_table(data, out)
+    out = io.BytesIO()
+    pq.write_table(data, out)
+    return out.getvalue()
 
 
 # ---------------------------------------------------------------------------------------
@@ -121,11 +109,36 @@ SUCCESS = '_SUCCESS'
 """An empty file, written after the manifest when no bag failed (as Spark's writers do)."""
 
 
-def begin(directory):
-    """Remove DIR's manifest and _SUCCESS: while a run writes DIR, it has neither."""
-    for name in (SUCCESS, MANIFEST):
+def begin(directory, error):
+    """
+    Start a run in DIR: create it if needed, and remove its manifest and _SUCCESS.
+
+    While a run writes DIR, DIR has neither. ``error(text)`` (one line, exit 2) when DIR
+    cannot be made or written.
+    """
+    try:
+        os.makedirs(directory, exist_ok=True)
+        for name in (SUCCESS, MANIFEST):
+            with suppress(FileNotFoundError):
+                os.unlink(os.path.join(directory, name))
+    except OSError as exc:
+        error(f'--parquet: cannot write in {directory}: {exc.strerror or exc}')
+    if not os.access(directory, os.W_OK | os.X_OK):
+        error(f'--parquet: cannot write in {directory}: permission denied')
+
+
+def keep(path, data):
+    """
+    Write a bag's Parquet bytes ``data`` to ``path`` whole (output_file.complete_or_nothing).
+
+    ``data`` None (the bag failed or was skipped): remove an earlier run's file at ``path``.
+    """
+    if data is None:
         with suppress(FileNotFoundError):
-            os.unlink(os.path.join(directory, name))
+            os.unlink(path)
+        return
+    with output_file.complete_or_nothing(path, 'wb') as out:
+        out.write(data)
 
 
 def finish(directory, bags):
@@ -134,7 +147,7 @@ def finish(directory, bags):
 
     bags: [(path, status, file name)] in the run's order, status ``ok``, ``skipped`` or
     ``failed``; the manifest lists every bag, and under ``files`` the files of the ``ok``
-    ones — the run's table, whatever else DIR holds.
+    ones: the run's table, whatever else DIR holds.
     """
     data = {'bags': [{'path': path, 'status': status, 'file': name if status == 'ok' else None}
                      for path, status, name in bags],
@@ -146,3 +159,32 @@ def finish(directory, bags):
     if all(status != 'failed' for _, status, _ in bags):
         with output_file.complete_or_nothing(os.path.join(directory, SUCCESS), 'w'):
             pass
+
+
+@contextmanager
+def run_of_one(directory, bag, error):
+    """
+    Keep --parquet DIR (None: not asked) for a run of the one bag ``bag`` as a fleet's run.
+
+    Yield the bag's file in DIR, which the block writes. When the block raises an Exception
+    (the bag failed, or holds nothing asked), the bag's earlier file goes and the manifest
+    says so; a run stopped otherwise (an error line, Ctrl-C) leaves DIR without a manifest.
+    """
+    if directory is None:
+        yield None
+        return
+    begin(directory, error)
+    name = file_names([bag])[0]
+    target = os.path.join(directory, name)
+    try:
+        yield target
+    except Exception as exc:
+        with suppress(OSError):  # the bag's own line says what went wrong
+            keep(target, None)
+            finish(directory, [(str(bag), 'skipped' if isinstance(exc, BagSkipped)
+                                else 'failed', name)])
+        raise
+    try:
+        finish(directory, [(str(bag), 'ok', name)])
+    except OSError as exc:
+        error(f'--parquet: cannot write the manifest in {directory}: {exc.strerror or exc}')

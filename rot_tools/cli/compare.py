@@ -135,6 +135,7 @@ def add_parser(subparsers):
     p.add_argument('--csv', metavar='FILE',
                    help='write one row per match: stamp (s), angle, roll, pitch, yaw of E '
                    '(- = standard output, which then gets no report)')
+    options.add_force(p)
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
     arguments.add_deg(common, 'angles in degrees', suppress)
@@ -469,7 +470,7 @@ def run(args):
         if given:
             options.error(f'{option} does not apply to compare')
     output_file.check_outputs([('--csv', args.csv), ('--plot', args.plot)],
-                              [args.est, args.ref])
+                              [args.est, args.ref], force=args.force)
     try:
         est = read_side('EST', args.est, args.est_topic, args.est_tf, args.strict_stamps)
         ref = read_side('REF', args.ref, args.ref_topic, args.ref_tf, args.strict_stamps)

@@ -38,6 +38,14 @@ def add_plot(parser, text, default=None):
                         f"extra ({arguments.install_hint('plot')})")
 
 
+def add_force(parser):
+    """Add --force: write an output file over a recording (a bag) that is not an input."""
+    parser.add_argument('--force', action='store_true',
+                        help='write an output over a recording (a .bag, .db3 or .mcap file, a '
+                        'rosbag2 directory or a file in one) that is not an input; without it, '
+                        'refused')
+
+
 def tolerance(text):
     """Read a tolerance: a finite number ≥ 0."""
     value = arguments.number(text)

@@ -1,18 +1,9 @@
 """
-Output files written whole or not at all (``--csv FILE``, ``--plot FILE``), never over an input.
+Output files: written whole or not at all, never over an input or, unasked, a recording.
 
-A file has no name until it is complete (:func:`complete_or_nothing`): on Linux it is made
-unnamed (O_TMPFILE) in its directory and linked into place once whole, so whatever ends the
-process meanwhile — an exception, SIGTERM, SIGKILL, the OOM killer — leaves nothing that
-looks like the finished file, and NAME keeps what it held before. Elsewhere a temporary name
-(``.NAME.XXXXXXXX.partial``, never the final suffix) is renamed once complete. A NAME that
-exists and is not a regular file (``/dev/null``, a FIFO) is written directly: renaming over
-it would replace the device or the pipe.
-
-:func:`check_outputs` is the one guard of every command's output paths: it refuses an output
-that is an input, lies in an input bag, or is another output, before anything is written.
-:func:`to_stdout` writes to the standard output: a closed pipe ends the command quietly
-(status 141, as SIGPIPE's), a full disk with one line (status 1), never a traceback.
+:func:`complete_or_nothing` writes a file under a temporary name and renames it once complete;
+:func:`check_outputs` is the one guard of every command's output paths; :func:`to_stdout`
+writes the standard output (a closed pipe ends the command quietly, a full disk with one line).
 """
 
 from contextlib import contextmanager, suppress
@@ -27,25 +18,6 @@ from rot_tools.cli import options
 from rot_tools.io import arguments, bag_read
 
 
-_PARTIAL = set()
-"""The temporary names this process writes under (where a file cannot be unnamed)."""
-
-
-def _unnamed(directory):
-    """Return a descriptor of a new file without a name in ``directory``, or None."""
-    if not hasattr(os, 'O_TMPFILE') or not os.path.isdir('/proc/self/fd'):
-        return None  # not Linux: no unnamed files, or no way to name one
-    try:
-        return os.open(directory, os.O_TMPFILE | os.O_WRONLY, 0o666)  # umask applies
-    except OSError:  # a file system without them (NFS, overlayfs of older kernels)
-        return None
-
-
-def _temporary(name):
-    """Return a temporary name for ``name``: never its suffix, within 255 bytes."""
-    return f'.{name[:200]}.{secrets.token_hex(4)}.partial'
-
-
 def _regular_or_new(path):
     try:
         return stat.S_ISREG(os.stat(path).st_mode)
@@ -56,61 +28,29 @@ def _regular_or_new(path):
 @contextmanager
 def complete_or_nothing(path, mode='w', **open_args):
     """
-    Yield a file object on a file that no one sees until it is complete, then is ``path``.
+    Yield a file object whose content becomes ``path`` when the block ends without an exception.
 
-    On Linux the file is made without a name (O_TMPFILE) in ``path``'s directory: whatever
-    ends the process while it is written — an exception, SIGTERM, SIGKILL, the OOM killer —
-    leaves nothing behind, as the kernel drops an unnamed file with its last descriptor. Once
-    complete it is linked under a temporary name and renamed to ``path`` (atomic in one
-    directory); ``path``, if it was there, holds its old content until then. Where files
-    cannot be unnamed, it is written under a temporary name (``.NAME.XXXXXXXX.partial``)
-    that an exception removes, and :func:`remove_partials` too before a worker ends itself.
-    A ``path`` that is not a regular file (/dev/null, a FIFO) is written directly: renaming
-    over it would replace the device or the pipe.
+    It is written under a temporary name in ``path``'s directory, ``.NAME.XXXXXXXX.partial``
+    (never NAME's suffix), and renamed to ``path`` (os.replace) once complete. An exception
+    (an error, Ctrl-C, SIGTERM in rot-tools) removes the temporary file and leaves ``path`` as
+    it was; only SIGKILL leaves the temporary file behind. A ``path`` that exists and is not a
+    regular file (/dev/null, a FIFO) is written directly: renaming would replace it.
     """
     if not _regular_or_new(path):
         with open(path, mode, **open_args) as out:
             yield out
         return
     directory, name = os.path.split(os.path.abspath(path))
-    fd = _unnamed(directory)
-    if fd is not None:
-        with open(fd, mode, **open_args) as out:
-            yield out
-            out.flush()
-            where = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
-            try:
-                temporary = _temporary(name)
-                os.link(f'/proc/self/fd/{fd}', temporary, dst_dir_fd=where)  # linkat, follows
-                try:
-                    os.replace(temporary, name, src_dir_fd=where, dst_dir_fd=where)
-                except BaseException:
-                    with suppress(OSError):
-                        os.unlink(temporary, dir_fd=where)
-                    raise
-            finally:
-                os.close(where)
-        return
-    partial = os.path.join(directory, _temporary(name))
-    fd = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    _PARTIAL.add(partial)
+    partial = os.path.join(directory, f'.{name[:200]}.{secrets.token_hex(4)}.partial')
     try:
-        with open(fd, mode, **open_args) as out:
+        with open(os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), mode,
+                  **open_args) as out:
             yield out
         os.replace(partial, path)
     except BaseException:
         with suppress(OSError):
             os.unlink(partial)
         raise
-    finally:
-        _PARTIAL.discard(partial)
-
-
-def remove_partials():
-    """Remove the temporary files this process is writing: it is about to end abruptly."""
-    for partial in list(_PARTIAL):
-        with suppress(OSError):
-            os.unlink(partial)
 
 
 def write_figure(draw, path, error):
@@ -161,18 +101,27 @@ def _protected(path):
     return real, real.suffix.lower() in bag_read.BAG_SUFFIXES
 
 
-def check_outputs(outputs, inputs, error=None):
+def _recording(path):
+    """Whether ``path`` is a recording: a bag file, or a rosbag2 directory or a file in one."""
+    real = _real(path)
+    if real.is_dir():
+        return (real / 'metadata.yaml').exists()
+    return real.exists() and (real.suffix.lower() in bag_read.BAG_SUFFIXES
+                              or (real.parent / 'metadata.yaml').exists())
+
+
+def check_outputs(outputs, inputs, error=None, force=False):
     """
     Refuse, before anything is written, an output path that would destroy an input or output.
 
     outputs: [(option, path)] of every file or directory the command writes (``--csv``,
     ``--plot``, ``--parquet`` ...); a path that is None (not asked for) or ``-`` (the
     standard output) passes, and so does an existing character device (/dev/null). inputs:
-    every path the command reads (text files, bags; None is skipped). An output is refused
-    when, with symlinks and relative paths resolved, it is an input (or a hard link to one),
-    lies inside an input bag (a rosbag2 directory: the directory, its metadata.yaml, its
-    storage files; a bag file), or is the same file as another output. ``error(text)``
-    (default rot_tools.cli.options.error: one line, exit 2) says which and why.
+    every path the command reads (None is skipped). An output is refused when, with symlinks
+    and relative paths resolved, it is an input (or a hard link to one), lies inside an input
+    bag, is the same file as another output, or, unless ``force`` (``--force``), is a
+    recording (:func:`_recording`). ``error(text)`` (default rot_tools.cli.options.error: one
+    line, exit 2) says which and why.
     """
     error = options.error if error is None else error
     protected = [(str(path), *_protected(path)) for path in inputs if path is not None]
@@ -190,6 +139,8 @@ def check_outputs(outputs, inputs, error=None):
                         and os.path.samestat(found, source))):
                 what = f'the bag being read ({given})' if bag else f'an input ({given})'
                 error(f'{option} {path} would overwrite {what}: refused')
+        if not force and _recording(path):
+            error(f'{option} {path} is a recording (a bag): refused; --force writes over it')
         for other_option, other, other_target, other_found in seen:
             if target == other_target or (found is not None and other_found is not None
                                           and os.path.samestat(found, other_found)):

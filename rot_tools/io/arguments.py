@@ -72,6 +72,10 @@ class Parser(argparse.ArgumentParser):
         """Print ``PROGRAM: error: message`` on one line and exit 2."""
         fail(program_name(self), message)
 
+    def print_help(self, file=None):
+        """Print the help to ``file`` (default stdout); a failed write raises, unlike argparse."""
+        (file or sys.stdout).write(self.format_help())
+
     def add_commands(self, add_options, **kwargs):
         """
         Add the options that come before a command, then return the commands' action.
