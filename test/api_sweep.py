@@ -10,8 +10,8 @@ TIME_SERIES = {
                  'error_statistics', 'estimate_time_offset', 'hand_eye_rotation',
                  'interpolate_poses', 'nearest_stamps', 'rotation_errors')}
 TIME_SERIES.update(
-    hand_eye='takes two bodies\' poses over time (stamps, N samples each), not items or a batch',
-    screw_congruence='takes two bodies\' poses at the same K instants, not items or a batch')
+    hand_eye='takes the poses of two bodies over time (stamps, N samples each), not items',
+    screw_congruence='takes the poses of two bodies at the same K instants, not items')
 """The public functions of a whole trajectory or stream: a sweep over items excuses them."""
 
 

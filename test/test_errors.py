@@ -607,7 +607,7 @@ RIG = he.arm_stations(1, stations=7)
 
 def _rig_moved(r, w):
     """
-    RIG's poses (R_a, b_a, R_b, b_b), its worlds moved: a rigid pair again (other X and Z).
+    Return the poses (R_a, b_a, R_b, b_b) of RIG in moved worlds: a rigid pair (other X, Z).
 
     Positions scaled by |w[0]|, world A turned by r and moved by w, world B moved by w
     reversed (inf where a position overflows: refused as not finite).
@@ -618,7 +618,7 @@ def _rig_moved(r, w):
 
 
 def _hand_eye_numbers(result):
-    """Every number of a HandEyeCalibration; its correlation is NaN for a given offset: left out."""
+    """Every number of a HandEyeCalibration but its correlation (NaN for a given offset)."""
     return flatten(result._replace(correlation=0.0, rejected=np.array(
         [rejection.stamp for rejection in result.rejected])))
 

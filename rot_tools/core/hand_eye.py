@@ -172,7 +172,7 @@ def _require_reach(b, name):
     far = float(np.max(np.abs(b), initial=0.0))
     if far > REACH:
         raise RotationError(f'{name}: positions reach {far:.3g}, beyond ±{REACH:.0e}, where '
-                            'hand_eye\'s squared residuals would overflow float64')
+                            "hand_eye's squared residuals would overflow float64")
 
 
 def sample_pairs(count):
@@ -546,8 +546,9 @@ def hand_eye(stamps_a, R_a, b_a, stamps_b, R_b, b_b, *, offset=0.0, max_offset=1
     to B's stamps, or 'auto' (found within ±max_offset from the angular speeds); max_gap
     (s): B is interpolated at a stamp of A only where its neighbours lie within it;
     min_angle (rad): the least turn of a pair used. Returns HandEyeCalibration.
-    RotationError for positions beyond ±REACH, no overlap in time, fewer than LEAST_SAMPLES matched samples (or kept),
-    no pair that turns by min_angle, or motion that leaves X's rotation free.
+    RotationError for positions beyond ±REACH, no overlap in time, fewer than LEAST_SAMPLES
+    matched samples (or kept), no pair that turns by min_angle, or motion that leaves X's
+    rotation free.
     """
     stamps_a = checked_stamps(stamps_a, 'stamps_a', LEAST_SAMPLES)
     stamps_b = checked_stamps(stamps_b, 'stamps_b', 2)
