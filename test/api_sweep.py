@@ -9,6 +9,9 @@ TIME_SERIES = {
     for name in ('align_rotations', 'angular_speeds', 'check_imu', 'delta_pairs',
                  'error_statistics', 'estimate_time_offset', 'hand_eye_rotation',
                  'interpolate_poses', 'nearest_stamps', 'rotation_errors')}
+TIME_SERIES.update(
+    hand_eye='takes the poses of two bodies over time (stamps, N samples each), not items',
+    screw_congruence='takes the poses of two bodies at the same K instants, not items')
 """The public functions of a whole trajectory or stream: a sweep over items excuses them."""
 
 

@@ -5,6 +5,7 @@ import re
 
 from api_sweep import (
     assert_sweeps_every_public_function, parameters, public_functions, TIME_SERIES)
+import hand_eye_helpers as he
 import math_helpers as h
 import numpy as np
 import pytest
@@ -12,11 +13,12 @@ from rot_tools import (
     align_rotations, align_vectors, angular_speeds, axis_angle_to_matrix,
     change_covariance_frame, check_imu, compose_transforms, decompose, delta_pairs,
     error_statistics, estimate_time_offset, euler_covariance_to_rotvec, euler_to_matrix,
-    frame_to_matrix, hand_eye_rotation, homogeneous_to_transform, interpolate_poses,
+    frame_to_matrix, hand_eye, hand_eye_rotation, homogeneous_to_transform, interpolate_poses,
     invert_transform, is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion,
     matrix_to_rotvec, mean_rotation, nearest_rotation, nearest_stamps, quaternion_to_matrix,
     random_rotations, rot_x, rot_y, rot_z, rotation_distance, rotation_errors, RotationError,
-    rotvec_covariance_to_euler, rotvec_to_matrix, screw_exp, screw_from_transform,
+    rotvec_covariance_to_euler, rotvec_to_matrix, screw_congruence, screw_exp,
+    screw_from_transform,
     screw_interpolate, screw_log, skew, transform_from_screw, transform_points,
     transform_pose_covariance, transform_to_homogeneous, validate_rotation)
 
@@ -599,6 +601,35 @@ def _diagonal(w):
     return w[..., :, None] * I3
 
 
+RIG = he.arm_stations(1, stations=7)
+"""A small hand-eye recording: a camera on a hand, seen from seven stations."""
+
+
+def _rig_moved(r, w):
+    """
+    Return the poses (R_a, b_a, R_b, b_b) of RIG in moved worlds: a rigid pair (other X, Z).
+
+    Positions scaled by |w[0]|, world A turned by r and moved by w, world B moved by w
+    reversed (inf where a position overflows: refused as not finite).
+    """
+    scale = abs(w[0])
+    with np.errstate(over='ignore'):
+        return (r @ RIG.R_a, scale * RIG.b_a @ r.T + w, RIG.R_b, scale * RIG.b_b + w[::-1])
+
+
+def _hand_eye_numbers(result):
+    """Every number of a HandEyeCalibration but its correlation (NaN for a given offset)."""
+    return flatten(result._replace(correlation=0.0, rejected=np.array(
+        [rejection.stamp for rejection in result.rejected])))
+
+
+def _of_each(call, r, w):
+    """Return call(r, w) as a tuple for one r (3, 3) and w (3,); one per item for a batch."""
+    if np.ndim(w) == 1:
+        return (call(r, w),)
+    return tuple(call(r_k, w_k) for r_k, w_k in zip(r, w))
+
+
 FINITE_CALLS = {
     'rotvec_to_matrix': lambda r, w: rotvec_to_matrix(w),
     'axis_angle_to_matrix': lambda r, w: axis_angle_to_matrix(w, 1.0),
@@ -630,11 +661,16 @@ FINITE_CALLS = {
         w, _diagonal(np.abs(w))),
     'transform_pose_covariance': lambda r, w: transform_pose_covariance(
         r, w, np.kron(I3[:2, :2], _diagonal(np.abs(w)))),
+    'hand_eye': lambda r, w: _of_each(lambda r, w: _hand_eye_numbers(hand_eye(
+        RIG.stamps_a, *_rig_moved(r, w)[:2], RIG.stamps_b, *_rig_moved(r, w)[2:])), r, w),
+    'screw_congruence': lambda r, w: _of_each(
+        lambda r, w: flatten(screw_congruence(*_rig_moved(r, w))), r, w),
 }
 """How each public function of items is called on rotations ``r`` and extreme vectors ``w``."""
 
 NOT_OF_EXTREMES = dict(
-    TIME_SERIES, random_rotations='draws rotations: takes a count',
+    {name: why for name, why in TIME_SERIES.items() if name not in FINITE_CALLS},
+    random_rotations='draws rotations: takes a count',
     is_rotation='answers True or False', validate_rotation='gives back its input',
     matrix_to_axis_angle='takes a rotation only', matrix_to_rotvec='takes a rotation only',
     matrix_to_quaternion='takes a rotation only', matrix_to_euler='takes a rotation only',
@@ -802,6 +838,13 @@ def _calls():
         'delta_pairs': (delta_pairs, [10]),
         'check_imu': (check_imu, [stamps, [q] * 10, [[0.0, 0.0, 0.0]] * 10,
                                   [[0.0, 0.0, 9.81]] * 10]),
+        # (its keyword arguments offset and min_angle given in places 7 and 8, to be swept too)
+        'hand_eye': (lambda *args: hand_eye(*args[:6], offset=args[6], min_angle=args[7]),
+                     [RIG.stamps_a.tolist(), RIG.R_a.tolist(), RIG.b_a.tolist(),
+                      RIG.stamps_b.tolist(), RIG.R_b.tolist(), RIG.b_b.tolist(), 0.0, 0.05]),
+        'screw_congruence': (screw_congruence, [RIG.R_a.tolist(), RIG.b_a.tolist(),
+                                                RIG.R_b.tolist(), RIG.b_b.tolist(),
+                                                [[0, 1], [2, 6]]]),
     }
 
 

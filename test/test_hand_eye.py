@@ -166,6 +166,34 @@ def test_motion_without_a_turn_is_refused():
         hand_eye(r.stamps_a, still, r.b_a, r.stamps_b, np.repeat(r.R_b[:1], 25, axis=0), r.b_b)
 
 
+@pytest.mark.parametrize('scale', [1e-6, 1e150])
+def test_positions_in_other_units_up_to_the_reach_scale_x_and_z_alike(scale):
+    r = arm_stations(0)
+    metres = _calibrate(r)
+    found = _calibrate(r._replace(b_a=scale * r.b_a, b_b=scale * r.b_b))
+    assert rotation_error(found.X.R, metres.X.R) < 1e-12
+    assert np.allclose(found.X.b / scale, metres.X.b, rtol=0, atol=1e-12)
+    assert np.allclose(found.Z.b / scale, metres.Z.b, rtol=0, atol=1e-12)
+
+
+def test_positions_beyond_the_reach_are_refused_saying_how_far():
+    r = arm_stations(0)
+    far = r.b_b + [0.0, -3e150, 0.0]
+    with pytest.raises(RotationError, match=r'^B: positions reach 3e\+150, beyond ±1e\+150, '
+                                            r'where .* squared residuals would overflow'):
+        hand_eye(r.stamps_a, r.R_a, r.b_a, r.stamps_b, r.R_b, far)
+
+
+@pytest.mark.parametrize('pairs, shown', [
+    ([[0, 1], [2, 1.5]], r'got 1.5 at index \(1, 1\)'), ([[0, 25]], r'got 25.0 at index \(0, 1\)'),
+    ([[-1, 3]], r'got -1.0 at index \(0, 0\)')])
+def test_pairs_that_are_not_sample_indices_are_refused(pairs, shown):
+    r = arm_stations(0)
+    with pytest.raises(RotationError, match=r'^pairs must be whole sample indices in \[0, 25\), '
+                                            + shown):
+        screw_congruence(r.R_a, r.b_a, r.R_b, r.b_b, pairs)
+
+
 def test_a_turn_about_one_axis_without_translation_across_it_is_refused():
     t = np.arange(10.0)
     R = Rotation.from_rotvec(np.outer(0.3 * t, [0.0, 0.0, 1.0])).as_matrix()

@@ -45,6 +45,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from rot_tools.core._arrays import finite_array, require_tolerance
 from rot_tools.core.axis_angle import axis_angle_to_matrix, matrix_to_rotvec
 from rot_tools.core.errors import RotationError
 from rot_tools.core.fitting import mean_rotation
@@ -81,6 +82,9 @@ LEAST_SAMPLES = 3
 
 ITERATIONS = 20
 """Gauss–Newton steps at most; it stops once a step changes X by less than rounding."""
+
+REACH = 1e150
+"""Positions at most this far from the origin (m): beyond, squared residuals overflow float64."""
 
 
 class ScrewCongruence(NamedTuple):
@@ -154,15 +158,21 @@ class HandEyeCalibration(NamedTuple):
 def _poses(R, b, name, count=None):
     """Return rotations (N, 3, 3) and positions (N, 3) checked, N = count when given."""
     R = checked_rotation(R, True)
-    b = np.asarray(b, dtype=float)
+    b = finite_array(b, (3,), f'{name}: positions')
     if R.ndim != 3 or b.shape != (len(R), 3):
         raise RotationError(f'{name}: rotations (N, 3, 3) and positions (N, 3) expected, got '
                             f'{R.shape} and {b.shape}')
     if count is not None and len(R) != count:
         raise RotationError(f'{name} has {len(R)} poses for {count} stamps')
-    if not np.isfinite(b).all():
-        raise RotationError(f'{name}: positions must be finite')
     return R, b
+
+
+def _require_reach(b, name):
+    """Raise RotationError when a position of ``b`` lies beyond REACH of the origin."""
+    far = float(np.max(np.abs(b), initial=0.0))
+    if far > REACH:
+        raise RotationError(f'{name}: positions reach {far:.3g}, beyond ±{REACH:.0e}, where '
+                            "hand_eye's squared residuals would overflow float64")
 
 
 def sample_pairs(count):
@@ -199,6 +209,19 @@ def _screw_numbers(motion):
     return screw.angle, d
 
 
+def _pair_indices(pairs, count):
+    """Return ``pairs`` as int64 (P, 2), whole numbers in [0, count); else raise RotationError."""
+    given = finite_array(pairs, (), 'pairs')
+    if given.ndim != 2 or given.shape[1] != 2:
+        raise RotationError(f'pairs must have shape (P, 2), got {given.shape}')
+    wrong = (given < 0) | (given >= count) | (given != np.floor(given))
+    if wrong.any():
+        first = tuple(int(i) for i in np.argwhere(wrong)[0])
+        raise RotationError(f'pairs must be whole sample indices in [0, {count}), got '
+                            f'{plain(given[first])} at index {first}')
+    return given.astype(np.int64)
+
+
 def screw_congruence(R_a, b_a, R_b, b_b, pairs=None):
     """
     Return the screws of the relative motions of matched samples, in A and in B.
@@ -211,11 +234,7 @@ def screw_congruence(R_a, b_a, R_b, b_b, pairs=None):
     """
     R_a, b_a = _poses(R_a, b_a, 'A')
     R_b, b_b = _poses(R_b, b_b, 'B', len(R_a))
-    pairs = sample_pairs(len(R_a)) if pairs is None else np.asarray(pairs, dtype=np.int64)
-    if pairs.ndim != 2 or pairs.shape[1] != 2 or (pairs.size and (
-            pairs.min() < 0 or pairs.max() >= len(R_a))):
-        raise RotationError(f'pairs must be (P, 2) indices below {len(R_a)}, got shape '
-                            f'{pairs.shape}')
+    pairs = sample_pairs(len(R_a)) if pairs is None else _pair_indices(pairs, len(R_a))
     angle_a, d_a = _screw_numbers(_relative(R_a, b_a, pairs))
     angle_b, d_b = _screw_numbers(_relative(R_b, b_b, pairs))
     return ScrewCongruence(pairs=pairs, angle_a=angle_a, angle_b=angle_b,
@@ -527,17 +546,24 @@ def hand_eye(stamps_a, R_a, b_a, stamps_b, R_b, b_b, *, offset=0.0, max_offset=1
     to B's stamps, or 'auto' (found within ±max_offset from the angular speeds); max_gap
     (s): B is interpolated at a stamp of A only where its neighbours lie within it;
     min_angle (rad): the least turn of a pair used. Returns HandEyeCalibration.
-    RotationError for no overlap in time, fewer than LEAST_SAMPLES matched samples (or kept),
-    no pair that turns by min_angle, or motion that leaves X's rotation free.
+    RotationError for positions beyond ±REACH, no overlap in time, fewer than LEAST_SAMPLES
+    matched samples (or kept), no pair that turns by min_angle, or motion that leaves X's
+    rotation free.
     """
     stamps_a = checked_stamps(stamps_a, 'stamps_a', LEAST_SAMPLES)
     stamps_b = checked_stamps(stamps_b, 'stamps_b', 2)
     R_a, b_a = _poses(R_a, b_a, 'A', len(stamps_a))
     R_b, b_b = _poses(R_b, b_b, 'B', len(stamps_b))
+    _require_reach(b_a, 'A')
+    _require_reach(b_b, 'B')
+    min_angle = require_tolerance(min_angle, 'min_angle')
     correlation = math.nan
     if isinstance(offset, str) and offset == 'auto':
         found = estimate_time_offset(stamps_b, R_b, stamps_a, R_a, max_offset)
         offset, correlation = found.offset, found.correlation
+    offset = finite_array(offset, (), "offset (s, or 'auto')")
+    if offset.ndim:
+        raise RotationError(f'offset must be one number of seconds, got shape {offset.shape}')
     offset = float(offset)
     stamps, R_a, b_a, R_b, b_b = _matched(stamps_a, R_a, b_a, stamps_b, R_b, b_b, offset,
                                           max_gap)
