@@ -1,41 +1,32 @@
 """
-rotation_node: orientations and poses republished as matrix, quaternion, Euler, screw.
+rotation_node: orientations and poses republished as every representation of their rotation.
 
-Every input and output is one row of rot_tools.io.interface — topic, message type, fields,
-formula — and every message becomes one rigid transform (header, R, b) at the boundary: the
-numbers at its row's field paths (rot_tools.ros.topics) converted by its row's formula
-(rot_tools.io.boundary). From there one path serves them all: one decomposition, as Python
-numbers (rot_tools.core.decomposition.decompose_one), gives every number published —
-rotation vector θ·l̂, Euler angles, roll/pitch/yaw, twist (θ·l̂, θ·m + d·l̂) = screw_log and
-the quaternion — each output row naming the field it publishes, and the picture's
-decomposition runs the same kernels, so at θ = π all outputs of one input share the axis
-sign. Outputs carry the input's header. Topics, services and parameters: doc/node.md, and
-``rotation_node --help``.
-
-The pictures (~/markers and ~/screw_axis) are throttled: rot_tools.ros.pictures. The reply of
-~/screw_path: rot_tools.ros.screw_path. The covariance of roll, pitch and yaw of the inputs that
-carry a covariance (~/rpy_covariance): rot_tools.ros.rpy_covariance.
+Each input's callback reads its message's fields into one rigid motion (header, R, b)
+through the boundary's checks (rot_tools.io.boundary); :meth:`RotationNode.publish_outputs`
+publishes every output from that motion's one decomposition, with the input's header. The
+topics, services and parameters: doc/node.md and ``rotation_node --help``.
 """
 
+import copy
 import difflib
-from functools import partial, wraps
 from importlib.metadata import PackageNotFoundError
 import math
 import os
 import sys
 import textwrap
 import time
-import traceback
 from typing import Callable, NamedTuple
 
+from geometry_msgs.msg import (PoseStamped, PoseWithCovarianceStamped, QuaternionStamped,
+                               TransformStamped, TwistStamped, Vector3Stamped)
+from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
-import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
+from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 import rclpy
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -45,21 +36,26 @@ from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES
+from rot_tools.core.rodrigues import quaternion_to_rodrigues
 from rot_tools.core.transform_tree import shown
-from rot_tools.io import boundary
+from rot_tools.io import boundary, interface
 from rot_tools.io.arguments import version_line
-from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.io.boundary import QUATERNION_TOLERANCE, RefusedInput
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
 from rot_tools.ros import diagnostics, rpy_covariance, runtime, screw_path, tf_input
-from rot_tools.ros.pictures import (MARKER_RATE, Pictures, WARM_UP_ROTATION,
-                                    WARM_UP_TRANSLATION)
+from rot_tools.ros.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
-from rot_tools.ros.topics import INPUTS, OUTPUTS
+from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker, MarkerArray
+
+RODRIGUES_AT_PI = 'rodrigues_at_pi'
+"""Why an input has no ~/rodrigues (its other outputs are published): θ = π, g infinite."""
 
 REFUSAL_REASONS = boundary.REFUSAL_REASONS + (
-    NOT_DECOMPOSABLE, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
+    NOT_DECOMPOSABLE, RODRIGUES_AT_PI, FRAME_MISMATCH, BAD_TOLERANCE, PATH_TOO_LONG
 ) + tf_input.REFUSAL_REASONS + rpy_covariance.REFUSAL_REASONS
 """Every reason an input is refused for, in the order ~/describe lists the counts."""
 
@@ -71,35 +67,30 @@ MAX_REFUSAL_TEXT = 400
 
 MIN_MARKER_SCALE = 1e-6
 """Smallest marker_scale (m): the arrows' shafts are 5 % of it, and RViz draws nothing of
-a zero width (5e-324 was accepted once)."""
+a zero width."""
 
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
 
+INPUT_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
+"""The inputs' QoS: best effort (any publisher matches), keep last 50: ROS's sensor-data
+profile, deeper, so that the node converts every message of a burst (doc/node.md)."""
+
+OUTPUT_QOS = QoSProfile(depth=10)
+"""The outputs' QoS: reliable, keep last 10."""
+
+MATRIX_LAYOUT = (('rows', 3, 9), ('cols', 3, 3))
+"""(label, size, stride) of ~/rotation_matrix's dimensions: row-major 3×3 (std_msgs' way)."""
+
+RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
+"""The parameters rclpy declares on every node (an override of one is no misspelling)."""
+
 
 class Source(NamedTuple):
-    """An input as the callbacks see it: topic (resolved), type name, its row's read, convert."""
+    """Where an input came from: its topic (as resolved) and its message type's name."""
 
     topic: str
     type_name: str
-    read: Callable
-    convert: Callable
-    fields: dict
-    covariance: rpy_covariance.Reader = None
-    """How its covariance is read, for an input that carries one (~/rpy_covariance)."""
-
-
-class Publishing(NamedTuple):
-    """One output published for every input: its publisher's publish, message and writer."""
-
-    publish: Callable
-    message: object
-    """The output's message, filled and published again for every input."""
-    write: Callable
-    """write(message, numbers): the numbers into the row's fields (rot_tools.ros.topics)."""
-    numbers: Callable
-    """numbers(R, decomposition, degrees): what the output publishes (rot_tools.ros.topics)."""
-    stamped: bool
 
 
 class Settings(NamedTuple):
@@ -120,15 +111,16 @@ class Latest(NamedTuple):
 
     source: Source
     header: object
-    R: np.ndarray
-    b: np.ndarray
+    R: object
+    b: object
     settings: Settings
 
 
-def _descriptor(kind, description, constraints='', fp_range=None):
-    return ParameterDescriptor(
-        type=kind, description=description, additional_constraints=constraints,
-        floating_point_range=[fp_range] if fp_range is not None else [])
+def _not_a_number(name, value):
+    """Return why ``value`` of double parameter ``name`` has the wrong type, or ''."""
+    if type(value) in (int, float):
+        return ''
+    return f'Wrong parameter type: {name} is a double, got {value!r}'
 
 
 def _check_sequence(value):
@@ -143,12 +135,16 @@ def _check_angle_unit(value):
 
 
 def _check_tolerance(value):
+    if _not_a_number('quaternion_tolerance', value):
+        return _not_a_number('quaternion_tolerance', value)
     if math.isfinite(value) and value >= 0.0:
         return ''
     return f'quaternion_tolerance must be finite and >= 0, got {value}'
 
 
 def _check_marker_scale(value):
+    if _not_a_number('marker_scale', value):
+        return _not_a_number('marker_scale', value)
     if math.isfinite(value) and value >= MIN_MARKER_SCALE:
         return ''
     return (f'marker_scale must be finite and >= {MIN_MARKER_SCALE:g} m (thinner arrows are '
@@ -163,22 +159,23 @@ def _any_value(value):
     return ''
 
 
-def _answers_even_if_it_raises(callback):
-    """
-    Wrap a service callback of the node: an exception it raises is logged, the request answered.
+def _text(type_, description, constraints=''):
+    return ParameterDescriptor(type=type_, description=description,
+                               additional_constraints=constraints)
 
-    The client then gets the response as it was given (success false, an empty path) instead of
-    no reply at all; the node serves on.
+
+def _double(description, constraints, low):
     """
-    @wraps(callback)
-    def answering(node, request, response):
-        try:
-            return callback(node, request, response)
-        except Exception:  # noqa: BLE001 - any bug: log it, answer, keep serving
-            node.get_logger().error(f'{callback.__name__} raised; the node keeps serving:\n'
-                                    + traceback.format_exc(), throttle_duration_sec=1.0)
-            return response
-    return answering
+    Return the descriptor of a double parameter that also takes an integer (3 for 3.0).
+
+    rclpy types a value by how it is written (``-p marker_scale:=3`` is an integer), so the
+    type is checked by the parameter's check instead of rclpy's, and the node stores a
+    double (RotationNode._integers_as_doubles).
+    """
+    return ParameterDescriptor(
+        type=ParameterType.PARAMETER_DOUBLE, description=description,
+        additional_constraints=constraints, dynamic_typing=True,
+        floating_point_range=[FloatingPointRange(from_value=low, to_value=math.inf, step=0.0)])
 
 
 class ParameterSpec(NamedTuple):
@@ -187,46 +184,41 @@ class ParameterSpec(NamedTuple):
     default: object
     descriptor: ParameterDescriptor
     check: Callable = _any_value
-    """check(value) -> '' when valid, else why not (rclpy has checked the type and range)."""
+    """check(value) -> '' when valid, else why not."""
 
 
 PARAMETERS = {
-    'euler_sequence': ParameterSpec('ZYX', _descriptor(
+    'euler_sequence': ParameterSpec('ZYX', _text(
         ParameterType.PARAMETER_STRING,
         'Euler sequence of ~/euler input and ~/euler_angles output: upper case intrinsic '
         '(ZYX: R = Rot_z(θ1) Rot_y(θ2) Rot_x(θ3)), lower case extrinsic',
         'one of ' + ' '.join(EULER_SEQUENCES)), _check_sequence),
-    'angle_unit': ParameterSpec('rad', _descriptor(
+    'angle_unit': ParameterSpec('rad', _text(
         ParameterType.PARAMETER_STRING,
         'unit of the angles of ~/euler, ~/euler_angles and ~/rpy', "'rad' or 'deg'"),
         _check_angle_unit),
-    'quaternion_tolerance': ParameterSpec(QUATERNION_TOLERANCE, _descriptor(
-        ParameterType.PARAMETER_DOUBLE,
+    'quaternion_tolerance': ParameterSpec(QUATERNION_TOLERANCE, _double(
         'largest |‖q‖ − 1| of an input quaternion; within it q is normalised, beyond it the '
-        'message is refused', '>= 0, finite',
-        FloatingPointRange(from_value=0.0, to_value=math.inf, step=0.0)), _check_tolerance),
-    'publish_markers': ParameterSpec(True, _descriptor(
+        'message is refused', '>= 0, finite', 0.0), _check_tolerance),
+    'publish_markers': ParameterSpec(True, _text(
         ParameterType.PARAMETER_BOOL,
         f'publish the picture of each input (at most {MARKER_RATE:g} a second, the latest '
         "wins): the moved frame's axes, screw axis, helical path and label on ~/markers "
         '(MarkerArray) and the screw axis arrow on ~/screw_axis (Marker); switching it off '
         'deletes both')),
-    'marker_scale': ParameterSpec(1.0, _descriptor(
-        ParameterType.PARAMETER_DOUBLE,
+    'marker_scale': ParameterSpec(1.0, _double(
         'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
-        f'>= {MIN_MARKER_SCALE:g}, finite',
-        FloatingPointRange(from_value=MIN_MARKER_SCALE, to_value=math.inf, step=0.0)),
-        _check_marker_scale),
-    'tf_reference_frame': ParameterSpec('', _descriptor(
+        f'>= {MIN_MARKER_SCALE:g}, finite', MIN_MARKER_SCALE), _check_marker_scale),
+    'tf_reference_frame': ParameterSpec('', _text(
         ParameterType.PARAMETER_STRING,
         'with tf_body_frame: follow the transform of tf_body_frame in this frame on /tf and '
         '/tf_static, publishing every output at each new common time of the chain '
         "(header.frame_id = this frame); '' = off"), _check_tf_frame),
-    'tf_body_frame': ParameterSpec('', _descriptor(
+    'tf_body_frame': ParameterSpec('', _text(
         ParameterType.PARAMETER_STRING,
         "with tf_reference_frame: the frame followed on /tf and /tf_static; '' = off"),
         _check_tf_frame),
-    'input_covariance': ParameterSpec('rotvec', _descriptor(
+    'input_covariance': ParameterSpec('rotvec', _text(
         ParameterType.PARAMETER_STRING,
         'how the rotation covariance of ~/imu, ~/pose_with_covariance and ~/odometry is read '
         "for ~/rpy_covariance: rotvec (rotations about the parent frame's fixed X, Y, Z, as "
@@ -235,98 +227,108 @@ PARAMETERS = {
 }
 """Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
-NO_PUBLISHER_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
-NO_SUBSCRIPTION_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)
-"""No QoS event handlers on the node's topics (rclpy adds two per publisher and subscription by
-default, each one more entity for the executor to wait on with every message): the warnings
-they would print are printed by the other side
-(doc/node.md, "Executor, services and the middleware")."""
 
-INPUT_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.BEST_EFFORT)
-"""The inputs' QoS: best effort (any publisher matches), volatile, keep last 50.
+def vector3_stamped(header, xyz):
+    """Return a geometry_msgs/Vector3Stamped of ``header`` holding (x, y, z)."""
+    msg = Vector3Stamped(header=header)
+    msg.vector.x, msg.vector.y, msg.vector.z = xyz
+    return msg
 
-ROS's sensor-data profile, but 50 deep instead of 5 (1 ms at 5,000 msg/s): the node converts
-every message of a burst, not the latest only (doc/node.md)."""
 
-RCLPY_PARAMETERS = (USE_SIM_TIME_NAME, START_TYPE_DESCRIPTION_SERVICE_PARAM)
-"""The parameters rclpy declares on every node (an override of one is no misspelling)."""
+def _malformed_requests_refused(callback, logger):
+    """
+    Wrap a parameter service's callback: a request rclpy cannot read is refused, not raised.
+
+    rclpy's ParameterService reads each parameter with Parameter.from_parameter_msg, which
+    raises ValueError for a type outside rcl_interfaces' ParameterType (e.g. 99): the
+    exception leaves the executor and ends the node (rclpy 7.1, Jazzy). Here the request is
+    answered as refused and one line logged.
+    """
+    def answering(request, response):
+        try:
+            return callback(request, response)
+        except ValueError as exc:
+            logger.error(f'refused a malformed parameter request: {exc}')
+            refused = SetParametersResult(successful=False, reason=f'malformed request: {exc}')
+            if hasattr(response, 'results'):  # SetParameters: one result per parameter
+                response.results = [refused] * len(request.parameters)
+            else:  # SetParametersAtomically
+                response.result = refused
+            return response
+    return answering
 
 
 class RotationNode(Node):
-    """Subscribes to every input of INPUTS and republishes their decompositions."""
+    """Subscribes to every input of the interface and republishes their decompositions."""
 
     def __init__(self, node_name='rot_tools', **kwargs):
-        """
-        Build the node (``kwargs``: rclpy.node.Node's).
-
-        Every start-up override (-p, --params-file, ``parameter_overrides``) is declared by
-        rclpy as the node is built (automatically_declare_parameters_from_overrides): that
-        is how the node reads them; _declare_parameters keeps its own and reports the rest.
-        """
-        super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
-                         **kwargs)
+        """Build the node (``kwargs``: rclpy.node.Node's); its parameters declared once."""
+        super().__init__(node_name, **kwargs)
+        self.add_pre_set_parameters_callback(self._integers_as_doubles)
         try:
             self._declare_parameters()
         except Exception:
             self.destroy_node()
             raise
         self._settings = self._read_settings()
-        self.add_pre_set_parameters_callback(self._integers_as_doubles)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
+        for service in self.services:
+            if service.srv_type in (SetParameters, SetParametersAtomically):
+                service.callback = _malformed_requests_refused(service.callback,
+                                                               self.get_logger())
 
         self._refused = dict.fromkeys(REFUSAL_REASONS, 0)
         self._last_refusals = {}  # reason: (topic, header or None, text) of the latest
         self._warned = {}  # (topic, reason): time.monotonic() of its last warning
         self._latest = None
 
-        # Each output published per input: its publisher, its message (filled and published
-        # for every input), the writer of its fields and the row; the pictures' publishers
-        # by name.
-        qos = QoSProfile(depth=10)
-        publishers = {kind.row.name: self.create_publisher(
-            kind.msg_type, kind.topic, qos, event_callbacks=NO_PUBLISHER_EVENTS)
-            for kind in OUTPUTS}
-        self._outputs = tuple(
-            Publishing(publishers[kind.row.name].publish, kind.message(), kind.write,
-                       kind.numbers, kind.row.stamped)
-            for kind in OUTPUTS if kind.row.value is not None and not kind.row.covariance)
-        # The first calls of the kernels and of the writers pay for one-off work: made here, on
-        # one motion written into every output's message and not published (as the pictures
-        # draw one), not with the first input.
-        warm_up = decompose_one(WARM_UP_ROTATION, WARM_UP_TRANSLATION,
-                                self._settings.euler_sequence)
-        for output in self._outputs:
-            output.write(output.message, output.numbers(WARM_UP_ROTATION, warm_up, False))
-        self._pictures = Pictures(self, publishers['markers'], publishers['screw_axis'],
-                                  self._settings.publish_markers)
-        self._covariances = rpy_covariance.RpyCovariances(publishers, OUTPUTS, self._refuse)
+        self._rotation_matrix = self.create_publisher(
+            Float64MultiArray, '~/rotation_matrix', OUTPUT_QOS)
+        self._quaternion = self.create_publisher(QuaternionStamped, '~/quaternion', OUTPUT_QOS)
+        self._axis_angle = self.create_publisher(Vector3Stamped, '~/axis_angle', OUTPUT_QOS)
+        self._rodrigues = self.create_publisher(Vector3Stamped, '~/rodrigues', OUTPUT_QOS)
+        self._euler_angles = self.create_publisher(Vector3Stamped, '~/euler_angles', OUTPUT_QOS)
+        self._rpy = self.create_publisher(Vector3Stamped, '~/rpy', OUTPUT_QOS)
+        self._screw = self.create_publisher(TwistStamped, '~/screw', OUTPUT_QOS)
+        self._covariances = rpy_covariance.RpyCovariances(
+            self.create_publisher(PoseWithCovarianceStamped, '~/rpy_covariance', OUTPUT_QOS),
+            self._refuse)
+        self._pictures = Pictures(
+            self, self.create_publisher(MarkerArray, '~/markers', OUTPUT_QOS),
+            self.create_publisher(Marker, '~/screw_axis', OUTPUT_QOS),
+            self._settings.publish_markers)
         self._diagnostics = diagnostics.Diagnostics(self)  # /diagnostics, once a second
 
-        # The TF tree: one more way of getting (header, R, b), beside the rows of INPUTS (it
-        # needs a tree between messages, two topics with their own QoS, and gives an output
-        # only when the chain has a new common time; rot_tools.ros.tf_input).
+        # The TF tree: one more way of getting (header, R, b): it keeps a tree between
+        # messages and gives an output only when the chain has a new common time.
         self._tf = tf_input.TfFollower(self, self._on_tf_transform, self._refuse,
                                        quaternion_tolerance=self._settings.quaternion_tolerance)
-        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME, None, None, {})
+        self._tf_source = Source(self._tf.topic, tf_input.TYPE_NAME)
         self._diagnostics.tf = self._tf
         self._tf.follow(self._settings.tf_reference_frame, self._settings.tf_body_frame)
 
-        self._sources = []
-        for kind in INPUTS:
-            source = Source(self.resolve_topic_name(kind.topic), kind.row.type_name, kind.read,
-                            kind.row.convert, kind.row.fields,
-                            rpy_covariance.covariance_reader(kind.row)
-                            if kind.row.covariance else None)
-            callback = self._diagnostics.counted(source.topic, partial(self._on_input, source),
-                                                 imu=kind.row.name == 'imu')
-            self.create_subscription(kind.msg_type, kind.topic, callback, INPUT_QOS,
-                                     event_callbacks=NO_SUBSCRIPTION_EVENTS)
-            self._sources.append(source)
+        self._sources = {row.name: Source(self.resolve_topic_name(row.topic), row.type_name)
+                         for row in interface.INPUTS}
+        for msg_type, name, callback in (
+                (PoseStamped, 'pose', self.on_pose),
+                (Vector3Stamped, 'euler', self.on_euler),
+                (TransformStamped, 'transform', self.on_transform),
+                (PoseWithCovarianceStamped, 'pose_with_covariance',
+                 self.on_pose_with_covariance),
+                (Odometry, 'odometry', self.on_odometry),
+                (Imu, 'imu', self.on_imu),
+                (QuaternionStamped, 'orientation', self.on_orientation)):
+            counted = self._diagnostics.counted(self._sources[name].topic, callback,
+                                                imu=msg_type is Imu)
+            self.create_subscription(msg_type, '~/' + name, counted, INPUT_QOS)
 
         self.create_service(Trigger, '~/describe', self._on_describe)
         self.create_service(GetPlan, '~/screw_path', self._on_screw_path)
         self._screw_path_name = self.resolve_service_name('~/screw_path')
+
+    def announce(self):
+        """Log that the node is up: its input topics and its Euler settings."""
         self.get_logger().info(
             f'decomposing {self._input_topics()} (euler_sequence '
             f'{self._settings.euler_sequence}, angle_unit '
@@ -334,48 +336,197 @@ class RotationNode(Node):
 
     def _input_topics(self):
         """'/n/pose, /n/euler or /n/transform': the input topics as remapped."""
-        topics = [source.topic for source in self._sources]
+        topics = [source.topic for source in self._sources.values()]
         if self._tf.following:
             topics.append(f'{self._tf.topic} ({self._tf.reference} ← {self._tf.body})')
         return ', '.join(topics[:-1]) + ' or ' + topics[-1]
+
+    # -- inputs: each message's fields into (header, R, b) ---------------------------------
+
+    def on_pose(self, msg):
+        """Take a PoseStamped: R from pose.orientation, b = pose.position."""
+        source, settings = self._sources['pose'], self._settings
+        p, q = msg.pose.position, msg.pose.orientation
+        try:
+            R, b = boundary.rigid_motion((p.x, p.y, p.z), (q.x, q.y, q.z, q.w),
+                                         settings.quaternion_tolerance, 'pose')
+        except RefusedInput as exc:
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            return
+        self.publish_outputs(source, msg.header, R, b, settings)
+
+    def on_euler(self, msg):
+        """Take a Vector3Stamped: vector.x, .y, .z = θ1, θ2, θ3 of euler_sequence; b = 0."""
+        source, settings = self._sources['euler'], self._settings
+        v = msg.vector
+        try:
+            R = boundary.euler_to_rotation((v.x, v.y, v.z), settings.euler_sequence,
+                                           settings.degrees)
+        except RefusedInput as exc:
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            return
+        self.publish_outputs(source, msg.header, R, (0.0, 0.0, 0.0), settings)
+
+    def on_transform(self, msg):
+        """Take a TransformStamped: R from transform.rotation, b = transform.translation."""
+        source, settings = self._sources['transform'], self._settings
+        t, q = msg.transform.translation, msg.transform.rotation
+        try:
+            R, b = boundary.rigid_motion(
+                (t.x, t.y, t.z), (q.x, q.y, q.z, q.w), settings.quaternion_tolerance,
+                ('transform.translation', 'transform.rotation'))
+        except RefusedInput as exc:
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            return
+        self.publish_outputs(source, msg.header, R, b, settings)
+
+    def on_pose_with_covariance(self, msg):
+        """Take a PoseWithCovarianceStamped: pose.pose as a pose, and pose.covariance."""
+        self._take_pose_with_covariance(self._sources['pose_with_covariance'], msg)
+
+    def on_odometry(self, msg):
+        """Take an Odometry: pose.pose (child_frame_id in header.frame_id), pose.covariance."""
+        self._take_pose_with_covariance(self._sources['odometry'], msg)
+
+    def _take_pose_with_covariance(self, source, msg):
+        """Publish the outputs of msg.pose.pose, then the rpy covariance of msg.pose.covariance."""
+        settings = self._settings
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        position, orientation = (p.x, p.y, p.z), (q.x, q.y, q.z, q.w)
+        try:
+            R, b = boundary.rigid_motion(position, orientation, settings.quaternion_tolerance,
+                                         'pose.pose')
+        except RefusedInput as exc:
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            return
+        if self.publish_outputs(source, msg.header, R, b, settings):
+            self._covariances.on_input(source.topic, msg.header, R, position, orientation,
+                                       msg.pose.covariance, 'pose.covariance', settings)
+
+    def on_imu(self, msg):
+        """Take an Imu: R from orientation, b = 0; refused when it has no orientation."""
+        source, settings = self._sources['imu'], self._settings
+        q = msg.orientation
+        orientation = (q.x, q.y, q.z, q.w)
+        try:
+            boundary.require_orientation(msg.orientation_covariance[0])
+            R = boundary.quaternion_to_rotation(*orientation, settings.quaternion_tolerance)
+        except RefusedInput as exc:
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            return
+        if self.publish_outputs(source, msg.header, R, (0.0, 0.0, 0.0), settings):
+            self._covariances.on_input(source.topic, msg.header, R, (0.0, 0.0, 0.0),
+                                       orientation, msg.orientation_covariance,
+                                       'orientation_covariance', settings)
+
+    def on_orientation(self, msg):
+        """Take a QuaternionStamped: R from quaternion, b = 0."""
+        source, settings = self._sources['orientation'], self._settings
+        q = msg.quaternion
+        try:
+            R = boundary.quaternion_to_rotation(q.x, q.y, q.z, q.w,
+                                                settings.quaternion_tolerance, 'quaternion')
+        except RefusedInput as exc:
+            self._refuse(source.topic, exc.reason, str(exc), header=msg.header)
+            return
+        self.publish_outputs(source, msg.header, R, (0.0, 0.0, 0.0), settings)
+
+    def _on_tf_transform(self, header, R, b):
+        """Publish every output of the followed frames at their new common time on /tf."""
+        self.publish_outputs(self._tf_source, header, R, b, self._settings)
+
+    # -- outputs: one decomposition into every message --------------------------------------
+
+    def publish_outputs(self, source, header, R, b, settings):
+        """
+        Publish every output of one accepted input (header, R, b); return whether it was.
+
+        One decomposition gives every number (so at θ = π all share the axis sign); angles
+        in angle_unit. At θ = π there is no ~/rodrigues (a refusal, rodrigues_at_pi) but the
+        other outputs go.
+        """
+        try:
+            d = decompose_one(R, b, settings.euler_sequence)
+        except RotationError as exc:  # a screw beyond float64
+            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
+            return False
+
+        matrix = Float64MultiArray(data=R.ravel().tolist())
+        matrix.layout.dim = [MultiArrayDimension(label=label, size=size, stride=stride)
+                             for label, size, stride in MATRIX_LAYOUT]
+        self._rotation_matrix.publish(matrix)
+
+        quaternion = QuaternionStamped(header=header)
+        q = quaternion.quaternion
+        q.x, q.y, q.z, q.w = d.quaternion
+        self._quaternion.publish(quaternion)
+
+        self._axis_angle.publish(vector3_stamped(header, d.rotvec))
+        try:
+            self._rodrigues.publish(vector3_stamped(header, quaternion_to_rodrigues(
+                d.quaternion).tolist()))
+        except RotationError as exc:
+            self._refuse(source.topic, RODRIGUES_AT_PI, str(exc), header=header)
+
+        euler, rpy = d.euler, d.rpy
+        if settings.degrees:
+            euler, rpy = map(math.degrees, euler), map(math.degrees, rpy)
+        self._euler_angles.publish(vector3_stamped(header, euler))
+        self._rpy.publish(vector3_stamped(header, rpy))
+
+        screw = TwistStamped(header=header)
+        angular, linear = screw.twist.angular, screw.twist.linear
+        angular.x, angular.y, angular.z, linear.x, linear.y, linear.z = d.twist
+        self._screw.publish(screw)
+
+        if settings.publish_markers:
+            self._pictures.offer(header, R, b, settings)
+        self._latest = Latest(source, header, R, b, settings)
+        return True
+
+    def _refuse(self, topic, reason, text, error=False, header=None):
+        """
+        Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
+
+        Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
+        stream would silence every other one. ``error``: log at error level (a refused
+        service request). The refusal is kept as the latest of its reason for ~/describe
+        (``header``: the refused message's).
+        """
+        self._refused[reason] += 1
+        self._diagnostics.refused(topic, reason)
+        self._last_refusals[reason] = (topic, header, text)
+        now = time.monotonic()
+        if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD and (
+                self.context.ok()):  # (shut down by a signal: the node is stopping)
+            self._warned[topic, reason] = now
+            # One call site per severity: rclpy's logger keeps a call site's first severity.
+            line = f'refused input on {topic} ({reason}): {text}'
+            if error:
+                self.get_logger().error(line)
+            else:
+                self.get_logger().warning(line)
 
     # -- parameters --------------------------------------------------------------------
 
     def _declare_parameters(self):
         """
-        Declare PARAMETERS, their start-up overrides taken; warn about any other override.
+        Declare PARAMETERS with their descriptors, taking their start-up overrides.
 
-        rclpy has declared every override as it stands (the Node was built with
-        automatically_declare_parameters_from_overrides): each of PARAMETERS is declared
-        again with its descriptor and default, then set to its override's value, if any
-        (an integer made a double for a double parameter: _integers_as_doubles); an
-        override that names no
-        parameter of the node is reported (a misspelt ``-p euler_sequnce:=xyz`` would
-        otherwise be silently ignored) and undeclared. Raises
+        An integer given to a double parameter is stored as a double. Raises
         InvalidParameterValueException for an invalid value.
         """
-        overrides = {}
-        for name in self.list_parameters([], 0).names:
-            if name in PARAMETERS:
-                (overrides[name],) = self._integers_as_doubles([self.get_parameter(name)])
-                self.undeclare_parameter(name)
-            elif name not in RCLPY_PARAMETERS:
-                self._warn_about_unknown_override(name)
-                self.undeclare_parameter(name)
-        for name, spec in PARAMETERS.items():
-            self.declare_parameter(name, spec.default, spec.descriptor, ignore_override=True)
-            if name in overrides:  # (checked against the descriptor: type and range)
-                (result,) = self.set_parameters([overrides[name]])
-                if not result.successful:
-                    raise InvalidParameterValueException(
-                        name, overrides[name].value, f'{name}: {result.reason}')
+        self.declare_parameters('', [(name, spec.default, copy.deepcopy(spec.descriptor))
+                                     for name, spec in PARAMETERS.items()])
         for name, spec in PARAMETERS.items():
             value = self.get_parameter(name).value
             reason = spec.check(value)
             if reason:
                 raise InvalidParameterValueException(name, value, reason)
+            if type(value) is int and type(spec.default) is float:
+                self.set_parameters([Parameter(name, Parameter.Type.DOUBLE, float(value))])
 
-    def _warn_about_unknown_override(self, name):
+    def warn_about_unknown_override(self, name):
         """Warn that start-up override ``name`` is not a parameter of this node."""
         close = difflib.get_close_matches(name, PARAMETERS, n=1)
         hint = f": did you mean '{close[0]}'?" if close else (
@@ -390,15 +541,13 @@ class RotationNode(Node):
         Return the parameters, with an integer value of a double parameter made a double.
 
         rclpy types a parameter by its value: ``marker_scale: 3`` in a YAML file, ``-p
-        marker_scale:=3`` or ``ros2 param set ... marker_scale 3`` is an integer, which a
-        double parameter refuses. Run before rclpy's type check (a pre-set callback, and on
-        the start-up overrides).
+        marker_scale:=3`` or ``ros2 param set ... marker_scale 3`` is an integer.
         """
         converted = []
         for parameter in parameters:
             spec = PARAMETERS.get(parameter.name)
             if (spec is not None and parameter.type_ == Parameter.Type.INTEGER
-                    and spec.descriptor.type == ParameterType.PARAMETER_DOUBLE):
+                    and type(spec.default) is float):
                 parameter = Parameter(parameter.name, Parameter.Type.DOUBLE,
                                       float(parameter.value))
             converted.append(parameter)
@@ -407,16 +556,12 @@ class RotationNode(Node):
     def _read_settings(self):
         value = {name: self.get_parameter(name).value for name in PARAMETERS}
         return Settings(value['euler_sequence'], value['angle_unit'] == 'deg',
-                        value['quaternion_tolerance'], value['publish_markers'],
-                        value['marker_scale'], value['tf_reference_frame'],
+                        float(value['quaternion_tolerance']), value['publish_markers'],
+                        float(value['marker_scale']), value['tf_reference_frame'],
                         value['tf_body_frame'], value['input_covariance'])
 
     def _on_set_parameters(self, parameters):
-        """
-        Refuse invalid values of our parameters (rclpy has checked type and range).
-
-        And a parameter without a name, which rclpy would otherwise declare.
-        """
+        """Refuse invalid values of our parameters, and a parameter without a name."""
         for parameter in parameters:
             if not parameter.name:
                 return SetParametersResult(successful=False, reason='a parameter name is empty')
@@ -444,78 +589,6 @@ class RotationNode(Node):
                     f'following {shown(frames[1])} in {shown(frames[0])} on {self._tf.topic}'
                     if self._tf.following else f'not following frames on {self._tf.topic}')
 
-    # -- inputs ----------------------------------------------------------------------------
-
-    def _on_input(self, source, msg):
-        """
-        Turn one input message into (header, R, b) and publish every output, or refuse it.
-
-        An input that carries a covariance then has its ~/rpy_covariance
-        (rot_tools.ros.rpy_covariance): the other inputs (~/pose's flood) pay nothing for it.
-        """
-        settings = self._settings
-        header = msg.header
-        values = source.read(msg)
-        try:
-            R, b = source.convert(values, settings, source.fields)
-            numbers = decompose_one(R, b, settings.euler_sequence)
-        except boundary.RefusedInput as exc:
-            self._refuse(source.topic, exc.reason, str(exc), header=header)
-            return
-        except RotationError as exc:
-            self._refuse(source.topic, NOT_DECOMPOSABLE, str(exc), header=header)
-            return
-        self._publish(source, header, R, b, numbers, settings)
-        if source.covariance is not None:
-            self._covariances.on_input(source.topic, source.covariance, msg, header, R, values,
-                                       settings)
-
-    def _on_tf_transform(self, header, R, b):
-        """Return the followed frames have a new common time on /tf: publish every output."""
-        settings = self._settings
-        try:
-            numbers = decompose_one(R, b, settings.euler_sequence)
-        except RotationError as exc:
-            self._refuse(self._tf_source.topic, NOT_DECOMPOSABLE, str(exc))
-            return
-        self._publish(self._tf_source, header, R, b, numbers, settings)
-
-    def _publish(self, source, header, R, b, numbers, settings):
-        """Every output of one accepted input (header, R, b); ``numbers``: its decompose_one."""
-        for output in self._outputs:
-            msg = output.message
-            if output.stamped:
-                msg.header = header
-            output.write(msg, output.numbers(R, numbers, settings.degrees))
-            output.publish(msg)
-        if settings.publish_markers:
-            self._pictures.offer(header, R, b, settings)
-        self._latest = Latest(source, header, R, b, settings)
-
-    def _refuse(self, topic, reason, text, error=False, header=None):
-        """
-        Count a refused input; warn at most once a REFUSAL_WARNING_PERIOD per (topic, reason).
-
-        Not rclpy's throttle_duration_sec: it throttles per call site, so one fast bad
-        stream (a raw IMU without orientation at 50 Hz) would silence every other one.
-        ``error``: log at error level (a refused service request). The refusal is kept as
-        the latest of its reason for ~/describe (``header``: the refused message's).
-        """
-        self._refused[reason] += 1
-        self._diagnostics.refused(topic, reason)
-        self._last_refusals[reason] = (topic, header, text)
-        now = time.monotonic()
-        if now - self._warned.get((topic, reason), -math.inf) >= REFUSAL_WARNING_PERIOD and (
-                self.context.ok()):  # (shut down by a signal: the node is stopping)
-            self._warned[topic, reason] = now
-            # One call site per severity: rclpy's logger keeps a call site's first severity
-            # and raises ValueError when that site logs at another one.
-            line = f'refused input on {topic} ({reason}): {text}'
-            if error:
-                self.get_logger().error(line)
-            else:
-                self.get_logger().warning(line)
-
     # -- services ----------------------------------------------------------------------
 
     def refused_counts(self):
@@ -527,8 +600,7 @@ class RotationNode(Node):
         {reason: {source, stamp, message}} of the latest refusal of each reason so far.
 
         In REFUSAL_REASONS order, only the reasons counted; ``stamp`` only when the refused
-        message had a header; ``message`` is the refusal's sentence (what and by how much),
-        cut to MAX_REFUSAL_TEXT characters.
+        message had a header; ``message`` cut to MAX_REFUSAL_TEXT characters.
         """
         latest = {}
         for reason in REFUSAL_REASONS:
@@ -544,14 +616,13 @@ class RotationNode(Node):
             latest[reason] = entry
         return latest
 
-    @_answers_even_if_it_raises
     def _on_describe(self, request, response):
         """
         YAML report of the latest input (rot_tools.io.report), with the refusals' data.
 
         Always a YAML document ending in ``refused`` (the counts by reason) and
-        ``last_refusals`` (last_refusals()). Before any accepted input ``success`` is false
-        and the document starts with ``note``: a sentence saying so, for people.
+        ``last_refusals``. Before any accepted input ``success`` is false and the document
+        starts with ``note``: a sentence saying so.
         """
         refused = self.refused_counts()
         latest = self._latest
@@ -577,7 +648,6 @@ class RotationNode(Node):
         response.message = to_yaml(data)
         return response
 
-    @_answers_even_if_it_raises
     def _on_screw_path(self, request, response):
         """
         Constant-screw motion start → goal, poses at most ``tolerance`` apart.
@@ -589,7 +659,7 @@ class RotationNode(Node):
         response.plan.header = header
         try:
             response.plan = screw_path.screw_path(request, self._settings.quaternion_tolerance)
-        except boundary.RefusedInput as exc:
+        except RefusedInput as exc:
             self._refuse(self._screw_path_name, exc.reason, str(exc), error=True, header=header)
         except (RotationError, ArithmeticError) as exc:  # no screw between start and goal
             self._refuse(self._screw_path_name, NOT_DECOMPOSABLE,
@@ -606,14 +676,15 @@ SERVICES = [('~/describe', "std_srvs/srv/Trigger: the latest input's report and 
              'as YAML'),
             ('~/screw_path', 'nav_msgs/srv/GetPlan: the constant-screw motion from start to '
              'goal')]
+PICTURES = ('screw_axis', 'markers')
 
 
 def usage():
     """Return the text of ``rotation_node --help``, from the interface's rows and PARAMETERS."""
-    inputs = [(kind.topic, f'{kind.row.type_name}: {kind.row.help}') for kind in INPUTS]
-    outputs = [(kind.topic, f'{kind.row.type_name}: {kind.row.help}'
-                + ('' if kind.row.value else f' (at most {MARKER_RATE:g} a second)'))
-               for kind in OUTPUTS]
+    inputs = [(row.topic, f'{row.type_name}: {row.help}') for row in interface.INPUTS]
+    outputs = [(row.topic, f'{row.type_name}: {row.help}'
+                + (f' (at most {MARKER_RATE:g} a second)' if row.name in PICTURES else ''))
+               for row in interface.OUTPUTS]
     parameters = [(f'{name} = {runtime.default_text(spec.default)}', spec.descriptor.description
                    + (f' ({spec.descriptor.additional_constraints})'
                       if spec.descriptor.additional_constraints else ''))
@@ -623,9 +694,10 @@ def usage():
         textwrap.fill(
             'A ROS 2 node: every input (an orientation or a pose) is turned into one rigid '
             'motion (R, b) and republished as rotation matrix, quaternion, rotation vector, '
-            'Euler angles, roll/pitch/yaw and screw (Chasles) decomposition, with the '
-            "input's header.", 99),
-        '', 'inputs (subscribed best effort, keep last 50):', *runtime.help_rows(inputs),
+            'Rodrigues vector, Euler angles, roll/pitch/yaw and screw (Chasles) '
+            "decomposition, with the input's header.", 99),
+        '', f'inputs (subscribed best effort, keep last {INPUT_QOS.depth}):',
+        *runtime.help_rows(inputs),
         '', 'outputs (for every accepted input, reliable, depth 10):',
         *runtime.help_rows(outputs),
         '', '/diagnostics (diagnostic_msgs/msg/DiagnosticArray, once a second):',
@@ -648,8 +720,7 @@ def main(args=None):
     ``args``: the whole command line as rclpy.init takes it, program name first (sys.argv
     when None). ``--help`` and ``--version`` print and return 0 before anything ROS starts;
     any other argument outside ``--ros-args`` is refused, as are bad ROS arguments: one line
-    on stderr, status 2. Signals are rclpy's: its handlers shut the context down and the
-    loop (rot_tools.ros.runtime.spin) ends.
+    on stderr, status 2.
     """
     argv = sys.argv if args is None else list(args)
     options = runtime.user_arguments(argv)
@@ -672,25 +743,28 @@ def main(args=None):
         get_logger(PROG).warning(
             f'remap -r {remap} starts with the home directory {home}: the shell expanded an '
             f'unquoted ~; quote it: -r {quoted}')
-    executor = node = None
     try:
-        executor = SingleThreadedExecutor()
         node = RotationNode()
-        runtime.spin(node, executor)
+    except runtime.ROS_ARGUMENT_ERRORS as exc:  # -p values, -r names the node cannot take
+        rclpy.try_shutdown()
+        runtime.fail(PROG, runtime.ros_argument_error(exc))
+    try:
+        for name in runtime.override_names(argv, node.get_fully_qualified_name()):
+            if name not in PARAMETERS and name not in RCLPY_PARAMETERS:
+                node.warn_about_unknown_override(name)
+        node.announce()
+        rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except runtime.ROS_ARGUMENT_ERRORS as exc:  # -p values, -r names the node cannot take
-        if rclpy.ok():
-            runtime.fail(PROG, runtime.ros_argument_error(exc))
-    except Exception:
+    except RuntimeError:
         if rclpy.ok():
             raise
-        # A signal shut the context down while the node was being made: a normal stop.
+        # rclpy's signal handler shuts the context down from its own thread, and spin may
+        # be building a wait set on it just then: 'failed to initialize wait set: the given
+        # context is not valid' (rclpy's signal handling races its executor): the signal's
+        # normal stop.
     finally:
-        if executor is not None:
-            executor.shutdown()
-        if node is not None:
-            node.destroy_node()
+        node.destroy_node()
         rclpy.try_shutdown()
     return 0
 
