@@ -30,7 +30,7 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-            'rotation_node = rot_tools.ros.rotation_node:main',
+            'rotation_node = rot_tools.ros.node.rotation_node:main',
             'rotation_client = rot_tools.ros.rotation_client:main',
             'rot-tools = rot_tools.cli.main:main',
         ],

@@ -35,7 +35,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
-from rot_tools.ros.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
+from rot_tools.ros.node.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 

@@ -7,7 +7,7 @@ line on stderr (after rcl's own error log line, for arguments rcl cannot parse) 
 2; Ctrl-C or SIGTERM at any moment of its start-up or its run ends it within a second of its
 own time with no process left behind — once it is up, with status 0 and nothing on stderr
 (before, Python's own KeyboardInterrupt is fine). Both ways of starting it, the console
-script and ``python -m rot_tools.ros.rotation_node``, behave alike.
+script and ``python -m rot_tools.ros.node.rotation_node``, behave alike.
 """
 
 import ast
@@ -28,8 +28,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'rot_tools'
 
 def node_commands():
     """Both commands that start rotation_node: the console script (when installed), -m."""
-    commands = {'python -m': [sys.executable, '-m', 'rot_tools.ros.rotation_node']}
-    script = console_script('rotation_node', 'rot_tools.ros.rotation_node')
+    commands = {'python -m': [sys.executable, '-m', 'rot_tools.ros.node.rotation_node']}
+    script = console_script('rotation_node', 'rot_tools.ros.node.rotation_node')
     if script[0] != sys.executable:
         commands['console script'] = script
     return commands
@@ -49,7 +49,7 @@ def run(command, *args, env_extra=None, timeout=60):
 def test_console_scripts_point_at_plain_main_functions():
     from importlib.metadata import entry_points
     scripts = {ep.name: ep.value for ep in entry_points(group='console_scripts')}
-    assert scripts['rotation_node'] == 'rot_tools.ros.rotation_node:main'
+    assert scripts['rotation_node'] == 'rot_tools.ros.node.rotation_node:main'
     assert scripts['rotation_client'] == 'rot_tools.ros.rotation_client:main'
 
 
@@ -270,7 +270,7 @@ builtins.__import__ = _import
 def test_help_and_version_print_and_start_nothing(tmp_path, how, flag):
     from importlib.metadata import version
     from rot_tools.io.interface import INPUTS, OUTPUTS
-    from rot_tools.ros.rotation_node import PARAMETERS
+    from rot_tools.ros.node.rotation_node import PARAMETERS
     (tmp_path / 'sitecustomize.py').write_text(NO_RCLPY_INIT)
     proc = run(NODE_COMMANDS[how], flag, '--ros-args', '-p', 'angle_unit:=deg',
                env_extra={'PYTHONPATH': f'{tmp_path}:{PACKAGE.parent}'})
@@ -309,7 +309,7 @@ def test_arguments_outside_ros_args_are_one_line_and_status_2(args):
     ['prog', '--', '--ros-args', '-p', 'a:=1', '--', '--']])
 def test_user_arguments_are_what_rclpy_leaves(argv):
     from rclpy.utilities import remove_ros_args
-    from rot_tools.ros.runtime import user_arguments
+    from rot_tools.ros.node.runtime import user_arguments
     assert user_arguments(argv) == remove_ros_args(argv)[1:]
 
 
@@ -349,8 +349,8 @@ def imports_of(module):
 
 
 def test_the_runtime_depends_on_no_module_of_the_package():
-    assert imports_of('rot_tools.ros.runtime') == set()
-    assert 'rot_tools.ros.runtime' in imports_of('rot_tools.ros.rotation_node')
+    assert imports_of('rot_tools.ros.node.runtime') == set()
+    assert 'rot_tools.ros.node.runtime' in imports_of('rot_tools.ros.node.rotation_node')
 
 
 def test_the_package_import_graph_has_no_cycle():

@@ -8,8 +8,8 @@ client's tests.
 
 import pytest
 from rot_tools.io import bag_read, interface
-from rot_tools.ros.messages import message_class
-from rot_tools.ros.rotation_node import RotationNode, usage
+from rot_tools.ros.node.messages import message_class
+from rot_tools.ros.node.rotation_node import RotationNode, usage
 
 
 @pytest.fixture(scope='module')

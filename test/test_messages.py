@@ -1,5 +1,5 @@
 """
-rotation_node's reading of each input message, and rot_tools.ros.messages (no DDS traffic).
+rotation_node's reading of each input message, and rot_tools.ros.node.messages (no DDS traffic).
 
 Inbound, a message goes the node's way: serialised by rclpy and read back as a message
 object, then given to the node's callback for its type, whose (header, R, b) or refusal is
@@ -19,8 +19,8 @@ from rot_tools import (
 from rot_tools.io import boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE as TOL
 from rot_tools.io.boundary import RefusedInput
-from rot_tools.ros import messages
-from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.node import messages
+from rot_tools.ros.node.rotation_node import RotationNode
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker

@@ -30,10 +30,10 @@ from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io import interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import transform_report
-from rot_tools.ros import rotation_node
-from rot_tools.ros.messages import message_class
-from rot_tools.ros.rotation_node import REFUSAL_REASONS, RotationNode
-from rot_tools.ros.screw_path import MAX_PATH_STEPS
+from rot_tools.ros.node import rotation_node
+from rot_tools.ros.node.messages import message_class
+from rot_tools.ros.node.rotation_node import REFUSAL_REASONS, RotationNode
+from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
 from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger

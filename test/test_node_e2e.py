@@ -2,7 +2,7 @@
 End-to-end: rotation_node as a separate process, driven over DDS from this one.
 
 Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
-installed package, ``python -m rot_tools.ros.rotation_node``) in a namespace unique to this test
+installed package, ``python -m rot_tools.ros.node.rotation_node``) in a namespace unique to this test
 run, publishes to its inputs, receives every output, calls both services and a parameter
 service, then stops it with SIGTERM or SIGINT: exit status 0 within a second, and no
 traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
@@ -28,7 +28,7 @@ from rclpy.parameter import Parameter, parameter_value_to_python
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix, screw_from_transform,
     screw_log)
-from rot_tools.ros.rotation_node import PARAMETERS
+from rot_tools.ros.node.rotation_node import PARAMETERS
 from scipy.spatial.transform import Rotation
 from std_srvs.srv import Trigger
 import yaml
@@ -363,7 +363,7 @@ def test_a_remap_the_shell_expanded_is_warned_about(node_process):
     (['p', '-r', '/home/u/imu:=/x', '--ros-args', '--', '-r', '/home/u/imu:=/x'], []),
 ])
 def test_home_remaps(argv, found):
-    from rot_tools.ros.runtime import home_remaps
+    from rot_tools.ros.node.runtime import home_remaps
     assert home_remaps(argv, '/home/u/') == found
 
 

@@ -47,7 +47,7 @@ from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data
 from rclpy.qos import ReliabilityPolicy
 from rot_tools.io.interface import INPUTS
-from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.node.rotation_node import RotationNode
 from std_srvs.srv import Trigger
 import yaml
 
@@ -563,7 +563,7 @@ def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signa
     tenth path (a queue served in arrival order answers it last), and SIGINT with ten more
     queued ends the node within a second of its own time, cleanly.
     """
-    from rot_tools.ros.screw_path import MAX_PATH_STEPS
+    from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
     process = node_process()
     wait_until_serving(tester, process)
     plan = tester.node.create_client(GetPlan, f'{process.name}/screw_path')

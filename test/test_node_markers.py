@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
-from rot_tools.ros import pictures
-from rot_tools.ros.diagnostics import PERIOD
-from rot_tools.ros.pictures import MARKER_RATE
+from rot_tools.ros.node import pictures
+from rot_tools.ros.node.diagnostics import PERIOD
+from rot_tools.ros.node.pictures import MARKER_RATE
 from scipy.spatial.transform import Rotation
 from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
     euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)

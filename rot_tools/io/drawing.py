@@ -2,7 +2,7 @@
 The geometry of a picture of one rigid motion, for every renderer (plain NumPy).
 
 ``rot-tools --plot`` (rot_tools.cli.plot, matplotlib) and rotation_node's ``~/markers``
-(rot_tools.ros.messages, RViz) draw the same :class:`Picture`, computed here once. The motion
+(rot_tools.ros.node.messages, RViz) draw the same :class:`Picture`, computed here once. The motion
 p ↦ R·p + b has the Chasles screw (l̂, c, θ, d) and the twist ξ = screw_log(R, b); a picture
 of it holds, in the reference frame:
 

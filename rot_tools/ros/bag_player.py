@@ -28,7 +28,7 @@ import time
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.ros.messages import type_name
+from rot_tools.ros.node.messages import type_name
 
 MESSAGE_TYPE = r'([A-Za-z]\w*)/([A-Za-z]\w*)'
 """A message type inside a field type of get_fields_and_field_types(): 'geometry_msgs/Point'
@@ -98,7 +98,7 @@ def converter(cls, cache=None):
     per class from ``cls.get_fields_and_field_types()``; ``cache`` ({class: convert}) shares
     the plans of the classes met along.
     """
-    from rot_tools.ros.messages import message_class
+    from rot_tools.ros.node.messages import message_class
     cache = {} if cache is None else cache
     if cls in cache:
         return cache[cls]
@@ -160,7 +160,7 @@ def topics(reader, wanted=None):
     ``wanted``: the topics asked for (all when None); a topic the bag lacks is a KeyError
     naming it. A topic whose type has no rclpy message class here is Skipped.
     """
-    from rot_tools.ros.messages import message_class
+    from rot_tools.ros.node.messages import message_class
     by_topic = {}
     for c in reader.connections:
         by_topic.setdefault(c.topic, []).append(c)

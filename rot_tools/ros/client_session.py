@@ -306,7 +306,7 @@ class Client:
         (:meth:`covariance_answer`).
         """
         from rclpy.qos import QoSProfile
-        from rot_tools.ros.messages import message_class
+        from rot_tools.ros.node.messages import message_class
         answers = Answers(msg.header.frame_id)
         matrix = matrix_output()
         qos = QoSProfile(depth=100)

@@ -38,7 +38,7 @@ The command line is parsed by rot_tools.ros.client_arguments. The node draws pic
 printed when the node drew this input: the client waits for them at most ``PICTURE_WAIT``
 seconds. ``describe`` prints ~/describe's
 report; ``screw-path`` calls ~/screw_path and prints the path. ``tf`` needs no node: it listens
-to /tf and /tf_static itself (rot_tools.ros.tf_input) and prints the report of BODY in
+to /tf and /tf_static itself (rot_tools.ros.node.tf_input) and prints the report of BODY in
 REFERENCE — tf2_echo's job, with every representation — once a second until Ctrl-C, or once
 with ``--once``; a frame that does not appear within ``--timeout`` is one line on stderr, exit
 status 1. ``tf-demo`` publishes a small moving tree (rot_tools.ros.tf_demo) until Ctrl-C or
@@ -221,7 +221,7 @@ def _input_message(args, parameters):
     rotation, quaternion, ...); Euler angles by sequence, unit, angles.
     """
     from rot_tools.io.fields import field_value
-    from rot_tools.ros.messages import message_class
+    from rot_tools.ros.node.messages import message_class
     row = args.row
     msg = message_class(row.type_name)()
     numbers = iter(args.numbers)
@@ -318,7 +318,7 @@ def _tf_report(follower, header, R, b, args):
 
 def _tf_command(client, args):
     """tf: print BODY in REFERENCE from /tf and /tf_static, once or once a second."""
-    from rot_tools.ros import tf_input  # tf2_msgs: only this command needs it
+    from rot_tools.ros.node import tf_input  # tf2_msgs: only this command needs it
     latest = []
 
     def keep(header, R, b):
@@ -345,7 +345,8 @@ def _tf_command(client, args):
 
 def _tf_demo_command(client, args):
     """tf-demo: publish the demo tree until Ctrl-C or --duration; nothing to print after."""
-    from rot_tools.ros import tf_demo, tf_input
+    from rot_tools.ros import tf_demo
+    from rot_tools.ros.node import tf_input
     missing = tf_input.tf2_msgs_missing()
     if missing:
         raise Unreachable(missing)
@@ -376,7 +377,7 @@ def _echo_data(msg, row, parameters):
 def _echo_command(client, args):
     """echo: print each message of the node's output until Ctrl-C, --once or --count N."""
     from rclpy.qos import QoSProfile
-    from rot_tools.ros.messages import message_class
+    from rot_tools.ros.node.messages import message_class
     row = interface.output_named(args.output)
     parameters = client.parameters(['euler_sequence', 'angle_unit'])
     received = deque()

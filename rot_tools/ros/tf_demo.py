@@ -9,13 +9,13 @@ yaw ψ = ω·t, position (r·sin ψ, r·(1 − cos ψ), 0), t the seconds since 
 ``base_link → camera``: 0.2 m ahead and 0.5 m up, tilted down by 15° (pitch about y).
 /tf_static carries the static edges once (transient local: late listeners get them), /tf the
 moving one RATE times a second, both with tf2_ros's broadcasters' QoS
-(rot_tools.ros.tf_input's). Enough for ``rotation_client tf map camera`` and for a
+(rot_tools.ros.node.tf_input's). Enough for ``rotation_client tf map camera`` and for a
 rotation_node following two frames.
 """
 
 import math
 
-from rot_tools.ros import tf_input
+from rot_tools.ros.node import tf_input
 
 RATE = 20.0
 """Messages a second on /tf."""

@@ -42,9 +42,9 @@ from rot_tools.io import boundary, interface
 from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import QUATERNION_TOLERANCE, RefusedInput
 from rot_tools.io.report import sequence_hint, to_yaml, transform_report
-from rot_tools.ros import diagnostics, rpy_covariance, runtime, screw_path, tf_input
-from rot_tools.ros.pictures import MARKER_RATE, Pictures
-from rot_tools.ros.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
+from rot_tools.ros.node import diagnostics, rpy_covariance, runtime, screw_path, tf_input
+from rot_tools.ros.node.pictures import MARKER_RATE, Pictures
+from rot_tools.ros.node.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
                                       PATH_TOO_LONG)
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
@@ -653,7 +653,7 @@ class RotationNode(Node):
         Constant-screw motion start → goal, poses at most ``tolerance`` apart.
 
         Every failure is a refusal: counted by reason, logged (throttled per reason), and
-        answered with an empty path (rot_tools.ros.screw_path).
+        answered with an empty path (rot_tools.ros.node.screw_path).
         """
         header = request.start.header
         response.plan.header = header

@@ -147,7 +147,7 @@ class TfFollower:
         self._heard = {}  # child of a dynamic edge: time.monotonic() of its latest sample
         self._swept = time.monotonic()
         self.messages = 0
-        """TFMessages of /tf taken since the start (rot_tools.ros.diagnostics' rate)."""
+        """TFMessages of /tf taken since the start (rot_tools.ros.node.diagnostics' rate)."""
 
     @property
     def following(self):

@@ -12,7 +12,7 @@ import time
 from rclpy.clock import Clock, ClockType
 from rot_tools.core.errors import RotationError
 from rot_tools.io import drawing
-from rot_tools.ros import messages
+from rot_tools.ros.node import messages
 
 MARKER_RATE = 30.0
 """Most pictures (~/markers with ~/screw_axis) a second: RViz draws 30 frames a second."""
