@@ -20,6 +20,7 @@ from rot_tools.io import boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE as TOL
 from rot_tools.io.boundary import RefusedInput
 from rot_tools.ros.node import messages
+from rot_tools.ros.node.parameters import read_settings
 from rot_tools.ros.node.rotation_node import RotationNode
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
@@ -55,7 +56,7 @@ def node(ros_context):
 def take(node):
     """Return a function of (msg, **settings) giving (header, R, b) as the node takes msg."""
     def take(msg, **settings):
-        node._settings = node._read_settings()._replace(**settings)
+        node._settings = read_settings(node)._replace(**settings)
         msg = deserialize_message(serialize_message(msg), type(msg))
         node.taken = None
         getattr(node, CALLBACKS[type(msg)])(msg)

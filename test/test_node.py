@@ -977,7 +977,8 @@ def test_screw_path_refusals(rig, case):
 
 def test_a_new_parameter_is_one_row(ros_context, make_rig, namespace, monkeypatch):
     from rcl_interfaces.msg import ParameterDescriptor
-    row = rotation_node.ParameterSpec(
+    from rot_tools.ros.node.parameters import ParameterSpec
+    row = ParameterSpec(
         2.0, ParameterDescriptor(type=ParameterType.PARAMETER_DOUBLE, description='a test'),
         lambda value: '' if value < 5.0 else f'test_limit {value} is not < 5')
     monkeypatch.setattr(rotation_node, 'PARAMETERS',

@@ -15,18 +15,17 @@ import os
 import sys
 import textwrap
 import time
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 from geometry_msgs.msg import (PoseStamped, PoseWithCovarianceStamped, QuaternionStamped,
                                TransformStamped, TwistStamped, Vector3Stamped)
 from nav_msgs.msg import Odometry
 from nav_msgs.srv import GetPlan
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, ParameterType
 from rcl_interfaces.msg import SetParametersResult
 from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 import rclpy
 from rclpy.exceptions import InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.logging import get_logger
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -35,17 +34,17 @@ from rclpy.time_source import USE_SIM_TIME_NAME
 from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.errors import RotationError
-from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.core.rodrigues import quaternion_to_rodrigues
 from rot_tools.core.transform_tree import shown
 from rot_tools.io import boundary, interface
 from rot_tools.io.arguments import version_line
-from rot_tools.io.boundary import QUATERNION_TOLERANCE, RefusedInput
-from rot_tools.io.report import sequence_hint, to_yaml, transform_report
+from rot_tools.io.boundary import RefusedInput
+from rot_tools.io.report import to_yaml, transform_report
 from rot_tools.ros.node import diagnostics, rpy_covariance, runtime, screw_path, tf_input
+from rot_tools.ros.node.parameters import PARAMETERS, read_settings, Settings
 from rot_tools.ros.node.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.node.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
-                                      PATH_TOO_LONG)
+                                           PATH_TOO_LONG)
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from std_srvs.srv import Trigger
@@ -64,10 +63,6 @@ PROG = 'rotation_node'
 
 MAX_REFUSAL_TEXT = 400
 """Longest refusal sentence ~/describe repeats (a refused frame_id may be megabytes)."""
-
-MIN_MARKER_SCALE = 1e-6
-"""Smallest marker_scale (m): the arrows' shafts are 5 % of it, and RViz draws nothing of
-a zero width."""
 
 REFUSAL_WARNING_PERIOD = 1.0
 """Seconds between two warnings about refused inputs of one topic for one reason."""
@@ -93,19 +88,6 @@ class Source(NamedTuple):
     type_name: str
 
 
-class Settings(NamedTuple):
-    """The parameters as the callbacks use them; replaced whole when a parameter changes."""
-
-    euler_sequence: str
-    degrees: bool
-    quaternion_tolerance: float
-    publish_markers: bool
-    marker_scale: float
-    tf_reference_frame: str
-    tf_body_frame: str
-    input_covariance: str
-
-
 class Latest(NamedTuple):
     """The latest accepted input, kept for ~/describe (the report is built on request)."""
 
@@ -114,118 +96,6 @@ class Latest(NamedTuple):
     R: object
     b: object
     settings: Settings
-
-
-def _not_a_number(name, value):
-    """Return why ``value`` of double parameter ``name`` has the wrong type, or ''."""
-    if type(value) in (int, float):
-        return ''
-    return f'Wrong parameter type: {name} is a double, got {value!r}'
-
-
-def _check_sequence(value):
-    if value in EULER_SEQUENCES:
-        return ''
-    return (f'euler_sequence {shown(value)} is not a sequence: use one of '
-            + ' '.join(EULER_SEQUENCES) + sequence_hint(value))
-
-
-def _check_angle_unit(value):
-    return '' if value in ('rad', 'deg') else f"angle_unit {shown(value)} is not 'rad' or 'deg'"
-
-
-def _check_tolerance(value):
-    if _not_a_number('quaternion_tolerance', value):
-        return _not_a_number('quaternion_tolerance', value)
-    if math.isfinite(value) and value >= 0.0:
-        return ''
-    return f'quaternion_tolerance must be finite and >= 0, got {value}'
-
-
-def _check_marker_scale(value):
-    if _not_a_number('marker_scale', value):
-        return _not_a_number('marker_scale', value)
-    if math.isfinite(value) and value >= MIN_MARKER_SCALE:
-        return ''
-    return (f'marker_scale must be finite and >= {MIN_MARKER_SCALE:g} m (thinner arrows are '
-            f'not drawn), got {value}')
-
-
-def _check_tf_frame(value):
-    return tf_input.tf2_msgs_missing() if value else ''
-
-
-def _any_value(value):
-    return ''
-
-
-def _text(type_, description, constraints=''):
-    return ParameterDescriptor(type=type_, description=description,
-                               additional_constraints=constraints)
-
-
-def _double(description, constraints, low):
-    """
-    Return the descriptor of a double parameter that also takes an integer (3 for 3.0).
-
-    rclpy types a value by how it is written (``-p marker_scale:=3`` is an integer), so the
-    type is checked by the parameter's check instead of rclpy's, and the node stores a
-    double (RotationNode._integers_as_doubles).
-    """
-    return ParameterDescriptor(
-        type=ParameterType.PARAMETER_DOUBLE, description=description,
-        additional_constraints=constraints, dynamic_typing=True,
-        floating_point_range=[FloatingPointRange(from_value=low, to_value=math.inf, step=0.0)])
-
-
-class ParameterSpec(NamedTuple):
-    """One parameter of the node: default, descriptor, and the check of its values."""
-
-    default: object
-    descriptor: ParameterDescriptor
-    check: Callable = _any_value
-    """check(value) -> '' when valid, else why not."""
-
-
-PARAMETERS = {
-    'euler_sequence': ParameterSpec('ZYX', _text(
-        ParameterType.PARAMETER_STRING,
-        'Euler sequence of ~/euler input and ~/euler_angles output: upper case intrinsic '
-        '(ZYX: R = Rot_z(θ1) Rot_y(θ2) Rot_x(θ3)), lower case extrinsic',
-        'one of ' + ' '.join(EULER_SEQUENCES)), _check_sequence),
-    'angle_unit': ParameterSpec('rad', _text(
-        ParameterType.PARAMETER_STRING,
-        'unit of the angles of ~/euler, ~/euler_angles and ~/rpy', "'rad' or 'deg'"),
-        _check_angle_unit),
-    'quaternion_tolerance': ParameterSpec(QUATERNION_TOLERANCE, _double(
-        'largest |‖q‖ − 1| of an input quaternion; within it q is normalised, beyond it the '
-        'message is refused', '>= 0, finite', 0.0), _check_tolerance),
-    'publish_markers': ParameterSpec(True, _text(
-        ParameterType.PARAMETER_BOOL,
-        f'publish the picture of each input (at most {MARKER_RATE:g} a second, the latest '
-        "wins): the moved frame's axes, screw axis, helical path and label on ~/markers "
-        '(MarkerArray) and the screw axis arrow on ~/screw_axis (Marker); switching it off '
-        'deletes both')),
-    'marker_scale': ParameterSpec(1.0, _double(
-        'length of the frame axes on ~/markers and of the ~/screw_axis arrow (m)',
-        f'>= {MIN_MARKER_SCALE:g}, finite', MIN_MARKER_SCALE), _check_marker_scale),
-    'tf_reference_frame': ParameterSpec('', _text(
-        ParameterType.PARAMETER_STRING,
-        'with tf_body_frame: follow the transform of tf_body_frame in this frame on /tf and '
-        '/tf_static, publishing every output at each new common time of the chain '
-        "(header.frame_id = this frame); '' = off"), _check_tf_frame),
-    'tf_body_frame': ParameterSpec('', _text(
-        ParameterType.PARAMETER_STRING,
-        "with tf_reference_frame: the frame followed on /tf and /tf_static; '' = off"),
-        _check_tf_frame),
-    'input_covariance': ParameterSpec('rotvec', _text(
-        ParameterType.PARAMETER_STRING,
-        'how the rotation covariance of ~/imu, ~/pose_with_covariance and ~/odometry is read '
-        "for ~/rpy_covariance: rotvec (rotations about the parent frame's fixed X, Y, Z, as "
-        'ROS documents it) or rpy (already roll, pitch, yaw)', "'rotvec' or 'rpy'"),
-        rpy_covariance.check_reading),
-}
-"""Every parameter of the node, by name. A new one is a row here and a field of Settings."""
 
 
 def vector3_stamped(header, xyz):
@@ -270,7 +140,7 @@ class RotationNode(Node):
         except Exception:
             self.destroy_node()
             raise
-        self._settings = self._read_settings()
+        self._settings = read_settings(self)
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.add_post_set_parameters_callback(self._on_parameters_set)
         for service in self.services:
@@ -553,13 +423,6 @@ class RotationNode(Node):
             converted.append(parameter)
         return converted
 
-    def _read_settings(self):
-        value = {name: self.get_parameter(name).value for name in PARAMETERS}
-        return Settings(value['euler_sequence'], value['angle_unit'] == 'deg',
-                        float(value['quaternion_tolerance']), value['publish_markers'],
-                        float(value['marker_scale']), value['tf_reference_frame'],
-                        value['tf_body_frame'], value['input_covariance'])
-
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters, and a parameter without a name."""
         for parameter in parameters:
@@ -575,7 +438,7 @@ class RotationNode(Node):
     def _on_parameters_set(self, parameters):
         """Take the new values into use from the next message; publish_markers starts, stops."""
         if any(parameter.name in PARAMETERS for parameter in parameters):
-            old, self._settings = self._settings, self._read_settings()
+            old, self._settings = self._settings, read_settings(self)
             new = self._settings
             if old.publish_markers and not new.publish_markers:
                 self._pictures.stop()
@@ -743,6 +606,7 @@ def main(args=None):
         get_logger(PROG).warning(
             f'remap -r {remap} starts with the home directory {home}: the shell expanded an '
             f'unquoted ~; quote it: -r {quoted}')
+    executor = SingleThreadedExecutor()
     try:
         node = RotationNode()
     except runtime.ROS_ARGUMENT_ERRORS as exc:  # -p values, -r names the node cannot take
@@ -752,18 +616,19 @@ def main(args=None):
         for name in runtime.override_names(argv, node.get_fully_qualified_name()):
             if name not in PARAMETERS and name not in RCLPY_PARAMETERS:
                 node.warn_about_unknown_override(name)
+        executor.add_node(node)
         node.announce()
-        rclpy.spin(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except RuntimeError:
         if rclpy.ok():
             raise
-        # rclpy's signal handler shuts the context down from its own thread, and spin may
-        # be building a wait set on it just then: 'failed to initialize wait set: the given
-        # context is not valid' (rclpy's signal handling races its executor): the signal's
-        # normal stop.
+        # rclpy's signal handler shuts the context down from its own thread while spin may
+        # be building a wait set on it ('failed to initialize wait set: the given context is
+        # not valid'): the signal's normal stop.
     finally:
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
