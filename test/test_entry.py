@@ -10,7 +10,6 @@ own time with no process left behind — once it is up, with status 0 and nothin
 script and ``python -m rot_tools.ros.node.rotation_node``, behave alike.
 """
 
-import ast
 import os
 from pathlib import Path
 import select
@@ -320,53 +319,3 @@ def test_the_documented_bad_ros_argument_line():
     proc = run(NODE_COMMANDS['python -m'], *command.split()[1:])
     assert proc.returncode == 2
     assert_doc_output('node-bad-ros-argument', f'$ {command}\n' + proc.stderr)
-
-
-# ---------------------------------------------------------------------------------------
-# The modules
-
-
-def module_names():
-    """Return {dotted name: path} of every module of rot_tools (__init__ as its package)."""
-    names = {}
-    for path in PACKAGE.rglob('*.py'):
-        parts = path.relative_to(PACKAGE.parent).with_suffix('').parts
-        names['.'.join(parts[:-1] if parts[-1] == '__init__' else parts)] = path
-    return names
-
-
-def imports_of(module):
-    """Return the rot_tools modules ``module`` (dotted) imports anywhere (in functions too)."""
-    names = module_names()
-    found = set()
-    for node in ast.walk(ast.parse(names[module].read_text())):
-        if isinstance(node, ast.ImportFrom) and (node.module or '').startswith('rot_tools'):
-            found.add(node.module)
-            found |= {f'{node.module}.{alias.name}' for alias in node.names} & names.keys()
-        elif isinstance(node, ast.Import):
-            found |= {alias.name for alias in node.names if alias.name.startswith('rot_tools')}
-    return found - {module}
-
-
-def test_the_runtime_depends_on_no_module_of_the_package():
-    assert imports_of('rot_tools.ros.node.runtime') == set()
-    assert 'rot_tools.ros.node.runtime' in imports_of('rot_tools.ros.node.rotation_node')
-
-
-def test_the_package_import_graph_has_no_cycle():
-    graph = {name: imports_of(name) for name in module_names()}
-    done, stack = set(), []
-
-    def visit(module):
-        if module in stack:
-            pytest.fail('import cycle: ' + ' -> '.join(stack[stack.index(module):] + [module]))
-        if module in done:
-            return
-        stack.append(module)
-        for dependency in sorted(graph.get(module, ())):
-            visit(dependency)
-        stack.pop()
-        done.add(module)
-
-    for module in sorted(graph):
-        visit(module)

@@ -549,9 +549,9 @@ def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(
     status, seconds, stderr = process.stop(signal.SIGINT)
     assert status == 0 and seconds < STOP_WITHIN, stderr
     assert 'Traceback' not in stderr
-    if malformed == 'type_99':
-        (line,) = [line for line in stderr.splitlines() if 'malformed' in line]
-        assert 'ERROR' in line and '99 is not a valid Parameter.Type' in line
+    (line,) = [line for line in stderr.splitlines() if 'malformed' in line]
+    assert 'ERROR' in line and {'type_99': '99 is not a valid Parameter.Type',
+                                'empty_name': 'a parameter name is empty'}[malformed] in line
 
 
 def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signal(

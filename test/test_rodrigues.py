@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from rot_tools import (matrix_to_rodrigues, quaternion_to_matrix, rodrigues_to_matrix, rot_x,
                        rot_z, RotationError)
+from rot_tools.core.rodrigues import quaternion_to_rodrigues, rodrigues_of_one
 from scipy.spatial.transform import Rotation
 import yaml
 
@@ -95,6 +96,17 @@ def test_a_half_turn_in_a_batch_is_named():
 def test_a_non_finite_vector_is_refused(g):
     with pytest.raises(RotationError, match='Rodrigues vector g must be finite'):
         rodrigues_to_matrix(g)
+
+
+def test_the_one_item_path_is_the_batch_formula():
+    q = RNG.normal(size=(1000, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q[:10, 3] = [0.0, -0.0, 1e-300, -1e-300, 1e-17, 1.0, -1.0, 1e-8, -1e-10, 0.5]
+    for item, batch in zip(q[2:], quaternion_to_rodrigues(q[2:])):
+        assert list(rodrigues_of_one(*map(float, item))) == batch.tolist()
+    for item in q[:2]:
+        with pytest.raises(RotationError, match='infinite at θ = π'):
+            rodrigues_of_one(*map(float, item))
 
 
 def test_a_non_rotation_is_refused():

@@ -13,6 +13,10 @@ from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import matrix_to_quaternion, quaternion_to_matrix
 
 
+AT_PI = 'the Rodrigues vector tan(θ/2)·l̂ is infinite at θ = π (quaternion w = 0)'
+"""Why a rotation by θ = π has no Rodrigues vector."""
+
+
 def quaternion_to_rodrigues(q):
     """
     Return g = (x, y, z)/w of unit quaternions q (..., 4) as (x, y, z, w); (..., 3).
@@ -24,9 +28,19 @@ def quaternion_to_rodrigues(q):
     at_pi = w == 0.0
     if at_pi.any():
         where = f' (item {tuple(int(i) for i in np.argwhere(at_pi)[0])})' if w.ndim else ''
-        raise RotationError('the Rodrigues vector tan(θ/2)·l̂ is infinite at θ = π '
-                            f'(quaternion w = 0){where}')
+        raise RotationError(AT_PI + where)
     return q[..., :3] / w[..., None]
+
+
+def rodrigues_of_one(x, y, z, w):
+    """
+    Return quaternion_to_rodrigues of one quaternion, in plain floats: (x/w, y/w, z/w).
+
+    The per-message path of rotation_node (no NumPy value made); RotationError at w = 0.
+    """
+    if w == 0.0:
+        raise RotationError(AT_PI)
+    return x / w, y / w, z / w
 
 
 def matrix_to_rodrigues(R, *, check=True):

@@ -34,7 +34,7 @@ from rclpy.time_source import USE_SIM_TIME_NAME
 from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
 from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.errors import RotationError
-from rot_tools.core.rodrigues import quaternion_to_rodrigues
+from rot_tools.core.rodrigues import rodrigues_of_one
 from rot_tools.core.transform_tree import shown
 from rot_tools.io import boundary, interface
 from rot_tools.io.arguments import version_line
@@ -333,8 +333,7 @@ class RotationNode(Node):
 
         self._axis_angle.publish(vector3_stamped(header, d.rotvec))
         try:
-            self._rodrigues.publish(vector3_stamped(header, quaternion_to_rodrigues(
-                d.quaternion).tolist()))
+            self._rodrigues.publish(vector3_stamped(header, rodrigues_of_one(*d.quaternion)))
         except RotationError as exc:
             self._refuse(source.topic, RODRIGUES_AT_PI, str(exc), header=header)
 
@@ -426,7 +425,9 @@ class RotationNode(Node):
     def _on_set_parameters(self, parameters):
         """Refuse invalid values of our parameters, and a parameter without a name."""
         for parameter in parameters:
-            if not parameter.name:
+            if not parameter.name:  # (rclpy would declare it)
+                self.get_logger().error(
+                    'refused a malformed parameter request: a parameter name is empty')
                 return SetParametersResult(successful=False, reason='a parameter name is empty')
             spec = PARAMETERS.get(parameter.name)
             if spec is not None:
