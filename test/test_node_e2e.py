@@ -2,10 +2,10 @@
 End-to-end: rotation_node as a separate process, driven over DDS from this one.
 
 Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
-installed package, ``python -m rot_tools.ros.node.rotation_node``) in a namespace unique to this test
-run, publishes to its inputs, receives every output, calls both services and a parameter
-service, then stops it with SIGTERM or SIGINT: exit status 0 within a second, and no
-traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
+installed package, ``python -m rot_tools.ros.node.rotation_node``) in a namespace unique to
+this test run, publishes to its inputs, receives every output, calls both services and a
+parameter service, then stops it with SIGTERM or SIGINT: exit status 0 within a second, and
+no traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
 shipped parameter file.
 """
 
