@@ -5,7 +5,8 @@ package_name = 'rot_tools'
 setup(
     name=package_name,
     version='0.1.0',
-    packages=[package_name] + [package_name + '.' + sub for sub in ('core', 'io', 'cli', 'ros', 'ros.client')],
+    packages=[package_name] + [package_name + '.' + sub
+                               for sub in ('core', 'io', 'cli', 'ros', 'ros.client', 'ros.node')],
     data_files=[
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
@@ -32,7 +33,7 @@ setup(
     python_requires='>=3.10',
     entry_points={
         'console_scripts': [
-            'rotation_node = rot_tools.ros.rotation_node:main',
+            'rotation_node = rot_tools.ros.node.rotation_node:main',
             'rotation_client = rot_tools.ros.client.rotation_client:main',
             'rot-tools = rot_tools.cli.main:main',
         ],

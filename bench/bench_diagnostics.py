@@ -4,9 +4,9 @@ rotation_node's /diagnostics under a 400 Hz IMU: what its once-a-second timer co
 Not a ratio benchmark: the node's loop runs the IMU's checks in its timer, once a second, and
 any time they take is time the loop serves no input; the figure to watch is that tick against
 the second between two. A window of 10 s at 400 Hz (4,000 samples, of which it checks every
-other one: rot_tools.ros.diagnostics' CHECKED) is built from ../shared/data's Jackal IMU
+other one: rot_tools.ros.node.diagnostics' CHECKED) is built from ../shared/data's Jackal IMU
 (50 Hz), resampled (scipy's Slerp for the orientation), and given to
-rot_tools.ros.diagnostics.imu_status as the timer gives it, ``--ticks`` times; each tick
+rot_tools.ros.node.diagnostics.imu_status as the timer gives it, ``--ticks`` times; each tick
 timed alone. Also timed: what keeping one ~/imu message costs its callback (ImuWindow.add),
 per message. No DDS: the functions the node calls, called directly.
 
@@ -67,7 +67,7 @@ def main():
     parser.add_argument('--ticks', type=int, default=20)
     parser.add_argument('--json', type=Path)
     args = parser.parse_args()
-    from rot_tools.ros import diagnostics
+    from rot_tools.ros.node import diagnostics
     messages, arrivals = recorded(args.rate, diagnostics.WINDOW)
     window = diagnostics.ImuWindow()
     adds = []

@@ -161,7 +161,7 @@ def _poses(n):
 def _node(parameters):
     """Return a fresh RotationNode with ``parameters`` {name: value} (rclpy initialised)."""
     from rclpy.parameter import Parameter
-    from rot_tools.ros.rotation_node import RotationNode
+    from rot_tools.ros.node.rotation_node import RotationNode
     return RotationNode(f'bench_first_calls_{os.getpid()}', parameter_overrides=[
         Parameter(name, value=value) for name, value in parameters.items()])
 

@@ -55,8 +55,8 @@ def main(argv=None):
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
     from rclpy.parameter import Parameter
-    from rot_tools.ros.pictures import MARKER_RATE
-    from rot_tools.ros.rotation_node import RotationNode
+    from rot_tools.ros.node.pictures import MARKER_RATE
+    from rot_tools.ros.node.rotation_node import RotationNode
 
     rclpy.init()
     nodes = {markers: RotationNode(f'bench_picture_cost_{markers}', parameter_overrides=[

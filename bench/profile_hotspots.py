@@ -82,7 +82,7 @@ def node_callback(top):
     import rclpy
     from geometry_msgs.msg import PoseStamped
     from rclpy.parameter import Parameter
-    from rot_tools.ros.rotation_node import RotationNode
+    from rot_tools.ros.node.rotation_node import RotationNode
     sys.path.insert(0, HERE)
     from relay_node import RelayNode
     from usual_node import UsualNode

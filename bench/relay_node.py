@@ -22,7 +22,7 @@ import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from rot_tools.ros.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
+from rot_tools.ros.node.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension, MultiArrayLayout
 
 

@@ -10,6 +10,7 @@ objects (reliable, depth 10) on rotation_node's topics:
 - ``~/rotation_matrix`` (Float64MultiArray, row-major, rows/cols layout): ``as_matrix()``;
 - ``~/quaternion`` (QuaternionStamped): ``as_quat(canonical=True)``;
 - ``~/axis_angle`` (Vector3Stamped): ``as_rotvec()``;
+- ``~/rodrigues`` (Vector3Stamped): tan(θ/2)·l̂ from the quaternion (x, y, z)/w, none at w = 0;
 - ``~/euler_angles`` (Vector3Stamped): ``as_euler(euler_sequence)`` in ``angle_unit``;
 - ``~/rpy`` (Vector3Stamped): roll, pitch, yaw, ``as_euler`` of REP 103's sequence;
 - ``~/screw`` (TwistStamped): the exponential coordinates of (R, b), angular = θ·l̂ (the
@@ -35,7 +36,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
-from rot_tools.ros.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
+from rot_tools.ros.node.rotation_node import INPUT_QOS  # the same QoS as the node's inputs
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
@@ -61,6 +62,7 @@ class UsualNode(Node):
         self.matrix_pub = self.create_publisher(Float64MultiArray, '~/rotation_matrix', qos)
         self.quaternion_pub = self.create_publisher(QuaternionStamped, '~/quaternion', qos)
         self.axis_angle_pub = self.create_publisher(Vector3Stamped, '~/axis_angle', qos)
+        self.rodrigues_pub = self.create_publisher(Vector3Stamped, '~/rodrigues', qos)
         self.euler_pub = self.create_publisher(Vector3Stamped, '~/euler_angles', qos)
         self.rpy_pub = self.create_publisher(Vector3Stamped, '~/rpy', qos)
         self.screw_pub = self.create_publisher(TwistStamped, '~/screw', qos)
@@ -94,6 +96,8 @@ class UsualNode(Node):
         self.quaternion_pub.publish(quaternion)
 
         self.axis_angle_pub.publish(vector3_stamped(header, rotvec))
+        if w != 0.0:
+            self.rodrigues_pub.publish(vector3_stamped(header, (x / w, y / w, z / w)))
         self.euler_pub.publish(vector3_stamped(
             header, rotation.as_euler(self.sequence, degrees=self.degrees)))
         self.rpy_pub.publish(vector3_stamped(

@@ -22,6 +22,7 @@ from rot_tools.core.imu import check_imu, ImuChecks, ImuReference
 from rot_tools.core.rigid import (
     compose_transforms, frame_to_matrix, homogeneous_to_transform, invert_transform,
     transform_points, transform_to_homogeneous)
+from rot_tools.core.rodrigues import matrix_to_rodrigues, rodrigues_to_matrix
 from rot_tools.core.screw import (
     PURE_TRANSLATION_ANGLE, Screw, screw_exp, screw_from_transform, screw_interpolate,
     screw_log, transform_from_screw)
@@ -45,10 +46,10 @@ __all__ = [
     'error_statistics', 'estimate_time_offset', 'euler_covariance_to_rotvec',
     'euler_to_matrix', 'frame_to_matrix', 'hand_eye_rotation', 'homogeneous_to_transform',
     'hand_eye', 'interpolate_poses', 'invert_transform', 'is_rotation', 'matrix_to_axis_angle',
-    'matrix_to_euler', 'matrix_to_quaternion', 'matrix_to_rotvec', 'mean_rotation',
-    'nearest_rotation', 'nearest_stamps', 'quaternion_to_matrix', 'random_rotations',
-    'rot_x', 'rot_y', 'rot_z', 'rotation_distance', 'rotation_errors',
-    'rotvec_covariance_to_euler', 'rotvec_to_matrix', 'screw_congruence', 'screw_exp',
-    'screw_from_transform',
+    'matrix_to_euler', 'matrix_to_quaternion', 'matrix_to_rodrigues', 'matrix_to_rotvec',
+    'mean_rotation', 'nearest_rotation', 'nearest_stamps', 'quaternion_to_matrix',
+    'random_rotations', 'rodrigues_to_matrix', 'rot_x', 'rot_y', 'rot_z', 'rotation_distance',
+    'rotation_errors', 'rotvec_covariance_to_euler', 'rotvec_to_matrix', 'screw_congruence',
+    'screw_exp', 'screw_from_transform',
     'screw_interpolate', 'screw_log', 'skew', 'transform_from_screw', 'transform_points',
     'transform_pose_covariance', 'transform_to_homogeneous', 'validate_rotation']

@@ -141,7 +141,7 @@ class NodeProcess:
         self.name = f'{namespace}/rot_tools'
         self.out_path = tmp_path / f'{namespace[1:].replace("/", "_")}.out'
         self.err_path = tmp_path / f'{namespace[1:].replace("/", "_")}.err'
-        args = console_script('rotation_node', 'rot_tools.ros.rotation_node') + [
+        args = console_script('rotation_node', 'rot_tools.ros.node.rotation_node') + [
             '--ros-args', '-r', f'__ns:={namespace}', *ros_args]
         with open(self.out_path, 'w') as out, open(self.err_path, 'w') as err:
             self.process = subprocess.Popen(args, stdout=out, stderr=err,
@@ -286,7 +286,7 @@ class Tester:
 
     def subscribe_outputs(self, prefix):
         """Subscribe (reliable, depth 10, like the node) to the node's outputs."""
-        from rot_tools.ros.messages import message_class
+        from rot_tools.ros.node.messages import message_class
         for row in interface.OUTPUTS:
             self.subscribe(f'{prefix}/{row.name}', message_class(row.type_name))
 

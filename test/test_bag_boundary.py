@@ -7,18 +7,16 @@ per-message converters take the fields' values, as rotation_node reads them from
 """
 
 import math
-from types import SimpleNamespace
 
 from hypothesis import example, given, settings as hsettings, strategies as st
 import numpy as np
 import pytest
-from rot_tools.io import boundary, interface
+from rot_tools.io import bag_read, boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE, RefusedInput
 from scipy.spatial.transform import Rotation
 
 TOL = QUATERNION_TOLERANCE
-SETTINGS = SimpleNamespace(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False)
-IMU, ODOMETRY = interface.input_named('imu'), interface.input_named('odometry')
+ODOMETRY_FIELDS = bag_read.SUPPORTED['nav_msgs/msg/Odometry']
 
 
 def _per_message(q, tol=TOL):
@@ -92,13 +90,13 @@ def test_check_order_no_orientation_then_position_then_quaternion():
     assert names == ['no_orientation', 'no_orientation', 'non_finite', 'zero_quaternion']
     # the per-message converters agree
     with pytest.raises(RefusedInput) as info:
-        IMU.convert((0, 0, 0, 0.0, -1.0), SETTINGS, IMU.fields)  # q, orientation_covariance[0]
+        boundary.require_orientation(-1.0)  # checked first, as rotation_node does
     assert info.value.reason == 'no_orientation'
     with pytest.raises(RefusedInput) as info:  # Odometry's pose.pose: position, orientation
-        ODOMETRY.convert((math.nan, 0.0, 0.0, 0, 0, 0, 0.0), SETTINGS, ODOMETRY.fields)
+        boundary.rigid_motion((math.nan, 0.0, 0.0), (0, 0, 0, 0.0), TOL, 'pose.pose')
     assert info.value.reason == 'non_finite'
     assert str(info.value) == boundary.batch_refusal_text(
-        ODOMETRY.fields, boundary.CODE['non_finite'], (0, 0, 0, 0.0), 0.0, TOL,
+        ODOMETRY_FIELDS, boundary.CODE['non_finite'], (0, 0, 0, 0.0), 0.0, TOL,
         (math.nan, 0.0, 0.0)) == 'pose.pose.position.x is nan'
 
 
@@ -110,11 +108,11 @@ def test_check_order_no_orientation_then_position_then_quaternion():
 ])
 def test_batch_text_is_the_per_message_text(q, reason, text):
     with pytest.raises(RefusedInput) as info:
-        ODOMETRY.convert((0.0, 0.0, 0.0, *q), SETTINGS, ODOMETRY.fields)
+        boundary.rigid_motion((0.0, 0.0, 0.0), q, TOL, 'pose.pose')
     codes, norms = boundary.check_batch([q], TOL, positions=[(0.0, 0.0, 0.0)])
     assert info.value.reason == reason == boundary.REFUSAL_REASONS[codes[0] - 1]
     assert str(info.value) == text == boundary.batch_refusal_text(
-        ODOMETRY.fields, int(codes[0]), q, float(norms[0]), TOL, (0.0, 0.0, 0.0))
+        ODOMETRY_FIELDS, int(codes[0]), q, float(norms[0]), TOL, (0.0, 0.0, 0.0))
 
 
 @pytest.mark.parametrize('tol', [0.25, 0.5, 0.0])

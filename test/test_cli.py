@@ -184,7 +184,7 @@ def test_euler_negative_angle_and_options_after_the_arguments(fmt):
     R = rot_z(a) @ rot_y(b) @ rot_x(c)  # Jia eq. 1
     check_rotation(rep, R, deg=True)
     close(rep['euler']['angles'], [-30.0, 20.0, 10.0])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion']
+    assert list(rep) == ['matrix', 'axis_angle', 'rodrigues', 'euler', 'rpy', 'quaternion']
 
 
 def test_euler_extrinsic_with_output_sequence_and_exponent_numbers():
@@ -426,7 +426,8 @@ def test_frame_of_the_tracking_example():
     close(rep['point']['p'], q)
     close(rep['point']['image'], R @ q)
     close(rep['point']['in_moved_frame'], [np.dot(u, q), np.dot(v, q), np.dot(w, q)])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'point']
+    assert list(rep) == ['matrix', 'axis_angle', 'rodrigues', 'euler', 'rpy', 'quaternion',
+                         'point']
 
 
 def test_frame_axes_of_any_length_typed_with_six_digits():
@@ -477,8 +478,8 @@ def test_matrix_of_sixteen_numbers_is_a_homogeneous_transform(seed):
     close(rep['homogeneous'], T)
     close(rep['point']['image'], (T @ np.append(p, 1.0))[:3])          # 4×4 product
     close(rep['point']['in_moved_frame'], (np.linalg.inv(T) @ np.append(p, 1.0))[:3])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'translation',
-                         'homogeneous', 'screw', 'point']
+    assert list(rep) == ['matrix', 'axis_angle', 'rodrigues', 'euler', 'rpy', 'quaternion',
+                         'translation', 'homogeneous', 'screw', 'point']
 
 
 def test_homogeneous_matrix_typed_with_six_digits():

@@ -17,7 +17,7 @@ from doc_blocks import assert_doc_output, console_steps, doc_block
 import pytest
 
 CLIENT = console_script('rotation_client', 'rot_tools.ros.client.rotation_client')
-NODE = console_script('rotation_node', 'rot_tools.ros.rotation_node')
+NODE = console_script('rotation_node', 'rot_tools.ros.node.rotation_node')
 
 
 def normalised(text, namespace):

@@ -109,7 +109,7 @@ def test_the_launch_file_runs_this_package_s_node_with_the_shipped_parameter_fil
     assert pkg == parse_package(str(REPO / 'package.xml')).name == PACKAGE
     scripts = dict(entry.split(' = ') for entry in
                    setup_keywords()['entry_points']['console_scripts'])
-    assert scripts[executable] == 'rot_tools.ros.rotation_node:main'
+    assert scripts[executable] == 'rot_tools.ros.node.rotation_node:main'
     (params_file,) = [ros_args[i + 1] for i, a in enumerate(ros_args) if a == '--params-file']
     assert Path(params_file) == REPO / 'config' / 'rot_tools.yaml'
     remaps = [ros_args[i + 1] for i, a in enumerate(ros_args) if a == '-r']
@@ -142,7 +142,7 @@ def launched(tmp_path):
 
     def launch(overrides):
         _, executable, ros_args = launch_command(overrides)
-        command = console_script(executable, 'rot_tools.ros.rotation_node') + ros_args
+        command = console_script(executable, 'rot_tools.ros.node.rotation_node') + ros_args
         err = tmp_path / f'{len(started)}.err'
         with open(err, 'w') as stderr:
             process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=stderr,
@@ -206,7 +206,7 @@ def test_a_relative_namespace_is_made_absolute_as_launch_ros_does():
 
 def test_doc_node_md_lists_every_launch_argument_and_every_topic_and_parameter():
     from rot_tools.io.interface import INPUTS, OUTPUTS
-    from rot_tools.ros.rotation_node import PARAMETERS
+    from rot_tools.ros.node.rotation_node import PARAMETERS
     doc = (REPO / 'doc' / 'node.md').read_text(encoding='utf-8')
     for arg in ElementTree.parse(LAUNCH_FILE).getroot().iter('arg'):
         assert f"`{arg.get('name')}`" in doc, arg.get('name')

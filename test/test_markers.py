@@ -1,5 +1,5 @@
 """
-rot_tools.ros.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
+rot_tools.ros.node.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
 
 Expected values are computed here from (R, b) and a screw chosen by the test (scipy's
 Rotation for R), never read back from rot_tools.io.drawing. Every message is taken through
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rot_tools.io.drawing import picture
-from rot_tools.ros import messages
+from rot_tools.ros.node import messages
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray

@@ -1,12 +1,12 @@
 """
-rot_tools.ros.messages: the message <-> NumPy boundary of rotation_node (no DDS needed).
+rotation_node's reading of each input message, and rot_tools.ros.node.messages (no DDS traffic).
 
 Inbound, a message goes the node's way: serialised by rclpy and read back as a message
-object, the fields at its INPUTS row's paths read and converted.
+object, then given to the node's callback for its type, whose (header, R, b) or refusal is
+caught before anything is published.
 """
 
 import math
-from types import SimpleNamespace
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Quaternion
 from geometry_msgs.msg import QuaternionStamped, TransformStamped, Vector3Stamped
@@ -16,12 +16,12 @@ import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from rot_tools import (
     euler_to_matrix, is_rotation, quaternion_to_matrix, rot_x, rot_z, rotvec_to_matrix)
-from rot_tools.io import boundary, fields
+from rot_tools.io import boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE as TOL
 from rot_tools.io.boundary import RefusedInput
-from rot_tools.io.fields import field_value
-from rot_tools.ros import messages
-from rot_tools.ros.topics import INPUTS
+from rot_tools.ros.node import messages
+from rot_tools.ros.node.parameters import read_settings
+from rot_tools.ros.node.rotation_node import RotationNode
 from sensor_msgs.msg import Imu
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
@@ -30,19 +30,38 @@ ATOL = 1e-12
 RNG = np.random.default_rng(7)
 
 
-def settings(quaternion_tolerance=TOL, euler_sequence='ZYX', degrees=False):
-    """Return what the converters read of rotation_node's Settings."""
-    return SimpleNamespace(quaternion_tolerance=quaternion_tolerance,
-                           euler_sequence=euler_sequence, degrees=degrees)
+CALLBACKS = {PoseStamped: 'on_pose', Vector3Stamped: 'on_euler', TransformStamped: 'on_transform',
+             PoseWithCovarianceStamped: 'on_pose_with_covariance', Odometry: 'on_odometry',
+             Imu: 'on_imu', QuaternionStamped: 'on_orientation'}
+"""The node's callback of each input type."""
 
 
-def take(msg, given=None):
-    """(header, R, b) of msg as rotation_node takes it: its row's fields read and converted."""
-    kind, = (kind for kind in INPUTS if kind.msg_type is type(msg))
-    msg = deserialize_message(serialize_message(msg), type(msg))
-    values = kind.read(msg)
-    return (msg.header, *kind.row.convert(values, settings() if given is None else given,
-                                          kind.row.fields))
+@pytest.fixture(scope='module')
+def node(ros_context):
+    """Return a RotationNode whose callbacks hand (header, R, b) or the refusal back."""
+    node = RotationNode('messages_check', context=ros_context, namespace='/messages')
+
+    def accepted(source, header, R, b, settings):
+        node.taken = (header, R, np.asarray(b, dtype=float))
+
+    def refused(topic, reason, text, header=None):
+        raise RefusedInput(reason, text)
+
+    node.publish_outputs, node._refuse = accepted, refused
+    yield node
+    node.destroy_node()
+
+
+@pytest.fixture
+def take(node):
+    """Return a function of (msg, **settings) giving (header, R, b) as the node takes msg."""
+    def take(msg, **settings):
+        node._settings = read_settings(node)._replace(**settings)
+        msg = deserialize_message(serialize_message(msg), type(msg))
+        node.taken = None
+        getattr(node, CALLBACKS[type(msg)])(msg)
+        return node.taken
+    return take
 
 
 def same_header(read, msg):
@@ -110,7 +129,7 @@ def test_zero_tolerance_accepts_an_exactly_unit_quaternion():
     np.testing.assert_allclose(R, np.diag([-1.0, 1.0, -1.0]), rtol=0, atol=0)
 
 
-def test_pose_stamped():
+def test_pose_stamped(take):
     msg = PoseStamped()
     msg.header.frame_id = 'map'
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 1.0, -2.0, 3.5
@@ -123,7 +142,7 @@ def test_pose_stamped():
 
 @pytest.mark.parametrize('field, value, match', [
     ('x', math.nan, r'pose\.position\.x is nan'), ('z', -math.inf, r'pose\.position\.z is -inf')])
-def test_pose_with_non_finite_position_is_refused(field, value, match):
+def test_pose_with_non_finite_position_is_refused(field, value, match, take):
     msg = PoseStamped()
     setattr(msg.pose.position, field, value)
     with pytest.raises(RefusedInput, match=match) as info:
@@ -131,7 +150,7 @@ def test_pose_with_non_finite_position_is_refused(field, value, match):
     assert info.value.reason == 'non_finite'
 
 
-def test_transform_stamped():
+def test_transform_stamped(take):
     msg = TransformStamped()
     msg.header.frame_id = 'world'
     msg.transform.translation.x = 4.0
@@ -145,7 +164,7 @@ def test_transform_stamped():
 @pytest.mark.parametrize('where, match', [
     ('translation', r'transform\.translation\.y is nan'),
     ('rotation', r'transform\.rotation\.y is nan')])
-def test_transform_with_nan_is_refused(where, match):
+def test_transform_with_nan_is_refused(where, match, take):
     msg = TransformStamped()
     getattr(msg.transform, where).y = math.nan
     with pytest.raises(RefusedInput, match=match) as info:
@@ -153,7 +172,7 @@ def test_transform_with_nan_is_refused(where, match):
     assert info.value.reason == 'non_finite'
 
 
-def test_transform_with_zero_rotation_is_refused():
+def test_transform_with_zero_rotation_is_refused(take):
     msg = TransformStamped()
     msg.transform.rotation.w = 0.0
     with pytest.raises(RefusedInput, match='transform.rotation is the zero quaternion'):
@@ -162,18 +181,18 @@ def test_transform_with_zero_rotation_is_refused():
 
 @pytest.mark.parametrize('seq', ['ZYX', 'xyz', 'ZXZ', 'yxy'])
 @pytest.mark.parametrize('degrees', [False, True])
-def test_euler_stamped(seq, degrees):
+def test_euler_stamped(seq, degrees, take):
     angles = np.array([0.7, 0.4, -1.3])
     msg = Vector3Stamped()
     given = np.degrees(angles) if degrees else angles
     msg.vector.x, msg.vector.y, msg.vector.z = map(float, given)
-    header, R, b = take(msg, settings(euler_sequence=seq, degrees=degrees))
+    header, R, b = take(msg, euler_sequence=seq, degrees=degrees)
     assert same_header(header, msg)
     np.testing.assert_allclose(R, euler_to_matrix(angles, seq), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
 
 
-def test_euler_stamped_with_inf_is_refused():
+def test_euler_stamped_with_inf_is_refused(take):
     msg = Vector3Stamped()
     msg.vector.z = math.inf
     with pytest.raises(RefusedInput, match=r'vector\.z is inf') as info:
@@ -181,7 +200,7 @@ def test_euler_stamped_with_inf_is_refused():
     assert info.value.reason == 'non_finite'
 
 
-def test_pose_with_covariance_stamped_ignores_the_covariance():
+def test_pose_with_covariance_stamped_ignores_the_covariance(take):
     msg = PoseWithCovarianceStamped()
     msg.header.frame_id = 'map'
     msg.pose.pose.position.y = -1.5
@@ -197,7 +216,7 @@ def test_pose_with_covariance_stamped_ignores_the_covariance():
     assert info.value.reason == 'non_unit_quaternion'
 
 
-def test_odometry_is_its_pose_and_ignores_the_twist():
+def test_odometry_is_its_pose_and_ignores_the_twist(take):
     msg = Odometry()
     msg.header.frame_id, msg.child_frame_id = 'odom', 'base_link'
     msg.pose.pose.position.x = 3.0
@@ -212,7 +231,7 @@ def test_odometry_is_its_pose_and_ignores_the_twist():
         take(msg)
 
 
-def test_imu_orientation():
+def test_imu_orientation(take):
     msg = Imu()
     msg.orientation = quaternion((math.sin(0.5), 0, 0, math.cos(0.5)))
     msg.linear_acceleration.x = math.inf  # not used
@@ -223,7 +242,7 @@ def test_imu_orientation():
 
 
 @pytest.mark.parametrize('q', [(0, 0, 0, 0), (0, 0, 0, 1), (math.nan, 0, 0, 0)])
-def test_imu_without_orientation_is_refused(q):
+def test_imu_without_orientation_is_refused(q, take):
     msg = Imu()
     msg.orientation = quaternion(q)
     msg.orientation_covariance[0] = -1.0
@@ -233,7 +252,7 @@ def test_imu_without_orientation_is_refused(q):
     assert 'no_orientation' in boundary.REFUSAL_REASONS
 
 
-def test_imu_with_a_covariance_is_used():
+def test_imu_with_a_covariance_is_used(take):
     msg = Imu()
     msg.orientation = quaternion((0, 0, 0, 1))
     msg.orientation_covariance = [0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01]
@@ -243,7 +262,7 @@ def test_imu_with_a_covariance_is_used():
         take(msg)
 
 
-def test_quaternion_stamped():
+def test_quaternion_stamped(take):
     msg = QuaternionStamped()
     msg.quaternion = quaternion(np.array([0.0, 0.0, 1.0, 1.0]) * math.sqrt(0.5) * (1 + 5e-4))
     header, R, b = take(msg)
@@ -251,49 +270,8 @@ def test_quaternion_stamped():
     np.testing.assert_allclose(R, rot_z(math.pi / 2), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
     with pytest.raises(RefusedInput, match='quaternion has norm') as info:
-        take(msg, settings(quaternion_tolerance=1e-4))
+        take(msg, quaternion_tolerance=1e-4)
     assert info.value.reason == 'non_unit_quaternion'
-
-
-def test_a_row_reads_the_fields_at_its_paths():
-    """An Imu row naming angular_velocity reads angular_velocity, not what comes first."""
-    from rot_tools.io import interface
-    from rot_tools.ros import topics
-    row = interface.Input('gyro', 'sensor_msgs/msg/Imu', {'angles': 'angular_velocity'},
-                          boundary.euler_fields_to_rt, 'the rates, as if they were angles')
-    msg = Imu(orientation=quaternion((0.5, 0.5, 0.5, 0.5)))
-    msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z = 0.1, 0.2, 0.3
-    msg.orientation_covariance[0] = -1.0
-    assert topics.subscribed(row).read(msg) == (0.1, 0.2, 0.3)
-    imu, = (kind for kind in INPUTS if kind.row.name == 'imu')
-    assert imu.read(msg) == (0.5, 0.5, 0.5, 0.5, -1.0)
-
-
-def test_an_output_row_writes_the_fields_at_its_paths():
-    from rot_tools.ros.topics import OUTPUTS
-    for kind in OUTPUTS:
-        if kind.row.value is None:
-            continue
-        msg = kind.message()
-        numbers = [0.5 + k for k in range(len(kind.row.fields))]
-        kind.write(msg, numbers)
-        msg = deserialize_message(serialize_message(msg), kind.msg_type)
-        assert [field_value(msg, path) for path in kind.row.fields] == numbers
-
-
-def test_fields_writer_writes_each_path_as_its_own_setter_would():
-    # Paths that leave a parent and come back to it, members and elements of one message:
-    # the writer (one parent lookup per run of paths) and field_setter (one per path) agree.
-    paths = ('pose.pose.position.x', 'pose.pose.position.y', 'pose.covariance[3]',
-             'pose.covariance[4]', 'pose.pose.position.z', 'pose.covariance[0]',
-             'pose.pose.orientation.w', 'pose.pose.orientation.x')
-    numbers = [0.5 + k for k in range(len(paths))]
-    written, one_by_one = PoseWithCovarianceStamped(), PoseWithCovarianceStamped()
-    fields.fields_writer(paths)(written, numbers)
-    for path, value in zip(paths, numbers):
-        fields.field_setter(path)(one_by_one, value)
-    assert [field_value(written, path) for path in paths] == numbers
-    assert serialize_message(written) == serialize_message(one_by_one)
 
 
 # ---------------------------------------------------------------------------------------

@@ -103,7 +103,7 @@ def test_every_module_lives_in_a_sub_package():
 @pytest.mark.parametrize('sub', sorted(LAYERS))
 def test_imports_point_down_only(sub):
     allowed = LAYERS[sub] | {sub}
-    for path in sorted((PACKAGE / sub).glob('*.py')):
+    for path in sorted((PACKAGE / sub).rglob('*.py')):
         for name in imported_modules(path):
             parts = name.split('.')
             if parts[0] != 'rot_tools':
@@ -111,7 +111,7 @@ def test_imports_point_down_only(sub):
                     assert not parts[0].startswith(ROS_PREFIXES), f'{path.name} imports {name}'
                 continue
             assert len(parts) == 1 or parts[1] not in LAYERS or parts[1] in allowed, \
-                f'rot_tools/{sub}/{path.name} imports {name}: {sub} may import only ' \
+                f'{path.relative_to(PACKAGE)} imports {name}: {sub} may import only ' \
                 f'{", ".join(sorted(allowed))}'
 
 

@@ -30,10 +30,10 @@ from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io import interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import transform_report
-from rot_tools.ros import rotation_node, topics
-from rot_tools.ros.messages import message_class
-from rot_tools.ros.rotation_node import REFUSAL_REASONS, RotationNode
-from rot_tools.ros.screw_path import MAX_PATH_STEPS
+from rot_tools.ros.node import rotation_node
+from rot_tools.ros.node.messages import message_class
+from rot_tools.ros.node.rotation_node import REFUSAL_REASONS, RotationNode
+from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
 from scipy.spatial.transform import Rotation
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
@@ -43,9 +43,10 @@ import yaml
 ATOL = 1e-12
 INPUTS = {row.name: message_class(row.type_name) for row in interface.INPUTS}
 """Every input of the node, by name: its message class."""
-ALWAYS = tuple(row.name for row in interface.OUTPUTS if row.value and not row.covariance)
-"""Outputs published for every accepted input (screw_axis only for a non-identity one)."""
-STAMPED = tuple(name for name in ALWAYS if interface.output_named(name).stamped)
+ALWAYS = ('rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy', 'screw')
+"""Outputs published for every accepted input (screw_axis only for a non-identity one,
+rodrigues only away from θ = π)."""
+STAMPED = ALWAYS[1:]
 """Those that carry the input's header (all but the MultiArray rotation_matrix)."""
 
 
@@ -470,6 +471,33 @@ def test_identity_has_no_marker(rig):
     assert [m.header.stamp.sec for m in markers if m.action == Marker.ADD] == [later]
 
 
+def test_rodrigues_vector_is_tan_half_angle_times_axis(rig):
+    """~/rodrigues = tan(θ/2)·l̂, cross-checked with scipy's rotation vector."""
+    q, p = POSE_CASES['general']
+    stamp = rig.send('pose', pose_stamped(q, p))
+    rig.outputs(stamp)
+    rig.tester.spin_until(lambda: rig.received('rodrigues')
+                          and rig.received('rodrigues')[-1].header.stamp.sec == stamp,
+                          what='~/rodrigues')
+    rotvec = Rotation.from_quat(q).as_rotvec()
+    angle = np.linalg.norm(rotvec)
+    np.testing.assert_allclose(xyz(rig.received('rodrigues')[-1].vector),
+                               math.tan(angle / 2) * rotvec / angle, rtol=1e-12, atol=ATOL)
+
+
+def test_no_rodrigues_vector_at_half_turn_but_every_other_output(rig):
+    stamp = rig.send('pose', pose_stamped((1.0, 0.0, 0.0, 0.0), (0.3, -1.0, 2.0)))
+    out = rig.outputs(stamp)
+    check_outputs(out, stamp, 'map', quaternion_to_matrix((1.0, 0.0, 0.0, 0.0)),
+                  np.array([0.3, -1.0, 2.0]))
+    later = rig.roundtrip('pose', pose_stamped((0, 0, 0.6, 0.8)))['screw'].header.stamp.sec
+    rig.tester.spin_until(lambda: rig.received('rodrigues'), what='~/rodrigues')
+    assert [m.header.stamp.sec for m in rig.received('rodrigues')] == [later]
+    report = rig.report()
+    assert report['refused']['rodrigues_at_pi'] == report['refused']['total'] == 1
+    assert 'infinite at θ = π' in report['last_refusals']['rodrigues_at_pi']['message']
+
+
 @pytest.mark.parametrize('kind', ['pose', 'transform'])
 def test_half_turn_outputs_share_one_axis_sign(rig, kind):
     """At θ = π the axis sign is free; every output of one input must use the same one."""
@@ -592,15 +620,15 @@ BAD_INPUTS = {
                                   'non_unit_quaternion', 'norm 5'),
 }
 GOOD_INPUTS = {
-    'pose': pose_stamped((0, 0, 1, 0), (1, 0, 0)),
-    'transform': transform_stamped((0, 0, 1, 0), (1, 0, 0)),
+    'pose': pose_stamped((0, 0, 0.6, 0.8), (1, 0, 0)),
+    'transform': transform_stamped((0, 0, 0.6, 0.8), (1, 0, 0)),
     'euler': euler_stamped((1.0, 0.0, 0.0)),
-    'pose_with_covariance': pose_with_covariance((0, 1, 0, 0), (0, 0, 1)),
-    'odometry': odometry((1, 0, 0, 0), (0, 1, 0)),
+    'pose_with_covariance': pose_with_covariance((0, 0.6, 0, 0.8), (0, 0, 1)),
+    'odometry': odometry((0.6, 0, 0, 0.8), (0, 1, 0)),
     'imu': imu((0, 0, math.sqrt(0.5), math.sqrt(0.5))),
     'orientation': quaternion_stamped((0.5, 0.5, 0.5, 0.5)),
 }
-"""A message of each kind that has outputs, screw axis included."""
+"""A message of each kind that has outputs, screw axis and Rodrigues vector included."""
 
 
 @pytest.mark.parametrize('case', BAD_INPUTS)
@@ -766,7 +794,7 @@ def test_describe_carries_the_latest_refusal_of_each_reason(rig):
     rig.send('pose', pose_stamped((0.0, 0.0, math.nan, 1.0)))
     latest = rig.send('orientation', quaternion_stamped((0.0, 0.0, 0.0, 0.5)))
     rig.tester.spin_until(lambda: rig.node.refused_counts()['total'] == 3, what='refusals')
-    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    rig.roundtrip('pose', pose_stamped((0, 0, 0.6, 0.8)))
     report = rig.report()
     assert report['refused']['non_unit_quaternion'] == 2
     assert list(report)[-2:] == ['refused', 'last_refusals']
@@ -938,7 +966,7 @@ def test_screw_path_refusals(rig, case):
     (error,) = rig.node_logs(Log.ERROR)
     assert why in error.msg
     # The node keeps serving; the refusal is counted.
-    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    rig.roundtrip('pose', pose_stamped((0, 0, 0.6, 0.8)))
     refused = rig.report()['refused']
     assert refused['total'] == 1 and refused[reason] == 1
 
@@ -947,33 +975,10 @@ def test_screw_path_refusals(rig, case):
 # The tables: a new output or parameter is one row
 
 
-def test_every_output_row_is_published_with_its_type(rig):
-    published = {pub.topic_name: pub.msg_type for pub in rig.node.publishers}
-    for kind in rotation_node.OUTPUTS:
-        assert published[rig.node.resolve_topic_name(kind.topic)] is kind.msg_type
-    assert {'rotation_matrix', 'quaternion', 'axis_angle', 'euler_angles', 'rpy',
-            'screw'} <= set(ALWAYS)  # (those that other tests here read by name)
-
-
-def test_a_new_output_is_one_row(make_rig, tester, namespace, monkeypatch):
-    row = interface.Output('euler_again', 'geometry_msgs/msg/Vector3Stamped',
-                           interface.members('vector', 'xyz'), 'euler', angles=True)
-    monkeypatch.setattr(rotation_node, 'OUTPUTS', rotation_node.OUTPUTS + (topics.published(row),))
-    tester.subscribe(f'{namespace}/rot_tools/euler_again', Vector3Stamped)
-    rig = make_rig(angle_unit='deg')  # (discovery waits for the new topic's match too)
-    q, p = POSE_CASES['general']
-    stamp = rig.send('pose', pose_stamped(q, p))
-    out = rig.outputs(stamp)
-    (extra,) = rig.tester.wait_messages(rig.topic('euler_again'))
-    assert extra.header.stamp.sec == stamp
-    assert xyz(extra.vector).tolist() == xyz(out['euler_angles'].vector).tolist()
-    angles, _ = matrix_to_euler(quaternion_to_matrix(q), 'ZYX')
-    np.testing.assert_allclose(xyz(extra.vector), np.degrees(angles), rtol=0, atol=1e-10)
-
-
 def test_a_new_parameter_is_one_row(ros_context, make_rig, namespace, monkeypatch):
     from rcl_interfaces.msg import ParameterDescriptor
-    row = rotation_node.ParameterSpec(
+    from rot_tools.ros.node.parameters import ParameterSpec
+    row = ParameterSpec(
         2.0, ParameterDescriptor(type=ParameterType.PARAMETER_DOUBLE, description='a test'),
         lambda value: '' if value < 5.0 else f'test_limit {value} is not < 5')
     monkeypatch.setattr(rotation_node, 'PARAMETERS',
@@ -1036,15 +1041,16 @@ def test_angle_unit_deg(rig):
     check_outputs(out, out['screw'].header.stamp.sec, 'map', R, np.zeros(3), degrees=True)
     np.testing.assert_allclose(xyz(out['euler_angles'].vector), [30, -20, 10], atol=1e-10)
     # Only the Euler angles switch unit: the rotation vector stays in radians.
-    out = rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
-    assert xyz(out['axis_angle'].vector)[2] == pytest.approx(math.pi, abs=ATOL)
-    assert xyz(out['euler_angles'].vector)[0] == pytest.approx(180.0, abs=1e-10)
+    out = rig.roundtrip('pose', pose_stamped((0, 0, 0.6, 0.8)))
+    angle = 2 * math.atan2(0.6, 0.8)
+    assert xyz(out['axis_angle'].vector)[2] == pytest.approx(angle, abs=ATOL)
+    assert xyz(out['euler_angles'].vector)[0] == pytest.approx(math.degrees(angle), abs=1e-10)
 
 
 def test_quaternion_tolerance(rig):
     q = np.array([0.0, 0.6, 0.0, 0.8]) * 1.01
     rig.send('pose', pose_stamped(q))
-    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))
+    rig.roundtrip('pose', pose_stamped((0, 0, 0.6, 0.8)))
     assert rig.report()['refused']['non_unit_quaternion'] == 1
     assert set_one(rig.node, 'quaternion_tolerance', 0.02).successful
     out = rig.roundtrip('pose', pose_stamped(q))
@@ -1189,8 +1195,9 @@ def test_a_parameter_without_a_name_is_refused(rig, service):
         assert (response.result.successful, response.result.reason) == (False, why)
         assert rig.node.get_parameter('angle_unit').value == 'rad'
     assert '' not in rig.node.list_parameters([], 0).names
-    assert not rig.node_logs(Log.ERROR)
-    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0)))  # and the node keeps serving
+    (log,) = rig.node_logs(Log.ERROR)  # one line each time, no traceback
+    assert log.msg == 'refused a malformed parameter request: a parameter name is empty'
+    rig.roundtrip('pose', pose_stamped((0, 0, 0.6, 0.8)))  # and the node keeps serving
 
 
 def test_a_megabyte_parameter_value_is_logged_and_answered_in_excerpts(rig):

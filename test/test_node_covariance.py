@@ -18,7 +18,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 import numpy as np
 import pytest
 from rclpy.parameter import Parameter
-from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.node.rotation_node import RotationNode
 from scipy.spatial.transform import Rotation
 from test_node import imu, odometry, pose_with_covariance, quat, Rig, set_one, xyz
 

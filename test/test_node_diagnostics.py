@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 from rclpy.qos import qos_profile_sensor_data
 from rot_tools.core.imu import faults, GyroAxesCheck, GyroUnitsCheck, ImuChecks
-from rot_tools.ros import diagnostics
-from rot_tools.ros.rotation_node import RotationNode
+from rot_tools.ros.node import diagnostics
+from rot_tools.ros.node.rotation_node import RotationNode
 from sensor_msgs.msg import Imu
 from test_imu import jackal  # noqa: F401 (the module's fixture)
 

@@ -2,10 +2,10 @@
 End-to-end: rotation_node as a separate process, driven over DDS from this one.
 
 Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
-installed package, ``python -m rot_tools.ros.rotation_node``) in a namespace unique to this test
-run, publishes to its inputs, receives every output, calls both services and a parameter
-service, then stops it with SIGTERM or SIGINT: exit status 0 within a second, and no
-traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
+installed package, ``python -m rot_tools.ros.node.rotation_node``) in a namespace unique to
+this test run, publishes to its inputs, receives every output, calls both services and a
+parameter service, then stops it with SIGTERM or SIGINT: exit status 0 within a second, and
+no traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
 shipped parameter file.
 """
 
@@ -28,7 +28,7 @@ from rclpy.parameter import Parameter, parameter_value_to_python
 from rot_tools import (
     euler_to_matrix, matrix_to_euler, matrix_to_rotvec, quaternion_to_matrix, screw_from_transform,
     screw_log)
-from rot_tools.ros.rotation_node import PARAMETERS
+from rot_tools.ros.node.rotation_node import PARAMETERS
 from scipy.spatial.transform import Rotation
 from std_srvs.srv import Trigger
 import yaml
@@ -166,7 +166,7 @@ def test_node_process_end_to_end(tester, node_process):
     assert report['source'] == f'{node}/transform' and report['frame_id'] == 'map'
     assert report['screw']['point'] == pytest.approx([1.0, 0.0, 0.0], abs=1e-12)
     assert report['axis_angle']['angle'] == pytest.approx(math.pi, rel=1e-11)
-    assert report['refused']['total'] == 0
+    assert report['refused']['total'] == report['refused']['rodrigues_at_pi'] == 1  # a half turn
 
     # ~/screw_path.
     request = GetPlan.Request(start=pose_stamped((0, 0, 0, 1), (0, 0, 0), 1),
@@ -187,14 +187,16 @@ def test_node_process_end_to_end(tester, node_process):
     # Bad input is refused and counted; the node keeps serving. Inputs are best effort: a
     # sample can be lost, so the bad one is sent until the node has counted it.
     deadline = time.monotonic() + 10.0
-    while remote.describe()['refused']['total'] == 0:
+    while remote.describe()['refused']['zero_quaternion'] == 0:
         assert time.monotonic() < deadline, 'the zero quaternion was never refused'
         remote.pubs['pose'].publish(pose_stamped((0, 0, 0, 0), (0, 0, 0), 999))
         tester.spin_for(0.2)
-    out = remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
-    check_outputs(out, np.diag([-1.0, -1.0, 1.0]), np.array([1.0, 0.0, 0.0]), degrees=True)
+    out = remote.send('pose', pose_stamped((0, 0, 0.6, 0.8), (1, 0, 0), 0))
+    check_outputs(out, quaternion_to_matrix((0, 0, 0.6, 0.8)), np.array([1.0, 0.0, 0.0]),
+                  degrees=True)
     refused = remote.describe()['refused']
-    assert refused['total'] == refused['zero_quaternion'] >= 1
+    assert refused['total'] == refused['zero_quaternion'] + refused['rodrigues_at_pi']
+    assert refused['zero_quaternion'] >= 1
     assert f'refused input on {node}/pose (zero_quaternion)' in process.err_path.read_text()
 
     assert process.process.poll() is None
@@ -363,7 +365,7 @@ def test_a_remap_the_shell_expanded_is_warned_about(node_process):
     (['p', '-r', '/home/u/imu:=/x', '--ros-args', '--', '-r', '/home/u/imu:=/x'], []),
 ])
 def test_home_remaps(argv, found):
-    from rot_tools.ros.runtime import home_remaps
+    from rot_tools.ros.node.runtime import home_remaps
     assert home_remaps(argv, '/home/u/') == found
 
 

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
-from rot_tools.ros import pictures
-from rot_tools.ros.diagnostics import PERIOD
-from rot_tools.ros.pictures import MARKER_RATE
+from rot_tools.ros.node import pictures
+from rot_tools.ros.node.diagnostics import PERIOD
+from rot_tools.ros.node.pictures import MARKER_RATE
 from scipy.spatial.transform import Rotation
 from test_node import (  # noqa: F401  (make_rig and rig are fixtures)
     euler_stamped, make_rig, pose_stamped, quat, rig, set_one, transform_stamped, xyz)
@@ -278,7 +278,7 @@ def test_markers_are_throttled_and_the_last_input_is_drawn(rig):  # noqa: F811
 
 def test_a_picture_too_large_for_float64_deletes_and_warns(make_rig):  # noqa: F811
     rig = make_rig(marker_scale=1e308)  # noqa: F811
-    stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
+    stamp = rig.send('pose', pose_stamped((0, 0, 0.6, 0.8), (1, 0, 0)))
     m = check_array(markers_of(rig, stamp), stamp, 'map')
     assert [m[i].action for i in range(6)] == [Marker.DELETE] * 6
     assert screw_axis_of(rig, stamp).action == Marker.DELETE

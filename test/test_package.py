@@ -16,7 +16,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = 'rot_tools'
 CONSOLE_SCRIPTS = {
-    'rotation_node': 'rot_tools.ros.rotation_node:main',
+    'rotation_node': 'rot_tools.ros.node.rotation_node:main',
     'rotation_client': 'rot_tools.ros.client.rotation_client:main',
     'rot-tools': 'rot_tools.cli.main:main',
 }

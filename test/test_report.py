@@ -45,8 +45,8 @@ def _json_loads(text):
 
 def test_keys_in_order_and_plain_python_types():
     rep = transform_report(R0, B0, point=[1.0, -2.0, 0.5])
-    assert list(rep) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion', 'translation',
-                         'homogeneous', 'screw', 'point']
+    assert list(rep) == ['matrix', 'axis_angle', 'rodrigues', 'euler', 'rpy', 'quaternion',
+                         'translation', 'homogeneous', 'screw', 'point']
     assert list(rep['axis_angle']) == [
         'axis', 'angle', 'angle_deg', 'rotation_vector', 'second_solution']
     assert list(rep['axis_angle']['second_solution']) == ['axis', 'angle', 'angle_deg']
@@ -56,7 +56,8 @@ def test_keys_in_order_and_plain_python_types():
     assert list(rep['screw']) == [
         'direction', 'point', 'moment', 'angle', 'angle_deg', 'translation', 'pitch']
     assert list(rep['point']) == ['p', 'image', 'in_moved_frame']
-    assert list(transform_report(R0)) == ['matrix', 'axis_angle', 'euler', 'rpy', 'quaternion']
+    assert list(transform_report(R0)) == [
+        'matrix', 'axis_angle', 'rodrigues', 'euler', 'rpy', 'quaternion']
     for item in _walk(rep):
         assert type(item) in (dict, list, float, bool, str), (type(item), item)
 
@@ -296,6 +297,7 @@ axis_angle:
     axis: [0.0, 0.0, -1.0]
     angle: 4.71238898038
     angle_deg: 270.0
+rodrigues: [0.0, 0.0, 1.0]
 euler:
   sequence: ZYX
   unit: deg

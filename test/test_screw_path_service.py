@@ -12,8 +12,8 @@ from nav_msgs.srv import GetPlan
 import pytest
 from rcl_interfaces.msg import Log
 from rclpy.serialization import serialize_message
-from rot_tools.ros import rotation_node
-from rot_tools.ros.screw_path import MAX_PATH_STEPS, MAX_REPLY_BYTES, reply_bytes
+from rot_tools.ros.node import rotation_node
+from rot_tools.ros.node.screw_path import MAX_PATH_STEPS, MAX_REPLY_BYTES, reply_bytes
 from test_node import pose_stamped
 
 

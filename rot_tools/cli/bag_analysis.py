@@ -21,7 +21,7 @@ from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.core.fitting import mean_rotation
 from rot_tools.core.imu import GYRO_TOL
-from rot_tools.io import bag_read, boundary, interface
+from rot_tools.io import bag_read, boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import Exact
 
@@ -164,7 +164,7 @@ class Topic:
         q = c.orientation[k]
         norm = boundary.check_batch(q[None], self.tolerance).norm
         position = c.position[k] if c.position is not None else None
-        fields = (interface.TF_FIELDS if self.chain is not None
+        fields = (bag_read.TF_FIELDS if self.chain is not None
                   else bag_read.SUPPORTED[self.msgtype])
         return boundary.batch_refusal_text(fields, int(self.codes[k]), q, float(norm[0]),
                                            self.tolerance, position)

@@ -12,16 +12,16 @@ import threading
 
 from rot_tools.cli import (
     axis_angle, bag, compare, covariance, euler, frame, hand_eye, imu_check, matrix, options,
-    output_file, quaternion, rotvec, screw)
+    output_file, quaternion, rodrigues, rotvec, screw)
 from rot_tools.io import arguments
 
 PROG = options.PROG
 
-COMMANDS = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw, bag, compare,
-            covariance, imu_check, hand_eye)
+COMMANDS = (euler, matrix, axis_angle, rotvec, rodrigues, quaternion, frame, screw, bag,
+            compare, covariance, imu_check, hand_eye)
 """The modules of rot-tools' commands, in the order --help lists them."""
 
-ONE_SHOT = (euler, matrix, axis_angle, rotvec, quaternion, frame, screw)
+ONE_SHOT = (euler, matrix, axis_angle, rotvec, rodrigues, quaternion, frame, screw)
 """The one-shot commands, whose first examples the main help shows."""
 
 

@@ -56,12 +56,12 @@ _DECOMPOSITION = InRange(value=Decomposition(
 
 def _decomposition_kernel(ops, m, b, spec):
     """InRange(the Decomposition, where its screw and its twist fit float64)."""
-    turn = axis_angle_kernel(ops, m)
-    screw = screw_of_axis_kernel(ops, turn.axis, turn.angle, b)
-    twist = twist_kernel(ops, turn.axis, turn.angle, b)
+    axis_angle = axis_angle_kernel(ops, m)
+    screw = screw_of_axis_kernel(ops, axis_angle.axis, axis_angle.angle, b)
+    twist = twist_kernel(ops, axis_angle.axis, axis_angle.angle, b)
     euler = angles_kernel(ops, m, spec, GIMBAL_LOCK_TOL)
     return InRange(value=Decomposition(
-        axis=turn.axis, angle=turn.angle, rotvec=rotvec_of(turn),
+        axis=axis_angle.axis, angle=axis_angle.angle, rotvec=rotvec_of(axis_angle),
         euler=euler.angles, degenerate=euler.degenerate,
         rpy=angles_kernel(ops, m, _RPY, GIMBAL_LOCK_TOL).angles,
         quaternion=quaternion_of_matrix_kernel(ops, m), screw=screw.value, twist=twist.value),

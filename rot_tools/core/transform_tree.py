@@ -30,8 +30,6 @@ NON_FINITE = 'non_finite'
 NOT_ROTATION = 'not_rotation'
 BAD_VALUE = 'bad_value'
 TOO_MANY_FRAMES = 'too_many_frames'
-SET_REASONS = (BAD_FRAME, LOOP, NON_FINITE, NOT_ROTATION, BAD_VALUE, TOO_MANY_FRAMES)
-"""Reasons set_transform refuses a transform for (TransformTreeError.reason)."""
 
 DEFAULT_MAX_SAMPLES = 100_000
 """Samples kept per dynamic edge at most: 10 s at 10 kHz (each sample is 13 float64)."""

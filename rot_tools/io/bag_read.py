@@ -2,9 +2,9 @@
 Reading the orientation fields of recorded bags into NumPy columns, without ROS.
 
 rosbags (the ``bag`` extra) opens ROS 1 and rosbag2 (sqlite3, MCAP) bags and decodes their
-messages; each topic keeps only the fields rot_tools.io.interface names, as columns. Every
-failure of a bag is a BagError of one line that names the bag; a bag that holds nothing of
-what was asked, a BagSkipped.
+messages; each topic keeps only the fields its checks and conversions need (SUPPORTED), as
+columns. Every failure of a bag is a BagError of one line that names the bag; a bag that
+holds nothing of what was asked, a BagSkipped.
 """
 
 from contextlib import contextmanager
@@ -15,15 +15,38 @@ import stat
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.io import interface
-from rot_tools.io.fields import field_getter
 
-SUPPORTED = interface.recorded_inputs()
+MEMBERS = {
+    'child_frame_id': None,
+    'position': ('x', 'y', 'z'),
+    'orientation': ('x', 'y', 'z', 'w'),
+    'covariance0': ('[0]',),
+    'angular_velocity': ('x', 'y', 'z'),
+}
+"""The columns read, and the float64 members of each field (None: a string)."""
+
+_POSE = {'position': 'pose.position', 'orientation': 'pose.orientation'}
+_POSE_POSE = {'position': 'pose.pose.position', 'orientation': 'pose.pose.orientation'}
+TF_FIELDS = {'child_frame_id': 'child_frame_id', 'position': 'transform.translation',
+             'orientation': 'transform.rotation'}
+"""The fields of a geometry_msgs/TransformStamped (and of each transform of a TFMessage)."""
+
+SUPPORTED = {
+    'geometry_msgs/msg/PoseStamped': _POSE,
+    'geometry_msgs/msg/TransformStamped': TF_FIELDS,
+    'geometry_msgs/msg/PoseWithCovarianceStamped': _POSE_POSE,
+    'nav_msgs/msg/Odometry': {'child_frame_id': 'child_frame_id', **_POSE_POSE},
+    'sensor_msgs/msg/Imu': {'orientation': 'orientation',
+                            'covariance0': 'orientation_covariance',
+                            'angular_velocity': 'angular_velocity'},
+    'geometry_msgs/msg/QuaternionStamped': {'orientation': 'quaternion'},
+}
 """The message types read — rotation_node's inputs with an orientation — and where their
-fields are: column (a role of rot_tools.io.interface.MEMBERS) → field path."""
+fields are: column (a key of :data:`MEMBERS`) → field path."""
 
-COVARIANCE = {row.type_name: row.covariance for row in interface.INPUTS
-              if row.covariance and row.type_name in SUPPORTED}
+COVARIANCE = {'geometry_msgs/msg/PoseWithCovarianceStamped': ('pose.covariance', 36),
+              'nav_msgs/msg/Odometry': ('pose.covariance', 36),
+              'sensor_msgs/msg/Imu': ('orientation_covariance', 9)}
 """The types read that carry their orientation's covariance: type name → (path, size) of
 the float64 array, read whole as the column ``covariance`` (N, size), row-major."""
 
@@ -216,6 +239,16 @@ def _members_getter(names):
     return attrgetter(*names)
 
 
+def _field_getter(path):
+    """Return get(msg): the field at ``path`` ('pose.position'; the last may be indexed)."""
+    name, indexed, index = path.partition('[')
+    get = attrgetter(name)
+    if not indexed:
+        return get
+    k = int(index.rstrip(']'))
+    return lambda msg: get(msg)[k]
+
+
 class _Getter(NamedTuple):
     """How one column is read: the field at its path, then its members (None: a string)."""
 
@@ -232,7 +265,7 @@ class _Fields:
     fields: {column: path}, the header's (:data:`HEADER`) added; covariance: (path, size) of
     an array read whole, or None; vectors: {column: path} of Vector3 fields read besides. A
     column is the stamp (sec, nanosec: int64), a string (a frame id), the numbers of a role's
-    members (rot_tools.io.interface.MEMBERS: float64) or of a Vector3 (:data:`VECTOR3`), or
+    members (MEMBERS: float64) or of a Vector3 (:data:`VECTOR3`), or
     a whole float64 array (``covariance``).
     """
 
@@ -241,12 +274,12 @@ class _Fields:
         self.vectors = dict(vectors or {})
         for column, path in {**HEADER, **fields, **self.vectors}.items():
             members = (STAMP_MEMBERS if column == 'stamp' else VECTOR3
-                       if column in self.vectors else interface.MEMBERS.get(column))
-            self.getters.append(_Getter(column, field_getter(path),
+                       if column in self.vectors else MEMBERS.get(column))
+            self.getters.append(_Getter(column, _field_getter(path),
                                         members and _members_getter(members),
                                         np.int64 if column == 'stamp' else np.float64))
         if covariance:
-            self.getters.append(_Getter('covariance', field_getter(covariance[0]), None,
+            self.getters.append(_Getter('covariance', _field_getter(covariance[0]), None,
                                         np.float64))
         self.size = covariance[1] if covariance else None
         self.names = {getter.column for getter in self.getters}
@@ -339,7 +372,7 @@ def _index(chunks):
 def _join(name, chunks, fields):
     """Return column ``name`` of every chunk, joined."""
     width = len(STAMP_MEMBERS if name == 'stamp' else VECTOR3 if name in fields.vectors
-                else interface.MEMBERS.get(name) or ()) or fields.size
+                else MEMBERS.get(name) or ()) or fields.size
     empty = np.zeros((0, width) if width > 1 else (0,), np.int64 if name == 'stamp' else None)
     return np.concatenate([chunk.columns[name] for chunk in chunks] or [empty])
 
@@ -474,7 +507,7 @@ def read_tf(reader, static, dynamic, start=None, stop=None):
     ``static`` connections are read whole, ``dynamic`` ones between start and stop (ns,
     record time), static ones first.
     """
-    topic = _Topic('tf', TF_TYPE, _Fields(interface.TF_FIELDS))
+    topic = _Topic('tf', TF_TYPE, _Fields(TF_FIELDS))
     kinds, count = [], 0
     try:
         for connections, lo, hi in ((static, None, None), (dynamic, start, stop)):

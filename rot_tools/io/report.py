@@ -1,80 +1,10 @@
 """
 Every representation of one rigid transform (R, b) as plain data, and its YAML / JSON text.
 
-The data takes one path: (R, b) → :func:`transform_report` → :func:`to_yaml` or
-:func:`to_json`. The ``rot-tools`` command line and the node's ``~/describe`` service print
-the same report, so the key names below are part of the contract; they never depend on
-options. Radians unless a key or ``unit`` says otherwise; lengths in the unit of b.
-
-``transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, point=None)``
-returns a dict of plain Python data (float, bool, str, list, dict; no NumPy types), keys in
-this order::
-
-    matrix:            [[r11, r12, r13], [r21, r22, r23], [r31, r32, r33]]   (list of rows)
-    axis_angle:
-      axis:            unit l̂ (at angle 0 it is [0, 0, 1])
-      angle:           θ ∈ [0, π], rad
-      angle_deg:       θ in degrees
-      rotation_vector: θ·l̂, rad
-      second_solution: the same rotation the other way round (Jia, Rotation in the Space,
-                       §3.3: about −l̂ through −θ), as
-                       {axis: −l̂, angle: 2π − θ, angle_deg: 360 − θ°}
-    euler:
-      sequence:        e.g. ZYX (upper case intrinsic, lower case extrinsic)
-      unit:            rad | deg (``degrees``)
-      angles:          [θ1, θ2, θ3]
-      degenerate:      true at gimbal lock (then θ3 = 0 and θ1 carries the free angle)
-      all_sequences:   only with ``all_sequences=True``: for each of the 24 sequences,
-                       in rot_tools.EULER_SEQUENCES order, {angles: [...], degenerate: ...}
-    rpy:               roll, pitch, yaw (REP 103): the rotations about the fixed x, y, z axes,
-                       i.e. the Euler angles of the extrinsic sequence xyz, whatever ``seq``
-                       is (at gimbal lock, pitch ±90°, yaw = 0 and roll carries the free angle)
-      roll:            about x
-      pitch:           about y (an angle, not the screw pitch below)
-      yaw:             about z
-      unit:            rad | deg, as euler.unit
-    quaternion:        {x, y, z, w}: the unit quaternion of R in the ROS message order
-                       (geometry_msgs/Quaternion), canonical sign (w > 0; at w = 0 the first
-                       non-zero of x, y, z positive), from rot_tools.matrix_to_quaternion
-    translation:       b = [x, y, z] (only when b is given)
-    homogeneous:       only when b is given: the 4×4 matrix [[R, b], [0, 0, 0, 1]] of
-                       p ↦ R·p + b, list of rows (rot_tools.transform_to_homogeneous)
-    screw:             only when b is given (Chasles: rotation θ about the line through
-                       ``point`` along ``direction``, then ``translation`` along it)
-      direction:       unit l̂
-      point:           the axis point closest to the origin (⊥ l̂)
-      moment:          point × direction (Plücker)
-      angle:           θ ∈ [0, π], rad
-      angle_deg:       θ in degrees
-      translation:     d, signed, along l̂
-      pitch:           the screw pitch d/θ (length per rad; not rpy's pitch); inf for a pure
-                       translation, 0 for the identity
-    point:             only when ``point`` p (3,) is given (b = 0 when b is not)
-      p:               the point as given, in the reference frame
-      image:           R·p + b, where the motion takes it (rot_tools.transform_points)
-      in_moved_frame:  Rᵀ·(p − b), its coordinates in the moved frame (Jia §4: q' = Rᵀq;
-                       transform_points of invert_transform)
-
-``degrees`` only switches the Euler angles (``euler.unit``); axis-angle and screw angles
-always come in both ``angle`` (rad) and ``angle_deg``.
-
-Text forms. Numbers are rounded to ``precision`` significant digits *and* decimal places
-(default 12) before they are written, so rounding noise such as 6.1e-17 prints as 0.0; −0.0
-prints as 0.0; ``precision=None`` keeps full float precision, as an :class:`Exact` number
-(a stamp) always does. The writers are libraries:
-
-- :func:`to_yaml`: PyYAML's safe dumper, keys in the report's order, mappings in block
-  style, lists of scalars in flow style ``[0.0, 0.0, 1.0]`` (a matrix is a list of flow
-  rows), one line per value; a mapping three or more levels deep whose values are scalars
-  or flat lists on one line too (``ZYX: {angles: [...], degenerate: false}``); infinities
-  and NaN are ``.inf``, ``-.inf``, ``.nan``; ``yaml.safe_load`` reads it back.
-- :func:`to_json`: the standard ``json`` module, indented by two. JSON has no infinity, so
-  ``inf``, ``-inf`` and ``nan`` are written as the strings ``"inf"``, ``"-inf"``, ``"nan"``
-  (Python's ``float()`` reads them back).
-
-Both write printable characters of a string as themselves (UTF-8) and escape the rest;
-YAML double-quotes a string with non-ASCII characters, so that the text still reads back
-the same when a terminal that cannot show them gets them as Python's backslash escapes.
+(R, b) → :func:`transform_report` → :func:`to_yaml` or :func:`to_json`: the ``rot-tools``
+one-shot commands and rotation_node's ``~/describe`` print this one report, so its keys are
+part of the contract. Numbers are rounded before they are written (:func:`round_number`); the
+writers are PyYAML and ``json``.
 """
 
 import json
@@ -86,6 +16,7 @@ from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.rigid import invert_transform, transform_points, transform_to_homogeneous
+from rot_tools.core.rodrigues import quaternion_to_rodrigues
 import yaml
 
 DEFAULT_PRECISION = 12
@@ -109,6 +40,14 @@ def _euler(angles, degenerate, degrees):
 def _rpy(angles, degrees):
     roll, pitch, yaw = _floats(np.degrees(angles) if degrees else angles)
     return {'roll': roll, 'pitch': pitch, 'yaw': yaw, 'unit': 'deg' if degrees else 'rad'}
+
+
+def _rodrigues(quaternion):
+    """Return tan(θ/2)·l̂ of the quaternion, None at θ = π (w = 0), where it is infinite."""
+    try:
+        return _floats(quaternion_to_rodrigues(quaternion))
+    except RotationError:
+        return None
 
 
 _RPY_NAMES = {'rpy', 'rollpitchyaw'}
@@ -152,10 +91,23 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, p
     """
     Every representation of the rotation R (3, 3), and of (R, b) when b (3,) is given.
 
-    R is validated as rot_tools.validate_rotation does (tol 1e-9); project a matrix typed
-    with few digits with rot_tools.nearest_rotation first. ``point`` (3,) adds where the
-    motion takes it and its coordinates in the moved frame. Returns the dict described in
-    the module docstring. RotationError for a bad R, b, point, or sequence.
+    R is validated as rot_tools.validate_rotation does; ``point`` (3,) adds where the motion
+    takes it. Returns a dict of plain Python data, keys in this order (radians unless a key
+    or ``unit`` says otherwise; ``degrees`` switches the Euler angles and rpy only):
+
+    - matrix: R, a list of rows;
+    - axis_angle: axis l̂, angle θ ∈ [0, π], angle_deg, rotation_vector θ·l̂, and
+      second_solution {axis −l̂, angle 2π − θ, angle_deg} (Jia, Rotation in the Space, §3.3);
+    - rodrigues: the Rodrigues (Gibbs) vector tan(θ/2)·l̂; null at θ = π, where it is infinite;
+    - euler: sequence, unit, angles, degenerate (gimbal lock: θ3 = 0), and with
+      ``all_sequences`` the angles and flag of each of the 24 sequences;
+    - rpy: roll, pitch, yaw (REP 103: the extrinsic xyz angles, whatever ``seq``), unit;
+    - quaternion: {x, y, z, w}, the canonical sign of matrix_to_quaternion;
+    - with b: translation, homogeneous (4×4), screw {direction, point (closest to the
+      origin), moment, angle, angle_deg, translation d, pitch d/θ};
+    - with ``point`` p: point {p, image R·p + b, in_moved_frame Rᵀ·(p − b)}.
+
+    RotationError for a bad R, b, point, or sequence.
     """
     R = np.asarray(R, dtype=np.float64)
     if R.shape != (3, 3):
@@ -186,6 +138,7 @@ def transform_report(R, b=None, seq='ZYX', degrees=False, all_sequences=False, p
                 'angle_deg': 360.0 - _deg(angle),
             },
         },
+        'rodrigues': _rodrigues(d.quaternion),
         'euler': euler,
         'rpy': _rpy(d.rpy, degrees),
         'quaternion': dict(zip('xyzw', _floats(d.quaternion))),

@@ -45,11 +45,15 @@ PICTURES = ('screw_axis', 'markers')
 COVARIANCES = ('rpy_covariance',)
 """The outputs published only for an input that carries a covariance."""
 
+WITHHELD = ('rodrigues',)
+"""The outputs the node withholds for some inputs (the Rodrigues vector at θ = π, where it is
+infinite): kept in the answer when they come with the others."""
+
 
 def stamped_outputs():
     """Return the names of the outputs published for every input, with its header."""
     return tuple(row.name for row in interface.OUTPUTS
-                 if row.name not in (MATRIX, *PICTURES, *COVARIANCES))
+                 if row.name not in (MATRIX, *PICTURES, *COVARIANCES, *WITHHELD))
 
 
 def describe_data(response):
@@ -303,12 +307,13 @@ class Client:
         (:meth:`covariance_answer`).
         """
         from rclpy.qos import QoSProfile
-        from rot_tools.ros.messages import message_class
+        from rot_tools.ros.node.messages import message_class
         answers = Answers(msg.header.frame_id)
         matrix = MATRIX
         qos = QoSProfile(depth=100)
         covariances = COVARIANCES if covariance else ()
-        wanted = stamped_outputs() + covariances + (PICTURES if pictures else ())
+        wanted = (stamped_outputs() + WITHHELD + covariances
+                  + (PICTURES if pictures else ()))
         subs = [self.subscribe(message_class(interface.output_named(name).type_name),
                                self.topic(name), answers.collector(name), qos)
                 for name in wanted]
@@ -341,6 +346,7 @@ class Client:
         # Kept now: while the pictures are awaited, another publisher's inputs may push it
         # out of the latest matrices.
         matrix_msg = answers.matrix(R)
+        self.spin_until(lambda: set(WITHHELD) <= set(answer), min(PICTURE_WAIT, self.timeout))
         if covariances:
             self.covariance_answer(answer, covariances, before, topic, answers.sent)
         if pictures:

@@ -10,7 +10,7 @@ import math
 import numpy as np
 from rot_tools.core.screw import screw_from_transform, screw_interpolate
 from rot_tools.io.boundary import pose_to_rt, RefusedInput
-from rot_tools.ros import messages
+from rot_tools.ros.node import messages
 
 FRAME_MISMATCH = 'frame_mismatch'
 BAD_TOLERANCE = 'bad_tolerance'

@@ -1,51 +1,19 @@
 """
 /tf and /tf_static into a TransformTree, and the transform between two frames out.
 
-The ROS side of rot_tools.core.transform_tree, shared by rotation_node (its parameters
-``tf_reference_frame`` and ``tf_body_frame``) and ``rotation_client tf``. A
-:class:`TfFollower` subscribes to /tf and /tf_static with tf2_ros's QoS (reliable, depth 100;
-/tf volatile, /tf_static transient-local, so that a late joiner gets the static transforms),
-passes every geometry_msgs/TransformStamped through the same inbound boundary as the node's
-other inputs (rot_tools.io.boundary: NaN/Inf → ``non_finite``, a zero or non-unit quaternion
-refused) into the tree, and after each message looks the pair up at the chain's latest common
-time. When that time (or the chain itself) is new, it hands ``(header, R, b)`` on, with
-``header.frame_id`` = the reference frame and the lookup's stamp: p_reference = R·p_body + b.
-
-Refusals are handed on with a reason, for the node to count and warn about:
-``tf_unknown_frame``, ``tf_not_connected``, ``tf_extrapolation`` (the lookup, after a message
-arrived while it cannot be answered), ``tf_loop`` (a transform that would make a frame its
-own ancestor), ``tf_bad_frame`` (an empty frame_id or child_frame_id, or one longer than
-MAX_FRAME_NAME bytes), ``tf_too_many_frames`` (a new frame beyond MAX_FRAMES),
-``tf_future_stamp``, ``tf_time_jump`` and ``tf_too_many_transforms`` (below), and the
-boundary's ``non_finite``, ``zero_quaternion`` and ``non_unit_quaternion``.
-
-Time. A /tf sample stamped more than MAX_FUTURE_SECONDS after the node's clock is refused
-(``tf_future_stamp``: one stamp of the year 2033 would otherwise hold its edge's newest time
-and shut every good sample out of the cache window); the check is off while that clock reads
-0 (simulated time before the first /clock). A /tf sample more than CACHE_SECONDS older than
-its edge's newest means time went back — a bag replayed in a loop, a simulator restarted: the
-edge's samples are dropped and it starts again from this one, as tf2_ros clears its buffer
-when /clock jumps back, and the jump is counted (``tf_time_jump``). /tf_static stamps are
-not checked (tf2 ignores them; a static publisher often runs on another clock).
-
-Bounds. Messages arrive as tf2_msgs/TFMessage objects: at most MAX_TRANSFORMS_PER_MESSAGE
-transforms of one are put into the tree, the rest dropped and the message counted once
-(``tf_too_many_transforms``), so that the tree's work for one message stays bounded and the
-services and signals are served between messages; a transform naming a frame longer than
-MAX_FRAME_NAME bytes is refused (``tf_bad_frame``). A dynamic edge not heard for
-CACHE_SECONDS is forgotten (its frames too, when no other edge names them): junk frames leave
-room for real ones again; static edges stay, as in tf2. Frame names in refusals are cut short
-(transform_tree.shown).
-
-Stamps. Header stamps are carried as integer nanoseconds: the tree holds float seconds
-since an epoch (the whole second of the first stamp that is not 0), and the follower keeps
-beside each edge the nanoseconds of its newest sample, so that the stamp handed on — always
-an edge's newest, at the latest common time — is an input's stamp exactly. (Interpolation
-uses the floats: exact to the nanosecond within weeks of the epoch.)
+Shared by rotation_node (parameters ``tf_reference_frame``, ``tf_body_frame``) and
+``rotation_client tf``. A :class:`TfFollower` subscribes with tf2_ros's QoS, passes each
+TransformStamped through the node's boundary checks into the tree, and hands
+``(header, R, b)`` on (p_reference = R·p_body + b) when the pair's latest common time is new.
+Refusals go to the node by reason (REFUSAL_REASONS and the boundary's). Time: a stamp more
+than MAX_FUTURE_SECONDS ahead of the node's clock is refused; one more than CACHE_SECONDS
+behind its edge's newest means time went back, and the edge starts again from it. Bounds:
+MAX_TRANSFORMS_PER_MESSAGE, MAX_FRAME_NAME, MAX_FRAMES; unheard dynamic edges are forgotten
+after CACHE_SECONDS. Stamps are kept as integer nanoseconds, so an output's stamp is an
+input's exactly.
 """
 
 import time
-from types import SimpleNamespace
 from typing import NamedTuple
 
 from builtin_interfaces.msg import Time
@@ -169,7 +137,7 @@ class TfFollower:
         self.reference = self.body = ''
         self.topic = node.resolve_topic_name(TF_TOPIC)
         self.static_topic = node.resolve_topic_name(TF_STATIC_TOPIC)
-        self._settings = SimpleNamespace(quaternion_tolerance=quaternion_tolerance)
+        self._tolerance = quaternion_tolerance
         self._on_transform = on_transform
         self._on_refused = on_refused
         self._subscriptions = ()
@@ -179,7 +147,7 @@ class TfFollower:
         self._heard = {}  # child of a dynamic edge: time.monotonic() of its latest sample
         self._swept = time.monotonic()
         self.messages = 0
-        """TFMessages of /tf taken since the start (rot_tools.ros.diagnostics' rate)."""
+        """TFMessages of /tf taken since the start (rot_tools.ros.node.diagnostics' rate)."""
 
     @property
     def following(self):
@@ -187,7 +155,7 @@ class TfFollower:
         return bool(self.reference and self.body)
 
     def set_quaternion_tolerance(self, tolerance):
-        self._settings = SimpleNamespace(quaternion_tolerance=tolerance)
+        self._tolerance = tolerance
 
     def follow(self, reference, body):
         """
@@ -284,8 +252,9 @@ class TfFollower:
                 f'{edge} stamped {(ns - now) / _NS:.9g} s after the clock of the node '
                 f'(at most MAX_FUTURE_SECONDS = {MAX_FUTURE_SECONDS:g})'))
         try:
-            R, b = boundary.pose_fields_to_rt(transform.values, self._settings,
-                                              boundary.TRANSFORM_FIELDS)
+            R, b = boundary.rigid_motion(transform.values[:3], transform.values[3:],
+                                         self._tolerance,
+                                         ('transform.translation', 'transform.rotation'))
             t = self.seconds(ns)
             if not self.tree.set_transform(parent, child, R, b, t, static=static):
                 # More than the cache older than the edge's newest: time went back.

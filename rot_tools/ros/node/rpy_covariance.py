@@ -1,35 +1,20 @@
 """
 rotation_node's ~/rpy_covariance: an input's covariance as that of roll, pitch and yaw.
 
-Only the inputs that carry a covariance (rows of rot_tools.io.interface with a
-``covariance``: ~/imu, ~/pose_with_covariance, ~/odometry) come here, once the input is
-accepted and its other outputs are published; the others (~/pose's flood) pay nothing for it.
-The covariance array is read from the same message, at the row's ``covariance`` path, and
-converted by rot_tools.io.message_covariance.rpy_covariances, read as the parameter
-``input_covariance`` says (``rotvec``: rotations about the parent's fixed X, Y, Z, as ROS
-documents PoseWithCovariance; ``rpy``: already roll, pitch, yaw). What follows:
-
-- converted: ~/rpy_covariance, the input's header and pose (an Imu's position 0) and the 6×6
-  covariance of x, y, z, roll, pitch, yaw in rad² (an Imu's position block and cross terms 0);
-- all zeros (ROS: unknown): nothing published, ~/describe says ``unknown``;
-- not finite, symmetric or PSD: nothing published, a refusal counted under bad_covariance (the
-  node's throttled refusals: what and by how much);
-- within GIMBAL_LOCK_TOL of pitch ±90°: nothing published (the covariance of roll, pitch, yaw
-  does not exist there), ~/describe says so. Not a refusal.
-
-~/describe's ``rpy_stddev`` and ``rpy_correlation`` are those of the latest input that carried
-a covariance (:meth:`RpyCovariances.describe`), with ``rpy_note`` near gimbal lock, where they
-are large and mean little.
+For the inputs that carry a covariance (~/imu, ~/pose_with_covariance, ~/odometry), once the
+input is accepted and its other outputs are published: the covariance read as the parameter
+``input_covariance`` says (rot_tools.io.message_covariance). Converted: published with the
+input's header and pose; all zeros (ROS: unknown), or near gimbal lock: nothing published and
+~/describe says so; not finite, symmetric or PSD: a refusal counted as bad_covariance.
 """
 
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
+from geometry_msgs.msg import PoseWithCovarianceStamped
 import numpy as np
 from rot_tools.core.covariance import gimbal_lock_distance
 from rot_tools.core.euler import matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.transform_tree import shown
-from rot_tools.io import interface
-from rot_tools.io.fields import field_getter
 from rot_tools.io.message_covariance import BAD, LOCK, OK, UNKNOWN
 from rot_tools.io.message_covariance import fault, near_lock_note, READINGS, rpy_covariances
 from rot_tools.io.message_covariance import stddev_correlation
@@ -52,25 +37,6 @@ def check_reading(value):
     return f'input_covariance {shown(value)} is not ' + ' or '.join(map(repr, READINGS))
 
 
-class Reader(NamedTuple):
-    """How one input row's covariance is read from its message."""
-
-    covariance: Callable
-    """covariance(msg) -> the covariance array (9 or 36 float64, row-major)."""
-    position: slice
-    """Where the position is among the row's numbers (None: an input without one, at 0)."""
-    orientation: slice
-    path: str
-    """The covariance's field, named in a refusal."""
-
-
-def covariance_reader(row):
-    """Return the Reader of an input row that carries a covariance."""
-    slots = row.slots()
-    path, _ = row.covariance
-    return Reader(field_getter(path), slots.get('position'), slots['orientation'], path)
-
-
 class Latest(NamedTuple):
     """The latest input that carried a covariance, for ~/describe."""
 
@@ -87,53 +53,50 @@ class Latest(NamedTuple):
 class RpyCovariances:
     """~/rpy_covariance of the inputs that carry a covariance, and its part of ~/describe."""
 
-    def __init__(self, publishers, outputs, refuse):
+    def __init__(self, publisher, refuse):
         """
-        Publish with ``publishers`` {output name: publisher} the covariance rows of ``outputs``.
+        Publish ~/rpy_covariance with ``publisher``.
 
-        ``outputs``: rot_tools.ros.topics.OUTPUTS (the rows, bound to their writers);
         ``refuse(topic, reason, text, header=...)``: the node's counted, throttled refusal.
         """
-        self._outputs = tuple((publishers[kind.row.name].publish, kind.message(), kind.write)
-                              for kind in outputs if kind.row.covariance)
+        self._publisher = publisher
         self._refuse = refuse
         self._latest = None
 
-    def on_input(self, topic, reader, msg, header, R, values, settings):
+    def on_input(self, topic, header, R, position, orientation, covariance, path, settings):
         """
-        Publish the covariance of one accepted input ``msg``, or say why there is none.
+        Publish the covariance of one accepted input, or say why there is none.
 
-        ``reader``: its row's Reader; ``header``, ``R``: the input's; ``values``: the numbers
-        at its row's field paths; ``settings``: the node's, as the input was converted.
+        ``header``, ``R``, ``position``, ``orientation``: the input's; ``covariance``: its
+        array (9 or 36 numbers, row-major), at field ``path`` (named in a refusal);
+        ``settings``: the node's, as the input was converted.
         """
-        cov = np.asarray(reader.covariance(msg), dtype=np.float64)
+        cov = np.asarray(covariance, dtype=np.float64)
         if cov.any():  # (NaN is true: refused below)
             (C,), (status,) = rpy_covariances(R[None], cov[None], settings.input_covariance)
         else:  # all zeros, unknown: rpy_covariances' verdict, without converting anything
             C, status = np.full((3, 3), np.nan), UNKNOWN
         self._latest = Latest(topic, header, int(status), C[-3:, -3:], settings.degrees, R)
         if status == OK:
-            self._publish(header, reader, values, C)
+            self._publish(header, position, orientation, C)
         elif status == BAD:
             text = fault(cov)
             if text.startswith('covariance'):  # (' is not …' or ': its …')
-                text = reader.path + text[len('covariance'):]
+                text = path + text[len('covariance'):]
             self._refuse(topic, BAD_COVARIANCE, text, header=header)
 
-    def _publish(self, header, reader, values, C):
-        """Publish the pose of the input (its ``values``) with C, 3×3 (an Imu's) or 6×6."""
+    def _publish(self, header, position, orientation, C):
+        """Publish the pose with C, 3×3 (an Imu's, the rotation block of a 6×6) or 6×6."""
         if C.shape[-1] == 3:
             C6 = np.zeros((6, 6))
             C6[3:, 3:] = C
             C = C6
-        position = values[reader.position] if reader.position is not None else (0.0,) * 3
-        pose = interface.PoseCovariance(position, values[reader.orientation],
-                                        tuple(C.ravel().tolist()))
-        numbers = [*pose.position, *pose.orientation, *pose.covariance]
-        for publish, msg, write in self._outputs:
-            msg.header = header
-            write(msg, numbers)
-            publish(msg)
+        msg = PoseWithCovarianceStamped(header=header)
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
+        p.x, p.y, p.z = position
+        q.x, q.y, q.z, q.w = orientation
+        msg.pose.covariance = C.ravel().tolist()
+        self._publisher.publish(msg)
 
     def describe(self):
         """

@@ -13,7 +13,6 @@ import time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 import numpy as np
 from rclpy.clock import Clock, ClockType
-from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.qos import QoSProfile
 from rot_tools.core.errors import RotationError
 from rot_tools.core.imu import check_imu, faults, ImuChecks
@@ -32,7 +31,6 @@ CHECKED = 2_000
 other sample of a 400 Hz IMU. The checks' cost grows faster than their samples."""
 
 CHECKS = ImuChecks._fields
-_NO_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 
 
 def _number(x):
@@ -183,14 +181,13 @@ class Diagnostics:
         self._node = node
         self._name = node.get_name()
         self.tf = None
-        """The node's rot_tools.ros.tf_input.TfFollower: its /tf messages are counted while
+        """The node's rot_tools.ros.node.tf_input.TfFollower: its /tf messages are counted while
         it follows frames."""
         self.imu = ImuWindow()
         self._received = {}  # topic: messages received since the start
         self._refused = {}  # topic: {reason: refusals since the start}
         self._history = deque()  # (time.monotonic(), received copy, refused totals copy)
-        self._publisher = node.create_publisher(DiagnosticArray, TOPIC, QoSProfile(depth=10),
-                                                event_callbacks=_NO_EVENTS)
+        self._publisher = node.create_publisher(DiagnosticArray, TOPIC, QoSProfile(depth=10))
         self._timer = node.create_timer(PERIOD, self.publish,
                                         clock=Clock(clock_type=ClockType.STEADY_TIME))
 

@@ -1,18 +1,8 @@
 """
-ROS messages <-> NumPy: message classes by name, and the node's other messages built.
+The node's messages other than its per-input outputs: the pictures and ~/screw_path's Path.
 
-Inbound, every input message becomes one rigid transform ``(header, R, b)`` by its row's
-converter (rot_tools.io.interface), from the numbers at the row's field paths
-(rot_tools.io.fields); a message that cannot be one transform is refused by the ROS-free
-boundary (rot_tools.io.boundary.RefusedInput, with a reason), which ``rot-tools bag`` runs
-on recorded messages too, as batches. Outbound, the per-input outputs are written at their
-rows' paths (rot_tools.io.fields.fields_writer).
-
-This module holds what needs the message classes: :func:`message_class` of a type name, and
-the node's other messages as message objects — poses and Path (``~/screw_path``), and the
-pictures: the screw-axis Marker and the MarkerArray of a rot_tools.io.drawing.Picture.
-Quaternions are (x, y, z, w), the ROS message order; path poses write
-q = (sin(θ/2)·l̂, cos(θ/2)) from the axis-angle of R, signed for continuity along the path.
+The screw-axis Marker and the MarkerArray of a rot_tools.io.drawing.Picture, and the poses of
+a Path. Quaternions are (x, y, z, w), the ROS message order.
 """
 
 import importlib
@@ -25,19 +15,10 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 
-def type_name(msg_type):
-    """'nav_msgs/msg/Odometry' for the message class nav_msgs.msg.Odometry."""
-    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
-
-
 def message_class(name):
     """Return the message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
-    package, kind, class_name = name.split('/')
-    return getattr(importlib.import_module(f'{package}.{kind}'), class_name)
-
-
-# ---------------------------------------------------------------------------------------
-# Outbound: NumPy -> message
+    package, interface_kind, class_name = name.split('/')
+    return getattr(importlib.import_module(f'{package}.{interface_kind}'), class_name)
 
 
 SCREW_AXIS_COLOR = (1.0, 0.5, 0.0, 1.0)
@@ -65,7 +46,7 @@ def point_msg(p):
     return Point(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
-def marker(header, ns, marker_id, kind=Marker.ARROW, action=Marker.ADD,
+def marker(header, ns, marker_id, marker_type=Marker.ARROW, action=Marker.ADD,
            position=(0.0, 0.0, 0.0), scale=(0.0, 0.0, 0.0), color=(0.0, 0.0, 0.0, 0.0),
            points=(), text=''):
     """
@@ -75,7 +56,7 @@ def marker(header, ns, marker_id, kind=Marker.ARROW, action=Marker.ADD,
     ``points`` (n, 3) carry the geometry; no lifetime (0: until replaced), no colours per
     point, texture or mesh.
     """
-    msg = Marker(header=header, ns=ns, id=marker_id, type=kind, action=action, text=text,
+    msg = Marker(header=header, ns=ns, id=marker_id, type=marker_type, action=action, text=text,
                  points=[point_msg(p) for p in points],
                  color=ColorRGBA(r=color[0], g=color[1], b=color[2], a=color[3]))
     msg.pose.position = point_msg(position)
@@ -132,9 +113,9 @@ def picture_markers(header, picture):
     else:
         markers.append(marker(header, MARKERS_NS, AXIS_ID, color=SCREW_AXIS_COLOR,
                               scale=(0.02 * s, 0.06 * s, 0.15 * s), points=picture.axis))
-    markers.append(marker(header, MARKERS_NS, PATH_ID, kind=Marker.LINE_STRIP,
+    markers.append(marker(header, MARKERS_NS, PATH_ID, marker_type=Marker.LINE_STRIP,
                           color=PATH_COLOR, scale=(0.02 * s, 0.0, 0.0), points=picture.path))
-    markers.append(marker(header, MARKERS_NS, LABEL_ID, kind=Marker.TEXT_VIEW_FACING,
+    markers.append(marker(header, MARKERS_NS, LABEL_ID, marker_type=Marker.TEXT_VIEW_FACING,
                           color=LABEL_COLOR, scale=(0.0, 0.0, 0.15 * s),
                           position=picture.label_at,
                           text=f'{picture.label}\npath: {picture.traced}'))

@@ -1,0 +1,1 @@
+"""rotation_node: the node program, its messages, pictures, services and /tf input."""
