@@ -5,7 +5,8 @@ Where each number typed must go is stated here field by field, per message type,
 rot_tools.ros.client.message_data. The answers are messages of each output's type with numbers
 of their own, fed to session.Answers as the client's subscriptions feed them: each is printed
 under its output's name, whatever the order of the node's output table, with a row dropped or
-one added, and an answer without ~/rodrigues (withheld at θ = π) is complete.
+one added, and an answer without ~/rodrigues (withheld at θ = π) is complete; ``echo`` prints
+a message of the output's type by its name, one of another type whole.
 """
 
 from builtin_interfaces.msg import Time
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 from rot_tools.io import interface
 from rot_tools.ros.client import arguments, message_data, session
-from rot_tools.ros.node.messages import message_class
+from rot_tools.ros.node.messages import message_class, type_name
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import Float64MultiArray
 from visualization_msgs.msg import Marker, MarkerArray
@@ -283,3 +284,27 @@ def test_an_answer_without_an_output_of_every_input_is_not_complete():
         del messages[name]
         stamp, _ = collected(messages)
         assert stamp is None, name
+
+
+# ---------------------------------------------------------------------------------------
+# echo
+
+
+def test_echo_prints_a_message_of_the_outputs_type_under_its_name():
+    msg = answer_messages()['rpy']
+    assert message_data.echo_data(msg, interface.output_named('rpy'), ANSWER_PARAMETERS) == {
+        'stamp': {'sec': 7, 'nanosec': 8}, 'frame_id': 'map', 'rpy': PRINTED['rpy']}
+
+
+def test_echo_prints_a_message_of_another_type_whole():
+    """A Vector3Stamped on ~/quaternion (echo --topic elsewhere): every field, as it is."""
+    msg = answer_messages()['axis_angle']
+    row = interface.output_named('quaternion')
+    assert message_data.echo_data(msg, row, ANSWER_PARAMETERS) == {
+        'header': {'stamp': {'sec': 7, 'nanosec': 8}, 'frame_id': 'map'},
+        'vector': {'x': 1.0, 'y': 2.0, 'z': 3.0}}
+
+
+def test_the_type_name_of_each_rows_message_class_is_the_rows():
+    for row in interface.INPUTS + interface.OUTPUTS:
+        assert type_name(message_class(row.type_name)) == row.type_name
