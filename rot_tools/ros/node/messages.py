@@ -15,6 +15,11 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 
+def type_name(msg_type):
+    """'nav_msgs/msg/Odometry' for the message class nav_msgs.msg.Odometry."""
+    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
+
+
 def message_class(name):
     """Return the message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
     package, interface_kind, class_name = name.split('/')
