@@ -73,6 +73,7 @@ def _public_calls():
         ('matrix_to_axis_angle', lambda R, b: rt.matrix_to_axis_angle(R)),
         ('matrix_to_rotvec', lambda R, b: rt.matrix_to_rotvec(R)),
         ('matrix_to_quaternion', lambda R, b: rt.matrix_to_quaternion(R)),
+        ('matrix_to_rodrigues', lambda R, b: rt.matrix_to_rodrigues(R)),
         ('is_rotation', lambda R, b: rt.is_rotation(R)),
         ('validate_rotation', lambda R, b: rt.validate_rotation(R)),
         ('nearest_rotation', lambda R, b: rt.nearest_rotation(R)),
@@ -105,6 +106,7 @@ def _public_calls():
     out = [(label, call, (R, b)) for label, call in calls]
     vector_calls = [
         ('rotvec_to_matrix', lambda v: rt.rotvec_to_matrix(v)),
+        ('rodrigues_to_matrix', lambda v: rt.rodrigues_to_matrix(v)),
         ('axis_angle_to_matrix', lambda v: rt.axis_angle_to_matrix(v[..., ::-1] + 1.0, v[..., 0])),
         ('quaternion_to_matrix', lambda v: rt.quaternion_to_matrix(
             np.concatenate([v, np.ones(v.shape[:-1] + (1,))], axis=-1))),
@@ -262,6 +264,7 @@ def _fail_alike_calls():
         ('matrix_to_axis_angle', lambda m, v: rt.matrix_to_axis_angle(m, check=False)),
         ('matrix_to_rotvec', lambda m, v: rt.matrix_to_rotvec(m, check=False)),
         ('matrix_to_quaternion', lambda m, v: rt.matrix_to_quaternion(m, check=False)),
+        ('matrix_to_rodrigues', lambda m, v: rt.matrix_to_rodrigues(m, check=False)),
         ('matrix_to_euler', lambda m, v: rt.matrix_to_euler(m, 'zxz', check=False)),
         ('screw_from_transform', lambda m, v: rt.screw_from_transform(m, v[..., :3],
                                                                       check=False)),
@@ -285,6 +288,7 @@ def _fail_alike_calls():
         ('is_rotation', lambda m, v: rt.is_rotation(m)),
         ('validate_rotation', lambda m, v: rt.validate_rotation(m)),
         ('matrix_to_rotvec checked', lambda m, v: rt.matrix_to_rotvec(m)),
+        ('matrix_to_rodrigues checked', lambda m, v: rt.matrix_to_rodrigues(m)),
         ('matrix_to_euler checked', lambda m, v: rt.matrix_to_euler(m, 'XYZ')),
         ('align_vectors', lambda m, v: rt.align_vectors(
             m, v[..., :9].reshape(v.shape[:-1] + (3, 3)))),
@@ -295,6 +299,7 @@ def _fail_alike_calls():
         ('transform_pose_covariance', lambda m, v: rt.transform_pose_covariance(
             m, v[..., :3], _pose_covariance(m))),
         ('rotvec_to_matrix', lambda m, v: rt.rotvec_to_matrix(v[..., :3])),
+        ('rodrigues_to_matrix', lambda m, v: rt.rodrigues_to_matrix(v[..., :3])),
         ('axis_angle_to_matrix', lambda m, v: rt.axis_angle_to_matrix(v[..., :3], v[..., 3])),
         ('quaternion_to_matrix', lambda m, v: rt.quaternion_to_matrix(v[..., :4])),
         ('screw_exp', lambda m, v: rt.screw_exp(v[..., :6])),

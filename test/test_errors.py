@@ -15,10 +15,10 @@ from rot_tools import (
     error_statistics, estimate_time_offset, euler_covariance_to_rotvec, euler_to_matrix,
     frame_to_matrix, hand_eye, hand_eye_rotation, homogeneous_to_transform, interpolate_poses,
     invert_transform, is_rotation, matrix_to_axis_angle, matrix_to_euler, matrix_to_quaternion,
-    matrix_to_rotvec, mean_rotation, nearest_rotation, nearest_stamps, quaternion_to_matrix,
-    random_rotations, rot_x, rot_y, rot_z, rotation_distance, rotation_errors, RotationError,
-    rotvec_covariance_to_euler, rotvec_to_matrix, screw_congruence, screw_exp,
-    screw_from_transform,
+    matrix_to_rodrigues, matrix_to_rotvec, mean_rotation, nearest_rotation, nearest_stamps,
+    quaternion_to_matrix, random_rotations, rodrigues_to_matrix, rot_x, rot_y, rot_z,
+    rotation_distance, rotation_errors, RotationError, rotvec_covariance_to_euler,
+    rotvec_to_matrix, screw_congruence, screw_exp, screw_from_transform,
     screw_interpolate, screw_log, skew, transform_from_screw, transform_points,
     transform_pose_covariance, transform_to_homogeneous, validate_rotation)
 
@@ -57,6 +57,7 @@ TAKES_R = {
     'matrix_to_euler': matrix_to_euler,
     'matrix_to_axis_angle': matrix_to_axis_angle,
     'matrix_to_rotvec': matrix_to_rotvec,
+    'matrix_to_rodrigues': matrix_to_rodrigues,
     'screw_from_transform': lambda r: screw_from_transform(r, np.zeros(np.shape(r)[:-1])),
     'screw_log': lambda r: screw_log(r, np.zeros(np.shape(r)[:-1])),
     'screw_interpolate': lambda r: screw_interpolate(r, Z3, I3, Z3, 0.5),
@@ -164,6 +165,7 @@ WITH_CHECK = {
     'matrix_to_euler': lambda m, c: matrix_to_euler(m, check=c),
     'matrix_to_axis_angle': lambda m, c: matrix_to_axis_angle(m, check=c),
     'matrix_to_rotvec': lambda m, c: matrix_to_rotvec(m, check=c),
+    'matrix_to_rodrigues': lambda m, c: matrix_to_rodrigues(m, check=c),
     'matrix_to_quaternion': lambda m, c: matrix_to_quaternion(m, check=c),
     'screw_from_transform': lambda m, c: screw_from_transform(m, Z3, check=c),
     'screw_log': lambda m, c: screw_log(m, Z3, check=c),
@@ -632,6 +634,7 @@ def _of_each(call, r, w):
 
 FINITE_CALLS = {
     'rotvec_to_matrix': lambda r, w: rotvec_to_matrix(w),
+    'rodrigues_to_matrix': lambda r, w: rodrigues_to_matrix(w),
     'axis_angle_to_matrix': lambda r, w: axis_angle_to_matrix(w, 1.0),
     'euler_to_matrix': lambda r, w: euler_to_matrix(w, 'ZYX'),
     'quaternion_to_matrix': lambda r, w: quaternion_to_matrix(
@@ -673,6 +676,7 @@ NOT_OF_EXTREMES = dict(
     random_rotations='draws rotations: takes a count',
     is_rotation='answers True or False', validate_rotation='gives back its input',
     matrix_to_axis_angle='takes a rotation only', matrix_to_rotvec='takes a rotation only',
+    matrix_to_rodrigues='takes a rotation only',
     matrix_to_quaternion='takes a rotation only', matrix_to_euler='takes a rotation only',
     rotation_distance='takes rotations only',
     screw_from_transform='its pitch is inf for a pure translation: the test below',
@@ -804,6 +808,8 @@ def _calls():
         'matrix_to_axis_angle': (matrix_to_axis_angle, [I3.tolist()]),
         'rotvec_to_matrix': (rotvec_to_matrix, [v3]),
         'matrix_to_rotvec': (matrix_to_rotvec, [I3.tolist()]),
+        'rodrigues_to_matrix': (rodrigues_to_matrix, [v3]),
+        'matrix_to_rodrigues': (matrix_to_rodrigues, [I3.tolist()]),
         'quaternion_to_matrix': (quaternion_to_matrix, [q]),
         'matrix_to_quaternion': (matrix_to_quaternion, [I3.tolist()]),
         'screw_from_transform': (screw_from_transform, [I3.tolist(), v3]),

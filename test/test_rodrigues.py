@@ -7,6 +7,7 @@ g is infinite and refused. The node's ~/rodrigues: test_node.py.
 """
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -107,6 +108,28 @@ def test_the_one_item_path_is_the_batch_formula():
     for item in q[:2]:
         with pytest.raises(RotationError, match='infinite at θ = π'):
             rodrigues_of_one(*map(float, item))
+
+
+def _a_hair_from_a_half_turn(w):
+    """Return the rotation about z with quaternion (0, 0, 1, w): θ = π − 2·asin(w)."""
+    R = np.diag([-1.0, -1.0, 1.0])
+    R[1, 0], R[0, 1] = 2.0 * w, -2.0 * w
+    return R
+
+
+def test_a_rotation_whose_vector_overflows_float64_is_refused_with_its_distance_from_pi():
+    # w = 5e-311: g = (0, 0, 1/w) = 2e310 is beyond float64, not inf; w = 1e-300: finite.
+    message = ('the Rodrigues vector tan(θ/2)·l̂ overflows float64 (beyond ±1.8e308): θ is '
+               '1e-310 rad from π (quaternion w = 5e-311)')
+    R = _a_hair_from_a_half_turn(5e-311)
+    with pytest.raises(RotationError, match=re.escape(message) + '$'):
+        matrix_to_rodrigues(R)
+    with pytest.raises(RotationError, match=re.escape(message + ' (item (1,))') + '$'):
+        matrix_to_rodrigues(np.stack([np.eye(3), R]))
+    with pytest.raises(RotationError, match=re.escape(message) + '$'):
+        rodrigues_of_one(0.0, 0.0, 1.0, 5e-311)
+    np.testing.assert_allclose(matrix_to_rodrigues(_a_hair_from_a_half_turn(1e-300)),
+                               [0.0, 0.0, 1e300], rtol=4 * EPS, atol=0)
 
 
 def test_a_non_rotation_is_refused():
