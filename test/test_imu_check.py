@@ -21,6 +21,7 @@ import pytest
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 from rot_tools.cli import imu_check  # noqa: E402
 from rot_tools.cli.main import main  # noqa: E402
+from rot_tools.core.stamps import plain  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
@@ -81,7 +82,7 @@ def imu_message(b, stamp, q, gyro, accel, cov0=0.0, frame='base_link'):
 
 
 def write(path, rec, q=None, gyro=None, accel=None, cov0=0.0, odom=False, topic=IMU,
-          more=()):
+          more=(), storage='sqlite3'):
     """Write the window as a rosbag2 bag, the IMU's fields replaced by those given."""
     b = bh.Builder()
     q = rec.q if q is None else q
@@ -94,7 +95,7 @@ def write(path, rec, q=None, gyro=None, accel=None, cov0=0.0, odom=False, topic=
                      for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))]
     messages += list(more)
     messages.sort(key=lambda m: m[2])
-    return bh.write_bag(path, messages)
+    return bh.write_bag(path, messages, storage)
 
 
 def run(capsys, *argv):
@@ -145,8 +146,8 @@ def test_gyro_in_degrees(real, tmp_path, capsys):
     bag = write(tmp_path / 'deg', real, gyro=gyro)
     status, out, err = run(capsys, 'imu-check', bag)
     assert status == 1
-    assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out (a NaN, an Inf or a '
-                   'refused orientation)\n')
+    assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out: 1 with a NaN or Inf '
+                   'in angular_velocity or linear_acceleration\n')
     rows = {line.split()[0]: line.split()[1] for line in out.splitlines()
             if line.split() and line.split()[0] in CHECKS}
     assert [name for name, word in rows.items() if word == 'fault'] == ['gyro_units']
@@ -223,6 +224,58 @@ def test_clean_window_with_the_odometry_json(real, tmp_path, capsys):
 
 
 # ---------------------------------------------------------------------------------------
+# The reference from another recording of the run (--ref-bag)
+
+
+DAY = 27 * 3600
+"""Two recordings of other runs, apart by this many seconds (as two bags merged by hand)."""
+
+
+def odometry_bag(path, rec, shift=0.0):
+    """Write the window's odometry alone as a rosbag2 bag, stamps and record times shifted."""
+    b = bh.Builder()
+    return bh.write_bag(path, [
+        (ODOM, ODOM_TYPE, int(t + shift * 1e9), b.odometry(s + shift, (0, 0, 0), rec.odom_q[k]))
+        for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))])
+
+
+def span(ns):
+    """Write a span of times (ns) as imu-check names it."""
+    return f'{plain(int(ns.min()) / 1e9)}–{plain(int(ns.max()) / 1e9)} s'
+
+
+def test_the_reference_from_another_recording(real, tmp_path, capsys):
+    both = write(tmp_path / 'both', real, odom=True)
+    imu, odom = write(tmp_path / 'imu', real), odometry_bag(tmp_path / 'odom', real)
+    argv = ('--ref-topic', ODOM, '--start', 2, '--end', 18)
+    status, data = run_json(capsys, 'imu-check', imu, '--ref-bag', odom, *argv)
+    assert (status, data) == run_json(capsys, 'imu-check', both, *argv)
+    assert status == 0 and data['checks']['mounting']['status'] == 'ok'
+
+
+def test_recordings_that_do_not_overlap_are_refused(real, tmp_path, capsys):
+    imu = write(tmp_path / 'imu', real)
+    odom = odometry_bag(tmp_path / 'odom', real, DAY)
+    one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', ODOM),
+                   f'imu-check: {imu} (recorded {span(real.imu_record)}) and --ref-bag {odom} '
+                   f'(recorded {span(real.odom_record + DAY * 10 ** 9)}) do not overlap in '
+                   'time: 27.0 h apart\n')
+
+
+def test_topics_stamped_a_day_apart_are_refused(real, tmp_path, capsys):
+    """Two bags merged by hand: each topic's stamps are of its own run."""
+    b = bh.Builder()
+    later = [(ODOM, ODOM_TYPE, int(t), b.odometry(s + DAY, (0, 0, 0), q))
+             for t, s, q in zip(real.odom_record, real.odom_stamp, real.odom_q)]
+    bag = write(tmp_path / 'merged', real, more=later)
+    imu_ns = np.round(real.imu_stamp * 1e9).astype(np.int64)
+    odom_ns = np.round((real.odom_stamp + DAY) * 1e9).astype(np.int64)
+    one_error_line(*run(capsys, 'imu-check', bag, '--ref-topic', ODOM),
+                   f'imu-check: {IMU} (stamped {span(imu_ns)}) and {ODOM} (stamped '
+                   f'{span(odom_ns)}) do not overlap in time: 27.0 h apart\n')
+
+
+# ---------------------------------------------------------------------------------------
 # doc/imu.md's example: the whole real recording, without and with the odometry
 
 
@@ -269,17 +322,97 @@ def test_bag_without_an_imu_and_with_two(real, tmp_path, capsys):
     one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/c'), 'no topic /imu/c')
     one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-topic',
                         '/imu/b'), 'not a reference orientation')
-    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-tf', 'odom',
-                        'base_link'), 'no tf2_msgs/msg/TFMessage topic')
+    status, out, err = run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-tf', 'odom',
+                           'base_link')
+    one_error_line(status, out, err, '--ref-tf: the bag has no tf2_msgs/msg/TFMessage topic')
+    assert '--tf:' not in err
     one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--start', 100),
                    'no message between --start and --end')
     one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--end', 0.1),
                    '/imu/a: stamps has 6 sample(s): at least 10 needed')
 
 
+def test_every_message_left_out_says_why(real, tmp_path, capsys):
+    q = real.q * 2  # not unit quaternions: the boundary refuses them
+    q[:5] = np.nan
+    bag = write(tmp_path / 'refused', real, q=q)
+    one_error_line(*run(capsys, 'imu-check', bag),
+                   f'imu-check: {IMU}: all {len(q)} messages left out: 5 with a NaN or Inf in '
+                   f'the orientation, {len(q) - 5} with a quaternion whose norm is off 1 by '
+                   'more than 0.001: nothing to check\n')
+
+
+def test_messages_left_out_are_told_before_an_error(real, tmp_path, capsys):
+    accel = real.accel.copy()
+    accel[4:] = np.inf  # 4 messages left: too few for the checks
+    bag = write(tmp_path / 'few', real, accel=accel)
+    status, out, err = run(capsys, 'imu-check', bag)
+    warning, line = err.splitlines()
+    assert status == 2 and out == ''
+    assert warning == (f'warning: {IMU}: {len(accel) - 4} of {len(accel)} messages left out: '
+                       f'{len(accel) - 4} with a NaN or Inf in angular_velocity or '
+                       'linear_acceleration')
+    assert line == (f'rot-tools: error: imu-check: {IMU}: stamps has 4 sample(s): at least 10 '
+                    'needed')
+
+
+def test_a_finite_spike_is_left_out_as_a_nan_is(real, tmp_path, capsys):
+    gyro = real.gyro.copy()
+    gyro[5, 0] = 1.5e298
+    bag = write(tmp_path / 'spike', real, gyro=gyro)
+    status, out, err = run(capsys, 'imu-check', bag)
+    assert status == 0 and out.endswith('\nno fault\n')
+    assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out: 1 with a reading '
+                   'beyond 1e+09 in angular_velocity or linear_acceleration (no sensor reads '
+                   'that)\n')
+
+
+def test_a_reference_with_one_stamp_is_named(real, tmp_path, capsys):
+    b = bh.Builder()
+    frozen = [(ODOM, ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
+              for t, q in zip(real.odom_record, real.odom_q)]
+    bag = write(tmp_path / 'frozen', real, more=frozen)
+    one_error_line(*run(capsys, 'imu-check', bag, '--ref-topic', ODOM),
+                   f'imu-check: {ODOM}: the reference has 1 distinct stamp(s) among its '
+                   f'{len(frozen)} usable orientations: at least 10 needed\n')
+
+
+def test_the_rate_is_the_stamps_rate(real, tmp_path, capsys):
+    stamp = real.imu_stamp.copy()
+    stamp[500:] += 100.0  # a gap of 100 s: over the whole span, 8 messages a second
+    rec = Recording(np.column_stack([real.imu_record, stamp, real.q, real.gyro, real.accel]),
+                    np.zeros((0, 6)))
+    bag = write(tmp_path / 'gap', rec)
+    status, out, err = run(capsys, 'imu-check', bag)
+    assert status == 1 and err == ''
+    assert out.startswith(f'imu: {IMU} (frame base_link), {len(stamp)} messages, 50 Hz\n')
+    assert re.search(r'\nstamps +fault +period 0.02 s, ', out)
+    assert json.loads(run(capsys, 'imu-check', bag, '--json')[1])['imu']['rate'] == \
+        pytest.approx(50, rel=1e-3)
+
+
+def damage(path, at=0.5, size=2000):
+    """Overwrite ``size`` bytes of a file from ``at`` of its length with junk."""
+    data = bytearray(path.read_bytes())
+    k = int(len(data) * at)
+    data[k:k + size] = (bytes(range(256)) * (size // 256 + 1))[:size]
+    path.write_bytes(bytes(data))
+
+
+def test_damaged_bags_are_named(real, tmp_path, capsys):
+    """The damage is met while the messages are read, after the bag opened."""
+    ros1 = bh.real_excerpt(tmp_path / 'excerpt.bag', 600)
+    damage(ros1)
+    one_error_line(*run(capsys, 'imu-check', ros1), f'{ros1}: cannot read the bag: ')
+    mcap = write(tmp_path / 'mcap', real, storage='mcap')
+    damage(next(mcap.glob('*.mcap')), at=0.1)
+    one_error_line(*run(capsys, 'imu-check', mcap), f'{mcap}: cannot read the bag: ')
+
+
 def test_options_that_do_not_fit(capsys):
     for argv, words in (
             (['--ref-topic', ODOM, '--ref-tf', 'odom', 'base_link'], ['one reference']),
+            (['--ref-bag', bh.REAL], ['--ref-bag: say which reference to take from it']),
             (['--start', 10, '--end', 5], ['--end 5 is before --start 10']),
             (['--start', -1], ['>= 0 seconds'])):
         status, out, err = run(capsys, 'imu-check', bh.REAL, *argv)

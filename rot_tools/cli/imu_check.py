@@ -1,26 +1,10 @@
 """
 ``rot-tools imu-check BAG``: an IMU's conventions checked from a recording.
 
-Is the IMU publishing what ROS expects? One ``sensor_msgs/Imu`` topic of the bag (the only
-one, or ``--imu-topic``) is read through rot_tools.io.bag_read — header stamps, orientation,
-angular_velocity, linear_acceleration — and, when asked, a reference orientation of the same
-body: a topic (``--ref-topic``: Odometry, a pose, a TransformStamped or a QuaternionStamped)
-or a TF frame pair (``--ref-tf PARENT CHILD``, followed over the recording by
-rot_tools.TransformTree as ``rot-tools bag --tf`` follows it). An IMU publishes no
-orientation when its orientation_covariance[0] is −1 or its quaternions are all zero
-(sensor_msgs/Imu's own convention): the orientation checks are then unknown.
-
-The checks are rot_tools.core.imu.check_imu's (REP 103 and REP 145: units, signs, axes, the
-orientation's lag and world, the mounting; doc/imu.md says what each means). This module
-prints them: with ``--json`` one document ``{imu: {topic, frame, messages, rate}, checks:
-{name: {status, message, <numbers>}}, faults: N, fix: [lines]}``; without it a table, one
-row a check, and under it what to change, in the user's terms — the factor to multiply a
-field by, the axis map, a ``static_transform_publisher`` line for a mounting or a NED
-device. Angles in radians and rates in rad/s unless ``--deg``; scales are plain factors.
-
-Exit status: 0 when no check is at fault, 1 when one is, 2 on bad input (one line): a
-path that is missing or not a bag, a bag without an Imu topic, two Imu topics and no
-``--imu-topic``, a topic or frame that is not there.
+Reads one sensor_msgs/Imu topic (and, when asked, a reference orientation of the same body
+from the bag or from another recording of the run), runs rot_tools.core.imu.check_imu on it
+and prints the checks as a table or JSON, with each fault's fix in the user's terms.
+doc/imu.md says what each check means.
 """
 
 import argparse
@@ -35,7 +19,9 @@ from rot_tools.cli.bag_output import NS_PER_S
 from rot_tools.core.errors import RotationError
 from rot_tools.core.imu import (
     ACCEL_TOL, check_imu, faults, GRAVITY, GYRO_TOL, ImuReference)
+from rot_tools.core.imu_samples import MAX_READING, MIN_SAMPLES
 from rot_tools.core.so3 import matrix_to_quaternion
+from rot_tools.core.stamps import plain
 from rot_tools.io import arguments, bag_read, boundary
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import DEFAULT_PRECISION, to_json
@@ -109,17 +95,15 @@ class Imu(NamedTuple):
     """
     The IMU topic read, and the arrays check_imu takes.
 
-    topic, frame (its most frequent frame_id), messages (how many were read), rate (Hz,
-    None for fewer than two stamps), dropped (messages left out: a NaN or Inf, or an
-    orientation refused while others are given); stamps (N,) s, quaternions (N, 4) or None,
-    angular_velocity and linear_acceleration (N, 3), as recorded.
+    topic, frame (its most frequent frame_id), messages (how many were read), left_out
+    ({why: how many} of the messages left out, in LEFT_OUT's order); stamps (N,) s,
+    quaternions (N, 4) or None, angular_velocity and linear_acceleration (N, 3), as recorded.
     """
 
     topic: str
     frame: str
     messages: int
-    rate: object
-    dropped: int
+    left_out: dict
     stamps: np.ndarray
     quaternions: object
     angular_velocity: np.ndarray
@@ -216,30 +200,71 @@ def _has_orientation(columns):
     return (columns.covariance0 != -1) & np.any(q != 0, axis=1)
 
 
+NON_FINITE_VECTOR = 'a NaN or Inf in angular_velocity or linear_acceleration'
+BEYOND_READING = (f'a reading beyond {MAX_READING:g} in angular_velocity or '
+                  'linear_acceleration (no sensor reads that)')
+REFUSED = {
+    boundary.NO_ORIENTATION: 'no orientation (orientation_covariance[0] = -1) among messages '
+    'with one',
+    boundary.NON_FINITE: 'a NaN or Inf in the orientation',
+    boundary.ZERO_QUATERNION: 'a zero quaternion among messages with an orientation',
+    boundary.NON_UNIT_QUATERNION: 'a quaternion whose norm is off 1 by more than '
+    f'{QUATERNION_TOLERANCE:g}'}
+"""Why an Imu message is left out: first its vectors, then the boundary's refusals of its
+orientation (when some messages give one)."""
+
+
+def _left_out(columns):
+    """
+    Return (keep (N,) bool, {why: count}) of an Imu topic's messages.
+
+    Each message left out is counted once, under its first reason.
+    """
+    c = columns
+    vectors = np.concatenate([c.angular_velocity, c.linear_acceleration], axis=1)
+    finite = np.isfinite(vectors).all(axis=1)
+    reasons = [(NON_FINITE_VECTOR, ~finite),
+               (BEYOND_READING, finite & (np.abs(vectors) > MAX_READING).any(axis=1))]
+    if _has_orientation(c).any():
+        code = boundary.check_batch(c.orientation, QUATERNION_TOLERANCE, None,
+                                    c.covariance0).code
+        reasons += [(text, code == boundary.CODE[reason]) for reason, text in REFUSED.items()]
+    keep = np.ones(len(c), bool)
+    counts = {}
+    for why, bad in reasons:
+        count = int((bad & keep).sum())
+        if count:
+            counts[why] = count
+        keep &= ~bad
+    return keep, counts
+
+
+def left_out_text(imu):
+    """Return '3 of 3061 messages left out: 2 with ..., 1 with ...' of an Imu."""
+    total = sum(imu.left_out.values())
+    why = ', '.join(f'{count} with {text}' for text, count in imu.left_out.items())
+    counted = 'all' if total == imu.messages else f'{total} of'
+    return f'{counted} {imu.messages} messages left out: {why}'
+
+
 def imu_stream(columns, origin):
     """
     Return the Imu of an Imu topic's Columns, stamps in seconds from ``origin`` (ns).
 
     With no orientation in any message (sensor_msgs/Imu's covariance[0] = −1, or zero
-    quaternions) the quaternions are None. Messages with a NaN or Inf are left out, and
-    when some messages give an orientation, those whose orientation the boundary refuses
-    (rotation_node's checks) too: ``dropped`` counts them.
+    quaternions) the quaternions are None. Messages the checks cannot use are left out and
+    counted (_left_out): a NaN, an Inf or a reading beyond MAX_READING, and, when some
+    messages give an orientation, one the boundary refuses (rotation_node's checks).
     """
     c = columns
-    ns = stamp_ns(c.sec, c.nanosec)
-    gyro, accel = c.angular_velocity, c.linear_acceleration
-    keep = np.isfinite(gyro).all(axis=1) & np.isfinite(accel).all(axis=1)
+    keep, counts = _left_out(c)
     quaternions = None
     if _has_orientation(c).any():
-        verdict = boundary.check_batch(c.orientation, QUATERNION_TOLERANCE, None,
-                                       c.covariance0)
-        keep &= verdict.code == boundary.ACCEPTED
-        quaternions = c.orientation[keep] / verdict.norm[keep, None]
-    n = len(c)
-    span = (int(ns.max()) - int(ns.min())) / NS_PER_S if n else 0.0
-    return Imu(c.topic, _majority(c), n, (n - 1) / span if span > 0 else None,
-               int(n - keep.sum()), (ns[keep] - origin) / NS_PER_S, quaternions,
-               gyro[keep], accel[keep])
+        q = c.orientation[keep]
+        quaternions = q / np.linalg.norm(q, axis=1, keepdims=True)
+    return Imu(c.topic, _majority(c), len(c), counts,
+               (stamp_ns(c.sec, c.nanosec)[keep] - origin) / NS_PER_S, quaternions,
+               c.angular_velocity[keep], c.linear_acceleration[keep])
 
 
 def topic_stream(columns, origin):
@@ -263,39 +288,133 @@ def tf_stream(followed, parent, child, origin):
                   matrix_to_quaternion(followed.chain.R, check=False))
 
 
-def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None):
+def _tf_reference(reader, frames, lo, hi, origin):
+    """Return the Stream of --ref-tf PARENT CHILD from a bag's TF."""
+    parent, child = frames
+    try:
+        followed = bag_analysis.tf_topic(reader, parent, child, QUATERNION_TOLERANCE, lo, hi)
+    except bag_read.BagError as exc:  # its messages name rot-tools bag's --tf
+        text = str(exc)
+        raise bag_read.BagError(
+            '--ref-tf' + text[len('--tf'):] if text.startswith('--tf') else text) from None
+    return tf_stream(followed, parent, child, origin)
+
+
+def _seconds(ns):
+    """Return a time in ns as seconds in a plain decimal."""
+    return plain(int(ns) / NS_PER_S)
+
+
+def _span_text(span):
+    return f'{_seconds(span[0])}–{_seconds(span[1])} s'
+
+
+def _apart(a, b):
+    """Return how far apart two spans (ns) are, as text in s, min or h."""
+    gap = max(a[0] - b[1], b[0] - a[1]) / NS_PER_S
+    if gap >= 3600:
+        return f'{gap / 3600:.1f} h'
+    return f'{gap / 60:.1f} min' if gap >= 60 else f'{gap:.3g} s'
+
+
+def require_overlap(a, span_a, b, span_b, what):
+    """
+    Raise BagError when two spans (first, last) in ns do not overlap.
+
+    a, b: what they are the spans of; what: 'recorded' or 'stamped'.
+    """
+    if span_a[0] <= span_b[1] and span_b[0] <= span_a[1]:
+        return
+    raise bag_read.BagError(
+        f'{a} ({what} {_span_text(span_a)}) and {b} ({what} {_span_text(span_b)}) do not '
+        f'overlap in time: {_apart(span_a, span_b)} apart')
+
+
+def _stamp_span(stamps, origin):
+    """Return (first, last) in ns of stamps in seconds from ``origin`` (ns)."""
+    return (origin + int(round(float(np.min(stamps)) * NS_PER_S)),
+            origin + int(round(float(np.max(stamps)) * NS_PER_S)))
+
+
+def _record_span(reader):
+    """Return (first, last) record time of an open bag, ns."""
+    return reader.start_time, reader.end_time - 1  # rosbags' end_time is the last one + 1
+
+
+def read_reference(path, ref_topic, ref_tf, lo, hi, origin, imu_bag):
+    """
+    Return the reference Stream from another recording of the run (--ref-bag PATH).
+
+    lo, hi: the IMU bag's window (record time, ns, or None); origin: the IMU's first stamp
+    (ns); imu_bag: (path, record span) of the IMU's bag, which this one must overlap.
+    """
+    with bag_read.open_bag(path) as reader:
+        require_overlap(imu_bag[0], imu_bag[1], f'--ref-bag {path}', _record_span(reader),
+                        'recorded')
+        try:
+            if ref_tf is not None:
+                return _tf_reference(reader, ref_tf, lo, hi, origin)
+            topic = _reference_topic(_topics(reader), ref_topic, None)
+            connections = [c for c in reader.connections if c.topic == topic]
+            return topic_stream(bag_read.read_topics(reader, connections, lo, hi)[topic],
+                                origin)
+        except bag_read.BagError as exc:
+            raise bag_read.BagError(f'--ref-bag {path}: {exc}') from None
+
+
+def _usable(reference, window):
+    """Raise BagError unless the reference has MIN_SAMPLES distinct stamps at least."""
+    count = len(reference.stamps)
+    if not count:
+        raise bag_read.BagError(f'{reference.name}: no usable orientation{window}')
+    distinct = len(np.unique(reference.stamps))
+    if distinct < MIN_SAMPLES:
+        raise bag_read.BagError(
+            f'{reference.name}: the reference has {distinct} distinct stamp(s) among its '
+            f'{count} usable orientations{window}: at least {MIN_SAMPLES} needed')
+
+
+def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None, ref_bag=None):
     """
     Return the Recording of the bag at PATH; BagError (one line) for what cannot be read.
 
     imu: the Imu topic (default: the bag's only one); ref_topic or ref_tf (PARENT, CHILD):
-    the reference; start, end: seconds from the bag's start (record time), as rot-tools
-    bag's --start and --end.
+    the reference, from the bag ref_bag when given (another recording of the same run), else
+    from PATH; start, end: seconds from the bag's start (record time), as rot-tools bag's
+    --start and --end (for ref_bag too, at the same record times).
     """
+    window = '' if start is None and end is None else ' between --start and --end'
     with bag_read.open_bag(path) as reader:
         found = _topics(reader)
         topic = imu_topic(found, imu)
         names = [topic]
-        if ref_topic is not None:
+        if ref_topic is not None and ref_bag is None:
             names.append(_reference_topic(found, ref_topic, topic))
         lo = None if start is None else bag_analysis.record_bound(reader.start_time, start)
         hi = None if end is None else bag_analysis.record_bound(reader.start_time, end) + 1
         connections = [c for c in reader.connections if c.topic in names]
         columns = bag_read.read_topics(reader, connections, lo, hi, vectors=ACCELERATION)
-        window = '' if start is None and end is None else ' between --start and --end'
         if not len(columns[topic]):
             raise bag_read.BagError(f'{topic}: no message{window}')
         origin = int(stamp_ns(columns[topic].sec[:1], columns[topic].nanosec[:1])[0])
+        imu_data = imu_stream(columns[topic], origin)
+        if not len(imu_data.stamps):
+            raise bag_read.BagError(f'{topic}: {left_out_text(imu_data)}{window}: '
+                                    'nothing to check')
         reference = None
-        if ref_topic is not None:
+        if ref_bag is None and ref_topic is not None:
             reference = topic_stream(columns[ref_topic], origin)
-        elif ref_tf is not None:
-            followed = bag_analysis.tf_topic(reader, ref_tf[0], ref_tf[1],
-                                             QUATERNION_TOLERANCE, lo, hi)
-            reference = tf_stream(followed, ref_tf[0], ref_tf[1], origin)
-        if reference is not None and not len(reference.stamps):
-            raise bag_read.BagError(f'{reference.name}: no usable orientation{window}')
-        hint = None if reference is not None else reference_hint(found, topic)
-    return Recording(imu_stream(columns[topic], origin), reference, hint)
+        elif ref_bag is None and ref_tf is not None:
+            reference = _tf_reference(reader, ref_tf, lo, hi, origin)
+        hint = None if ref_topic or ref_tf else reference_hint(found, topic)
+        imu_bag = (path, _record_span(reader))
+    if ref_bag is not None:
+        reference = read_reference(ref_bag, ref_topic, ref_tf, lo, hi, origin, imu_bag)
+    if reference is not None:
+        _usable(reference, window)
+        require_overlap(topic, _stamp_span(imu_data.stamps, origin), reference.name,
+                        _stamp_span(reference.stamps, origin), 'stamped')
+    return Recording(imu_data, reference, hint)
 
 
 # ---------------------------------------------------------------------------------------
@@ -343,12 +462,18 @@ def numbers(result, degrees=False):
     return out
 
 
+def imu_rate(checks):
+    """Return the IMU's messages per second: one over the median step of its stamps."""
+    period = checks.stamps.period
+    return 1 / period if period else None
+
+
 def document(recording, checks, degrees=False):
     """Return the ``--json`` document: imu, checks, faults, fix."""
     imu = recording.imu
     return {
         'imu': {'topic': imu.topic, 'frame': imu.frame, 'messages': imu.messages,
-                'rate': imu.rate},
+                'rate': imu_rate(checks)},
         'checks': {name: {'status': result.status, 'message': result.message,
                           **numbers(result, degrees)}
                    for name, result in checks._asdict().items()},
@@ -618,7 +743,7 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         'imu-check', help="an IMU's conventions checked from a recording (REP 103, REP 145)",
         usage=f'{options.PROG} imu-check BAG [--imu-topic T] [--ref-topic T | --ref-tf PARENT '
-        'CHILD]\n       [--start S] [--end S] [--deg] [--json]',
+        'CHILD]\n       [--ref-bag BAG] [--start S] [--end S] [--deg] [--json]',
         description=f"An IMU's conventions checked from a recording.\n\n{TEXT}",
         epilog='examples:\n  rot-tools imu-check run.bag\n'
         '  rot-tools imu-check run.bag --imu-topic /imu/data --ref-topic /odom\n'
@@ -633,6 +758,9 @@ def add_parser(subparsers):
     p.add_argument('--ref-tf', nargs=2, metavar=('PARENT', 'CHILD'),
                    help="the body's orientation: CHILD (the body frame, e.g. base_link) in "
                    "PARENT (e.g. odom) from the bag's /tf and /tf_static")
+    p.add_argument('--ref-bag', metavar='BAG',
+                   help='take the reference (--ref-topic or --ref-tf) from this bag, another '
+                   'recording of the same run, instead of BAG')
     arguments.add_bag_window(p)
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
@@ -660,6 +788,9 @@ def run(args):
             error(f'{option} does not apply to imu-check')
     if args.ref_topic is not None and args.ref_tf is not None:
         error('--ref-topic and --ref-tf: give one reference, not both')
+    if args.ref_bag is not None and args.ref_topic is None and args.ref_tf is None:
+        error('--ref-bag: say which reference to take from it (--ref-topic T or --ref-tf '
+              'PARENT CHILD)')
     missing = bag_read.rosbags_missing()
     if missing:
         error(f"imu-check needs the rosbags library ({missing} is missing), the 'bag' extra: "
@@ -668,17 +799,15 @@ def run(args):
         error(f'--end {args.end:g} is before --start {args.start:g}')
     try:
         recording = read(args.path, args.imu_topic, args.ref_topic, args.ref_tf, args.start,
-                         args.end)
+                         args.end, args.ref_bag)
     except bag_read.BagError as exc:
         error(f'imu-check: {exc}')
+    if recording.imu.left_out:
+        sys.stderr.write(f'warning: {recording.imu.topic}: {left_out_text(recording.imu)}\n')
     try:
         checks = check(recording)
     except RotationError as exc:  # too few samples for the checks
         error(f'imu-check: {recording.imu.topic}: {exc}')
-    if recording.imu.dropped:
-        sys.stderr.write(f'warning: {recording.imu.topic}: {recording.imu.dropped} of '
-                         f'{recording.imu.messages} messages left out (a NaN, an Inf or a '
-                         'refused orientation)\n')
     data = document(recording, checks, args.deg)
     text = to_json(data, JSON_DIGITS) if args.json else table(data, recording, args.deg)
     output_file.to_stdout(lambda out: out.write(text))

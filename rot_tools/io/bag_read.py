@@ -169,6 +169,11 @@ def _one_line(exc):
     return text if len(text) < 300 else text[:297] + '...'
 
 
+def _named(reader):
+    """Return the path(s) of an open reader's bag, for a message."""
+    return ', '.join(str(path) for path in reader.paths)
+
+
 def _opened(paths, typestore=None):
     from rosbags.highlevel import AnyReader
     reader = AnyReader(paths, default_typestore=typestore)
@@ -408,8 +413,8 @@ def _decode(reader, raw, conn, index):
     try:
         return reader.deserialize(raw, conn.msgtype)
     except Exception as exc:  # noqa: BLE001 - rosbags' serde errors vary
-        raise BagError(f'{conn.topic}: message {index()} cannot be decoded as {conn.msgtype}: '
-                       f'{_one_line(exc)}') from None
+        raise BagError(f'{_named(reader)}: {conn.topic}: message {index()} cannot be decoded '
+                       f'as {conn.msgtype}: {_one_line(exc)}') from None
 
 
 def read_topics(reader, connections, start=None, stop=None, progress=None, vectors=None):
@@ -439,7 +444,7 @@ def read_topics(reader, connections, start=None, stop=None, progress=None, vecto
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags' reader
-        raise BagError(f'cannot read the bag: {_one_line(exc)}') from None
+        raise BagError(f'{_named(reader)}: cannot read the bag: {_one_line(exc)}') from None
     if progress is not None:
         progress(count)
     return {name: topic.finish() for name, topic in topics.items()}
@@ -485,5 +490,5 @@ def read_tf(reader, static, dynamic, start=None, stop=None):
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags
-        raise BagError(f'cannot read the bag: {_one_line(exc)}') from None
+        raise BagError(f'{_named(reader)}: cannot read the bag: {_one_line(exc)}') from None
     return TfColumns(topic.finish(), np.array(kinds, bool))
