@@ -464,7 +464,7 @@ def hand_eye_rotation(A, B):
     residual = rotation_distance(A @ X, X @ B, check=False)
     warning = ''
     if axes < 2:
-        warning = (f'the motion excited {axes} rotation axis (σ2/σ1 = {sigma[1] / sigma[0]:.2g}'
+        warning = (f'the motion excited {axes} rotation axis (σ2/σ1 = {sigma[1] / sigma[0]:.3f}'
                    f' < {EXCITED_RATIO:g}): the turn of the mounting about it is not '
                    'determined')
     return HandEye(rotation=X, residual=float(np.sqrt(np.mean(residual ** 2))),
