@@ -224,6 +224,44 @@ def test_clean_window_with_the_odometry_json(real, tmp_path, capsys):
 
 
 # ---------------------------------------------------------------------------------------
+# Every window of the clean recording
+
+
+def window(recording, start, end):
+    """Return the Recording's samples stamped from ``start`` to ``end`` s of the IMU's first."""
+    imu, ref = recording.imu, recording.reference
+    k = (imu.stamps >= start) & (imu.stamps <= end)
+    j = (ref.stamps >= start) & (ref.stamps <= end)
+    return recording._replace(
+        imu=imu._replace(messages=int(k.sum()), stamps=imu.stamps[k],
+                         quaternions=imu.quaternions[k],
+                         angular_velocity=imu.angular_velocity[k],
+                         linear_acceleration=imu.linear_acceleration[k]),
+        reference=ref._replace(stamps=ref.stamps[j], quaternions=ref.quaternions[j]))
+
+
+def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
+    """
+    Windows of 2, 5 and 10 s, 1.5 s apart, over the whole recording, with the odometry.
+
+    The bag is read once; each window goes through the command's run as --start S --end E.
+    """
+    whole = imu_check.read(bh.REAL, ref_topic=ODOM)
+    monkeypatch.setattr(imu_check, 'read', lambda *args: window(whole, args[4], args[5]))
+    span = whole.imu.stamps[-1]
+    windows = [(start, start + length) for length in (2, 5, 10)
+               for start in np.arange(0.0, span - length, 1.5)]
+    assert len(windows) >= 100
+    found_faults = {}
+    for start, end in windows:
+        status, data = run_json(capsys, 'imu-check', bh.REAL, '--ref-topic', ODOM,
+                                '--start', start, '--end', end)
+        if status != 0:
+            found_faults[f'{start:g}-{end:g} s'] = sorted(found(data))
+    assert found_faults == {}
+
+
+# ---------------------------------------------------------------------------------------
 # The reference from another recording of the run (--ref-bag)
 
 

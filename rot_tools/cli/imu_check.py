@@ -726,15 +726,17 @@ def table(data, recording, degrees=False):
 
 TEXT = (
     'Reads one sensor_msgs/Imu topic of a bag (the only one, or --imu-topic) and checks it\n'
-    'against REP 103 and REP 145: stamps, accel_units, orientation_vs_accel, gyro_units,\n'
-    'gyro_axes, gyro_bias, time_offset; with a reference orientation of the same body\n'
-    '(--ref-topic: odometry or a pose; --ref-tf PARENT CHILD: a TF frame pair) also\n'
-    'accel_sign, world_up (NED) and mounting. Each check is ok, fault or unknown, with its\n'
-    'numbers (angles in radians and rates in rad/s unless --deg; scales are plain factors).\n'
-    'Prints a table and, under it, what to change for each fault; --json prints\n'
-    '{imu, checks, faults, fix}. An IMU without orientation (orientation_covariance[0] = -1\n'
-    'or zero quaternions) leaves the orientation checks unknown. Exit status 0: no fault,\n'
-    '1: faults, 2: bad input. Needs rosbags (the bag extra). doc/imu.md explains each check.')
+    'against REP 103 and REP 145: quaternion (as recorded, written w-first or inverted),\n'
+    'stamps, accel_units, orientation_vs_accel, gyro_units, gyro_axes, gyro_bias,\n'
+    'time_offset; with a reference orientation of the same body (--ref-topic: odometry or a\n'
+    'pose; --ref-tf PARENT CHILD: a TF frame pair; from another recording of the run with\n'
+    '--ref-bag) also accel_sign, world_up (NED) and mounting. Each check is ok, fault or\n'
+    'unknown, with its numbers (angles in radians and rates in rad/s unless --deg; scales are\n'
+    'plain factors). Prints a table and, under it, what to change for each fault; --json\n'
+    'prints {imu, checks, faults, fix}. An IMU without orientation\n'
+    '(orientation_covariance[0] = -1 or zero quaternions) leaves the orientation checks\n'
+    'unknown. Exit status 0: no fault, 1: faults, 2: bad input. Needs rosbags (the bag\n'
+    'extra). doc/imu.md explains each check.')
 """What ``rot-tools imu-check --help`` says of the command."""
 
 
@@ -747,6 +749,7 @@ def add_parser(subparsers):
         description=f"An IMU's conventions checked from a recording.\n\n{TEXT}",
         epilog='examples:\n  rot-tools imu-check run.bag\n'
         '  rot-tools imu-check run.bag --imu-topic /imu/data --ref-topic /odom\n'
+        '  rot-tools imu-check imu.bag --ref-bag odom.bag --ref-topic /odom\n'
         '  rot-tools imu-check rosbag2_dir --ref-tf odom base_link --deg --json')
     p.add_argument('path', metavar='BAG',
                    help='a ROS 1 .bag file, a rosbag2 directory, or a file in one')
