@@ -30,7 +30,7 @@ IMU_TYPE, ODOM_TYPE = 'sensor_msgs/msg/Imu', 'nav_msgs/msg/Odometry'
 WINDOW = (0.0, 20.0)
 """The seconds of the real recording (from its first IMU stamp) written into the test bags."""
 
-CHECKS = ('stamps', 'accel_units', 'orientation_vs_accel', 'gyro_units', 'gyro_axes',
+CHECKS = ('quaternion', 'stamps', 'accel_units', 'orientation_vs_accel', 'gyro_units', 'gyro_axes',
           'gyro_bias', 'time_offset', 'accel_sign', 'world_up', 'mounting')
 
 G = 9.80665
@@ -115,6 +115,12 @@ def found(data):
     return {name for name, check in data['checks'].items() if check['status'] == 'fault'}
 
 
+def table_faults(out):
+    """Return the names of the table's rows at fault."""
+    rows = [line.split() for line in out.splitlines()]
+    return {row[0] for row in rows if row[:1] and row[0] in CHECKS and row[1] == 'fault'}
+
+
 def one_error_line(status, out, err, *words):
     assert status == 2 and out == ''
     assert err.startswith('rot-tools: error: imu-check: ') and err.count('\n') == 1, err
@@ -148,13 +154,76 @@ def test_gyro_in_degrees(real, tmp_path, capsys):
     assert status == 1
     assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out: 1 with a NaN or Inf '
                    'in angular_velocity or linear_acceleration\n')
-    rows = {line.split()[0]: line.split()[1] for line in out.splitlines()
-            if line.split() and line.split()[0] in CHECKS}
-    assert [name for name, word in rows.items() if word == 'fault'] == ['gyro_units']
+    assert table_faults(out) == {'gyro_units'}
     scale = float(re.search(r'gyro_units\s+fault\s+scale (\S+)', out).group(1))
     assert scale == pytest.approx(math.pi / 180, rel=0.03)
     assert '1 fault\n  gyro_units: angular_velocity reads in deg/s: multiply it by π/180 = ' \
         '0.0174533' in out
+
+
+def recipe(line, fields):
+    """
+    Apply a fix's axis map to recorded fields: 'x = -orientation.y, ...' or 'x = +y, ...'.
+
+    fields: {name: (N,) values} of the names the map reads; returns the (N, k) result.
+    """
+    columns = []
+    for part in line.split(', '):
+        sign, name = re.fullmatch(r'\w = ([+-]?)([\w.]+)', part).groups()
+        columns.append(-fields[name] if sign == '-' else fields[name])
+    return np.column_stack(columns)
+
+
+def test_quaternion_written_w_first(real, tmp_path, capsys):
+    """The fields x, y, z, w hold w, x, y, z: only the quaternion check is at fault."""
+    written = real.q[:, [3, 0, 1, 2]]
+    bag = write(tmp_path / 'w_first', real, q=written)
+    status, data = run_json(capsys, 'imu-check', bag)
+    assert status == 1 and found(data) == {'quaternion'}
+    assert data['checks']['quaternion']['reading'] == 'w-first'
+    (fix,) = data['fix']
+    assert fix.startswith('quaternion: the orientation is written w-first: its fields x, y, '
+                          "z, w hold the quaternion's w, x, y, z")
+    assert 'orientation.x = q.x(), orientation.y = q.y(), orientation.z = q.z(), ' \
+        'orientation.w = q.w()' in fix
+    fields = {f'orientation.{a}': written[:, k] for k, a in enumerate('xyzw')}
+    read = recipe(fix.split('reads right as ')[1], fields)
+    assert np.array_equal(read, real.q)
+
+
+def test_quaternion_inverted(real, tmp_path, capsys):
+    """The conjugate, the world in the IMU frame: only the quaternion check is at fault."""
+    written = Rotation.from_quat(real.q).inv().as_quat()
+    bag = write(tmp_path / 'inverted', real, q=written)
+    status, data = run_json(capsys, 'imu-check', bag)
+    assert status == 1 and found(data) == {'quaternion'}
+    assert data['checks']['quaternion']['reading'] == 'inverted'
+    (fix,) = data['fix']
+    assert fix.startswith('quaternion: the orientation is inverted: it gives the world in the '
+                          'IMU frame')
+    assert 'publish its conjugate' in fix
+    fields = {f'orientation.{a}': written[:, k] for k, a in enumerate('xyzw')}
+    read = Rotation.from_quat(recipe(fix.split('reads right as ')[1], fields))
+    assert np.degrees((read.inv() * Rotation.from_quat(real.q)).magnitude()).max() < 1e-6
+
+
+def test_gyro_axis_negated_is_a_mirror(real, tmp_path, capsys):
+    """A left-handed gyro: the fix negates its y axis; no rotation is offered for it."""
+    gyro = real.gyro * [1, -1, 1]
+    bag = write(tmp_path / 'mirror', real, gyro=gyro, odom=True)
+    status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
+    assert status == 1 and err == ''
+    assert table_faults(out) == {'gyro_axes'}
+    assert re.search(r'\ngyro_axes +fault +x = \+x, y = -y, z = \+z, mirror, negate y ', out)
+    fix = out.split('\n1 fault\n')[1].splitlines()[0]
+    assert fix.startswith("  gyro_axes: the gyro's axes are a mirror of the orientation's (a "
+                          'left-handed frame: no turn of the IMU gives it): negate the '
+                          "gyro's y axis; in all, publish x = +x, y = -y, z = +z of what it "
+                          'reads now')
+    fields = dict(zip('xyz', gyro.T))
+    assert np.array_equal(recipe(fix.split('publish ')[1][:-len(' of what it reads now')],
+                                 fields), real.gyro)
+    assert 'static_transform_publisher' not in out
 
 
 def test_ned_device_with_the_odometry(real, tmp_path, capsys):
@@ -167,9 +236,7 @@ def test_ned_device_with_the_odometry(real, tmp_path, capsys):
                 accel=frd.apply(real.accel), odom=True)
     status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
     assert status == 1 and err == ''
-    faults = {line.split()[0] for line in out.splitlines()
-              if line.split()[:1] and line.split()[0] in CHECKS and line.split()[1] == 'fault'}
-    assert faults == {'orientation_vs_accel', 'world_up'}
+    assert table_faults(out) == {'orientation_vs_accel', 'world_up'}
     lines = [line for line in out.splitlines() if 'static_transform_publisher' in line]
     assert lines[0].startswith("  world_up: the orientation's world is NED (z down)")
     assert lines[0].endswith(' --qx 1 --qy 0 --qz 0 --qw 0 --frame-id base_link '
@@ -210,15 +277,20 @@ def test_clean_window_with_the_odometry_json(real, tmp_path, capsys):
     assert data['imu'] == {'topic': IMU, 'frame': 'base_link', 'messages': int(inside.sum()),
                            'rate': pytest.approx(50, rel=1e-3)}
     assert list(data['checks']) == list(CHECKS)
-    named = {'stamps': ['period', 'gap', 'backwards'], 'accel_units': ['scale'],
-             'orientation_vs_accel': ['angle'], 'gyro_units': ['scale'],
-             'gyro_axes': ['matrix'], 'gyro_bias': ['bias'], 'time_offset': ['seconds'],
+    named = {'quaternion': ['reading'],
+             'stamps': ['period', 'gap', 'backwards', 'spread', 'rate', 'arrival_time'],
+             'accel_units': ['scale'], 'orientation_vs_accel': ['angle'],
+             'gyro_units': ['scale'], 'gyro_axes': ['matrix', 'mirror', 'negate'],
+             'gyro_bias': ['bias'], 'time_offset': ['seconds'],
              'accel_sign': ['angle'], 'world_up': ['angle'],
              'mounting': ['quaternion', 'warning']}
     for name, check in data['checks'].items():
         assert list(check) == ['status', 'message'] + named[name], name
         assert check['status'] == 'ok', (name, check)
+    assert data['checks']['quaternion']['reading'] == 'as recorded'
+    assert data['checks']['stamps']['rate'] == data['imu']['rate']
     assert data['checks']['gyro_axes']['matrix'] == [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    assert data['checks']['gyro_axes']['mirror'] is False
     assert len(data['checks']['gyro_bias']['bias']) == 3
     assert len(data['checks']['mounting']['quaternion']) == 4
 

@@ -66,10 +66,17 @@ GRAVITY_REMOVED = 10
 """An accelerometer scale above this (|a| under a tenth of gravity when the body turns
 slowly) reads with gravity removed."""
 
+STEPS = ('period', 'gap', 'spread')
+"""The numbers that are steps of stamps (s): to the nanosecond, as the stamps are."""
+
 ANGLES = {'angle': ('rad', 'deg'), 'bias': ('rad/s', 'deg/s')}
 """The numbers of a check that are angles or rates: their unit without and with --deg."""
 
-UNITS = {'period': 's', 'gap': 's'}
+FLAGS = {'mirror': 'mirror', 'negate': 'negate {}',
+         'arrival_time': 'arrival-time stamping suspected'}
+"""The table's words for a check's flag or axis when it is set (nothing when it is not)."""
+
+UNITS = {'period': 's', 'gap': 's', 'spread': 's', 'rate': 'Hz'}
 """The other numbers with a unit in the table (scales, matrices and quaternions have none;
 time_offset's seconds are shown without their name)."""
 
@@ -456,6 +463,8 @@ def numbers(result, degrees=False):
         if name in ('status', 'message'):
             continue
         value = _plain(value)
+        if name in STEPS and value is not None:
+            value = round(value, 9)
         if degrees and name in ANGLES and value is not None:
             value = np.degrees(value).tolist()
         out[name] = value
@@ -564,11 +573,10 @@ def fixes(recording, checks, degrees=False):
             lines.append(_tilt_line(getattr(result, 'angle', None), degrees))
         elif name == 'gyro_units':
             lines.append(_gyro_units_line(getattr(result, 'scale', None)))
+        elif name == 'quaternion':
+            lines.append(QUATERNION_FIXES[result.reading])
         elif name == 'gyro_axes':
-            matrix = getattr(result, 'matrix', None)
-            lines.append("gyro_axes: angular_velocity is not about the orientation's axes"
-                         + ('' if matrix is None else
-                            f': publish {axis_map(matrix)} of what it reads now'))
+            lines.append(_gyro_axes_line(result))
         elif name == 'gyro_bias':
             bias = getattr(result, 'bias', None)
             lines.append('gyro_bias: calibrate the gyro at rest' + (
@@ -593,6 +601,31 @@ def fixes(recording, checks, degrees=False):
         else:
             lines.append(f'{name}: {result.message}')
     return lines
+
+
+QUATERNION_FIXES = {
+    'w-first': 'quaternion: the orientation is written w-first: its fields x, y, z, w hold the '
+    "quaternion's w, x, y, z (Eigen's coeffs() are x, y, z, w; its constructor takes w, x, y, "
+    'z). In the driver fill orientation.x = q.x(), orientation.y = q.y(), orientation.z = '
+    'q.z(), orientation.w = q.w(); a recording reads right as x = orientation.y, y = '
+    'orientation.z, z = orientation.w, w = orientation.x',
+    'inverted': 'quaternion: the orientation is inverted: it gives the world in the IMU frame '
+    'where REP 145 wants the IMU frame in the world. In the driver publish its conjugate '
+    '(Eigen: q.conjugate()); a recording reads right as x = -orientation.x, y = '
+    '-orientation.y, z = -orientation.z, w = orientation.w'}
+"""The fix of a quaternion check at fault, by its reading."""
+
+
+def _gyro_axes_line(result):
+    said = "gyro_axes: angular_velocity is not about the orientation's axes"
+    if result.matrix is None:
+        return said
+    publish = f'publish {axis_map(result.matrix)} of what it reads now'
+    if not result.mirror:
+        return f'{said}: {publish}'
+    return (f"gyro_axes: the gyro's axes are a mirror of the orientation's (a left-handed "
+            f"frame: no turn of the IMU gives it): negate the gyro's {result.negate} axis; in "
+            f'all, {publish}')
 
 
 def _tilt_line(angle, degrees):
@@ -673,6 +706,8 @@ def _fixed(values, decimals):
 
 def number_text(name, value, degrees=False):
     """Return one number of a check as the table shows it, with its unit."""
+    if name in FLAGS:  # shown by its words when set, else not at all
+        return FLAGS[name].format(value) if value else ''
     if value is None:
         return '-'
     if name == 'matrix':
@@ -704,6 +739,7 @@ def table(data, recording, degrees=False):
     for name, result in data['checks'].items():
         texts = [number_text(k, v, degrees) for k, v in result.items()
                  if k not in ('status', 'message', 'warning')]
+        texts = [text for text in texts if text]
         text = '-' if set(texts) <= {'-'} else ', '.join(texts)
         rows.append((name, result['status'], text, result['message']))
         if result.get('warning'):
