@@ -1,36 +1,11 @@
 """
 An IMU's conventions checked from its samples (REP-103, REP-145): check_imu, on arrays.
 
-Sample k of a ``sensor_msgs/Imu`` stream: stamp t_k (s), orientation R_k (the IMU frame in the
-orientation's world), gyro ω_k (rad/s) and accelerometer a_k (m/s²) on the IMU's axes. ROS
-expects an ENU world (z up, REP-103), the gyro to be the body rate of R (R_kᵀ·Ṙ_k = [ω_k]×),
-the accelerometer to read the specific force (+9.80665 m/s² along the IMU's up at rest,
-REP-145), and all three at one instant. The checks (ImuChecks, in order):
-
-- stamps: increasing, no gap longer than GAP_PERIODS sample periods.
-- accel_units (scale = 9.80665 / median |ā_k| in slow spells, imu_motion.slow_spells; ā_k
-  the accelerometer averaged over the slow window, imu_motion.steady_accel): fault beyond
-  ACCEL_TOL (g instead of m/s², gravity removed).
-- orientation_vs_accel (angle): the world z seen from the IMU, Rᵀ·ẑ, against the specific
-  force's direction in slow spells: the median over those samples of the angle between
-  R_kᵀ·ẑ and ā_k (a tilt shows at every attitude; a mean of vectors would let the attitudes
-  cancel it). Fault beyond ANGLE_TOL; near 180° the accelerometer reads gravity, or the
-  orientation's world is NED. Unknown where the accelerometer shows no gravity.
-- gyro_units (scale), gyro_axes (matrix, a signed permutation M), gyro_bias (bias): the fit
-  ω° ≈ scale·M·(ω − bias/scale) of the orientation's rates (imu_motion.fit_gyro). Faults:
-  |scale − 1| > GYRO_TOL, M ≠ I on the axes the motion fixes, |bias| > BIAS_TOL rad/s.
-- time_offset (seconds): how late the orientation is (imu_motion.orientation_lag); fault
-  beyond LAG_PERIODS periods.
-- With a reference (ImuReference: the body's orientation Q_k): mounting (quaternion, the
-  IMU frame X in the body frame, imu_mounting); accel_sign (angle: the median over slow
-  spells of the angle between the body's up in the IMU frame, Xᵀ·Q_kᵀ·ẑ, and ā_k; fault
-  beyond 90°, the accelerometer's sign flipped); world_up (angle: the median over the
-  mounting's poses of the angle between the orientation's world z in the reference's world,
-  Q_k·X·R_kᵀ·ẑ, and ẑ; fault beyond 90°, NED).
-
-Each check is ok, fault or unknown (where the data cannot tell: no orientation, no slow
-spells, too little motion, no reference), with a one-sentence message and its numbers
-(radians, rad/s, seconds, plain factors; None where unknown).
+Sample k: stamp t_k (s), orientation R_k (the IMU frame in the orientation's world), gyro ω_k
+(rad/s) and accelerometer a_k (m/s²) on the IMU's axes. ROS expects an ENU world (z up), the
+gyro to be the body rate of R, the accelerometer to read the specific force (+9.80665 m/s² up
+at rest), all three at one instant. Each check of ImuChecks is ok, fault, or unknown where the
+data cannot tell.
 """
 
 import math
@@ -43,6 +18,7 @@ from rot_tools.core.imu_motion import (
 from rot_tools.core.imu_mounting import HAND_EYE_STEP, imu_mounting, mounting_poses
 from rot_tools.core.imu_samples import imu_samples, reference_samples, stamps_array
 from rot_tools.core.so3 import matrix_to_quaternion
+from rot_tools.core.stamps import stamp_steps
 from rot_tools.core.trajectory import nearest_stamps
 
 GRAVITY = 9.80665
@@ -58,7 +34,10 @@ ACCEL_TOL = 0.05
 """|scale − 1| of the accelerometer beyond which it is a fault."""
 
 ANGLE_TOL = math.radians(5)
-"""Angle between Rᵀ·ẑ and the specific force beyond which it is a fault (rad)."""
+"""Angle between the orientation's up and the specific force beyond which it is a fault."""
+
+OPPOSITE = math.radians(150)
+"""An angle between two up directions beyond which they are opposite (a sign flipped, NED)."""
 
 GYRO_TOL = 0.1
 """|scale − 1| of the gyro beyond which it is a fault."""
@@ -76,7 +55,44 @@ NO_GRAVITY = 0.5
 """Median |a| (in its units) in slow spells below which the accelerometer shows no gravity,
 so no direction of up (a gravity-compensated output; in g it reads 1)."""
 
+TURNS = 0.05
+"""RMS (rad/s) of the orientation's rates about their mean at least, for the orientation to
+turn clearly: a gyro must then follow it."""
+
+FOLLOWS = 0.25
+"""Share of the orientation's rate variance that the gyro explains at least (by any linear
+map, whatever its units, axes and bias), for the gyro to follow the orientation."""
+
+READING_SLACK = 1.5
+"""A reading of the quaternion agrees with the gyro when what the gyro leaves of its rates is
+at most this many times what the best reading leaves."""
+
+REGULAR = 1e-6
+"""Spread of the steps, as a share of the period, at most for the steps to be equal (the
+rest is the stamps' rounding)."""
+
 AXES = 'xyz'
+
+READINGS = ('as recorded', 'w-first', 'inverted')
+"""How a quaternion's fields x, y, z, w may be read (read_quaternions)."""
+
+
+def read_quaternions(quaternions, reading):
+    """
+    Return quaternions (N, 4) [x, y, z, w] as `reading` (one of READINGS) takes them.
+
+    'as recorded': as given; 'w-first': the fields x, y, z, w hold w, x, y, z (Eigen's
+    coeffs() against its constructor), so (x, y, z, w) = (y, z, w, x) of the fields;
+    'inverted': the conjugate (x, y, z, w) → (−x, −y, −z, w), the world in the IMU frame.
+    """
+    q = np.asarray(quaternions, dtype=np.float64)
+    if reading == 'as recorded':
+        return q
+    if reading == 'w-first':
+        return q[..., [1, 2, 3, 0]]
+    if reading == 'inverted':
+        return q * [-1.0, -1.0, -1.0, 1.0]
+    raise RotationError(f'reading must be one of {", ".join(READINGS)}, got {reading!r}')
 
 
 # ---- the checks --------------------------------------------------------------------------
@@ -89,18 +105,48 @@ class ImuReference(NamedTuple):
     quaternions: Any
 
 
+class QuaternionCheck(NamedTuple):
+    """
+    reading: how the orientation's quaternion is read ('as recorded', 'w-first', 'inverted').
+
+    Tried three ways (READINGS), a reading other than as recorded is a fault when the
+    orientation, read so, agrees with both the gyro and the accelerometer where read as
+    recorded it does not; the other checks then take the orientation so read. None where
+    there is no orientation.
+    """
+
+    status: str
+    message: str
+    reading: Any
+
+
 class StampsCheck(NamedTuple):
-    """Stamps: period (s, median step), gap (s, longest step), backwards (steps ≤ 0)."""
+    """
+    Stamps: increasing, no gap longer than GAP_PERIODS periods; their steps' jitter.
+
+    period: the median step (s); gap: the longest step (s); backwards: steps ≤ 0 as given;
+    spread: the steps' scatter (s, stamps.StampSteps); rate: 1/period (Hz); arrival_time:
+    the steps fall into two groups (stamped on arrival suspected; not a fault).
+    """
 
     status: str
     message: str
     period: Any
     gap: Any
     backwards: int
+    spread: Any
+    rate: Any
+    arrival_time: bool
 
 
 class AccelUnitsCheck(NamedTuple):
-    """scale: the factor that makes |linear_acceleration| read 9.80665 m/s² in slow spells."""
+    """
+    scale: the factor that makes |linear_acceleration| read 9.80665 m/s² in slow spells.
+
+    9.80665 over the median |ā_k| in slow spells (imu_motion.slow_spells; ā_k the
+    accelerometer averaged over the slow window); fault beyond ACCEL_TOL (g instead of m/s²,
+    gravity removed).
+    """
 
     status: str
     message: str
@@ -108,7 +154,16 @@ class AccelUnitsCheck(NamedTuple):
 
 
 class AngleCheck(NamedTuple):
-    """angle (rad) between two directions that should agree."""
+    """
+    angle (rad) between two directions that should agree.
+
+    orientation_vs_accel: the orientation's up in the IMU frame, Rᵀ·ẑ, against the specific
+    force in slow spells (their median angle: a tilt shows at every attitude); fault beyond
+    ANGLE_TOL, beyond OPPOSITE a sign flipped or NED. accel_sign: the body's up that the
+    reference gives through the mounting against the specific force; fault beyond OPPOSITE.
+    world_up: the orientation's world z in the reference's world against ẑ; fault beyond
+    OPPOSITE (NED). Between 90° and OPPOSITE neither is told: unknown.
+    """
 
     status: str
     message: str
@@ -116,7 +171,12 @@ class AngleCheck(NamedTuple):
 
 
 class GyroUnitsCheck(NamedTuple):
-    """scale: ω_orientation ≈ scale·M·(ω_measured − bias)."""
+    """
+    scale: ω_orientation ≈ scale·M·(ω_measured − bias) (imu_motion.fit_gyro).
+
+    Fault beyond GYRO_TOL (degrees/s), and where the orientation turns clearly but the gyro
+    does not follow it (reads zeros, a constant, noise): scale None then.
+    """
 
     status: str
     message: str
@@ -124,15 +184,24 @@ class GyroUnitsCheck(NamedTuple):
 
 
 class GyroAxesCheck(NamedTuple):
-    """matrix: the signed permutation M (3 rows of 3 ints), None unless every row is fixed."""
+    """
+    matrix: the signed permutation M (3 rows of 3 ints), None unless every row is fixed.
+
+    Fault where M ≠ I on the axes the motion fixes. mirror: det M = −1 (one axis negated, a
+    left-handed frame: no turn of the IMU gives it), None where M is not known; negate: the
+    gyro axis ('x', 'y' or 'z') whose negation leaves a turn of the frame, the one closest to
+    the identity, or None.
+    """
 
     status: str
     message: str
     matrix: Any
+    mirror: Any
+    negate: Any
 
 
 class GyroBiasCheck(NamedTuple):
-    """bias: the gyro's reading at rest (3 floats, rad/s, on the gyro's own axes)."""
+    """bias: the gyro's reading at rest (3 floats, rad/s, its own axes); fault beyond BIAS_TOL."""
 
     status: str
     message: str
@@ -140,7 +209,11 @@ class GyroBiasCheck(NamedTuple):
 
 
 class TimeOffsetCheck(NamedTuple):
-    """seconds: how much the orientation lags the gyro (positive: the orientation is late)."""
+    """
+    seconds: how much the orientation lags the gyro (positive: the orientation is late).
+
+    From the angular speeds (imu_motion.orientation_lag); fault beyond LAG_PERIODS periods.
+    """
 
     status: str
     message: str
@@ -148,7 +221,12 @@ class TimeOffsetCheck(NamedTuple):
 
 
 class MountingCheck(NamedTuple):
-    """quaternion [x, y, z, w] of the IMU frame in the body frame; warning: '' or why not whole."""
+    """
+    quaternion [x, y, z, w] of the IMU frame in the body frame; warning: '' or why not whole.
+
+    From the relative rotations of the reference and of the orientation (imu_mounting), as a
+    static transform base_link → imu_link gives it.
+    """
 
     status: str
     message: str
@@ -159,6 +237,7 @@ class MountingCheck(NamedTuple):
 class ImuChecks(NamedTuple):
     """Every check of check_imu, each a NamedTuple (status, message, its numbers)."""
 
+    quaternion: QuaternionCheck
     stamps: StampsCheck
     accel_units: AccelUnitsCheck
     orientation_vs_accel: AngleCheck
@@ -191,21 +270,47 @@ def _deg(angle):
     return f'{math.degrees(angle):.1f}°'
 
 
+def _seconds(x):
+    """Write a duration in ms under a second, else in s."""
+    return f'{x * 1e3:.3g} ms' if abs(x) < 1 else f'{x:.4g} s'
+
+
 def _check_stamps(stamps, samples):
-    """Return the StampsCheck: steps as given (backwards), and in order (period, gap)."""
+    """Return the StampsCheck: steps as given (backwards), and in order (period, gap, jitter)."""
     backwards = int((np.diff(stamps) <= 0).sum())
-    period, gap = samples.period, float(np.diff(samples.t).max())
-    rate = f'{len(stamps)} samples every {period:.6g} s ({1 / period:.4g} Hz)'
+    steps = stamp_steps(samples.t)
+    period, gap = steps.period, float(np.diff(samples.t).max())
+    spread = ('equal steps' if steps.spread <= REGULAR * period
+              else f'the steps spread {_seconds(steps.spread)}')
+    rate = f'{len(stamps)} samples every {_seconds(period)} ({steps.rate:.4g} Hz, {spread})'
+
     faulty = []
-    if backwards:
+    if backwards > (len(stamps) - 1) / 2:
+        faulty.append(f'{backwards} of {len(stamps) - 1} steps go back or repeat a stamp: the '
+                      "samples' order is not known")
+    elif backwards:
         faulty.append(f'{backwards} step(s) go back or repeat a stamp')
     if gap > GAP_PERIODS * period:
         faulty.append(f'the longest gap, {gap:.6g} s, is {gap / period:.3g} periods '
                       f'(> {GAP_PERIODS})')
     message = (f'{rate}: ' + ' and '.join(faulty) if faulty else
-               f'{rate}, increasing, the longest step {gap:.6g} s.')
-    return StampsCheck(status=_status(bool(faulty)), message=message.rstrip('.') + '.',
-                       period=period, gap=gap, backwards=backwards)
+               f'{rate}, increasing, the longest step {_seconds(gap)}')
+    if steps.arrival_time:
+        low, high = steps.modes
+        message += (f'; the steps fall into two groups, {_seconds(low)} and {_seconds(high)}: '
+                    'stamped as messages arrive rather than by the sensor, it seems')
+    return StampsCheck(status=_status(bool(faulty)), message=message + '.', period=period,
+                       gap=gap, backwards=backwards, spread=steps.spread, rate=steps.rate,
+                       arrival_time=steps.arrival_time)
+
+
+def _order_unknown(stamps):
+    """Return '' when most steps of the stamps as given go forward, else why not."""
+    backwards = int((np.diff(stamps) <= 0).sum())
+    if backwards <= (len(stamps) - 1) / 2:
+        return ''
+    return ("the stamps mostly go back, so the samples' order, which this check needs, is "
+            'not known.')
 
 
 # ---- the accelerometer -------------------------------------------------------------------
@@ -254,12 +359,17 @@ def _median_angle(u, v):
     return float(np.median(np.arctan2(sin, np.sum(u * v, axis=1))))
 
 
-def _orientation_vs_accel(R, force):
-    angle = _median_angle(R[:, 2, :], force)  # Rᵀ·ẑ is R's last row
-    said = f'Rᵀ·ẑ and the specific force are {_deg(angle)} apart when the body turns slowly'
+def _tilt_angle(samples, slow, force):
+    """Return the median angle (rad) of Rᵀ·ẑ (R's last row) and the specific force, slow."""
+    return _median_angle(samples.R[slow][:, 2, :], force[slow])
+
+
+def _orientation_vs_accel(angle):
+    said = (f"the orientation's up and the accelerometer's are {_deg(angle)} apart when the "
+            'body turns slowly')
     if angle <= ANGLE_TOL:
         return AngleCheck(status='ok', angle=angle, message=f'{said}.')
-    if angle > math.pi / 2:
+    if angle >= OPPOSITE:
         why = ('the accelerometer reads gravity instead of the specific force (sign '
                "flipped), or the orientation's world is NED (z down)")
     else:
@@ -270,25 +380,46 @@ def _orientation_vs_accel(R, force):
 # ---- the gyro against the orientation -----------------------------------------------------
 
 
-def _time_offset(samples):
-    """Return the TimeOffsetCheck, and the lag (s) for the gyro fit (0 where unknown)."""
+def _lag(samples):
+    """Return the orientation's lag (s) and why it is unknown ('' when known)."""
     try:
         lag = orientation_lag(samples)
     except RotationError as exc:
-        return _unknown(TimeOffsetCheck, f'the angular speeds do not fix the lag: {exc}.'), 0.0
+        return 0.0, f'{exc}.'
+    if not lag.correlation >= MIN_CORRELATION:
+        return 0.0, ('the angular speeds of the gyro and the orientation correlate at '
+                     f'{lag.correlation:.2f} at best (< {MIN_CORRELATION:g}): too little '
+                     'motion to align them.')
+    return lag, ''
+
+
+def _time_offset(samples, lag, why):
+    """Return the TimeOffsetCheck of a lag (imu_motion.Lag) or why it is unknown."""
+    if why:
+        return _unknown(TimeOffsetCheck, why)
     seconds, r = lag.seconds, lag.correlation
-    if not r >= MIN_CORRELATION:
-        return _unknown(TimeOffsetCheck, 'the angular speeds of the gyro and the orientation '
-                        f'correlate at {r:.2f} at best (< {MIN_CORRELATION:g}): too little '
-                        'motion to align them.'), 0.0
     periods = seconds / samples.period
-    said = (f'the orientation lags the gyro by {seconds:.4g} s ({periods:+.2f} periods; the '
-            f'angular speeds correlate at {r:.3f})')
+    said = (f'the orientation lags the gyro by {_seconds(seconds)} ({periods:+.2f} periods; '
+            f'the angular speeds correlate at {r:.3f})')
     if abs(periods) <= LAG_PERIODS:
-        return TimeOffsetCheck(status='ok', seconds=seconds, message=f'{said}.'), seconds
+        return TimeOffsetCheck(status='ok', seconds=seconds, message=f'{said}.')
     late = 'late' if seconds > 0 else 'early'
     return TimeOffsetCheck(status='fault', seconds=seconds, message=(
-        f'{said}: the orientation is {late} by more than {LAG_PERIODS} periods.')), seconds
+        f'{said}: the orientation is {late} by more than {LAG_PERIODS} periods.'))
+
+
+def _gyro_fit(samples):
+    """Return the lag (s), why it is unknown, and the GyroFit of the orientation's rates."""
+    lag, why = _lag(samples)
+    seconds = lag.seconds if not why else 0.0
+    return lag, why, fit_gyro(body_rates(samples, seconds))
+
+
+def _follows(fit):
+    """Return whether the gyro follows an orientation that turns clearly (None: no turn)."""
+    if fit.explained is None or fit.spread < TURNS:
+        return None
+    return bool(fit.explained >= FOLLOWS)
 
 
 def _axis_map(rows, axes):
@@ -305,6 +436,12 @@ def _gyro_units(fit):
     return GyroUnitsCheck(status='fault', scale=fit.scale, message=f'{said}: {why}.')
 
 
+def _negate(matrix):
+    """Return the gyro axis whose negation turns a mirror M into the rotation nearest I."""
+    M = np.array(matrix, dtype=float)
+    return max(AXES, key=lambda a: np.trace(M * np.where(np.arange(3) == AXES.index(a), -1, 1)))
+
+
 def _gyro_axes(fit):
     fixed = sorted(fit.rows)
     wrong = [i for i in fixed if fit.rows[i] != (i, 1)]
@@ -315,13 +452,26 @@ def _gyro_axes(fit):
     if len(fixed) == 3:
         matrix = tuple(tuple(s if k == j else 0 for k in range(3))
                        for j, s in (fit.rows[i] for i in range(3)))
-        message = ("each gyro axis reads the orientation's rate about the same axis." if not
-                   wrong else f'swapped or negated axes: {_axis_map(fit.rows, wrong)}.')
-        return GyroAxesCheck(status=_status(bool(wrong)), matrix=matrix, message=message)
+        mirror = bool(round(np.linalg.det(matrix)) < 0)
+        negate = _negate(matrix) if mirror else None
+        if not wrong:
+            message = "each gyro axis reads the orientation's rate about the same axis."
+        elif mirror:
+            turned = {i: (j, -s if AXES[j] == negate else s) for i, (j, s) in fit.rows.items()}
+            rest = [i for i in range(3) if turned[i] != (i, 1)]
+            message = (f'a mirror: {_axis_map(fit.rows, wrong)}, a left-handed frame that no '
+                       f"turn of the IMU gives: the gyro's {negate} is negated" + (
+                           f'; with it negated, {_axis_map(turned, rest)} (a turn of the '
+                           'frame).' if rest else '.'))
+        else:
+            message = (f'swapped or negated axes (a turn of the frame): '
+                       f'{_axis_map(fit.rows, wrong)}.')
+        return GyroAxesCheck(status=_status(bool(wrong)), matrix=matrix, mirror=mirror,
+                             negate=negate, message=message)
     if wrong:
-        return GyroAxesCheck(status='fault', matrix=None, message=(
+        return GyroAxesCheck(status='fault', matrix=None, mirror=None, negate=None, message=(
             f'swapped or negated axes: {_axis_map(fit.rows, wrong)}; {unfixed}.'))
-    return GyroAxesCheck(status='unknown', matrix=None, message=(
+    return GyroAxesCheck(status='unknown', matrix=None, mirror=None, negate=None, message=(
         f"{', '.join(AXES[i] for i in fixed)} as the orientation's; {unfixed}."))
 
 
@@ -331,27 +481,113 @@ def _gyro_bias(fit):
         return _unknown(GyroBiasCheck, f'the orientation turns about {left}, which the '
                         'motion does not fix on the gyro, so the bias is not known.')
     norm = float(np.linalg.norm(fit.bias))
-    said = (f'the gyro reads ({", ".join(f"{b:.4g}" for b in fit.bias)}) rad/s more than '
-            f'the orientation turns (norm {norm:.4g} rad/s)')
+    said = (f'the gyro reads ({", ".join(f"{b:.2g}" for b in fit.bias)}) rad/s more than '
+            f'the orientation turns (norm {norm:.2g} rad/s)')
     over = norm > BIAS_TOL
     return GyroBiasCheck(status=_status(over), bias=tuple(map(float, fit.bias)), message=(
         f'{said}: more than {BIAS_TOL:g} rad/s.' if over else f'{said}.'))
 
 
-def _gyro_checks(samples):
+def _gyro_checks(samples, unordered):
     """Return the TimeOffsetCheck, GyroUnitsCheck, GyroAxesCheck and GyroBiasCheck."""
-    if samples.R is None:
-        why = 'no orientation to compare the gyro with.'
+    why = ('no orientation to compare the gyro with.' if samples.R is None else unordered)
+    if why:
         return (_unknown(TimeOffsetCheck, why), _unknown(GyroUnitsCheck, why),
                 _unknown(GyroAxesCheck, why), _unknown(GyroBiasCheck, why))
-    offset, lag = _time_offset(samples)
-    fit = fit_gyro(body_rates(samples, lag))
+    lag, lag_unknown, fit = _gyro_fit(samples)
+    if _follows(fit) is False:
+        why = 'the gyro does not follow the orientation, so this is not known.'
+        dead = GyroUnitsCheck(status='fault', scale=None, message=(
+            f'the orientation turns clearly (its rates vary by {fit.spread:.2g} rad/s RMS) '
+            'but the gyro does not follow it: any map of its readings explains '
+            f'{fit.explained:.0%} of those rates (a dead, constant, noisy or shuffled gyro).'))
+        return (_unknown(TimeOffsetCheck, why), dead, _unknown(GyroAxesCheck, why),
+                _unknown(GyroBiasCheck, why))
+    offset = _time_offset(samples, lag, lag_unknown)
     if fit.scale is None:
         why = ("the orientation's rates fix no gyro axis (too little turn, or rates that do "
                'not match).')
         return (offset, _unknown(GyroUnitsCheck, why), _unknown(GyroAxesCheck, why),
                 _unknown(GyroBiasCheck, why))
     return offset, _gyro_units(fit), _gyro_axes(fit), _gyro_bias(fit)
+
+
+# ---- the quaternion's reading --------------------------------------------------------------
+
+
+class _Reading(NamedTuple):
+    """
+    One reading's agreement with the sensors, each None where they cannot tell.
+
+    angle (rad) from the accelerometer; residual: what the gyro leaves of the orientation's
+    rates (rad/s RMS).
+    """
+
+    angle: Any
+    residual: Any
+
+
+def _reading(samples, unordered):
+    """Return the _Reading of samples whose orientation is read one way."""
+    slow, force = slow_spells(samples), steady_accel(samples)
+    angle = None
+    if not _too_few_slow(samples, slow) and not _no_gravity(force[slow]):
+        angle = _tilt_angle(samples, slow, force)
+    residual = None
+    if not unordered:
+        fit = _gyro_fit(samples)[2]
+        residual = fit.residual if _follows(fit) else None
+    return _Reading(angle=angle, residual=residual)
+
+
+def _said(name, found):
+    """Write one reading's agreement in words."""
+    accel = ('the accelerometer cannot tell' if found.angle is None
+             else f'{_deg(found.angle)} from the accelerometer')
+    gyro = ('the gyro cannot tell' if found.residual is None
+            else f'the gyro follows to {found.residual:.2g} rad/s RMS')
+    return f'{name}: {accel}, {gyro}'
+
+
+def _choose_reading(found):
+    """
+    Return the QuaternionCheck of the readings' agreement {reading: _Reading}.
+
+    A reading agrees with the accelerometer within ANGLE_TOL and with the gyro within
+    READING_SLACK of the best reading's residual. Another reading is chosen when it agrees
+    with both and the recorded one does not; of two such, the one the gyro follows better.
+    """
+    residuals = [f.residual for f in found.values() if f.residual is not None]
+    best = min(residuals) if residuals else None
+
+    def agrees(f):
+        return (f.angle is not None and f.angle <= ANGLE_TOL and f.residual is not None
+                and f.residual <= READING_SLACK * best)
+
+    recorded = found['as recorded']
+    if agrees(recorded):
+        return QuaternionCheck(status='ok', reading='as recorded', message=(
+            'as recorded: the orientation agrees with the accelerometer '
+            f'({_deg(recorded.angle)}) and the gyro follows it ({recorded.residual:.2g} rad/s '
+            'RMS).'))
+    others = [name for name in READINGS[1:] if agrees(found[name])]
+    if not others:
+        if recorded.angle is None or best is None:
+            which = 'accelerometer' if recorded.angle is None else 'gyro'
+            why = f'the {which} cannot tell how to read it'
+        else:
+            why = 'no reading makes it agree with both the gyro and the accelerometer'
+        return QuaternionCheck(status='unknown', reading='as recorded', message=(
+            f'read as recorded; {why} (' + '; '.join(_said(n, f) for n, f in found.items())
+            + ').'))
+    name = min(others, key=lambda n: found[n].residual)
+    what = ('written w-first: its fields x, y, z, w hold w, x, y, z' if name == 'w-first' else
+            'inverted: it gives the world in the IMU frame, not the IMU frame in the world')
+    return QuaternionCheck(status='fault', reading=name, message=(
+        f'{what}; read so, the orientation agrees with the accelerometer '
+        f'({_deg(found[name].angle)}) and the gyro follows it ({found[name].residual:.2g} '
+        f"rad/s RMS), as it does not read as recorded ({_said('as recorded', recorded)[13:]})"
+        '; the other checks take it so.'))
 
 
 # ---- against a reference -------------------------------------------------------------------
@@ -388,6 +624,9 @@ def _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, X):
             'the mounting')
     if angle <= math.pi / 2:
         return AngleCheck(status='ok', angle=angle, message=f'{said}.')
+    if angle < OPPOSITE:
+        return AngleCheck(status='unknown', angle=angle, message=(
+            f'{said}: neither along it nor opposite.'))
     return AngleCheck(status='fault', angle=angle, message=(
         f'{said}: the accelerometer reads gravity, not the specific force (its sign is '
         'flipped).'))
@@ -401,14 +640,17 @@ def _world_up(found):
     said = f"the orientation's world z is {_deg(angle)} from the reference's"
     if angle <= math.pi / 2:
         return AngleCheck(status='ok', angle=angle, message=f'{said}: up (ENU).')
+    if angle < OPPOSITE:
+        return AngleCheck(status='unknown', angle=angle, message=(
+            f'{said}: neither up nor down.'))
     return AngleCheck(status='fault', angle=angle, message=(
         f'{said}: it points down, the orientation is NED (REP-103 wants ENU).'))
 
 
-def _reference_checks(samples, slow, force, reference, tol, lag, flat):
+def _reference_checks(samples, slow, force, reference, tol, lag, flat, unordered):
     """Return the accel_sign, world_up and mounting checks (lag: the orientation's, s)."""
-    if reference is None:
-        why = 'no reference orientation to compare with.'
+    why = 'no reference orientation to compare with.' if reference is None else unordered
+    if why:
         return (_unknown(AngleCheck, why), _unknown(AngleCheck, why),
                 _unknown(MountingCheck, why))
     ref_t, ref_Q, ref_period = reference_samples(reference, tol)
@@ -423,6 +665,20 @@ def _reference_checks(samples, slow, force, reference, tol, lag, flat):
     return sign, up, mounting
 
 
+def _quaternion(stamps, quaternions, arrays, samples, unordered):
+    """Return the QuaternionCheck, and the samples with the orientation read as it says."""
+    if samples.R is None:
+        return _unknown(QuaternionCheck, 'no orientation.'), samples
+    if unordered:
+        return QuaternionCheck(status='unknown', reading='as recorded', message=(
+            f'read as recorded; {unordered}')), samples
+    read = {name: samples if name == 'as recorded' else
+            imu_samples(stamps, read_quaternions(quaternions, name), *arrays)
+            for name in READINGS}
+    check = _choose_reading({name: _reading(s, unordered) for name, s in read.items()})
+    return check, read[check.reading]
+
+
 # ---- all together ------------------------------------------------------------------------
 
 
@@ -432,17 +688,22 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     Check an IMU's samples against ROS's conventions (REP-103, REP-145): return ImuChecks.
 
     stamps (N,) s, N ≥ 10, in any order (the stamps check says where they do not increase;
-    the other checks take the samples in order, each stamp once); quaternions (N, 4)
-    [x, y, z, w], or None for an IMU without orientation (all zeros count as None);
-    angular_velocity (N, 3) rad/s; linear_acceleration (N, 3) m/s²; reference None or
-    ImuReference(stamps (M,), quaternions (M, 4)), the orientation of the body that carries
-    the IMU in its world (odometry, a pose, TF). tol: None takes any non-zero quaternion as
-    its normalised self; a number refuses ||q| − 1| > tol. Each check is ok, fault or unknown
-    (module docstring). RotationError (imu_samples) for a shape, NaN or Inf, a reading beyond
-    1e9, a zero or non-unit quaternion, fewer than 10 distinct stamps.
+    the other checks take the samples in order, each stamp once, and those that need the
+    order are unknown when most steps go back); quaternions (N, 4) [x, y, z, w], or None for
+    an IMU without orientation (all zeros count as None); angular_velocity (N, 3) rad/s;
+    linear_acceleration (N, 3) m/s²; reference None or ImuReference(stamps (M,),
+    quaternions (M, 4)), the orientation of the body that carries the IMU in its world
+    (odometry, a pose, TF). tol: None takes any non-zero quaternion as its normalised self;
+    a number refuses ||q| − 1| > tol. The quaternion is tried three ways first
+    (QuaternionCheck); the other checks take it as that check reads it. RotationError
+    (imu_samples) for a shape, NaN or Inf, a reading beyond 1e9, a zero or non-unit
+    quaternion, fewer than 10 distinct stamps, steps under a nanosecond.
     """
     given = stamps_array(stamps, 'stamps')
-    samples = imu_samples(given, quaternions, angular_velocity, linear_acceleration, tol)
+    arrays = (angular_velocity, linear_acceleration, tol)
+    samples = imu_samples(given, quaternions, *arrays)
+    unordered = _order_unknown(given)
+    quaternion, samples = _quaternion(given, quaternions, arrays, samples, unordered)
     slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
     flat = '' if why else _no_gravity(force[slow])
@@ -452,11 +713,12 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
         units = _accel_units(force[slow])
         tilt = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
                 else _unknown(AngleCheck, flat) if flat
-                else _orientation_vs_accel(samples.R[slow], force[slow]))
-    offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples)
+                else _orientation_vs_accel(_tilt_angle(samples, slow, force)))
+    offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples, unordered)
     lag = offset.seconds if offset.status != 'unknown' else 0.0
-    sign, up, mounting = _reference_checks(samples, slow, force, reference, tol, lag, flat)
-    return ImuChecks(stamps=_check_stamps(given, samples), accel_units=units,
-                     orientation_vs_accel=tilt, gyro_units=gyro_units, gyro_axes=gyro_axes,
-                     gyro_bias=gyro_bias, time_offset=offset, accel_sign=sign, world_up=up,
-                     mounting=mounting)
+    sign, up, mounting = _reference_checks(samples, slow, force, reference, tol, lag, flat,
+                                           unordered)
+    return ImuChecks(quaternion=quaternion, stamps=_check_stamps(given, samples),
+                     accel_units=units, orientation_vs_accel=tilt, gyro_units=gyro_units,
+                     gyro_axes=gyro_axes, gyro_bias=gyro_bias, time_offset=offset,
+                     accel_sign=sign, world_up=up, mounting=mounting)

@@ -1,26 +1,8 @@
 """
 An IMU's motion: its slow spells, its orientation's lag, its gyro against its orientation.
 
-Samples in time order (imu_samples.ImuSamples): stamps t_k, orientations R_k (the IMU frame in the
-orientation's world) or none, gyro ω_k and accelerometer a_k on the IMU's axes.
-
-- **Slow spells** (slow_spells): samples where the body turns slower than SLOW_RATE on
-  average over SLOW_WINDOW around them, by the orientation's turn over the window, or
-  without orientation by the gyro's integrated rate (as it reads).
-- **Lag** (orientation_lag): the angular speeds |ω| of the gyro and of consecutive
-  orientations do not depend on units, axes or frames; the shift that best correlates them
-  (trajectory.estimate_time_offset, the gyro's speed given as the turn of a rotation about
-  one axis) is how late the orientation is.
-- **Rates** (body_rates): the body rates of consecutive orientations, ω°_k =
-  log(R_kᵀR_{k+1}) / Δt_k, at the midpoints of their stamps, and the gyro interpolated at the
-  same instants less the lag.
-- **Gyro fit** (fit_gyro): the least-squares fit ω° ≈ A·ω + c. A row i of A fixes an axis
-  where its largest entry A_ij stands out: MIN_T standard errors, DOMINANCE times every other
-  entry of the row, and within SIZE_RANGE of the scale; M_ij = sign A_ij. The scale is the
-  least-squares s of ω° ≈ s·M·ω + c over the rows fixed; the bias, on the gyro's axes in
-  rad/s, s·mean(ω) − Mᵀ·mean(ω°) (from mean ω° = s·M·(mean ω − b)). An axis the motion does
-  not excite stays unknown; its row of M is completed in order for the bias, which is then
-  given only when the orientation's mean rate about it is at most BIAS_SLACK.
+Samples in time order (imu_samples.ImuSamples): stamps t_k, orientations R_k (the IMU frame in
+the orientation's world) or none, gyro ω_k and accelerometer a_k on the IMU's axes.
 """
 
 import math
@@ -29,6 +11,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from rot_tools.core.axis_angle import axis_angle_kernel, rotvec_of
 from rot_tools.core.engine import VECTOR
+from rot_tools.core.errors import RotationError
 from rot_tools.core.fitting import rotation_distance
 from rot_tools.core.so3 import apply_to_named_rotations, rot_z
 from rot_tools.core.trajectory import estimate_time_offset
@@ -43,7 +26,11 @@ SLOW_WINDOW = 0.5
 """Seconds over which the angular speed of a slow spell is averaged."""
 
 MAX_LAG = 1.0
-"""The lag is searched within ±MAX_LAG (s)."""
+"""The lag is searched within ±MAX_LAG (s) at most."""
+
+LAG_SHARE = 0.1
+"""The lag is searched within ±LAG_SHARE of the recording's span at most: a longer lag would
+leave too little overlap to tell it."""
 
 MIN_T = 10.0
 """|A_ij| / its standard error at least, for row i of the gyro fit to fix an axis."""
@@ -92,7 +79,12 @@ def steady_accel(samples):
 
 
 def slow_spells(samples):
-    """Return (N,) bool: the mean angular speed over SLOW_WINDOW around the sample < SLOW_RATE."""
+    """
+    Return (N,) bool: the mean angular speed over SLOW_WINDOW around the sample < SLOW_RATE.
+
+    The speed is the orientation's turn over the window, or without orientation the gyro's
+    integrated rate (as it reads).
+    """
     t, count, w = samples.t, len(samples.t), _window(samples)
     slow = np.zeros(count, dtype=bool)
     if count <= w:
@@ -125,10 +117,12 @@ def orientation_lag(samples):
     """
     Return the Lag of the orientation behind the gyro, from their angular speeds.
 
-    The gyro's speed, averaged over each step and scaled to at most 1 rad per step (the
-    correlation does not see the scale), is the turn of a rotation about z; its offset to the
-    orientation is estimate_time_offset's within ±MAX_LAG, over LAG_SAMPLES at most.
-    RotationError as estimate_time_offset raises it.
+    The angular speeds of the gyro and of consecutive orientations do not depend on units,
+    axes or frames: the shift that best correlates them (trajectory.estimate_time_offset, the
+    gyro's speed given as the turn of a rotation about z, scaled to at most 1 rad per step)
+    is how late the orientation is. It is searched within ±MAX_LAG and ±LAG_SHARE of the
+    span, over LAG_SAMPLES at most (of a longer recording, the stretch whose gyro speed
+    varies most). RotationError, in words, when the data cannot fix it.
     """
     t, R, speed = samples.t, samples.R, np.linalg.norm(samples.gyro, axis=1)
     if len(t) > LAG_SAMPLES:
@@ -136,10 +130,23 @@ def orientation_lag(samples):
         spread = speed[:chunks * LAG_SAMPLES].reshape(chunks, LAG_SAMPLES).std(axis=1)
         stretch = slice(int(np.argmax(spread)) * LAG_SAMPLES, None)
         t, R, speed = (x[stretch][:LAG_SAMPLES] for x in (t, R, speed))
+    reach = min(MAX_LAG, LAG_SHARE * float(t[-1] - t[0]))
+    if reach < 2 * samples.period:
+        raise RotationError(f'{len(t)} samples over {t[-1] - t[0]:.3g} s are too short to '
+                            'search for a lag')
+    if np.ptp(speed) == 0:
+        raise RotationError(f'the gyro reads a constant speed ({speed[0]:.3g} rad/s): nothing '
+                            'to align in time')
+    if np.ptp(rotation_distance(R[:-1], R[1:], check=False) / np.diff(t)) == 0:
+        raise RotationError('the orientation turns at a constant speed: nothing to align in '
+                            'time')
     steps = 0.5 * (speed[:-1] + speed[1:]) * np.diff(t)
-    top = float(steps.max())
-    turn = np.concatenate([[0.0], np.cumsum(steps / top if top > 0 else steps)])
-    found = estimate_time_offset(t, R, t, rot_z(turn % (2 * math.pi)), MAX_LAG)
+    turn = np.concatenate([[0.0], np.cumsum(steps / steps.max())])
+    try:
+        found = estimate_time_offset(t, R, t, rot_z(turn % (2 * math.pi)), reach)
+    except RotationError:
+        raise RotationError('the angular speeds of the gyro and the orientation fix no lag '
+                            f'within ±{reach:.3g} s') from None
     return Lag(seconds=-found.offset, correlation=found.correlation)
 
 
@@ -164,7 +171,12 @@ class Rates(NamedTuple):
 
 
 def body_rates(samples, lag):
-    """Return the Rates: of consecutive orientations, and the gyro at their midpoints − lag."""
+    """
+    Return the Rates: of consecutive orientations, and the gyro at their midpoints − lag.
+
+    ω°_k = log(R_kᵀR_{k+1}) / Δt_k (rad/s), the gyro interpolated at (t_k + t_{k+1})/2 − lag;
+    steps longer than RATE_GAP periods give none.
+    """
     t, R = samples.t, samples.R
     dt = np.diff(t)
     at = t[:-1] + dt / 2 - lag
@@ -181,31 +193,51 @@ class GyroFit(NamedTuple):
     What the rates fix: ω° ≈ scale·M·(ω − bias/scale).
 
     scale: float or None; rows: {i: (j, ±1)}, M_ij for the axes i of the orientation fixed;
-    bias: (3,) rad/s on the gyro's axes, or None; mean_rate: mean ω° (3,) rad/s.
+    bias: (3,) rad/s on the gyro's axes, or None; mean_rate: mean ω° (3,) rad/s; spread: the
+    RMS of ω° about its mean (rad/s: how clearly the orientation's rate varies); residual:
+    the RMS of what scale·M·(ω − bias/scale) leaves of ω° (rad/s; spread where no axis is
+    fixed); explained: the share of ω°'s variance that any linear map of ω explains (0 … 1,
+    None where ω° does not vary).
     """
 
     scale: Any
     rows: dict
     bias: Any
     mean_rate: np.ndarray
+    spread: float
+    residual: float
+    explained: Any
 
 
 def fit_gyro(rates):
-    """Return the GyroFit of ω° ≈ A·ω + c (module docstring)."""
+    """
+    Return the GyroFit of the least-squares fit ω° ≈ A·ω + c of the rates (Rates).
+
+    A row i of A fixes an axis where its largest entry A_ij stands out: MIN_T standard
+    errors, DOMINANCE times every other entry of the row, and within SIZE_RANGE of the scale;
+    M_ij = sign A_ij. The scale is the least-squares s of ω° ≈ s·M·ω + c over the rows fixed;
+    the bias, on the gyro's axes, s·mean(ω) − Mᵀ·mean(ω°) (from mean ω° = s·M·(mean ω − b)).
+    An axis the motion does not excite stays unknown; its row of M is completed in order for
+    the bias, which is then given only when the orientation's mean rate about it is at most
+    BIAS_SLACK.
+    """
     # centred sums from the raw ones, as products: NumPy reduces and subtracts tall (K, 3)
     # arrays slowly, and the means are not large against the spread here
     g, o, count = rates.gyro, rates.orientation, len(rates.gyro)
     if count < MIN_RATES:
-        return GyroFit(scale=None, rows={}, bias=None, mean_rate=np.zeros(3))
+        return GyroFit(scale=None, rows={}, bias=None, mean_rate=np.zeros(3), spread=0.0,
+                       residual=0.0, explained=None)
     ones = np.full(count, 1.0 / count)
     mean_g, mean_o = ones @ g, ones @ o
     S = g.T @ g - count * np.outer(mean_g, mean_g)
     C = g.T @ o - count * np.outer(mean_g, mean_o)
-    Y = np.diag(o.T @ o) - count * mean_o * mean_o
+    Y = np.maximum(np.diag(o.T @ o) - count * mean_o * mean_o, 0.0)
     inverse = np.linalg.pinv(S)
     A = (inverse @ C).T
     # Σ residual² per row, from the Gram matrix: Σ d_o² − Cᵀ·S⁻¹·C
     residual = np.maximum(Y - np.einsum('ji,jk,ki->i', C, inverse, C), 0.0)
+    spread = math.sqrt(Y.sum() / count)
+    explained = 1.0 - min(residual.sum() / Y.sum(), 1.0) if Y.sum() > 0 else None
     variance = residual / max(count - 4, 1)
     error = np.sqrt(variance[:, None] * np.maximum(np.diag(inverse), 0.0)[None, :])
     size = np.abs(A)
@@ -217,7 +249,8 @@ def fit_gyro(rates):
     rows = {i: (int(column[i]), 1 if A[i, column[i]] > 0 else -1) for i in range(3) if clear[i]}
     taken = [j for j, _ in rows.values()]
     rows = {i: js for i, js in rows.items() if taken.count(js[0]) == 1}
-    none = GyroFit(scale=None, rows={}, bias=None, mean_rate=mean_o)
+    none = GyroFit(scale=None, rows={}, bias=None, mean_rate=mean_o, spread=spread,
+                   residual=spread, explained=explained)
     scale = 0.0
     for _ in range(2):  # once, then again without the rows whose size disagrees
         den = sum(S[j, j] for j, _ in rows.values())
@@ -238,4 +271,7 @@ def fit_gyro(rates):
     bias = None
     if all(abs(mean_o[i]) <= BIAS_SLACK for i in range(3) if i not in rows):
         bias = scale * mean_g - M.T @ mean_o
-    return GyroFit(scale=float(scale), rows=rows, bias=bias, mean_rate=mean_o)
+    left = (o - mean_o) - scale * (g - mean_g) @ M.T
+    return GyroFit(scale=float(scale), rows=rows, bias=bias, mean_rate=mean_o, spread=spread,
+                   residual=float(np.sqrt(np.einsum('ij,ij->', left, left) / count)),
+                   explained=explained)

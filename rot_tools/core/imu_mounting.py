@@ -2,17 +2,8 @@
 An IMU's mounting on a body: the IMU frame in the body frame, from the two orientations.
 
 The body's orientation Q_k (a reference: odometry, a pose, TF) and the IMU's R_k turn together:
-Q_k·X = W·R_k for the mounting X (the IMU frame in the body frame, as a static transform
-base_link → imu_link gives it) and a constant W between their worlds. Their relative rotations
-over the same steps then satisfy A·X = X·B (A = Q_iᵀQ_j, B = R_iᵀR_j): the rotation part of
-hand-eye calibration (trajectory.hand_eye_rotation), over steps HAND_EYE_STEP apart. Without
-an orientation, B is the turn of the gyro's rates integrated over the step (first order).
-
-A body that turns about one axis only (a ground robot's yaw) fixes the IMU axis that turns
-with it (the IMU's main axis of turn: one_axis_mounting), not the turn of the mounting about
-that axis. Of the mountings that map the same IMU axis, the one given then best keeps the
-IMU's x (then y) along the body's: the identity for an IMU that only lacks a turn about the
-axis, the half turn about x for a device turned upside down as NED devices are.
+Q_k·X = W·R_k for the mounting X (as a static transform base_link → imu_link gives it), so
+their relative rotations over the same steps satisfy A·X = X·B: hand-eye calibration.
 """
 
 import math
@@ -37,6 +28,16 @@ AXIS_DOMINANCE = 4.0
 """σ1/σ2 of the IMU's turns at least, for their first principal axis to be the one the body
 turns about when the reference turns about one axis only."""
 
+MIN_TURN = 0.1
+"""σ1 of the IMU's turns (rad) at least, for their main axis to stand above noise."""
+
+MIN_AGREEMENT = 0.5
+"""|cosine| of the body's and the IMU's turns about their main axes at least, for the IMU's
+axis to be signed by the body's."""
+
+ROUND_OFF = 1e-9
+"""σ2/σ1 of the body's turns below which it turned about one axis only (said in words)."""
+
 
 def one_axis_mounting(alpha, beta):
     """
@@ -48,7 +49,9 @@ def one_axis_mounting(alpha, beta):
     reference's turns to be right in sense only, not in size (wheel odometry's are not), and
     it takes the IMU's turns that the reference does not show (a planar odometry on uneven
     ground) as noise about it. RotationError when those are not much smaller (σ1/σ2 of the
-    IMU's turns below AXIS_DOMINANCE). Of the mountings that map m onto n (X₀, the smallest
+    IMU's turns below AXIS_DOMINANCE), when the IMU hardly turns (σ1 under MIN_TURN rad), or
+    when its turns about m do not follow the body's about n (|cosine| under MIN_AGREEMENT).
+    Of the mountings that map m onto n (X₀, the smallest
     turn, then Rot(n, ψ)·X₀), the one that best keeps the body's x, then y: tr(Rot(n, ψ)·P)
     greatest for P = X₀·KEEP_AXES, at ψ = atan2(tr([n]×·P), tr P − nᵀ·P·n).
     """
@@ -58,7 +61,15 @@ def one_axis_mounting(alpha, beta):
         raise RotationError(
             "the reference turns about one axis, but the IMU's turns have no dominant axis "
             f'(σ2/σ1 = {sigma[1] / sigma[0]:.2g} > {1 / AXIS_DOMINANCE:g}): too little turn')
-    m = vt[0] if np.sum((alpha @ n) * (beta @ vt[0])) >= 0 else -vt[0]
+    if sigma[0] < MIN_TURN:
+        raise RotationError(f'the IMU turns by {sigma[0]:.2g} rad over those steps (under '
+                            f'{MIN_TURN:g}): too little turn to fix its axis')
+    along, about = alpha @ n, beta @ vt[0]
+    cosine = float(along @ about / (np.linalg.norm(along) * np.linalg.norm(about)))
+    if abs(cosine) < MIN_AGREEMENT:
+        raise RotationError("the IMU's turns about its main axis do not follow the body's "
+                            f'(cosine {cosine:.2f}, under {MIN_AGREEMENT:g})')
+    m = vt[0] if cosine >= 0 else -vt[0]
     X0 = align_vectors(n[None], m[None]).R
     P = X0 @ KEEP_AXES
     psi = math.atan2(float(np.trace(skew(n) @ P)), float(np.trace(P) - n @ P @ n))
@@ -123,6 +134,9 @@ def imu_mounting(samples, ref_t, ref_Q, ref_period, lag=0.0):
     X, warning = found.rotation, ''
     if found.axes < 2:
         X = one_axis_mounting(matrix_to_rotvec(A, check=False), matrix_to_rotvec(B, check=False))
-        warning = (f"{found.warning}; of the turns about it, the one that best keeps the IMU's "
+        ratio = found.singular_values[1] / found.singular_values[0]
+        how = ('only' if ratio < ROUND_OFF else f'mainly (σ2/σ1 = {ratio:.2g})')
+        warning = (f'the body turned about one axis {how}: the turn of the mounting about it is '
+                   "not determined; of the turns about it, the one that best keeps the IMU's "
                    "x (then y) along the body's is given")
     return Mounting(X=X, warning=warning, Q=Q, R=R)

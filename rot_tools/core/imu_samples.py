@@ -1,10 +1,8 @@
 """
 An IMU's samples and a reference orientation, checked and put in time order for check_imu.
 
-The IMU's stamps may come in any order (the stamps check of check_imu says so): the samples
-are sorted by stamp, each stamp kept once (the first), into ImuSamples; a reference into
-ReferenceSamples. Quaternions [x, y, z, w] become rotation matrices (quaternion_to_matrix);
-all of them zero means no orientation.
+Samples are sorted by stamp, each stamp kept once (the first); quaternions [x, y, z, w] become
+rotation matrices; all of them zero means no orientation.
 """
 
 from typing import Any, NamedTuple
@@ -13,6 +11,7 @@ import numpy as np
 from rot_tools.core._arrays import finite_array
 from rot_tools.core.errors import RotationError
 from rot_tools.core.so3 import quaternion_to_matrix
+from rot_tools.core.stamps import stamp_steps
 
 MIN_SAMPLES = 10
 """Samples (distinct stamps) at least, of the IMU and of a reference."""
@@ -84,6 +83,14 @@ def stamps_array(stamps, name):
     return t
 
 
+def _period(t, name):
+    """Return the median step of stamps t in order (s), or RotationError naming them."""
+    try:
+        return stamp_steps(t).period
+    except RotationError as exc:
+        raise RotationError(f'{name}: {exc}') from None
+
+
 def _in_order(t, name):
     """Return the indices that put t in order, each stamp once (the first of equal ones)."""
     order = np.argsort(t, kind='stable')
@@ -99,7 +106,8 @@ def imu_samples(t, quaternions, angular_velocity, linear_acceleration, tol):
     Return the ImuSamples of stamps t (from stamps_array) and the arrays of check_imu.
 
     RotationError for a shape, a NaN or Inf, a reading beyond MAX_READING, a zero or (tol a
-    number) non-unit quaternion, fewer than MIN_SAMPLES distinct stamps.
+    number) non-unit quaternion, fewer than MIN_SAMPLES distinct stamps, steps under a
+    nanosecond at the median or beyond float64.
     """
     count = len(t)
     gyro = _vectors(angular_velocity, 'angular_velocity', count)
@@ -108,7 +116,7 @@ def imu_samples(t, quaternions, angular_velocity, linear_acceleration, tol):
     if not (np.diff(t) > 0).all():
         keep = _in_order(t, 'stamps')
         t, gyro, accel, R = t[keep], gyro[keep], accel[keep], None if R is None else R[keep]
-    return ImuSamples(t=t, R=R, gyro=gyro, accel=accel, period=float(np.median(np.diff(t))))
+    return ImuSamples(t=t, R=R, gyro=gyro, accel=accel, period=_period(t, 'stamps'))
 
 
 def reference_samples(reference, tol):
@@ -124,4 +132,4 @@ def reference_samples(reference, tol):
         raise RotationError('reference.quaternions are all (0, 0, 0, 0): no orientation')
     keep = _in_order(t, 'reference.stamps')
     t = t[keep]
-    return ReferenceSamples(t=t, Q=Q[keep], period=float(np.median(np.diff(t))))
+    return ReferenceSamples(t=t, Q=Q[keep], period=_period(t, 'reference.stamps'))

@@ -1,20 +1,13 @@
 """
-The stamps of a stream of poses: checked, put in order, and paired Δ apart.
+The stamps of a stream of poses: checked, put in order, their steps, and pairs Δ apart.
 
 Stamps are seconds (float64) or, where exactness matters (bags), integer nanoseconds.
-
-- **Checks** (checked_stamps): finite, one dimension, strictly increasing, a span that
-  float64 holds.
-- **Order** (order_stamps): files and bags give stamps as they come — repeated, or going
-  back. Sorted stably, the first of equal stamps kept (as evo's matching keeps it).
-- **Pairs** (delta_pairs): the index pairs (i, j) of relative errors Δ apart, in frames or
-  seconds, consecutive (evo's RPE) or one per start (a mounting's intervals).
-- **Numbers in messages** (plain): the shortest decimal that reads back the same.
 """
 
+import decimal
 import math
 import numbers
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from rot_tools.core._arrays import finite_array, require_tolerance
@@ -22,6 +15,18 @@ from rot_tools.core.errors import RotationError
 
 MAX_POSES = 1 << 28
 """Poses a count may name at most (delta_pairs): the pairs of more would not fit in memory."""
+
+MIN_PERIOD = 1e-9
+"""The median step of a stream's stamps at least (s): a nanosecond, ROS stamps' resolution."""
+
+MODE_SHARE = 0.1
+"""Share of the steps each group holds at least, for steps to fall into two groups."""
+
+MODE_SEPARATION = 0.05
+"""Distance between the two groups of steps at least, as a share of the period."""
+
+MODE_CLEARANCE = 4.0
+"""Distance between the two groups of steps at least, in their own spreads."""
 
 
 def plain(x):
@@ -31,7 +36,12 @@ def plain(x):
     1311868229.576, 1e-07, 3 — never np.float64(...) nor a 300-digit expansion.
     """
     if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
-        return str(int(x)) if abs(x) < 10 ** 16 else repr(float(x))
+        if abs(x) < 10 ** 16:
+            return str(int(x))
+        try:
+            return repr(float(x))
+        except OverflowError:  # beyond float64: its leading digits and exponent
+            return f'{decimal.Decimal(int(x)):.3e}'
     return repr(float(x))
 
 
@@ -53,6 +63,63 @@ def checked_stamps(stamps, name, least):
         raise RotationError(f'{name} span {plain(t[0])} to {plain(t[-1])} s: their '
                             'differences overflow float64')
     return t
+
+
+class StampSteps(NamedTuple):
+    """
+    The steps between a stream's stamps (stamp_steps).
+
+    period: the median step (s); spread: the steps' scatter about it (s, 1.4826 × their median
+    absolute deviation: the standard deviation of normally scattered steps); rate: 1/period
+    (Hz); arrival_time: the steps fall into two groups (stamps taken as messages arrive, in
+    the bursts a driver reads them in, rather than by the sensor's clock); modes: the two
+    groups' median steps (s), or None.
+    """
+
+    period: float
+    spread: float
+    rate: float
+    arrival_time: bool
+    modes: Any
+
+
+def _spread(steps):
+    """Return 1.4826 × the median absolute deviation of steps (s)."""
+    return 1.4826 * float(np.median(np.abs(steps - np.median(steps))))
+
+
+def stamp_steps(stamps):
+    """
+    Return the StampSteps of stamps (N,) in increasing order (seconds), N ≥ 2.
+
+    Two groups: of the steps within half a period of the median, sorted, split at their
+    largest jump between the MODE_SHARE and 1 − MODE_SHARE quantiles; the groups' medians at
+    least MODE_SEPARATION·period and MODE_CLEARANCE times the larger group's spread apart.
+    RotationError for a median step under MIN_PERIOD.
+    """
+    t = np.asarray(stamps, dtype=np.float64)
+    with np.errstate(over='ignore'):
+        steps = np.diff(t)
+    if len(steps) < 1 or not np.isfinite(steps).all():
+        raise RotationError(f'stamps need 2 finite steps at least, got {len(steps)}' if
+                            len(steps) < 1 else 'the steps between the stamps overflow float64')
+    period = float(np.median(steps))
+    if not period >= MIN_PERIOD:
+        raise RotationError(f'the stamps step by {period:.3g} s at the median: under '
+                            f'{MIN_PERIOD:g} s, the resolution of ROS stamps')
+    near = np.sort(steps[np.abs(steps - period) <= period / 2])
+    least = int(math.ceil(MODE_SHARE * len(near)))
+    modes, arrival = None, False
+    if least >= 2 and len(near) - 2 * least >= 1:
+        jumps = np.diff(near[least - 1:len(near) - least + 1])
+        cut = least + int(np.argmax(jumps))
+        low, high = near[:cut], near[cut:]
+        gap = float(np.median(high) - np.median(low))
+        if gap >= MODE_SEPARATION * period and gap >= MODE_CLEARANCE * max(
+                _spread(low), _spread(high)):
+            modes, arrival = (float(np.median(low)), float(np.median(high))), True
+    return StampSteps(period=period, spread=_spread(steps), rate=1 / period,
+                      arrival_time=arrival, modes=modes)
 
 
 class StampOrder(NamedTuple):
@@ -112,7 +179,7 @@ def delta_pairs(count, delta=1, unit='f', stamps=None, *, overlapping=False):
     if unit == 'f':
         if not _whole(delta):
             raise RotationError(f'delta in frames must be an integer ≥ 1, got {_shown(delta)}')
-        step = int(min(float(delta), count + 1))
+        step = int(min(delta, count + 1))
         if overlapping:
             i = np.arange(max(count - step, 0))
             pairs = np.stack([i, i + step], axis=-1)
@@ -135,6 +202,9 @@ def _pairs_in_seconds(count, delta, stamps, overlapping):
     t = checked_stamps(stamps, 'stamps', 1)
     if len(t) != count:
         raise RotationError(f'stamps has {len(t)} entries for {count} poses')
+    if isinstance(delta, int) and not isinstance(delta, bool) and delta > 10 ** 308:
+        # beyond float64, and so beyond any span of stamps
+        raise RotationError(f'delta = {plain(delta)} s leaves no pair among {count} poses')
     step = require_tolerance(delta, 'delta')
     if step == 0:
         raise RotationError('delta in seconds must be > 0, got 0')
@@ -166,9 +236,13 @@ def _pairs_in_seconds(count, delta, stamps, overlapping):
 
 def _count(count):
     """Return count as an int in [0, MAX_POSES], or raise RotationError."""
-    whole = (isinstance(count, (int, np.integer, float, np.floating))
-             and not isinstance(count, (bool, np.bool_)) and math.isfinite(count)
-             and float(count).is_integer() and count >= 0)
+    if isinstance(count, (bool, np.bool_)):
+        whole = False
+    elif isinstance(count, (int, np.integer)):  # exact: a Python int may exceed float64
+        whole = count >= 0
+    else:
+        whole = (isinstance(count, (float, np.floating)) and math.isfinite(count)
+                 and float(count).is_integer() and count >= 0)
     if not whole:
         raise RotationError(f'count must be a whole number ≥ 0, got {_shown(count)}')
     if count > MAX_POSES:
@@ -189,8 +263,11 @@ def _shown(value):
 
 def _whole(delta):
     """Whether delta is a whole number ≥ 1 (an int, or a float such as 2.0)."""
+    if isinstance(delta, (bool, np.bool_)):
+        return False
+    if isinstance(delta, (int, np.integer)):  # exact: a Python int may exceed float64
+        return delta >= 1
     try:
-        return not isinstance(delta, (bool, np.bool_)) and float(delta).is_integer() and (
-            delta >= 1)
+        return float(delta).is_integer() and delta >= 1
     except (TypeError, ValueError, OverflowError):
         return False
