@@ -501,6 +501,22 @@ def test_the_rate_is_the_stamps_rate(real, tmp_path, capsys):
         pytest.approx(50, rel=1e-3)
 
 
+def test_stamps_taken_on_arrival_are_shown(real, tmp_path, capsys):
+    """Steps of 18 and 22 ms at random, as a driver stamping messages read in bursts."""
+    steps = np.where(np.random.default_rng(5).random(len(real.imu_stamp) - 1) < 0.5,
+                     0.018, 0.022)
+    stamp = real.imu_stamp[0] + np.concatenate([[0.0], np.cumsum(steps)])
+    rec = Recording(np.column_stack([real.imu_record, stamp, real.q, real.gyro, real.accel]),
+                    np.zeros((0, 6)))
+    status, out, err = run(capsys, 'imu-check', write(tmp_path / 'bursts', rec))
+    rate = f'{1 / np.median(steps):.4g} Hz'
+    assert out.startswith(f'imu: {IMU} (frame base_link), {len(stamp)} messages, {rate}\n')
+    row = re.search(r'\nstamps +ok +(.*)', out).group(1)
+    assert row.startswith(f'period {np.median(steps):g} s, gap 0.022 s, backwards 0, spread ')
+    assert f', rate {rate}, arrival-time stamping suspected ' in row
+    assert 'the steps fall into two groups, 18 ms and 22 ms' in row
+
+
 def damage(path, at=0.5, size=2000):
     """Overwrite ``size`` bytes of a file from ``at`` of its length with junk."""
     data = bytearray(path.read_bytes())

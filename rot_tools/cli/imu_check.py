@@ -471,18 +471,12 @@ def numbers(result, degrees=False):
     return out
 
 
-def imu_rate(checks):
-    """Return the IMU's messages per second: one over the median step of its stamps."""
-    period = checks.stamps.period
-    return 1 / period if period else None
-
-
 def document(recording, checks, degrees=False):
     """Return the ``--json`` document: imu, checks, faults, fix."""
     imu = recording.imu
     return {
         'imu': {'topic': imu.topic, 'frame': imu.frame, 'messages': imu.messages,
-                'rate': imu_rate(checks)},
+                'rate': checks.stamps.rate},
         'checks': {name: {'status': result.status, 'message': result.message,
                           **numbers(result, degrees)}
                    for name, result in checks._asdict().items()},
