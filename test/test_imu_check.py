@@ -174,36 +174,38 @@ def recipe(line, fields):
     return np.column_stack(columns)
 
 
+def one_fault(out, name):
+    """Return the table's text from its '1 fault' line on, after checking that only ``name`` is."""
+    assert table_faults(out) == {name}
+    return out[out.index('\n1 fault\n') + 1:]
+
+
 def test_quaternion_written_w_first(real, tmp_path, capsys):
     """The fields x, y, z, w hold w, x, y, z: only the quaternion check is at fault."""
     written = real.q[:, [3, 0, 1, 2]]
-    bag = write(tmp_path / 'w_first', real, q=written)
-    status, data = run_json(capsys, 'imu-check', bag)
-    assert status == 1 and found(data) == {'quaternion'}
-    assert data['checks']['quaternion']['reading'] == 'w-first'
-    (fix,) = data['fix']
-    assert fix.startswith('quaternion: the orientation is written w-first: its fields x, y, '
-                          "z, w hold the quaternion's w, x, y, z")
-    assert 'orientation.x = q.x(), orientation.y = q.y(), orientation.z = q.z(), ' \
-        'orientation.w = q.w()' in fix
+    status, out, err = run(capsys, 'imu-check', write(tmp_path / 'w_first', real, q=written))
+    assert status == 1 and err == ''
+    assert re.search(r'\nquaternion +fault +w-first ', out)
+    shown = one_fault(out, 'quaternion')
+    assert_doc_output('imu-fix-w-first', shown)
+    assert 'In the driver fill orientation.x = q.x(), orientation.y = q.y(), orientation.z = ' \
+        'q.z(), orientation.w = q.w()' in shown
     fields = {f'orientation.{a}': written[:, k] for k, a in enumerate('xyzw')}
-    read = recipe(fix.split('reads right as ')[1], fields)
+    read = recipe(shown.split('reads right as ')[1].splitlines()[0], fields)
     assert np.array_equal(read, real.q)
 
 
 def test_quaternion_inverted(real, tmp_path, capsys):
     """The conjugate, the world in the IMU frame: only the quaternion check is at fault."""
     written = Rotation.from_quat(real.q).inv().as_quat()
-    bag = write(tmp_path / 'inverted', real, q=written)
-    status, data = run_json(capsys, 'imu-check', bag)
-    assert status == 1 and found(data) == {'quaternion'}
-    assert data['checks']['quaternion']['reading'] == 'inverted'
-    (fix,) = data['fix']
-    assert fix.startswith('quaternion: the orientation is inverted: it gives the world in the '
-                          'IMU frame')
-    assert 'publish its conjugate' in fix
+    status, out, err = run(capsys, 'imu-check', write(tmp_path / 'inverted', real, q=written))
+    assert status == 1 and err == ''
+    assert re.search(r'\nquaternion +fault +inverted ', out)
+    shown = one_fault(out, 'quaternion')
+    assert_doc_output('imu-fix-inverted', shown)
+    assert 'In the driver publish its conjugate' in shown
     fields = {f'orientation.{a}': written[:, k] for k, a in enumerate('xyzw')}
-    read = Rotation.from_quat(recipe(fix.split('reads right as ')[1], fields))
+    read = Rotation.from_quat(recipe(shown.split('reads right as ')[1].splitlines()[0], fields))
     assert np.degrees((read.inv() * Rotation.from_quat(real.q)).magnitude()).max() < 1e-6
 
 
@@ -213,16 +215,16 @@ def test_gyro_axis_negated_is_a_mirror(real, tmp_path, capsys):
     bag = write(tmp_path / 'mirror', real, gyro=gyro, odom=True)
     status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
     assert status == 1 and err == ''
-    assert table_faults(out) == {'gyro_axes'}
     assert re.search(r'\ngyro_axes +fault +x = \+x, y = -y, z = \+z, mirror, negate y ', out)
-    fix = out.split('\n1 fault\n')[1].splitlines()[0]
+    shown = one_fault(out, 'gyro_axes')
+    assert_doc_output('imu-fix-mirror', shown)
+    fix = shown.splitlines()[1]
     assert fix.startswith("  gyro_axes: the gyro's axes are a mirror of the orientation's (a "
                           'left-handed frame: no turn of the IMU gives it): negate the '
-                          "gyro's y axis; in all, publish x = +x, y = -y, z = +z of what it "
-                          'reads now')
-    fields = dict(zip('xyz', gyro.T))
-    assert np.array_equal(recipe(fix.split('publish ')[1][:-len(' of what it reads now')],
-                                 fields), real.gyro)
+                          "gyro's y axis; in all, publish ")
+    applied = recipe(fix.split('publish ')[1][:-len(' of what it reads now')],
+                     dict(zip('xyz', gyro.T)))
+    assert np.array_equal(applied, real.gyro)
     assert 'static_transform_publisher' not in out
 
 
