@@ -103,7 +103,7 @@ class Imu(NamedTuple):
     The IMU topic read, and the arrays check_imu takes.
 
     topic, frame (its most frequent frame_id), messages (how many were read), left_out
-    ({why: how many} of the messages left out, in LEFT_OUT's order); stamps (N,) s,
+    ({why: how many} of the messages left out, as _left_out counts them); stamps (N,) s,
     quaternions (N, 4) or None, angular_velocity and linear_acceleration (N, 3), as recorded.
     """
 
@@ -568,7 +568,7 @@ def fixes(recording, checks, degrees=False):
         elif name == 'gyro_units':
             lines.append(_gyro_units_line(getattr(result, 'scale', None)))
         elif name == 'quaternion':
-            lines.append(QUATERNION_FIXES[result.reading])
+            lines.append(QUATERNION_FIXES.get(result.reading, f'quaternion: {result.message}'))
         elif name == 'gyro_axes':
             lines.append(_gyro_axes_line(result))
         elif name == 'gyro_bias':
