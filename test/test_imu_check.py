@@ -365,6 +365,35 @@ def test_the_reference_from_another_recording(real, tmp_path, capsys):
     assert status == 0 and data['checks']['mounting']['status'] == 'ok'
 
 
+def test_the_tf_reference_from_another_recording(real, tmp_path, capsys):
+    """The odometry's orientations as TF (odom → base_link) in the other bag."""
+    b = bh.Builder()
+    tf = bh.write_bag(tmp_path / 'tf', [
+        ('/tf', 'tf2_msgs/msg/TFMessage', int(t), b.tf_message([b.transform_stamped(
+            s, (0, 0, 0), q, 'odom', 'base_link')]))
+        for t, s, q in zip(real.odom_record, real.odom_stamp, real.odom_q)])
+    imu = write(tmp_path / 'imu', real)
+    status, by_tf = run_json(capsys, 'imu-check', imu, '--ref-bag', tf, '--ref-tf', 'odom',
+                             'base_link')
+    by_topic = run_json(capsys, 'imu-check', write(tmp_path / 'both', real, odom=True),
+                        '--ref-topic', ODOM)[1]
+    assert status == 0
+    for name in ('accel_sign', 'world_up', 'mounting'):
+        assert by_tf['checks'][name]['status'] == by_topic['checks'][name]['status'] == 'ok'
+    assert by_tf['checks']['mounting']['quaternion'] == pytest.approx(
+        by_topic['checks']['mounting']['quaternion'], abs=1e-6)
+
+
+def test_a_ref_bag_without_what_was_asked_is_named(real, tmp_path, capsys):
+    imu, odom = write(tmp_path / 'imu', real), odometry_bag(tmp_path / 'odom', real)
+    one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-tf', 'odom',
+                        'base_link'),
+                   f'imu-check: --ref-bag {odom}: --ref-tf: the bag has no '
+                   'tf2_msgs/msg/TFMessage topic\n')
+    one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', '/odom'),
+                   f'imu-check: --ref-bag {odom}: --ref-topic: no topic /odom in the bag')
+
+
 def test_recordings_that_do_not_overlap_are_refused(real, tmp_path, capsys):
     imu = write(tmp_path / 'imu', real)
     odom = odometry_bag(tmp_path / 'odom', real, DAY)
