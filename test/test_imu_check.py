@@ -497,6 +497,20 @@ def test_messages_left_out_are_told_before_an_error(real, tmp_path, capsys):
                     'needed')
 
 
+def test_messages_left_out_are_told_before_an_error_of_the_reference(real, tmp_path, capsys):
+    gyro = real.gyro.copy()
+    gyro[3] = np.nan
+    b = bh.Builder()
+    frozen = [(ODOM, ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
+              for t, q in zip(real.odom_record, real.odom_q)]
+    bag = write(tmp_path / 'frozen', real, gyro=gyro, more=frozen)
+    status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
+    warning, line = err.splitlines()
+    assert status == 2 and out == ''
+    assert warning.startswith(f'warning: {IMU}: 1 of {len(gyro)} messages left out: ')
+    assert line.startswith(f'rot-tools: error: imu-check: {ODOM}: the reference has 1 distinct')
+
+
 def test_a_finite_spike_is_left_out_as_a_nan_is(real, tmp_path, capsys):
     gyro = real.gyro.copy()
     gyro[5, 0] = 1.5e298

@@ -381,14 +381,17 @@ def _usable(reference, window):
             f'{count} usable orientations{window}: at least {MIN_SAMPLES} needed')
 
 
-def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None, ref_bag=None):
+def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None, ref_bag=None,
+         warn=None):
     """
     Return the Recording of the bag at PATH; BagError (one line) for what cannot be read.
 
     imu: the Imu topic (default: the bag's only one); ref_topic or ref_tf (PARENT, CHILD):
     the reference, from the bag ref_bag when given (another recording of the same run), else
     from PATH; start, end: seconds from the bag's start (record time), as rot-tools bag's
-    --start and --end (for ref_bag too, at the same record times).
+    --start and --end (for ref_bag too, at the same record times). warn(text) is called with
+    left_out_text once the IMU is read, when messages were left out (before any error about
+    the reference).
     """
     window = '' if start is None and end is None else ' between --start and --end'
     with bag_read.open_bag(path) as reader:
@@ -408,6 +411,8 @@ def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None, ref_
         if not len(imu_data.stamps):
             raise bag_read.BagError(f'{topic}: {left_out_text(imu_data)}{window}: '
                                     'nothing to check')
+        if imu_data.left_out and warn is not None:
+            warn(f'{topic}: {left_out_text(imu_data)}')
         reference = None
         if ref_bag is None and ref_topic is not None:
             reference = topic_stream(columns[ref_topic], origin)
@@ -832,11 +837,10 @@ def run(args):
         error(f'--end {args.end:g} is before --start {args.start:g}')
     try:
         recording = read(args.path, args.imu_topic, args.ref_topic, args.ref_tf, args.start,
-                         args.end, args.ref_bag)
+                         args.end, args.ref_bag,
+                         warn=lambda text: sys.stderr.write(f'warning: {text}\n'))
     except bag_read.BagError as exc:
         error(f'imu-check: {exc}')
-    if recording.imu.left_out:
-        sys.stderr.write(f'warning: {recording.imu.topic}: {left_out_text(recording.imu)}\n')
     try:
         checks = check(recording)
     except RotationError as exc:  # too few samples for the checks
