@@ -72,6 +72,14 @@ def real():
     return read_real()
 
 
+@pytest.fixture(scope='module')
+def clean(real, tmp_path_factory):
+    """Write the window as recorded as rosbag2 bags: 'imu' alone, 'odom' alone, 'both'."""
+    folder = tmp_path_factory.mktemp('clean')
+    return {'imu': write(folder / 'imu', real), 'odom': odometry_bag(folder / 'odom', real),
+            'both': write(folder / 'both', real, odom=True)}
+
+
 def imu_message(b, stamp, q, gyro, accel, cov0=0.0, frame='base_link'):
     covariance = np.zeros(9)
     covariance[0] = cov0
@@ -268,9 +276,8 @@ def test_imu_without_orientation(real, tmp_path, capsys):
     assert status == 0 and data['faults'] == 0 and data['fix'] == []
 
 
-def test_clean_window_with_the_odometry_json(real, tmp_path, capsys):
-    bag = write(tmp_path / 'window', real, odom=True)
-    status, data = run_json(capsys, 'imu-check', bag, '--ref-topic', ODOM, '--start', 5,
+def test_clean_window_with_the_odometry_json(real, clean, capsys):
+    status, data = run_json(capsys, 'imu-check', clean['both'], '--ref-topic', ODOM, '--start', 5,
                             '--end', 15)
     assert status == 0 and data['faults'] == 0 and data['fix'] == []
     start = min(real.imu_record[0], real.odom_record[0])
@@ -321,7 +328,8 @@ def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
     The bag is read once; each window goes through the command's run as --start S --end E.
     """
     whole = imu_check.read(bh.REAL, ref_topic=ODOM)
-    monkeypatch.setattr(imu_check, 'read', lambda *args: window(whole, args[4], args[5]))
+    monkeypatch.setattr(imu_check, 'read',
+                        lambda *args, **_: window(whole, args[4], args[5]))
     span = whole.imu.stamps[-1]
     windows = [(start, start + length) for length in (2, 5, 10)
                for start in np.arange(0.0, span - length, 1.5)]
@@ -356,27 +364,24 @@ def span(ns):
     return f'{plain(int(ns.min()) / 1e9)}–{plain(int(ns.max()) / 1e9)} s'
 
 
-def test_the_reference_from_another_recording(real, tmp_path, capsys):
-    both = write(tmp_path / 'both', real, odom=True)
-    imu, odom = write(tmp_path / 'imu', real), odometry_bag(tmp_path / 'odom', real)
+def test_the_reference_from_another_recording(clean, capsys):
+    both, imu, odom = clean['both'], clean['imu'], clean['odom']
     argv = ('--ref-topic', ODOM, '--start', 2, '--end', 18)
     status, data = run_json(capsys, 'imu-check', imu, '--ref-bag', odom, *argv)
     assert (status, data) == run_json(capsys, 'imu-check', both, *argv)
     assert status == 0 and data['checks']['mounting']['status'] == 'ok'
 
 
-def test_the_tf_reference_from_another_recording(real, tmp_path, capsys):
+def test_the_tf_reference_from_another_recording(real, clean, tmp_path, capsys):
     """The odometry's orientations as TF (odom → base_link) in the other bag."""
     b = bh.Builder()
     tf = bh.write_bag(tmp_path / 'tf', [
         ('/tf', 'tf2_msgs/msg/TFMessage', int(t), b.tf_message([b.transform_stamped(
             s, (0, 0, 0), q, 'odom', 'base_link')]))
         for t, s, q in zip(real.odom_record, real.odom_stamp, real.odom_q)])
-    imu = write(tmp_path / 'imu', real)
-    status, by_tf = run_json(capsys, 'imu-check', imu, '--ref-bag', tf, '--ref-tf', 'odom',
-                             'base_link')
-    by_topic = run_json(capsys, 'imu-check', write(tmp_path / 'both', real, odom=True),
-                        '--ref-topic', ODOM)[1]
+    status, by_tf = run_json(capsys, 'imu-check', clean['imu'], '--ref-bag', tf, '--ref-tf',
+                             'odom', 'base_link')
+    by_topic = run_json(capsys, 'imu-check', clean['both'], '--ref-topic', ODOM)[1]
     assert status == 0
     for name in ('accel_sign', 'world_up', 'mounting'):
         assert by_tf['checks'][name]['status'] == by_topic['checks'][name]['status'] == 'ok'
@@ -384,8 +389,8 @@ def test_the_tf_reference_from_another_recording(real, tmp_path, capsys):
         by_topic['checks']['mounting']['quaternion'], abs=1e-6)
 
 
-def test_a_ref_bag_without_what_was_asked_is_named(real, tmp_path, capsys):
-    imu, odom = write(tmp_path / 'imu', real), odometry_bag(tmp_path / 'odom', real)
+def test_a_ref_bag_without_what_was_asked_is_named(clean, capsys):
+    imu, odom = clean['imu'], clean['odom']
     one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-tf', 'odom',
                         'base_link'),
                    f'imu-check: --ref-bag {odom}: --ref-tf: the bag has no '
@@ -394,8 +399,8 @@ def test_a_ref_bag_without_what_was_asked_is_named(real, tmp_path, capsys):
                    f'imu-check: --ref-bag {odom}: --ref-topic: no topic /odom in the bag')
 
 
-def test_recordings_that_do_not_overlap_are_refused(real, tmp_path, capsys):
-    imu = write(tmp_path / 'imu', real)
+def test_recordings_that_do_not_overlap_are_refused(real, clean, tmp_path, capsys):
+    imu = clean['imu']
     odom = odometry_bag(tmp_path / 'odom', real, DAY)
     one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', ODOM),
                    f'imu-check: {imu} (recorded {span(real.imu_record)}) and --ref-bag {odom} '
