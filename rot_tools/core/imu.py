@@ -488,9 +488,13 @@ def _gyro_bias(fit):
         f'{said}: more than {BIAS_TOL:g} rad/s.' if over else f'{said}.'))
 
 
-def _gyro_checks(samples, unordered):
-    """Return the TimeOffsetCheck, GyroUnitsCheck, GyroAxesCheck and GyroBiasCheck."""
-    why = ('no orientation to compare the gyro with.' if samples.R is None else unordered)
+def _gyro_checks(samples, doubt):
+    """
+    Return the TimeOffsetCheck, GyroUnitsCheck, GyroAxesCheck and GyroBiasCheck.
+
+    doubt: why the order or the orientation's reading is not known, or ''.
+    """
+    why = ('no orientation to compare the gyro with.' if samples.R is None else doubt)
     if why:
         return (_unknown(TimeOffsetCheck, why), _unknown(GyroUnitsCheck, why),
                 _unknown(GyroAxesCheck, why), _unknown(GyroBiasCheck, why))
@@ -520,24 +524,26 @@ class _Reading(NamedTuple):
     One reading's agreement with the sensors, each None where they cannot tell.
 
     angle (rad) from the accelerometer; residual: what the gyro leaves of the orientation's
-    rates (rad/s RMS).
+    rates (rad/s RMS), whatever its units, axes and bias; plain: the gyro's axes are the
+    orientation's on every axis the motion fixes.
     """
 
     angle: Any
     residual: Any
+    plain: Any
 
 
-def _reading(samples, unordered):
+def _reading(samples):
     """Return the _Reading of samples whose orientation is read one way."""
     slow, force = slow_spells(samples), steady_accel(samples)
     angle = None
     if not _too_few_slow(samples, slow) and not _no_gravity(force[slow]):
         angle = _tilt_angle(samples, slow, force)
-    residual = None
-    if not unordered:
-        fit = _gyro_fit(samples)[2]
-        residual = fit.residual if _follows(fit) else None
-    return _Reading(angle=angle, residual=residual)
+    fit = _gyro_fit(samples)[2]
+    if fit.scale is None and not _follows(fit):
+        return _Reading(angle=angle, residual=None, plain=None)
+    plain = bool(fit.rows) and all(fit.rows[i] == (i, 1) for i in fit.rows)
+    return _Reading(angle=angle, residual=fit.residual, plain=plain)
 
 
 def _said(name, found):
@@ -545,49 +551,88 @@ def _said(name, found):
     accel = ('the accelerometer cannot tell' if found.angle is None
              else f'{_deg(found.angle)} from the accelerometer')
     gyro = ('the gyro cannot tell' if found.residual is None
-            else f'the gyro follows to {found.residual:.2g} rad/s RMS')
+            else f'the gyro differs by {found.residual:.2g} rad/s RMS')
     return f'{name}: {accel}, {gyro}'
 
 
 def _choose_reading(found):
     """
-    Return the QuaternionCheck of the readings' agreement {reading: _Reading}.
+    Return the QuaternionCheck of the readings' agreement {reading: _Reading}, and a doubt.
+
+    The doubt: why the checks that take the orientation are unknown ('' when they are not).
 
     A reading agrees with the accelerometer within ANGLE_TOL and with the gyro within
-    READING_SLACK of the best reading's residual. Another reading is chosen when it agrees
-    with both and the recorded one does not; of two such, the one the gyro follows better.
+    READING_SLACK of the best reading's residual. Of the readings that agree with both, the
+    one that needs the fewest faults (a reading other than as recorded, gyro axes other than
+    the orientation's) is chosen; a tie leaves the reading unknown. Where no reading agrees
+    with both, it is as recorded, unknown, and in doubt when the gyro follows another
+    reading better.
     """
     residuals = [f.residual for f in found.values() if f.residual is not None]
     best = min(residuals) if residuals else None
 
-    def agrees(f):
-        return (f.angle is not None and f.angle <= ANGLE_TOL and f.residual is not None
-                and f.residual <= READING_SLACK * best)
+    def gyro_agrees(f):
+        return f.residual is not None and f.residual <= READING_SLACK * best
 
+    def faults_needed(name):
+        return (name != 'as recorded') + (not found[name].plain)
+
+    said = '; '.join(_said(n, f) for n, f in found.items())
+    both = [n for n, f in found.items()
+            if f.angle is not None and f.angle <= ANGLE_TOL and gyro_agrees(f)]
+    least = min(map(faults_needed, both), default=None)
+    chosen = [n for n in both if faults_needed(n) == least]
     recorded = found['as recorded']
-    if agrees(recorded):
+    if len(chosen) == 1 and chosen[0] == 'as recorded':
         return QuaternionCheck(status='ok', reading='as recorded', message=(
             'as recorded: the orientation agrees with the accelerometer '
             f'({_deg(recorded.angle)}) and the gyro follows it ({recorded.residual:.2g} rad/s '
-            'RMS).'))
-    others = [name for name in READINGS[1:] if agrees(found[name])]
-    if not others:
-        if recorded.angle is None or best is None:
-            which = 'accelerometer' if recorded.angle is None else 'gyro'
-            why = f'the {which} cannot tell how to read it'
-        else:
-            why = 'no reading makes it agree with both the gyro and the accelerometer'
+            'RMS).')), ''
+    if len(chosen) == 1:
+        name = chosen[0]
+        what = ('written w-first: its fields x, y, z, w hold w, x, y, z' if name == 'w-first'
+                else 'inverted: it gives the world in the IMU frame, not the IMU frame in the '
+                'world')
+        return QuaternionCheck(status='fault', reading=name, message=(
+            f'{what}; read so, the orientation agrees with the accelerometer '
+            f'({_deg(found[name].angle)}) and the gyro follows it ({found[name].residual:.2g} '
+            f"rad/s RMS), as it does not read as recorded ({_said('as recorded', recorded)[13:]})"
+            '; the other checks take it so.')), ''
+    if chosen:
+        why = f'{" and ".join(chosen)} agree with both the gyro and the accelerometer alike'
+    elif recorded.angle is None or best is None:
+        why = f'the {"accelerometer" if recorded.angle is None else "gyro"} cannot tell'
+    else:
+        why = 'no reading makes it agree with both the gyro and the accelerometer'
+    check = QuaternionCheck(status='unknown', reading='as recorded', message=(
+        f'read as recorded; {why} ({said}).'))
+    rivals = [n for n in READINGS[1:] if gyro_agrees(found[n]) and (
+        not gyro_agrees(recorded) or found[n].plain and not recorded.plain)]
+    if len(chosen) > 1:
+        return check, (f"the quaternion's reading is not known ({' or '.join(chosen)} agree "
+                       'alike), so neither is this.')
+    if not chosen and rivals:
+        return check, ("the quaternion's reading is not known, and the gyro follows it better "
+                       f"read {' or '.join(rivals)}, so neither is this.")
+    return check, ''
+
+
+def _quaternion(stamps, quaternions, arrays, samples, unordered):
+    """
+    Return the QuaternionCheck, the samples with the orientation read as it says, a doubt.
+
+    The doubt: why the checks that take the orientation are unknown ('' when they are not).
+    """
+    if samples.R is None:
+        return _unknown(QuaternionCheck, 'no orientation.'), samples, ''
+    if unordered:
         return QuaternionCheck(status='unknown', reading='as recorded', message=(
-            f'read as recorded; {why} (' + '; '.join(_said(n, f) for n, f in found.items())
-            + ').'))
-    name = min(others, key=lambda n: found[n].residual)
-    what = ('written w-first: its fields x, y, z, w hold w, x, y, z' if name == 'w-first' else
-            'inverted: it gives the world in the IMU frame, not the IMU frame in the world')
-    return QuaternionCheck(status='fault', reading=name, message=(
-        f'{what}; read so, the orientation agrees with the accelerometer '
-        f'({_deg(found[name].angle)}) and the gyro follows it ({found[name].residual:.2g} '
-        f"rad/s RMS), as it does not read as recorded ({_said('as recorded', recorded)[13:]})"
-        '; the other checks take it so.'))
+            f'read as recorded; {unordered}')), samples, unordered
+    read = {name: samples if name == 'as recorded' else
+            imu_samples(stamps, read_quaternions(quaternions, name), *arrays)
+            for name in READINGS}
+    check, doubt = _choose_reading({name: _reading(s) for name, s in read.items()})
+    return check, read[check.reading], doubt
 
 
 # ---- against a reference -------------------------------------------------------------------
@@ -647,9 +692,9 @@ def _world_up(found):
         f'{said}: it points down, the orientation is NED (REP-103 wants ENU).'))
 
 
-def _reference_checks(samples, slow, force, reference, tol, lag, flat, unordered):
+def _reference_checks(samples, slow, force, reference, tol, lag, flat, doubt):
     """Return the accel_sign, world_up and mounting checks (lag: the orientation's, s)."""
-    why = 'no reference orientation to compare with.' if reference is None else unordered
+    why = 'no reference orientation to compare with.' if reference is None else doubt
     if why:
         return (_unknown(AngleCheck, why), _unknown(AngleCheck, why),
                 _unknown(MountingCheck, why))
@@ -663,20 +708,6 @@ def _reference_checks(samples, slow, force, reference, tol, lag, flat, unordered
     up = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
           else _world_up(found))
     return sign, up, mounting
-
-
-def _quaternion(stamps, quaternions, arrays, samples, unordered):
-    """Return the QuaternionCheck, and the samples with the orientation read as it says."""
-    if samples.R is None:
-        return _unknown(QuaternionCheck, 'no orientation.'), samples
-    if unordered:
-        return QuaternionCheck(status='unknown', reading='as recorded', message=(
-            f'read as recorded; {unordered}')), samples
-    read = {name: samples if name == 'as recorded' else
-            imu_samples(stamps, read_quaternions(quaternions, name), *arrays)
-            for name in READINGS}
-    check = _choose_reading({name: _reading(s, unordered) for name, s in read.items()})
-    return check, read[check.reading]
 
 
 # ---- all together ------------------------------------------------------------------------
@@ -702,8 +733,8 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     given = stamps_array(stamps, 'stamps')
     arrays = (angular_velocity, linear_acceleration, tol)
     samples = imu_samples(given, quaternions, *arrays)
-    unordered = _order_unknown(given)
-    quaternion, samples = _quaternion(given, quaternions, arrays, samples, unordered)
+    quaternion, samples, doubt = _quaternion(given, quaternions, arrays, samples,
+                                             _order_unknown(given))
     slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
     flat = '' if why else _no_gravity(force[slow])
@@ -712,12 +743,12 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     else:
         units = _accel_units(force[slow])
         tilt = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
-                else _unknown(AngleCheck, flat) if flat
+                else _unknown(AngleCheck, flat or doubt) if flat or doubt
                 else _orientation_vs_accel(_tilt_angle(samples, slow, force)))
-    offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples, unordered)
+    offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples, doubt)
     lag = offset.seconds if offset.status != 'unknown' else 0.0
     sign, up, mounting = _reference_checks(samples, slow, force, reference, tol, lag, flat,
-                                           unordered)
+                                           doubt)
     return ImuChecks(quaternion=quaternion, stamps=_check_stamps(given, samples),
                      accel_units=units, orientation_vs_accel=tilt, gyro_units=gyro_units,
                      gyro_axes=gyro_axes, gyro_bias=gyro_bias, time_offset=offset,

@@ -28,7 +28,10 @@ AXIS_DOMINANCE = 4.0
 """σ1/σ2 of the IMU's turns at least, for their first principal axis to be the one the body
 turns about when the reference turns about one axis only."""
 
-MIN_TURN = 0.1
+MIN_STEPS = 5
+"""Steps HAND_EYE_STEP apart at least, with both poses known, for a mounting."""
+
+MIN_TURN = 0.5
 """σ1 of the IMU's turns (rad) at least, for their main axis to stand above noise."""
 
 MIN_AGREEMENT = 0.5
@@ -106,8 +109,8 @@ def imu_mounting(samples, ref_t, ref_Q, ref_period, lag=0.0):
     RATE_GAP periods) and the IMU's orientation lag (s) after them (the nearest sample: it
     describes the instant of the stamp lag earlier), relative rotations of consecutive ones
     without a gap, then hand_eye_rotation (one_axis_mounting where the reference turns about
-    one axis only). RotationError as those raise it (fewer than two steps that turn, no
-    dominant axis of the IMU's turns).
+    one axis only). RotationError for fewer than MIN_STEPS steps, and as those raise it
+    (fewer than two steps that turn, no dominant axis of the IMU's turns).
     """
     t = samples.t
     poses = mounting_poses(samples, ref_t)
@@ -130,6 +133,9 @@ def imu_mounting(samples, ref_t, ref_Q, ref_period, lag=0.0):
     else:
         total = integrated_gyro(samples)
         B = rotvec_to_matrix(total[poses[1:][pair]] - total[poses[:-1][pair]])
+    if len(A) < MIN_STEPS:
+        raise RotationError(f'{len(A)} steps of {HAND_EYE_STEP:g} s where the reference covers '
+                            f'the IMU: at least {MIN_STEPS} needed')
     found = hand_eye_rotation(A, B)
     X, warning = found.rotation, ''
     if found.axes < 2:

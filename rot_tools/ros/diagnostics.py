@@ -1,27 +1,9 @@
 """
 rotation_node's /diagnostics: an IMU's conventions over the last 10 s, and its inputs.
 
-Once a second (a steady-clock timer) the node publishes a ``diagnostic_msgs/DiagnosticArray``
-on ``/diagnostics``, the convention rqt_robot_monitor and diagnostic_aggregator read, with two
-statuses:
-
-- ``<node name>: imu conventions``: rot_tools.core.imu.check_imu over the ~/imu messages
-  received in the last WINDOW seconds (at most CHECKED of them, every k-th of a faster
-  stream). ``hardware_id`` is the IMU's frame; the level is OK (no fault), WARN (a fault:
-  the message names the checks; or the checks cannot run on these samples, and the message
-  says why) or STALE (under STALE_BELOW seconds of input in the window); one KeyValue per
-  check, its name and ``<status> <numbers>`` (``ok scale=0.9987``; radians, rad/s, seconds).
-  A message is taken as it comes, refused or not by the node (an Imu without orientation
-  has its orientation checks unknown); one whose angular velocity or linear acceleration is
-  not finite is left out (counted in the message).
-- ``<node name>: inputs``: one KeyValue per input topic (and the /tf the node follows, and
-  whatever else the node refused on: ~/screw_path), ``<rate> msg/s`` over the last WINDOW
-  seconds and the refusals counted since the start, by reason; WARN while any input was
-  refused in the last WINDOW seconds, else OK.
-
-Memory is bounded: the IMU's samples are a ring of at most CAPACITY (WINDOW seconds at
-1 kHz; a faster IMU's window is shorter), each a tuple of numbers, appended by the input's
-callback; the checks run in the timer, never in an input's callback.
+Once a second the node publishes a ``diagnostic_msgs/DiagnosticArray`` on ``/diagnostics`` (the
+convention rqt_robot_monitor and diagnostic_aggregator read): ``<node name>: imu conventions``
+(imu_status) and ``<node name>: inputs`` (rates and refusals of each input).
 """
 
 from collections import deque
@@ -54,18 +36,27 @@ _NO_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
 
 
 def _number(x):
-    """Write a number as ``:.4g`` text; a list or matrix of them in brackets."""
+    """Write a number as ``:.4g`` text, a list or matrix of them in brackets, a bool as a word."""
     if isinstance(x, (list, tuple, np.ndarray)):
         return '[' + ', '.join(_number(v) for v in x) + ']'
-    if isinstance(x, (int, np.integer)) and not isinstance(x, bool):
+    if isinstance(x, (bool, np.bool_)):
+        return 'true' if x else 'false'
+    if isinstance(x, str):
+        return f"'{x}'"
+    if isinstance(x, (int, np.integer)):
         return str(int(x))
     return f'{float(x):.4g}'
 
 
 def check_value(check):
-    """``<status> <name>=<numbers> ...``: one check's KeyValue value (None numbers left out)."""
+    """
+    ``<status> <name>=<value> ...``: one check's KeyValue value.
+
+    Its numbers, flags and words (a quaternion's reading); None and the mounting's warning (a
+    sentence, in the check's message's place) left out.
+    """
     numbers = [f'{name}={_number(value)}' for name, value in zip(check._fields[2:], check[2:])
-               if value is not None and not isinstance(value, str)]
+               if value is not None and name != 'warning']
     return ' '.join([check.status, *numbers])
 
 
@@ -98,8 +89,58 @@ class ImuWindow:
         return np.array(self._samples, dtype=np.float64).reshape(-1, 12)
 
 
+def steady(whole, halves):
+    """
+    Return the check of a whole window where its halves bear it out, else unknown.
+
+    whole: one check of check_imu over the window; halves: the same check over its first and
+    second halves. A half that says otherwise (ok against a fault, fault against ok, another
+    axis map or reading of the quaternion) makes the check unknown: the window does not fix
+    it. A half that cannot tell (unknown) leaves the whole window's verdict.
+    """
+    if whole.status == 'unknown':
+        return whole
+    told = [half for half in halves if half.status != 'unknown']
+    same = all(half.status == whole.status and all(
+        getattr(half, name) == getattr(whole, name) for name in ('matrix', 'reading')
+        if name in whole._fields) for half in told)
+    if same:
+        return whole
+    said = '; '.join(f'{which} half {half.status}: {half.message.rstrip(".")}'
+                     for which, half in zip(('first', 'second'), halves))
+    return type(whole)(**{**dict.fromkeys(whole._fields), 'status': 'unknown', 'message': (
+        f'{whole.status} over the window, but not over both its halves ({said}).'),
+        **({'warning': ''} if 'warning' in whole._fields else {})})
+
+
+def steady_checks(stamps, quaternions, angular_velocity, linear_acceleration):
+    """Return the ImuChecks of a window whose halves bear each check out (steady)."""
+    whole = check_imu(stamps, quaternions, angular_velocity, linear_acceleration)
+    middle = len(stamps) // 2
+    halves = []
+    for part in (slice(None, middle), slice(middle, None)):
+        try:
+            halves.append(check_imu(stamps[part], None if quaternions is None else
+                                    quaternions[part], angular_velocity[part],
+                                    linear_acceleration[part]))
+        except RotationError:  # too few samples in a half: it cannot tell
+            return ImuChecks(*(steady(check, ()) for check in whole))
+    return ImuChecks(*(steady(check, [half[k] for half in halves])
+                       for k, check in enumerate(whole)))
+
+
 def imu_status(name, window, now):
-    """Return the DiagnosticStatus ``<name>: imu conventions`` of ``window`` at ``now``."""
+    """
+    Return the DiagnosticStatus ``<name>: imu conventions`` of ``window`` at ``now``.
+
+    steady_checks over the ~/imu messages received in the last WINDOW seconds (at most
+    CHECKED of them, every k-th of a faster stream). ``hardware_id`` is the IMU's frame;
+    the level is OK (no fault), WARN (a fault: the message names the checks; or the checks
+    cannot run on these samples, and the message says why) or STALE (under STALE_BELOW
+    seconds of input in the window); one KeyValue per check, its name and ``<status>
+    <numbers>`` (``ok scale=0.9987``; radians, rad/s, seconds). An Imu without orientation
+    has its orientation checks unknown.
+    """
     status = DiagnosticStatus(name=f'{name}: imu conventions', hardware_id=window.frame)
     samples = window.recent(now)
     seconds = float(samples[-1, 0] - samples[0, 0]) if len(samples) else 0.0
@@ -116,7 +157,7 @@ def imu_status(name, window, now):
             f' (every {step})' if step > 1 else '') + (
             f', {window.skipped} left out since the start' if window.skipped else '')
         try:
-            checks = check_imu(x[:, 1], q, x[:, 6:9], x[:, 9:12])
+            checks = steady_checks(x[:, 1], q, x[:, 6:9], x[:, 9:12])
         except RotationError as exc:
             status.level = DiagnosticStatus.WARN
             status.message = f'the checks cannot run on the last {of}: {exc}'
