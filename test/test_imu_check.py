@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import imu_check  # noqa: E402
+from rot_tools.cli import imu_check, imu_recording  # noqa: E402
 from rot_tools.cli.main import main  # noqa: E402
 from rot_tools.core.stamps import plain  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
@@ -327,8 +327,8 @@ def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
 
     The bag is read once; each window goes through the command's run as --start S --end E.
     """
-    whole = imu_check.read(bh.REAL, ref_topic=ODOM)
-    monkeypatch.setattr(imu_check, 'read',
+    whole = imu_recording.read(bh.REAL, ref_topic=ODOM)
+    monkeypatch.setattr(imu_recording, 'read',
                         lambda *args, **_: window(whole, args[4], args[5]))
     span = whole.imu.stamps[-1]
     windows = [(start, start + length) for length in (2, 5, 10)
