@@ -450,7 +450,8 @@ def run(args):
 
     0 when no check is at fault, 1 when one is; one error line and status 2
     (options.error) for bad input: an option that does not apply, a bag that cannot be
-    read, no Imu topic or two without --imu-topic, a reference that is not there.
+    read, no Imu topic or two without --imu-topic, nothing left to check, a reference that
+    is not there or does not meet the IMU in time. Messages left out are warned of first.
     """
     error = options.error
     for option, given in (('--seq', args.seq), ('--all-sequences', args.all_sequences),
