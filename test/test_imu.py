@@ -2,25 +2,12 @@
 check_imu on the real Jackal recording with one fault put in at a time, and on synthetic motion.
 
 The recording (bag_helpers.REAL): /imu/data, a Clearpath Jackal's IMU in base_link at 50 Hz with
-its orientation, and /jackal_velocity_controller/odom as the reference, read once with rosbags.
-Each faulty copy is written from those arrays with scipy's Rotation and plain NumPy (the
-accelerometer in g or negated, the gyro in degrees/s, its x and y swapped and z negated, a bias,
-the orientation slerped 0.1 s late, the whole IMU converted to NED or turned on the body), and
-each case runs with and without the odometry as reference: the injected fault is found, and
-only it, to the accuracy asked (units within 3 %, the axis map exact, the bias within
-0.003 rad/s, the lag within one sample, the mounting's up axis within 3°).
-
-What the recording allows: the Jackal drives on the ground, so its turns are yaw; but its roll
-and pitch vibrate (gyro x and y at 0.03 and 0.06 rad/s RMS) and the orientation follows them
-(correlation 0.92 and 0.94 with the gyro), so every axis of the gyro is fixed, and every check
-but the reference's three is known without a reference. The odometry is planar (yaw only): the
-mounting's up axis is fixed, not its turn about it (the mounting's warning). A sign flipped
-accelerometer and a NED orientation both put the specific force 180° from Rᵀ·ẑ
-(orientation_vs_accel); only the reference tells which (accel_sign, or world_up).
-
-The synthetic motion turns about all three axes with rests between (scipy's rotation vectors of
-sines, the gyro from a central difference of the same closed form): there the answers are exact
-and the mounting is whole.
+its orientation, and its wheel odometry as the reference, read once with rosbags. Each faulty
+copy is written from those arrays with scipy's Rotation and plain NumPy, with and without the
+reference: the injected fault is found, and only it, to the accuracy asked. The Jackal's roll
+and pitch vibrate, so every gyro axis is fixed; its odometry is planar, so the mounting's up
+axis is fixed, not its turn about it. The synthetic motion turns about all three axes with
+rests between: there the answers are exact and the mounting is whole.
 """
 
 import itertools

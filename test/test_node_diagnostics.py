@@ -19,10 +19,11 @@ from geometry_msgs.msg import PoseStamped
 import numpy as np
 import pytest
 from rclpy.qos import qos_profile_sensor_data
-from rot_tools.core.imu import ImuChecks
+from rot_tools.core.imu import faults, GyroAxesCheck, GyroUnitsCheck, ImuChecks
 from rot_tools.ros import diagnostics
 from rot_tools.ros.rotation_node import RotationNode
 from sensor_msgs.msg import Imu
+from test_imu import jackal  # noqa: F401 (the module's fixture)
 
 BAG = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'jackal_imu_odometry.bag'
 MESSAGES = 15 * 50
@@ -206,3 +207,65 @@ def test_the_documented_status_of_an_imu_in_degrees():
     status = diagnostics.imu_status('rot_tools', window, stamps[499] - stamps[0])
     assert status.level == DiagnosticStatus.WARN
     assert_doc_output('node-diagnostics-degrees', shown(status))
+
+
+# ---- steady verdicts over a window ----------------------------------------------------------
+
+
+def units(status, scale=None):
+    """Return a GyroUnitsCheck of that status."""
+    return GyroUnitsCheck(status=status, message=f'{status}.', scale=scale)
+
+
+def axes(status, matrix):
+    """Return a GyroAxesCheck of that status and matrix."""
+    return GyroAxesCheck(status=status, message=f'{status}.', matrix=matrix, mirror=None,
+                         negate=None)
+
+
+@pytest.mark.parametrize('whole, halves, steady', [
+    ('fault', ('fault', 'fault'), 'fault'),
+    ('fault', ('fault', 'unknown'), 'fault'),
+    ('fault', ('ok', 'fault'), 'unknown'),
+    ('ok', ('ok', 'fault'), 'unknown'),
+    ('ok', ('unknown', 'unknown'), 'ok'),
+    ('unknown', ('fault', 'fault'), 'unknown'),
+])
+def test_a_check_holds_where_both_halves_bear_it_out(whole, halves, steady):
+    found = diagnostics.steady(units(whole, 0.5), [units(h, 0.5) for h in halves])
+    assert found.status == steady
+    if steady == 'unknown' and whole != 'unknown':
+        assert found.message.startswith(f'{whole} over the window, but not over both its halves')
+        assert found.scale is None
+
+
+def test_another_axis_map_in_a_half_leaves_the_axes_unknown():
+    swap = ((0, 1, 0), (1, 0, 0), (0, 0, 1))
+    negated = ((1, 0, 0), (0, 1, 0), (0, 0, -1))
+    assert diagnostics.steady(axes('fault', swap), [axes('fault', swap)] * 2).status == 'fault'
+    found = diagnostics.steady(axes('fault', swap), [axes('fault', swap), axes('fault', negated)])
+    assert (found.status, found.matrix) == ('unknown', None)
+
+
+def test_a_fault_over_half_the_window_is_not_reported():
+    """10 s of the recording, its first 5 s with the gyro in degrees/s: gyro_units unknown."""
+    stamps, messages = recorded_imu()
+    window = diagnostics.ImuWindow()
+    for k, (stamp, msg) in enumerate(zip(stamps[:500], messages)):
+        window.add(in_degrees(msg) if k < 250 else msg, stamp - stamps[0])
+    status = diagnostics.imu_status('rot_tools', window, stamps[499] - stamps[0])
+    assert status.level == DiagnosticStatus.OK, status.message
+    assert values(status)['gyro_units'] == 'unknown'
+
+
+def test_a_quaternion_written_w_first_is_the_only_fault_of_every_window(jackal):  # noqa: F811
+    """Every 10 s window, 5 s apart, of the recording written w-first: that fault, or unknown."""
+    imu, _ = jackal
+    q = np.roll(imu['q'], 1, axis=1)  # the fields x, y, z, w hold w, x, y, z
+    for start in range(0, len(q) - 500, 250):
+        part = slice(start, start + 500)
+        checks = diagnostics.steady_checks(imu['t'][part], q[part], imu['gyro'][part],
+                                           imu['accel'][part])
+        assert faults(checks) in ((), ('quaternion',)), [c.message for c in checks]
+        assert checks.quaternion.reading == (
+            'w-first' if checks.quaternion.status == 'fault' else 'as recorded')

@@ -13,6 +13,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from rot_tools.core.errors import RotationError
+from rot_tools.core.imu_checks import (
+    AccelUnitsCheck, AngleCheck, GyroAxesCheck, GyroBiasCheck, GyroUnitsCheck, ImuChecks,
+    MountingCheck, QuaternionCheck, StampsCheck, TimeOffsetCheck, unknown)
 from rot_tools.core.imu_motion import (
     body_rates, fit_gyro, orientation_lag, RATE_GAP, SLOW_RATE, slow_spells, steady_accel)
 from rot_tools.core.imu_mounting import HAND_EYE_STEP, imu_mounting, mounting_poses
@@ -67,10 +70,6 @@ READING_SLACK = 1.5
 """A reading of the quaternion agrees with the gyro when what the gyro leaves of its rates is
 at most this many times what the best reading leaves."""
 
-REGULAR = 1e-6
-"""Spread of the steps, as a share of the period, at most for the steps to be equal (the
-rest is the stamps' rounding)."""
-
 AXES = 'xyz'
 
 READINGS = ('as recorded', 'w-first', 'inverted')
@@ -105,161 +104,9 @@ class ImuReference(NamedTuple):
     quaternions: Any
 
 
-class QuaternionCheck(NamedTuple):
-    """
-    reading: how the orientation's quaternion is read ('as recorded', 'w-first', 'inverted').
-
-    Tried three ways (READINGS), a reading other than as recorded is a fault when the
-    orientation, read so, agrees with both the gyro and the accelerometer where read as
-    recorded it does not; the other checks then take the orientation so read. None where
-    there is no orientation.
-    """
-
-    status: str
-    message: str
-    reading: Any
-
-
-class StampsCheck(NamedTuple):
-    """
-    Stamps: increasing, no gap longer than GAP_PERIODS periods; their steps' jitter.
-
-    period: the median step (s); gap: the longest step (s); backwards: steps ≤ 0 as given;
-    spread: the steps' scatter (s, stamps.StampSteps); rate: 1/period (Hz); arrival_time:
-    the steps fall into two groups (stamped on arrival suspected; not a fault).
-    """
-
-    status: str
-    message: str
-    period: Any
-    gap: Any
-    backwards: int
-    spread: Any
-    rate: Any
-    arrival_time: bool
-
-
-class AccelUnitsCheck(NamedTuple):
-    """
-    scale: the factor that makes |linear_acceleration| read 9.80665 m/s² in slow spells.
-
-    9.80665 over the median |ā_k| in slow spells (imu_motion.slow_spells; ā_k the
-    accelerometer averaged over the slow window); fault beyond ACCEL_TOL (g instead of m/s²,
-    gravity removed).
-    """
-
-    status: str
-    message: str
-    scale: Any
-
-
-class AngleCheck(NamedTuple):
-    """
-    angle (rad) between two directions that should agree.
-
-    orientation_vs_accel: the orientation's up in the IMU frame, Rᵀ·ẑ, against the specific
-    force in slow spells (their median angle: a tilt shows at every attitude); fault beyond
-    ANGLE_TOL, beyond OPPOSITE a sign flipped or NED. accel_sign: the body's up that the
-    reference gives through the mounting against the specific force; fault beyond OPPOSITE.
-    world_up: the orientation's world z in the reference's world against ẑ; fault beyond
-    OPPOSITE (NED). Between 90° and OPPOSITE neither is told: unknown.
-    """
-
-    status: str
-    message: str
-    angle: Any
-
-
-class GyroUnitsCheck(NamedTuple):
-    """
-    scale: ω_orientation ≈ scale·M·(ω_measured − bias) (imu_motion.fit_gyro).
-
-    Fault beyond GYRO_TOL (degrees/s), and where the orientation turns clearly but the gyro
-    does not follow it (reads zeros, a constant, noise): scale None then.
-    """
-
-    status: str
-    message: str
-    scale: Any
-
-
-class GyroAxesCheck(NamedTuple):
-    """
-    matrix: the signed permutation M (3 rows of 3 ints), None unless every row is fixed.
-
-    Fault where M ≠ I on the axes the motion fixes. mirror: det M = −1 (one axis negated, a
-    left-handed frame: no turn of the IMU gives it), None where M is not known; negate: the
-    gyro axis ('x', 'y' or 'z') whose negation leaves a turn of the frame, the one closest to
-    the identity, or None.
-    """
-
-    status: str
-    message: str
-    matrix: Any
-    mirror: Any
-    negate: Any
-
-
-class GyroBiasCheck(NamedTuple):
-    """bias: the gyro's reading at rest (3 floats, rad/s, its own axes); fault beyond BIAS_TOL."""
-
-    status: str
-    message: str
-    bias: Any
-
-
-class TimeOffsetCheck(NamedTuple):
-    """
-    seconds: how much the orientation lags the gyro (positive: the orientation is late).
-
-    From the angular speeds (imu_motion.orientation_lag); fault beyond LAG_PERIODS periods.
-    """
-
-    status: str
-    message: str
-    seconds: Any
-
-
-class MountingCheck(NamedTuple):
-    """
-    quaternion [x, y, z, w] of the IMU frame in the body frame; warning: '' or why not whole.
-
-    From the relative rotations of the reference and of the orientation (imu_mounting), as a
-    static transform base_link → imu_link gives it.
-    """
-
-    status: str
-    message: str
-    quaternion: Any
-    warning: str
-
-
-class ImuChecks(NamedTuple):
-    """Every check of check_imu, each a NamedTuple (status, message, its numbers)."""
-
-    quaternion: QuaternionCheck
-    stamps: StampsCheck
-    accel_units: AccelUnitsCheck
-    orientation_vs_accel: AngleCheck
-    gyro_units: GyroUnitsCheck
-    gyro_axes: GyroAxesCheck
-    gyro_bias: GyroBiasCheck
-    time_offset: TimeOffsetCheck
-    accel_sign: AngleCheck
-    world_up: AngleCheck
-    mounting: MountingCheck
-
-
 def faults(checks):
     """Return the names of the checks of an ImuChecks whose status is 'fault', in order."""
     return tuple(name for name, check in zip(checks._fields, checks) if check.status == 'fault')
-
-
-def _unknown(kind, message):
-    """Return a check of the NamedTuple class kind, status 'unknown', its numbers None."""
-    extra = {'warning': ''} if kind is MountingCheck else {}
-    numbers = {f: None for f in kind._fields[2:] if f not in extra}
-    return kind(status='unknown', message=message, **numbers, **extra)
 
 
 def _status(fault):
@@ -277,10 +124,10 @@ def _seconds(x):
 
 def _check_stamps(stamps, samples):
     """Return the StampsCheck: steps as given (backwards), and in order (period, gap, jitter)."""
-    backwards = int((np.diff(stamps) <= 0).sum())
+    backwards = int((stamps[1:] <= stamps[:-1]).sum())  # compared: a step may overflow
     steps = stamp_steps(samples.t)
     period, gap = steps.period, float(np.diff(samples.t).max())
-    spread = ('equal steps' if steps.spread <= REGULAR * period
+    spread = ('equal steps' if steps.spread == 0
               else f'the steps spread {_seconds(steps.spread)}')
     rate = f'{len(stamps)} samples every {_seconds(period)} ({steps.rate:.4g} Hz, {spread})'
 
@@ -304,9 +151,9 @@ def _check_stamps(stamps, samples):
                        arrival_time=steps.arrival_time)
 
 
-def _order_unknown(stamps):
+def _orderunknown(stamps):
     """Return '' when most steps of the stamps as given go forward, else why not."""
-    backwards = int((np.diff(stamps) <= 0).sum())
+    backwards = int((stamps[1:] <= stamps[:-1]).sum())  # compared: a step may overflow
     if backwards <= (len(stamps) - 1) / 2:
         return ''
     return ("the stamps mostly go back, so the samples' order, which this check needs, is "
@@ -381,22 +228,22 @@ def _orientation_vs_accel(angle):
 
 
 def _lag(samples):
-    """Return the orientation's lag (s) and why it is unknown ('' when known)."""
+    """Return the orientation's Lag (imu_motion) and why it is unknown ('' when known)."""
     try:
         lag = orientation_lag(samples)
     except RotationError as exc:
-        return 0.0, f'{exc}.'
+        return None, f'{exc}.'
     if not lag.correlation >= MIN_CORRELATION:
-        return 0.0, ('the angular speeds of the gyro and the orientation correlate at '
-                     f'{lag.correlation:.2f} at best (< {MIN_CORRELATION:g}): too little '
-                     'motion to align them.')
+        return None, ('the angular speeds of the gyro and the orientation correlate at '
+                      f'{lag.correlation:.2f} at best (< {MIN_CORRELATION:g}): too little '
+                      'motion to align them.')
     return lag, ''
 
 
 def _time_offset(samples, lag, why):
     """Return the TimeOffsetCheck of a lag (imu_motion.Lag) or why it is unknown."""
     if why:
-        return _unknown(TimeOffsetCheck, why)
+        return unknown(TimeOffsetCheck, why)
     seconds, r = lag.seconds, lag.correlation
     periods = seconds / samples.period
     said = (f'the orientation lags the gyro by {_seconds(seconds)} ({periods:+.2f} periods; '
@@ -409,17 +256,15 @@ def _time_offset(samples, lag, why):
 
 
 def _gyro_fit(samples):
-    """Return the lag (s), why it is unknown, and the GyroFit of the orientation's rates."""
+    """Return the Lag, why it is unknown, and the GyroFit of the rates (taken 0 s apart then)."""
     lag, why = _lag(samples)
-    seconds = lag.seconds if not why else 0.0
-    return lag, why, fit_gyro(body_rates(samples, seconds))
+    return lag, why, fit_gyro(body_rates(samples, 0.0 if why else lag.seconds))
 
 
-def _follows(fit):
-    """Return whether the gyro follows an orientation that turns clearly (None: no turn)."""
-    if fit.explained is None or fit.spread < TURNS:
-        return None
-    return bool(fit.explained >= FOLLOWS)
+def _dead(fit):
+    """Return whether the orientation turns clearly and the gyro does not follow it at all."""
+    return bool(fit.scale is None and fit.explained is not None and fit.spread >= TURNS
+                and fit.explained < FOLLOWS)
 
 
 def _axis_map(rows, axes):
@@ -478,8 +323,8 @@ def _gyro_axes(fit):
 def _gyro_bias(fit):
     if fit.bias is None:
         left = ', '.join(AXES[i] for i in range(3) if i not in fit.rows)
-        return _unknown(GyroBiasCheck, f'the orientation turns about {left}, which the '
-                        'motion does not fix on the gyro, so the bias is not known.')
+        return unknown(GyroBiasCheck, f'the orientation turns about {left}, which the '
+                       'motion does not fix on the gyro, so the bias is not known.')
     norm = float(np.linalg.norm(fit.bias))
     said = (f'the gyro reads ({", ".join(f"{b:.2g}" for b in fit.bias)}) rad/s more than '
             f'the orientation turns (norm {norm:.2g} rad/s)')
@@ -496,23 +341,23 @@ def _gyro_checks(samples, doubt):
     """
     why = ('no orientation to compare the gyro with.' if samples.R is None else doubt)
     if why:
-        return (_unknown(TimeOffsetCheck, why), _unknown(GyroUnitsCheck, why),
-                _unknown(GyroAxesCheck, why), _unknown(GyroBiasCheck, why))
+        return (unknown(TimeOffsetCheck, why), unknown(GyroUnitsCheck, why),
+                unknown(GyroAxesCheck, why), unknown(GyroBiasCheck, why))
     lag, lag_unknown, fit = _gyro_fit(samples)
-    if _follows(fit) is False:
+    if _dead(fit):
         why = 'the gyro does not follow the orientation, so this is not known.'
         dead = GyroUnitsCheck(status='fault', scale=None, message=(
             f'the orientation turns clearly (its rates vary by {fit.spread:.2g} rad/s RMS) '
             'but the gyro does not follow it: any map of its readings explains '
             f'{fit.explained:.0%} of those rates (a dead, constant, noisy or shuffled gyro).'))
-        return (_unknown(TimeOffsetCheck, why), dead, _unknown(GyroAxesCheck, why),
-                _unknown(GyroBiasCheck, why))
+        return (unknown(TimeOffsetCheck, why), dead, unknown(GyroAxesCheck, why),
+                unknown(GyroBiasCheck, why))
     offset = _time_offset(samples, lag, lag_unknown)
     if fit.scale is None:
         why = ("the orientation's rates fix no gyro axis (too little turn, or rates that do "
                'not match).')
-        return (offset, _unknown(GyroUnitsCheck, why), _unknown(GyroAxesCheck, why),
-                _unknown(GyroBiasCheck, why))
+        return (offset, unknown(GyroUnitsCheck, why), unknown(GyroAxesCheck, why),
+                unknown(GyroBiasCheck, why))
     return offset, _gyro_units(fit), _gyro_axes(fit), _gyro_bias(fit)
 
 
@@ -540,19 +385,19 @@ def _reading(samples):
     if not _too_few_slow(samples, slow) and not _no_gravity(force[slow]):
         angle = _tilt_angle(samples, slow, force)
     fit = _gyro_fit(samples)[2]
-    if fit.scale is None and not _follows(fit):
+    if fit.scale is None:
         return _Reading(angle=angle, residual=None, plain=None)
     plain = bool(fit.rows) and all(fit.rows[i] == (i, 1) for i in fit.rows)
     return _Reading(angle=angle, residual=fit.residual, plain=plain)
 
 
-def _said(name, found):
-    """Write one reading's agreement in words."""
+def _said(found):
+    """Write one reading's agreement (a _Reading) in words."""
     accel = ('the accelerometer cannot tell' if found.angle is None
              else f'{_deg(found.angle)} from the accelerometer')
     gyro = ('the gyro cannot tell' if found.residual is None
             else f'the gyro differs by {found.residual:.2g} rad/s RMS')
-    return f'{name}: {accel}, {gyro}'
+    return f'{accel}, {gyro}'
 
 
 def _choose_reading(found):
@@ -577,7 +422,7 @@ def _choose_reading(found):
     def faults_needed(name):
         return (name != 'as recorded') + (not found[name].plain)
 
-    said = '; '.join(_said(n, f) for n, f in found.items())
+    said = '; '.join(f'{n}: {_said(f)}' for n, f in found.items())
     both = [n for n, f in found.items()
             if f.angle is not None and f.angle <= ANGLE_TOL and gyro_agrees(f)]
     least = min(map(faults_needed, both), default=None)
@@ -596,8 +441,8 @@ def _choose_reading(found):
         return QuaternionCheck(status='fault', reading=name, message=(
             f'{what}; read so, the orientation agrees with the accelerometer '
             f'({_deg(found[name].angle)}) and the gyro follows it ({found[name].residual:.2g} '
-            f"rad/s RMS), as it does not read as recorded ({_said('as recorded', recorded)[13:]})"
-            '; the other checks take it so.')), ''
+            f'rad/s RMS); read as recorded, {_said(recorded)}; the other checks take it so '
+            'read.')), ''
     if chosen:
         why = f'{" and ".join(chosen)} agree with both the gyro and the accelerometer alike'
     elif recorded.angle is None or best is None:
@@ -624,7 +469,7 @@ def _quaternion(stamps, quaternions, arrays, samples, unordered):
     The doubt: why the checks that take the orientation are unknown ('' when they are not).
     """
     if samples.R is None:
-        return _unknown(QuaternionCheck, 'no orientation.'), samples, ''
+        return unknown(QuaternionCheck, 'no orientation.'), samples, ''
     if unordered:
         return QuaternionCheck(status='unknown', reading='as recorded', message=(
             f'read as recorded; {unordered}')), samples, unordered
@@ -642,12 +487,12 @@ def _mounting(samples, ref_t, ref_Q, ref_period, lag):
     """Return the MountingCheck, and the Mounting (None where unknown)."""
     count = len(mounting_poses(samples, ref_t))
     if count < 3:
-        return _unknown(MountingCheck, f'the reference covers {count} of the IMU’s steps of '
-                        f'{HAND_EYE_STEP:g} s: too few for a mounting.'), None
+        return unknown(MountingCheck, f'the reference covers {count} of the IMU’s steps of '
+                       f'{HAND_EYE_STEP:g} s: too few for a mounting.'), None
     try:
         found = imu_mounting(samples, ref_t, ref_Q, ref_period, lag)
     except RotationError as exc:
-        return _unknown(MountingCheck, f'no mounting: {exc}.'), None
+        return unknown(MountingCheck, f'no mounting: {exc}.'), None
     quaternion = matrix_to_quaternion(found.X, check=False)
     angle = 2 * math.atan2(math.hypot(*quaternion[:3]), quaternion[3])
     up = ', '.join(f'{u:.3f}' for u in found.X[2])
@@ -662,7 +507,7 @@ def _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, X):
     inside = inside[near.covered]
     why = _too_few_slow(samples, np.isin(np.arange(len(slow)), inside))
     if why:
-        return _unknown(AngleCheck, f'{why} where the reference covers them.')
+        return unknown(AngleCheck, f'{why} where the reference covers them.')
     # Xᵀ·Q_kᵀ·ẑ: the body's up in the IMU frame
     angle = _median_angle(ref_Q[near.index, 2, :] @ X, force[inside])
     said = (f'the specific force is {_deg(angle)} from the up that the reference gives through '
@@ -696,16 +541,16 @@ def _reference_checks(samples, slow, force, reference, tol, lag, flat, doubt):
     """Return the accel_sign, world_up and mounting checks (lag: the orientation's, s)."""
     why = 'no reference orientation to compare with.' if reference is None else doubt
     if why:
-        return (_unknown(AngleCheck, why), _unknown(AngleCheck, why),
-                _unknown(MountingCheck, why))
+        return (unknown(AngleCheck, why), unknown(AngleCheck, why),
+                unknown(MountingCheck, why))
     ref_t, ref_Q, ref_period = reference_samples(reference, tol)
     mounting, found = _mounting(samples, ref_t, ref_Q, ref_period, lag)
     if found is None:
         why = 'no mounting, so no physical up in the IMU frame.'
-        return _unknown(AngleCheck, why), _unknown(AngleCheck, why), mounting
-    sign = (_unknown(AngleCheck, flat) if flat
+        return unknown(AngleCheck, why), unknown(AngleCheck, why), mounting
+    sign = (unknown(AngleCheck, flat) if flat
             else _accel_sign(samples, slow, force, ref_t, ref_Q, ref_period, found.X))
-    up = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
+    up = (unknown(AngleCheck, 'no orientation.') if samples.R is None
           else _world_up(found))
     return sign, up, mounting
 
@@ -734,16 +579,16 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     arrays = (angular_velocity, linear_acceleration, tol)
     samples = imu_samples(given, quaternions, *arrays)
     quaternion, samples, doubt = _quaternion(given, quaternions, arrays, samples,
-                                             _order_unknown(given))
+                                             _orderunknown(given))
     slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
     flat = '' if why else _no_gravity(force[slow])
     if why:
-        units, tilt = _unknown(AccelUnitsCheck, f'{why}.'), _unknown(AngleCheck, f'{why}.')
+        units, tilt = unknown(AccelUnitsCheck, f'{why}.'), unknown(AngleCheck, f'{why}.')
     else:
         units = _accel_units(force[slow])
-        tilt = (_unknown(AngleCheck, 'no orientation.') if samples.R is None
-                else _unknown(AngleCheck, flat or doubt) if flat or doubt
+        tilt = (unknown(AngleCheck, 'no orientation.') if samples.R is None
+                else unknown(AngleCheck, flat or doubt) if flat or doubt
                 else _orientation_vs_accel(_tilt_angle(samples, slow, force)))
     offset, gyro_units, gyro_axes, gyro_bias = _gyro_checks(samples, doubt)
     lag = offset.seconds if offset.status != 'unknown' else 0.0

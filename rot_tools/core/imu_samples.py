@@ -94,7 +94,7 @@ def _period(t, name):
 def _in_order(t, name):
     """Return the indices that put t in order, each stamp once (the first of equal ones)."""
     order = np.argsort(t, kind='stable')
-    keep = np.concatenate([[True], np.diff(t[order]) > 0])
+    keep = np.concatenate([[True], t[order][1:] > t[order][:-1]])
     if keep.sum() < MIN_SAMPLES:
         raise RotationError(f'{name} has {int(keep.sum())} distinct stamp(s): at least '
                             f'{MIN_SAMPLES} needed')
@@ -113,7 +113,7 @@ def imu_samples(t, quaternions, angular_velocity, linear_acceleration, tol):
     gyro = _vectors(angular_velocity, 'angular_velocity', count)
     accel = _vectors(linear_acceleration, 'linear_acceleration', count)
     R = None if quaternions is None else _orientation(quaternions, 'quaternions', count, tol)
-    if not (np.diff(t) > 0).all():
+    if not (t[1:] > t[:-1]).all():  # compared, not subtracted: a step may overflow
         keep = _in_order(t, 'stamps')
         t, gyro, accel, R = t[keep], gyro[keep], accel[keep], None if R is None else R[keep]
     return ImuSamples(t=t, R=R, gyro=gyro, accel=accel, period=_period(t, 'stamps'))

@@ -69,11 +69,11 @@ class StampSteps(NamedTuple):
     """
     The steps between a stream's stamps (stamp_steps).
 
-    period: the median step (s); spread: the steps' scatter about it (s, 1.4826 × their median
-    absolute deviation: the standard deviation of normally scattered steps); rate: 1/period
-    (Hz); arrival_time: the steps fall into two groups (stamps taken as messages arrive, in
-    the bursts a driver reads them in, rather than by the sensor's clock); modes: the two
-    groups' median steps (s), or None.
+    period: the median step (s); spread: the standard deviation of the steps within half a
+    period of it (s: gaps left out; 0 within the stamps' rounding); rate: 1/period (Hz);
+    arrival_time: the steps fall into two groups (stamps taken as messages arrive, in the
+    bursts a driver reads them in, rather than by the sensor's clock); modes: the two groups'
+    median steps (s), or None.
     """
 
     period: float
@@ -84,7 +84,7 @@ class StampSteps(NamedTuple):
 
 
 def _spread(steps):
-    """Return 1.4826 × the median absolute deviation of steps (s)."""
+    """Return 1.4826 × the median absolute deviation of steps (s): a group's robust spread."""
     return 1.4826 * float(np.median(np.abs(steps - np.median(steps))))
 
 
@@ -105,7 +105,7 @@ def stamp_steps(stamps):
                             len(steps) < 1 else 'the steps between the stamps overflow float64')
     period = float(np.median(steps))
     if not period >= MIN_PERIOD:
-        raise RotationError(f'the stamps step by {period:.3g} s at the median: under '
+        raise RotationError(f'the median step is {period:.3g} s: under '
                             f'{MIN_PERIOD:g} s, the resolution of ROS stamps')
     near = np.sort(steps[np.abs(steps - period) <= period / 2])
     least = int(math.ceil(MODE_SHARE * len(near)))
@@ -118,7 +118,9 @@ def stamp_steps(stamps):
         if gap >= MODE_SEPARATION * period and gap >= MODE_CLEARANCE * max(
                 _spread(low), _spread(high)):
             modes, arrival = (float(np.median(low)), float(np.median(high))), True
-    return StampSteps(period=period, spread=_spread(steps), rate=1 / period,
+    spread = float(np.std(near))
+    rounding = 4 * np.finfo(float).eps * max(abs(t[0]), abs(t[-1]))
+    return StampSteps(period=period, spread=spread if spread > rounding else 0.0, rate=1 / period,
                       arrival_time=arrival, modes=modes)
 
 
