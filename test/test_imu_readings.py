@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from rot_tools import check_imu
 from rot_tools.core.errors import RotationError
-from rot_tools.core.imu import faults
+from rot_tools.core.imu import faults, read_quaternions
 from rot_tools.core.stamps import delta_pairs, stamp_steps
 from scipy.spatial.transform import Rotation
 from test_imu import jackal, run, synthetic  # noqa: F401 (jackal: the module's fixture)
@@ -225,3 +225,13 @@ def test_stamps_closer_than_a_nanosecond_raise_rotation_error(heeled):
     with pytest.raises(RotationError, match=r'stamps: the steps between the stamps overflow '
                                             r'float64'):
         check_imu(huge, imu['q'], imu['gyro'], imu['accel'])
+
+
+def test_the_three_readings_of_a_quaternion():
+    q = np.array([[0.1, 0.2, 0.3, 0.9]])
+    assert np.array_equal(read_quaternions(q, 'as recorded'), q)
+    assert np.array_equal(read_quaternions(q, 'w-first'), [[0.2, 0.3, 0.9, 0.1]])
+    assert np.array_equal(read_quaternions(q, 'inverted'), [[-0.1, -0.2, -0.3, 0.9]])
+    with pytest.raises(RotationError, match='reading must be one of as recorded, w-first, '
+                                            "inverted, got 'x-first'"):
+        read_quaternions(q, 'x-first')

@@ -94,7 +94,7 @@ def read_quaternions(quaternions, reading):
     raise RotationError(f'reading must be one of {", ".join(READINGS)}, got {reading!r}')
 
 
-# ---- the checks --------------------------------------------------------------------------
+# ---- the reference, the faults, the stamps ----------------------------------------------
 
 
 class ImuReference(NamedTuple):
@@ -130,7 +130,6 @@ def _check_stamps(stamps, samples):
     spread = ('equal steps' if steps.spread == 0
               else f'the steps spread {_seconds(steps.spread)}')
     rate = f'{len(stamps)} samples every {_seconds(period)} ({steps.rate:.4g} Hz, {spread})'
-
     faulty = []
     if backwards > (len(stamps) - 1) / 2:
         faulty.append(f'{backwards} of {len(stamps) - 1} steps go back or repeat a stamp: the '
@@ -151,7 +150,7 @@ def _check_stamps(stamps, samples):
                        arrival_time=steps.arrival_time)
 
 
-def _orderunknown(stamps):
+def _order_unknown(stamps):
     """Return '' when most steps of the stamps as given go forward, else why not."""
     backwards = int((stamps[1:] <= stamps[:-1]).sum())  # compared: a step may overflow
     if backwards <= (len(stamps) - 1) / 2:
@@ -579,7 +578,7 @@ def check_imu(stamps, quaternions, angular_velocity, linear_acceleration, refere
     arrays = (angular_velocity, linear_acceleration, tol)
     samples = imu_samples(given, quaternions, *arrays)
     quaternion, samples, doubt = _quaternion(given, quaternions, arrays, samples,
-                                             _orderunknown(given))
+                                             _order_unknown(given))
     slow, force = slow_spells(samples), steady_accel(samples)
     why = _too_few_slow(samples, slow)
     flat = '' if why else _no_gravity(force[slow])
