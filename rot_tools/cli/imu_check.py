@@ -1,54 +1,23 @@
 """
 ``rot-tools imu-check BAG``: an IMU's conventions checked from a recording.
 
-Is the IMU publishing what ROS expects? One ``sensor_msgs/Imu`` topic of the bag (the only
-one, or ``--imu-topic``) is read through rot_tools.io.bag_read — header stamps, orientation,
-angular_velocity, linear_acceleration — and, when asked, a reference orientation of the same
-body: a topic (``--ref-topic``: Odometry, a pose, a TransformStamped or a QuaternionStamped)
-or a TF frame pair (``--ref-tf PARENT CHILD``, followed over the recording by
-rot_tools.TransformTree as ``rot-tools bag --tf`` follows it). An IMU publishes no
-orientation when its orientation_covariance[0] is −1 or its quaternions are all zero
-(sensor_msgs/Imu's own convention): the orientation checks are then unknown.
-
-The checks are rot_tools.core.imu.check_imu's (REP 103 and REP 145: units, signs, axes, the
-orientation's lag and world, the mounting; doc/imu.md says what each means). This module
-prints them: with ``--json`` one document ``{imu: {topic, frame, messages, rate}, checks:
-{name: {status, message, <numbers>}}, faults: N, fix: [lines]}``; without it a table, one
-row a check, and under it what to change, in the user's terms — the factor to multiply a
-field by, the axis map, a ``static_transform_publisher`` line for a mounting or a NED
-device. Angles in radians and rates in rad/s unless ``--deg``; scales are plain factors.
-
-Exit status: 0 when no check is at fault, 1 when one is, 2 on bad input (one line): a
-path that is missing or not a bag, a bag without an Imu topic, two Imu topics and no
-``--imu-topic``, a topic or frame that is not there.
+Reads one sensor_msgs/Imu topic (and, when asked, a reference orientation of the same body
+from the bag or from another recording of the run), runs rot_tools.core.imu.check_imu on it
+and prints the checks as a table or JSON, with each fault's fix in the user's terms.
+doc/imu.md says what each check means.
 """
 
 import argparse
 import math
 import sys
-from typing import NamedTuple
 
 import numpy as np
-from rot_tools.cli import bag_analysis, options, output_file
-from rot_tools.cli.bag_analysis import stamp_ns
-from rot_tools.cli.bag_output import NS_PER_S
+from rot_tools.cli import imu_recording, options, output_file
 from rot_tools.core.errors import RotationError
 from rot_tools.core.imu import (
     ACCEL_TOL, check_imu, faults, GRAVITY, GYRO_TOL, ImuReference)
-from rot_tools.core.so3 import matrix_to_quaternion
-from rot_tools.io import arguments, bag_read, boundary
-from rot_tools.io.boundary import QUATERNION_TOLERANCE
+from rot_tools.io import arguments, bag_read
 from rot_tools.io.report import DEFAULT_PRECISION, to_json
-
-IMU_TYPE = 'sensor_msgs/msg/Imu'
-"""The type of the topic checked."""
-
-ACCELERATION = {IMU_TYPE: {'linear_acceleration': 'linear_acceleration'}}
-"""The Imu field read besides those rot-tools bag reads (bag_read.read_topics' vectors)."""
-
-REFERENCE_TYPES = tuple(t for t in bag_read.SUPPORTED if t != IMU_TYPE)
-"""The types a reference topic may have: those of rot-tools bag with an orientation, but an
-Imu (whose orientation is its own sensor frame's, not the body's)."""
 
 BODY_FRAME = 'base_link'
 """The body's frame in a static transform line when the reference does not name it (REP 105's
@@ -80,222 +49,19 @@ GRAVITY_REMOVED = 10
 """An accelerometer scale above this (|a| under a tenth of gravity when the body turns
 slowly) reads with gravity removed."""
 
+STEPS = ('period', 'gap', 'spread')
+"""The numbers that are steps of stamps (s): to the nanosecond, as the stamps are."""
+
 ANGLES = {'angle': ('rad', 'deg'), 'bias': ('rad/s', 'deg/s')}
 """The numbers of a check that are angles or rates: their unit without and with --deg."""
 
-UNITS = {'period': 's', 'gap': 's'}
+FLAGS = {'mirror': 'mirror', 'negate': 'negate {}',
+         'arrival_time': 'arrival-time stamping suspected'}
+"""The table's words for a check's flag or axis when it is set (nothing when it is not)."""
+
+UNITS = {'period': 's', 'gap': 's', 'spread': 's', 'rate': 'Hz'}
 """The other numbers with a unit in the table (scales, matrices and quaternions have none;
 time_offset's seconds are shown without their name)."""
-
-
-class Stream(NamedTuple):
-    """
-    A stream of orientations read from the bag, stamps in seconds from the IMU's first.
-
-    name: the topic, or ``tf:PARENT->CHILD``; msgtype; body: the frame the orientation is of
-    (an Odometry's child frame, --ref-tf's CHILD; None when the message does not name it);
-    parent: the frame it is in; stamps (n,); quaternions (n, 4) [x, y, z, w].
-    """
-
-    name: str
-    msgtype: str
-    body: object
-    parent: object
-    stamps: np.ndarray
-    quaternions: np.ndarray
-
-
-class Imu(NamedTuple):
-    """
-    The IMU topic read, and the arrays check_imu takes.
-
-    topic, frame (its most frequent frame_id), messages (how many were read), rate (Hz,
-    None for fewer than two stamps), dropped (messages left out: a NaN or Inf, or an
-    orientation refused while others are given); stamps (N,) s, quaternions (N, 4) or None,
-    angular_velocity and linear_acceleration (N, 3), as recorded.
-    """
-
-    topic: str
-    frame: str
-    messages: int
-    rate: object
-    dropped: int
-    stamps: np.ndarray
-    quaternions: object
-    angular_velocity: np.ndarray
-    linear_acceleration: np.ndarray
-
-
-class Recording(NamedTuple):
-    """
-    What imu-check reads from a bag.
-
-    imu: the Imu; reference: the reference Stream or None; hint: a sentence naming the
-    bag's topics that could serve as reference, or None.
-    """
-
-    imu: Imu
-    reference: object
-    hint: object
-
-
-# ---------------------------------------------------------------------------------------
-# Reading
-
-
-def _topics(reader):
-    """Return {topic: type} of the bag, in the order of its connections."""
-    found = {}
-    for conn in reader.connections:
-        found.setdefault(conn.topic, conn.msgtype)
-    return found
-
-
-def _listed(found):
-    return ', '.join(f'{t} ({m})' for t, m in sorted(found.items())) or 'none'
-
-
-def imu_topic(found, asked=None):
-    """
-    Return the Imu topic to check: ``asked``, or the bag's only one; BagError if none fits.
-
-    found: {topic: type} of the bag.
-    """
-    if asked is not None:
-        if asked not in found:
-            raise bag_read.BagError(f'--imu-topic: no topic {asked} in the bag (its topics: '
-                                    f'{_listed(found)})')
-        if found[asked] != IMU_TYPE:
-            raise bag_read.BagError(f'--imu-topic: {asked} is a {found[asked]}, not a '
-                                    f'{IMU_TYPE}')
-        return asked
-    imus = sorted(t for t, m in found.items() if m == IMU_TYPE)
-    if not imus:
-        raise bag_read.BagError(f'no {IMU_TYPE} topic in the bag (its topics: '
-                                f'{_listed(found)})')
-    if len(imus) > 1:
-        raise bag_read.BagError(f'{len(imus)} {IMU_TYPE} topics ({", ".join(imus)}): choose '
-                                'one with --imu-topic')
-    return imus[0]
-
-
-def _reference_topic(found, asked, imu):
-    if asked not in found:
-        raise bag_read.BagError(f'--ref-topic: no topic {asked} in the bag (its topics: '
-                                f'{_listed(found)})')
-    if asked == imu or found[asked] not in REFERENCE_TYPES:
-        kinds = ', '.join(t.rsplit('/', 1)[1] for t in REFERENCE_TYPES)
-        raise bag_read.BagError(f'--ref-topic: {asked} is a {found[asked]}, not a reference '
-                                f'orientation of the body ({kinds}; or --ref-tf PARENT '
-                                'CHILD)')
-    return asked
-
-
-def reference_hint(found, imu):
-    """Return a sentence naming the topics that could be the reference, or None."""
-    topics = sorted(t for t, m in found.items() if m in REFERENCE_TYPES and t != imu)
-    tf = any(m == bag_read.TF_TYPE for m in found.values())
-    if not topics and not tf:
-        return None
-    ways = [f'--ref-topic {t}' for t in topics] + (['--ref-tf PARENT CHILD'] if tf else [])
-    return ('accel_sign, world_up and mounting need a reference orientation of the body: '
-            f'{" or ".join(ways)}')
-
-
-def _majority(columns):
-    """Return the frame_id most of a topic's messages carry ('' when it has none)."""
-    if not len(columns):
-        return ''
-    counts = np.bincount(columns.frame, minlength=len(columns.frame_ids))
-    return columns.frame_ids[int(np.argmax(counts))]
-
-
-def _has_orientation(columns):
-    """Tell which messages carry an orientation: covariance[0] ≠ −1 and a quaternion ≠ 0."""
-    q = columns.orientation
-    return (columns.covariance0 != -1) & np.any(q != 0, axis=1)
-
-
-def imu_stream(columns, origin):
-    """
-    Return the Imu of an Imu topic's Columns, stamps in seconds from ``origin`` (ns).
-
-    With no orientation in any message (sensor_msgs/Imu's covariance[0] = −1, or zero
-    quaternions) the quaternions are None. Messages with a NaN or Inf are left out, and
-    when some messages give an orientation, those whose orientation the boundary refuses
-    (rotation_node's checks) too: ``dropped`` counts them.
-    """
-    c = columns
-    ns = stamp_ns(c.sec, c.nanosec)
-    gyro, accel = c.angular_velocity, c.linear_acceleration
-    keep = np.isfinite(gyro).all(axis=1) & np.isfinite(accel).all(axis=1)
-    quaternions = None
-    if _has_orientation(c).any():
-        verdict = boundary.check_batch(c.orientation, QUATERNION_TOLERANCE, None,
-                                       c.covariance0)
-        keep &= verdict.code == boundary.ACCEPTED
-        quaternions = c.orientation[keep] / verdict.norm[keep, None]
-    n = len(c)
-    span = (int(ns.max()) - int(ns.min())) / NS_PER_S if n else 0.0
-    return Imu(c.topic, _majority(c), n, (n - 1) / span if span > 0 else None,
-               int(n - keep.sum()), (ns[keep] - origin) / NS_PER_S, quaternions,
-               gyro[keep], accel[keep])
-
-
-def topic_stream(columns, origin):
-    """Return the Stream of a reference topic's Columns (refused orientations left out)."""
-    c = columns
-    verdict = boundary.check_batch(c.orientation, QUATERNION_TOLERANCE, c.position,
-                                   c.covariance0)
-    ok = verdict.code == boundary.ACCEPTED
-    body = c.child_frame_ids[int(c.child[ok][0])] if c.child is not None and ok.any() else None
-    parent = c.frame_ids[int(c.frame[ok][0])] if ok.any() else None
-    return Stream(c.topic, c.msgtype, body, parent,
-                  (stamp_ns(c.sec, c.nanosec)[ok] - origin) / NS_PER_S,
-                  c.orientation[ok] / verdict.norm[ok, None])
-
-
-def tf_stream(followed, parent, child, origin):
-    """Return the Stream of CHILD in PARENT followed through the bag's TF (a TfTopic)."""
-    c = followed.columns
-    return Stream(c.topic, bag_read.TF_TYPE, child, parent,
-                  (stamp_ns(c.sec, c.nanosec) - origin) / NS_PER_S,
-                  matrix_to_quaternion(followed.chain.R, check=False))
-
-
-def read(path, imu=None, ref_topic=None, ref_tf=None, start=None, end=None):
-    """
-    Return the Recording of the bag at PATH; BagError (one line) for what cannot be read.
-
-    imu: the Imu topic (default: the bag's only one); ref_topic or ref_tf (PARENT, CHILD):
-    the reference; start, end: seconds from the bag's start (record time), as rot-tools
-    bag's --start and --end.
-    """
-    with bag_read.open_bag(path) as reader:
-        found = _topics(reader)
-        topic = imu_topic(found, imu)
-        names = [topic]
-        if ref_topic is not None:
-            names.append(_reference_topic(found, ref_topic, topic))
-        lo = None if start is None else bag_analysis.record_bound(reader.start_time, start)
-        hi = None if end is None else bag_analysis.record_bound(reader.start_time, end) + 1
-        connections = [c for c in reader.connections if c.topic in names]
-        columns = bag_read.read_topics(reader, connections, lo, hi, vectors=ACCELERATION)
-        window = '' if start is None and end is None else ' between --start and --end'
-        if not len(columns[topic]):
-            raise bag_read.BagError(f'{topic}: no message{window}')
-        origin = int(stamp_ns(columns[topic].sec[:1], columns[topic].nanosec[:1])[0])
-        reference = None
-        if ref_topic is not None:
-            reference = topic_stream(columns[ref_topic], origin)
-        elif ref_tf is not None:
-            followed = bag_analysis.tf_topic(reader, ref_tf[0], ref_tf[1],
-                                             QUATERNION_TOLERANCE, lo, hi)
-            reference = tf_stream(followed, ref_tf[0], ref_tf[1], origin)
-        if reference is not None and not len(reference.stamps):
-            raise bag_read.BagError(f'{reference.name}: no usable orientation{window}')
-        hint = None if reference is not None else reference_hint(found, topic)
-    return Recording(imu_stream(columns[topic], origin), reference, hint)
 
 
 # ---------------------------------------------------------------------------------------
@@ -337,6 +103,8 @@ def numbers(result, degrees=False):
         if name in ('status', 'message'):
             continue
         value = _plain(value)
+        if name in STEPS and value is not None:
+            value = round(value, 9)
         if degrees and name in ANGLES and value is not None:
             value = np.degrees(value).tolist()
         out[name] = value
@@ -348,7 +116,7 @@ def document(recording, checks, degrees=False):
     imu = recording.imu
     return {
         'imu': {'topic': imu.topic, 'frame': imu.frame, 'messages': imu.messages,
-                'rate': imu.rate},
+                'rate': checks.stamps.rate},
         'checks': {name: {'status': result.status, 'message': result.message,
                           **numbers(result, degrees)}
                    for name, result in checks._asdict().items()},
@@ -439,11 +207,10 @@ def fixes(recording, checks, degrees=False):
             lines.append(_tilt_line(getattr(result, 'angle', None), degrees))
         elif name == 'gyro_units':
             lines.append(_gyro_units_line(getattr(result, 'scale', None)))
+        elif name == 'quaternion':
+            lines.append(QUATERNION_FIXES.get(result.reading, f'quaternion: {result.message}'))
         elif name == 'gyro_axes':
-            matrix = getattr(result, 'matrix', None)
-            lines.append("gyro_axes: angular_velocity is not about the orientation's axes"
-                         + ('' if matrix is None else
-                            f': publish {axis_map(matrix)} of what it reads now'))
+            lines.append(_gyro_axes_line(result))
         elif name == 'gyro_bias':
             bias = getattr(result, 'bias', None)
             lines.append('gyro_bias: calibrate the gyro at rest' + (
@@ -468,6 +235,31 @@ def fixes(recording, checks, degrees=False):
         else:
             lines.append(f'{name}: {result.message}')
     return lines
+
+
+QUATERNION_FIXES = {
+    'w-first': 'quaternion: the orientation is written w-first: its fields x, y, z, w hold the '
+    "quaternion's w, x, y, z (Eigen's coeffs() are x, y, z, w; its constructor takes w, x, y, "
+    'z). In the driver fill orientation.x = q.x(), orientation.y = q.y(), orientation.z = '
+    'q.z(), orientation.w = q.w(); a recording reads right as x = orientation.y, y = '
+    'orientation.z, z = orientation.w, w = orientation.x',
+    'inverted': 'quaternion: the orientation is inverted: it gives the world in the IMU frame '
+    'where REP 145 wants the IMU frame in the world. In the driver publish its conjugate '
+    '(Eigen: q.conjugate()); a recording reads right as x = -orientation.x, y = '
+    '-orientation.y, z = -orientation.z, w = orientation.w'}
+"""The fix of a quaternion check at fault, by its reading."""
+
+
+def _gyro_axes_line(result):
+    said = "gyro_axes: angular_velocity is not about the orientation's axes"
+    if result.matrix is None:
+        return said
+    publish = f'publish {axis_map(result.matrix)} of what it reads now'
+    if not result.mirror:
+        return f'{said}: {publish}'
+    return (f"gyro_axes: the gyro's axes are a mirror of the orientation's (a left-handed "
+            f"frame: no turn of the IMU gives it): negate the gyro's {result.negate} axis; in "
+            f'all, {publish}')
 
 
 def _tilt_line(angle, degrees):
@@ -548,6 +340,8 @@ def _fixed(values, decimals):
 
 def number_text(name, value, degrees=False):
     """Return one number of a check as the table shows it, with its unit."""
+    if name in FLAGS:  # shown by its words when set, else not at all
+        return FLAGS[name].format(value) if value else ''
     if value is None:
         return '-'
     if name == 'matrix':
@@ -579,6 +373,7 @@ def table(data, recording, degrees=False):
     for name, result in data['checks'].items():
         texts = [number_text(k, v, degrees) for k, v in result.items()
                  if k not in ('status', 'message', 'warning')]
+        texts = [text for text in texts if text]
         text = '-' if set(texts) <= {'-'} else ', '.join(texts)
         rows.append((name, result['status'], text, result['message']))
         if result.get('warning'):
@@ -601,15 +396,17 @@ def table(data, recording, degrees=False):
 
 TEXT = (
     'Reads one sensor_msgs/Imu topic of a bag (the only one, or --imu-topic) and checks it\n'
-    'against REP 103 and REP 145: stamps, accel_units, orientation_vs_accel, gyro_units,\n'
-    'gyro_axes, gyro_bias, time_offset; with a reference orientation of the same body\n'
-    '(--ref-topic: odometry or a pose; --ref-tf PARENT CHILD: a TF frame pair) also\n'
-    'accel_sign, world_up (NED) and mounting. Each check is ok, fault or unknown, with its\n'
-    'numbers (angles in radians and rates in rad/s unless --deg; scales are plain factors).\n'
-    'Prints a table and, under it, what to change for each fault; --json prints\n'
-    '{imu, checks, faults, fix}. An IMU without orientation (orientation_covariance[0] = -1\n'
-    'or zero quaternions) leaves the orientation checks unknown. Exit status 0: no fault,\n'
-    '1: faults, 2: bad input. Needs rosbags (the bag extra). doc/imu.md explains each check.')
+    'against REP 103 and REP 145: quaternion (as recorded, written w-first or inverted),\n'
+    'stamps, accel_units, orientation_vs_accel, gyro_units, gyro_axes, gyro_bias,\n'
+    'time_offset; with a reference orientation of the same body (--ref-topic: odometry or a\n'
+    'pose; --ref-tf PARENT CHILD: a TF frame pair; from another recording of the run with\n'
+    '--ref-bag) also accel_sign, world_up (NED) and mounting. Each check is ok, fault or\n'
+    'unknown, with its numbers (angles in radians and rates in rad/s unless --deg; scales are\n'
+    'plain factors). Prints a table and, under it, what to change for each fault; --json\n'
+    'prints {imu, checks, faults, fix}. An IMU without orientation\n'
+    '(orientation_covariance[0] = -1 or zero quaternions) leaves the orientation checks\n'
+    'unknown. Exit status 0: no fault, 1: faults, 2: bad input. Needs rosbags (the bag\n'
+    'extra). doc/imu.md explains each check.')
 """What ``rot-tools imu-check --help`` says of the command."""
 
 
@@ -618,10 +415,11 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         'imu-check', help="an IMU's conventions checked from a recording (REP 103, REP 145)",
         usage=f'{options.PROG} imu-check BAG [--imu-topic T] [--ref-topic T | --ref-tf PARENT '
-        'CHILD]\n       [--start S] [--end S] [--deg] [--json]',
+        'CHILD]\n       [--ref-bag BAG] [--start S] [--end S] [--deg] [--json]',
         description=f"An IMU's conventions checked from a recording.\n\n{TEXT}",
         epilog='examples:\n  rot-tools imu-check run.bag\n'
         '  rot-tools imu-check run.bag --imu-topic /imu/data --ref-topic /odom\n'
+        '  rot-tools imu-check imu.bag --ref-bag odom.bag --ref-topic /odom\n'
         '  rot-tools imu-check rosbag2_dir --ref-tf odom base_link --deg --json')
     p.add_argument('path', metavar='BAG',
                    help='a ROS 1 .bag file, a rosbag2 directory, or a file in one')
@@ -633,6 +431,9 @@ def add_parser(subparsers):
     p.add_argument('--ref-tf', nargs=2, metavar=('PARENT', 'CHILD'),
                    help="the body's orientation: CHILD (the body frame, e.g. base_link) in "
                    "PARENT (e.g. odom) from the bag's /tf and /tf_static")
+    p.add_argument('--ref-bag', metavar='BAG',
+                   help='take the reference (--ref-topic or --ref-tf) from this bag, another '
+                   'recording of the same run, instead of BAG')
     arguments.add_bag_window(p)
     common = p.add_argument_group('common options')
     suppress = argparse.SUPPRESS
@@ -649,7 +450,8 @@ def run(args):
 
     0 when no check is at fault, 1 when one is; one error line and status 2
     (options.error) for bad input: an option that does not apply, a bag that cannot be
-    read, no Imu topic or two without --imu-topic, a reference that is not there.
+    read, no Imu topic or two without --imu-topic, nothing left to check, a reference that
+    is not there or does not meet the IMU in time. Messages left out are warned of first.
     """
     error = options.error
     for option, given in (('--seq', args.seq), ('--all-sequences', args.all_sequences),
@@ -660,6 +462,9 @@ def run(args):
             error(f'{option} does not apply to imu-check')
     if args.ref_topic is not None and args.ref_tf is not None:
         error('--ref-topic and --ref-tf: give one reference, not both')
+    if args.ref_bag is not None and args.ref_topic is None and args.ref_tf is None:
+        error('--ref-bag: say which reference to take from it (--ref-topic T or --ref-tf '
+              'PARENT CHILD)')
     missing = bag_read.rosbags_missing()
     if missing:
         error(f"imu-check needs the rosbags library ({missing} is missing), the 'bag' extra: "
@@ -667,18 +472,15 @@ def run(args):
     if args.start is not None and args.end is not None and args.end < args.start:
         error(f'--end {args.end:g} is before --start {args.start:g}')
     try:
-        recording = read(args.path, args.imu_topic, args.ref_topic, args.ref_tf, args.start,
-                         args.end)
+        recording = imu_recording.read(
+            args.path, args.imu_topic, args.ref_topic, args.ref_tf, args.start, args.end,
+            args.ref_bag, warn=lambda text: sys.stderr.write(f'warning: {text}\n'))
     except bag_read.BagError as exc:
         error(f'imu-check: {exc}')
     try:
         checks = check(recording)
     except RotationError as exc:  # too few samples for the checks
         error(f'imu-check: {recording.imu.topic}: {exc}')
-    if recording.imu.dropped:
-        sys.stderr.write(f'warning: {recording.imu.topic}: {recording.imu.dropped} of '
-                         f'{recording.imu.messages} messages left out (a NaN, an Inf or a '
-                         'refused orientation)\n')
     data = document(recording, checks, args.deg)
     text = to_json(data, JSON_DIGITS) if args.json else table(data, recording, args.deg)
     output_file.to_stdout(lambda out: out.write(text))
