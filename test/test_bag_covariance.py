@@ -34,18 +34,7 @@ ODOM_TYPE = 'nav_msgs/msg/Odometry'
 def run(capsys, *args):
     status = cli.main([str(a) for a in args])
     out, err = capsys.readouterr()
-    return status, out, without_gyro_warnings(err)
-
-
-def without_gyro_warnings(err):
-    """
-    Return stderr without the lines flagging an Imu whose orientation disagrees with its gyro.
-
-    The Imu messages written here turn at random while their gyro reads zero: rightly flagged,
-    and not what these tests are about.
-    """
-    return ''.join(line for line in err.splitlines(keepends=True)
-                   if 'the orientation disagrees with the gyro' not in line)
+    return status, out, bh.without_gyro_warnings(err)
 
 
 def summary_of(capsys, *args):

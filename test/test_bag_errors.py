@@ -108,18 +108,7 @@ def bad_bag(request, tmp_path_factory):
 def run(capsys, *args):
     status = cli.main([str(a) for a in args])
     out, err = capsys.readouterr()
-    return status, out, without_gyro_warnings(err)
-
-
-def without_gyro_warnings(err):
-    """
-    Return stderr without the lines flagging an Imu whose orientation disagrees with its gyro.
-
-    The Imu messages written here turn at random while their gyro reads zero: rightly flagged,
-    and not what these tests are about.
-    """
-    return ''.join(line for line in err.splitlines(keepends=True)
-                   if 'the orientation disagrees with the gyro' not in line)
+    return status, out, bh.without_gyro_warnings(err)
 
 
 def test_refusals_are_counted_by_reason(capsys, bad_bag):
@@ -403,7 +392,7 @@ def test_progress_bar_only_on_a_terminal(capsys, monkeypatch, bad_bag):
     monkeypatch.setattr(sys, 'stderr', terminal)
     status, out, _ = run(capsys, 'bag', path)
     total = sum(len(items) for _, items in plan.values())
-    bar = without_gyro_warnings(terminal.getvalue())
+    bar = bh.without_gyro_warnings(terminal.getvalue())
     assert status == 0 and out.startswith('bag: ')
     assert bar.startswith('\rrot-tools bag: [') and f'{total}/{total} messages' in bar
     assert bar.endswith('\r' + ' ' * 79 + '\r')  # wiped before the summary

@@ -58,16 +58,10 @@ def _one_bag(args, error, parquet):
             bag_parquet.keep(parquet, bag_parquet.to_bytes(table))
         except OSError as exc:
             error(f'--parquet: cannot write {parquet}: {exc.strerror or exc}')
-    if args.csv == '-':
-        output_file.to_stdout(lambda out: write_csv(out, topics, args.deg, args.precision))
-    else:
-        if args.csv is not None:
-            try:
-                with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
-                                                     newline='') as out:
-                    write_csv(out, topics, args.deg, args.precision)
-            except OSError as exc:
-                error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
+    if args.csv is not None:
+        output_file.write_table(lambda out: write_csv(out, topics, args.deg, args.precision),
+                                args.csv, error)
+    if args.csv != '-':
         text = to_json if args.json else to_yaml
         document = text(bag_analysis.summary(args.path, storage, topics, args.deg),
                         precision=args.precision)

@@ -58,36 +58,6 @@ class CompareError(Exception):
     """Input that compare cannot use (one line for the user)."""
 
 
-def _seconds(text, least=0.0):
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > least):
-        raise ValueError(text)
-    return value
-
-
-def _positive(text):
-    """Return a number of seconds (or frames) > 0."""
-    try:
-        return _seconds(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f'expected a number > 0, got {text.strip()!r}') from None
-
-
-def _offset(text):
-    """Return 'auto' or a finite number of seconds."""
-    if text.strip() == 'auto':
-        return 'auto'
-    try:
-        return _seconds(text, -math.inf)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected 'auto' or seconds, got {text.strip()!r}") from None
-
-
 def add_parser(subparsers):
     """Add ``rot-tools compare`` to argparse's subparsers action and return its parser."""
     p = subparsers.add_parser(
@@ -108,7 +78,7 @@ def add_parser(subparsers):
                        help=f"{name} is the transform of frame B in frame A from its bag's TF")
     p.add_argument('--match', choices=('interpolate', 'nearest'), default='interpolate',
                    help='REF interpolated at EST stamps (default), or its nearest stamp')
-    p.add_argument('--max-gap', type=_positive, metavar='S',
+    p.add_argument('--max-gap', type=options.positive, metavar='S',
                    help='largest time (s) from an EST stamp to the REF stamps used (default '
                    '0.1, or 0.01 with --match nearest)')
     p.add_argument('--align', choices=trajectory.ALIGNMENTS, default='none',
@@ -116,15 +86,15 @@ def add_parser(subparsers):
                    'rotation (least squares on SO(3)), yaw (about z), se3 (Umeyama on the '
                    'positions, as evo), posyaw (a yaw and a shift that align the positions, '
                    'as rpg_trajectory_evaluation aligns visual-inertial odometry)')
-    p.add_argument('--offset', type=_offset, default=0.0, metavar='auto|SECONDS',
+    p.add_argument('--offset', type=options.offset, default=0.0, metavar='auto|SECONDS',
                    help="seconds added to EST's stamps (default 0), or auto: estimated from "
                    'the angular speeds')
-    p.add_argument('--max-offset', type=_positive, default=1.0, metavar='S',
+    p.add_argument('--max-offset', type=options.positive, default=1.0, metavar='S',
                    help='search --offset auto within ±S seconds (default 1)')
     p.add_argument('--mounting', action='store_true',
                    help='estimate the rotation X between the two body frames (hand-eye, '
                    'A X = X B), and compare EST turned by it')
-    p.add_argument('--delta', type=_positive, default=1, metavar='D',
+    p.add_argument('--delta', type=options.positive, default=1, metavar='D',
                    help='the interval of relative rotations (RPE, mounting): D frames '
                    '(default 1) or seconds')
     p.add_argument('--delta-unit', choices=('f', 's'), default='f',
@@ -480,16 +450,10 @@ def run(args):
     if args.plot:
         output_file.write_figure(lambda: write_plot(args.plot, result, args), args.plot,
                                  options.error)
-    if args.csv == '-':
-        output_file.to_stdout(lambda out: write_csv(out, result, args.deg, args.precision))
-    else:
-        if args.csv is not None:
-            try:
-                with output_file.complete_or_nothing(args.csv, 'w', encoding='utf-8',
-                                                     newline='') as out:
-                    write_csv(out, result, args.deg, args.precision)
-            except OSError as exc:
-                options.error(f'--csv: cannot write {args.csv}: {exc.strerror or exc}')
+    if args.csv is not None:
+        output_file.write_table(lambda out: write_csv(out, result, args.deg, args.precision),
+                                args.csv, options.error)
+    if args.csv != '-':
         data = report(result, est, ref, args)
         text = to_json if args.json else to_yaml
         output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))

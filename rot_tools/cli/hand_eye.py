@@ -46,31 +46,6 @@ TEXT = (
     'bags (the bag extra).')
 
 
-def _seconds(text, least):
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value > least):
-        raise argparse.ArgumentTypeError(f'expected a number > {least:g}, got {text.strip()!r}')
-    return value
-
-
-def _positive(text):
-    return _seconds(text, 0.0)
-
-
-def _offset(text):
-    """Return 'auto' or a finite number of seconds."""
-    if text.strip() == 'auto':
-        return 'auto'
-    try:
-        return _seconds(text, -math.inf)
-    except argparse.ArgumentTypeError:
-        raise argparse.ArgumentTypeError(
-            f"expected 'auto' or seconds, got {text.strip()!r}") from None
-
-
 def add_parser(subparsers):
     """Add ``rot-tools hand-eye`` to argparse's subparsers action and return its parser."""
     p = subparsers.add_parser(
@@ -92,14 +67,15 @@ def add_parser(subparsers):
                        help=f"{name} is the transform of CHILD in PARENT from its bag's TF")
         p.add_argument(f'--invert-{side}', action='store_true',
                        help=f'{name} gives the world in the body: invert each pose')
-    p.add_argument('--offset', type=_offset, default=0.0, metavar='auto|SECONDS',
+    p.add_argument('--offset', type=options.offset, default=0.0, metavar='auto|SECONDS',
                    help="seconds added to B's stamps (default 0), or auto: found from the "
                    'angular speeds')
-    p.add_argument('--max-offset', type=_positive, default=1.0, metavar='S',
+    p.add_argument('--max-offset', type=options.positive, default=1.0, metavar='S',
                    help='search --offset auto within ±S seconds (default 1)')
-    p.add_argument('--max-gap', type=_positive, default=0.1, metavar='S',
+    p.add_argument('--max-gap', type=options.positive, default=0.1, metavar='S',
                    help="largest time (s) from a stamp of A to B's stamps used (default 0.1)")
-    p.add_argument('--min-angle', type=_positive, default=math.degrees(DEFAULT_MIN_ANGLE),
+    p.add_argument('--min-angle', type=options.positive,
+                   default=math.degrees(DEFAULT_MIN_ANGLE),
                    metavar='DEG', help='the least turn of a pair of samples used, in degrees '
                    f'(default {math.degrees(DEFAULT_MIN_ANGLE):g})')
     p.add_argument('--yaml', metavar='FILE',

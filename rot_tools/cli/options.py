@@ -7,6 +7,7 @@ they are added to the main parser with their defaults and to each command's pars
 """
 
 import argparse
+import math
 
 from rot_tools.io import arguments
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
@@ -22,6 +23,36 @@ two axes): six significant digits pass."""
 def error(message):
     """Print ``rot-tools: error: message`` on one line and exit with status 2."""
     arguments.fail(PROG, message)
+
+
+def _number(text, least):
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > least):
+        raise ValueError(text)
+    return value
+
+
+def positive(text):
+    """Read a finite number > 0 (seconds, frames, degrees)."""
+    try:
+        return _number(text, 0.0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f'expected a number > 0, got {text.strip()!r}') from None
+
+
+def offset(text):
+    """Read 'auto' or a finite number of seconds."""
+    if text.strip() == 'auto':
+        return 'auto'
+    try:
+        return _number(text, -math.inf)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected 'auto' or seconds, got {text.strip()!r}") from None
 
 
 def plot_file(text):

@@ -53,6 +53,23 @@ def complete_or_nothing(path, mode='w', **open_args):
         raise
 
 
+def write_table(write, path, error):
+    """
+    Call ``write(out)`` with the CSV file ``path`` open, or the standard output for '-'.
+
+    The file is written whole or not at all (complete_or_nothing); ``error(text)`` prints
+    one line and exits 2 when it cannot be written.
+    """
+    if path == '-':
+        to_stdout(write)
+        return
+    try:
+        with complete_or_nothing(path, 'w', encoding='utf-8', newline='') as out:
+            write(out)
+    except OSError as exc:
+        error(f'--csv: cannot write {path}: {exc.strerror or exc}')
+
+
 def write_figure(draw, path, error):
     """
     Call ``draw()``, which writes the figure at ``path`` with matplotlib (the 'plot' extra).
