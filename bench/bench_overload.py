@@ -456,7 +456,7 @@ def measure(seconds, after, call_timeout, logdir, rate='max', tf=None, profile=F
         if tf == 'large':
             # Only a run in which the node took large messages says anything of their cost:
             # under a fast steady stream its queue drops them before they are taken.
-            from rot_tools.ros.node.tf_input import TF_TOO_MANY_TRANSFORMS
+            from rot_tools.ros.tf_input import TF_TOO_MANY_TRANSFORMS
             beside_bare['large_taken'] = refused.get(TF_TOO_MANY_TRANSFORMS, 0)
             goals['tf_memory'] = beside_bare['large_taken'] > 0 and max(
                 beside_bare['growth_mb'], beside_bare['kept_mb']) <= TF_GROWTH_GOAL_MB

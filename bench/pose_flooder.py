@@ -3,7 +3,7 @@ Publisher process of the node benchmarks: floods PoseStamped, or TFMessage on /t
 
 Started by bench_node.py, bench_memory.py and bench_overload.py with the topics as
 arguments. A pose topic gets the sensor-data QoS rotation_node subscribes with (best
-effort); a topic named ``tf`` (``/tf``) gets tf2_ros's (rot_tools.ros.node.tf_input.TF_QOS:
+effort); a topic named ``tf`` (``/tf``) gets tf2_ros's (rot_tools.ros.tf_input.TF_QOS:
 reliable, depth 100), and the process then also publishes, once, the static edge
 ``map → odom`` on the ``tf_static`` beside it (transient local). Waits until every topic has
 a subscriber, prints ``ready``, then reads commands on stdin, one a line:
@@ -227,7 +227,7 @@ def main(topics):
     senders = {}
     for topic in topics:
         if topic.rsplit('/', 1)[-1] == 'tf':
-            from rot_tools.ros.node.tf_input import TF_QOS, TF_STATIC_QOS
+            from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
             from tf2_msgs.msg import TFMessage
             senders[topic] = TfSender(node.create_publisher(TFMessage, topic, TF_QOS),
                                       node.create_publisher(TFMessage, topic, TF_QOS))

@@ -286,7 +286,7 @@ class Tester:
 
     def subscribe_outputs(self, prefix):
         """Subscribe (reliable, depth 10, like the node) to the node's outputs."""
-        from rot_tools.ros.node.messages import message_class
+        from rot_tools.ros.message_types import message_class
         for row in interface.OUTPUTS:
             self.subscribe(f'{prefix}/{row.name}', message_class(row.type_name))
 

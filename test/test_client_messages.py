@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from rot_tools.io import interface
 from rot_tools.ros.client import arguments, message_data, session
-from rot_tools.ros.node.messages import message_class, type_name
+from rot_tools.ros.message_types import message_class, type_name
 from scipy.spatial.transform import Rotation
 from std_msgs.msg import Float64MultiArray
 from visualization_msgs.msg import Marker, MarkerArray

@@ -198,7 +198,7 @@ def write(path, store, namespace):
 def test_every_field_is_played_as_recorded(here, tester, namespace, tmp_path, store):
     from rclpy.qos import DurabilityPolicy, QoSProfile
     from rclpy.serialization import deserialize_message
-    from rot_tools.ros.node.messages import message_class
+    from rot_tools.ros.message_types import message_class
     bag = write(tmp_path / 'fields', store, namespace)
     jazzy = Messages('ros2')
     expected = {name: [] for name in jazzy.by_topic(0)}

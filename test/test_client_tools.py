@@ -477,7 +477,7 @@ def test_play_a_rosbag2_bag_with_tf(here, tester, namespace, tmp_path):
     The subscriptions have tf2_ros's QoS: /tf_static's transient local one matches only a
     transient local publisher, as the player's is for /tf_static.
     """
-    from rot_tools.ros.node.tf_input import TF_QOS, TF_STATIC_QOS
+    from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
     from tf2_msgs.msg import TFMessage
     messages, _, _ = tf_chain_messages(n=10)
     bag = write_bag(tmp_path / 'tf_bag', messages, storage='mcap')
@@ -618,7 +618,7 @@ def remapped(namespace):
 
 
 def test_tf_demo_publishes_the_tree(here, tester, namespace):
-    from rot_tools.ros.node.tf_input import TF_QOS, TF_STATIC_QOS
+    from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
     from tf2_msgs.msg import TFMessage
     tester.subscribe(f'{namespace}/tf', TFMessage, TF_QOS)
     tester.subscribe(f'{namespace}/tf_static', TFMessage, TF_STATIC_QOS)

@@ -8,7 +8,7 @@ client's tests.
 
 import pytest
 from rot_tools.io import bag_read, interface
-from rot_tools.ros.node.messages import message_class
+from rot_tools.ros.message_types import message_class
 from rot_tools.ros.node.rotation_node import RotationNode, usage
 
 

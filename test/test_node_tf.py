@@ -465,7 +465,7 @@ def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
     """
     from geometry_msgs.msg import QuaternionStamped
     from rclpy.parameter import Parameter
-    from rot_tools.ros.node import tf_input
+    from rot_tools.ros import tf_input
     from rot_tools.ros.node.rotation_node import RotationNode
     monkeypatch.setattr(tf_input, 'CACHE_SECONDS', 1.0)
     node = RotationNode(context=ros_context, namespace=namespace,
@@ -591,7 +591,7 @@ def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
 def test_follower_refusals_and_stamps(ros_context):
     import rclpy
     from geometry_msgs.msg import TransformStamped
-    from rot_tools.ros.node.tf_input import TfFollower
+    from rot_tools.ros.tf_input import TfFollower
     node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
     got, refused = [], []
     follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a),
@@ -656,7 +656,7 @@ def make_transform(parent, child, x=0.0, q=(0.0, 0.0, 0.0, 1.0), sec=1_700_000_0
 def follower(ros_context):
     """Yield (follower, outputs, refusals): a TfFollower of an in-process node."""
     import rclpy
-    from rot_tools.ros.node.tf_input import TfFollower
+    from rot_tools.ros.tf_input import TfFollower
     node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
     got, refused = [], []
     follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a))
@@ -714,7 +714,7 @@ def test_follower_refuses_future_stamps_and_starts_over_when_time_goes_back(foll
 
 
 def test_follower_forgets_dynamic_edges_not_heard_but_not_static_ones(follower, monkeypatch):
-    from rot_tools.ros.node import tf_input
+    from rot_tools.ros import tf_input
     follower, got, refused = follower
     follower.add(make_transform('a', 'b'), False, '/tf')
     follower.add(make_transform('a', 'b'), True, '/tf_static')  # b's edge turns static
@@ -727,7 +727,7 @@ def test_follower_forgets_dynamic_edges_not_heard_but_not_static_ones(follower, 
 
 
 def test_follower_takes_at_most_max_transforms_a_message(follower):
-    from rot_tools.ros.node import tf_input
+    from rot_tools.ros import tf_input
     follower, got, refused = follower
     follower.follow('odom', 'base_link')
     transforms = [make_transform('odom', 'base_link', float(k), sec=1_000 + k)

@@ -1,1 +1,1 @@
-"""Everything that imports rclpy: rotation_node, rotation_client, the TF input, the runtime."""
+"""Everything that imports rclpy: the node (node/), its client (client/) and what both use."""

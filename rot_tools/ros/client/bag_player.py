@@ -12,7 +12,7 @@ import time
 from typing import NamedTuple
 
 import numpy as np
-from rot_tools.ros.node.messages import type_name
+from rot_tools.ros.message_types import type_name
 
 DEPTH = 100
 """The publishers' history depth."""
@@ -70,7 +70,7 @@ def _scalar(value):
 def _field(slot, default, cache):
     """Return convert(value) of one field, from its rosidl type ``slot`` (SLOT_TYPES)."""
     from rosidl_parser.definition import AbstractNestedType, NamespacedType, OCTET_TYPE
-    from rot_tools.ros.node.messages import message_class
+    from rot_tools.ros.message_types import message_class
     if isinstance(slot, NamespacedType):
         return converter(message_class('/'.join([*slot.namespaces, slot.name])), cache)
     if isinstance(slot, AbstractNestedType):
@@ -146,7 +146,7 @@ def topics(reader, wanted=None):
     ``wanted``: the topics asked for (all when None); a topic the bag lacks is a KeyError
     naming it. A topic whose type has no rclpy message class here is Skipped.
     """
-    from rot_tools.ros.node.messages import message_class
+    from rot_tools.ros.message_types import message_class
     by_topic = {}
     for c in reader.connections:
         by_topic.setdefault(c.topic, []).append(c)

@@ -156,7 +156,7 @@ def input_message(args, parameters):
     covariance --cov, 9 numbers row-major, is an Imu's orientation_covariance or the rotation
     block of a pose's 6×6 (the rest 0).
     """
-    from rot_tools.ros.node.messages import message_class
+    from rot_tools.ros.message_types import message_class
     name, numbers = args.command, list(args.numbers)
     msg = message_class(args.row.type_name)()
     cov = None if getattr(args, 'cov', None) is None else np.reshape(args.cov, (3, 3))
@@ -202,7 +202,7 @@ def echo_data(msg, row, parameters):
 
     A message of another type than the output's (``--topic`` elsewhere) is printed whole.
     """
-    from rot_tools.ros.node.messages import type_name
+    from rot_tools.ros.message_types import type_name
     if type_name(type(msg)) != row.type_name:
         return message_data(msg)
     data = {}

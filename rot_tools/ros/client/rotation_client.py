@@ -85,7 +85,7 @@ def _print_document(data, args):
 
 def _tf_command(client, args):
     """tf: print BODY in REFERENCE from /tf and /tf_static, once or once a second."""
-    from rot_tools.ros.node import tf_input  # tf2_msgs: only this command needs it
+    from rot_tools.ros import tf_input  # tf2_msgs: only this command needs it
     latest = []
 
     def keep(header, R, b):
@@ -108,7 +108,7 @@ def _tf_command(client, args):
 
 def _tf_demo_command(client, args):
     """tf-demo: publish the demo tree until Ctrl-C or --duration; nothing to print after."""
-    from rot_tools.ros.node import tf_input
+    from rot_tools.ros import tf_input
     from rot_tools.ros.client import tf_demo
     missing = tf_input.tf2_msgs_missing()
     if missing:
@@ -135,7 +135,7 @@ def _echo_command(client, args):
     a topic of another type (``--topic``) is then listened to with the type it has.
     """
     from rclpy.qos import QoSProfile
-    from rot_tools.ros.node.messages import message_class
+    from rot_tools.ros.message_types import message_class
     row = interface.output_named(args.output)
     received = deque()
     qos = QoSProfile(depth=100)

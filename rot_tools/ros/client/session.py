@@ -307,7 +307,7 @@ class Client:
         (:meth:`covariance_answer`).
         """
         from rclpy.qos import QoSProfile
-        from rot_tools.ros.node.messages import message_class
+        from rot_tools.ros.message_types import message_class
         answers = Answers(msg.header.frame_id)
         matrix = MATRIX
         qos = QoSProfile(depth=100)

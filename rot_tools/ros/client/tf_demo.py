@@ -7,7 +7,7 @@ map → odom (static), odom → base_link (a robot driving a circle), base_link 
 
 import math
 
-from rot_tools.ros.node import tf_input
+from rot_tools.ros import tf_input
 
 RATE = 20.0
 """Messages a second on /tf."""

@@ -181,7 +181,7 @@ class Diagnostics:
         self._node = node
         self._name = node.get_name()
         self.tf = None
-        """The node's rot_tools.ros.node.tf_input.TfFollower: its /tf messages are counted while
+        """The node's rot_tools.ros.tf_input.TfFollower: its /tf messages are counted while
         it follows frames."""
         self.imu = ImuWindow()
         self._received = {}  # topic: messages received since the start

@@ -5,25 +5,12 @@ The screw-axis Marker and the MarkerArray of a rot_tools.io.drawing.Picture, and
 a Path. Quaternions are (x, y, z, w), the ROS message order.
 """
 
-import importlib
-
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 import numpy as np
 from rot_tools.core.axis_angle import matrix_to_axis_angle
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
-
-
-def type_name(msg_type):
-    """'nav_msgs/msg/Odometry' for the message class nav_msgs.msg.Odometry."""
-    return f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}"
-
-
-def message_class(name):
-    """Return the message class nav_msgs.msg.Odometry of 'nav_msgs/msg/Odometry' (imported)."""
-    package, interface_kind, class_name = name.split('/')
-    return getattr(importlib.import_module(f'{package}.{interface_kind}'), class_name)
 
 
 SCREW_AXIS_COLOR = (1.0, 0.5, 0.0, 1.0)

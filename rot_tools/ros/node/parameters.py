@@ -12,7 +12,8 @@ from rot_tools.core.euler import EULER_SEQUENCES
 from rot_tools.core.transform_tree import shown
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import sequence_hint
-from rot_tools.ros.node import rpy_covariance, tf_input
+from rot_tools.ros import tf_input
+from rot_tools.ros.node import rpy_covariance
 from rot_tools.ros.node.pictures import MARKER_RATE
 
 MIN_MARKER_SCALE = 1e-6

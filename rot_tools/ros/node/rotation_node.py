@@ -40,7 +40,8 @@ from rot_tools.io import boundary, interface
 from rot_tools.io.arguments import version_line
 from rot_tools.io.boundary import RefusedInput
 from rot_tools.io.report import to_yaml, transform_report
-from rot_tools.ros.node import diagnostics, rpy_covariance, runtime, screw_path, tf_input
+from rot_tools.ros import tf_input
+from rot_tools.ros.node import diagnostics, rpy_covariance, runtime, screw_path
 from rot_tools.ros.node.parameters import PARAMETERS, read_settings, Settings
 from rot_tools.ros.node.pictures import MARKER_RATE, Pictures
 from rot_tools.ros.node.screw_path import (BAD_TOLERANCE, FRAME_MISMATCH, NOT_DECOMPOSABLE,
