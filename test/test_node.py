@@ -30,8 +30,8 @@ from rot_tools.core.euler import RPY_SEQUENCE
 from rot_tools.io import interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from rot_tools.io.report import transform_report
-from rot_tools.ros.node import rotation_node
 from rot_tools.ros.message_types import message_class
+from rot_tools.ros.node import rotation_node
 from rot_tools.ros.node.rotation_node import REFUSAL_REASONS, RotationNode
 from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
 from scipy.spatial.transform import Rotation
