@@ -190,6 +190,17 @@ def stamp_warning(name, source, poses):
     return f'{name} ({source}): {", ".join(parts)}' if parts else None
 
 
+def say_warnings(sides, lines):
+    """
+    Write a ``warning:`` line on stderr for each of ``sides`` put in order, then ``lines``.
+
+    ``sides``: (name, source, poses) of each trajectory read (read_side).
+    """
+    ordered = [stamp_warning(name, source, poses) for name, source, poses in sides]
+    for line in [line for line in ordered if line] + lines:
+        sys.stderr.write(f'warning: {line}\n')
+
+
 # ---- the comparison -----------------------------------------------------------------------
 
 
@@ -457,8 +468,5 @@ def run(args):
         data = report(result, est, ref, args)
         text = to_json if args.json else to_yaml
         output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
-    ordered = [stamp_warning(name, source, poses)
-               for name, source, poses in (('EST', args.est, est), ('REF', args.ref, ref))]
-    for line in [line for line in ordered if line] + warnings(result, args):
-        sys.stderr.write(f'warning: {line}\n')
+    say_warnings((('EST', args.est, est), ('REF', args.ref, ref)), warnings(result, args))
     return 0

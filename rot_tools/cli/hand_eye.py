@@ -14,12 +14,11 @@ line; ``--yaml FILE`` writes X as the parameters of tf2_ros' static transform no
 
 import argparse
 import math
-import sys
 
 import numpy as np
 from rot_tools.cli import options, output_file
 from rot_tools.cli.compare import (
-    CompareError, LOW_CORRELATION, read_side, stamp_warning)
+    CompareError, LOW_CORRELATION, read_side, say_warnings)
 from rot_tools.core.errors import RotationError
 from rot_tools.core.hand_eye import DEFAULT_MIN_ANGLE, hand_eye
 from rot_tools.core.rigid import invert_transform
@@ -219,8 +218,5 @@ def run(args):
     data = report(found, (('a', args.a, a), ('b', args.b, b)), args)
     text = to_json if args.json else to_yaml
     output_file.to_stdout(lambda out: out.write(text(data, precision=args.precision)))
-    ordered = [stamp_warning(name, source, poses)
-               for name, source, poses in (('A', args.a, a), ('B', args.b, b))]
-    for line in [line for line in ordered if line] + warnings(found, args):
-        sys.stderr.write(f'warning: {line}\n')
+    say_warnings((('A', args.a, a), ('B', args.b, b)), warnings(found, args))
     return 0
