@@ -18,7 +18,7 @@ from rot_tools.io import interface
 from rot_tools.ros.client import arguments, message_data, session
 from rot_tools.ros.message_types import message_class, type_name
 from scipy.spatial.transform import Rotation
-from std_msgs.msg import Float64MultiArray
+from std_msgs.msg import Float64MultiArray, Header
 from visualization_msgs.msg import Marker, MarkerArray
 
 PARAMETERS = {'euler_sequence': 'ZYX', 'angle_unit': 'rad', 'publish_markers': True}
@@ -197,25 +197,23 @@ def collected(messages):
     """
     Feed session.Answers the messages of the table's outputs as the client's subscriptions do.
 
-    Return (the stamp of its complete answer or None, the answer with its ~/rotation_matrix).
+    Return (whether its answer is complete, the answer with its ~/rotation_matrix).
     """
-    answers = session.Answers('map')
-    answers.sent.add((STAMP.sec, STAMP.nanosec))
+    answers = session.Answers(Header(frame_id='map', stamp=STAMP))
     for row in interface.OUTPUTS:  # the table as it is now
         if row.name == session.MATRIX:
             answers.matrices.append(messages[row.name])
         elif row.name in messages:
             answers.collector(row.name)(messages[row.name])
-    stamp = answers.complete()
-    answer = dict(answers.by_stamp.get((STAMP.sec, STAMP.nanosec), {}))
+    answer = dict(answers.outputs)
     answer[session.MATRIX] = answers.matrix(R)
-    return stamp, answer
+    return answers.complete(), answer
 
 
 def printed(messages):
     """Return the client's printed answer to ``messages``, after checking it is complete."""
-    stamp, answer = collected(messages)
-    assert stamp == (STAMP.sec, STAMP.nanosec)
+    complete, answer = collected(messages)
+    assert complete
     return message_data.answer_data(answer, ANSWER_PARAMETERS)
 
 
@@ -259,8 +257,8 @@ def test_a_new_output_is_awaited_and_printed_by_its_fields(monkeypatch):
     row = interface.Topic('gibbs', 'geometry_msgs/msg/Vector3Stamped', 'tan(θ/2)·l̂ again')
     monkeypatch.setattr(interface, 'OUTPUTS', interface.OUTPUTS + (row,))
     messages = answer_messages()
-    stamp, _ = collected(messages)
-    assert stamp is None  # awaited: no answer is complete without it
+    complete, _ = collected(messages)
+    assert not complete  # awaited: no answer is complete without it
     messages['gibbs'] = vector(31.0, 32.0, 33.0)
     answer = printed(messages)
     assert answer == {**PRINTED, 'gibbs': {'vector': {'x': 31.0, 'y': 32.0, 'z': 33.0}}}
@@ -282,8 +280,8 @@ def test_an_answer_without_an_output_of_every_input_is_not_complete():
     for name in AWAITED:
         messages = answer_messages()
         del messages[name]
-        stamp, _ = collected(messages)
-        assert stamp is None, name
+        complete, _ = collected(messages)
+        assert not complete, name
 
 
 # ---------------------------------------------------------------------------------------

@@ -8,9 +8,8 @@ context (one DDS participant) with its services; these tests show, on the real e
 (where a signal or the process matters) on the real console script:
 
 - SIGINT and SIGTERM under a flood of poses, good and bad at 3000 msg/s and back to back:
-  exit status 0 within a second of the node's own time (what a loaded machine keeps it
-  waiting for a CPU is left out: conftest.NodeProcess.stop), no traceback (and after
-  floods, with ten screw paths queued; idle, test_entry's sweep);
+  exit status 0 (within conftest.STOP_WITHIN), no traceback (and after floods, with ten
+  screw paths queued; idle, test_entry's sweep);
 - both services and the parameter services answer, correctly, while ~/pose is flooded;
 - overload, measured in messages rather than seconds so that no machine's speed decides:
   100,000 poses arriving while the loop is held cost no memory (the EventsExecutor took
@@ -35,7 +34,7 @@ import sys
 import threading
 import time
 
-from conftest import rss_mb, RUN, TIMEOUT
+from conftest import assert_clean_exit, rss_mb, RUN, TIMEOUT
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.srv import GetPlan
 import numpy as np
@@ -50,9 +49,6 @@ from rot_tools.io.interface import INPUTS
 from rot_tools.ros.node.rotation_node import RotationNode
 from std_srvs.srv import Trigger
 import yaml
-
-STOP_WITHIN = 1.0
-"""Seconds of the node's own time from a signal to its end (conftest.NodeProcess.stop)."""
 
 
 def pose(q=(0.0, 0.0, 0.0, 1.0), p=(1.0, 0.0, 0.0), frame='map'):
@@ -211,12 +207,6 @@ def describe(tester, name):
     return yaml.safe_load(response.message) if response.success else {'stamp': {'sec': -1}}
 
 
-def assert_clean_exit(status, seconds, stderr):
-    assert status == 0, stderr
-    assert 'Traceback' not in stderr and 'KeyboardInterrupt' not in stderr, stderr
-    assert seconds < STOP_WITHIN, f'the node took {seconds:.2f} s of its own time to stop'
-
-
 SIGNALLED_FLOODS = {'good and bad, 3000 msg/s': (GOOD + BAD, 3000.0),
                     'good, back to back': (GOOD, 'max')}
 """The floods a node is signalled under: the signal lands in the middleware's take, a
@@ -239,8 +229,8 @@ def test_every_signal_ends_the_node_cleanly_within_a_second(tester, node_process
         time.sleep(0.2)
         for name, process in processes.items():
             stops[name] = process.stop(signum)
-    for name, (status, seconds, stderr) in stops.items():
-        assert_clean_exit(status, seconds, f'{name}: {stderr}')
+    for name, (status, stderr) in stops.items():
+        assert_clean_exit(status, f'{name}: {stderr}')
 
 
 def test_services_and_parameters_answer_correctly_under_a_flood(tester, node_process):
@@ -546,8 +536,8 @@ def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(
     results = tester.set_parameters(name, [Parameter('angle_unit', value='deg')])
     assert results[0].successful
     assert describe(tester, name)['source'] == f'{name}/pose'
-    status, seconds, stderr = process.stop(signal.SIGINT)
-    assert status == 0 and seconds < STOP_WITHIN, stderr
+    status, stderr = process.stop(signal.SIGINT)
+    assert status == 0, stderr
     assert 'Traceback' not in stderr
     (line,) = [line for line in stderr.splitlines() if 'malformed' in line]
     assert 'ERROR' in line and {'type_99': '99 is not a valid Parameter.Type',
@@ -561,7 +551,7 @@ def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signa
 
     The executor serves each ready service in turn: describe's answer comes before the
     tenth path (a queue served in arrival order answers it last), and SIGINT with ten more
-    queued ends the node within a second of its own time, cleanly.
+    queued ends the node cleanly.
     """
     from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
     process = node_process()

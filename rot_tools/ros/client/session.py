@@ -308,7 +308,8 @@ class Client:
         """
         from rclpy.qos import QoSProfile
         from rot_tools.ros.message_types import message_class
-        answers = Answers(msg.header.frame_id)
+        msg.header.stamp = self.node.get_clock().now().to_msg()  # one stamp for every resend
+        answers = Answers(msg.header)
         matrix = MATRIX
         qos = QoSProfile(depth=100)
         covariances = COVARIANCES if covariance else ()
@@ -325,19 +326,16 @@ class Client:
         before = self.refusal_counts()
         deadline = time.monotonic() + self.timeout
         while True:
-            msg.header.stamp = self.node.get_clock().now().to_msg()
-            answers.sent.add(_key(msg.header.stamp))
             pub.publish(msg)
             if self.spin_until(answers.complete, min(RESEND, deadline - time.monotonic())):
                 break
-            refused = self.refused(before, topic, answers.sent)
+            refused = self.refused(before, topic, {answers.stamp})
             if refused:
                 raise Refused(f'node {self.target} refused the input on {topic}: {refused}')
             if time.monotonic() >= deadline:
                 raise Unreachable(f'no answer from node {self.target} to the input on {topic} '
                                   f'within {self.timeout:g} s')
-        stamp = answers.complete()
-        answer = answers.by_stamp[stamp]
+        answer = answers.outputs
         q = answer['quaternion'].quaternion
         R = quaternion_to_matrix([q.x, q.y, q.z, q.w])
         if not self.spin_until(lambda: answers.matrix(R), self.timeout):
@@ -348,11 +346,11 @@ class Client:
         matrix_msg = answers.matrix(R)
         self.spin_until(lambda: set(WITHHELD) <= set(answer), min(PICTURE_WAIT, self.timeout))
         if covariances:
-            self.covariance_answer(answer, covariances, before, topic, answers.sent)
+            self.covariance_answer(answer, covariances, before, topic, {answers.stamp})
         if pictures:
             self.spin_until(lambda: set(PICTURES) <= set(answer),
                             min(PICTURE_WAIT, self.timeout))
-        return topic, stamp, {**answer, matrix: matrix_msg}
+        return topic, answers.stamp, {**answer, matrix: matrix_msg}
 
     def covariance_answer(self, answer, names, before, topic, stamps):
         """
@@ -380,19 +378,19 @@ def _key(stamp):
 
 
 class Answers:
-    """What the node published for the messages sent: stamped outputs by stamp, matrices."""
+    """What the node published for the message sent: its stamped outputs, the matrices."""
 
-    def __init__(self, frame_id):
-        self.frame_id = frame_id
-        self.sent = set()
-        """(sec, nanosec) of every message sent."""
-        self.by_stamp = {}
-        """(sec, nanosec): {output: message} of the stamped outputs."""
+    def __init__(self, header):
+        self.frame_id = header.frame_id
+        self.stamp = _key(header.stamp)
+        """(sec, nanosec) of the message sent (and sent again, unchanged, until answered)."""
+        self.outputs = {}
+        """{output: message} of the stamped outputs of that message."""
         self.matrices = deque(maxlen=100)
         """The latest ~/rotation_matrix messages (they carry no header)."""
 
     def collector(self, output):
-        """Subscription callback keeping the ``output`` messages stamped as a sent one."""
+        """Subscription callback keeping the ``output`` messages stamped as the sent one."""
         def collect(msg):
             if hasattr(msg, 'header'):
                 header = msg.header
@@ -400,18 +398,13 @@ class Answers:
                 header = msg.markers[0].header
             else:
                 return
-            key = _key(header.stamp)
-            if key in self.sent and header.frame_id == self.frame_id:
-                self.by_stamp.setdefault(key, {})[output] = msg
+            if _key(header.stamp) == self.stamp and header.frame_id == self.frame_id:
+                self.outputs[output] = msg
         return collect
 
     def complete(self):
-        """Return the stamp of a sent message with every one of stamped_outputs(), or None."""
-        expected = set(stamped_outputs())
-        for stamp, answer in self.by_stamp.items():
-            if expected <= set(answer):
-                return stamp
-        return None
+        """Return whether every one of stamped_outputs() has come."""
+        return set(stamped_outputs()) <= set(self.outputs)
 
     def matrix(self, R):
         """Return the latest ~/rotation_matrix equal to R (within MATRIX_MATCH), or None."""
