@@ -6,8 +6,10 @@ NumPy may differ in the last bit), fails alike on extremes, and a batch refuses 
 chunk naming the first index. The sweeps read the public functions from rot_tools.__all__.
 """
 
+import importlib
 import math
 from pathlib import Path
+import pkgutil
 import re
 import subprocess
 import sys
@@ -768,6 +770,14 @@ def test_public_names_are_plain_module_attributes():
                           timeout=120, cwd=REPO)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("ok module 'rot_tools' has no attribute 'no_such_name'")
+
+
+def test_the_public_names_are_those_of_the_core_modules_all():
+    # A public name is written once, in its core module's __all__; rot_tools imports them all.
+    modules = [importlib.import_module('rot_tools.core.' + m.name)
+               for m in pkgutil.iter_modules(rt.core.__path__)]
+    assert sorted(rt.__all__) == sorted(
+        name for module in modules for name in getattr(module, '__all__', ()))
 
 
 def test_results_do_not_depend_on_call_history():

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from rot_tools import (matrix_to_rodrigues, quaternion_to_matrix, rodrigues_to_matrix, rot_x,
                        rot_z, RotationError)
-from rot_tools.core.rodrigues import quaternion_to_rodrigues, rodrigues_of_one
+from rot_tools.core.axis_angle import quaternion_to_rodrigues, rodrigues_of_one
 from scipy.spatial.transform import Rotation
 import yaml
 

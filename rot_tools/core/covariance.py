@@ -7,6 +7,9 @@ through their rate matrix E, Σ_δ = E·Σ_θ·Eᵀ, which is singular at gimbal
 Rotation in the Space, §1 and §3).
 """
 
+__all__ = ['change_covariance_frame', 'euler_covariance_to_rotvec', 'rotvec_covariance_to_euler',
+           'transform_pose_covariance']
+
 from typing import NamedTuple
 
 import numpy as np

@@ -10,6 +10,8 @@ equals what that function gives, and at θ = π all of them use the same axis si
 :func:`decompose_one` gives the same numbers for one motion as Python numbers.
 """
 
+__all__ = ['decompose', 'Decomposition']
+
 from typing import NamedTuple
 
 import numpy as np

@@ -7,6 +7,8 @@ case extrinsic, about the fixed axes, the product reversed ('zyx': R = Rot_x(θ3
 Rot_z(θ1)), as scipy names them. R maps body coordinates to world coordinates.
 """
 
+__all__ = ['EULER_SEQUENCES', 'euler_to_matrix', 'GIMBAL_LOCK_TOL', 'matrix_to_euler']
+
 import math
 from typing import Any, NamedTuple
 

@@ -6,6 +6,8 @@ Haar-uniform sampling; the mean and the fit are the nearest rotation to a matrix
 (NumPy's batched linalg: any leading batch shape).
 """
 
+__all__ = ['align_vectors', 'mean_rotation', 'random_rotations', 'rotation_distance', 'UNIQUE_TOL']
+
 import math
 import numbers
 import os

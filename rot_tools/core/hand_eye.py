@@ -41,6 +41,8 @@ hand_eye, step by step:
    samples and for noise that follows the stream.
 """
 
+__all__ = ['hand_eye', 'HandEyeCalibration', 'screw_congruence', 'ScrewCongruence']
+
 import math
 from typing import NamedTuple
 

@@ -8,6 +8,8 @@ at rest), all three at one instant. Each check of ImuChecks is ok, fault, or unk
 data cannot tell.
 """
 
+__all__ = ['check_imu', 'ImuChecks', 'ImuReference']
+
 import math
 from typing import Any, NamedTuple
 

@@ -6,6 +6,9 @@ motion is p ↦ R·p + b, the 4×4 [[R, b], [0, 0, 0, 1]], composed by the matri
 Functions that take R validate it unless called with check=False (rot_tools.core.so3).
 """
 
+__all__ = ['compose_transforms', 'frame_to_matrix', 'homogeneous_to_transform', 'invert_transform',
+           'transform_points', 'transform_to_homogeneous']
+
 from typing import Any, NamedTuple
 
 import numpy as np

@@ -7,6 +7,9 @@ the plane ⊥ l̂, where I − R is invertible; the twist (θ·l̂, θ·v) is wr
 is smooth at θ = 0. Each function states its formula.
 """
 
+__all__ = ['PURE_TRANSLATION_ANGLE', 'Screw', 'screw_exp', 'screw_from_transform',
+           'screw_interpolate', 'screw_log', 'transform_from_screw']
+
 import math
 from typing import Any, NamedTuple
 

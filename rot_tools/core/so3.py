@@ -7,6 +7,9 @@ the boundary, in the ROS order (x, y, z, w). check=False trusts R to be a rotati
 formula is applied to the matrix as given, whatever it means.
 """
 
+__all__ = ['is_rotation', 'matrix_to_quaternion', 'nearest_rotation', 'quaternion_to_matrix',
+           'rot_x', 'rot_y', 'rot_z', 'ROTATION_TOL', 'skew', 'validate_rotation']
+
 import math
 from typing import Any, NamedTuple
 

@@ -6,6 +6,10 @@ estimate and the reference, R mapping the body's coordinates to its reference fr
 Their stamps are checked and paired by rot_tools.core.stamps.
 """
 
+__all__ = ['align_rotations', 'ALIGNMENTS', 'angular_speeds', 'delta_pairs', 'error_statistics',
+           'estimate_time_offset', 'hand_eye_rotation', 'HandEye', 'interpolate_poses',
+           'nearest_stamps', 'rotation_errors', 'RotationErrors', 'TimeOffset']
+
 import math
 from typing import NamedTuple
 

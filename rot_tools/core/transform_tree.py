@@ -6,6 +6,8 @@ sampled in time; a lookup composes the edges between two frames, each dynamic on
 interpolated by its constant screw. doc/tf.md has the rules of time, refusals and memory.
 """
 
+__all__ = ['TransformLookupError', 'TransformTree', 'TransformTreeError']
+
 import math
 import numbers
 import threading

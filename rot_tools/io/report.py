@@ -12,11 +12,11 @@ import math
 import re
 
 import numpy as np
+from rot_tools.core.axis_angle import quaternion_to_rodrigues
 from rot_tools.core.decomposition import decompose
 from rot_tools.core.errors import RotationError
 from rot_tools.core.euler import EULER_SEQUENCES, matrix_to_euler, RPY_SEQUENCE
 from rot_tools.core.rigid import invert_transform, transform_points, transform_to_homogeneous
-from rot_tools.core.rodrigues import quaternion_to_rodrigues
 import yaml
 
 DEFAULT_PRECISION = 12

@@ -32,9 +32,9 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.time_source import USE_SIM_TIME_NAME
 from rclpy.type_description_service import START_TYPE_DESCRIPTION_SERVICE_PARAM
+from rot_tools.core.axis_angle import rodrigues_of_one
 from rot_tools.core.decomposition import decompose_one
 from rot_tools.core.errors import RotationError
-from rot_tools.core.rodrigues import rodrigues_of_one
 from rot_tools.core.transform_tree import shown
 from rot_tools.io import boundary, interface
 from rot_tools.io.arguments import version_line
