@@ -1,10 +1,7 @@
 """
-Simulated hand-eye recordings, built with scipy's Rotation (independent of rot_tools).
+Simulated hand-eye recordings (T_A(t)·X = Z·T_B(t)), built with scipy's Rotation, not rot_tools.
 
-Each is a Recording of two joined bodies with T_A(t)·X = Z·T_B(t): poses of A and of B, each
-in its own world, and the true X and Z. Noise is put on B's poses in B's own frame (a camera's
-pose, as its detector or odometry reports it): a small turn of ``noise_deg`` degrees and a
-shift of ``noise_m`` metres per axis, standard deviations.
+Noise goes on B's poses in B's own frame: ``noise_deg`` degrees and ``noise_m`` metres per axis.
 """
 
 from typing import NamedTuple

@@ -1,10 +1,4 @@
-"""
-Independent reference helpers for the math tests.
-
-Everything here is written from the API's definitions and the course notes (Jia; Cayero),
-with plain NumPy, and never calls rot_tools: the tests compare rot_tools against these
-constructions, not against itself.
-"""
+"""Independent references for the math tests: plain NumPy from the notes, never rot_tools."""
 
 import itertools
 import re

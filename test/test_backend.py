@@ -1,9 +1,7 @@
 """
 One item and a batch: the same formula, through rot_tools.core.engine's kernels.
 
-Every public function of items gives one item what a batch gives it (to rounding: libm and
-NumPy may differ in the last bit), fails alike on extremes, and a batch refuses NaN/Inf per
-chunk naming the first index. The sweeps read the public functions from rot_tools.__all__.
+Swept over every public function (rot_tools.__all__): same values to rounding, same failures.
 """
 
 import math

@@ -1,13 +1,8 @@
 """
 rot-tools as a user runs it: every command through main, what the console script calls.
 
-The commands run in this process (a process each would cost a second of start-up per line);
-test_the_installed_script_runs_main runs the installed console script itself, and
-test_cli_streams.py what only a process shows (its streams at exit, signals).
-
-Output values are parsed (JSON with the standard library, YAML with PyYAML when present) and
-compared with the math module; the printed precision is 12 digits, so values agree to
-~1e-11. Bad input must give exactly one ``rot-tools: error:`` line and exit status 2.
+Values are parsed and compared with the math module to the printed 12 digits; bad input is
+one ``rot-tools: error:`` line and exit status 2.
 """
 
 import io

@@ -1,12 +1,7 @@
 """
 rotation_client's messages in this process, without DDS: the input each verb fills, the answer.
 
-Where each number typed must go is stated here field by field, per message type, apart from
-rot_tools.ros.client.message_data. The answers are messages of each output's type with numbers
-of their own, fed to session.Answers as the client's subscriptions feed them: each is printed
-under its output's name, whatever the order of the node's output table, with a row dropped or
-one added, and an answer without ~/rodrigues (withheld at θ = π) is complete; ``echo`` prints
-a message of the output's type by its name, one of another type whole.
+Where each number typed goes is stated here field by field, apart from the client's own table.
 """
 
 from builtin_interfaces.msg import Time

@@ -1,11 +1,7 @@
 """
 rotation_client's tools around the inputs: the angle hint, echo, set, param, play, tf-demo.
 
-Against a rotation_node process of this run (conftest's isolated domain and namespaces), over
-DDS: the commands run in this process (test_client.Here) where what is tested is the
-command, as a process where it is the process (a stream printed as it comes, Ctrl-C, a closed
-pipe, a module that does not import); expected values come from closed forms and scipy, not
-from rot_tools.
+Against a rotation_node process of this run; expected values from closed forms and scipy.
 """
 
 from contextlib import redirect_stdout

@@ -1,11 +1,8 @@
 """
 rot-tools compare: evo's numbers, a recorded time offset, a simulated mounting, bad inputs.
 
-evo (GPL) is a test requirement only: its Python API (evo.tools.file_interface to read the
-same files and bags, evo.core.sync.associate_trajectories, PoseTrajectory3D.align,
-evo.core.metrics.APE/RPE with PoseRelation.rotation_angle_deg) is what ``evo_ape --align``
-and ``evo_rpe --align --pose_relation angle_deg`` run; where evo is not installed those tests
-skip and say so.
+evo's Python API (what ``evo_ape``/``evo_rpe --align`` run) is the reference; without evo
+those tests skip.
 """
 
 import json

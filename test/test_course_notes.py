@@ -3,8 +3,6 @@ The course notes' worked examples as exact expectations, and their slips pinned 
 
 Jia: Yan-Bin Jia, "Rotation in the Space" (Com S 477/577 notes).
 Cayero: Julen Cayero, "Relations between Rotation Matrix and Euler axis-angle".
-Each formula below is typed in from the notes as printed; the slips are shown to be slips by
-numbers, next to what the code (following the mathematics) does instead.
 """
 
 import math_helpers as h

@@ -1,10 +1,7 @@
 """
 rot_tools.io.drawing: the geometry both renderers draw, against independent closed forms.
 
-Motions are built from a screw chosen by the test (l̂, c, θ, d) with Jia's eq. 7
-(math_helpers.screw_motion): R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the
-helix p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ of the constant-screw motion (scipy's
-Rotation), point by point.
+The path must be the helix p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ (scipy's Rotation).
 """
 
 import math

@@ -1,10 +1,7 @@
 """
 Comparing, averaging, fitting and sampling rotations, against scipy and closed forms.
 
-References: scipy.spatial.transform.Rotation (magnitude of R1⁻¹R2, mean, align_vectors —
-quaternion-based, computed independently of rot_tools), scipy.stats.kstest for the Haar angle
-law, and closed forms (rotations about one axis, exact a = R0·b data, the smallest rotation
-between two vectors).
+scipy.spatial.transform.Rotation, scipy.stats.kstest for the Haar angle law, closed forms.
 """
 
 import re

@@ -1,13 +1,7 @@
 """
 check_imu on the real Jackal recording with one fault put in at a time, and on synthetic motion.
 
-The recording (bag_helpers.REAL): /imu/data, a Clearpath Jackal's IMU in base_link at 50 Hz with
-its orientation, and its wheel odometry as the reference, read once with rosbags. Each faulty
-copy is written from those arrays with scipy's Rotation and plain NumPy, with and without the
-reference: the injected fault is found, and only it, to the accuracy asked. The Jackal's roll
-and pitch vibrate, so every gyro axis is fixed; its odometry is planar, so the mounting's up
-axis is fixed, not its turn about it. The synthetic motion turns about all three axes with
-rests between: there the answers are exact and the mounting is whole.
+The faulty copies are written with scipy's Rotation and NumPy: the fault is found, and only it.
 """
 
 import itertools

@@ -1,12 +1,7 @@
 """
 rot-tools imu-check end to end, in-process: faulty copies of the real recording, bad input.
 
-The real recording (a Clearpath Jackal: /imu/data in base_link at 50 Hz, wheel odometry) is
-read here with rosbags alone; a window of it is written back as small rosbag2 bags with one
-fault put in by an independent formula (scipy's Rotation): the accelerometer in g, the gyro
-in degrees/s, the whole IMU converted to NED, no orientation at all. The command must find
-each fault, say how to fix it in the user's terms, and leave the clean recording without
-fault. Bad input is one line and exit status 2. doc/imu.md's example is produced here.
+Each fault (accelerometer in g, gyro in deg/s, NED, no orientation) is found and its fix said.
 """
 
 import json

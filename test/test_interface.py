@@ -1,9 +1,5 @@
 """
 rot_tools.io.interface: one row per input and output, as the node and the bag reader show them.
-
-The node's graph (rclpy's introspection of its publishers and subscriptions) against the
-table, and the bag reader's types against its rows. The client's verbs and answers are the
-client's tests.
 """
 
 import pytest

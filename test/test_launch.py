@@ -1,10 +1,8 @@
 """
 launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would.
 
-ros2 launch (launch_ros) is not on PyPI, so :func:`launch_command` reads the file the way
-launch_ros turns a ``<node>`` into a command line, for the few tags and substitutions the
-file uses — any other tag, attribute or substitution fails the test, so the file cannot
-outgrow this reading of it. The command is then started and talked to over DDS.
+launch_ros is not on PyPI: :func:`launch_command` reads the few tags the file uses, and any
+other tag fails the test.
 """
 
 from pathlib import Path

@@ -1,9 +1,7 @@
 """
 rot_tools.ros.node.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
 
-Expected values are computed here from (R, b) and a screw chosen by the test (scipy's
-Rotation for R), never read back from rot_tools.io.drawing. Every message is taken through
-rclpy's serialisation and back, as a subscriber gets it.
+Expected values come from (R, b) and a screw chosen here, never from rot_tools.io.drawing.
 """
 
 import math

@@ -1,9 +1,5 @@
 """
 rotation_node's reading of each input message, and rot_tools.ros.node.messages (no DDS traffic).
-
-Inbound, a message goes the node's way: serialised by rclpy and read back as a message
-object, then given to the node's callback for its type, whose (header, R, b) or refusal is
-caught before anything is published.
 """
 
 import math

@@ -1,12 +1,7 @@
 """
-In-process tests of rotation_node over real DDS.
+rotation_node over real DDS: node and tester in two rclpy contexts, one namespace a test.
 
-The node under test lives in one rclpy context (one DDS participant), the test node in
-another, so every message crosses DDS as it would between processes; each test has a
-namespace of its own (below this run's, see conftest). Expected values come from the math
-module (rot_tools) and, for the robot inputs and the quaternion output, independently from
-scipy.spatial.transform.Rotation and closed forms; compared to 1e-12. ~/describe prints 12
-significant digits, so its numbers are compared to that.
+Expected values from the math module and, independently, scipy's Rotation, to 1e-12.
 """
 
 import math

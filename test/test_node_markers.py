@@ -1,11 +1,7 @@
 """
 rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
 
-The node lives in its own rclpy context and namespace (test_node's Rig). Every expected
-value is computed here from the input alone, without rot_tools: R with scipy's Rotation,
-the screw from its rotation vector θ·l̂, d = b·l̂ and the axis point c as the least-norm
-solution of (I − R)·c = b − d·l̂ (it is ⊥ l̂), and the path as the closed form of the
-constant-screw motion, p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂.
+Expected values from the input alone (scipy's Rotation and the closed-form screw), not rot_tools.
 """
 
 import math

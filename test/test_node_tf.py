@@ -1,15 +1,8 @@
 """
 rotation_node following two frames of /tf, and `rotation_client tf`, over real DDS.
 
-A separate process (test/tf_publisher.py) publishes a chain of four frames, one edge static,
-the two dynamic edges stamped half a period apart (so the node interpolates one of them).
-The test side listens to the same /tf and /tf_static and computes what the node must
-publish on its own: 4×4 products of the transforms received (quaternions turned into
-matrices by scipy), each dynamic edge between its samples by scipy.linalg's
-T0·expm(s·logm(T0⁻¹T1)), the twist by logm. Each test remaps /tf and /tf_static into its
-own namespace (tf2's usual ``-r /tf:=...``), except the client's, which uses the real names
-in this run's own DDS domain. The tests that only read share a node and a publisher (the
-fixtures ``followed`` and ``real_tf``).
+test/tf_publisher.py publishes the frames; expected values are 4×4 products of what the test
+hears and scipy.linalg's T0·expm(s·logm(T0⁻¹T1)) between samples.
 """
 
 import math

@@ -1,10 +1,4 @@
-"""
-Frames and rigid motions (Jia §4, §5) against plain NumPy 4×4 products.
-
-The references are built here with NumPy only: homogeneous matrices multiplied with ``@``,
-np.linalg.inv, einsum, and Jia's own statements (p' = p_u·û + p_v·v̂ + p_w·ŵ,
-q' = Rᵀq, R(p + b) = R·p + R·b, a rotation about a line through q is R(p − q) + q).
-"""
+"""Frames and rigid motions (Jia §4, §5) against plain NumPy 4×4 products."""
 
 import re
 

@@ -1,10 +1,7 @@
 """
 Chasles' screw decomposition, its inverse, exponential coordinates and interpolation.
 
-Transforms are built from known screws (direction l, axis point c perpendicular to l, angle,
-translation d) with R = Rodrigues(l, angle) and b = (I - R) c + d l, where (I - R) c is
-evaluated in the vector form of math_helpers.rotate_minus_identity so that tiny angles with
-far-away axes stay exact. The checks are the defining properties of a screw, not rot_tools.
+Transforms are built from known screws; the checks are a screw's defining properties.
 """
 
 from hypothesis import given, settings

@@ -1,9 +1,7 @@
 """
 ~/screw_path against a hostile caller: every failure counted, replies bounded in bytes.
 
-The node under test lives in one rclpy context, the caller in another (real DDS between,
-conftest's isolated domain and namespaces). The size of a reply is checked against
-rclpy's own CDR serialisation of it, not against the node's estimate.
+A reply's size is checked against rclpy's own CDR serialisation of it.
 """
 
 import math

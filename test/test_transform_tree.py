@@ -1,9 +1,7 @@
 """
 TransformTree: lookups across a tree of frames, at any time, and its refusals.
 
-References are independent of rot_tools: the pose of a frame is the product of 4×4
-homogeneous matrices from the root down (Jia, Rotation in the Space, §5), and an edge between
-two samples is T0·expm(s·logm(T0⁻¹·T1)) with scipy.linalg's matrix exponential and logarithm.
+References: 4×4 products from the root down, and T0·expm(s·logm(T0⁻¹·T1)) with scipy.linalg.
 """
 
 import math
