@@ -124,12 +124,7 @@ def _smooth_motion(rng, t, turn=0.6, reach=0.12):
 
 def arm_streams(seed, seconds=60.0, rate_a=100.0, rate_b=30.0, shift=0.12, noise_deg=0.05,
                 noise_m=5e-4):
-    """
-    Eye in hand in continuous motion, two streams.
-
-    A at rate_a Hz, B at rate_b Hz whose stamps are ``shift`` seconds early (the offset to
-    add to B's stamps is +shift).
-    """
+    """Eye in hand in motion: A at rate_a Hz, B at rate_b Hz stamped ``shift`` s early."""
     rng = np.random.default_rng(seed)
     X = random_mounting(rng)
     Z = random_mounting(rng, 0.5)
@@ -164,11 +159,7 @@ def mobile_base(seed, seconds=120.0, rate=10.0, noise_deg=0.05, noise_m=5e-4):
 
 
 def eye_to_hand(seed, stations=20, noise_deg=0.05, noise_m=5e-4):
-    """
-    Eye to hand: A the hand in the robot's base, B the marker held by the hand in a camera.
-
-    The camera is fixed: X is the marker on the hand, Z the camera in the base.
-    """
+    """Eye to hand: X is the marker on the hand, Z the fixed camera in the base."""
     rng = np.random.default_rng(seed)
     X = (_matrix(rng.normal(0.0, 0.3, 3)), np.array([0.0, 0.02, 0.08]))
     Z = (_looking_at_origin(np.array([0.0, -0.8, 0.9]), 0.3), np.array([0.5, -0.8, 0.9]))

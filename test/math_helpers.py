@@ -38,12 +38,7 @@ def ref_elementary(axis, angle):
 
 
 def ref_euler(angles, seq):
-    """
-    Explicit product of elementary rotations.
-
-    Intrinsic (upper case): R = Rot_a1(t1) Rot_a2(t2) Rot_a3(t3).
-    Extrinsic (lower case): R = Rot_a3(t3) Rot_a2(t2) Rot_a1(t1).
-    """
+    """Return Rot_a1(t1) Rot_a2(t2) Rot_a3(t3) (intrinsic, upper case), reversed for lower case."""
     angles = np.asarray(angles, dtype=float)
     mats = [ref_elementary(seq[i], angles[..., i]) for i in range(3)]
     if seq.isupper():
@@ -130,11 +125,7 @@ def expm_twist(twist):
 
 
 def rotate_minus_identity(axis, angle, p):
-    """
-    (R - I) p for R = Rodrigues(axis, angle), accurate for tiny angles and huge |p|.
-
-    (R - I) p = sin(t) l x p - 2 sin^2(t/2) (p - (p.l) l); no matrix entry is rounded to 1.
-    """
+    """(R - I) p = sin(t) l x p - 2 sin^2(t/2) (p - (p.l) l): exact for tiny t and huge |p|."""
     axis = np.asarray(axis, dtype=float)
     t = np.asarray(angle, dtype=float)[..., None]
     p = np.asarray(p, dtype=float)

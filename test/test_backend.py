@@ -136,12 +136,7 @@ SUBNORMAL_STEPS = 4 * 5e-324
 
 
 def _close(one, batch):
-    """
-    Tell whether one item's result is the batch's to rounding (NaN = NaN, inf exactly).
-
-    Rounding is relative to the result's scale, and a few subnormal steps absolute (libm's
-    and NumPy's last bit of a subnormal result, e.g. a screw of b = 5e-324).
-    """
+    """Tell whether one item's result is the batch's to rounding (NaN = NaN, inf exactly)."""
     if isinstance(one, tuple):
         return len(one) == len(batch) and all(_close(a, b) for a, b in zip(one, batch))
     a, b = np.asarray(one), np.asarray(batch)
@@ -176,12 +171,7 @@ def _refused(outcome):
 
 
 def _locked_covariance(one, batch_item):
-    """
-    Tell whether one item is refused at gimbal lock where its batch item is NaN, degenerate.
-
-    The covariance conversions' documented rule: there is no covariance of Euler angles at
-    gimbal lock; one item says so, a batch flags the item.
-    """
+    """Tell whether one item is refused at gimbal lock where its batch item is flagged, NaN."""
     return (_refused(one) and 'gimbal lock' in one[1] and not _refused(batch_item)
             and bool(batch_item.degenerate) and np.isnan(batch_item.cov).all())
 
@@ -716,13 +706,7 @@ def test_checked_conversions_take_what_validate_rotation_takes_at_the_tolerance(
 
 
 def _at_the_edge(target):
-    """
-    Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] with squared column norms and det at ``target``.
-
-    The first two columns' squared norm c·c + v·v, as the check computes it, is the float
-    target, and det R too (c·c − (−v)·v); the columns are orthogonal exactly (c·(−v) + v·c
-    is 0).
-    """
+    """Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] with squared column norms and det ``target``."""
     for v in (0.0, 2.0 ** -27, math.sqrt(2.0 ** -53), 2.0 ** -26):
         c = math.sqrt(target)
         for _ in range(8):

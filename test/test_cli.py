@@ -64,12 +64,7 @@ class Done(NamedTuple):
 
 
 def run(*args):
-    """
-    Run rot-tools on these words as its console script does (``sys.exit(main(argv))``).
-
-    In this process, its standard streams swapped for text buffers, COLUMNS 80 as in a pipe;
-    a Python warning goes to its stderr as Python would print it, once per place.
-    """
+    """Run rot-tools on these words as its console script does, its streams swapped for buffers."""
     out, err = io.StringIO(), io.StringIO()
     streams, columns = (sys.stdout, sys.stderr), os.environ.get('COLUMNS')
     sys.stdout, sys.stderr = out, err

@@ -189,11 +189,7 @@ PRINTED = {
 
 
 def collected(messages):
-    """
-    Feed session.Answers the messages of the table's outputs as the client's subscriptions do.
-
-    Return (the stamp of its complete answer or None, the answer with its ~/rotation_matrix).
-    """
+    """Feed session.Answers the table's outputs; return (stamp of its complete answer, answer)."""
     answers = session.Answers('map')
     answers.sent.add((STAMP.sec, STAMP.nanosec))
     for row in interface.OUTPUTS:  # the table as it is now

@@ -152,12 +152,7 @@ def test_echo_unknown_output_and_unreachable(here, node):
 
 
 class StreamDuringCall:
-    """
-    A Client as echo sees it, whose node publishes a stream from the moment echo asks it.
-
-    The message published during the parameters call (stamp 1) reaches echo only if echo
-    subscribed before; each later spin brings the next (stamps 2, 3, ...).
-    """
+    """A Client whose node publishes a stream (stamps 1, 2, ...) from the moment echo asks it."""
 
     def __init__(self):
         from types import SimpleNamespace
@@ -425,13 +420,7 @@ def bag_csv(*args):
 
 
 def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
-    """
-    Play one second of the Jackal recording (ROS 1) at twice its speed into the node.
-
-    Its Imu and Odometry topics are remapped onto ~/imu and ~/odometry: every ~/quaternion the
-    node publishes for them is the one ``rot-tools bag`` reads for that message (same frame,
-    same stamp), and the summary counts what the bag holds in that second.
-    """
+    """Each ~/quaternion of a played second of the Jackal bag is what ``rot-tools bag`` reads."""
     from geometry_msgs.msg import QuaternionStamped
     from rclpy.qos import QoSProfile
     topic = f'{node}/quaternion'
@@ -467,12 +456,7 @@ def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
 
 
 def test_play_a_rosbag2_bag_with_tf(here, tester, namespace, tmp_path):
-    """
-    A rosbag2 bag's /tf and /tf_static (TFMessage: sequences of messages) arrive whole.
-
-    The subscriptions have tf2_ros's QoS: /tf_static's transient local one matches only a
-    transient local publisher, as the player's is for /tf_static.
-    """
+    """A rosbag2 bag's /tf and /tf_static arrive whole, /tf_static transient local."""
     from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
     from tf2_msgs.msg import TFMessage
     messages, _, _ = tf_chain_messages(n=10)

@@ -375,12 +375,7 @@ SANDWICHES = {  # name: (the call on C, M such that the result is M·C·Mᵀ, C'
 @pytest.mark.parametrize('size', ['huge', 'subnormal'])
 def test_huge_and_subnormal_covariances_are_carried_as_exact_arithmetic_carries_them(
         name, size):
-    """
-    s·I stays finite up to float64's largest result, 5e-324·I does not vanish.
-
-    (ROS reads an all-zero covariance as unknown.) The huge s makes the largest entry of
-    M·C·Mᵀ 0.9 of float64's largest: computed as it stands, out + outᵀ overflowed.
-    """
+    """s·I stays finite up to float64's largest result, 5e-324·I does not vanish."""
     call, M, n = SANDWICHES[name]
     scale = 0.9 * BIG / np.abs(M @ M.T).max() if size == 'huge' else 5e-324
     C = scale * np.eye(n)

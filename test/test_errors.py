@@ -608,12 +608,7 @@ RIG = he.arm_stations(1, stations=7)
 
 
 def _rig_moved(r, w):
-    """
-    Return the poses (R_a, b_a, R_b, b_b) of RIG in moved worlds: a rigid pair (other X, Z).
-
-    Positions scaled by |w[0]|, world A turned by r and moved by w, world B moved by w
-    reversed (inf where a position overflows: refused as not finite).
-    """
+    """Return RIG's poses (R_a, b_a, R_b, b_b) in worlds moved by w and turned by r."""
     scale = abs(w[0])
     with np.errstate(over='ignore'):
         return (r @ RIG.R_a, scale * RIG.b_a @ r.T + w, RIG.R_b, scale * RIG.b_b + w[::-1])

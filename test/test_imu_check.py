@@ -165,11 +165,7 @@ def test_gyro_in_degrees(real, tmp_path, capsys):
 
 
 def recipe(line, fields):
-    """
-    Apply a fix's axis map to recorded fields: 'x = -orientation.y, ...' or 'x = +y, ...'.
-
-    fields: {name: (N,) values} of the names the map reads; returns the (N, k) result.
-    """
+    """Apply a fix's axis map ('x = -orientation.y, ...') to fields {name: (N,)}; return (N, k)."""
     columns = []
     for part in line.split(', '):
         sign, name = re.fullmatch(r'\w = ([+-]?)([\w.]+)', part).groups()
@@ -317,11 +313,7 @@ def window(recording, start, end):
 
 
 def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
-    """
-    Windows of 2, 5 and 10 s, 1.5 s apart, over the whole recording, with the odometry.
-
-    The bag is read once; each window goes through the command's run as --start S --end E.
-    """
+    """Windows of 2, 5 and 10 s over the whole clean recording: no fault."""
     whole = imu_recording.read(bh.REAL, ref_topic=ODOM)
     monkeypatch.setattr(imu_recording, 'read',
                         lambda *args, **_: window(whole, args[4], args[5]))

@@ -47,13 +47,7 @@ def _allowed(element, attributes):
 
 
 def launch_command(overrides=None, share=REPO):
-    """
-    (pkg, exec, ros_args) of the file's one node with launch arguments ``overrides``.
-
-    As launch_ros builds it: --ros-args, -r __node:=NAME, -r __ns:=/NS, --params-file for
-    each <param from>, -r FROM:=TO for each <remap>. ``share`` stands for the package's
-    share directory ($(find-pkg-share rot_tools)): the repository has the same layout.
-    """
+    """(pkg, exec, ros_args) of the file's one node, as launch_ros builds it from the file."""
     root = ElementTree.parse(LAUNCH_FILE).getroot()
     assert root.tag == 'launch'
     args, node = {}, None

@@ -115,12 +115,7 @@ def git(*args, cwd=REPO):
 
 
 class FreshClone:
-    """
-    A git clone of this checkout, ``shared`` beside it, and README's make commands dry-run.
-
-    ``dry_runs[command]`` is (exit status, output) of ``make -n TARGET`` in the clone without
-    a venv.
-    """
+    """A git clone of this checkout, ``shared`` beside it, and README's make commands dry-run."""
 
     def __init__(self, top):
         self.path = top / 'rot_tools'

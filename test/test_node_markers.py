@@ -219,12 +219,7 @@ def test_the_picture_timer_exists_only_while_markers_are_published(make_rig):  #
 
 def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
         make_rig, monkeypatch):  # noqa: F811
-    """
-    Check that a picture waits for its turn (a 2 s throttle here); switching off deletes, once.
-
-    The DELETEs come in the frame of the picture shown, not of the one waiting, and the one
-    waiting is not drawn, not even when the markers are switched on again.
-    """
+    """Switching markers off deletes the picture shown, once; the one waiting is never drawn."""
     monkeypatch.setattr(pictures, 'MARKER_RATE', 0.5)
     rig = make_rig()  # noqa: F811
     shown = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), frame='odom'))

@@ -101,12 +101,7 @@ class Reference:
                 samples[nanoseconds(t.header.stamp)] = hom(t.transform)
 
     def edge(self, child, ns):
-        """
-        Return (parent, T) of child's edge at stamp ns, or None.
-
-        (parent, T) of child's edge at stamp ns, or None when the samples around it are
-        not both here (T0·expm(s·logm(T0⁻¹T1)) between them).
-        """
+        """Return (parent, T) of child's edge at stamp ns, or None without samples around it."""
         if child in self.static:
             return self.static[child]
         parent, samples = self.samples[child]
@@ -150,11 +145,7 @@ def node_args(namespace, reference='odom', body='gimbal'):
 
 
 def wait_started(tester, topic):
-    """
-    Wait until the node publishes ``topic`` (subscribed by the tester): it has started.
-
-    A node process takes seconds to start on a loaded machine: up to 30 s here.
-    """
+    """Wait (up to 30 s) until the node publishes ``topic``: it has started."""
     sub = tester._subscriptions[topic]
     tester.spin_until(lambda: sub.get_publisher_count() > 0, TIMEOUT * 6,
                       f'a publisher on {topic}')
@@ -168,12 +159,7 @@ def describe(tester, node_name):
 
 @pytest.fixture(scope='module')
 def followed(tmp_path_factory, tester_context):
-    """
-    One node process following odom → gimbal on a /tf of its own, fed by one tf_publisher.
-
-    For the tests that only read its outputs and its report. Its tester hears that /tf too
-    (``reference``) and the node's outputs from its start.
-    """
+    """One node process following odom → gimbal on a /tf of its own, for tests that only read."""
     from conftest import NodeProcess, Tester
     namespace = f'/{RUN}/followed'
     tester = Tester(tester_context, name='followed_tester')
@@ -196,12 +182,7 @@ def followed(tmp_path_factory, tester_context):
 
 @pytest.fixture(scope='module')
 def real_tf(tester_context):
-    """
-    One tf_publisher on this run's /tf and /tf_static, the names rotation_client reads.
-
-    In this run's own DDS domain; its tester hears both (``reference``), the whole chain and
-    the second tree heard before the first test.
-    """
+    """One tf_publisher on this run's /tf and /tf_static, the names rotation_client reads."""
     from conftest import Tester
     tester = Tester(tester_context, name='real_tf_tester')
     publisher = start_tf_publisher('/tf', '/tf_static', lifetime=600)
@@ -398,14 +379,7 @@ def test_node_refuses_a_future_stamp_and_starts_over_when_time_goes_back(
 
 def test_large_tf_messages_are_cut_the_node_serves_on_and_ctrl_c_ends_it_within_a_second(
         node_process, tester, namespace):
-    """
-    Each TFMessage of 100,000 transforms is cut to its first 1,000, and the node serves on.
-
-    rclpy turns each into a message object in seconds of the node's time; Ctrl-C while it
-    makes one ends the node within a second of its own time, status 0, no traceback. (What
-    the middleware and rclpy keep of such messages is theirs: the node's growth beside a bare
-    /tf subscriber is bench/bench_overload.py --tf large's goal, not a test's.)
-    """
+    """A TFMessage of 100,000 transforms is cut to 1,000; Ctrl-C ends the node within a second."""
     import signal
     from geometry_msgs.msg import QuaternionStamped
     from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -450,12 +424,7 @@ def test_large_tf_messages_are_cut_the_node_serves_on_and_ctrl_c_ends_it_within_
 
 def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
         ros_context, tester, namespace, monkeypatch):
-    """
-    Junk frames fill the tree and keep the real ones out until they are not heard for the cache.
-
-    In-process, over DDS, with the cache cut to 1 s (what forgets is the node's sweep, not
-    the clock's 10 s); a frame name of 1 MB is refused and never logged whole (/rosout).
-    """
+    """Junk frames are forgotten after the cache; a 1 MB frame name is never logged whole."""
     from geometry_msgs.msg import QuaternionStamped
     from rclpy.parameter import Parameter
     from rot_tools.ros import tf_input
@@ -786,13 +755,7 @@ def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
 
 def test_refusals_of_every_kind_in_sequence_are_logged_without_a_traceback(
         node_process, tester, namespace):
-    """
-    Warnings (inputs, /tf) and errors (~/screw_path) alternate: each is its refusal line.
-
-    rclpy's logger keeps the severity of a call site's first message and raises at that
-    site for another one: one shared refusal line raised inside the callback (a traceback
-    in place of the refusal) from the second severity on.
-    """
+    """Warnings and errors alternating are each their refusal line, never a traceback."""
     from geometry_msgs.msg import PoseStamped, QuaternionStamped
     from nav_msgs.srv import GetPlan
     from rclpy.qos import qos_profile_sensor_data

@@ -99,12 +99,7 @@ def make_tree(stamps=np.arange(0.0, 5.01, 0.5), **kwargs):
 
 
 def ref_edges_at(statics, t, stamps):
-    """
-    Return every edge's reference 4×4 at time t.
-
-    Every edge's reference 4×4 at time t: statics as set, dynamic edges interpolated
-    between the samples around t (T0·expm(s·logm(T0⁻¹T1))).
-    """
+    """Return every edge's reference 4×4 at time t, dynamic ones by T0·expm(s·logm(T0⁻¹T1))."""
     edges = dict(statics)
     for child, parent in DYNAMIC.items():
         i = int(np.searchsorted(stamps, t))
