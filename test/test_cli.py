@@ -163,7 +163,6 @@ def check_quaternion(printed, R):
     close(q, reference)
 
 
-# ---------------------------------------------------------------------------------------
 # Each subcommand
 
 
@@ -314,7 +313,6 @@ def test_yaml_and_json_carry_the_same_report():
     assert from_yaml == from_json
 
 
-# ---------------------------------------------------------------------------------------
 # Quaternions (x, y, z, w: the ROS message order; --wxyz reads w first)
 
 
@@ -394,7 +392,6 @@ def test_screw_from_a_ros_pose():
     assert wxyz == rep
 
 
-# ---------------------------------------------------------------------------------------
 # Frames (Jia §4), homogeneous matrices, points (Jia §5)
 
 
@@ -521,7 +518,6 @@ def test_point_image_and_coordinates_in_the_moved_frame(args):
         close(R @ pt['in_moved_frame'] + b, p)  # back to the reference frame
 
 
-# ---------------------------------------------------------------------------------------
 # Options anywhere, --version, hints
 
 COMMON_OPTIONS = {  # option → its arguments, for a quaternion input
@@ -608,7 +604,6 @@ def test_radians_value_is_kept_when_hinting():
     check_rotation(rep, rot_z(90.0))  # 90 rad, as typed
 
 
-# ---------------------------------------------------------------------------------------
 # Help
 
 
@@ -631,7 +626,6 @@ def test_main_help():
         assert f'\n    {command} ' in proc.stdout
 
 
-# ---------------------------------------------------------------------------------------
 # Bad input: one line on stderr, status 2
 
 

@@ -129,7 +129,6 @@ def test_version_without_the_distribution_is_one_error_line(monkeypatch, capsys)
         'metadata)\n')
 
 
-# ---------------------------------------------------------------------------------------
 # rot-tools' commands, and rotation_client
 
 

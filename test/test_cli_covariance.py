@@ -102,7 +102,6 @@ def close_to(got, want):
     np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-7 * np.abs(want).max())
 
 
-# ---------------------------------------------------------------------------------------
 # Values: every kind of pair, every input kind, both frames
 
 PAIRS = [  # (rotation input, rotation, from, to, --frame, --to-frame or None)
@@ -169,7 +168,6 @@ def test_small_covariances_keep_their_digits():
     assert rep['stddev'][2] == 0.005
 
 
-# ---------------------------------------------------------------------------------------
 # Gimbal lock: degenerate, no numbers, a note, status 0
 
 
@@ -190,7 +188,6 @@ def test_gimbal_lock_is_degenerate_with_a_note(words, source, target, seq):
     assert proc.stderr.count('\n') == 1
 
 
-# ---------------------------------------------------------------------------------------
 # Refusals: one line, status 2
 
 COV = ['--cov', '1', '0', '0', '0', '2', '0', '0', '0', '3']
@@ -295,7 +292,6 @@ def test_bad_rotation_or_misplaced_option(args, message):
     assert proc.stderr.count('\n') == 1, proc.stderr
 
 
-# ---------------------------------------------------------------------------------------
 # Help
 
 
@@ -315,7 +311,6 @@ def test_help_lists_the_command_its_inputs_and_examples_that_run():
     assert inner.startswith('usage: rot-tools covariance quaternion X Y Z W\n')
 
 
-# ---------------------------------------------------------------------------------------
 # doc/covariance.md: the Jackal's IMU
 
 

@@ -20,7 +20,6 @@ PARAMETERS = {'euler_sequence': 'ZYX', 'angle_unit': 'rad', 'publish_markers': T
 """The node's parameters as the client reads them (the defaults)."""
 
 
-# ---------------------------------------------------------------------------------------
 # The input each verb fills
 
 
@@ -112,7 +111,6 @@ def test_cov_is_the_rotations_covariance_of_the_message(name):
     assert COVARIANCE[name](msg) == expected
 
 
-# ---------------------------------------------------------------------------------------
 # The answer, by output name
 
 ANSWER_PARAMETERS = {'euler_sequence': 'xyz', 'angle_unit': 'deg', 'publish_markers': True}
@@ -277,7 +275,6 @@ def test_an_answer_without_an_output_of_every_input_is_not_complete():
         assert stamp is None, name
 
 
-# ---------------------------------------------------------------------------------------
 # echo
 
 

@@ -55,7 +55,6 @@ def wait_subscribed(tester, topic):
                       f'a subscription on {topic}')
 
 
-# ---------------------------------------------------------------------------------------
 # The angle hint
 
 
@@ -72,7 +71,6 @@ def test_angle_hint(here, node, args, hint):
     assert yaml.safe_load(result.stdout)['answer']['euler_angles']['unit'] == 'rad'
 
 
-# ---------------------------------------------------------------------------------------
 # echo
 
 
@@ -243,7 +241,6 @@ def test_diagnostics_with_nothing_published(here, namespace):
                     f"{os.environ['ROS_DOMAIN_ID']}?)")
 
 
-# ---------------------------------------------------------------------------------------
 # set
 
 
@@ -336,7 +333,6 @@ def test_set_a_value_that_does_not_fit_the_type(here, node, args, why):
     assert line == (f'rotation_client: parameter {args[0]} of node {node} is a {kind}: {why}')
 
 
-# ---------------------------------------------------------------------------------------
 # param get / list
 
 
@@ -383,7 +379,6 @@ def test_param_bad_arguments(here, args, message):
     assert line.startswith('rotation_client: error: ') and message in line, line
 
 
-# ---------------------------------------------------------------------------------------
 # play
 
 JACKAL = {'/imu/data': 'imu', '/jackal_velocity_controller/odom': 'odometry'}
@@ -587,7 +582,6 @@ def test_play_interrupted_exits_130_quietly(tester, namespace):
     assert interrupt(play) == (130, f'playing /imu/data (sensor_msgs/msg/Imu) on {topic}\n', '')
 
 
-# ---------------------------------------------------------------------------------------
 # tf-demo
 
 
@@ -665,7 +659,6 @@ def test_tf_demo_without_tf2_msgs():
         result.stderr)
 
 
-# ---------------------------------------------------------------------------------------
 # Ctrl-C
 
 
@@ -681,7 +674,6 @@ def test_echo_interrupted_exits_130_quietly(here, node, tester):
     assert first == ['---\n']
 
 
-# ---------------------------------------------------------------------------------------
 # doc/client.md's examples of echo, set and param
 
 
@@ -722,7 +714,6 @@ def _stamps_elided(text):
     return re.sub(r'(\n\s*sec: )\d+(\n\s*nanosec: )\d+', r'\1...\2...', text)
 
 
-# ---------------------------------------------------------------------------------------
 # A full disk
 
 

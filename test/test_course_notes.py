@@ -45,7 +45,6 @@ def notes_q_eq11(r):
                      r[..., 0, 1] - r[..., 1, 0]], -1)
 
 
-# ----------------------------------------------------------------------------------------
 # Worked examples that are right: exact expectations.
 
 
@@ -145,7 +144,6 @@ def test_000_example3_no_jump_inside_the_flagged_band(lock):
             assert h.max_abs(euler_to_matrix(got, 'ZYX') - r) <= 2e-9 + 1e-12
 
 
-# ----------------------------------------------------------------------------------------
 # Slips, pinned.
 
 

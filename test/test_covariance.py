@@ -341,7 +341,6 @@ def test_change_covariance_frame_agrees_with_sampling_and_batches():
                                change_covariance_frame(C0, R[0]), rtol=1e-14)
 
 
-# ---------------------------------------------------------------------------------------
 # The ends of float64: converted at the scale of 1, exact arithmetic as the reference
 
 

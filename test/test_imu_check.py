@@ -132,7 +132,6 @@ def one_error_line(status, out, err, *words):
         assert word in err, err
 
 
-# ---------------------------------------------------------------------------------------
 # Faults put in
 
 
@@ -295,7 +294,6 @@ def test_clean_window_with_the_odometry_json(real, clean, capsys):
     assert len(data['checks']['mounting']['quaternion']) == 4
 
 
-# ---------------------------------------------------------------------------------------
 # Every window of the clean recording
 
 
@@ -330,7 +328,6 @@ def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
     assert found_faults == {}
 
 
-# ---------------------------------------------------------------------------------------
 # The reference from another recording of the run (--ref-bag)
 
 
@@ -408,7 +405,6 @@ def test_topics_stamped_a_day_apart_are_refused(real, tmp_path, capsys):
                    f'{span(odom_ns)}) do not overlap in time: 27.0 h apart\n')
 
 
-# ---------------------------------------------------------------------------------------
 # doc/imu.md's example: the whole real recording, without and with the odometry
 
 
@@ -425,7 +421,6 @@ def test_doc_example_is_real_output(capsys, monkeypatch):
     assert_doc_output('imu-check-jackal', shown)  # ROT_TOOLS_UPDATE_DOCS=1 rewrites it
 
 
-# ---------------------------------------------------------------------------------------
 # Bad input: one line, exit status 2
 
 
@@ -588,7 +583,6 @@ def test_options_that_do_not_fit(capsys):
                                   'imu-check\n')
 
 
-# ---------------------------------------------------------------------------------------
 # The pieces
 
 

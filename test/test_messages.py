@@ -78,7 +78,6 @@ def unit(v):
     return v / np.linalg.norm(v)
 
 
-# ---------------------------------------------------------------------------------------
 # Inbound
 
 
@@ -270,7 +269,6 @@ def test_quaternion_stamped(take):
     assert info.value.reason == 'non_unit_quaternion'
 
 
-# ---------------------------------------------------------------------------------------
 # Outbound
 
 

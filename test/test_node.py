@@ -45,7 +45,6 @@ STAMPED = ALWAYS[1:]
 """Those that carry the input's header (all but the MultiArray rotation_matrix)."""
 
 
-# ---------------------------------------------------------------------------------------
 # Messages and expected values
 
 
@@ -187,7 +186,6 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
                                    scale * screw.direction, rtol=0, atol=ATOL * size * 10)
 
 
-# ---------------------------------------------------------------------------------------
 # The rig: node under test + tester
 
 
@@ -304,7 +302,6 @@ def random_quaternion():
     return q / np.linalg.norm(q)
 
 
-# ---------------------------------------------------------------------------------------
 # Topics
 
 POSE_CASES = {
@@ -543,7 +540,6 @@ def test_sensor_data_publisher_is_served(rig):
     check_outputs(out, 4242, 'map', quaternion_to_matrix(q), p)
 
 
-# ---------------------------------------------------------------------------------------
 # Bad input
 
 
@@ -731,7 +727,6 @@ def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
     assert refused['total'] == 3 + refused['no_orientation']
 
 
-# ---------------------------------------------------------------------------------------
 # ~/describe
 
 
@@ -864,7 +859,6 @@ def test_describe_reports_gimbal_lock(rig):
     assert report['euler']['angles'][2] == 0.0
 
 
-# ---------------------------------------------------------------------------------------
 # ~/screw_path
 
 
@@ -961,7 +955,6 @@ def test_screw_path_refusals(rig, case):
     assert refused['total'] == 1 and refused[reason] == 1
 
 
-# ---------------------------------------------------------------------------------------
 # The tables: a new output or parameter is one row
 
 
@@ -984,7 +977,6 @@ def test_a_new_parameter_is_one_row(ros_context, make_rig, namespace, monkeypatc
                      parameter_overrides=[Parameter('test_limit', value=9.0)])
 
 
-# ---------------------------------------------------------------------------------------
 # Parameters
 
 

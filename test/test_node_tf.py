@@ -28,7 +28,6 @@ CHAIN = ['odom', 'base_link', 'camera', 'gimbal']
 TOL = 1e-9
 
 
-# ---------------------------------------------------------------------------------------
 # The publisher process and the independent reference
 
 
@@ -197,7 +196,6 @@ def real_tf(tester_context):
         tester.close()
 
 
-# ---------------------------------------------------------------------------------------
 # The node
 
 
@@ -467,7 +465,6 @@ def test_junk_frames_are_forgotten_and_long_names_never_logged_whole(
         node.destroy_node()
 
 
-# ---------------------------------------------------------------------------------------
 # rotation_client tf
 
 
@@ -546,7 +543,6 @@ def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
     assert os.environ['ROS_DOMAIN_ID']  # the run's own domain (conftest)
 
 
-# ---------------------------------------------------------------------------------------
 # The follower in-process: each refusal's reason, stamps to the nanosecond
 
 
@@ -749,7 +745,6 @@ def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
         assert 'tf2_msgs is not importable (no tf2_msgs here): run make' in result.stderr
 
 
-# ---------------------------------------------------------------------------------------
 # Refusals of every kind, one after another
 
 

@@ -58,7 +58,6 @@ def refused(node):
     return {k: v for k, v in node.refused_counts().items() if v}
 
 
-# ---------------------------------------------------------------------------------------
 # Every failure is a counted refusal with its reason
 
 
@@ -83,7 +82,6 @@ def test_huge_positions_are_a_counted_refusal(service, tolerance):
     assert [p.pose.position.x for p in path.poses] == [0.0, 0.5, 1.0]
 
 
-# ---------------------------------------------------------------------------------------
 # A reply is bounded in bytes
 
 
@@ -134,7 +132,6 @@ def test_long_frame_id_times_many_poses_is_refused(service):
     assert len(short.poses) == MAX_PATH_STEPS + 1
 
 
-# ---------------------------------------------------------------------------------------
 # Error logs throttled per reason
 
 

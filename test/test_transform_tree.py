@@ -116,7 +116,6 @@ def ref_edges_at(statics, t, stamps):
 STAMPS = np.arange(0.0, 5.01, 0.5)
 
 
-# ---------------------------------------------------------------------------------------
 # Exports and the shape of the tree
 
 
@@ -140,7 +139,6 @@ def test_chain_up_down_and_across_through_the_common_ancestor():
     assert tree.parent('map') is None
 
 
-# ---------------------------------------------------------------------------------------
 # Lookups against products of 4×4 matrices
 
 
@@ -233,7 +231,6 @@ def test_random_trees_against_4x4_products(parents, pair, seed):
     assert h.max_abs(product - np.eye(4)) <= 1e-11
 
 
-# ---------------------------------------------------------------------------------------
 # Batches of stamps
 
 
@@ -273,7 +270,6 @@ def test_a_batch_of_samples_equals_one_sample_at_a_time():
         assert np.array_equal(got[0], R[k]) and np.array_equal(got[1], b[k])
 
 
-# ---------------------------------------------------------------------------------------
 # Time: the latest common time, extrapolation, the cache
 
 
@@ -420,7 +416,6 @@ def test_samples_out_of_order_and_repeated_stamps():
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
 
 
-# ---------------------------------------------------------------------------------------
 # Refusals
 
 
@@ -628,7 +623,6 @@ def test_an_edges_memory_is_bounded_by_max_samples_and_given_back():
     assert tree.time_range('a', 'b') == (21.0, 31.0)
 
 
-# ---------------------------------------------------------------------------------------
 # The user documentation's example
 
 
@@ -640,7 +634,6 @@ def test_the_example_of_doc_tf_md_prints_what_the_page_shows(capsys):
     assert_doc_output('tf-tree-example', capsys.readouterr().out)
 
 
-# ---------------------------------------------------------------------------------------
 # A recording followed through the tree
 
 
