@@ -316,10 +316,7 @@ def _fail_outcome(call, m, v, batch=False):
 
 
 def test_one_item_and_a_batch_fail_alike_for_every_public_function():
-    # Each call on one item and on a batch of that one item: the same values (NaN and inf
-    # where the other has them) or the same RotationError (the batch naming item (0,)); never
-    # ZeroDivisionError or "math domain error" on one side only.
-    # (NumPy's warnings of arithmetic on garbage given with check=False are not the subject)
+    # The same values (NaN and inf alike) or the same RotationError, never another exception.
     mats, vecs = _weird_items()
     differ = []
     for label, call in _fail_alike_calls():
@@ -353,9 +350,7 @@ def test_one_item_gives_what_a_batch_gives_where_float_arithmetic_would_raise():
 
 
 def test_apply_to_one_gives_the_numbers_of_apply_as_python_numbers():
-    # The kernel's own floats (where float arithmetic raises, those of a batch of one), the
-    # same numbers as apply's NumPy scalars; an input as a tuple of floats is taken as the
-    # array; a batch is refused.
+    # apply_to_one's Python floats are apply's numbers; a batch is refused.
     def kernel(ops, v):
         return _Three(quotient=v[0] / v[1], root=ops.sqrt(v[0]),
                       sine=ops.sin(v[2] * 1e308 * 10.0))
@@ -556,9 +551,7 @@ _lock_tol = st.one_of(st.just(None), st.sampled_from([0.0, 1e-9, 1e-7, 1e-6, 1e-
          lock_tol=0.0, check=True)  # (θ2 = π/2 exactly: locked at lock_tol 0)
 @example(rotation=(np.diag([1.0, -1.0, -1.0]), 'zxz'), lock_tol=0.0, check=True)  # (θ2 = π)
 def test_one_item_of_matrix_to_euler_gives_the_batch_formula(rotation, lock_tol, check):
-    # One rotation runs angles_kernel on FLOATS (its very bits, on libm), after apply's
-    # check. A batch of one runs it on ARRAYS: the same lock flag, and the same angles to
-    # libm's and NumPy's last bit, in every sequence, at and near gimbal lock.
+    # One item (on floats) and a batch of one (on arrays): the same lock flag and angles.
     R, seq = rotation
     options = {'check': check} if lock_tol is None else {'check': check, 'lock_tol': lock_tol}
     angles, lock = rt.matrix_to_euler(R, seq, **options)

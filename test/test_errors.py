@@ -186,9 +186,7 @@ WITH_CHECK = {
 
 @pytest.mark.parametrize('name', WITH_CHECK)
 def test_check_false_skips_validation(name):
-    # Refused with the check; without it the function computes from the matrix as given:
-    # the answer moves by about the size of the perturbation (1e-6) — no error, no NaN, no
-    # projection onto a rotation first. (The modules' own tests pin the exact formulas.)
+    # Without the check the answer moves by about the perturbation (1e-6): no error, no NaN.
     call = WITH_CHECK[name]
     r = rot_z(0.4) @ rot_y(0.3)
     bad = non_orthogonal(1e-6) @ r

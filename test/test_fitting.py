@@ -622,10 +622,8 @@ def dominated_sets(rng, n_sets, n_pairs):
 
 @pytest.mark.parametrize('ratio', [1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16])
 def test_align_dominant_weight_against_scipy(ratio):
-    # The exact minimiser with weights [ratio, 1, 1, 1] lies within ~Σ wᵢ|aᵢ||bᵢ| / (ratio ·
-    # |a0||b0|) of the answer for an infinite first weight (that pair aligned exactly, the
-    # rest fitted about it: scipy_primary); scipy's own finite-weight SVD is accurate to
-    # ~ε·ratio. Each is a reference where it is sharp.
+    # Two references, each where it is sharp: scipy_primary (off by ~1/ratio) and scipy's
+    # finite-weight SVD (off by ~ε·ratio).
     rng = np.random.default_rng(int(np.log10(ratio)))
     a, b = dominated_sets(rng, 60, 4)
     weights = np.array([ratio, 1.0, 1.0, 1.0])
@@ -690,19 +688,14 @@ def rot_z_scipy(angle):
 
 @pytest.mark.parametrize('delta', [1e-12, 1e-11, 1e-10])
 def test_a_mean_decided_by_rounding_is_refused(delta):
-    # rot_z(0) and rot_z(π − δ), equal weights: S = Σ Rᵢ has singular values (2, δ, δ), and
-    # its entries carry rounding of ~ε, so the turn about z of the answer is only known to
-    # ~ε/δ (2e-4 rad at δ = 1e-12). Refused while δ ≤ UNIQUE_TOL·σ1 = 2e-9: a threshold
-    # moved down to 1e-15 (a surviving mutant) accepted these and returned noise.
+    # S = Σ Rᵢ has singular values (2, δ, δ): the turn about z is known only to ~ε/δ.
     with pytest.raises(RotationError, match=r'mean rotation is not unique'):
         mean_rotation(np.stack([np.eye(3), rot_z_scipy(PI - delta)]))
 
 
 @pytest.mark.parametrize('delta', [1e-7, 1e-6])
 def test_a_mean_the_data_decides_is_returned(delta):
-    # The same pair a little further from π apart (σ2/σ1 = δ/2 = 5e-8 and up): determined by
-    # the data to ~ε/δ, returned, and equal to rot_z((π − δ)/2) to that accuracy; a
-    # threshold moved up (1e-6) refused it.
+    # A little further from π apart the data decide it, to ~ε/δ.
     M = mean_rotation(np.stack([np.eye(3), rot_z_scipy(PI - delta)]))
     ref = Rotation.from_rotvec([0.0, 0.0, (PI - delta) / 2]).as_matrix()
     assert scipy_angle(M, ref) <= 64 * EPS / delta

@@ -192,10 +192,7 @@ def test_make_run_installs_the_extras_then_starts_the_node(clone):
 
 
 def test_make_run_s_pip_installs_resolve(clone):
-    # pip reads its requirement and constraint files before it installs anything: a file it
-    # refuses (a constraint with an extra, dask[distributed]) fails make run on every new
-    # machine. Each pip install of the dry run, but the editable one, is run with --dry-run
-    # --no-index by the venv make run sets up, which holds every pin already: no download.
+    # Each pip install but the editable one runs with --dry-run --no-index: pip reads its files.
     if Path(sys.prefix).resolve() != (REPO / '.venv').resolve():
         pytest.skip('make run sets up .venv: its pins are checked by the suite that runs there')
     status, out = clone.dry_runs['make run']

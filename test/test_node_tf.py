@@ -298,8 +298,6 @@ def test_refusals_are_counted_and_the_node_keeps_serving(node_process, tester, n
             Parameter('tf_body_frame', value=body)])
         assert all(r.successful for r in results)
         tester.spin_until(lambda: counts().get(reason, 0) > before, TIMEOUT * 2, reason)
-    # (The warnings of one reason are throttled to one a second: the one shown may be an
-    # earlier one, from the start-up while the tree filled.)
     warnings = node.wait_for_stderr("following 'old_marker' in 'gimbal'")
     assert re.search(r"\(tf_extrapolation\): lookup of '\w+' in '\w+' at t = \S+ s would "
                      r"extrapolate [\d.]+ s before the oldest sample of the edge '\w+' → '\w+'",

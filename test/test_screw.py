@@ -540,9 +540,7 @@ def test_decompose_twist_is_screw_log_at_tiny_angles():
 
 @pytest.mark.parametrize('angle', [1e-8, 2e-8, 1e-7, 1e-6, 3e-6, 1e-5])
 def test_screw_exp_between_series_and_closed_form(angle):
-    # Below a cut-off screw_exp uses sin θ/θ ≈ 1 and (1 − cos θ)/θ ≈ θ/2, exact to double
-    # precision only below ~1e-8 (the dropped θ²/6 is 1.7e-11 at 1e-5): b must match the
-    # exponential of the twist to 1e-14 relative here.
+    # b must match the exponential series of the twist to 1e-14 relative at small θ.
     rng = np.random.default_rng(54)
     w = h.random_unit_vectors(rng, 100) * angle
     v = rng.normal(size=(100, 3)) * 10.0 ** rng.uniform(-2, 2, size=(100, 1))

@@ -288,8 +288,7 @@ def exact_quaternion(axis, angle):
 
 
 def test_matrix_to_quaternion_adversarial_closed_forms():
-    # ~1e-15 at 0, 1e-12, π − 1e-9 and π against (sin(θ/2)·l̂, cos(θ/2)); the input matrix
-    # is itself rounded, so a few ulps is the floor.
+    # Against (sin(θ/2)·l̂, cos(θ/2)) to a few ulps.
     r, axis, angle = adversarial_rotations()
     n = len(angle)
     q = matrix_to_quaternion(r[:n])

@@ -16,8 +16,6 @@ import pytest
 UPSTREAM_HASH = 'RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087'
 """The type hash of tf2_msgs/msg/TFMessage in ROS 2 Jazzy (tf2_msgs 0.36)."""
 # What a sourced ROS install or a developer's shell may set; the child runs without them.
-# (The ROS wheels' start-up hook sets LD_LIBRARY_PATH and its guard variable, then re-executes
-# Python: the child, started without either, does it again by itself.)
 ROS_PATHS = ('LD_LIBRARY_PATH', '_ROS_WHEELS_BOOTSTRAP_COMPLETE', 'AMENT_PREFIX_PATH',
              'CMAKE_PREFIX_PATH', 'PYTHONPATH', 'COLCON_PREFIX_PATH', 'ROS_DISTRO',
              'ROS_VERSION')
