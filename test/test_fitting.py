@@ -207,25 +207,24 @@ def test_mean_of_a_symmetric_set_is_refused():
         mean_rotation(r, [3.0, 3.0, 2.0, 1.0])
 
 
-@pytest.mark.parametrize('weights', [[1.0, -0.5, 1.0], [-1e-300, 1.0, 1.0]])
-def test_mean_negative_weights(weights):
-    r = clusters(1, 3, 1.0, 19)[0]
-    bad = min(weights)
-    with pytest.raises(RotationError, match=re.escape(f'weights must be ≥ 0, got {bad:g}')):
-        mean_rotation(r, weights)
+MEAN_REFUSALS = {
+    'negative weight': (1, [1.0, -0.5, 1.0], re.escape('weights must be ≥ 0, got -0.5')),
+    'tiny negative weight': (1, [-1e-300, 1.0, 1.0], re.escape('weights must be ≥ 0, got -1e-300')),
+    'zero weights': (1, [0.0, 0.0, 0.0], r'weights are all 0'),
+    'zero weights of one set': (2, [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], r'weights are all 0'),
+    'two weights': (1, [1.0, 1.0], r'weights must have one entry per rotation \(3\)'),
+    'four weights': (1, [1.0] * 4, r'weights must have one entry per rotation \(3\)'),
+    'one weight': (1, 1.0, r'weights must have one entry per rotation \(3\)'),
+}
+"""mean_rotation of n_sets sets of three rotations with weights that are refused, and why."""
 
 
-def test_mean_all_zero_weights():
-    with pytest.raises(RotationError, match=r'weights are all 0'):
-        mean_rotation(clusters(1, 3, 1.0, 20)[0], [0.0, 0.0, 0.0])
-    with pytest.raises(RotationError, match=r'weights are all 0'):
-        mean_rotation(clusters(2, 3, 1.0, 20), [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
-
-
-@pytest.mark.parametrize('weights', [[1.0, 1.0], [1.0] * 4, 1.0])
-def test_mean_mismatched_weight_count(weights):
-    with pytest.raises(RotationError, match=r'weights must have one entry per rotation \(3\)'):
-        mean_rotation(clusters(1, 3, 1.0, 21)[0], weights)
+@pytest.mark.parametrize('case', MEAN_REFUSALS)
+def test_mean_refuses_bad_weights(case):
+    n_sets, weights, message = MEAN_REFUSALS[case]
+    r = clusters(n_sets, 3, 1.0, 20)
+    with pytest.raises(RotationError, match=message):
+        mean_rotation(r[0] if n_sets == 1 else r, weights)
 
 
 def test_mean_needs_a_set_of_rotations():
@@ -417,34 +416,33 @@ def test_align_any_finite_scale(scale_a, scale_b):
     assert np.isfinite(rmsd)
 
 
-@pytest.mark.parametrize('which', ['a', 'b'])
-def test_align_zero_vectors(which):
-    v = {'a': np.eye(3), 'b': np.eye(3)}
-    v[which] = v[which].copy()
-    v[which][1] = 0.0
-    with pytest.raises(RotationError, match=re.escape(f'{which}[1] is the zero vector')):
-        align_vectors(v['a'], v['b'])
+ALIGN_REFUSALS = {
+    'a zero vector in a': (np.diag([1.0, 0.0, 1.0]), np.eye(3), None,
+                           re.escape('a[1] is the zero vector')),
+    'a zero vector in b': (np.eye(3), np.diag([1.0, 0.0, 1.0]), None,
+                           re.escape('b[1] is the zero vector')),
+    'counts 3 and 2': (np.ones((3, 3)), np.ones((2, 3)), None, 'a has 3 vectors but b has 2'),
+    'counts 1 and 4': (np.ones((1, 3)), np.ones((4, 3)), None, 'a has 1 vectors but b has 4'),
+    'weight count': (np.eye(3), np.eye(3), [1.0, 1.0],
+                     r'one entry per vector pair \(3\), got 2 entries'),
+    'negative weight': (np.eye(3), np.eye(3), [1.0, 1.0, -1.0],
+                        r'weights must be ≥ 0, got -1 at index 2'),
+    'zero weights': (np.eye(3), np.eye(3), [0.0, 0.0, 0.0],
+                     r'weights are all 0: at least one vector pair'),
+    'one vector': ([1.0, 0.0, 0.0], [[1.0, 0.0, 0.0]], None,
+                   r'a must have shape \(\.\.\., N, 3\)'),
+    'no pairs': (np.zeros((0, 3)), np.zeros((0, 3)), None, r'no vector pairs'),
+    'batches': (np.ones((2, 4, 3)), np.ones((3, 4, 3)), None, r'do not broadcast'),
+    'inf': (np.eye(3), [[1.0, 0, 0], [0, np.inf, 0], [0, 0, 1]], None, r'b must be finite'),
+}
+"""align_vectors(a, b, weights) that are refused, and what the message says."""
 
 
-@pytest.mark.parametrize('n_a, n_b', [(3, 2), (1, 4)])
-def test_align_mismatched_counts(n_a, n_b):
-    with pytest.raises(RotationError, match=f'a has {n_a} vectors but b has {n_b}'):
-        align_vectors(np.ones((n_a, 3)), np.ones((n_b, 3)))
-
-
-def test_align_mismatched_weight_count():
-    with pytest.raises(RotationError, match=r'one entry per vector pair \(3\), got 2 entries'):
-        align_vectors(np.eye(3), np.eye(3), [1.0, 1.0])
-
-
-def test_align_negative_weights():
-    with pytest.raises(RotationError, match=r'weights must be ≥ 0, got -1 at index 2'):
-        align_vectors(np.eye(3), np.eye(3), [1.0, 1.0, -1.0])
-
-
-def test_align_all_zero_weights():
-    with pytest.raises(RotationError, match=r'weights are all 0: at least one vector pair'):
-        align_vectors(np.eye(3), np.eye(3), [0.0, 0.0, 0.0])
+@pytest.mark.parametrize('case', ALIGN_REFUSALS)
+def test_align_refusals(case):
+    a, b, weights, message = ALIGN_REFUSALS[case]
+    with pytest.raises(RotationError, match=message):
+        align_vectors(a, b, weights)
 
 
 def test_align_without_a_best_rotation():
@@ -455,17 +453,6 @@ def test_align_without_a_best_rotation():
     with pytest.raises(RotationError, match=r'best rotation is not unique: the singular values'
                                             r' of H = Σ wᵢ·aᵢbᵢᵀ are .* det -1'):
         align_vectors(np.eye(3), np.diag([1.0, 1.0, -1.0]))
-
-
-def test_align_shapes_refused():
-    with pytest.raises(RotationError, match=r'a must have shape \(\.\.\., N, 3\)'):
-        align_vectors([1.0, 0.0, 0.0], [[1.0, 0.0, 0.0]])
-    with pytest.raises(RotationError, match=r'no vector pairs'):
-        align_vectors(np.zeros((0, 3)), np.zeros((0, 3)))
-    with pytest.raises(RotationError, match=r'do not broadcast'):
-        align_vectors(np.ones((2, 4, 3)), np.ones((3, 4, 3)))
-    with pytest.raises(RotationError, match=r'b must be finite'):
-        align_vectors(np.eye(3), [[1.0, 0, 0], [0, np.inf, 0], [0, 0, 1]])
 
 
 # ---- random_rotations ----------------------------------------------------------------------
