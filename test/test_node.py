@@ -1045,15 +1045,6 @@ def test_quaternion_tolerance(rig):
     assert rig.report()['refused']['non_unit_quaternion'] == 2
 
 
-def test_publish_markers_false(rig):
-    assert set_one(rig.node, 'publish_markers', False).successful
-    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)), marker=False)
-    assert set_one(rig.node, 'publish_markers', True).successful
-    stamp = rig.send('pose', pose_stamped((0, 1, 0, 0)))
-    rig.outputs(stamp)
-    assert [m.header.stamp.sec for m in rig.received('screw_axis')] == [stamp]
-
-
 def test_marker_scale(make_rig):
     rig = make_rig(marker_scale=0.25)
     q, p = POSE_CASES['general']
