@@ -92,10 +92,7 @@ def expm(a, squarings=None):
     """
     Matrix exponential by scaling and squaring of a Taylor series (no eigen-decomposition).
 
-    The squaring runs on E = exp(A / 2^s) - I, E <- 2E + E E, which keeps the small part
-    exact instead of rounding it against the identity.  For an se(3) 4x4 matrix the series
-    of the translation column converges as fast as the rotation block, so the scaling is
-    chosen from the upper-left 3x3 block only.
+    Squaring E = exp(A / 2^s) - I as E <- 2E + E E keeps the small part exact.
     """
     a = np.asarray(a, dtype=float)
     n = a.shape[-1]
@@ -154,12 +151,7 @@ def ref_quaternion_to_matrix(q):
 
 
 def cube_rotations():
-    """
-    Return the 24 rotations that map the cube onto itself, exact signed permutations.
-
-    Their entries are exactly 0 and +/-1 (with -0.0 where a product of signs gives it), which
-    puts them at gimbal locks, at angle pi and at the +/-pi boundaries of the Euler ranges.
-    """
+    """Return the 24 rotations of the cube: exact signed permutations, at gimbal locks and π."""
     out = []
     for perm in itertools.permutations(range(3)):
         for signs in itertools.product((1.0, -1.0), repeat=3):

@@ -664,14 +664,7 @@ def test_checked_conversions_take_what_validate_rotation_takes(rotation, entry, 
 
 
 def _straddling_the_tolerance():
-    """
-    Matrices s·Q with s a few ulps either side of where a defect of s·Q reaches ROTATION_TOL.
-
-    For a rotation Q, |(s·Q)ᵀ(s·Q) − I| has s² − 1 on its diagonal and det(s·Q) − 1 = s³ − 1:
-    s near sqrt(1 ± tol) puts a column's squared norm at the edge, s near cbrt(1 ± tol) det R
-    (the columns then pass). Rounding spreads the computed defects over a few ulps around the
-    edge, so both sides and the floats at the edge itself are met.
-    """
+    """Matrices s·Q with s a few ulps either side of where their defect reaches ROTATION_TOL."""
     tol = so3.ROTATION_TOL
     out = []
     for q in [np.eye(3)] + ROTATIONS[::6]:

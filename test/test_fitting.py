@@ -550,11 +550,7 @@ def scipy_primary(a, b, weights, primary):
     """
     Return the rotation that aligns pair ``primary`` exactly and best fits the rest.
 
-    The answer of an infinite weight on that pair (scipy ≥ 1.12 computes it, 1.11 cannot), by
-    another road than rot_tools': scipy's rotations throughout, R1 the smallest rotation
-    taking b̂ onto â (from its rotation vector), then the turn φ about â where the torque of
-    the other pairs, Σ wᵢ aᵢ·(â × Rot(â, φ)·R1·bᵢ), vanishes at a maximum of Σ wᵢ aᵢ·R·bᵢ:
-    the best of 720 turns, refined by brentq to 1e-15 rad.
+    scipy's rotations throughout, the turn about â by a scan and brentq (not rot_tools' road).
     """
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     w = np.asarray(weights, dtype=float)
