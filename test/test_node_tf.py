@@ -546,33 +546,22 @@ def test_client_tf_shown_in_the_docs(tester, namespace, tf_publisher):
 
 def test_follower_refusals_and_stamps(ros_context):
     import rclpy
-    from geometry_msgs.msg import TransformStamped
     from rot_tools.ros.tf_input import TfFollower
     node = rclpy.create_node('follower', namespace=f'/{RUN}', context=ros_context)
     got, refused = [], []
     follower = TfFollower(node, lambda *a: got.append(a), lambda *a: refused.append(a),
                           max_frames=4)
     try:
-        def transform(parent, child, x=0.0, q=(0.0, 0.0, 0.0, 1.0), sec=1_700_000_000,
-                      nanosec=123_456_789):
-            msg = TransformStamped()
-            msg.header.frame_id, msg.child_frame_id = parent, child
-            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
-            msg.transform.translation.x = x
-            r = msg.transform.rotation
-            r.x, r.y, r.z, r.w = q
-            return msg
-
-        assert follower.add(transform('a', 'b', 1.0), False, '/tf')
-        assert follower.add(transform('b', 'e'), True, '/tf_static')  # a, b, e: 3 of 4
-        assert follower.add(transform('b', 'c', q=(0.0, 0.0, 1.0, 1.0)), True, '/tf_static') \
-            is False  # |q| = √2: not a unit quaternion
-        for msg, reason in [(transform('a', ''), 'tf_bad_frame'),
-                            (transform('', 'b'), 'tf_bad_frame'),
-                            (transform('a', 'x', math.nan), 'non_finite'),
-                            (transform('a', 'x', q=(0.0, 0.0, 0.0, 0.0)), 'zero_quaternion'),
-                            (transform('b', 'a'), 'tf_loop'),
-                            (transform('c', 'd'), 'tf_too_many_frames')]:
+        assert follower.add(make_transform('a', 'b', 1.0), False, '/tf')
+        assert follower.add(make_transform('b', 'e'), True, '/tf_static')  # a, b, e: 3 of 4
+        half_turn_too_long = make_transform('b', 'c', q=(0.0, 0.0, 1.0, 1.0))  # |q| = √2
+        assert follower.add(half_turn_too_long, True, '/tf_static') is False
+        for msg, reason in [(make_transform('a', ''), 'tf_bad_frame'),
+                            (make_transform('', 'b'), 'tf_bad_frame'),
+                            (make_transform('a', 'x', math.nan), 'non_finite'),
+                            (make_transform('a', 'x', q=(0.0,) * 4), 'zero_quaternion'),
+                            (make_transform('b', 'a'), 'tf_loop'),
+                            (make_transform('c', 'd'), 'tf_too_many_frames')]:
             refused.clear()
             assert follower.add(msg, False, '/tf') is False
             assert [r[1] for r in refused] == [reason]
@@ -584,7 +573,7 @@ def test_follower_refusals_and_stamps(ros_context):
         assert np.array_equal(R, np.eye(3)) and np.array_equal(b, [1.0, 0.0, 0.0])
         follower.update()  # no new common time: nothing more
         assert len(got) == 1
-        follower.add(transform('a', 'b', 2.0, nanosec=123_456_790), False, '/tf')
+        follower.add(make_transform('a', 'b', 2.0, nanosec=123_456_790), False, '/tf')
         follower.update()
         assert len(got) == 2 and got[1][0].stamp.nanosec == 123_456_790
         refused.clear()
