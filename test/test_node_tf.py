@@ -554,8 +554,8 @@ def test_follower_refusals_and_stamps(ros_context):
     try:
         assert follower.add(make_transform('a', 'b', 1.0), False, '/tf')
         assert follower.add(make_transform('b', 'e'), True, '/tf_static')  # a, b, e: 3 of 4
-        half_turn_too_long = make_transform('b', 'c', q=(0.0, 0.0, 1.0, 1.0))  # |q| = √2
-        assert follower.add(half_turn_too_long, True, '/tf_static') is False
+        not_unit = make_transform('b', 'c', q=(0.0, 0.0, 1.0, 1.0))  # |q| = √2
+        assert follower.add(not_unit, True, '/tf_static') is False
         for msg, reason in [(make_transform('a', ''), 'tf_bad_frame'),
                             (make_transform('', 'b'), 'tf_bad_frame'),
                             (make_transform('a', 'x', math.nan), 'non_finite'),
