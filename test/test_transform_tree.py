@@ -494,41 +494,30 @@ def test_nan_and_inf_are_refused(R, b, stamp, what, static):
     assert tree.time_range('odom', 'base_link') == (0.0, 5.0)
 
 
-@pytest.mark.parametrize('R, message', [
-    (1.001 * np.eye(3), 'not orthogonal'), (-np.eye(3), 'reflection')])
-def test_a_matrix_that_is_not_a_rotation_is_refused(R, message):
+REFUSED_EDGES = {
+    'scaled R': ('a', 'b', 1.001 * np.eye(3), [0, 0, 0], 0.0, 'not_rotation', 'not orthogonal'),
+    'reflection': ('a', 'b', -np.eye(3), [0, 0, 0], 0.0, 'not_rotation', 'reflection'),
+    'empty parent': ('', 'b', np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'empty child': ('a', '', np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'no parent': (None, 'b', np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'a number child': ('a', 3, np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'a 4×4 R': ('a', 'b', np.eye(4), [0, 0, 0], 0.0, 'bad_value', ''),
+    'two entries in b': ('a', 'b', np.eye(3), [0, 0], 0.0, 'bad_value', ''),
+    'two stamps': ('a', 'b', np.eye(3), [0, 0, 0], [0.0, 1.0], 'bad_value', ''),
+    'a word for a stamp': ('a', 'b', np.eye(3), [0, 0, 0], 'now', 'bad_value', ''),
+    'two static transforms': ('a', 'b', np.stack([np.eye(3)] * 2), np.zeros((2, 3)), [0.0, 1.0],
+                              'bad_value', 'static edge takes one'),
+}
+"""set_transform(parent, child, R, b, stamp) refused, its reason and message."""
+
+
+@pytest.mark.parametrize('case', REFUSED_EDGES)
+def test_an_edge_that_is_not_a_transform_is_refused_and_the_tree_stays_empty(case):
+    parent, child, R, b, stamp, reason, message = REFUSED_EDGES[case]
     tree = TransformTree()
     with pytest.raises(TransformTreeError, match=message) as excinfo:
-        tree.set_transform('a', 'b', R, [0.0, 0.0, 0.0], 0.0)
-    assert excinfo.value.reason == 'not_rotation'
-    assert tree.frames == []
-
-
-@pytest.mark.parametrize('parent, child', [('', 'b'), ('a', ''), (None, 'b'), ('a', 3)])
-def test_an_empty_or_non_string_frame_name_is_refused(parent, child):
-    tree = TransformTree()
-    with pytest.raises(TransformTreeError, match='non-empty string') as excinfo:
-        tree.set_transform(parent, child, np.eye(3), [0.0, 0.0, 0.0], 0.0)
-    assert excinfo.value.reason == 'bad_frame'
-    assert tree.frames == []
-
-
-@pytest.mark.parametrize('R, b, stamp', [
-    (np.eye(4), [0, 0, 0], 0.0), (np.eye(3), [0, 0], 0.0), (np.eye(3), [0, 0, 0], [0.0, 1.0]),
-    (np.eye(3), [0, 0, 0], 'now')])
-def test_a_value_that_is_not_a_transform_is_refused(R, b, stamp):
-    tree = TransformTree()
-    with pytest.raises(TransformTreeError) as excinfo:
-        tree.set_transform('a', 'b', R, b, stamp)
-    assert excinfo.value.reason == 'bad_value'
-    assert tree.frames == []
-
-
-def test_a_static_edge_takes_one_transform():
-    tree = TransformTree()
-    with pytest.raises(TransformTreeError, match='static edge takes one'):
-        tree.set_transform('a', 'b', np.stack([np.eye(3)] * 2), np.zeros((2, 3)), [0.0, 1.0],
-                           static=True)
+        tree.set_transform(parent, child, R, b, stamp, static=case == 'two static transforms')
+    assert excinfo.value.reason == reason
     assert tree.frames == []
 
 
