@@ -182,8 +182,7 @@ PUBLIC_CALLS = _public_calls()
 @pytest.mark.parametrize('label, call, items', PUBLIC_CALLS, ids=[c[0] for c in PUBLIC_CALLS])
 def test_every_public_function_gives_one_item_what_a_batch_gives(label, call, items,
                                                                  monkeypatch):
-    # One item runs a kernel on FLOATS (a fast path or apply), the batch on ARRAYS in
-    # chunks of 16: every item of the batch must be the item's own result.
+    # One item runs a kernel on FLOATS, the batch on ARRAYS in chunks of 16: the same result.
     monkeypatch.setattr(engine, 'CHUNK', 16)
     first, second = items
     batch = _outcome(call, first, second)
@@ -412,8 +411,7 @@ class _Other(NamedTuple):
 
 
 def test_outputs_come_back_in_the_kernels_named_tuple_by_name():
-    # The kernel builds its NamedTuple by keyword, in any order; apply gives the arrays back
-    # under the same names, for one item and for a batch, nested NamedTuples and tuples too.
+    # The kernel's NamedTuple, built by keyword in any order, comes back by name.
     def kernel(ops, m, a):
         return (_Pose(scalar=a * a, vector=[a, -a], matrix=[[m[0][0] * a, m[0][1]],
                                                             [m[1][0], m[1][1] + a]]),
@@ -436,8 +434,7 @@ def test_outputs_come_back_in_the_kernels_named_tuple_by_name():
 
 @pytest.mark.parametrize('batch', [False, True])
 def test_an_output_of_another_form_is_refused_not_misread(batch):
-    # Swapping two outputs must not pass silently: another NamedTuple (even with the same
-    # fields), a plain tuple or a wrong shape where apply was told otherwise is a TypeError.
+    # Another NamedTuple (even of the same fields), a plain tuple or a wrong shape: TypeError.
     outputs = _Pose(matrix=engine.Spec((2, 2)), vector=engine.Spec((2,)), scalar=engine.SCALAR)
     v = np.array([[1.0, 2.0]] * 2) if batch else np.array([1.0, 2.0])
     kernels = [lambda ops, v: _Other(matrix=[v, v], vector=v, scalar=v[0]),
@@ -582,8 +579,7 @@ def test_one_item_of_euler_to_matrix_gives_the_batch_formula(a, seq):
 @given(axis=_axes(), size=_size, angle=_angle)
 @example(axis=np.array([0.0, 0.0, 1.0]), size=0.0, angle=0.0)
 def test_one_item_to_a_matrix_gives_the_batch_formula(axis, size, angle):
-    # (rotvec_to_matrix and axis_angle_to_matrix take the fast path _plain_rodrigues for one
-    # float64 vector of ordinary size, apply for anything else: the edges are drawn)
+    # (the fast path _plain_rodrigues for ordinary sizes, apply for the edges drawn here)
     v = axis * size
     _same_as_batch('rotvec_to_matrix', axis * (abs(angle) * min(size, 1.0)), None)
     _same_as_batch('quaternion_to_matrix', np.append(v, angle), None)
@@ -606,8 +602,7 @@ def test_one_item_to_a_matrix_gives_the_batch_formula(axis, size, angle):
                            [0.35078322768961984, 0.0, -0.9364566872907963]]),
          axis=np.array([0.0, 0.0, 1.0]), size=0.0, seq='XYX')  # (θ1 a last bit from −π)
 def test_decompose_of_one_item_gives_the_batch_formula(rotation, axis, size, seq):
-    # One item (the kernel on floats) and a batch of one (on arrays): the same numbers in
-    # every field, and the same refusal (a screw beyond float64).
+    # One item and a batch of one: the same numbers in every field, or the same refusal.
     b = axis * size
     one = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), rotation, b)
     batch = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), rotation[None], b[None])
@@ -654,8 +649,7 @@ def _takes(call, R):
 @given(rotation=_rotation(), entry=st.integers(0, 8),
        error=st.sampled_from([0.0, 1e-10, 9e-10, 1.1e-9, 1e-6, -2.0, math.nan]))
 def test_checked_conversions_take_what_validate_rotation_takes(rotation, entry, error):
-    # The check runs in the kernel's own pass (so3.apply_to_named_rotations): one item and
-    # a batch of one take exactly the matrices validate_rotation takes.
+    # One item and a batch of one take exactly the matrices validate_rotation takes.
     R = rotation.copy()
     R.flat[entry] += error
     valid = _takes(rt.validate_rotation, R)
@@ -680,8 +674,7 @@ def _straddling_the_tolerance():
 
 
 def test_checked_conversions_take_what_validate_rotation_takes_at_the_tolerance():
-    # Columns' squared norms and det R a few floats either side of 1 ± tol: every checked
-    # conversion, one item and a batch, takes exactly what validate_rotation takes.
+    # A few floats either side of 1 ± tol: taken exactly where validate_rotation takes them.
     taken = []
     for R in _straddling_the_tolerance():
         valid = _takes(rt.validate_rotation, R)

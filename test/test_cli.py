@@ -400,9 +400,8 @@ def _typed(values, digits=17):
 
 
 def test_frame_of_the_tracking_example():
-    # Jia example 3: the tracking frame's axes are the columns of
-    # Rot_z(α)·Rot_y(β), written out in closed form; a point q of the station's frame has
-    # coordinates q' = Rᵀ·q in the tracking frame (§4).
+    # Jia example 3: the tracking frame's axes are the columns of Rot_z(α)·Rot_y(β); a point
+    # q of the station's frame has coordinates q' = Rᵀ·q in it (§4).
     a, b = math.radians(30.0), math.radians(-20.0)
     ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
     u, v, w = [ca * cb, sa * cb, -sb], [-sa, ca, 0.0], [ca * sb, sa * sb, cb]

@@ -449,9 +449,7 @@ def test_screw_log_overflow():
 
 
 def test_a_screw_point_that_fits_is_returned_near_the_largest_float():
-    # θ = 3 about z, b = 1.7e308·(1, −1, 0): the point c = ½(b + cot 1.5·ẑ × b) ≈
-    # (9.1, −7.9, 0)e308 fits, though b + cot 1.5·ẑ × b does not. Checked by its defining
-    # property in units of 1e308 (d = 0: the axis point stays put, R·c + b = c).
+    # c ≈ (9.1, −7.9, 0)e308 fits though b + cot 1.5·ẑ × b does not; checked by R·c + b = c.
     R = h.ref_elementary('z', 3.0)
     b = np.array([1.7e308, -1.7e308, 0.0])
     screw = screw_from_transform(R, b)

@@ -579,10 +579,8 @@ def scipy_primary(a, b, weights, primary):
 
 @pytest.mark.parametrize('ratio', [1e8, 1e9, 1e10, 1e12, 1e16, 1e30])
 def test_align_dominant_weight_still_fits_the_second_pair(ratio):
-    # scipy's test_align_vectors_align_constrain with a finite weight: the primary +x of b
-    # goes onto +y of a, then the turn about it takes the rest of b's [1, 1, 0] onto a's
-    # [0, 1, 1]. Weights ≥ 1e9 make the SVD's H rank one to UNIQUE_TOL: the second pair must
-    # still count.
+    # scipy's test_align_vectors_align_constrain with a finite weight: however large, the
+    # second pair still counts.
     a = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 1.0]])
     expected = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     R, rmsd = align_vectors(a, [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [ratio, 1.0])

@@ -713,8 +713,7 @@ def test_the_start_up_refusals_are_those_the_docs_call_normal(follower):
 
 
 def test_without_tf2_msgs_the_node_and_the_client_say_so_in_one_line(tmp_path):
-    # A tf2_msgs that cannot be imported, first on the path: the other inputs would still
-    # run, but following frames is refused at start-up (exit 2) and the client exits 1.
+    # A tf2_msgs that cannot be imported: the node exits 2 at start-up, the client 1.
     fake = tmp_path / 'tf2_msgs'
     fake.mkdir()
     (fake / '__init__.py').write_text("raise ImportError('no tf2_msgs here')\n")

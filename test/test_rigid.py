@@ -456,9 +456,7 @@ def _scaled_reference(R, v, b):
 
 
 def _overflow_case_frame():
-    # Columns u = (2, 2, 1)/3 and v, w at 45° to the part of (1, 1, −1) ⊥ u: for
-    # b = 1.7e308·(1, 1, −1), Rᵀ·b = 1.7e308·(1, 1, ±1) fits, but the first two terms of
-    # u·b, (2/3 + 2/3)·1.7e308, overflow.
+    # For b = 1.7e308·(1, 1, −1), Rᵀ·b fits but the first two terms of u·b overflow.
     u = np.array([2.0, 2.0, 1.0]) / 3
     e = np.array([1.0, 1.0, -4.0]) / np.sqrt(18)
     v = (e + np.cross(u, e)) / np.sqrt(2)

@@ -387,9 +387,7 @@ def test_batches_larger_than_one_chunk():
 
 
 def test_check_false_uses_the_matrix_as_given():
-    # θ and l̂ read from the perturbed matrix as given (skew part and trace), then the
-    # defining formulas with them: d = b·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), h = d/θ, and the
-    # twist (θ·l̂, −(θ/2)·l̂ × b + (θ/2)cot(θ/2)·b⊥ + d·l̂).
+    # θ and l̂ read from the matrix as given, then the defining formulas with them.
     r = h.notes_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
     b = np.array([1.0, -2.0, 0.5])
