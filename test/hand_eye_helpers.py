@@ -130,7 +130,7 @@ def arm_streams(seed, seconds=60.0, rate_a=100.0, rate_b=30.0, shift=0.12, noise
 
 
 def mobile_base(seed, seconds=120.0, rate=10.0, noise_deg=0.05, noise_m=5e-4):
-    """A robot on a floor: A its odometry (x, y, yaw), B its camera's visual odometry."""
+    """Drive a robot on a floor: A its odometry (x, y, yaw), B its camera's visual odometry."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, seconds, 1.0 / rate)
     yaw = 1.2 * np.sin(2 * np.pi * 0.03 * t) + 0.4 * np.sin(2 * np.pi * 0.11 * t + 1.0)

@@ -209,7 +209,8 @@ def test_mean_of_a_symmetric_set_is_refused():
 
 MEAN_REFUSALS = {
     'negative weight': (1, [1.0, -0.5, 1.0], re.escape('weights must be ≥ 0, got -0.5')),
-    'tiny negative weight': (1, [-1e-300, 1.0, 1.0], re.escape('weights must be ≥ 0, got -1e-300')),
+    'tiny negative weight': (1, [-1e-300, 1.0, 1.0],
+                             re.escape('weights must be ≥ 0, got -1e-300')),
     'zero weights': (1, [0.0, 0.0, 0.0], r'weights are all 0'),
     'zero weights of one set': (2, [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], r'weights are all 0'),
     'two weights': (1, [1.0, 1.0], r'weights must have one entry per rotation \(3\)'),

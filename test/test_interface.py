@@ -1,6 +1,4 @@
-"""
-rot_tools.io.interface: one row per input and output, as the node and the bag reader show them.
-"""
+"""rot_tools.io.interface: a row per input and output, as the node and bag reader show them."""
 
 import pytest
 from rot_tools.io import bag_read, interface

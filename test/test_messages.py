@@ -1,6 +1,4 @@
-"""
-rotation_node's reading of each input message, and rot_tools.ros.node.messages (no DDS traffic).
-"""
+"""rotation_node's reading of each input message, and its messages module (no DDS traffic)."""
 
 import math
 
