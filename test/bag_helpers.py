@@ -17,13 +17,7 @@ def convert_real(dst, storage, source=REAL):
 
 
 def real_excerpt(dst, count=300):
-    """
-    Return a ROS 1 bag of the real recording's first ``count`` messages, as recorded.
-
-    Each message's bytes, record time and connection (type, definition, md5sum) are copied
-    by rosbags' ROS 1 reader and writer: a small bag of the real data (300 messages: 150 on
-    each topic).
-    """
+    """Return a ROS 1 bag of the real recording's first ``count`` messages, copied as recorded."""
     from rosbags.rosbag1 import Reader, Writer
     with Reader(REAL) as reader, Writer(Path(dst)) as writer:
         conns = {}
@@ -187,11 +181,7 @@ def tf_chain_messages(n=40, bad_at=7):
 
 
 def without_definitions(bag):
-    """
-    Return the rosbag2 sqlite3 bag with its message definitions removed.
-
-    As older recorders wrote bags: a reader then needs a type store of its own.
-    """
+    """Return the rosbag2 sqlite3 bag without its message definitions, as older recorders wrote."""
     import sqlite3
     (db,) = Path(bag).glob('*.db3')
     with sqlite3.connect(db) as con:
@@ -200,11 +190,6 @@ def without_definitions(bag):
 
 
 def without_gyro_warnings(err):
-    """
-    Return stderr without the lines flagging an Imu whose orientation disagrees with its gyro.
-
-    The Imu messages some tests write turn at random while their gyro reads zero: rightly
-    flagged, and not what those tests are about.
-    """
+    """Return stderr without the warnings of an Imu whose orientation disagrees with its gyro."""
     return ''.join(line for line in err.splitlines(keepends=True)
                    if 'the orientation disagrees with the gyro' not in line)

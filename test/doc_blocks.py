@@ -1,27 +1,10 @@
 """
 Find the example blocks of README.md and doc/*.md, so tests can compare them with real output.
 
-How a block of the docs is kept true (test/test_docs.py enforces it):
-
-- A fenced ``console`` block whose commands are all ``$ rot-tools ...`` (or ``$ echo $?``)
-  is run by test_docs.py, line by line in one bash, from the repository root, with
-  ``rot-tools`` on PATH, and its output compared with the lines that follow each command.
-- A fenced ``pycon`` (or ``python``) block with ``>>>`` lines is run as a doctest (one
-  namespace per file, in order).
-- Any other block that shows output (node logs, ``ros2``/``rotation_client`` output, YAML
-  printed by a service) carries a tag on the line just before its opening fence::
-
-      <!-- output: client-euler -->
-      ```console
-      $ rotation_client euler ZYX 30 20 10 --deg
-      ...
-      ```
-
-  and a test that produces that output compares it with ``doc_block('client-euler')`` (or
-  ``assert_doc_output('client-euler', got)``). test_docs.py fails when a tag is not named
-  in any test file, and when a console block that it cannot run has no tag.
-
-In expected output, ``...`` matches any text (doctest's ELLIPSIS), e.g. for a time stamp.
+A ``console`` block of ``$ rot-tools`` lines and ``pycon`` blocks are run by test_docs.py;
+any other block that shows output carries ``<!-- output: NAME -->`` before its fence and is
+compared by a test with ``assert_doc_output(NAME, got)``. ``...`` in expected output matches
+any text.
 """
 
 import doctest

@@ -1,10 +1,7 @@
 """
-Simulated hand-eye recordings, built with scipy's Rotation (independent of rot_tools).
+Simulated hand-eye recordings (T_A(t)·X = Z·T_B(t)), built with scipy's Rotation, not rot_tools.
 
-Each is a Recording of two joined bodies with T_A(t)·X = Z·T_B(t): poses of A and of B, each
-in its own world, and the true X and Z. Noise is put on B's poses in B's own frame (a camera's
-pose, as its detector or odometry reports it): a small turn of ``noise_deg`` degrees and a
-shift of ``noise_m`` metres per axis, standard deviations.
+Noise goes on B's poses in B's own frame: ``noise_deg`` degrees and ``noise_m`` metres per axis.
 """
 
 from typing import NamedTuple
@@ -66,11 +63,9 @@ def random_mounting(rng, reach=0.1):
 
 def arm_stations(seed, stations=25, noise_deg=0.05, noise_m=5e-4):
     """
-    Eye in hand: A the hand in the robot's base, B the camera in the marker's frame.
+    Eye in hand: the camera on the hand (X) sees the marker (Z in the base) from ``stations``.
 
-    The camera looks at the marker from ``stations`` places on a half sphere 0.4–0.7 m
-    above it (turned about its axis at random, tilted by 5°); X is the camera on the hand,
-    Z the marker in the base. One stamp per station (0, 1, 2, ... s), shared by A and B.
+    One stamp (0, 1, 2, ... s) per station, on a half sphere above the marker.
     """
     rng = np.random.default_rng(seed)
     X = random_mounting(rng)
@@ -99,12 +94,7 @@ def inverted(R, b):
 
 
 def flipped(recording, indices, degrees=25.0, seed=0):
-    """
-    Return the recording with the marker's detections at ``indices`` flipped.
-
-    The marker is turned by ``degrees`` about an axis across the camera's line of sight to it
-    (a planar marker's ambiguity), its position kept.
-    """
+    """Return the recording with the detections at ``indices`` flipped as a planar marker's."""
     rng = np.random.default_rng(seed)
     R_b, b_b = recording.R_b.copy(), recording.b_b.copy()
     for k in indices:
@@ -127,12 +117,7 @@ def _smooth_motion(rng, t, turn=0.6, reach=0.12):
 
 def arm_streams(seed, seconds=60.0, rate_a=100.0, rate_b=30.0, shift=0.12, noise_deg=0.05,
                 noise_m=5e-4):
-    """
-    Eye in hand in continuous motion, two streams.
-
-    A at rate_a Hz, B at rate_b Hz whose stamps are ``shift`` seconds early (the offset to
-    add to B's stamps is +shift).
-    """
+    """Eye in hand in motion: A at rate_a Hz, B at rate_b Hz stamped ``shift`` s early."""
     rng = np.random.default_rng(seed)
     X = random_mounting(rng)
     Z = random_mounting(rng, 0.5)
@@ -145,13 +130,7 @@ def arm_streams(seed, seconds=60.0, rate_a=100.0, rate_b=30.0, shift=0.12, noise
 
 
 def mobile_base(seed, seconds=120.0, rate=10.0, noise_deg=0.05, noise_m=5e-4):
-    """
-    Drive a robot on a floor: A its odometry, B its camera's visual odometry.
-
-    A is x, y, yaw in the odometry frame; B the camera in the frame of its first pose (noisy).
-    The camera looks forward from 0.3 m ahead of and 0.5 m above the base, turned a little off
-    axis.
-    """
+    """Drive a robot on a floor: A its odometry (x, y, yaw), B its camera's visual odometry."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, seconds, 1.0 / rate)
     yaw = 1.2 * np.sin(2 * np.pi * 0.03 * t) + 0.4 * np.sin(2 * np.pi * 0.11 * t + 1.0)
@@ -167,11 +146,7 @@ def mobile_base(seed, seconds=120.0, rate=10.0, noise_deg=0.05, noise_m=5e-4):
 
 
 def eye_to_hand(seed, stations=20, noise_deg=0.05, noise_m=5e-4):
-    """
-    Eye to hand: A the hand in the robot's base, B the marker held by the hand in a camera.
-
-    The camera is fixed: X is the marker on the hand, Z the camera in the base.
-    """
+    """Eye to hand: X is the marker on the hand, Z the fixed camera in the base."""
     rng = np.random.default_rng(seed)
     X = (_matrix(rng.normal(0.0, 0.3, 3)), np.array([0.0, 0.02, 0.08]))
     Z = (_looking_at_origin(np.array([0.0, -0.8, 0.9]), 0.3), np.array([0.5, -0.8, 0.9]))

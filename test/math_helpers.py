@@ -1,10 +1,4 @@
-"""
-Independent reference helpers for the math tests.
-
-Everything here is written from the API's definitions and the course notes (Jia; Cayero),
-with plain NumPy, and never calls rot_tools: the tests compare rot_tools against these
-constructions, not against itself.
-"""
+"""Independent references for the math tests: plain NumPy from the notes, never rot_tools."""
 
 import itertools
 import re
@@ -44,12 +38,7 @@ def ref_elementary(axis, angle):
 
 
 def ref_euler(angles, seq):
-    """
-    Explicit product of elementary rotations.
-
-    Intrinsic (upper case): R = Rot_a1(t1) Rot_a2(t2) Rot_a3(t3).
-    Extrinsic (lower case): R = Rot_a3(t3) Rot_a2(t2) Rot_a1(t1).
-    """
+    """Return Rot_a1(t1) Rot_a2(t2) Rot_a3(t3) (intrinsic, upper case), reversed for lower case."""
     angles = np.asarray(angles, dtype=float)
     mats = [ref_elementary(seq[i], angles[..., i]) for i in range(3)]
     if seq.isupper():
@@ -103,10 +92,7 @@ def expm(a, squarings=None):
     """
     Matrix exponential by scaling and squaring of a Taylor series (no eigen-decomposition).
 
-    The squaring runs on E = exp(A / 2^s) - I, E <- 2E + E E, which keeps the small part
-    exact instead of rounding it against the identity.  For an se(3) 4x4 matrix the series
-    of the translation column converges as fast as the rotation block, so the scaling is
-    chosen from the upper-left 3x3 block only.
+    Squaring E = exp(A / 2^s) - I as E <- 2E + E E keeps the small part exact.
     """
     a = np.asarray(a, dtype=float)
     n = a.shape[-1]
@@ -136,11 +122,7 @@ def expm_twist(twist):
 
 
 def rotate_minus_identity(axis, angle, p):
-    """
-    (R - I) p for R = Rodrigues(axis, angle), accurate for tiny angles and huge |p|.
-
-    (R - I) p = sin(t) l x p - 2 sin^2(t/2) (p - (p.l) l); no matrix entry is rounded to 1.
-    """
+    """(R - I) p = sin(t) l x p - 2 sin^2(t/2) (p - (p.l) l): exact for tiny t and huge |p|."""
     axis = np.asarray(axis, dtype=float)
     t = np.asarray(angle, dtype=float)[..., None]
     p = np.asarray(p, dtype=float)
@@ -169,12 +151,7 @@ def ref_quaternion_to_matrix(q):
 
 
 def cube_rotations():
-    """
-    Return the 24 rotations that map the cube onto itself, exact signed permutations.
-
-    Their entries are exactly 0 and +/-1 (with -0.0 where a product of signs gives it), which
-    puts them at gimbal locks, at angle pi and at the +/-pi boundaries of the Euler ranges.
-    """
+    """Return the 24 rotations of the cube: exact signed permutations, at gimbal locks and π."""
     out = []
     for perm in itertools.permutations(range(3)):
         for signs in itertools.product((1.0, -1.0), repeat=3):

@@ -1,9 +1,7 @@
 """
 One item and a batch: the same formula, through rot_tools.core.engine's kernels.
 
-Every public function of items gives one item what a batch gives it (to rounding: libm and
-NumPy may differ in the last bit), fails alike on extremes, and a batch refuses NaN/Inf per
-chunk naming the first index. The sweeps read the public functions from rot_tools.__all__.
+Swept over every public function (rot_tools.__all__): same values to rounding, same failures.
 """
 
 import importlib
@@ -140,12 +138,7 @@ SUBNORMAL_STEPS = 4 * 5e-324
 
 
 def _close(one, batch):
-    """
-    Tell whether one item's result is the batch's to rounding (NaN = NaN, inf exactly).
-
-    Rounding is relative to the result's scale, and a few subnormal steps absolute (libm's
-    and NumPy's last bit of a subnormal result, e.g. a screw of b = 5e-324).
-    """
+    """Tell whether one item's result is the batch's to rounding (NaN = NaN, inf exactly)."""
     if isinstance(one, tuple):
         return len(one) == len(batch) and all(_close(a, b) for a, b in zip(one, batch))
     a, b = np.asarray(one), np.asarray(batch)
@@ -180,12 +173,7 @@ def _refused(outcome):
 
 
 def _locked_covariance(one, batch_item):
-    """
-    Tell whether one item is refused at gimbal lock where its batch item is NaN, degenerate.
-
-    The covariance conversions' documented rule: there is no covariance of Euler angles at
-    gimbal lock; one item says so, a batch flags the item.
-    """
+    """Tell whether one item is refused at gimbal lock where its batch item is flagged, NaN."""
     return (_refused(one) and 'gimbal lock' in one[1] and not _refused(batch_item)
             and bool(batch_item.degenerate) and np.isnan(batch_item.cov).all())
 
@@ -196,8 +184,7 @@ PUBLIC_CALLS = _public_calls()
 @pytest.mark.parametrize('label, call, items', PUBLIC_CALLS, ids=[c[0] for c in PUBLIC_CALLS])
 def test_every_public_function_gives_one_item_what_a_batch_gives(label, call, items,
                                                                  monkeypatch):
-    # One item runs a kernel on FLOATS (a fast path or apply), the batch on ARRAYS in
-    # chunks of 16: every item of the batch must be the item's own result.
+    # One item runs a kernel on FLOATS, the batch on ARRAYS in chunks of 16: the same result.
     monkeypatch.setattr(engine, 'CHUNK', 16)
     first, second = items
     batch = _outcome(call, first, second)
@@ -330,10 +317,7 @@ def _fail_outcome(call, m, v, batch=False):
 
 
 def test_one_item_and_a_batch_fail_alike_for_every_public_function():
-    # Each call on one item and on a batch of that one item: the same values (NaN and inf
-    # where the other has them) or the same RotationError (the batch naming item (0,)); never
-    # ZeroDivisionError or "math domain error" on one side only.
-    # (NumPy's warnings of arithmetic on garbage given with check=False are not the subject)
+    # The same values (NaN and inf alike) or the same RotationError, never another exception.
     mats, vecs = _weird_items()
     differ = []
     for label, call in _fail_alike_calls():
@@ -367,9 +351,7 @@ def test_one_item_gives_what_a_batch_gives_where_float_arithmetic_would_raise():
 
 
 def test_apply_to_one_gives_the_numbers_of_apply_as_python_numbers():
-    # The kernel's own floats (where float arithmetic raises, those of a batch of one), the
-    # same numbers as apply's NumPy scalars; an input as a tuple of floats is taken as the
-    # array; a batch is refused.
+    # apply_to_one's Python floats are apply's numbers; a batch is refused.
     def kernel(ops, v):
         return _Three(quotient=v[0] / v[1], root=ops.sqrt(v[0]),
                       sine=ops.sin(v[2] * 1e308 * 10.0))
@@ -431,8 +413,7 @@ class _Other(NamedTuple):
 
 
 def test_outputs_come_back_in_the_kernels_named_tuple_by_name():
-    # The kernel builds its NamedTuple by keyword, in any order; apply gives the arrays back
-    # under the same names, for one item and for a batch, nested NamedTuples and tuples too.
+    # The kernel's NamedTuple, built by keyword in any order, comes back by name.
     def kernel(ops, m, a):
         return (_Pose(scalar=a * a, vector=[a, -a], matrix=[[m[0][0] * a, m[0][1]],
                                                             [m[1][0], m[1][1] + a]]),
@@ -455,8 +436,7 @@ def test_outputs_come_back_in_the_kernels_named_tuple_by_name():
 
 @pytest.mark.parametrize('batch', [False, True])
 def test_an_output_of_another_form_is_refused_not_misread(batch):
-    # Swapping two outputs must not pass silently: another NamedTuple (even with the same
-    # fields), a plain tuple or a wrong shape where apply was told otherwise is a TypeError.
+    # Another NamedTuple (even of the same fields), a plain tuple or a wrong shape: TypeError.
     outputs = _Pose(matrix=engine.Spec((2, 2)), vector=engine.Spec((2,)), scalar=engine.SCALAR)
     v = np.array([[1.0, 2.0]] * 2) if batch else np.array([1.0, 2.0])
     kernels = [lambda ops, v: _Other(matrix=[v, v], vector=v, scalar=v[0]),
@@ -570,9 +550,7 @@ _lock_tol = st.one_of(st.just(None), st.sampled_from([0.0, 1e-9, 1e-7, 1e-6, 1e-
          lock_tol=0.0, check=True)  # (θ2 = π/2 exactly: locked at lock_tol 0)
 @example(rotation=(np.diag([1.0, -1.0, -1.0]), 'zxz'), lock_tol=0.0, check=True)  # (θ2 = π)
 def test_one_item_of_matrix_to_euler_gives_the_batch_formula(rotation, lock_tol, check):
-    # One rotation runs angles_kernel on FLOATS (its very bits, on libm), after apply's
-    # check. A batch of one runs it on ARRAYS: the same lock flag, and the same angles to
-    # libm's and NumPy's last bit, in every sequence, at and near gimbal lock.
+    # One item (on floats) and a batch of one (on arrays): the same lock flag and angles.
     R, seq = rotation
     options = {'check': check} if lock_tol is None else {'check': check, 'lock_tol': lock_tol}
     angles, lock = rt.matrix_to_euler(R, seq, **options)
@@ -603,8 +581,7 @@ def test_one_item_of_euler_to_matrix_gives_the_batch_formula(a, seq):
 @given(axis=_axes(), size=_size, angle=_angle)
 @example(axis=np.array([0.0, 0.0, 1.0]), size=0.0, angle=0.0)
 def test_one_item_to_a_matrix_gives_the_batch_formula(axis, size, angle):
-    # (rotvec_to_matrix and axis_angle_to_matrix take the fast path _plain_rodrigues for one
-    # float64 vector of ordinary size, apply for anything else: the edges are drawn)
+    # (the fast path _plain_rodrigues for ordinary sizes, apply for the edges drawn here)
     v = axis * size
     _same_as_batch('rotvec_to_matrix', axis * (abs(angle) * min(size, 1.0)), None)
     _same_as_batch('quaternion_to_matrix', np.append(v, angle), None)
@@ -627,8 +604,7 @@ def test_one_item_to_a_matrix_gives_the_batch_formula(axis, size, angle):
                            [0.35078322768961984, 0.0, -0.9364566872907963]]),
          axis=np.array([0.0, 0.0, 1.0]), size=0.0, seq='XYX')  # (θ1 a last bit from −π)
 def test_decompose_of_one_item_gives_the_batch_formula(rotation, axis, size, seq):
-    # One item (the kernel on floats) and a batch of one (on arrays): the same numbers in
-    # every field, and the same refusal (a screw beyond float64).
+    # One item and a batch of one: the same numbers in every field, or the same refusal.
     b = axis * size
     one = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), rotation, b)
     batch = _outcome(lambda R, b: rt.decompose(R, b, seq, check=False), rotation[None], b[None])
@@ -675,8 +651,7 @@ def _takes(call, R):
 @given(rotation=_rotation(), entry=st.integers(0, 8),
        error=st.sampled_from([0.0, 1e-10, 9e-10, 1.1e-9, 1e-6, -2.0, math.nan]))
 def test_checked_conversions_take_what_validate_rotation_takes(rotation, entry, error):
-    # The check runs in the kernel's own pass (so3.apply_to_named_rotations): one item and
-    # a batch of one take exactly the matrices validate_rotation takes.
+    # One item and a batch of one take exactly the matrices validate_rotation takes.
     R = rotation.copy()
     R.flat[entry] += error
     valid = _takes(rt.validate_rotation, R)
@@ -685,14 +660,7 @@ def test_checked_conversions_take_what_validate_rotation_takes(rotation, entry, 
 
 
 def _straddling_the_tolerance():
-    """
-    Matrices s·Q with s a few ulps either side of where a defect of s·Q reaches ROTATION_TOL.
-
-    For a rotation Q, |(s·Q)ᵀ(s·Q) − I| has s² − 1 on its diagonal and det(s·Q) − 1 = s³ − 1:
-    s near sqrt(1 ± tol) puts a column's squared norm at the edge, s near cbrt(1 ± tol) det R
-    (the columns then pass). Rounding spreads the computed defects over a few ulps around the
-    edge, so both sides and the floats at the edge itself are met.
-    """
+    """Matrices s·Q with s a few ulps either side of where their defect reaches ROTATION_TOL."""
     tol = so3.ROTATION_TOL
     out = []
     for q in [np.eye(3)] + ROTATIONS[::6]:
@@ -708,8 +676,7 @@ def _straddling_the_tolerance():
 
 
 def test_checked_conversions_take_what_validate_rotation_takes_at_the_tolerance():
-    # Columns' squared norms and det R a few floats either side of 1 ± tol: every checked
-    # conversion, one item and a batch, takes exactly what validate_rotation takes.
+    # A few floats either side of 1 ± tol: taken exactly where validate_rotation takes them.
     taken = []
     for R in _straddling_the_tolerance():
         valid = _takes(rt.validate_rotation, R)
@@ -720,13 +687,7 @@ def test_checked_conversions_take_what_validate_rotation_takes_at_the_tolerance(
 
 
 def _at_the_edge(target):
-    """
-    Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] with squared column norms and det at ``target``.
-
-    The first two columns' squared norm c·c + v·v, as the check computes it, is the float
-    target, and det R too (c·c − (−v)·v); the columns are orthogonal exactly (c·(−v) + v·c
-    is 0).
-    """
+    """Return [[c, −v, 0], [v, c, 0], [0, 0, 1]] with squared column norms and det ``target``."""
     for v in (0.0, 2.0 ** -27, math.sqrt(2.0 ** -53), 2.0 ** -26):
         c = math.sqrt(target)
         for _ in range(8):

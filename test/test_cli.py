@@ -1,13 +1,8 @@
 """
 rot-tools as a user runs it: every command through main, what the console script calls.
 
-The commands run in this process (a process each would cost a second of start-up per line);
-test_the_installed_script_runs_main runs the installed console script itself, and
-test_cli_streams.py what only a process shows (its streams at exit, signals).
-
-Output values are parsed (JSON with the standard library, YAML with PyYAML when present) and
-compared with the math module; the printed precision is 12 digits, so values agree to
-~1e-11. Bad input must give exactly one ``rot-tools: error:`` line and exit status 2.
+Values are parsed and compared with the math module to the printed 12 digits; bad input is
+one ``rot-tools: error:`` line and exit status 2.
 """
 
 import io
@@ -69,12 +64,7 @@ class Done(NamedTuple):
 
 
 def run(*args):
-    """
-    Run rot-tools on these words as its console script does (``sys.exit(main(argv))``).
-
-    In this process, its standard streams swapped for text buffers, COLUMNS 80 as in a pipe;
-    a Python warning goes to its stderr as Python would print it, once per place.
-    """
+    """Run rot-tools on these words as its console script does, its streams swapped for buffers."""
     out, err = io.StringIO(), io.StringIO()
     streams, columns = (sys.stdout, sys.stderr), os.environ.get('COLUMNS')
     sys.stdout, sys.stderr = out, err
@@ -173,7 +163,6 @@ def check_quaternion(printed, R):
     close(q, reference)
 
 
-# ---------------------------------------------------------------------------------------
 # Each subcommand
 
 
@@ -324,7 +313,6 @@ def test_yaml_and_json_carry_the_same_report():
     assert from_yaml == from_json
 
 
-# ---------------------------------------------------------------------------------------
 # Quaternions (x, y, z, w: the ROS message order; --wxyz reads w first)
 
 
@@ -404,7 +392,6 @@ def test_screw_from_a_ros_pose():
     assert wxyz == rep
 
 
-# ---------------------------------------------------------------------------------------
 # Frames (Jia §4), homogeneous matrices, points (Jia §5)
 
 
@@ -413,9 +400,8 @@ def _typed(values, digits=17):
 
 
 def test_frame_of_the_tracking_example():
-    # Jia example 3: the tracking frame's axes are the columns of
-    # Rot_z(α)·Rot_y(β), written out in closed form; a point q of the station's frame has
-    # coordinates q' = Rᵀ·q in the tracking frame (§4).
+    # Jia example 3: the tracking frame's axes are the columns of Rot_z(α)·Rot_y(β); a point
+    # q of the station's frame has coordinates q' = Rᵀ·q in it (§4).
     a, b = math.radians(30.0), math.radians(-20.0)
     ca, sa, cb, sb = math.cos(a), math.sin(a), math.cos(b), math.sin(b)
     u, v, w = [ca * cb, sa * cb, -sb], [-sa, ca, 0.0], [ca * sb, sa * sb, cb]
@@ -531,7 +517,6 @@ def test_point_image_and_coordinates_in_the_moved_frame(args):
         close(R @ pt['in_moved_frame'] + b, p)  # back to the reference frame
 
 
-# ---------------------------------------------------------------------------------------
 # Options anywhere, --version, hints
 
 COMMON_OPTIONS = {  # option → its arguments, for a quaternion input
@@ -618,7 +603,6 @@ def test_radians_value_is_kept_when_hinting():
     check_rotation(rep, rot_z(90.0))  # 90 rad, as typed
 
 
-# ---------------------------------------------------------------------------------------
 # Help
 
 
@@ -641,7 +625,6 @@ def test_main_help():
         assert f'\n    {command} ' in proc.stdout
 
 
-# ---------------------------------------------------------------------------------------
 # Bad input: one line on stderr, status 2
 
 

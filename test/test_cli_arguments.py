@@ -1,11 +1,7 @@
 """
 The command-line pieces rot-tools and rotation_client share (rot_tools.io.arguments).
 
-A parser with commands reads options before its command, and before, between and after the
-command's words, at any depth of commands, through argparse's documented calls only; errors
-are one line and exit status 2; ``--help`` is the help of the parser it follows. rot-tools'
-commands are modules with ``add_parser(subparsers)`` and ``run(args)``, and rotation_client
-reads its command line the same way.
+Options go before, between and after a command's words; errors are one line and status 2.
 """
 
 import argparse
@@ -133,7 +129,6 @@ def test_version_without_the_distribution_is_one_error_line(monkeypatch, capsys)
         'metadata)\n')
 
 
-# ---------------------------------------------------------------------------------------
 # rot-tools' commands, and rotation_client
 
 

@@ -1,13 +1,7 @@
 """
-rot-tools covariance as a user runs it (through main, as test_cli.py), against a reference.
+rot-tools covariance as a user runs it, against scipy's Rotation by central differences.
 
-The reference is scipy's Rotation (from_euler / as_euler, from_rotvec / as_rotvec)
-differentiated by central differences: J = ∂(output coordinates)/∂(input coordinates) at the
-rotation, column by column, and Σ_out = J·Σ_in·Jᵀ — nothing of rot_tools. With h = 1e-5 the
-differences are good to ~1e-10 relative, so the printed covariance (17 digits) must agree to
-1e-7 of its largest entry. Every kind of --from/--to pair is run once, with each input kind
-of the rotation, both frames, the gimbal lock of a Tait–Bryan and of a proper sequence, and
-every refusal (one ``rot-tools: error:`` line, status 2).
+Σ_out = J·Σ_in·Jᵀ with J from scipy (nothing of rot_tools), agreeing to 1e-7 of the largest entry.
 """
 
 import json
@@ -108,7 +102,6 @@ def close_to(got, want):
     np.testing.assert_allclose(got, want, rtol=1e-7, atol=1e-7 * np.abs(want).max())
 
 
-# ---------------------------------------------------------------------------------------
 # Values: every kind of pair, every input kind, both frames
 
 PAIRS = [  # (rotation input, rotation, from, to, --frame, --to-frame or None)
@@ -175,7 +168,6 @@ def test_small_covariances_keep_their_digits():
     assert rep['stddev'][2] == 0.005
 
 
-# ---------------------------------------------------------------------------------------
 # Gimbal lock: degenerate, no numbers, a note, status 0
 
 
@@ -196,7 +188,6 @@ def test_gimbal_lock_is_degenerate_with_a_note(words, source, target, seq):
     assert proc.stderr.count('\n') == 1
 
 
-# ---------------------------------------------------------------------------------------
 # Refusals: one line, status 2
 
 COV = ['--cov', '1', '0', '0', '0', '2', '0', '0', '0', '3']
@@ -301,7 +292,6 @@ def test_bad_rotation_or_misplaced_option(args, message):
     assert proc.stderr.count('\n') == 1, proc.stderr
 
 
-# ---------------------------------------------------------------------------------------
 # Help
 
 
@@ -321,7 +311,6 @@ def test_help_lists_the_command_its_inputs_and_examples_that_run():
     assert inner.startswith('usage: rot-tools covariance quaternion X Y Z W\n')
 
 
-# ---------------------------------------------------------------------------------------
 # doc/covariance.md: the Jackal's IMU
 
 

@@ -1,11 +1,7 @@
 """
-rot-tools on extreme numbers: a report, or exactly one error line, and no warning ever.
+rot-tools on the edges of float64: a report, or exactly one error line, and no warning ever.
 
-`rot-tools matrix 1e308 0 0 0 1e308 0 0 0 1e308` printed NumPy's 'overflow encountered in
-det' warning (two lines) before its error line. Here every command and option is fed the
-edges of float64 — the largest and smallest numbers, subnormals, ±0, NaN, ±inf, numbers
-beyond float64 — in process with warnings turned into errors (a leaked warning is a failure
-wherever it comes from), and a sample again as the installed script, counting stderr lines.
+Warnings are errors here, in process; a sample runs again as the installed script.
 """
 
 import itertools

@@ -1,8 +1,4 @@
-"""
-rot-tools hand-eye: files and bags in, the report, --yaml, the warning, bad input.
-
-The worked examples of doc/hand_eye.md are its real output, and near the simulations' truth.
-"""
+"""rot-tools hand-eye: files and bags in, the report, --yaml, the warning, bad input."""
 
 import json
 import math

@@ -1,12 +1,7 @@
 """
 rotation_client's messages in this process, without DDS: the input each verb fills, the answer.
 
-Where each number typed must go is stated here field by field, per message type, apart from
-rot_tools.ros.client.message_data. The answers are messages of each output's type with numbers
-of their own, fed to session.Answers as the client's subscriptions feed them: each is printed
-under its output's name, whatever the order of the node's output table, with a row dropped or
-one added, and an answer without ~/rodrigues (withheld at θ = π) is complete; ``echo`` prints
-a message of the output's type by its name, one of another type whole.
+Where each number typed goes is stated here field by field, apart from the client's own table.
 """
 
 from builtin_interfaces.msg import Time
@@ -25,7 +20,6 @@ PARAMETERS = {'euler_sequence': 'ZYX', 'angle_unit': 'rad', 'publish_markers': T
 """The node's parameters as the client reads them (the defaults)."""
 
 
-# ---------------------------------------------------------------------------------------
 # The input each verb fills
 
 
@@ -117,7 +111,6 @@ def test_cov_is_the_rotations_covariance_of_the_message(name):
     assert COVARIANCE[name](msg) == expected
 
 
-# ---------------------------------------------------------------------------------------
 # The answer, by output name
 
 ANSWER_PARAMETERS = {'euler_sequence': 'xyz', 'angle_unit': 'deg', 'publish_markers': True}
@@ -194,11 +187,7 @@ PRINTED = {
 
 
 def collected(messages):
-    """
-    Feed session.Answers the messages of the table's outputs as the client's subscriptions do.
-
-    Return (whether its answer is complete, the answer with its ~/rotation_matrix).
-    """
+    """Feed session.Answers the table's outputs; return (whether complete, the answer)."""
     answers = session.Answers(Header(frame_id='map', stamp=STAMP))
     for row in interface.OUTPUTS:  # the table as it is now
         if row.name == session.MATRIX:
@@ -284,7 +273,6 @@ def test_an_answer_without_an_output_of_every_input_is_not_complete():
         assert not complete, name
 
 
-# ---------------------------------------------------------------------------------------
 # echo
 
 

@@ -1,13 +1,8 @@
 """
 rotation_client play republishes every field as recorded, from ROS 1 and rosbag2 bags.
 
-A bag of messages that cover the field types of common_interfaces (bytes, chars, uint8 and
-int8 sequences, fixed arrays, bounded sequences, strings, nested messages and sequences of
-them, 64-bit extremes) is written by rosbags' writers, as ROS 1 (Noetic's types) and as
-rosbag2 (Jazzy's); played into this run's namespace; received by rclpy subscriptions. Each
-message received must equal, field by field (the message classes' own comparison), the
-Jazzy message of the same content as rosbags serialises it and rclpy reads it back (a ROS 1
-header's seq has no place in ROS 2; a ROS 1 byte is the same 8 bits).
+Each message received equals, by the message classes' own comparison, the Jazzy message of
+the same content as rosbags serialises it.
 """
 
 from pathlib import Path

@@ -1,11 +1,7 @@
 """
 rotation_client's tools around the inputs: the angle hint, echo, set, param, play, tf-demo.
 
-Against a rotation_node process of this run (conftest's isolated domain and namespaces), over
-DDS: the commands run in this process (test_client.Here) where what is tested is the
-command, as a process where it is the process (a stream printed as it comes, Ctrl-C, a closed
-pipe, a module that does not import); expected values come from closed forms and scipy, not
-from rot_tools.
+Against a rotation_node process of this run; expected values from closed forms and scipy.
 """
 
 from contextlib import redirect_stdout
@@ -59,7 +55,6 @@ def wait_subscribed(tester, topic):
                       f'a subscription on {topic}')
 
 
-# ---------------------------------------------------------------------------------------
 # The angle hint
 
 
@@ -76,7 +71,6 @@ def test_angle_hint(here, node, args, hint):
     assert yaml.safe_load(result.stdout)['answer']['euler_angles']['unit'] == 'rad'
 
 
-# ---------------------------------------------------------------------------------------
 # echo
 
 
@@ -156,12 +150,7 @@ def test_echo_unknown_output_and_unreachable(here, node):
 
 
 class StreamDuringCall:
-    """
-    A Client as echo sees it, whose node publishes a stream from the moment echo asks it.
-
-    The message published during the parameters call (stamp 1) reaches echo only if echo
-    subscribed before; each later spin brings the next (stamps 2, 3, ...).
-    """
+    """A Client whose node publishes a stream (stamps 1, 2, ...) from the moment echo asks it."""
 
     def __init__(self):
         from types import SimpleNamespace
@@ -252,7 +241,6 @@ def test_diagnostics_with_nothing_published(here, namespace):
                     f"{os.environ['ROS_DOMAIN_ID']}?)")
 
 
-# ---------------------------------------------------------------------------------------
 # set
 
 
@@ -345,7 +333,6 @@ def test_set_a_value_that_does_not_fit_the_type(here, node, args, why):
     assert line == (f'rotation_client: parameter {args[0]} of node {node} is a {kind}: {why}')
 
 
-# ---------------------------------------------------------------------------------------
 # param get / list
 
 
@@ -392,7 +379,6 @@ def test_param_bad_arguments(here, args, message):
     assert line.startswith('rotation_client: error: ') and message in line, line
 
 
-# ---------------------------------------------------------------------------------------
 # play
 
 JACKAL = {'/imu/data': 'imu', '/jackal_velocity_controller/odom': 'odometry'}
@@ -429,13 +415,7 @@ def bag_csv(*args):
 
 
 def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
-    """
-    Play one second of the Jackal recording (ROS 1) at twice its speed into the node.
-
-    Its Imu and Odometry topics are remapped onto ~/imu and ~/odometry: every ~/quaternion the
-    node publishes for them is the one ``rot-tools bag`` reads for that message (same frame,
-    same stamp), and the summary counts what the bag holds in that second.
-    """
+    """Each ~/quaternion of a played second of the Jackal bag is what ``rot-tools bag`` reads."""
     from geometry_msgs.msg import QuaternionStamped
     from rclpy.qos import QoSProfile
     topic = f'{node}/quaternion'
@@ -471,12 +451,7 @@ def test_play_drives_the_node_as_rot_tools_bag_reads_it(here, node, tester):
 
 
 def test_play_a_rosbag2_bag_with_tf(here, tester, namespace, tmp_path):
-    """
-    A rosbag2 bag's /tf and /tf_static (TFMessage: sequences of messages) arrive whole.
-
-    The subscriptions have tf2_ros's QoS: /tf_static's transient local one matches only a
-    transient local publisher, as the player's is for /tf_static.
-    """
+    """A rosbag2 bag's /tf and /tf_static arrive whole, /tf_static transient local."""
     from rot_tools.ros.tf_input import TF_QOS, TF_STATIC_QOS
     from tf2_msgs.msg import TFMessage
     messages, _, _ = tf_chain_messages(n=10)
@@ -607,7 +582,6 @@ def test_play_interrupted_exits_130_quietly(tester, namespace):
     assert interrupt(play) == (130, f'playing /imu/data (sensor_msgs/msg/Imu) on {topic}\n', '')
 
 
-# ---------------------------------------------------------------------------------------
 # tf-demo
 
 
@@ -685,7 +659,6 @@ def test_tf_demo_without_tf2_msgs():
         result.stderr)
 
 
-# ---------------------------------------------------------------------------------------
 # Ctrl-C
 
 
@@ -701,7 +674,6 @@ def test_echo_interrupted_exits_130_quietly(here, node, tester):
     assert first == ['---\n']
 
 
-# ---------------------------------------------------------------------------------------
 # doc/client.md's examples of echo, set and param
 
 
@@ -742,7 +714,6 @@ def _stamps_elided(text):
     return re.sub(r'(\n\s*sec: )\d+(\n\s*nanosec: )\d+', r'\1...\2...', text)
 
 
-# ---------------------------------------------------------------------------------------
 # A full disk
 
 

@@ -1,11 +1,8 @@
 """
 rot-tools compare: evo's numbers, a recorded time offset, a simulated mounting, bad inputs.
 
-evo (GPL) is a test requirement only: its Python API (evo.tools.file_interface to read the
-same files and bags, evo.core.sync.associate_trajectories, PoseTrajectory3D.align,
-evo.core.metrics.APE/RPE with PoseRelation.rotation_angle_deg) is what ``evo_ape --align``
-and ``evo_rpe --align --pose_relation angle_deg`` run; where evo is not installed those tests
-skip and say so.
+evo's Python API (what ``evo_ape``/``evo_rpe --align`` run) is the reference; without evo
+those tests skip.
 """
 
 import json
@@ -170,15 +167,7 @@ def test_bag_topic_gives_evos_numbers_and_its_tf_the_same(capsys, tmp_path, stre
 
 
 def as_they_come(path, t, R, b):
-    """
-    Write a TUM file as real ones come: a stamp repeated with another pose, and lines swapped.
-
-    Every 97th line is followed by one of the same stamp and a pose turned by 30° (kept, the
-    numbers would change), and every 89th pair of lines is swapped (stamps going back: evo
-    then searches the file linearly, taking the first of equal stamps; in a sorted file its
-    binary search takes the last for a stamp at or after them). Returns (repeated, backwards):
-    how many of each.
-    """
+    """Write a TUM file with repeated stamps and swapped lines; return (repeated, backwards)."""
     rows = np.column_stack([t, b, rt.matrix_to_quaternion(R)])
     off = rt.matrix_to_quaternion(R @ rt.rot_x(np.radians(30)))
     lines = [f'{row[0]:.9f} ' + ' '.join(f'{x:.9f}' for x in row[1:]) for row in rows]
@@ -291,12 +280,7 @@ def test_offset_of_the_recorded_imu_is_recovered_within_a_sample(capsys, tmp_pat
 
 
 def test_unrelated_streams_matched_by_a_weak_correlation_get_a_warning(capsys, tmp_path):
-    """
-    Check two stretches of the recorded IMU 30 s apart, given as one time span.
-
-    No offset matches them, yet a wide search finds one where their angular speeds correlate
-    by chance.
-    """
+    """Two stretches of the IMU 30 s apart correlate only by chance: a warning."""
     pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
     from rot_tools.cli import bag_analysis
     _, (imu,) = bag_analysis.analyse(bh.REAL, ('/imu/data',))
@@ -671,13 +655,7 @@ def test_se3_needs_positions(capsys, tmp_path):
 
 
 def simulated_files(directory):
-    """
-    Write doc/compare.md's example: a sensor 0.25 s late, mounted by X, in a turned world.
-
-    REF at 100 Hz, EST at 50 Hz with its clock 0.25 s behind (it reports at t what REF saw
-    at t + 0.25), its body turned by X = exp([0.3, −0.5, 1.1]×) and its world by 30° of yaw,
-    with 0.05° of noise per axis.
-    """
+    """Write doc/compare.md's example: EST 0.25 s late, mounted by X, in a world turned 30°."""
     rng = np.random.default_rng(2024)
     t_ref, t_est = np.arange(0.0, 30.0, 0.01), np.arange(0.0, 30.0, 0.02)
     X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))

@@ -3,8 +3,6 @@ The course notes' worked examples as exact expectations, and their slips pinned 
 
 Jia: Yan-Bin Jia, "Rotation in the Space" (Com S 477/577 notes).
 Cayero: Julen Cayero, "Relations between Rotation Matrix and Euler axis-angle".
-Each formula below is typed in from the notes as printed; the slips are shown to be slips by
-numbers, next to what the code (following the mathematics) does instead.
 """
 
 import math_helpers as h
@@ -47,7 +45,6 @@ def notes_q_eq11(r):
                      r[..., 0, 1] - r[..., 1, 0]], -1)
 
 
-# ----------------------------------------------------------------------------------------
 # Worked examples that are right: exact expectations.
 
 
@@ -115,9 +112,8 @@ def test_000_example3_gimbal_lock_at_elevation_pm_half_pi(lock):
 @pytest.mark.parametrize('eps', [1e-3, 1e-5])
 @pytest.mark.parametrize('lock', [PI / 2, -PI / 2])
 def test_000_example3_heading_jumps_by_pi_across_the_lock(lock, eps):
-    # "As beta increases from pi/2 - eps to pi/2 + eps, alpha instantaneously jumps to
-    # alpha + pi": past the lock the pitch folds back to lock -/+ eps, the heading turns by pi
-    # and the roll becomes pi.  Angle tolerance: theta1 and theta3 have condition ~1/eps.
+    # "alpha instantaneously jumps to alpha + pi" past the lock; theta1 and theta3 have
+    # condition ~1/eps.
     inside = lock - np.sign(lock) * eps
     outside = lock + np.sign(lock) * eps
     for alpha in (0.0, 0.7, -2.0, 3.0):
@@ -147,14 +143,11 @@ def test_000_example3_no_jump_inside_the_flagged_band(lock):
             assert h.max_abs(euler_to_matrix(got, 'ZYX') - r) <= 2e-9 + 1e-12
 
 
-# ----------------------------------------------------------------------------------------
 # Slips, pinned.
 
 
 def test_000_sec1_pitch_range_is_minus_half_pi_to_half_pi():
-    # §1 gives the Z-Y-X pitch range as [0, pi] (and calls eq. 1 "Z-Y-Z"). By eq. 1,
-    # r31 = -sin(pitch); a nose-down pitch has r31 > 0, i.e. sin(pitch) < 0: no pitch in
-    # [0, pi] can produce it.  The code reports pitch in [-pi/2, pi/2].
+    # §1 gives the Z-Y-X pitch range as [0, pi]: no pitch there gives a nose-down r31 > 0.
     r = notes_rot_zyx_eq1(0.0, -0.5, 0.0)
     assert r[2, 0] > 0
     got, _ = matrix_to_euler(r, 'ZYX')
@@ -231,9 +224,7 @@ def test_000_eq13_sin_squared_typo():
     assert h.max_abs(np.sin(theta) ** 2 - (3 - tr ** 2 + 2 * tr) / 4) <= 1e-15 * 4
     literal = 1 - np.sin(np.cos(theta)) ** 2
     assert h.max_abs(np.sin(theta) ** 2 - literal) > 0.1
-    # The code: for R = axis_angle_to_matrix(axis, theta), the angle matrix_to_axis_angle
-    # returns has sin = +sqrt((3 - Tr^2 + 2 Tr) / 4) (theta in [0, pi]: the + root), and the
-    # literal reading of eq. 13 does not give it.
+    # The code: sin(theta) = +sqrt((3 - Tr^2 + 2 Tr) / 4); eq. 13 read literally does not give it.
     rng = np.random.default_rng(72)
     axis = h.random_unit_vectors(rng, len(theta))
     r = axis_angle_to_matrix(axis, theta)
@@ -286,10 +277,8 @@ def test_000_eq15_with_eq11_axis_gives_the_angle_two_pi_minus_theta():
 
 
 def test_000_eq16_half_angle_vector_points_along_minus_axis():
-    # Eq. 16's first vector is eq. 11 applied to the tracking matrix (right). Its half-angle
-    # form (sin a/2 sin b/2, -cos a/2 sin b/2, -sin a/2 cos b/2) is parallel to it (factor
-    # 4 cos a/2 cos b/2 > 0), so it points along -l; it equals -sin(theta/2) l, i.e.
-    # sin(theta'/2) l' for l' = -l and theta' = 2 pi - theta.
+    # Eq. 16's half-angle form points along -l: it is sin(theta'/2) l' for l' = -l and
+    # theta' = 2 pi - theta.
     rng = np.random.default_rng(68)
     alpha = rng.uniform(-PI + 1e-3, PI - 1e-3, N)
     beta = rng.uniform(-PI / 2, PI / 2, N)
@@ -328,8 +317,6 @@ def test_000_sec5_i_minus_r_is_singular_and_the_axis_point():
     # c = R c + b_perp
     assert h.max_abs(np.einsum('nij,nj->ni', r, c) + bperp - c) <= 1e-12 * (1 + h.max_abs(b))
     # the minimum-norm solution (pseudo-inverse) is the same point, and so is ours
-    # (cut off the rounding-level singular value along the axis; the pseudo-inverse's own
-    # error grows like 1 / sin^2(theta/2), the point's condition like 1 / sin(theta/2))
     pinv = np.einsum('nij,nj->ni', np.linalg.pinv(i_minus_r, rcond=1e-9), bperp)
     sin_half = np.sin(angle / 2)
     bnorm = np.linalg.norm(b, axis=-1)
@@ -339,10 +326,8 @@ def test_000_sec5_i_minus_r_is_singular_and_the_axis_point():
 
 
 def test_000_eq17_eq18_moment_sign():
-    # Eq. 18: m = -(R^T + I) b_perp, which is -2 sin(theta) times the Pluecker moment
-    # point x direction. Eq. 17 calls it l x c with l = q of eq. 11, which is +2 sin(theta)
-    # times the Pluecker moment: eq. 17's first step (l x c = (R - R^T) c) has eq. 10's sign
-    # slip. The algebra (R^T + I)(I - R) = R^T - R and (R - R^T) c = m is right.
+    # Eq. 18: m = -(R^T + I) b_perp is -2 sin(theta) times the Pluecker moment; eq. 17's
+    # l x c is +2 sin(theta) times it (eq. 10's sign slip).
     rng = np.random.default_rng(70)
     axis, angle, r, b = transform_set(rng, N)
     rt = np.swapaxes(r, -1, -2)

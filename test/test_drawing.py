@@ -1,10 +1,7 @@
 """
 rot_tools.io.drawing: the geometry both renderers draw, against independent closed forms.
 
-Motions are built from a screw chosen by the test (l̂, c, θ, d) with Jia's eq. 7
-(math_helpers.screw_motion): R = Rot(θ·l̂), b = (I − R)·c + d·l̂. The path must then be the
-helix p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ of the constant-screw motion (scipy's
-Rotation), point by point.
+The path must be the helix p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂ (scipy's Rotation).
 """
 
 import math
@@ -64,8 +61,7 @@ def test_screw_picture(case, scale):
     s = np.linspace(0.0, 1.0, n + 1)
     np.testing.assert_allclose(path, helix(direction, point, angle, d, np.zeros(3), s),
                                rtol=0, atol=1e-12 * size)
-    # Smooth: each step turns at most 3° and no chord is further than SAGITTA·scale from
-    # the helix (checked at the middle of each step, where a chord is furthest off).
+    # Each step turns at most 3°, its chord within SAGITTA·scale of the helix.
     assert angle / n <= drawing.MAX_STEP_ANGLE * (1 + 1e-12)
     mid = helix(direction, point, angle, d, np.zeros(3), (s[:-1] + s[1:]) / 2)
     off = np.linalg.norm(mid - (path[:-1] + path[1:]) / 2, axis=1)

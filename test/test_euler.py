@@ -25,12 +25,7 @@ def lock_distance(angles, seq):
 
 
 def input_lock_distance(middle, seq):
-    """
-    Distance to the lock of the rotation built with middle angle `middle` (any value).
-
-    Tait-Bryan: the canonical middle angle has the same sine, so the distance to +/-pi/2 is
-    asin|cos(middle)|; proper Euler: same cosine, distance to 0 or pi is asin|sin(middle)|.
-    """
+    """Distance to gimbal lock of the rotation with middle angle `middle` (any value)."""
     middle = np.asarray(middle, dtype=float)
     if seq.upper() in h.TAIT_BRYAN:
         return np.arcsin(np.abs(np.cos(middle)))

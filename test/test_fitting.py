@@ -1,10 +1,7 @@
 """
 Comparing, averaging, fitting and sampling rotations, against scipy and closed forms.
 
-References: scipy.spatial.transform.Rotation (magnitude of R1⁻¹R2, mean, align_vectors —
-quaternion-based, computed independently of rot_tools), scipy.stats.kstest for the Haar angle
-law, and closed forms (rotations about one axis, exact a = R0·b data, the smallest rotation
-between two vectors).
+scipy.spatial.transform.Rotation, scipy.stats.kstest for the Haar angle law, closed forms.
 """
 
 import re
@@ -210,25 +207,25 @@ def test_mean_of_a_symmetric_set_is_refused():
         mean_rotation(r, [3.0, 3.0, 2.0, 1.0])
 
 
-@pytest.mark.parametrize('weights', [[1.0, -0.5, 1.0], [-1e-300, 1.0, 1.0]])
-def test_mean_negative_weights(weights):
-    r = clusters(1, 3, 1.0, 19)[0]
-    bad = min(weights)
-    with pytest.raises(RotationError, match=re.escape(f'weights must be ≥ 0, got {bad:g}')):
-        mean_rotation(r, weights)
+MEAN_REFUSALS = {
+    'negative weight': (1, [1.0, -0.5, 1.0], re.escape('weights must be ≥ 0, got -0.5')),
+    'tiny negative weight': (1, [-1e-300, 1.0, 1.0],
+                             re.escape('weights must be ≥ 0, got -1e-300')),
+    'zero weights': (1, [0.0, 0.0, 0.0], r'weights are all 0'),
+    'zero weights of one set': (2, [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], r'weights are all 0'),
+    'two weights': (1, [1.0, 1.0], r'weights must have one entry per rotation \(3\)'),
+    'four weights': (1, [1.0] * 4, r'weights must have one entry per rotation \(3\)'),
+    'one weight': (1, 1.0, r'weights must have one entry per rotation \(3\)'),
+}
+"""mean_rotation of n_sets sets of three rotations with weights that are refused, and why."""
 
 
-def test_mean_all_zero_weights():
-    with pytest.raises(RotationError, match=r'weights are all 0'):
-        mean_rotation(clusters(1, 3, 1.0, 20)[0], [0.0, 0.0, 0.0])
-    with pytest.raises(RotationError, match=r'weights are all 0'):
-        mean_rotation(clusters(2, 3, 1.0, 20), [[1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
-
-
-@pytest.mark.parametrize('weights', [[1.0, 1.0], [1.0] * 4, 1.0])
-def test_mean_mismatched_weight_count(weights):
-    with pytest.raises(RotationError, match=r'weights must have one entry per rotation \(3\)'):
-        mean_rotation(clusters(1, 3, 1.0, 21)[0], weights)
+@pytest.mark.parametrize('case', MEAN_REFUSALS)
+def test_mean_refuses_bad_weights(case):
+    n_sets, weights, message = MEAN_REFUSALS[case]
+    r = clusters(n_sets, 3, 1.0, 20)
+    with pytest.raises(RotationError, match=message):
+        mean_rotation(r[0] if n_sets == 1 else r, weights)
 
 
 def test_mean_needs_a_set_of_rotations():
@@ -420,34 +417,33 @@ def test_align_any_finite_scale(scale_a, scale_b):
     assert np.isfinite(rmsd)
 
 
-@pytest.mark.parametrize('which', ['a', 'b'])
-def test_align_zero_vectors(which):
-    v = {'a': np.eye(3), 'b': np.eye(3)}
-    v[which] = v[which].copy()
-    v[which][1] = 0.0
-    with pytest.raises(RotationError, match=re.escape(f'{which}[1] is the zero vector')):
-        align_vectors(v['a'], v['b'])
+ALIGN_REFUSALS = {
+    'a zero vector in a': (np.diag([1.0, 0.0, 1.0]), np.eye(3), None,
+                           re.escape('a[1] is the zero vector')),
+    'a zero vector in b': (np.eye(3), np.diag([1.0, 0.0, 1.0]), None,
+                           re.escape('b[1] is the zero vector')),
+    'counts 3 and 2': (np.ones((3, 3)), np.ones((2, 3)), None, 'a has 3 vectors but b has 2'),
+    'counts 1 and 4': (np.ones((1, 3)), np.ones((4, 3)), None, 'a has 1 vectors but b has 4'),
+    'weight count': (np.eye(3), np.eye(3), [1.0, 1.0],
+                     r'one entry per vector pair \(3\), got 2 entries'),
+    'negative weight': (np.eye(3), np.eye(3), [1.0, 1.0, -1.0],
+                        r'weights must be ≥ 0, got -1 at index 2'),
+    'zero weights': (np.eye(3), np.eye(3), [0.0, 0.0, 0.0],
+                     r'weights are all 0: at least one vector pair'),
+    'one vector': ([1.0, 0.0, 0.0], [[1.0, 0.0, 0.0]], None,
+                   r'a must have shape \(\.\.\., N, 3\)'),
+    'no pairs': (np.zeros((0, 3)), np.zeros((0, 3)), None, r'no vector pairs'),
+    'batches': (np.ones((2, 4, 3)), np.ones((3, 4, 3)), None, r'do not broadcast'),
+    'inf': (np.eye(3), [[1.0, 0, 0], [0, np.inf, 0], [0, 0, 1]], None, r'b must be finite'),
+}
+"""align_vectors(a, b, weights) that are refused, and what the message says."""
 
 
-@pytest.mark.parametrize('n_a, n_b', [(3, 2), (1, 4)])
-def test_align_mismatched_counts(n_a, n_b):
-    with pytest.raises(RotationError, match=f'a has {n_a} vectors but b has {n_b}'):
-        align_vectors(np.ones((n_a, 3)), np.ones((n_b, 3)))
-
-
-def test_align_mismatched_weight_count():
-    with pytest.raises(RotationError, match=r'one entry per vector pair \(3\), got 2 entries'):
-        align_vectors(np.eye(3), np.eye(3), [1.0, 1.0])
-
-
-def test_align_negative_weights():
-    with pytest.raises(RotationError, match=r'weights must be ≥ 0, got -1 at index 2'):
-        align_vectors(np.eye(3), np.eye(3), [1.0, 1.0, -1.0])
-
-
-def test_align_all_zero_weights():
-    with pytest.raises(RotationError, match=r'weights are all 0: at least one vector pair'):
-        align_vectors(np.eye(3), np.eye(3), [0.0, 0.0, 0.0])
+@pytest.mark.parametrize('case', ALIGN_REFUSALS)
+def test_align_refusals(case):
+    a, b, weights, message = ALIGN_REFUSALS[case]
+    with pytest.raises(RotationError, match=message):
+        align_vectors(a, b, weights)
 
 
 def test_align_without_a_best_rotation():
@@ -458,17 +454,6 @@ def test_align_without_a_best_rotation():
     with pytest.raises(RotationError, match=r'best rotation is not unique: the singular values'
                                             r' of H = Σ wᵢ·aᵢbᵢᵀ are .* det -1'):
         align_vectors(np.eye(3), np.diag([1.0, 1.0, -1.0]))
-
-
-def test_align_shapes_refused():
-    with pytest.raises(RotationError, match=r'a must have shape \(\.\.\., N, 3\)'):
-        align_vectors([1.0, 0.0, 0.0], [[1.0, 0.0, 0.0]])
-    with pytest.raises(RotationError, match=r'no vector pairs'):
-        align_vectors(np.zeros((0, 3)), np.zeros((0, 3)))
-    with pytest.raises(RotationError, match=r'do not broadcast'):
-        align_vectors(np.ones((2, 4, 3)), np.ones((3, 4, 3)))
-    with pytest.raises(RotationError, match=r'b must be finite'):
-        align_vectors(np.eye(3), [[1.0, 0, 0], [0, np.inf, 0], [0, 0, 1]])
 
 
 # ---- random_rotations ----------------------------------------------------------------------
@@ -566,11 +551,7 @@ def scipy_primary(a, b, weights, primary):
     """
     Return the rotation that aligns pair ``primary`` exactly and best fits the rest.
 
-    The answer of an infinite weight on that pair (scipy ≥ 1.12 computes it, 1.11 cannot), by
-    another road than rot_tools': scipy's rotations throughout, R1 the smallest rotation
-    taking b̂ onto â (from its rotation vector), then the turn φ about â where the torque of
-    the other pairs, Σ wᵢ aᵢ·(â × Rot(â, φ)·R1·bᵢ), vanishes at a maximum of Σ wᵢ aᵢ·R·bᵢ:
-    the best of 720 turns, refined by brentq to 1e-15 rad.
+    scipy's rotations throughout, the turn about â by a scan and brentq (not rot_tools' road).
     """
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     w = np.asarray(weights, dtype=float)
@@ -599,10 +580,8 @@ def scipy_primary(a, b, weights, primary):
 
 @pytest.mark.parametrize('ratio', [1e8, 1e9, 1e10, 1e12, 1e16, 1e30])
 def test_align_dominant_weight_still_fits_the_second_pair(ratio):
-    # scipy's test_align_vectors_align_constrain with a finite weight: the primary +x of b
-    # goes onto +y of a, then the turn about it takes the rest of b's [1, 1, 0] onto a's
-    # [0, 1, 1]. Weights ≥ 1e9 make the SVD's H rank one to UNIQUE_TOL: the second pair must
-    # still count.
+    # scipy's test_align_vectors_align_constrain with a finite weight: however large, the
+    # second pair still counts.
     a = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 1.0]])
     expected = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     R, rmsd = align_vectors(a, [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [ratio, 1.0])
@@ -625,10 +604,8 @@ def dominated_sets(rng, n_sets, n_pairs):
 
 @pytest.mark.parametrize('ratio', [1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16])
 def test_align_dominant_weight_against_scipy(ratio):
-    # The exact minimiser with weights [ratio, 1, 1, 1] lies within ~Σ wᵢ|aᵢ||bᵢ| / (ratio ·
-    # |a0||b0|) of the answer for an infinite first weight (that pair aligned exactly, the
-    # rest fitted about it: scipy_primary); scipy's own finite-weight SVD is accurate to
-    # ~ε·ratio. Each is a reference where it is sharp.
+    # Two references, each where it is sharp: scipy_primary (off by ~1/ratio) and scipy's
+    # finite-weight SVD (off by ~ε·ratio).
     rng = np.random.default_rng(int(np.log10(ratio)))
     a, b = dominated_sets(rng, 60, 4)
     weights = np.array([ratio, 1.0, 1.0, 1.0])
@@ -693,19 +670,14 @@ def rot_z_scipy(angle):
 
 @pytest.mark.parametrize('delta', [1e-12, 1e-11, 1e-10])
 def test_a_mean_decided_by_rounding_is_refused(delta):
-    # rot_z(0) and rot_z(π − δ), equal weights: S = Σ Rᵢ has singular values (2, δ, δ), and
-    # its entries carry rounding of ~ε, so the turn about z of the answer is only known to
-    # ~ε/δ (2e-4 rad at δ = 1e-12). Refused while δ ≤ UNIQUE_TOL·σ1 = 2e-9: a threshold
-    # moved down to 1e-15 (a surviving mutant) accepted these and returned noise.
+    # S = Σ Rᵢ has singular values (2, δ, δ): the turn about z is known only to ~ε/δ.
     with pytest.raises(RotationError, match=r'mean rotation is not unique'):
         mean_rotation(np.stack([np.eye(3), rot_z_scipy(PI - delta)]))
 
 
 @pytest.mark.parametrize('delta', [1e-7, 1e-6])
 def test_a_mean_the_data_decides_is_returned(delta):
-    # The same pair a little further from π apart (σ2/σ1 = δ/2 = 5e-8 and up): determined by
-    # the data to ~ε/δ, returned, and equal to rot_z((π − δ)/2) to that accuracy; a
-    # threshold moved up (1e-6) refused it.
+    # A little further from π apart the data decide it, to ~ε/δ.
     M = mean_rotation(np.stack([np.eye(3), rot_z_scipy(PI - delta)]))
     ref = Rotation.from_rotvec([0.0, 0.0, (PI - delta) / 2]).as_matrix()
     assert scipy_angle(M, ref) <= 64 * EPS / delta

@@ -1,9 +1,7 @@
 """
 hand_eye and screw_congruence on simulated recordings whose X and Z are known.
 
-The recordings (test/hand_eye_helpers.py): an arm at stations, against OpenCV's five methods;
-flipped marker detections; a mobile base on a floor; streams at two rates with a time offset;
-the reported sigma against the errors seen.
+The arm at stations is also checked against OpenCV's five methods.
 """
 
 import math

@@ -1,13 +1,7 @@
 """
 check_imu on the real Jackal recording with one fault put in at a time, and on synthetic motion.
 
-The recording (bag_helpers.REAL): /imu/data, a Clearpath Jackal's IMU in base_link at 50 Hz with
-its orientation, and its wheel odometry as the reference, read once with rosbags. Each faulty
-copy is written from those arrays with scipy's Rotation and plain NumPy, with and without the
-reference: the injected fault is found, and only it, to the accuracy asked. The Jackal's roll
-and pitch vibrate, so every gyro axis is fixed; its odometry is planar, so the mounting's up
-axis is fixed, not its turn about it. The synthetic motion turns about all three axes with
-rests between: there the answers are exact and the mounting is whole.
+The faulty copies are written with scipy's Rotation and NumPy: the fault is found, and only it.
 """
 
 import itertools
@@ -238,14 +232,7 @@ def body(t, axes=(1.0, 1.0, 1.0)):
 
 def synthetic(M=np.eye(3), scale=1.0, bias=(0.0, 0.0, 0.0), lag=0.0, X=None,
               axes=(1.0, 1.0, 1.0), noise=0.0, seed=0):
-    """
-    Return an IMU mounted X on a body turning as body(t), its gyro ω/scale on Mᵀ's axes.
-
-    The true rate ω(t) in the IMU frame is the central difference of the closed form
-    (h = 1e-5 s); the measured gyro Mᵀ·ω/scale + bias/scale (so that ω = scale·M·(ω_m −
-    bias/scale)); the orientation W·body(t − lag)·X; the specific force Rᵀ·(0, 0, g); the
-    reference body(t). noise: σ of the gyro (rad/s), and 10σ of the accelerometer.
-    """
+    """Return an IMU mounted X on a body turning as body(t), its gyro ω/scale on Mᵀ's axes."""
     rng = np.random.default_rng(seed)
     t = np.arange(int(SECONDS * RATE)) / RATE
     X = Rotation.identity() if X is None else X

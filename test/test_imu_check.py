@@ -1,12 +1,7 @@
 """
 rot-tools imu-check end to end, in-process: faulty copies of the real recording, bad input.
 
-The real recording (a Clearpath Jackal: /imu/data in base_link at 50 Hz, wheel odometry) is
-read here with rosbags alone; a window of it is written back as small rosbag2 bags with one
-fault put in by an independent formula (scipy's Rotation): the accelerometer in g, the gyro
-in degrees/s, the whole IMU converted to NED, no orientation at all. The command must find
-each fault, say how to fix it in the user's terms, and leave the clean recording without
-fault. Bad input is one line and exit status 2. doc/imu.md's example is produced here.
+Each fault (accelerometer in g, gyro in deg/s, NED, no orientation) is found and its fix said.
 """
 
 import json
@@ -137,7 +132,6 @@ def one_error_line(status, out, err, *words):
         assert word in err, err
 
 
-# ---------------------------------------------------------------------------------------
 # Faults put in
 
 
@@ -170,11 +164,7 @@ def test_gyro_in_degrees(real, tmp_path, capsys):
 
 
 def recipe(line, fields):
-    """
-    Apply a fix's axis map to recorded fields: 'x = -orientation.y, ...' or 'x = +y, ...'.
-
-    fields: {name: (N,) values} of the names the map reads; returns the (N, k) result.
-    """
+    """Apply a fix's axis map ('x = -orientation.y, ...') to fields {name: (N,)}; return (N, k)."""
     columns = []
     for part in line.split(', '):
         sign, name = re.fullmatch(r'\w = ([+-]?)([\w.]+)', part).groups()
@@ -304,7 +294,6 @@ def test_clean_window_with_the_odometry_json(real, clean, capsys):
     assert len(data['checks']['mounting']['quaternion']) == 4
 
 
-# ---------------------------------------------------------------------------------------
 # Every window of the clean recording
 
 
@@ -322,11 +311,7 @@ def window(recording, start, end):
 
 
 def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
-    """
-    Windows of 2, 5 and 10 s, 1.5 s apart, over the whole recording, with the odometry.
-
-    The bag is read once; each window goes through the command's run as --start S --end E.
-    """
+    """Windows of 2, 5 and 10 s over the whole clean recording: no fault."""
     whole = imu_recording.read(bh.REAL, ref_topic=ODOM)
     monkeypatch.setattr(imu_recording, 'read',
                         lambda *args, **_: window(whole, args[4], args[5]))
@@ -343,7 +328,6 @@ def test_no_fault_in_any_window_of_the_clean_recording(capsys, monkeypatch):
     assert found_faults == {}
 
 
-# ---------------------------------------------------------------------------------------
 # The reference from another recording of the run (--ref-bag)
 
 
@@ -421,7 +405,6 @@ def test_topics_stamped_a_day_apart_are_refused(real, tmp_path, capsys):
                    f'{span(odom_ns)}) do not overlap in time: 27.0 h apart\n')
 
 
-# ---------------------------------------------------------------------------------------
 # doc/imu.md's example: the whole real recording, without and with the odometry
 
 
@@ -438,7 +421,6 @@ def test_doc_example_is_real_output(capsys, monkeypatch):
     assert_doc_output('imu-check-jackal', shown)  # ROT_TOOLS_UPDATE_DOCS=1 rewrites it
 
 
-# ---------------------------------------------------------------------------------------
 # Bad input: one line, exit status 2
 
 
@@ -601,7 +583,6 @@ def test_options_that_do_not_fit(capsys):
                                   'imu-check\n')
 
 
-# ---------------------------------------------------------------------------------------
 # The pieces
 
 

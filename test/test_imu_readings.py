@@ -1,11 +1,7 @@
 """
 check_imu blames the right culprit, and says unknown where the data cannot tell.
 
-The culprits: the quaternion's reading, a mirrored gyro, a gyro that does not follow, stamps
-going back.
-
-The faults are put into the real Jackal recording (test_imu's fixture) and into a synthetic
-heeled body that turns about three axes, by scipy and plain NumPy.
+Faults put into the real Jackal recording and a synthetic body, by scipy and plain NumPy.
 """
 
 import math

@@ -1,10 +1,4 @@
-"""
-rot_tools.io.interface: one row per input and output, as the node and the bag reader show them.
-
-The node's graph (rclpy's introspection of its publishers and subscriptions) against the
-table, and the bag reader's types against its rows. The client's verbs and answers are the
-client's tests.
-"""
+"""rot_tools.io.interface: a row per input and output, as the node and bag reader show them."""
 
 import pytest
 from rot_tools.io import bag_read, interface

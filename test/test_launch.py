@@ -1,10 +1,8 @@
 """
 launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would.
 
-ros2 launch (launch_ros) is not on PyPI, so :func:`launch_command` reads the file the way
-launch_ros turns a ``<node>`` into a command line, for the few tags and substitutions the
-file uses — any other tag, attribute or substitution fails the test, so the file cannot
-outgrow this reading of it. The command is then started and talked to over DDS.
+launch_ros is not on PyPI: :func:`launch_command` reads the few tags the file uses, and any
+other tag fails the test.
 """
 
 from pathlib import Path
@@ -49,13 +47,7 @@ def _allowed(element, attributes):
 
 
 def launch_command(overrides=None, share=REPO):
-    """
-    (pkg, exec, ros_args) of the file's one node with launch arguments ``overrides``.
-
-    As launch_ros builds it: --ros-args, -r __node:=NAME, -r __ns:=/NS, --params-file for
-    each <param from>, -r FROM:=TO for each <remap>. ``share`` stands for the package's
-    share directory ($(find-pkg-share rot_tools)): the repository has the same layout.
-    """
+    """(pkg, exec, ros_args) of the file's one node, as launch_ros builds it from the file."""
     root = ElementTree.parse(LAUNCH_FILE).getroot()
     assert root.tag == 'launch'
     args, node = {}, None

@@ -1,9 +1,7 @@
 """
 rot_tools.ros.node.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
 
-Expected values are computed here from (R, b) and a screw chosen by the test (scipy's
-Rotation for R), never read back from rot_tools.io.drawing. Every message is taken through
-rclpy's serialisation and back, as a subscriber gets it.
+Expected values come from (R, b) and a screw chosen here, never from rot_tools.io.drawing.
 """
 
 import math
@@ -94,9 +92,7 @@ def test_screw_markers():
 
 @pytest.mark.parametrize('theta', [0.01, 1e-8])
 def test_a_small_turn_is_labelled_beside_the_motion(theta):
-    # Odometry's usual pose: a small turn about z and b = (1, 0, 0). Its axis is the vertical
-    # line through (0.5, 0.5·cot(θ/2)), 100 or 1e8 away; the label stays by the path, which is
-    # the chord from 0 to b within SAGITTA·scale, and the axis is a few marker_scale long.
+    # A small turn about z, b = (1, 0, 0): the axis 100 or 1e8 away, the label by the path.
     R = Rotation.from_rotvec([0.0, 0.0, theta]).as_matrix()
     b, scale = np.array([1.0, 0.0, 0.0]), 0.5
     m = by_id(picture_markers(HEADER, picture(R, b, scale=scale)))

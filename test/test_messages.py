@@ -1,10 +1,4 @@
-"""
-rotation_node's reading of each input message, and rot_tools.ros.node.messages (no DDS traffic).
-
-Inbound, a message goes the node's way: serialised by rclpy and read back as a message
-object, then given to the node's callback for its type, whose (header, R, b) or refusal is
-caught before anything is published.
-"""
+"""rotation_node's reading of each input message, and its messages module (no DDS traffic)."""
 
 import math
 
@@ -82,7 +76,6 @@ def unit(v):
     return v / np.linalg.norm(v)
 
 
-# ---------------------------------------------------------------------------------------
 # Inbound
 
 
@@ -140,16 +133,6 @@ def test_pose_stamped(take):
     assert b.tolist() == [1.0, -2.0, 3.5]
 
 
-@pytest.mark.parametrize('field, value, match', [
-    ('x', math.nan, r'pose\.position\.x is nan'), ('z', -math.inf, r'pose\.position\.z is -inf')])
-def test_pose_with_non_finite_position_is_refused(field, value, match, take):
-    msg = PoseStamped()
-    setattr(msg.pose.position, field, value)
-    with pytest.raises(RefusedInput, match=match) as info:
-        take(msg)
-    assert info.value.reason == 'non_finite'
-
-
 def test_transform_stamped(take):
     msg = TransformStamped()
     msg.header.frame_id = 'world'
@@ -159,24 +142,6 @@ def test_transform_stamped(take):
     assert same_header(header, msg)
     np.testing.assert_allclose(R, rot_x(math.pi), rtol=0, atol=ATOL)
     assert b.tolist() == [4.0, 0.0, 0.0]
-
-
-@pytest.mark.parametrize('where, match', [
-    ('translation', r'transform\.translation\.y is nan'),
-    ('rotation', r'transform\.rotation\.y is nan')])
-def test_transform_with_nan_is_refused(where, match, take):
-    msg = TransformStamped()
-    getattr(msg.transform, where).y = math.nan
-    with pytest.raises(RefusedInput, match=match) as info:
-        take(msg)
-    assert info.value.reason == 'non_finite'
-
-
-def test_transform_with_zero_rotation_is_refused(take):
-    msg = TransformStamped()
-    msg.transform.rotation.w = 0.0
-    with pytest.raises(RefusedInput, match='transform.rotation is the zero quaternion'):
-        take(msg)
 
 
 @pytest.mark.parametrize('seq', ['ZYX', 'xyz', 'ZXZ', 'yxy'])
@@ -190,14 +155,6 @@ def test_euler_stamped(seq, degrees, take):
     assert same_header(header, msg)
     np.testing.assert_allclose(R, euler_to_matrix(angles, seq), rtol=0, atol=ATOL)
     assert b.tolist() == [0.0, 0.0, 0.0]
-
-
-def test_euler_stamped_with_inf_is_refused(take):
-    msg = Vector3Stamped()
-    msg.vector.z = math.inf
-    with pytest.raises(RefusedInput, match=r'vector\.z is inf') as info:
-        take(msg)
-    assert info.value.reason == 'non_finite'
 
 
 def test_pose_with_covariance_stamped_ignores_the_covariance(take):
@@ -274,7 +231,6 @@ def test_quaternion_stamped(take):
     assert info.value.reason == 'non_unit_quaternion'
 
 
-# ---------------------------------------------------------------------------------------
 # Outbound
 
 

@@ -1,33 +1,8 @@
 """
 A newcomer's walk: README.md's commands, run as written in a fresh clone after ``make run``.
 
-doc/development.md ("A newcomer's walk") says what the walk does and what it leaves out. In
-short: the checkout is cloned with git into a temporary directory (its uncommitted changes to
-tracked files copied in: none in CI), with ``shared`` beside the clone, as CI has it, so that
-``../shared/data`` resolves. Every command of README.md's shell blocks (``sh``, ``console``)
-is read from README.md and either walked or named in :data:`NOT_WALKED` with the reason; a
-command that is neither fails the test, as does a name in NOT_WALKED that README.md no longer
-shows.
-
-- ``make`` commands are dry runs (``make -n``) in the clone while it has no venv: a real
-  ``make run`` sets up a venv for minutes. The run target must set up the venv, install the
-  ``bag`` and ``plot`` extras and end by starting the node; in the suite of the pinned venv,
-  its pip installs (but the editable one) run with ``--dry-run --no-index``, so that pip
-  reads their requirement and constraint files.
-- The last line of ``make -n run``, the node, is then started in the clone in the background
-  (as in a terminal of its own), the clone's ``.venv`` being a link to the venv this suite
-  runs in: what ``make run`` installs (the package, editable, and its console scripts).
-- The other commands are typed in order, in bash, in the clone, after ``source
-  .venv/bin/activate`` as README.md says. The output a console block shows after a command is
-  compared with the real one (``...`` matches any text, as everywhere in the docs); every
-  command ends with status 0, or the one the ``echo $?`` after it shows, and no traceback.
-- The node and the commands that end with ``&`` run until the end of the walk, then get
-  SIGINT (Ctrl-C, or ``kill -INT %1``): the node ends with status 0, rotation_client with
-  130 (doc/client.md), both without a traceback.
-
-DDS is isolated as in every node test (conftest.py: this run's ROS_DOMAIN_ID,
-ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST); the commands themselves use the default names, as
-written.
+doc/development.md ("A newcomer's walk") says what the walk does and what it leaves out:
+every README.md command is walked or named in :data:`NOT_WALKED` with its reason.
 """
 
 from importlib import metadata
@@ -140,12 +115,7 @@ def git(*args, cwd=REPO):
 
 
 class FreshClone:
-    """
-    A git clone of this checkout, ``shared`` beside it, and README's make commands dry-run.
-
-    ``dry_runs[command]`` is (exit status, output) of ``make -n TARGET`` in the clone without
-    a venv.
-    """
+    """A git clone of this checkout, ``shared`` beside it, and README's make commands dry-run."""
 
     def __init__(self, top):
         self.path = top / 'rot_tools'
@@ -222,10 +192,7 @@ def test_make_run_installs_the_extras_then_starts_the_node(clone):
 
 
 def test_make_run_s_pip_installs_resolve(clone):
-    # pip reads its requirement and constraint files before it installs anything: a file it
-    # refuses (a constraint with an extra, dask[distributed]) fails make run on every new
-    # machine. Each pip install of the dry run, but the editable one, is run with --dry-run
-    # --no-index by the venv make run sets up, which holds every pin already: no download.
+    # Each pip install but the editable one runs with --dry-run --no-index: pip reads its files.
     if Path(sys.prefix).resolve() != (REPO / '.venv').resolve():
         pytest.skip('make run sets up .venv: its pins are checked by the suite that runs there')
     status, out = clone.dry_runs['make run']

@@ -1,12 +1,7 @@
 """
-In-process tests of rotation_node over real DDS.
+rotation_node over real DDS: node and tester in two rclpy contexts, one namespace a test.
 
-The node under test lives in one rclpy context (one DDS participant), the test node in
-another, so every message crosses DDS as it would between processes; each test has a
-namespace of its own (below this run's, see conftest). Expected values come from the math
-module (rot_tools) and, for the robot inputs and the quaternion output, independently from
-scipy.spatial.transform.Rotation and closed forms; compared to 1e-12. ~/describe prints 12
-significant digits, so its numbers are compared to that.
+Expected values from the math module and, independently, scipy's Rotation, to 1e-12.
 """
 
 import math
@@ -50,7 +45,6 @@ STAMPED = ALWAYS[1:]
 """Those that carry the input's header (all but the MultiArray rotation_matrix)."""
 
 
-# ---------------------------------------------------------------------------------------
 # Messages and expected values
 
 
@@ -192,7 +186,6 @@ def check_outputs(out, stamp, frame, R, b, seq='ZYX', degrees=False, scale=1.0,
                                    scale * screw.direction, rtol=0, atol=ATOL * size * 10)
 
 
-# ---------------------------------------------------------------------------------------
 # The rig: node under test + tester
 
 
@@ -309,7 +302,6 @@ def random_quaternion():
     return q / np.linalg.norm(q)
 
 
-# ---------------------------------------------------------------------------------------
 # Topics
 
 POSE_CASES = {
@@ -548,7 +540,6 @@ def test_sensor_data_publisher_is_served(rig):
     check_outputs(out, 4242, 'map', quaternion_to_matrix(q), p)
 
 
-# ---------------------------------------------------------------------------------------
 # Bad input
 
 
@@ -560,7 +551,7 @@ BAD_INPUTS = {
     'pose_nan_orientation': ('pose', pose_stamped((0, 0, 0, math.nan)),
                              'non_finite', 'pose.orientation.w is nan'),
     'pose_zero_quaternion': ('pose', pose_stamped((0, 0, 0, 0)),
-                             'zero_quaternion', 'zero quaternion'),
+                             'zero_quaternion', 'pose.orientation is the zero quaternion'),
     'pose_long_quaternion': ('pose', pose_stamped((0, 0, 0, 1.5)),
                              'non_unit_quaternion', 'norm 1.5'),
     'pose_just_beyond_tolerance': ('pose', pose_stamped(np.array([0, 0, 0.6, 0.8]) * 1.0011),
@@ -575,7 +566,7 @@ BAD_INPUTS = {
     'transform_inf_rotation': ('transform', transform_stamped((math.inf, 0, 0, 1)),
                                'non_finite', 'transform.rotation.x is inf'),
     'transform_zero_quaternion': ('transform', transform_stamped((0, 0, 0, 0)),
-                                  'zero_quaternion', 'zero quaternion'),
+                                  'zero_quaternion', 'transform.rotation is the zero quaternion'),
     'transform_short_quaternion': ('transform', transform_stamped((0, 0.5, 0, 0)),
                                    'non_unit_quaternion', 'norm 0.5'),
     'euler_nan': ('euler', euler_stamped((0.1, math.nan, 0.3)),
@@ -654,21 +645,11 @@ def test_bad_input_is_refused(rig, case):
     lambda data: data[:12] + b'\xff' + data[13:],
 ], ids=['truncated', 'xcdr2', 'frame_id_length'])
 def test_bytes_that_are_not_the_message_never_reach_the_node(rig, damage):
-    # A publisher of raw bytes can send anything on ~/pose: rclpy's type support cannot make a
-    # PoseStamped of it, and the node never sees it. Nothing is refused, nothing logged, and
-    # the next message is served.
+    # rclpy cannot make a PoseStamped of them: nothing refused, nothing logged, the next served.
     rig.pubs['pose'].publish(damage(serialize_message(GOOD_INPUTS['pose'])))
     rig.outputs(rig.send('pose', GOOD_INPUTS['pose']))
     assert rig.report()['refused']['total'] == 0
     assert rig.node_logs(Log.WARN) == rig.node_logs(Log.ERROR) == []
-
-
-def test_quaternion_within_tolerance_is_normalised(rig):
-    q = np.array([0.6, 0.0, 0.0, 0.8]) * (1 + 0.9e-3)
-    out = rig.roundtrip('pose', pose_stamped(q, (1, 2, 3)))
-    R = quaternion_to_matrix(q / np.linalg.norm(q))
-    check_outputs(out, out['screw'].header.stamp.sec, 'map', R, np.array([1.0, 2.0, 3.0]))
-    assert rig.report()['refused']['total'] == 0
 
 
 def test_huge_finite_euler_angles_are_accepted(rig):
@@ -703,12 +684,7 @@ def test_burst_of_bad_input_throttles_warnings_and_keeps_serving(rig):
 
 
 def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
-    """
-    Check that a fast stream of bad IMU messages does not silence a slow bad odometry stream.
-
-    The odometry is refused while the IMU's warning of this second has just been logged:
-    a throttle shared by every input (rclpy's, per call site) would swallow its warning.
-    """
+    """A fast stream of bad IMU messages does not silence a slow bad odometry stream."""
     bad_imu = imu((0, 0, 0, 1), orientation_covariance0=-1.0)
     bad_odometry = odometry((0, 0, 0, 1), (math.nan, 0, 0))
     imu_warning = f"refused input on {rig.topic('imu')} (no_orientation): "
@@ -741,7 +717,6 @@ def test_refusal_warnings_are_throttled_per_topic_and_reason(rig):
     assert refused['total'] == 3 + refused['no_orientation']
 
 
-# ---------------------------------------------------------------------------------------
 # ~/describe
 
 
@@ -874,7 +849,6 @@ def test_describe_reports_gimbal_lock(rig):
     assert report['euler']['angles'][2] == 0.0
 
 
-# ---------------------------------------------------------------------------------------
 # ~/screw_path
 
 
@@ -971,7 +945,6 @@ def test_screw_path_refusals(rig, case):
     assert refused['total'] == 1 and refused[reason] == 1
 
 
-# ---------------------------------------------------------------------------------------
 # The tables: a new output or parameter is one row
 
 
@@ -994,7 +967,6 @@ def test_a_new_parameter_is_one_row(ros_context, make_rig, namespace, monkeypatc
                      parameter_overrides=[Parameter('test_limit', value=9.0)])
 
 
-# ---------------------------------------------------------------------------------------
 # Parameters
 
 
@@ -1061,15 +1033,6 @@ def test_quaternion_tolerance(rig):
     rig.send('pose', pose_stamped(q))
     rig.roundtrip('pose', pose_stamped((0, 0, 0, 1)), marker=False)
     assert rig.report()['refused']['non_unit_quaternion'] == 2
-
-
-def test_publish_markers_false(rig):
-    assert set_one(rig.node, 'publish_markers', False).successful
-    rig.roundtrip('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)), marker=False)
-    assert set_one(rig.node, 'publish_markers', True).successful
-    stamp = rig.send('pose', pose_stamped((0, 1, 0, 0)))
-    rig.outputs(stamp)
-    assert [m.header.stamp.sec for m in rig.received('screw_axis')] == [stamp]
 
 
 def test_marker_scale(make_rig):

@@ -1,12 +1,7 @@
 """
 rotation_node's ~/rpy_covariance and describe's rpy_stddev / rpy_correlation, over real DDS.
 
-One node for the module (test_node's Rig, publish_markers off); each test resets the
-parameters it changes and counts refusals as differences. The expected covariance is built
-here without rot_tools: the Jacobian of roll, pitch, yaw (scipy's ``as_euler('xyz')``) with
-respect to a small rotation vector δ in the parent frame (R_true = exp([δ]×)·R), by central
-differences (step 1e-5: truncation ~1e-10, rounding ~1e-11), then Σ_rpy = J·Σ·Jᵀ, and for a
-6×6 pose covariance diag(I, J)·Σ·diag(I, J)ᵀ.
+The expected covariance is J·Σ·Jᵀ, J by central differences of scipy's ``as_euler('xyz')``.
 """
 
 import math

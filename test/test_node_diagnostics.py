@@ -1,13 +1,7 @@
 """
 rotation_node's /diagnostics over real DDS: an IMU's conventions and the inputs' counts.
 
-The IMU is the Jackal's (../shared/data/jackal_imu_odometry.bag, /imu/data, 50 Hz), replayed
-in real time with fresh stamps (the recorded spacing kept), as it was recorded to one node
-and with its gyro turned into degrees/s to another, side by side: the checks need 5 s of
-input, and the 10 s window is one of arrival. Both nodes live in one rclpy context, each
-with /diagnostics remapped into this run's namespace; the tester in another. Which checks
-fail on the recording is rot_tools.core.imu's (test_imu*.py): here, that the node runs them
-on what it receives and says so in the ROS convention.
+The Jackal's IMU replayed in real time to two nodes, as recorded and with its gyro in deg/s.
 """
 
 from pathlib import Path

@@ -1,11 +1,7 @@
 """
 rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
 
-The node lives in its own rclpy context and namespace (test_node's Rig). Every expected
-value is computed here from the input alone, without rot_tools: R with scipy's Rotation,
-the screw from its rotation vector θ·l̂, d = b·l̂ and the axis point c as the least-norm
-solution of (I − R)·c = b − d·l̂ (it is ⊥ l̂), and the path as the closed form of the
-constant-screw motion, p(s) = c + Rot(s·θ·l̂)·(p0 − c) + s·d·l̂.
+Expected values from the input alone (scipy's Rotation and the closed-form screw), not rot_tools.
 """
 
 import math
@@ -223,12 +219,7 @@ def test_the_picture_timer_exists_only_while_markers_are_published(make_rig):  #
 
 def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
         make_rig, monkeypatch):  # noqa: F811
-    """
-    Check that a picture waits for its turn (a 2 s throttle here); switching off deletes, once.
-
-    The DELETEs come in the frame of the picture shown, not of the one waiting, and the one
-    waiting is not drawn, not even when the markers are switched on again.
-    """
+    """Switching markers off deletes the picture shown, once; the one waiting is never drawn."""
     monkeypatch.setattr(pictures, 'MARKER_RATE', 0.5)
     rig = make_rig()  # noqa: F811
     shown = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), frame='odom'))

@@ -281,13 +281,7 @@ def test_every_requirement_is_pinned_exactly():
 
 @pytest.mark.parametrize('where', ['beside_a_clone', 'parent', 'root'])
 def test_import_rot_tools_from_any_directory(tmp_path, where):
-    """
-    Import the package, not a directory rot_tools without __init__.py beside it.
-
-    Such a directory (a clone, seen from its parent) is imported as an empty namespace
-    package when the installed package is found only after the current directory's
-    namespace portion, as with setuptools' default editable import hook.
-    """
+    """Import the package, not a directory rot_tools without __init__.py beside it."""
     if where == 'beside_a_clone':
         cwd = tmp_path
         (cwd / PACKAGE / PACKAGE).mkdir(parents=True)

@@ -1,9 +1,7 @@
 """
 rot_tools.cli.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files.
 
-The figure is inspected through the gids of its lines; the helix is checked against the
-closed form p(s) = c + Rot(s·θ·l̂)(p0 − c) + s·d·l̂ with scipy's Rotation, from a screw chosen
-here. Files are checked by their bytes (PNG signature and IHDR) and by parsing the SVG.
+The helix against the closed form with scipy's Rotation; files by their bytes and parsed SVG.
 """
 
 import math

@@ -1,26 +1,9 @@
 """
 rot_tools leaves the process and the wire to their owners and speaks to libraries by name.
 
-The process and the middleware belong to whoever starts them; rclpy and rosbags are used by
-their documented names. Read from the package's syntax tree (comments and strings are not
-code), every module of rot_tools/ is refused:
-
-- hand-written serialisation: a call with ``raw=True`` (a subscription handing over bytes),
-  ``import struct``;
-- taking over the process: ``os._exit``, ``gc.freeze`` / ``gc.disable``, ``ctypes`` (and so
-  ``mallopt``), an environment variable set, changed or removed (``os.environ[k] = v``,
-  ``os.environ.setdefault/update/pop/...``, ``os.putenv``), a signal handler (a function)
-  anywhere but in rot-tools' main (SIGTERM unwinds the command), signal masks; a signal's
-  default or ignoring it (SIG_DFL, SIG_IGN: a fleet's workers leave Ctrl-C to the command)
-  passes;
-- reaching into rclpy's objects: ``.callback = ...`` on anything (rclpy's subscriptions,
-  timers and services own their callbacks), but the one guard of the node's parameter
-  services;
-- rosbags' internals: its message definitions walked (``fielddefs``), a reader's
-  ``readers``, a module outside its documented ones.
-
-And no docstring or comment quotes a measured figure (µs, ns, MB, ...): figures live in
-bench/README.md, with the command and the date that measured them.
+Read from each module's syntax tree: no hand-written serialisation, no taking over the process
+(os._exit, gc, ctypes, environment, signal handlers but rot-tools' main), no reaching into
+rclpy's or rosbags' internals, and no measured figure in a docstring or comment.
 """
 
 import ast

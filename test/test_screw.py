@@ -1,10 +1,7 @@
 """
 Chasles' screw decomposition, its inverse, exponential coordinates and interpolation.
 
-Transforms are built from known screws (direction l, axis point c perpendicular to l, angle,
-translation d) with R = Rodrigues(l, angle) and b = (I - R) c + d l, where (I - R) c is
-evaluated in the vector form of math_helpers.rotate_minus_identity so that tiny angles with
-far-away axes stay exact. The checks are the defining properties of a screw, not rot_tools.
+Transforms are built from known screws; the checks are a screw's defining properties.
 """
 
 from hypothesis import given, settings
@@ -390,9 +387,7 @@ def test_batches_larger_than_one_chunk():
 
 
 def test_check_false_uses_the_matrix_as_given():
-    # θ and l̂ read from the perturbed matrix as given (skew part and trace), then the
-    # defining formulas with them: d = b·l̂, c = ½(b⊥ + cot(θ/2)·l̂ × b⊥), h = d/θ, and the
-    # twist (θ·l̂, −(θ/2)·l̂ × b + (θ/2)cot(θ/2)·b⊥ + d·l̂).
+    # θ and l̂ read from the matrix as given, then the defining formulas with them.
     r = h.notes_rodrigues_eq7([0.0, 0.6, 0.8], 0.5)
     r[0, 0] += 1e-6
     b = np.array([1.0, -2.0, 0.5])
@@ -543,9 +538,7 @@ def test_decompose_twist_is_screw_log_at_tiny_angles():
 
 @pytest.mark.parametrize('angle', [1e-8, 2e-8, 1e-7, 1e-6, 3e-6, 1e-5])
 def test_screw_exp_between_series_and_closed_form(angle):
-    # Below a cut-off screw_exp uses sin θ/θ ≈ 1 and (1 − cos θ)/θ ≈ θ/2, exact to double
-    # precision only below ~1e-8 (the dropped θ²/6 is 1.7e-11 at 1e-5): b must match the
-    # exponential of the twist to 1e-14 relative here.
+    # b must match the exponential series of the twist to 1e-14 relative at small θ.
     rng = np.random.default_rng(54)
     w = h.random_unit_vectors(rng, 100) * angle
     v = rng.normal(size=(100, 3)) * 10.0 ** rng.uniform(-2, 2, size=(100, 1))

@@ -1,9 +1,7 @@
 """
 ~/screw_path against a hostile caller: every failure counted, replies bounded in bytes.
 
-The node under test lives in one rclpy context, the caller in another (real DDS between,
-conftest's isolated domain and namespaces). The size of a reply is checked against
-rclpy's own CDR serialisation of it, not against the node's estimate.
+A reply's size is checked against rclpy's own CDR serialisation of it.
 """
 
 import math
@@ -32,11 +30,7 @@ class Service:
         tester.subscribe_rosout()
 
     def call(self, start, goal, tolerance=0.0):
-        """
-        Return the path of a request, waiting up to 30 s an attempt.
-
-        A big reply (10,001 poses) may take long to come on a loaded machine.
-        """
+        """Return the path of a request, waiting up to 30 s an attempt."""
         return self.tester.call(GetPlan, self.name, request(start, goal, tolerance),
                                 timeout=30.0, attempts=3).plan
 
@@ -64,19 +58,12 @@ def refused(node):
     return {k: v for k, v in node.refused_counts().items() if v}
 
 
-# ---------------------------------------------------------------------------------------
 # Every failure is a counted refusal with its reason
 
 
 @pytest.mark.parametrize('tolerance', [0.0, 0.5])
 def test_huge_positions_are_a_counted_refusal(service, tolerance):
-    """
-    ±1e308: b1 − b0 overflows float64, so there is no screw between them.
-
-    Unchecked, the overflow raised a RotationError inside the callback, with tolerance 0
-    in the interpolation, with 0.5 already when the number of steps is worked out: the
-    caller got an empty path and nothing was counted.
-    """
+    """±1e308: b1 − b0 overflows float64, no screw between them: a counted refusal."""
     start = pose_stamped(p=(-1e308, 0, 0))
     start.header.stamp.sec, start.header.stamp.nanosec = 42, 7
     goal = pose_stamped(p=(1e308, 0, 0))
@@ -95,17 +82,11 @@ def test_huge_positions_are_a_counted_refusal(service, tolerance):
     assert [p.pose.position.x for p in path.poses] == [0.0, 0.5, 1.0]
 
 
-# ---------------------------------------------------------------------------------------
 # A reply is bounded in bytes
 
 
 def test_reply_size_estimate_bounds_the_serialised_reply():
-    """
-    Check that the estimate is never below what rclpy serialises, at most 12 B a pose above.
-
-    Serialised, a pose takes 69 to 76 bytes besides its frame_id (alignment), the Path's
-    header and sequence length 21 to 24.
-    """
+    """The estimate is never below what rclpy serialises, and at most 12 B a pose above."""
     for frame in ('', 'm', 'map', 'é' * 5, '😀' * 3, 'x' * 1000):
         for n in (2, 3, 21, 200):
             start, goal = pose_stamped(frame=frame), pose_stamped(p=(1, 0, 0), frame=frame)
@@ -118,12 +99,7 @@ def test_reply_size_estimate_bounds_the_serialised_reply():
 
 
 def test_reply_bytes_bound_the_default_path(service):
-    """
-    21 poses (tolerance 0) in the longest frame_id that fits: served, ≤ MAX_REPLY_BYTES.
-
-    One byte more of frame_id and the reply would not fit: refused as path_too_long before
-    anything is built. Called in-process: the point is the bound, not DDS's large messages.
-    """
+    """The longest frame_id that fits is served in MAX_REPLY_BYTES; one byte more is refused."""
     longest = MAX_REPLY_BYTES // 22 - reply_bytes('', 21) // 22
     while reply_bytes('x' * (longest + 1), 21) <= MAX_REPLY_BYTES:
         longest += 1
@@ -156,16 +132,11 @@ def test_long_frame_id_times_many_poses_is_refused(service):
     assert len(short.poses) == MAX_PATH_STEPS + 1
 
 
-# ---------------------------------------------------------------------------------------
 # Error logs throttled per reason
 
 
 def test_errors_are_throttled_per_reason(service, monkeypatch):
-    """
-    Refusals for different reasons each log; the same reason again (at once) does not.
-
-    The throttle period is made very long so that "at once" holds on a loaded machine too.
-    """
+    """Refusals for different reasons each log; the same reason again at once does not."""
     monkeypatch.setattr(rotation_node, 'REFUSAL_WARNING_PERIOD', 1e9)
     zero = pose_stamped((0, 0, 0, 0))
     cases = [  # (start, goal, tolerance): reason

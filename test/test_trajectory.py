@@ -1,10 +1,7 @@
 """
 An orientation against ground truth: matching, time offset, alignment, mounting and errors.
 
-References: scipy.linalg.expm of the twist (constant-screw motion), scipy.spatial.transform
-.Rotation (quaternion-based angles, Euler angles and Kabsch fit, independent of rot_tools),
-brute-force searches (nearest stamp, the best yaw), and simulated motion with a known time
-offset and mounting rotation written into it.
+References: scipy's expm and Rotation, brute-force searches, and simulated motion.
 """
 
 import math

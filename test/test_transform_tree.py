@@ -1,9 +1,7 @@
 """
 TransformTree: lookups across a tree of frames, at any time, and its refusals.
 
-References are independent of rot_tools: the pose of a frame is the product of 4×4
-homogeneous matrices from the root down (Jia, Rotation in the Space, §5), and an edge between
-two samples is T0·expm(s·logm(T0⁻¹·T1)) with scipy.linalg's matrix exponential and logarithm.
+References: 4×4 products from the root down, and T0·expm(s·logm(T0⁻¹·T1)) with scipy.linalg.
 """
 
 import math
@@ -101,12 +99,7 @@ def make_tree(stamps=np.arange(0.0, 5.01, 0.5), **kwargs):
 
 
 def ref_edges_at(statics, t, stamps):
-    """
-    Return every edge's reference 4×4 at time t.
-
-    Every edge's reference 4×4 at time t: statics as set, dynamic edges interpolated
-    between the samples around t (T0·expm(s·logm(T0⁻¹T1))).
-    """
+    """Return every edge's reference 4×4 at time t, dynamic ones by T0·expm(s·logm(T0⁻¹T1))."""
     edges = dict(statics)
     for child, parent in DYNAMIC.items():
         i = int(np.searchsorted(stamps, t))
@@ -123,7 +116,6 @@ def ref_edges_at(statics, t, stamps):
 STAMPS = np.arange(0.0, 5.01, 0.5)
 
 
-# ---------------------------------------------------------------------------------------
 # Exports and the shape of the tree
 
 
@@ -147,7 +139,6 @@ def test_chain_up_down_and_across_through_the_common_ancestor():
     assert tree.parent('map') is None
 
 
-# ---------------------------------------------------------------------------------------
 # Lookups against products of 4×4 matrices
 
 
@@ -240,7 +231,6 @@ def test_random_trees_against_4x4_products(parents, pair, seed):
     assert h.max_abs(product - np.eye(4)) <= 1e-11
 
 
-# ---------------------------------------------------------------------------------------
 # Batches of stamps
 
 
@@ -280,7 +270,6 @@ def test_a_batch_of_samples_equals_one_sample_at_a_time():
         assert np.array_equal(got[0], R[k]) and np.array_equal(got[1], b[k])
 
 
-# ---------------------------------------------------------------------------------------
 # Time: the latest common time, extrapolation, the cache
 
 
@@ -427,7 +416,6 @@ def test_samples_out_of_order_and_repeated_stamps():
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
 
 
-# ---------------------------------------------------------------------------------------
 # Refusals
 
 
@@ -506,41 +494,30 @@ def test_nan_and_inf_are_refused(R, b, stamp, what, static):
     assert tree.time_range('odom', 'base_link') == (0.0, 5.0)
 
 
-@pytest.mark.parametrize('R, message', [
-    (1.001 * np.eye(3), 'not orthogonal'), (-np.eye(3), 'reflection')])
-def test_a_matrix_that_is_not_a_rotation_is_refused(R, message):
+REFUSED_EDGES = {
+    'scaled R': ('a', 'b', 1.001 * np.eye(3), [0, 0, 0], 0.0, 'not_rotation', 'not orthogonal'),
+    'reflection': ('a', 'b', -np.eye(3), [0, 0, 0], 0.0, 'not_rotation', 'reflection'),
+    'empty parent': ('', 'b', np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'empty child': ('a', '', np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'no parent': (None, 'b', np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'a number child': ('a', 3, np.eye(3), [0, 0, 0], 0.0, 'bad_frame', 'non-empty string'),
+    'a 4×4 R': ('a', 'b', np.eye(4), [0, 0, 0], 0.0, 'bad_value', None),
+    'two entries in b': ('a', 'b', np.eye(3), [0, 0], 0.0, 'bad_value', None),
+    'two stamps': ('a', 'b', np.eye(3), [0, 0, 0], [0.0, 1.0], 'bad_value', None),
+    'a word for a stamp': ('a', 'b', np.eye(3), [0, 0, 0], 'now', 'bad_value', None),
+    'two static transforms': ('a', 'b', np.stack([np.eye(3)] * 2), np.zeros((2, 3)), [0.0, 1.0],
+                              'bad_value', 'static edge takes one'),
+}
+"""set_transform(parent, child, R, b, stamp) refused, its reason and message."""
+
+
+@pytest.mark.parametrize('case', REFUSED_EDGES)
+def test_an_edge_that_is_not_a_transform_is_refused_and_the_tree_stays_empty(case):
+    parent, child, R, b, stamp, reason, message = REFUSED_EDGES[case]
     tree = TransformTree()
     with pytest.raises(TransformTreeError, match=message) as excinfo:
-        tree.set_transform('a', 'b', R, [0.0, 0.0, 0.0], 0.0)
-    assert excinfo.value.reason == 'not_rotation'
-    assert tree.frames == []
-
-
-@pytest.mark.parametrize('parent, child', [('', 'b'), ('a', ''), (None, 'b'), ('a', 3)])
-def test_an_empty_or_non_string_frame_name_is_refused(parent, child):
-    tree = TransformTree()
-    with pytest.raises(TransformTreeError, match='non-empty string') as excinfo:
-        tree.set_transform(parent, child, np.eye(3), [0.0, 0.0, 0.0], 0.0)
-    assert excinfo.value.reason == 'bad_frame'
-    assert tree.frames == []
-
-
-@pytest.mark.parametrize('R, b, stamp', [
-    (np.eye(4), [0, 0, 0], 0.0), (np.eye(3), [0, 0], 0.0), (np.eye(3), [0, 0, 0], [0.0, 1.0]),
-    (np.eye(3), [0, 0, 0], 'now')])
-def test_a_value_that_is_not_a_transform_is_refused(R, b, stamp):
-    tree = TransformTree()
-    with pytest.raises(TransformTreeError) as excinfo:
-        tree.set_transform('a', 'b', R, b, stamp)
-    assert excinfo.value.reason == 'bad_value'
-    assert tree.frames == []
-
-
-def test_a_static_edge_takes_one_transform():
-    tree = TransformTree()
-    with pytest.raises(TransformTreeError, match='static edge takes one'):
-        tree.set_transform('a', 'b', np.stack([np.eye(3)] * 2), np.zeros((2, 3)), [0.0, 1.0],
-                           static=True)
+        tree.set_transform(parent, child, R, b, stamp, static=case == 'two static transforms')
+    assert excinfo.value.reason == reason
     assert tree.frames == []
 
 
@@ -635,7 +612,6 @@ def test_an_edges_memory_is_bounded_by_max_samples_and_given_back():
     assert tree.time_range('a', 'b') == (21.0, 31.0)
 
 
-# ---------------------------------------------------------------------------------------
 # The user documentation's example
 
 
@@ -647,7 +623,6 @@ def test_the_example_of_doc_tf_md_prints_what_the_page_shows(capsys):
     assert_doc_output('tf-tree-example', capsys.readouterr().out)
 
 
-# ---------------------------------------------------------------------------------------
 # A recording followed through the tree
 
 

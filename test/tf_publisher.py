@@ -3,17 +3,11 @@ A TF publisher for the tests, run as a separate process: a chain of four frames.
 
     odom ──(dynamic)── base_link ──(static)── camera ──(dynamic)── gimbal
 
-/tf_static (transient local, as tf2_ros's static broadcaster) carries base_link → camera
-once, with a second tree (moon → rover) not connected to the first; /tf (reliable, depth
-100) carries odom → base_link stamped at each tick and, in a message of its own, camera →
-gimbal stamped half a period earlier, so that a lookup at the gimbal's stamp interpolates
-the base_link's motion. Quaternions come from scipy, not rot_tools. Topics are given on the
-command line (each test remaps them into its own namespace); the process ends by itself
-after --lifetime seconds.
+The gimbal is stamped half a period before base_link, so a lookup interpolates; a second
+tree (moon → rover) stands apart. Quaternions from scipy.
 
 Usage: tf_publisher.py TF_TOPIC TF_STATIC_TOPIC [--rate HZ] [--lifetime S] [--bad] [--still]
---bad also publishes, once a second, a transform with a NaN, one that closes a loop and an
-edge odom → old_marker stamped 20 s before the start; --still holds the motion at t = 1 s.
+--bad also publishes, once a second, a NaN, a loop and a stale edge; --still holds the motion.
 """
 
 import argparse
