@@ -7,11 +7,8 @@ dask``); the results are taken in the order of the bags, and only this process w
 """
 
 from collections import deque
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
 from contextlib import closing
 import io
-import multiprocessing
 import os
 from pathlib import Path
 import signal
@@ -152,13 +149,21 @@ def _end_with_command(command):
 
 
 def _pool(workers):
-    """Return a pool of ``workers`` processes forked from this one (its modules loaded)."""
+    """
+    Return a pool of ``workers`` processes forked from this one (its modules loaded).
+
+    concurrent.futures and multiprocessing are imported by the functions that use them: a
+    command on one bag, or with --jobs 1, never does.
+    """
+    from concurrent.futures import ProcessPoolExecutor
+    import multiprocessing
     return ProcessPoolExecutor(workers, multiprocessing.get_context('fork'),
                                initializer=_worker_start, initargs=(os.getpid(),))
 
 
 def _stop(pool):
     """Stop ``pool`` at once: its workers killed (this process's only children), no bag begun."""
+    import multiprocessing
     for worker in multiprocessing.active_children():
         worker.kill()
     pool.shutdown(cancel_futures=True)
@@ -166,6 +171,7 @@ def _stop(pool):
 
 def _alone(item):
     """Return read_bag(*item) from a worker of its own: a bag that a broken pool held."""
+    from concurrent.futures.process import BrokenProcessPool
     pool = _pool(1)
     try:
         return pool.submit(read_bag, *item).result()
@@ -183,6 +189,7 @@ def _processes(items, jobs):
     At most 2 × ``jobs`` bags are handed to the pool at a time. When a worker dies (the OOM
     killer, a crash), the pool breaks: each bag it held is read again alone (:func:`_alone`).
     """
+    from concurrent.futures.process import BrokenProcessPool
     import rosbags.highlevel  # noqa: F401 - imported once, here, for every worker
     waiting, queued = deque(items), deque()
     pool = _pool(jobs)
