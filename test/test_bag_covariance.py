@@ -173,18 +173,6 @@ def test_real_bag_read_as_rpy(capsys, real):
     assert s['topics'][ODOM]['rpy_stddev_median']['yaw'] == pytest.approx(math.sqrt(0.03))
 
 
-@pytest.mark.parametrize('n', [1, 2, 3, 4, 7, 10])
-def test_column_medians_are_np_median_s(n):
-    """The summary's medians, bit for bit as np.median gives them, NaN and ties included."""
-    rng = np.random.default_rng(n)
-    values = rng.standard_normal((n, 3)) * 10.0 ** rng.integers(-300, 300, (n, 3))
-    values[:, 1] = values[0, 1]  # a column of one value
-    if n > 2:
-        values[1, 2] = np.nan
-    np.testing.assert_array_equal(bag_covariance.column_medians(values),
-                                  np.median(values, axis=0), strict=True)
-
-
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
 def test_the_covariance_column_of_each_format(tmp_path, storage, excerpt):
     """The covariance column holds each message's array as rosbags decodes it, NaN and all."""

@@ -124,20 +124,6 @@ def stddevs(R, cov, reading='rotvec'):
     return _at_scale(C, scale, status)
 
 
-def column_medians(values):
-    """
-    Return the median of each column of ``values`` (n ≥ 1, k): np.median's, axis 0.
-
-    The middle value, or the mean of the middle two; NaN in a column that holds one. Not
-    np.median itself, whose first call imports numpy.ma (a large module, to check for masked
-    arrays): a command's start-up would pay for it.
-    """
-    ordered = np.sort(values, axis=0)  # NaN last
-    n = len(ordered)
-    median = ordered[n // 2] if n % 2 else (ordered[n // 2 - 1] + ordered[n // 2]) / 2
-    return np.where(np.isnan(ordered[-1]), np.nan, median)
-
-
 def summary(sigma, status, cov, reading, degrees):
     """
     Return a topic's summary of its covariances: counts, median σ, the first bad one's fault.
@@ -152,7 +138,7 @@ def summary(sigma, status, cov, reading, degrees):
                            **{name: int(counts[code]) for name, code in COUNTS}}}
     good = sigma[status == OK]
     if len(good):
-        median = column_medians(np.degrees(good) if degrees else good)
+        median = np.median(np.degrees(good) if degrees else good, axis=0)
         out['rpy_stddev_median'] = dict(zip(RPY_NAMES, map(float, median)))
     else:
         out['rpy_stddev_median'] = 'unknown'
