@@ -11,6 +11,7 @@ commands). A CPU loop in 1 and 2 processes shows the speed-up the machine offers
 """
 
 import argparse
+import compileall
 from pathlib import Path
 import shutil
 import subprocess
@@ -89,6 +90,8 @@ def main():
     args = parser.parse_args()
     rot_tools = str(Path(sys.executable).parent / 'rot-tools')
     print(f'bench_fleet: {benchlib.machine_line()}')
+    # The package's bytecode, as an install writes it (the reference's libraries have theirs).
+    compileall.compile_dir(REPO / 'rot_tools', quiet=1)
     with tempfile.TemporaryDirectory(prefix='rot_tools_fleet_') as tmp:
         fleet = Path(tmp, 'fleet')
         fleet.mkdir()
