@@ -12,7 +12,6 @@ what is tested (an environment without rosbags).
 
 import contextlib
 import csv
-import gc
 import io
 import json
 import math
@@ -262,19 +261,6 @@ def flipped(data, start, count, step):
                                    'flipped mcap', 'zeroed mcap'])
 def test_damaged_bags_are_one_line_naming_the_bag(script, damaged, which):
     one_line_error(script, 'bag', damaged[which], contains=f'bag: {damaged[which]}: ')
-
-
-def test_the_garbage_collector_is_left_as_it_was(script, damaged, capsys):
-    """Messages are read with Python's cyclic collector paused; after, it is as it was."""
-    one_line_error(script, 'bag', damaged['flipped mcap'], contains='cannot be decoded')
-    assert gc.isenabled()
-    gc.disable()
-    try:
-        assert cli.main(['bag', str(bh.REAL)]) == 0
-        assert not gc.isenabled()
-    finally:
-        gc.enable()
-    capsys.readouterr()
 
 
 def test_a_chunk_the_reader_skips_is_an_error_not_a_shorter_topic(script, damaged):

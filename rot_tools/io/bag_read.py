@@ -8,7 +8,6 @@ holds nothing of what was asked, a BagSkipped.
 """
 
 from contextlib import contextmanager
-import gc
 from operator import attrgetter, itemgetter
 import os
 from pathlib import Path
@@ -61,7 +60,8 @@ STAMP_MEMBERS = ('sec', 'nanosec')
 """The members of a header stamp (builtin_interfaces/Time), read as int64."""
 
 CHUNK = 64
-"""Messages of one topic held as objects at a time, before their fields become columns."""
+"""Messages of one topic held as objects at a time, before their fields become columns: few,
+so that they are gone before Python's garbage collector would walk them again and again."""
 
 VECTOR3 = ('x', 'y', 'z')
 """The members of a Vector3 field read on request (read_topics' ``vectors``)."""
@@ -434,24 +434,6 @@ def _decode(reader, raw, conn, index):
                        f'as {conn.msgtype}: {_one_line(exc)}') from None
 
 
-@contextmanager
-def _collector_paused():
-    """
-    Pause Python's cyclic garbage collector in this block; it is as it was after.
-
-    Decoded messages hold no reference cycles: reference counting frees them. While a chunk of
-    them is held (CHUNK), the collector would walk them, and what the process holds besides,
-    again and again, for nothing.
-    """
-    collecting = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if collecting:
-            gc.enable()
-
-
 def read_topics(reader, connections, start=None, stop=None, progress=None, vectors=None):
     """
     {topic: Columns} of the connections' messages between start and stop (ns, record time).
@@ -469,14 +451,13 @@ def read_topics(reader, connections, start=None, stop=None, progress=None, vecto
         by_id[conn.id] = topics[conn.topic]
     count = 0
     try:
-        with _collector_paused():
-            for conn, record, raw in reader.messages(connections=connections, start=start,
-                                                     stop=stop):
-                topic = by_id[conn.id]
-                topic.add(record, _decode(reader, raw, conn, topic.index))
-                count += 1
-                if progress is not None and not count % CHUNK:
-                    progress(count)
+        for conn, record, raw in reader.messages(connections=connections, start=start,
+                                                 stop=stop):
+            topic = by_id[conn.id]
+            topic.add(record, _decode(reader, raw, conn, topic.index))
+            count += 1
+            if progress is not None and not count % CHUNK:
+                progress(count)
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags' reader
@@ -529,17 +510,16 @@ def read_tf(reader, static, dynamic, start=None, stop=None):
     topic = _Topic('tf', TF_TYPE, _Fields(TF_FIELDS))
     kinds, count = [], 0
     try:
-        with _collector_paused():
-            for connections, lo, hi in ((static, None, None), (dynamic, start, stop)):
-                if not connections:
-                    continue
-                for conn, record, raw in reader.messages(connections=connections, start=lo,
-                                                         stop=hi):
-                    transforms = _decode(reader, raw, conn, lambda: count).transforms
-                    count += 1
-                    kinds += [connections is static] * len(transforms)
-                    for transform in transforms:
-                        topic.add(record, transform)
+        for connections, lo, hi in ((static, None, None), (dynamic, start, stop)):
+            if not connections:
+                continue
+            for conn, record, raw in reader.messages(connections=connections, start=lo,
+                                                     stop=hi):
+                transforms = _decode(reader, raw, conn, lambda: count).transforms
+                count += 1
+                kinds += [connections is static] * len(transforms)
+                for transform in transforms:
+                    topic.add(record, transform)
     except BagError:
         raise
     except Exception as exc:  # noqa: BLE001 - a damaged bag fails inside rosbags
