@@ -1,7 +1,11 @@
 """Bags written by the tests (rosbags' writer), from the real recording or message by message."""
 
+import csv
+import io
+import json
 from pathlib import Path
 
+from conftest import run_cli
 import numpy as np
 
 REAL = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'jackal_imu_odometry.bag'
@@ -187,6 +191,26 @@ def without_definitions(bag):
     with sqlite3.connect(db) as con:
         con.execute('DELETE FROM message_definitions')
     return Path(bag)
+
+
+def run_quiet(capsys, *args):
+    """Return run_cli's (status, stdout, stderr), stderr without the gyro warnings."""
+    status, out, err = run_cli(capsys, *args)
+    return status, out, without_gyro_warnings(err)
+
+
+def summary_of(capsys, *args, run=run_cli):
+    """Return the --json summary of ``run`` on these words; it must succeed, stderr empty."""
+    status, out, err = run(capsys, *args, '--json')
+    assert (status, err) == (0, ''), err
+    return json.loads(out)
+
+
+def rows_of(capsys, *args, run=run_cli):
+    """Return the --csv rows of ``run`` on these words; it must succeed, stderr empty."""
+    status, out, err = run(capsys, *args, '--csv', '-')
+    assert (status, err) == (0, ''), err
+    return list(csv.DictReader(io.StringIO(out)))
 
 
 def without_gyro_warnings(err):

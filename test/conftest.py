@@ -70,6 +70,14 @@ def script_env(command):
     return env
 
 
+def run_cli(capsys, *args):
+    """Run rot-tools on these words in this process; return (status, stdout, stderr)."""
+    from rot_tools.cli.main import main
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
 def rss_mb(pid='self'):
     """Return the resident set size in MB of process ``pid``, this one by default."""
     with open(f'/proc/{pid}/status', encoding='ascii') as f:

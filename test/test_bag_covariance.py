@@ -12,7 +12,6 @@ unknown (all zero), NaN, non-symmetric and non-PSD ones, and an orientation at p
 
 import csv
 import io
-import json
 import math
 
 import bag_helpers as bh
@@ -20,7 +19,7 @@ import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import bag_covariance, main as cli  # noqa: E402
+from rot_tools.cli import bag_covariance  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
@@ -29,24 +28,6 @@ IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 STD = ['roll_std', 'pitch_std', 'yaw_std']
 IMU_TYPE, POSE_TYPE = 'sensor_msgs/msg/Imu', 'geometry_msgs/msg/PoseWithCovarianceStamped'
 ODOM_TYPE = 'nav_msgs/msg/Odometry'
-
-
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, bh.without_gyro_warnings(err)
-
-
-def summary_of(capsys, *args):
-    status, out, err = run(capsys, *args, '--json')
-    assert (status, err) == (0, ''), err
-    return json.loads(out)
-
-
-def rows_of(capsys, *args):
-    status, out, err = run(capsys, *args, '--csv', '-')
-    assert (status, err) == (0, ''), err
-    return list(csv.DictReader(io.StringIO(out)))
 
 
 def cells(rows, names):
@@ -128,8 +109,8 @@ def excerpt(tmp_path_factory):
 
 
 def test_real_bag_columns_and_median(capsys, real):
-    rows = rows_of(capsys, 'bag', bh.REAL)
-    s = summary_of(capsys, 'bag', bh.REAL)
+    rows = bh.rows_of(capsys, 'bag', bh.REAL)
+    s = bh.summary_of(capsys, 'bag', bh.REAL)
     for topic in (IMU, ODOM):
         q, cov = real[topic]
         want = reference_sigma(q, cov)
@@ -148,19 +129,19 @@ def test_real_bag_columns_and_median(capsys, real):
 
 
 def test_real_bag_in_degrees(capsys, real):
-    rows = rows_of(capsys, 'bag', bh.REAL, '--deg', '--topic', IMU)
+    rows = bh.rows_of(capsys, 'bag', bh.REAL, '--deg', '--topic', IMU)
     q, cov = real[IMU]
     want = np.degrees(reference_sigma(q, cov))
     np.testing.assert_allclose(cells(rows, STD), want, rtol=2e-11, atol=5e-13)
-    t = summary_of(capsys, 'bag', bh.REAL, '--deg')['topics'][IMU]
+    t = bh.summary_of(capsys, 'bag', bh.REAL, '--deg')['topics'][IMU]
     assert t['unit'] == 'deg'
     np.testing.assert_allclose(list(t['rpy_stddev_median'].values()), np.median(want, axis=0),
                                rtol=2e-11, atol=5e-13)
 
 
 def test_real_bag_read_as_rpy(capsys, real):
-    rows = rows_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
-    s = summary_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
+    rows = bh.rows_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
+    s = bh.summary_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
     for topic in (IMU, ODOM):
         q, cov = real[topic]
         want = reference_sigma(q, cov, 'rpy')
@@ -263,8 +244,8 @@ def write_derived(path, storage, seed=3):
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
 def test_unknown_and_bad_covariances_leave_empty_cells(capsys, tmp_path, storage):
     path, topics = write_derived(tmp_path / 'derived', storage)
-    rows = rows_of(capsys, 'bag', path)
-    s = summary_of(capsys, 'bag', path)
+    rows = bh.rows_of(capsys, 'bag', path, run=bh.run_quiet)
+    s = bh.summary_of(capsys, 'bag', path, run=bh.run_quiet)
     for topic, cases in topics.items():
         mine = [r for r in rows if r['topic'] == topic]
         assert len(mine) == len(cases)  # /imu's message without orientation is refused
@@ -303,8 +284,8 @@ def test_unknown_and_bad_covariances_leave_empty_cells(capsys, tmp_path, storage
 
 def test_pitch_90_is_good_when_read_as_rpy(capsys, tmp_path):
     path, topics = write_derived(tmp_path / 'derived', 'mcap')
-    rows = rows_of(capsys, 'bag', path, '--input-covariance', 'rpy', '--deg')
-    s = summary_of(capsys, 'bag', path, '--input-covariance', 'rpy')
+    rows = bh.rows_of(capsys, 'bag', path, '--input-covariance', 'rpy', '--deg', run=bh.run_quiet)
+    s = bh.summary_of(capsys, 'bag', path, '--input-covariance', 'rpy', run=bh.run_quiet)
     for topic, cases in topics.items():
         mine = [r for r in rows if r['topic'] == topic]
         status = np.array([c[3] for c in cases])
@@ -353,8 +334,8 @@ def test_parquet_null_where_the_csv_is_empty(capsys, tmp_path):
     pq = pytest.importorskip('pyarrow.parquet')
     import pyarrow as pa
     path, _ = write_derived(tmp_path / 'derived', 'sqlite3')
-    status, _, err = run(capsys, 'bag', path, '--parquet', tmp_path / 'pq', '--csv',
-                         tmp_path / 'rows.csv', '--deg', '--precision', '17')
+    status, _, err = bh.run_quiet(capsys, 'bag', path, '--parquet', tmp_path / 'pq', '--csv',
+                                  tmp_path / 'rows.csv', '--deg', '--precision', '17')
     assert (status, err) == (0, '')
     (file,) = (tmp_path / 'pq').glob('*.parquet')
     table = pq.read_table(file)
@@ -370,14 +351,14 @@ def test_parquet_null_where_the_csv_is_empty(capsys, tmp_path):
 
 def test_the_option_reaches_every_bag_of_a_fleet(capsys, tmp_path):
     path, _ = write_derived(tmp_path / 'derived', 'mcap')
-    data = summary_of(capsys, 'bag', bh.REAL, path, '--jobs', '1', '--input-covariance', 'rpy')
+    data = bh.summary_of(capsys, 'bag', bh.REAL, path, '--jobs', '1', '--input-covariance', 'rpy')
     readings = {t['covariances']['reading'] for e in data['bags']
                 for t in e['topics'].values() if 'covariances' in t}
     assert readings == {'rpy'} and data['fleet']['failed'] == 0
 
 
 def test_an_unknown_reading_is_refused(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--input-covariance', 'body')
+    status, out, err = bh.run_quiet(capsys, 'bag', bh.REAL, '--input-covariance', 'body')
     assert (status, out) == (2, '')
     assert "argument --input-covariance: invalid choice: 'body'" in err.splitlines()[-1]
 
@@ -421,7 +402,7 @@ def test_covariances_near_float64_s_ends_are_converted_at_the_scale_of_one(
     """
     path, plan = extreme_bag(tmp_path / 'extreme')
     out = tmp_path / 'rows.csv'
-    status, _, err = run(capsys, 'bag', path, '--csv', out)
+    status, _, err = bh.run_quiet(capsys, 'bag', path, '--csv', out)
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out.read_text())))
     analysed = []

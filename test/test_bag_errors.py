@@ -105,15 +105,9 @@ def bad_bag(request, tmp_path_factory):
     return path, plan
 
 
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, bh.without_gyro_warnings(err)
-
-
 def test_refusals_are_counted_by_reason(capsys, bad_bag):
     path, plan = bad_bag
-    status, out, err = run(capsys, 'bag', path, '--json')
+    status, out, err = bh.run_quiet(capsys, 'bag', path, '--json')
     assert (status, err) == (0, '')
     topics = json.loads(out)['topics']
     assert set(topics) == set(plan)  # /chatter (std_msgs/String) is not read
@@ -139,7 +133,7 @@ def test_refusals_are_counted_by_reason(capsys, bad_bag):
 
 def test_accepted_rows_are_the_normalised_inputs(capsys, bad_bag):
     path, plan = bad_bag
-    status, out, err = run(capsys, 'bag', path, '--csv', '-')
+    status, out, err = bh.run_quiet(capsys, 'bag', path, '--csv', '-')
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out)))
     assert not [r for r in rows if r['topic'] == '/odom_w0']
@@ -171,7 +165,7 @@ def test_accepted_rows_are_the_normalised_inputs(capsys, bad_bag):
 
 def test_tolerance_option(capsys, bad_bag):
     path, plan = bad_bag
-    s = json.loads(run(capsys, 'bag', path, '--json', '--tol', '0.02', '--topic', '/pose')[1])
+    s = bh.summary_of(capsys, 'bag', path, '--tol', '0.02', '--topic', '/pose', run=bh.run_quiet)
     # the 1.01 × q now passes; zero, NaN and Inf still do not
     assert s['topics']['/pose']['refused'] == {
         'total': 4, 'non_finite': 3, 'zero_quaternion': 1, 'non_unit_quaternion': 0,
@@ -343,7 +337,7 @@ def test_a_bag_with_nothing_asked_for_is_skipped(capsys, tmp_path):
         with pytest.raises(bag_read.BagError, match=re.escape(contains)) as caught:
             bag_analysis.analyse(bag, options[1::2])
         assert isinstance(caught.value, bag_read.BagSkipped) == skipped, contains
-        status, out, err = run(capsys, 'bag', bag, *options)
+        status, out, err = bh.run_quiet(capsys, 'bag', bag, *options)
         assert (status, out) == (2, '') and err.count('\n') == 1 and contains in err, err
 
 
@@ -386,11 +380,11 @@ class Terminal(io.StringIO):
 
 def test_progress_bar_only_on_a_terminal(capsys, monkeypatch, bad_bag):
     path, plan = bad_bag
-    status, out, err = run(capsys, 'bag', path)
+    status, out, err = bh.run_quiet(capsys, 'bag', path)
     assert (status, err) == (0, '') and out.startswith('bag: ')
     terminal = Terminal()
     monkeypatch.setattr(sys, 'stderr', terminal)
-    status, out, _ = run(capsys, 'bag', path)
+    status, out, _ = bh.run_quiet(capsys, 'bag', path)
     total = sum(len(items) for _, items in plan.values())
     bar = bh.without_gyro_warnings(terminal.getvalue())
     assert status == 0 and out.startswith('bag: ')

@@ -18,7 +18,7 @@ import sys
 import xml.etree.ElementTree as ElementTree
 
 import bag_helpers as bh
-from conftest import console_script, script_env
+from conftest import console_script, run_cli, script_env
 import numpy as np
 import pytest
 
@@ -30,14 +30,8 @@ from rot_tools.io import bag_read  # noqa: E402
 import yaml  # noqa: E402,I100
 
 
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
 def one_error(capsys, *args, contains=''):
-    status, out, err = run(capsys, *args)
+    status, out, err = run_cli(capsys, *args)
     assert (status, out) == (2, ''), err
     assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
     assert contains in err, err
@@ -116,7 +110,7 @@ def test_a_failed_csv_write_leaves_the_old_file(capsys, tmp_path, monkeypatch):
     assert out.read_text() == 'the old table\n'
     assert sorted(p.name for p in tmp_path.iterdir()) == ['imu.csv']  # nothing left over
     monkeypatch.setattr(bag_output, 'stamp_text', real_stamp_text)
-    assert run(capsys, 'bag', bh.REAL, '--csv', out)[0] == 0  # the real one, complete
+    assert run_cli(capsys, 'bag', bh.REAL, '--csv', out)[0] == 0  # the real one, complete
     assert len(out.read_text().splitlines()) == 1 + 3061 + 3060
     assert sorted(p.name for p in tmp_path.iterdir()) == ['imu.csv']
 
@@ -182,7 +176,7 @@ def test_an_unexpected_error_on_the_bag_is_one_line(capsys, tmp_path, small_bag,
 def interrupted(capsys, *args):
     """Return the exit status of rot-tools ARGS stopped by Ctrl-C (130)."""
     try:
-        status = run(capsys, *args)[0]
+        status = run_cli(capsys, *args)[0]
     except KeyboardInterrupt:  # main lets it through, or says it in one line
         status = 130
     capsys.readouterr()
@@ -229,13 +223,13 @@ def test_ctrl_c_while_writing_leaves_every_output_as_it_was(
 
 def test_negative_stamps_are_exact(capsys, tmp_path):
     path = pose_bag(tmp_path / 'bag', [-12345.0, -2.0, -1.5, -0.5, -1e-9, 0.25])
-    status, out, err = run(capsys, 'bag', path, '--csv', '-')
+    status, out, err = run_cli(capsys, 'bag', path, '--csv', '-')
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out)))
     assert [r['stamp'] for r in rows] == ['-12345.000000000', '-2.000000000', '-1.500000000',
                                           '-0.500000000', '-0.000000001', '0.250000000']
     assert float(rows[2]['wx'] or 0) != 0 or rows[2]['wx'] != ''  # Δt > 0: ω given
-    s = json.loads(run(capsys, 'bag', path, '--json')[1])['topics']['/pose']
+    s = json.loads(run_cli(capsys, 'bag', path, '--json')[1])['topics']['/pose']
     assert (s['start'], s['end'], s['duration']) == (-12345.0, 0.25, 12345.25)
     bag = next(iter(bag_analysis.analyse(path)[1]))
     assert bag.ns.tolist() == [-12345 * 10**9, -2 * 10**9, -15 * 10**8, -5 * 10**8, -1,
@@ -248,7 +242,7 @@ def test_start_and_end_keep_every_digit_whatever_the_precision(capsys, tmp_path)
     path = pose_bag(tmp_path / 'bag', stamps)
     ns = [1503000000_123456789, 1503000000_987654321, 1503000061_500000000]
     for extra in ((), ('--json',)):
-        status, out, err = run(capsys, 'bag', path, '--precision', '4', *extra)
+        status, out, err = run_cli(capsys, 'bag', path, '--precision', '4', *extra)
         assert (status, err) == (0, '')
         s = (json.loads(out) if extra else yaml.safe_load(out))['topics']['/pose']
         assert (s['start'], s['end']) == (ns[0] / 1e9, ns[-1] / 1e9)
@@ -256,7 +250,7 @@ def test_start_and_end_keep_every_digit_whatever_the_precision(capsys, tmp_path)
 
 
 def test_a_start_beyond_any_time_reads_nothing(capsys, small_bag):
-    status, out, err = run(capsys, 'bag', small_bag, '--start', '1e300', '--json')
+    status, out, err = run_cli(capsys, 'bag', small_bag, '--start', '1e300', '--json')
     assert (status, err) == (0, '')
     assert json.loads(out)['topics']['/pose']['messages'] == 0
 
@@ -281,13 +275,13 @@ def test_a_bare_storage_file_is_read_as_a_bag(capsys, tmp_path, storage):
     shutil.copy(inner, bare)
     assert bag_read.is_bag(bare) and bag_read.is_bag(folder) and bag_read.is_bag(inner)
     assert not bag_read.is_bag(tmp_path) and not bag_read.is_bag(tmp_path / 'notes.txt')
-    of_folder, of_bare = (json.loads(run(capsys, 'bag', path, '--json')[1])
+    of_folder, of_bare = (json.loads(run_cli(capsys, 'bag', path, '--json')[1])
                           for path in (folder, bare))
     assert of_bare == {**of_folder, 'bag': str(bare)}
     assert of_bare['storage'] == f'rosbag2 {storage}'
     assert of_bare['topics']['/pose']['accepted'] == 30
-    rows = run(capsys, 'bag', bare, '--csv', '-')[1]
-    assert rows == run(capsys, 'bag', folder, '--csv', '-')[1] and rows.count('\n') == 31
+    rows = run_cli(capsys, 'bag', bare, '--csv', '-')[1]
+    assert rows == run_cli(capsys, 'bag', folder, '--csv', '-')[1] and rows.count('\n') == 31
 
 
 def test_files_named_as_bags_that_are_not(capsys, tmp_path):
@@ -338,7 +332,7 @@ def test_a_fifo_is_refused_before_opening(tmp_path):
 def test_text_cells_a_spreadsheet_would_run_are_escaped(capsys, tmp_path):
     frames = ('=HYPERLINK("x")', '+1', '-cmd', '@SUM(A1)', '\tx', '\rx', 'map', "'q", 'a,b\nc')
     path = pose_bag(tmp_path / 'bag', [1.0 + k for k in range(len(frames))], frames)
-    out = run(capsys, 'bag', path, '--csv', '-')[1]
+    out = run_cli(capsys, 'bag', path, '--csv', '-')[1]
     rows = list(csv.DictReader(io.StringIO(out)))
     assert [r['frame_id'] for r in rows] == ["'" + f for f in frames[:6]] + list(frames[6:])
     assert out.count('"\'=HYPERLINK(""x"")"') == 1  # quoted where CSV needs it
@@ -380,7 +374,7 @@ def test_the_plot_is_bounded_and_says_what_it_draws(capsys, tmp_path):
     topics = [f'/t{k:02d}' for k in range(bag_output.MAX_PLOTTED_TOPICS + 3)]
     path = spinning_bag(tmp_path / 'bag', topics)
     svg = tmp_path / 'rpy.svg'
-    status, _, err = run(capsys, 'bag', path, '--plot', svg, '--deg')
+    status, _, err = run_cli(capsys, 'bag', path, '--plot', svg, '--deg')
     drawn, left = topics[:bag_output.MAX_PLOTTED_TOPICS], topics[bag_output.MAX_PLOTTED_TOPICS:]
     assert status == 0 and err == (
         f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {", ".join(drawn)}; left out, 3 '
@@ -391,6 +385,6 @@ def test_the_plot_is_bounded_and_says_what_it_draws(capsys, tmp_path):
     assert not any(f'id="{t}:yaw"' in text for t in left)
     # roll and pitch share an axis of their own; yaw (2,000°) has another
     assert axes_of(svg, '/t00:roll') == axes_of(svg, '/t00:pitch') != axes_of(svg, '/t00:yaw')
-    status, _, err = run(capsys, 'bag', path, '--plot', svg, '--topic', left[0])
+    status, _, err = run_cli(capsys, 'bag', path, '--plot', svg, '--topic', left[0])
     assert status == 0 and err == f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {left[0]}\n'
     assert f'id="{left[0]}:roll"' in svg.read_text()

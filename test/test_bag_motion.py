@@ -11,23 +11,16 @@ import json
 import math
 
 import bag_helpers as bh
+from conftest import run_cli
 import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.cli.bag_analysis import GYRO_NOISE  # noqa: E402
 from rot_tools.core.imu import GYRO_TOL  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
-
-
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools ARGS, in-process."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def real_messages(topic):
@@ -72,7 +65,7 @@ def w_first(tmp_path_factory):
 
 def test_the_threshold_is_the_noise_and_imu_check_s_gyro_scale_tolerance(capsys):
     """Check the threshold: GYRO_NOISE + GYRO_TOL × the gyro's RMS rate over the steps."""
-    status, out, err = run(capsys, 'bag', bh.REAL, '--topic', IMU, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--topic', IMU, '--json')
     imu = json.loads(out)['topics'][IMU]
     gyro = real_messages(IMU)['gyro']
     at_step = 0.5 * (gyro[:-1] + gyro[1:])
@@ -81,7 +74,7 @@ def test_the_threshold_is_the_noise_and_imu_check_s_gyro_scale_tolerance(capsys)
 
 
 def test_the_real_imu_agrees_with_its_gyro(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     imu = json.loads(out)['topics'][IMU]
     assert (status, err) == (0, '')
     assert imu['gyro_rms_difference'] < imu['gyro_rms_threshold']
@@ -89,7 +82,7 @@ def test_the_real_imu_agrees_with_its_gyro(capsys):
 
 
 def test_a_quaternion_written_w_first_is_flagged(capsys, w_first):
-    status, out, err = run(capsys, 'bag', w_first, '--json', '--deg')
+    status, out, err = run_cli(capsys, 'bag', w_first, '--json', '--deg')
     imu = json.loads(out)['topics'][IMU]
     # ω from the orientations as written, against the gyro (scipy, independent of rot_tools)
     real = real_messages(IMU)
@@ -107,7 +100,7 @@ def test_a_quaternion_written_w_first_is_flagged(capsys, w_first):
 
 
 def test_the_warning_goes_to_stderr_with_the_csv_on_stdout(capsys, w_first):
-    status, out, err = run(capsys, 'bag', w_first, '--csv', '-')
+    status, out, err = run_cli(capsys, 'bag', w_first, '--csv', '-')
     assert status == 0 and out.startswith('topic,stamp,')
     assert len(err.splitlines()) == 1
     assert err.startswith(f'warning: {IMU}: the orientation disagrees with the gyro: ')
@@ -118,7 +111,7 @@ def test_the_warning_goes_to_stderr_with_the_csv_on_stdout(capsys, w_first):
 
 
 def test_the_odometry_s_position_ranges_and_largest_speed(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     odom = json.loads(out)['topics'][ODOM]
     real = real_messages(ODOM)
     p, t = real['p'], real['t']
@@ -131,7 +124,7 @@ def test_the_odometry_s_position_ranges_and_largest_speed(capsys):
 
 
 def test_an_imu_has_no_positions(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     imu = json.loads(out)['topics'][IMU]
     assert not {'position_range', 'max_speed'} & set(imu)
 
@@ -149,7 +142,7 @@ def falling_odometry(path):
 
 
 def test_an_odometry_falling_at_80_m_s_is_seen(capsys, tmp_path):
-    status, out, err = run(capsys, 'bag', falling_odometry(tmp_path / 'fall'), '--json')
+    status, out, err = run_cli(capsys, 'bag', falling_odometry(tmp_path / 'fall'), '--json')
     odom = json.loads(out)['topics']['/odom']
     assert odom['position_range'] == {'x': [1.0, 1.0], 'y': [2.0, 2.0], 'z': [-3754.0, 0.0]}
     assert odom['max_speed'] == pytest.approx(80.0, rel=1e-9)

@@ -16,19 +16,12 @@ import sys
 import time
 
 import bag_helpers as bh
-from conftest import console_script, live_pids, script_env
+from conftest import console_script, live_pids, run_cli, script_env
 import numpy as np
 import pytest
 import rot_tools as rt
 from rot_tools.cli import main as cli
 from rot_tools.cli import output_file
-
-
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools with these words, in this process."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def write_tum(path, n=40):
@@ -70,13 +63,13 @@ def test_compare_refuses_to_write_into_the_bag_it_reads(capsys, files, tmp_path,
             (tmp_path / 'link' / storage.name, '--csv', Path('victim/../victim') / storage.name),
             (storage, '--plot', victim / 'errors.png'),
             (victim, '--csv', victim)):
-        status, out, err = run(capsys, 'compare', est, 'ref.tum', option, output)
+        status, out, err = run_cli(capsys, 'compare', est, 'ref.tum', option, output)
         assert (status, out) == (2, ''), err
         assert err == (f'rot-tools: error: {option} {output} would overwrite the bag being read '
                        f'({est}): refused\n')
     assert {p: p.read_bytes() for p in victim.iterdir()} == before
     # the same bag written to beside it: compare runs, the bag is untouched
-    status, _, err = run(capsys, 'compare', storage, 'ref.tum', '--csv', tmp_path / 'e.csv')
+    status, _, err = run_cli(capsys, 'compare', storage, 'ref.tum', '--csv', tmp_path / 'e.csv')
     assert (status, err) == (0, ''), err
     assert (tmp_path / 'e.csv').read_text().startswith('stamp,angle')
     assert {p: p.read_bytes() for p in victim.iterdir()} == before
@@ -144,7 +137,7 @@ def test_an_output_over_a_recording_is_refused_without_force(files, recordings, 
         recordings / 'rec' / 'metadata.yaml', recordings / 'rec' / 'rec_0.db3']
     for target in targets:
         before = target.read_bytes()
-        status, out, err = run(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv', target)
+        status, out, err = run_cli(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv', target)
         assert (status, out, err) == (2, '', f'rot-tools: error: --csv {target} is a recording '
                                       '(a bag): refused; --force writes over it\n')
         assert target.read_bytes() == before
@@ -152,8 +145,8 @@ def test_an_output_over_a_recording_is_refused_without_force(files, recordings, 
 
 def test_force_writes_over_a_recording(files, recordings, capsys, monkeypatch):
     monkeypatch.chdir(files)
-    status, _, err = run(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv',
-                         recordings / 'old.bag', '--force')
+    status, _, err = run_cli(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv',
+                             recordings / 'old.bag', '--force')
     assert (status, err) == (0, '')
     assert (recordings / 'old.bag').read_text().startswith('stamp,angle')
 
@@ -161,7 +154,7 @@ def test_force_writes_over_a_recording(files, recordings, capsys, monkeypatch):
 def test_force_does_not_let_an_output_overwrite_an_input(files, capsys, monkeypatch):
     monkeypatch.chdir(files)
     storage = next(Path('victim').glob('*.db3'))
-    status, out, err = run(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force')
+    status, out, err = run_cli(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force')
     assert (status, out) == (2, '') and 'would overwrite the bag being read' in err
 
 
@@ -170,7 +163,7 @@ def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, 
     """rot-tools bag's --csv and --parquet get the same guard (a rosbag2 directory as DIR)."""
     pytest.importorskip('pyarrow')
     monkeypatch.chdir(files)
-    status, out, err = run(capsys, 'bag', 'victim', '--parquet', recordings / 'rec')
+    status, out, err = run_cli(capsys, 'bag', 'victim', '--parquet', recordings / 'rec')
     assert (status, out, err) == (2, '', f'rot-tools: error: --parquet {recordings / "rec"} is '
                                   'a recording (a bag): refused; --force writes over it\n')
     left = sorted(p.name for p in (recordings / 'rec').iterdir())
