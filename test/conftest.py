@@ -1,12 +1,7 @@
 """
 Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
 
-Node tests use real DDS on the loopback, in a ROS_DOMAIN_ID of this run's own (from the
-pid, in 1..101) limited to LOCALHOST, and in a namespace unique to this run (:data:`RUN`),
-with one namespace per test below it: other programs on the same domain cannot answer. A
-test module that imports a package this machine lacks (ROS, scipy, rosbags, ...) is skipped,
-not an error; numpy, PyYAML, pytest and hypothesis are required. Waits are bounded waits for
-the graph, never sleeps.
+A module importing what this machine lacks is skipped; waits are bounded, never sleeps.
 """
 
 import errno
@@ -52,11 +47,7 @@ _namespaces = itertools.count(1)
 
 
 def console_script(name, module):
-    """
-    Return the command of console script ``name``: next to this Python, on PATH, or -m.
-
-    Without an installed package it is ``python -m module``, run from this checkout.
-    """
+    """Return the command of console script ``name``: next to this Python, on PATH, or -m."""
     here = Path(sys.executable).parent / name
     script = str(here) if here.exists() else shutil.which(name)
     return [script] if script else [sys.executable, '-m', module]
@@ -157,12 +148,7 @@ class NodeProcess:
 
 
 class Tester:
-    """
-    A test-side rclpy node in ``context`` that an executor spins on demand.
-
-    Nodes under test may be added to the same executor (in-process tests) or live in another
-    process (end-to-end tests). Every wait is bounded by ``timeout`` and fails the test.
-    """
+    """A test-side rclpy node in ``context``, spun on demand; every wait bounded by ``timeout``."""
 
     def __init__(self, context, name='tester'):
         import rclpy
@@ -176,13 +162,7 @@ class Tester:
         self.logs = []
 
     def close(self):
-        """
-        Destroy the executors, then the test node (not the nodes added under test).
-
-        An executor's shutdown drops the generator of its last wait, which may still hold
-        the handles of the node's entities; it is collected here, while the node lives, not
-        by a later garbage collection after the node is gone.
-        """
+        """Destroy the executors, collect their last wait, then destroy the test node."""
         for executor in self.executors:
             executor.remove_node(self.node)
             executor.shutdown(timeout_sec=1.0)
@@ -190,13 +170,7 @@ class Tester:
         self.node.destroy_node()
 
     def add_node(self, node):
-        """
-        Spin ``node`` (a node under test, usually in another context) with the tester.
-
-        A node of another context (another DDS participant) gets an executor of its own —
-        the kind rotation_node runs on, rclpy's SingleThreadedExecutor, so that every node
-        test holds on it; both are spun in turn, in this thread.
-        """
+        """Spin ``node`` with the tester; another context's node on an executor of its own."""
         from rclpy.executors import SingleThreadedExecutor
         if node.context is self.context:
             self.executors[0].add_node(node)
@@ -276,13 +250,7 @@ class Tester:
     # -- services ----------------------------------------------------------------------
 
     def call(self, srv_type, name, request, timeout=2.0, attempts=5):
-        """
-        Call a service with a bounded wait per attempt and retries; return the response.
-
-        A reply that does not come within ``timeout`` is abandoned (the pending request is
-        removed) and the request sent again: Fast DDS can drop the first reply to a new
-        client. Fails the test when every attempt times out.
-        """
+        """Call a service, a bounded wait per attempt (Fast DDS may drop a first reply)."""
         client = self.node.create_client(srv_type, name)
         try:
             self.spin_until(lambda: client.service_is_ready(), DISCOVERY_TIMEOUT,
@@ -300,12 +268,7 @@ class Tester:
             self.node.destroy_client(client)
 
     def set_parameters(self, node_name, parameters):
-        """
-        Set parameters of node ``node_name`` through its ~/set_parameters service.
-
-        ``parameters`` are rclpy.parameter.Parameter objects; returns the list of
-        rcl_interfaces/SetParametersResult, one per parameter.
-        """
+        """Set rclpy Parameters of ``node_name`` by ~/set_parameters; return its results."""
         from rcl_interfaces.srv import SetParameters
         request = SetParameters.Request(
             parameters=[p.to_parameter_msg() for p in parameters])
@@ -387,12 +350,7 @@ def namespace():
 
 @pytest.fixture
 def node_process(tmp_path):
-    """
-    Start rotation_node processes, each in a namespace of its own; kill them after the test.
-
-    start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args;
-    start(..., env_extra={NAME: VALUE}) sets environment variables of the process.
-    """
+    """Start rotation_node processes: start(*ros_args, env_extra=None); kill them after."""
     pytest.importorskip('rclpy')
     started = []
 

@@ -1,10 +1,7 @@
 """
 rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 and MCAP).
 
-Every value is checked against an independent computation from the messages as rosbags
-decodes them: scipy's Rotation (from_quat, as_euler(RPY_SEQUENCE), as_rotvec, mean), numpy.unwrap,
-and a log map written here. Runs the CLI in-process (rot_tools.cli.main.main), and as the console
-script where the process itself matters (test_bag_hostile.py: its standard output).
+Every value is checked against scipy's Rotation and numpy on the messages as rosbags decodes them.
 """
 
 import math
@@ -226,12 +223,7 @@ def test_rosbag2_gives_what_the_ros1_bag_gives(capsys, converted, storage):
 
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
 def test_columns_are_the_fields_rosbags_decodes(converted, reference, storage):
-    """
-    Each topic's columns hold the fields of its messages, as rosbags decodes them.
-
-    The whole real recording (ROS 1), and the rosbag2 bags of its excerpt (their first
-    messages).
-    """
+    """Each topic's columns hold the fields of its messages, as rosbags decodes them."""
     path = bh.REAL if storage == 'ros1' else converted[storage]
     n = {IMU: 3061, ODOM: 3060} if storage == 'ros1' else {IMU: EXCERPT, ODOM: EXCERPT}
     with bag_read.open_bag(path) as reader:

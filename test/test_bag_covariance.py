@@ -1,13 +1,8 @@
 """
 rot-tools bag: standard deviations of roll, pitch and yaw from the recorded covariances.
 
-The reference is independent of rot_tools: the Jacobian J of scipy's
-``Rotation.as_euler(RPY_SEQUENCE)`` with respect to a small rotation about the parent's fixed axes
-(R_true = exp([δ]×)·R, ROS's PoseWithCovariance), by central differences; then
-Σ_rpy = J·Σ·Jᵀ and σ = √diag(Σ_rpy) over the rotation block Σ (an Imu's 3×3, a pose's last
-3×3). With ``--input-covariance rpy`` σ is √diag(Σ) itself. The real recording's IMU and
-odometry carry covariances; bags written here (ROS 1, rosbag2 sqlite3 and MCAP) carry
-unknown (all zero), NaN, non-symmetric and non-PSD ones, and an orientation at pitch 90°.
+Reference: σ = √diag(J·Σ·Jᵀ), J of scipy's as_euler(RPY_SEQUENCE) about the parent's fixed
+axes by central differences; with ``--input-covariance rpy``, √diag(Σ).
 """
 
 import csv
@@ -300,13 +295,7 @@ def test_pitch_90_is_good_when_read_as_rpy(capsys, tmp_path):
 
 
 def test_runs_and_the_whole_batch_give_the_same(tmp_path, monkeypatch, excerpt):
-    """
-    Check the runs of one covariance against message_covariance's batch over every message.
-
-    The real recording's covariances are constant (its excerpt here): one run each,
-    converted run by run; the bag written here has a new one nearly every message: the
-    whole batch. Each both ways.
-    """
+    """Check the runs of one covariance against message_covariance's batch over every message."""
     path, _ = write_derived(tmp_path / 'derived', 'sqlite3')
     for source in (excerpt, path):
         results = {}
@@ -395,10 +384,7 @@ def test_covariances_near_float64_s_ends_are_converted_at_the_scale_of_one(
     """
     σ = √max|C|·σ(C / max|C|): 1e308·I gives σ near 1e154, 5e-324·I near 2e-162, never inf or 0.
 
-    A covariance of roll, pitch, yaw beyond float64 (1e308·I far enough from level) is bad,
-    as rotation_node's ~/rpy_covariance says; every other is the reference's, whether the
-    covariances go run by run or as one batch, and the table is written whole (it raised
-    OverflowError, then RotationError, with a traceback and no CSV).
+    One beyond float64 is bad, as ~/rpy_covariance says; the table is written whole.
     """
     path, plan = extreme_bag(tmp_path / 'extreme')
     out = tmp_path / 'rows.csv'

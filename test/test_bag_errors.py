@@ -1,13 +1,8 @@
 """
 rot-tools bag on bad input: refusals counted by reason, or one line and exit status 2.
 
-Bags with bad messages are written here (rosbags' writer): zero quaternions on every message
-(as a public ROS 1 bag's odometry has), NaN/Inf, non-unit quaternions, Imu messages without
-orientation, in every type read. Damaged copies of the real recording, empty and missing
-bags, and wrong options must each give exactly one ``rot-tools: error:`` line, never a
-traceback nor a warning: run in this process (rot_tools.cli.main.main, with Python's warnings
-caught as the lines they would print), and as the console script only where the process is
-what is tested (an environment without rosbags).
+Bad messages of every type read, damaged, empty and missing bags, wrong options: never a
+traceback nor a warning.
 """
 
 import contextlib
@@ -185,9 +180,7 @@ def one_line_error(script, *args, env=None, contains=''):
     """
     Assert that rot-tools ARGS prints one error line, nothing else, and exits with status 2.
 
-    In this process (rot_tools.cli.main.main, stdout and stderr redirected, every warning
-    Python would print on stderr caught and counted as lines of it); as the console script
-    ``script`` when ``env`` is given (an environment of its own).
+    Warnings count as lines; with ``env``, as the console script ``script``.
     """
     if env is None:
         out, err = io.StringIO(), io.StringIO()
@@ -306,13 +299,7 @@ def test_a_bag_without_a_topic_to_read(script, tmp_path):
 
 
 def test_a_bag_with_nothing_asked_for_is_skipped(capsys, tmp_path):
-    """
-    Check what is BagSkipped (a fleet's ``skipped``) and what a BagError (``failed``).
-
-    Skipped: no message, none of the topics asked for, no topic of a type read. A topic asked
-    for that is missing beside others, or of a type not read, is a BagError (``failed``).
-    Alone, each is one line and exit status 2.
-    """
+    """Check what is BagSkipped (a fleet's ``skipped``) and what a BagError (``failed``)."""
     from rot_tools.cli import bag_analysis
     from rot_tools.io import bag_read
     from rosbags.rosbag2 import Writer

@@ -1,13 +1,7 @@
 """
 rot-tools bag over many bags: --jobs, --parquet and its manifest, --engine dask, bags that fail.
 
-Most tests read a small fleet (a hundred and twenty messages a bag, written here by rosbags)
-as a ROS 1 bag, rosbag2 sqlite3 and MCAP, in this process with ``--jobs 1``; what needs
-processes of its own (``--jobs 2``, a local Dask cluster, a worker killed) runs the console
-script. Whatever runs the per-bag jobs (one after the other, two processes, a Dask cluster),
-the summary is the same byte for byte and the Parquet tables are equal; each bag's entry is
-the summary the bag gives alone. The docs' fleet reads the real recording (../shared/data)
-three times. Signals sent to a fleet: test_fleet_signals.py.
+Whatever runs the per-bag jobs, the summary is the same byte for byte and the tables equal.
 """
 
 import contextlib
@@ -351,10 +345,7 @@ def test_a_worker_killed_is_tried_again_once_and_a_rerun_owns_its_files(small, t
     """
     --jobs 2: the worker of a.bag is killed once, b.bag's every time (as the OOM killer does).
 
-    The bags the broken pool held are read again, each alone: a.bag is whole; b.bag, killed
-    alone, is failed and the rest go on. The
-    Parquet directory held an earlier run's files: its file of b.bag goes (the bag has none
-    in this run), the file of a bag not in this run stays, and the manifest lists this run's.
+    a.bag is read again whole, b.bag failed; the Parquet directory and manifest are this run's.
     """
     duckdb = pytest.importorskip('duckdb')
     root, paths = small

@@ -131,12 +131,7 @@ def closed_pipe():
 
 
 def test_the_summary_on_a_full_or_closed_stdout(small_bag, monkeypatch):
-    """
-    The summary and the table (--csv -) on > /dev/full, | true and >&-, in this process.
-
-    rot-tools' main says them as it says every command's (test_cli_streams.py runs the
-    console script): one line and status 1, or quiet and 141 for a reader gone.
-    """
+    """The summary and the table on > /dev/full, | true and >&-: one line and 1, or quiet 141."""
     for extra in ([], ['--csv', '-']):
         for open_stdout, status, said in (
                 (lambda: open('/dev/full', 'w'), 1, 'No space left on device'),

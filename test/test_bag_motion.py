@@ -1,10 +1,7 @@
 """
 rot-tools bag's checks of the motion: an Imu's orientation against its gyro, and positions.
 
-On the real recording and on copies written here: the Jackal's IMU with its quaternion
-fields written w-first (as a driver that hands Eigen's coeffs() to the message's x, y, z, w
-does), and an odometry that falls as a bad estimator's does. Expected values are computed
-here from the messages as rosbags decodes them, with scipy's Rotation.
+On the real recording, its IMU written w-first, and a falling odometry; expected by scipy.
 """
 
 import json

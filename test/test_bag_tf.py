@@ -1,9 +1,7 @@
 """
 rot-tools bag --tf REFERENCE BODY: a TF chain recorded in a bag, through TransformTree.
 
-The bag (written here) holds map → odom and odom → base_link, dynamic and sampled together,
-and base_link → imu on /tf_static; the lookups at the samples' stamps are exact compositions,
-checked against 4×4 homogeneous matrices built here with scipy.
+Lookups at the samples' stamps are checked against 4×4 products built with scipy.
 """
 
 import csv

@@ -1,10 +1,7 @@
 """
 rot-tools' outputs and streams: the one output guard, a full or closed stdout, signals.
 
-Every command checks all its output paths against its inputs, each other and recordings
-before writing (rot_tools.cli.output_file.check_outputs). What the process does on a full
-disk, a closed pipe, Ctrl-C or SIGTERM is tested on the console script where Python's own
-exit takes part, in this process otherwise.
+The console script runs where Python's own exit takes part, this process otherwise.
 """
 
 import io
@@ -183,12 +180,7 @@ COMMANDS = {
 
 
 def run_with(*words, stdout=io.StringIO):
-    """
-    Return (status, stdout, stderr) of rot-tools with these words, the streams swapped here.
-
-    ``stdout``: its standard output (None: closed); by default a StringIO, whose text is
-    returned (else None).
-    """
+    """Return (status, stdout, stderr) of rot-tools, ``stdout`` its stream (None: closed)."""
     out = stdout() if stdout is io.StringIO else stdout
     err = io.StringIO()
     real = sys.stdout, sys.stderr
@@ -332,12 +324,7 @@ def ignores_sigint(pid):
 
 
 def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
-    """
-    Ctrl-C (SIGINT to the whole process group, as a terminal sends it) while a fleet runs.
-
-    Sent once the two workers are up (they leave Ctrl-C to the command, which stops them):
-    one line, status 130, no partial file, no CSV, no worker left in the session.
-    """
+    """Ctrl-C on a fleet's process group: one line, status 130, no file, no worker left."""
     pytest.importorskip('rosbags')
     pytest.importorskip('pyarrow')
     bags = tmp_path / 'bags'

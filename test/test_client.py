@@ -1,15 +1,8 @@
 """
-rotation_client against rotation_node processes, over DDS: in this process, and as a process.
+rotation_client against a rotation_node process, over DDS: in this process, and as a process.
 
-One node process (a namespace of this run) serves the tests of this module. Most tests run
-the client's commands in this process (:class:`Here`): the same parser, command and printing
-as the console script, in one rclpy context for the module (one DDS participant, discovered
-once), each command by a client node of its own. What only a process shows — the installed
-script end to end, Ctrl-C, an encoding of stdout, another publisher streaming meanwhile — runs
-the installed ``rotation_client`` script (``python -m rot_tools.ros.client.rotation_client``
-without an installed package) and reads its stdout, stderr and exit status. Expected values
-come from scipy.spatial.transform.Rotation and closed forms, not from rot_tools. The client
-prints 12 significant digits, so numbers are compared to that.
+Most commands run here (:class:`Here`); what only a process shows runs the installed script.
+Expected values come from scipy's Rotation and closed forms, to the printed 12 digits.
 """
 
 from collections import Counter
@@ -42,11 +35,7 @@ DIGITS = {'rel': 1e-11, 'abs': 1e-12}
 
 
 def run(*args, timeout=60, **env):
-    """
-    Run rotation_client as a process with ``args`` (and ``env`` added to its environment).
-
-    Return the CompletedProcess, its output read as UTF-8 text.
-    """
+    """Run rotation_client as a process (``env`` added); return the CompletedProcess, as text."""
     command = CLIENT + [str(a) for a in args]
     return subprocess.run(command, capture_output=True, encoding='utf-8', timeout=timeout,
                           env=dict(script_env(command), **env), stdin=subprocess.DEVNULL)
@@ -74,15 +63,9 @@ class Result(NamedTuple):
 
 class Here:
     """
-    rotation_client's commands run in this process, in one rclpy context.
+    rotation_client's commands run in this process, in one rclpy context; ``here(*args)``.
 
-    ``here(*args)`` reads the command line as the console script does and runs its command
-    by rot_tools.ros.client.rotation_client.run_command — printing, exit status — in ``context``,
-    whose DDS participant has discovered the nodes already, with one Client for every
-    command (its endpoints discovered by the nodes once); stdout and stderr are captured. A
-    command line with ROS arguments runs through ``main``, in a context made for it, as the
-    script does (rclpy's signal handlers, which its rclpy.init installs, are uninstalled
-    after it: this process keeps its own). Return a Result.
+    One Client serves every command; a line with ROS arguments runs through ``main``.
     """
 
     def __init__(self, context):
@@ -141,11 +124,7 @@ def here(ros_context):
 
 @pytest.fixture(scope='module')
 def node(tmp_path_factory, here):
-    """
-    Return a rotation_node process (default parameters) for this module; its name.
-
-    It has accepted one input, so ~/describe always has a report.
-    """
+    """Return the name of this module's rotation_node process; it has accepted one input."""
     process = NodeProcess(tmp_path_factory.mktemp('client'))
     here.answered('orientation', 0, 1, 0, 0, '--node', process.name, '--timeout', 20)
     yield process.name
@@ -157,12 +136,7 @@ def approx(values):
 
 
 def check_answer(answer, rotation, b=(0.0, 0.0, 0.0), drawn=True):
-    """
-    Return the printed answer of the node to an input with rotation ``rotation`` and position b.
-
-    ``drawn``: the node drew this input (nothing else reached it in between), so its
-    pictures must be there; else they are checked if they are.
-    """
+    """Check an answer to ``rotation`` and b; ``drawn``: its markers must be there."""
     assert answer['rotation_matrix'] == [approx(row) for row in rotation.as_matrix()]
     q = answer['quaternion']
     assert [q['x'], q['y'], q['z'], q['w']] == approx(rotation.as_quat(canonical=True))
@@ -381,12 +355,7 @@ def test_cov_is_sent_and_the_rpy_covariance_printed(here, node, verb, position):
 
 
 def send_until(done, send, tries=40):
-    """
-    Call send() until done(), waiting half a second after each; fail after ``tries``.
-
-    For an echo started just before: the node's publisher may match its subscription a moment
-    after the subscription is in the graph, and a message published before is not its.
-    """
+    """Call send() until done(), waiting half a second after each; fail after ``tries``."""
     for _ in range(tries):
         send()
         deadline = time.monotonic() + 0.5
@@ -427,10 +396,7 @@ def test_frame_id_beyond_ascii_round_trips(here, node):
     """
     Check that an emoji (beyond U+FFFF) and an accent in frame_id: sent, reported, printed as such.
 
-    Over DDS to the node and back in ~/describe's YAML, then printed by the client. On a
-    UTF-8 stdout the characters are printed as themselves (here); on an ASCII one (a process
-    with PYTHONIOENCODING=ascii) as escapes that YAML and JSON read back to the same
-    characters.
+    On an ASCII stdout, as escapes that YAML and JSON read back to the same characters.
     """
     frame = 'caméra_😀'
     sent = here.answered('orientation', 0, 0, 0, 1, '--frame', frame, '--node', node)
@@ -490,11 +456,7 @@ REFUSED = [
 
 
 def test_refused_input(here, node):
-    """
-    Each is one line: the node's sentence (what and by how much), and the reason counted.
-
-    The node counts each of them under its reason, and keeps serving.
-    """
+    """Each is one line, the node's sentence; the node counts its reason and keeps serving."""
     reasons = Counter(why.rpartition('(')[2].rstrip(')') for _, why in REFUSED)
     before = here.answered('describe', '--node', node)['refused']
     for args, why in REFUSED:
@@ -540,13 +502,7 @@ def test_unreachable_node(here, node):
 
 
 def test_a_fresh_and_remapped_node(here, node_process):
-    """
-    Check a node whose ~/pose and ~/imu are remapped, from its start.
-
-    Before it accepts anything, ~/describe has no report, but its refusals (counts,
-    sentences); its ~/pose is away, so the client names the topic it waited for; --topic
-    reaches the remapped ~/imu, and so do the client's own ROS arguments.
-    """
+    """Check a node whose ~/pose and ~/imu are remapped, from its start (describe, --topic)."""
     remapped = f'/{RUN}/robot/imu/data'
     process = node_process('-r', f'~/pose:=/{RUN}/elsewhere', '-r', f'~/imu:={remapped}')
     name = process.name
@@ -614,12 +570,7 @@ def test_bad_arguments(here, args, message):
 @pytest.mark.parametrize('tolerance, poses', [
     ('3.4e38', 2), ('-1e-300', 21), ('-1e39', 21), ('2e-45', 'path_too_long')])
 def test_tolerances_float32_keeps_are_sent(here, node, tolerance, poses):
-    """
-    Tolerances whose meaning float32 keeps are sent as given.
-
-    3.4e38 (below float32's largest) is one step; -1e-300 and -1e39 become -0 and -inf,
-    still <= 0: 20 steps; 2e-45 becomes 1.4e-45, not 0: 1 m in such steps is too many.
-    """
+    """Tolerances whose meaning float32 keeps are sent as given (its largest, -0, -inf, tiny)."""
     path = ('screw-path', *[0] * 6, 1, 1, 0, 0, *[0] * 3, 1, '--tolerance', tolerance,
             '--node', node)
     if poses == 'path_too_long':
@@ -697,12 +648,7 @@ def _session(sid):
 
 
 def interrupt(process):
-    """
-    Send Ctrl-C's SIGINT to a client started by :func:`popen`; return (status, out, err).
-
-    Checked: it ends (within conftest.STOP_WITHIN), with no traceback, and leaves no process
-    of its session behind.
-    """
+    """SIGINT a client of :func:`popen`; check a clean end, none of its session left; return it."""
     process.send_signal(signal.SIGINT)
     try:
         process.wait(timeout=STOP_WITHIN)
@@ -733,9 +679,7 @@ def console(here, *commands, names=()):
     """
     Return the transcript of rotation_client ``commands`` as doc/client.md shows it.
 
-    Each command is (shown, extra): the arguments shown after ``$ rotation_client``, and
-    those added to run it here (this run's node). ``names`` are (real, shown) node names,
-    replaced in the output. A failed command is followed by ``$ echo $?`` and its status.
+    Each command is (shown, extra); ``names`` are (real, shown) node names.
     """
     lines = []
     for shown, extra in commands:
@@ -816,12 +760,7 @@ def must_escape(c):
     'nul\x00 bel\x07 esc\x1b del\x7f', 'c1\x85\x9f', 'ls\u2028 ps\u2029', 'bom\ufeff',
     '\ufffe\uffff', 'lone \ud83d and \ude00', 'quote " backslash \\'])
 def test_report_strings_round_trip(text):
-    """
-    Every string reads back the same from the YAML and the JSON report (PyYAML, json).
-
-    Printable characters are written as themselves, the rest escaped. Before, an emoji
-    became a surrogate pair, which YAML reads as two lone surrogates.
-    """
+    """Every string reads back the same from the YAML and the JSON report (PyYAML, json)."""
     from rot_tools.io.report import to_json, to_yaml
     data = {'frame_id': text, text: [text]}
     yaml_text, json_text = to_yaml(data), to_json(data)

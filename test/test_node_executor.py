@@ -1,27 +1,8 @@
 """
-The executor rotation_node runs on, rclpy's SingleThreadedExecutor, proved in use.
+The executor rotation_node runs on (rclpy's SingleThreadedExecutor) under floods and signals.
 
-It was chosen over rclpy's EventsExecutor, whose event queue grows without bound under a
-flood beyond the node's pace and makes service calls wait behind it
-(bench/bench_overload.py). The node spins it through rclpy.spin, in one
-context (one DDS participant) with its services; these tests show, on the real executor and
-(where a signal or the process matters) on the real console script:
-
-- SIGINT and SIGTERM under a flood of poses, good and bad at 3000 msg/s and back to back:
-  exit status 0 (within conftest.STOP_WITHIN), no traceback (and after floods, with ten
-  screw paths queued; idle, test_entry's sweep);
-- both services and the parameter services answer, correctly, while ~/pose is flooded;
-- overload, measured in messages rather than seconds so that no machine's speed decides:
-  100,000 poses arriving while the loop is held cost no memory (the EventsExecutor took
-  ~14 MB for them, an event per message), and while a back-to-back flood saturates the
-  node, every call of ~/describe and the parameter services is served within a few
-  bursts of inputs (the EventsExecutor served them after the whole queue);
-- a flood of bad input is refused and counted, and the node keeps serving;
-- a parameter request rclpy cannot read is refused with one log line, and the node serves on;
-- the graph (what ``ros2 node info`` prints) lists the node's services as its own.
-
-The in-process node tests (test_node.py) run on the same executor: conftest's Tester spins
-nodes under test on a SingleThreadedExecutor of their context.
+Clean exits on SIGINT/SIGTERM under a flood, services answered while flooded, overload counted
+in messages (never seconds), malformed requests refused, the services listed as the node's own.
 """
 
 import contextlib
@@ -141,11 +122,7 @@ class Flood:
     """
     Publishes ``poses`` in turn on ``topic`` at about ``rate`` msg/s, from a process.
 
-    A process of its own, so that the flood keeps its pace whatever this one does. ``rate``
-    'max' publishes back to back, as fast as one publisher can; then ``count`` messages at
-    most (wait_sent() waits for them). Each message's header.stamp.sec counts up from
-    1_000_000, so a flooded output is told apart; ``sent`` is how many were published, once
-    the flood has ended.
+    ``rate`` 'max': back to back, ``count`` messages at most. Stamps count up from 1_000_000.
     """
 
     def __init__(self, topic, poses, rate=2000.0, count=-1):
@@ -317,14 +294,7 @@ HELD_GROWTH_MB = 4.0
 
 def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
         tester, own_context, namespace, monkeypatch):
-    """
-    Check that a flood beyond the node's pace costs lost inputs, never memory.
-
-    The node's loop is held in a callback (as by a node busy beyond its pace) while 100,000
-    poses arrive. Whatever the machine's speed, the middleware keeps the input's last 10;
-    an executor that queued anything per arriving message (the EventsExecutor: an event
-    each, ~140 bytes) would grow with the count, however slowly they came.
-    """
+    """Check that poses arriving while the node's loop is held cost lost inputs, never memory."""
     held, release = threading.Event(), threading.Event()
     real = RotationNode.on_pose
 
@@ -382,13 +352,7 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
     """
     Check that a node saturated by the fastest flood one publisher sends still answers every call.
 
-    Promptly is counted in inputs, not seconds, so that no machine's speed decides: the
-    flood mixes good poses with bad ones, which the node counts as refused, and ~/describe
-    reports the count. Calls go one at a time, each parameter call between two describes;
-    between two describe answers the node may handle only what arrives during the round
-    trips plus the burst under way — a few dozen inputs on any machine, since the node and
-    this test share the CPUs alike. The EventsExecutor answered after every input event
-    queued before the call: thousands (and some calls not within 16 s).
+    Promptly is counted in inputs: the refusals ~/describe counts between two answers.
     """
     process = node_process()
     name = process.name
@@ -448,13 +412,7 @@ PARAMETER_SERVICES = ('describe_parameters', 'get_parameter_types', 'get_paramet
 
 
 def test_the_graph_lists_the_services_as_the_nodes_own(tester, node_process):
-    """
-    Check that the node's services are its own, as ``ros2 node info`` reports them.
-
-    ``ros2 node info`` prints Node.get_service_names_and_types_by_node: ~/describe,
-    ~/screw_path and the parameter services must be there, under the node's name, and no
-    other node (a hidden one of a second participant) may serve them.
-    """
+    """Check that the node's services are its own, as ``ros2 node info`` reports them."""
     process = node_process('-p', 'angle_unit:=deg')
     wait_until_serving(tester, process)
     namespace, node = process.name.rsplit('/', 1)
@@ -513,13 +471,7 @@ def test_the_inputs_keep_a_burst_of_50(own_context, namespace):
 @pytest.mark.parametrize('malformed', ['type_99', 'empty_name'])
 def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(
         tester, node_process, malformed):
-    """
-    Check a SetParameters request rclpy cannot read: refused, one log line, no traceback.
-
-    A parameter of type 99 (no rcl_interfaces/msg/ParameterType) makes rclpy's own
-    SetParameters service raise as it reads the request; a parameter without a name would
-    be declared. Both are answered as refused and every later call is answered.
-    """
+    """Check a SetParameters request rclpy cannot read: refused, one log line, no traceback."""
     from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
     process = node_process()
     name = process.name
@@ -549,9 +501,7 @@ def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signa
     """
     Ten ~/screw_path requests of MAX_PATH_STEPS + 1 poses each, queued, then ~/describe.
 
-    The executor serves each ready service in turn: describe's answer comes before the
-    tenth path (a queue served in arrival order answers it last), and SIGINT with ten more
-    queued ends the node cleanly.
+    describe is answered before the tenth path; SIGINT with ten more queued ends cleanly.
     """
     from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
     process = node_process()
