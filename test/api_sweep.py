@@ -29,9 +29,7 @@ def assert_sweeps_every_public_function(swept, excused):
     """
     Fail naming each public function that ``swept`` does not call and ``excused`` does not excuse.
 
-    ``swept``: the names a sweep calls; ``excused``: {name: why the sweep cannot call it}. A
-    new public function fails the sweep until it is given inputs or a reason; a name that is
-    no longer public fails it too.
+    ``excused``: {name: why}; a name no longer public fails too.
     """
     public = public_functions()
     unswept = sorted(public - set(swept) - set(excused))

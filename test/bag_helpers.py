@@ -152,11 +152,9 @@ def write_ros1_bag(dst, messages):
 
 def tf_chain_messages(n=40, bad_at=7):
     """
-    [(topic, type, t, msg)] of a TF tree map → odom → base_link → imu, plus odom → wheel.
+    Return (messages, truth, static) of a TF tree map → odom → base_link → imu, plus odom → wheel.
 
-    map → odom and odom → base_link are dynamic, sampled together at 10 Hz; base_link → imu
-    is static (on /tf_static); odom → wheel has a zero quaternion at sample ``bad_at``. Returns
-    (messages, truth): truth[t] = {(parent, child): (q, translation)} of every sample.
+    base_link → imu is on /tf_static; odom → wheel has a zero quaternion at sample ``bad_at``.
     """
     b = Builder()
     rng = np.random.default_rng(17)

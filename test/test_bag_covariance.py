@@ -202,12 +202,7 @@ def _cases(rng, size):
 
 
 def write_derived(path, storage, seed=3):
-    """
-    Return (bag, {topic: cases}) of an Imu, a PoseWithCovarianceStamped, an Odometry topic.
-
-    /imu/none: every covariance unknown; /pose: a PoseStamped (no covariance); /imu also has
-    a message without orientation (orientation_covariance[0] = −1), refused.
-    """
+    """Return (bag, {topic: cases}) of an Imu, a PoseWithCovarianceStamped, an Odometry topic."""
     b, rng = bh.Builder(), np.random.default_rng(seed)
     topics = {'/imu': _cases(rng, 3), '/pose_cov': _cases(rng, 6), '/odom': _cases(rng, 6)}
     messages = []
@@ -357,12 +352,7 @@ def test_an_unknown_reading_is_refused(capsys):
 
 
 def extreme_bag(path):
-    """
-    Return (bag, {topic: (quaternions, covariances)}): covariances near 1e308 and 5e-324.
-
-    /imu: 1e308·I at 24 orientations (constant: one run), then 5e-324·I at 8; /odom: a pose
-    covariance whose position block is 1 m² and rotation block 1e308·I.
-    """
+    """Return (bag, {topic: (quaternions, covariances)}): covariances near 1e308 and 5e-324."""
     b, rng = bh.Builder(), np.random.default_rng(11)
     q = Rotation.random(40, random_state=7).as_quat()
     huge, tiny = 1e308 * np.eye(3).ravel(), 5e-324 * np.eye(3).ravel()

@@ -1,10 +1,4 @@
-"""
-rot-tools bag against what a careless or hostile user gives it, each made here.
-
-Outputs that would overwrite the bag, writes that fail midway, negative stamps, files that
-are not bags (a FIFO among them), absurd --start, a full or closed standard output, frame
-ids a spreadsheet would run, and bags with more topics than a plot can hold.
-"""
+"""rot-tools bag against what a careless or hostile user gives it, each made here."""
 
 import csv
 import errno

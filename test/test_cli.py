@@ -1,9 +1,4 @@
-"""
-rot-tools as a user runs it: every command through main, what the console script calls.
-
-Values are parsed and compared with the math module to the printed 12 digits; bad input is
-one ``rot-tools: error:`` line and exit status 2.
-"""
+"""rot-tools as a user runs it: every command through main, to the printed 12 digits."""
 
 import io
 import json

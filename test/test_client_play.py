@@ -1,9 +1,4 @@
-"""
-rotation_client play republishes every field as recorded, from ROS 1 and rosbag2 bags.
-
-Each message received equals, by the message classes' own comparison, the Jazzy message of
-the same content as rosbags serialises it.
-"""
+"""rotation_client play republishes every field as recorded, from ROS 1 and rosbag2 bags."""
 
 from pathlib import Path
 

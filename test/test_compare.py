@@ -1,8 +1,7 @@
 """
 rot-tools compare: evo's numbers, a recorded time offset, a simulated mounting, bad inputs.
 
-evo's Python API (what ``evo_ape``/``evo_rpe --align`` run) is the reference; without evo
-those tests skip.
+evo's Python API is the reference; without evo those tests skip.
 """
 
 import json

@@ -1,11 +1,7 @@
 """
 The node and client outputs shown in doc/node.md and doc/client.md, produced for real.
 
-Each tagged block (``<!-- output: NAME -->``, see doc_blocks.py) is run against a
-rotation_node process of this run: its ``$ rotation_client ...`` lines with ``--node`` set to
-that process (unless the line names a node), its ``$ rotation_node ...`` lines as a process
-of their own. The run's namespace is taken out of the output, and what changes from run to
-run — time stamps, the ROS domain — is written ``...`` (doctest's ELLIPSIS) in the docs.
+Each tagged block runs against a rotation_node process of this run; ``...`` matches any text.
 """
 
 import re

@@ -1,13 +1,7 @@
 """
 How rotation_node starts and stops: its console script, its arguments, its signals.
 
-The console scripts point at plain ``main`` functions. ``--help`` and ``--version`` answer
-without starting anything ROS; bad arguments, ROS arguments included, end the node with one
-line on stderr (after rcl's own error log line, for arguments rcl cannot parse) and status
-2; Ctrl-C or SIGTERM at any moment of its start-up or its run ends it (within
-conftest.STOP_WITHIN) with no process left behind — once it is up, with status 0 and
-nothing on stderr (before, Python's own KeyboardInterrupt is fine). Both ways of starting
-it, the console script and ``python -m rot_tools.ros.node.rotation_node``, behave alike.
+Bad arguments are one line and status 2; a signal at any moment ends it, none left behind.
 """
 
 import os
@@ -171,10 +165,7 @@ def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
     """
     Check that a signal at any of 12 moments of the start-up and the run ends the node cleanly.
 
-    Within conftest.STOP_WITHIN, with no process left in its session. Once up: status 0
-    and nothing on stderr but the ready line. Before, Python's and rclpy's own handling is
-    fine (SIGINT: a KeyboardInterrupt, wherever Python was; SIGTERM: its default action until
-    rclpy's handler is in).
+    Once up: status 0, nothing on stderr but the ready line; before, Python's own handling.
     """
     command = NODE_COMMANDS.get('console script', NODE_COMMANDS['python -m'])
     command = [*command, '--ros-args', '-r', f'__ns:=/{RUN}/sweep_{sig.name.lower()}']

@@ -1,8 +1,7 @@
 """
 launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would.
 
-launch_ros is not on PyPI: :func:`launch_command` reads the few tags the file uses, and any
-other tag fails the test.
+:func:`launch_command` reads the few tags the file uses; any other tag fails the test.
 """
 
 from pathlib import Path

@@ -1,8 +1,7 @@
 """
 A newcomer's walk: README.md's commands, run as written in a fresh clone after ``make run``.
 
-doc/development.md ("A newcomer's walk") says what the walk does and what it leaves out:
-every README.md command is walked or named in :data:`NOT_WALKED` with its reason.
+Every README.md command is walked or named in :data:`NOT_WALKED` with its reason.
 """
 
 from importlib import metadata

@@ -1,12 +1,7 @@
 """
 End-to-end: rotation_node as a separate process, driven over DDS from this one.
 
-Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
-installed package, ``python -m rot_tools.ros.node.rotation_node``) in a namespace unique to
-this test run, publishes to its inputs, receives every output, calls both services and a
-parameter service, then stops it with SIGTERM or SIGINT: exit status 0, and
-no traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
-shipped parameter file.
+Every input, output and service; SIGTERM or SIGINT end it with status 0 and no traceback.
 """
 
 import math
@@ -366,12 +361,7 @@ FAST_DDS_PROFILE = REPO / 'config' / 'fastdds_profile.xml'
 
 def test_the_opt_in_fast_dds_profile_is_read_whole_with_the_users_two_settings(
         tester, node_process):
-    """
-    Check that the shipped profile turns on as doc/node.md says, and the node runs under it.
-
-    Fast DDS reads it (an XML error would be logged and the profile left out), and the node
-    answers as without it.
-    """
+    """Check that the shipped profile turns on as doc/node.md says, and the node runs under it."""
     page = (REPO / 'doc' / 'node.md').read_text(encoding='utf-8')
     for setting in ('FASTRTPS_DEFAULT_PROFILES_FILE=', 'RMW_FASTRTPS_USE_QOS_FROM_XML=1'):
         assert f'export {setting}' in page
