@@ -26,11 +26,7 @@ def parameters(name):
 
 
 def assert_sweeps_every_public_function(swept, excused):
-    """
-    Fail naming each public function that ``swept`` does not call and ``excused`` does not excuse.
-
-    ``excused``: {name: why}; a name no longer public fails too.
-    """
+    """Fail naming each public function neither ``swept`` nor ``excused`` ({name: why})."""
     public = public_functions()
     unswept = sorted(public - set(swept) - set(excused))
     assert not unswept, f'public functions without inputs in this sweep: {unswept}'

@@ -12,6 +12,43 @@ REAL = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'jackal_
 """61 s of a Clearpath Jackal: 3,061 Imu on /imu/data, 3,060 Odometry on
 /jackal_velocity_controller/odom (a ROS 1 bag; see its README)."""
 
+IMU_TYPE, POSE_TYPE = 'sensor_msgs/msg/Imu', 'geometry_msgs/msg/PoseWithCovarianceStamped'
+ODOM_TYPE = 'nav_msgs/msg/Odometry'
+
+
+def decode(path=REAL):
+    """
+    Return {topic: {field: array}} of a bag's Imu and poses with covariance, decoded by rosbags.
+
+    Fields: record (ns), sec, nsec, stamp (s), frame (a list), q (x, y, z, w), p (zero for an
+    Imu), cov; an Imu's gyro and accel too.
+    """
+    from rosbags.highlevel import AnyReader
+    out = {}
+    with AnyReader([path]) as reader:
+        for conn, record, raw in reader.messages():
+            if conn.msgtype not in (IMU_TYPE, POSE_TYPE, ODOM_TYPE):
+                continue
+            msg = reader.deserialize(raw, conn.msgtype)
+            d = out.setdefault(conn.topic, {})
+            if conn.msgtype == IMU_TYPE:
+                q, p, cov = msg.orientation, None, msg.orientation_covariance
+                w, a = msg.angular_velocity, msg.linear_acceleration
+                d.setdefault('gyro', []).append((w.x, w.y, w.z))
+                d.setdefault('accel', []).append((a.x, a.y, a.z))
+            else:
+                q, p, cov = msg.pose.pose.orientation, msg.pose.pose.position, msg.pose.covariance
+            for name, value in (('record', record), ('sec', msg.header.stamp.sec),
+                                ('nsec', msg.header.stamp.nanosec),
+                                ('frame', msg.header.frame_id), ('q', (q.x, q.y, q.z, q.w)),
+                                ('p', (0.0, 0.0, 0.0) if p is None else (p.x, p.y, p.z)),
+                                ('cov', np.array(cov, float))):
+                d.setdefault(name, []).append(value)
+    for d in out.values():
+        d.update({k: np.array(v) for k, v in d.items() if k != 'frame'})
+        d['stamp'] = d['sec'] + 1e-9 * d['nsec']
+    return out
+
 
 def convert_real(dst, storage, source=REAL):
     """Return the real recording (or ``source``) as a rosbag2 bag (storage 'sqlite3' or 'mcap')."""

@@ -1,8 +1,4 @@
-"""
-Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
-
-A module importing what this machine lacks is skipped; waits are bounded, never sleeps.
-"""
+"""Shared fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester."""
 
 import errno
 import gc
@@ -104,11 +100,7 @@ def assert_clean_exit(status, stderr):
 
 
 class NodeProcess:
-    """
-    rotation_node in a child process, in a namespace of this run; stdout / stderr in files.
-
-    ``name`` is the node's fully qualified name (/RUN/pN/rot_tools).
-    """
+    """rotation_node in a child process, in a namespace of this run; ``name`` its full name."""
 
     def __init__(self, tmp_path, *ros_args, env_extra=None):
         namespace = f'/{RUN}/p{next(_namespaces)}'
@@ -340,6 +332,15 @@ def tester_context():
     context = _context()
     yield context
     context.try_shutdown()
+
+
+@pytest.fixture(scope='module')
+def here(ros_context):
+    """Run rotation_client's commands in this process (test_client.Here), one runner a module."""
+    from test_client import Here
+    runner = Here(ros_context)
+    yield runner
+    runner.close()
 
 
 @pytest.fixture

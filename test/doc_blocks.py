@@ -1,8 +1,4 @@
-"""
-Find the example blocks of README.md and doc/*.md, so tests can compare them with real output.
-
-A block tagged ``<!-- output: NAME -->`` is compared by ``assert_doc_output(NAME, got)``.
-"""
+"""The example blocks of README.md and doc/*.md, to compare with real output."""
 
 import doctest
 from pathlib import Path

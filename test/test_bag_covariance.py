@@ -21,8 +21,6 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 STD = ['roll_std', 'pitch_std', 'yaw_std']
-IMU_TYPE, POSE_TYPE = 'sensor_msgs/msg/Imu', 'geometry_msgs/msg/PoseWithCovarianceStamped'
-ODOM_TYPE = 'nav_msgs/msg/Odometry'
 
 
 def cells(rows, names):
@@ -71,21 +69,7 @@ def reference_sigma(quaternions, cov, reading='rotvec'):
 
 def decoded(path):
     """{topic: (quaternions (N, 4), covariances (N, 9 or 36))}, decoded by rosbags."""
-    from rosbags.highlevel import AnyReader
-    out = {}
-    with AnyReader([path]) as reader:
-        for conn, _, raw in reader.messages():
-            if conn.msgtype not in (IMU_TYPE, POSE_TYPE, ODOM_TYPE):
-                continue
-            msg = reader.deserialize(raw, conn.msgtype)
-            if conn.msgtype == IMU_TYPE:
-                q, cov = msg.orientation, msg.orientation_covariance
-            else:
-                q, cov = msg.pose.pose.orientation, msg.pose.covariance
-            qs, covs = out.setdefault(conn.topic, ([], []))
-            qs.append((q.x, q.y, q.z, q.w))
-            covs.append(np.array(cov, float))
-    return {t: (np.array(q), np.array(c)) for t, (q, c) in out.items()}
+    return {topic: (d['q'], d['cov']) for topic, d in bh.decode(path).items()}
 
 
 @pytest.fixture(scope='module')
@@ -99,7 +83,6 @@ def excerpt(tmp_path_factory):
     return bh.real_excerpt(tmp_path_factory.mktemp('excerpt') / 'excerpt.bag')
 
 
-# ---------------------------------------------------------------------------------------
 # The real recording
 
 
@@ -165,7 +148,6 @@ def test_the_covariance_column_of_each_format(tmp_path, storage, excerpt):
     assert columns['/pose'].covariance is None
 
 
-# ---------------------------------------------------------------------------------------
 # Bags written here: covariances unknown, bad, at gimbal lock
 
 
@@ -211,17 +193,17 @@ def write_derived(path, storage, seed=3):
             stamp = 5.0 + 0.02 * k
             p = (k, 0.5, -1.0)
             if topic == '/imu':
-                msg, kind = b.imu(stamp, q, cov=cov), IMU_TYPE
+                msg, kind = b.imu(stamp, q, cov=cov), bh.IMU_TYPE
             elif topic == '/pose_cov':
-                msg, kind = b.pose_with_covariance_stamped(stamp, p, q, cov=cov), POSE_TYPE
+                msg, kind = b.pose_with_covariance_stamped(stamp, p, q, cov=cov), bh.POSE_TYPE
             else:
-                msg, kind = b.odometry(stamp, p, q, cov=cov), ODOM_TYPE
+                msg, kind = b.odometry(stamp, p, q, cov=cov), bh.ODOM_TYPE
             messages.append((topic, kind, int(stamp * 1e9), msg))
     refused = np.zeros(9)
     refused[0] = -1.0
-    messages.append(('/imu', IMU_TYPE, int(9e9), b.imu(9.0, (0, 0, 0, 1), cov=refused)))
+    messages.append(('/imu', bh.IMU_TYPE, int(9e9), b.imu(9.0, (0, 0, 0, 1), cov=refused)))
     for k in range(3):
-        messages.append(('/imu/none', IMU_TYPE, int((6 + k) * 1e9),
+        messages.append(('/imu/none', bh.IMU_TYPE, int((6 + k) * 1e9),
                          b.imu(6.0 + k, (0, 0, 0, 1), cov=np.zeros(9))))
         messages.append(('/pose', 'geometry_msgs/msg/PoseStamped', int((6 + k) * 1e9),
                          b.pose_stamped(6.0 + k, (1, 2, 3), (0, 0, 0, 1))))
@@ -347,7 +329,6 @@ def test_an_unknown_reading_is_refused(capsys):
     assert "argument --input-covariance: invalid choice: 'body'" in err.splitlines()[-1]
 
 
-# ---------------------------------------------------------------------------------------
 # Covariances at float64's ends
 
 
@@ -364,7 +345,7 @@ def extreme_bag(path):
             stamp = 3.0 + 0.05 * k
             msg = (b.imu(stamp, qk, cov=cov) if topic == '/imu' else
                    b.odometry(stamp, rng.normal(size=3), qk, cov=cov))
-            messages.append((topic, IMU_TYPE if topic == '/imu' else ODOM_TYPE,
+            messages.append((topic, bh.IMU_TYPE if topic == '/imu' else bh.ODOM_TYPE,
                              int(stamp * 1e9), msg))
     return bh.write_bag(path, messages), {t: (qs, np.array(c)) for t, (qs, c) in plan.items()}
 

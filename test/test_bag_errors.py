@@ -167,7 +167,6 @@ def test_tolerance_option(capsys, bad_bag):
         'no_orientation': 0}
 
 
-# ---------------------------------------------------------------------------------------
 # One line and exit status 2
 
 
@@ -177,11 +176,7 @@ def script():
 
 
 def one_line_error(script, *args, env=None, contains=''):
-    """
-    Assert that rot-tools ARGS prints one error line, nothing else, and exits with status 2.
-
-    Warnings count as lines; with ``env``, as the console script ``script``.
-    """
+    """Assert one error line, no warning, nothing else, status 2; with ``env``, by ``script``."""
     if env is None:
         out, err = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \

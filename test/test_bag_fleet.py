@@ -1,8 +1,4 @@
-"""
-rot-tools bag over many bags: --jobs, --parquet and its manifest, --engine dask, bags that fail.
-
-Whatever runs the per-bag jobs, the summary is the same byte for byte and the tables equal.
-"""
+"""rot-tools bag over many bags: --jobs, --parquet, --engine dask, bags that fail."""
 
 import contextlib
 import csv
@@ -342,11 +338,7 @@ sys.exit(main.main(sys.argv[1:]))
 
 
 def test_a_worker_killed_is_tried_again_once_and_a_rerun_owns_its_files(small, tmp_path):
-    """
-    --jobs 2: the worker of a.bag is killed once, b.bag's every time (as the OOM killer does).
-
-    a.bag is read again whole, b.bag failed; the Parquet directory and manifest are this run's.
-    """
+    """--jobs 2: a.bag's worker killed once is read again, b.bag's killed every time fails."""
     duckdb = pytest.importorskip('duckdb')
     root, paths = small
     for name in ('a', 'b', 'c'):

@@ -1,8 +1,4 @@
-"""
-rot-tools bag's checks of the motion: an Imu's orientation against its gyro, and positions.
-
-On the real recording, its IMU written w-first, and a falling odometry; expected by scipy.
-"""
+"""rot-tools bag's checks of an Imu's orientation against its gyro, and of positions."""
 
 import json
 import math
@@ -21,22 +17,9 @@ IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 
 
 def real_messages(topic):
-    """{'t': stamps (s), 'q': (n, 4), 'p': (n, 3) or None, 'gyro': (n, 3) or None}."""
-    from rosbags.highlevel import AnyReader
-    rows = {'t': [], 'q': [], 'p': [], 'gyro': []}
-    with AnyReader([bh.REAL]) as reader:
-        conns = [c for c in reader.connections if c.topic == topic]
-        for conn, _, raw in reader.messages(connections=conns):
-            msg = reader.deserialize(raw, conn.msgtype)
-            rows['t'].append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
-            if conn.msgtype == 'sensor_msgs/msg/Imu':
-                q, g = msg.orientation, msg.angular_velocity
-                rows['gyro'].append((g.x, g.y, g.z))
-            else:
-                q, p = msg.pose.pose.orientation, msg.pose.pose.position
-                rows['p'].append((p.x, p.y, p.z))
-            rows['q'].append((q.x, q.y, q.z, q.w))
-    return {k: np.array(v, float) if v else None for k, v in rows.items()}
+    """{'t': stamps (s), 'q', 'p', 'gyro'} of a topic of the real recording, decoded by rosbags."""
+    d = bh.decode()[topic]
+    return dict(d, t=d['stamp'])
 
 
 @pytest.fixture(scope='module')

@@ -1,8 +1,4 @@
-"""
-rot-tools bag --tf REFERENCE BODY: a TF chain recorded in a bag, through TransformTree.
-
-Lookups at the samples' stamps are checked against 4×4 products built with scipy.
-"""
+"""rot-tools bag --tf REFERENCE BODY: a TF chain in a bag, against 4×4 products (scipy)."""
 
 import csv
 import io

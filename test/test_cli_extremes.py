@@ -1,8 +1,4 @@
-"""
-rot-tools on the edges of float64: a report, or exactly one error line, and no warning ever.
-
-Warnings are errors here, in process; a sample runs again as the installed script.
-"""
+"""rot-tools on float64's edges: a report or one error line, never a warning."""
 
 import itertools
 from pathlib import Path

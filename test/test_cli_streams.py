@@ -1,8 +1,4 @@
-"""
-rot-tools' outputs and streams: the one output guard, a full or closed stdout, signals.
-
-The console script runs where Python's own exit takes part, this process otherwise.
-"""
+"""rot-tools' outputs and streams: the one output guard, a full or closed stdout, signals."""
 
 import io
 import os
@@ -43,7 +39,6 @@ def files(tmp_path_factory):
     return where
 
 
-# ---------------------------------------------------------------------------------------
 # The one output guard
 
 
@@ -167,7 +162,6 @@ def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, 
     assert left == ['metadata.yaml', 'rec_0.db3']
 
 
-# ---------------------------------------------------------------------------------------
 # A standard output that cannot be written: in this process, then as the console script
 
 COMMANDS = {
@@ -175,6 +169,8 @@ COMMANDS = {
     'covariance': ['covariance', 'quaternion', 0, 0, 0, 1, '--cov', 1e-4, 0, 0, 0, 1e-4, 0, 0,
                    0, 1e-4, '--from', 'rotvec', '--to', 'rpy'],
     'one-shot': ['euler', 'ZYX', 30, 20, 10, '--deg', '--all-sequences'],
+    'bag': ['bag', 'victim'],
+    'bag table': ['bag', 'victim', '--csv', '-'],
 }
 """A command line of each kind of command that prints to stdout, run in ``files``."""
 
@@ -252,7 +248,6 @@ def test_the_console_script_on_a_full_disk_and_a_closed_pipe(files):
         1, 'rot-tools: error: cannot write to stdout: No space left on device\n')
 
 
-# ---------------------------------------------------------------------------------------
 # Ctrl-C and SIGTERM
 
 

@@ -62,11 +62,7 @@ class Result(NamedTuple):
 
 
 class Here:
-    """
-    rotation_client's commands run in this process, in one rclpy context; ``here(*args)``.
-
-    One Client serves every command; a line with ROS arguments runs through ``main``.
-    """
+    """rotation_client's commands run in this process, in one rclpy context; ``here(*args)``."""
 
     def __init__(self, context):
         self.context = context
@@ -112,14 +108,6 @@ def one_line_error(result, status):
     lines = result.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith('rotation_client: '), result.stderr
     return lines[0]
-
-
-@pytest.fixture(scope='module')
-def here(ros_context):
-    """Run rotation_client's commands in this process (:class:`Here`)."""
-    runner = Here(ros_context)
-    yield runner
-    runner.close()
 
 
 @pytest.fixture(scope='module')
@@ -289,11 +277,7 @@ def test_screw_path_wxyz(here, node):
 
 
 def test_answer_is_matched_among_other_inputs(node, tester):
-    """
-    Check the answer to the client's input, while another publisher streams others.
-
-    Same frame: the outputs are told apart by stamp, the matrix by content.
-    """
+    """Check the answer to the client's input, while another publisher streams others."""
     pub = tester.publisher(f'{node}/orientation', QuaternionStamped)
     rng = np.random.default_rng(5)
     command = CLIENT + ['euler', 'ZYX', '0.1', '-0.2', '0.3', '--node', node]
@@ -671,16 +655,11 @@ def test_interrupt_exits_promptly_and_quietly(tester):
     assert interrupt(process) == (130, '', '')
 
 
-# ---------------------------------------------------------------------------------------
 # doc/client.md's examples are this output
 
 
 def console(here, *commands, names=()):
-    """
-    Return the transcript of rotation_client ``commands`` as doc/client.md shows it.
-
-    Each command is (shown, extra); ``names`` are (real, shown) node names.
-    """
+    """Return the transcript of ``commands``, each (shown, extra), as doc/client.md shows it."""
     lines = []
     for shown, extra in commands:
         result = here(*shown.split(), *extra)
@@ -709,7 +688,6 @@ def test_doc_examples(here, node):
         names=[shown, (absent, '/arm/rot_tools')]))
 
 
-# ---------------------------------------------------------------------------------------
 # The node's sentence on refusal, from ~/describe's data
 
 
@@ -743,7 +721,6 @@ def test_refusal_text_uses_the_nodes_sentence():
     assert refusal_text(data, {}, topic) == 'non_finite; non_unit_quaternion'
 
 
-# ---------------------------------------------------------------------------------------
 # Text beyond ASCII in the reports (rot_tools.io.report's YAML and JSON strings)
 
 

@@ -5,17 +5,9 @@ from pathlib import Path
 from conftest import TIMEOUT
 import numpy as np
 import pytest
-from test_client import Here
 
 COUNT = 2
 """Messages recorded on each topic."""
-
-
-@pytest.fixture(scope='module')
-def here(ros_context):
-    runner = Here(ros_context)
-    yield runner
-    runner.close()
 
 
 class Messages:

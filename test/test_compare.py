@@ -1,8 +1,4 @@
-"""
-rot-tools compare: evo's numbers, a recorded time offset, a simulated mounting, bad inputs.
-
-evo's Python API is the reference; without evo those tests skip.
-"""
+"""rot-tools compare: evo's numbers, a time offset, a simulated mounting, bad inputs."""
 
 import json
 from pathlib import Path
@@ -103,7 +99,7 @@ def ours(capsys, *args):
 
 
 def assert_as_evo(mine, evo):
-    assert mine['pairs'] == evo['pairs'] and mine['alignment'] == 'se3'
+    assert mine['pairs'] == evo['pairs'] > 800 and mine['alignment'] == 'se3'
     for metric in ('ape', 'rpe'):
         for key in STATS:
             assert abs(mine[metric][key] - evo[metric][key]) <= 1e-6, (metric, key)
@@ -124,7 +120,6 @@ def test_tum_files_give_evos_numbers(capsys, tmp_path, streams, longer):
     mine = ours(capsys, est_path, ref_path)
     evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path),
                       file_interface.read_tum_trajectory_file(est_path))
-    assert mine['pairs'] > 800
     assert_as_evo(mine, evo)
 
 
@@ -136,7 +131,6 @@ def test_euroc_file_gives_evos_numbers(capsys, tmp_path, streams):
     mine = ours(capsys, est_path, ref_path)
     evo = evo_numbers(file_interface.read_euroc_csv_trajectory(ref_path),
                       file_interface.read_tum_trajectory_file(est_path))
-    assert mine['pairs'] > 800
     assert_as_evo(mine, evo)
 
 
@@ -151,7 +145,6 @@ def test_bag_topic_gives_evos_numbers_and_its_tf_the_same(capsys, tmp_path, stre
     with Reader(bag) as reader:
         est = file_interface.read_bag_trajectory(reader, '/est/pose')
     evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path), est)
-    assert mine['pairs'] > 800
     assert_as_evo(mine, evo)
     by_tf = ours(capsys, bag, ref_path, '--est-tf', 'map', 'body')
     for metric in ('ape', 'rpe'):

@@ -1,8 +1,4 @@
-"""
-The node and client outputs shown in doc/node.md and doc/client.md, produced for real.
-
-Each tagged block runs against a rotation_node process of this run; ``...`` matches any text.
-"""
+"""The node and client outputs shown in doc/node.md and doc/client.md, produced for real."""
 
 import re
 import shlex

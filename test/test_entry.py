@@ -1,8 +1,4 @@
-"""
-How rotation_node starts and stops: its console script, its arguments, its signals.
-
-Bad arguments are one line and status 2; a signal at any moment ends it, none left behind.
-"""
+"""How rotation_node starts and stops: its console script, its arguments, its signals."""
 
 import os
 from pathlib import Path
@@ -45,7 +41,6 @@ def test_console_scripts_point_at_plain_main_functions():
     assert scripts['rotation_client'] == 'rot_tools.ros.client.rotation_client:main'
 
 
-# ---------------------------------------------------------------------------------------
 # Signals, from the first millisecond to after the ready line
 
 READY = 'decomposing'
@@ -120,11 +115,7 @@ class Started:
 
 
 def signal_at(command, env, when, sig):
-    """
-    Start the node, send ``sig`` at ``when``; return what went wrong, or None.
-
-    ``when``: seconds after the start, 'ready' or 'ready + 100 ms'.
-    """
+    """Start the node, send ``sig`` at ``when`` (seconds, or 'ready'); return what went wrong."""
     node = Started(command, env)
     try:
         if isinstance(when, str):
@@ -162,11 +153,7 @@ def signal_at(command, env, when, sig):
 
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
-    """
-    Check that a signal at any of 12 moments of the start-up and the run ends the node cleanly.
-
-    Once up: status 0, nothing on stderr but the ready line; before, Python's own handling.
-    """
+    """Check that a signal at any of 12 moments of its start-up and run ends the node cleanly."""
     command = NODE_COMMANDS.get('console script', NODE_COMMANDS['python -m'])
     command = [*command, '--ros-args', '-r', f'__ns:=/{RUN}/sweep_{sig.name.lower()}']
     env = script_env(command)
@@ -180,7 +167,6 @@ def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
     assert not wrong, '\n'.join(wrong)
 
 
-# ---------------------------------------------------------------------------------------
 # Arguments
 
 BAD_ROS_ARGUMENTS = {

@@ -1,8 +1,4 @@
-"""
-A fleet ended by a signal: no worker left, no file left half written, the caller sees EOF.
-
-SIGTERM or SIGKILL once two workers are up (--jobs 2, or --engine dask): no CSV, no manifest.
-"""
+"""A fleet ended by a signal: no worker left, no file half written, the caller sees EOF."""
 
 from pathlib import Path
 import shutil

@@ -1,8 +1,4 @@
-"""
-rot-tools imu-check end to end, in-process: faulty copies of the real recording, bad input.
-
-Each fault (accelerometer in g, gyro in deg/s, NED, no orientation) is found and its fix said.
-"""
+"""rot-tools imu-check in-process: faulty copies of the real recording, bad input."""
 
 import json
 import math
@@ -20,7 +16,6 @@ from rot_tools.core.stamps import plain  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
-IMU_TYPE, ODOM_TYPE = 'sensor_msgs/msg/Imu', 'nav_msgs/msg/Odometry'
 
 WINDOW = (0.0, 20.0)
 """The seconds of the real recording (from its first IMU stamp) written into the test bags."""
@@ -32,39 +27,23 @@ G = 9.80665
 
 
 class Recording:
-    """The real recording's window as arrays: record times (ns), stamps (s), fields."""
+    """The real recording's window, decoded by rosbags: record times (ns), stamps (s), fields."""
 
-    def __init__(self, imu, odom):
-        self.imu_record, self.imu_stamp = imu[:, 0].astype(np.int64), imu[:, 1]
-        self.q, self.gyro, self.accel = imu[:, 2:6], imu[:, 6:9], imu[:, 9:12]
+    def __init__(self):
+        real = bh.decode()
+        imu, odom = real[IMU], real[ODOM]
+        t0 = imu['stamp'][0]
+        keep = (imu['stamp'] >= t0 + WINDOW[0]) & (imu['stamp'] < t0 + WINDOW[1])
+        self.imu_record, self.imu_stamp = imu['record'][keep], imu['stamp'][keep]
+        self.q, self.gyro, self.accel = imu['q'][keep], imu['gyro'][keep], imu['accel'][keep]
+        keep = (odom['stamp'] >= t0 + WINDOW[0]) & (odom['stamp'] < t0 + WINDOW[1])
         self.odom_record, self.odom_stamp, self.odom_q = (
-            odom[:, 0].astype(np.int64), odom[:, 1], odom[:, 2:6])
-
-
-def read_real():
-    """Read the window of the real recording with rosbags (not through rot_tools)."""
-    from rosbags.highlevel import AnyReader
-    imu, odom = [], []
-    with AnyReader([bh.REAL]) as reader:
-        for conn, record, raw in reader.messages():
-            m = reader.deserialize(raw, conn.msgtype)
-            stamp = m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
-            if conn.topic == IMU:
-                o, w, a = m.orientation, m.angular_velocity, m.linear_acceleration
-                imu.append((record, stamp, o.x, o.y, o.z, o.w, w.x, w.y, w.z, a.x, a.y, a.z))
-            elif conn.topic == ODOM:
-                o = m.pose.pose.orientation
-                odom.append((record, stamp, o.x, o.y, o.z, o.w))
-    imu, odom = np.array(imu), np.array(odom)
-    t0 = imu[0, 1]
-    keep_imu = (imu[:, 1] >= t0 + WINDOW[0]) & (imu[:, 1] < t0 + WINDOW[1])
-    keep_odom = (odom[:, 1] >= t0 + WINDOW[0]) & (odom[:, 1] < t0 + WINDOW[1])
-    return Recording(imu[keep_imu], odom[keep_odom])
+            odom['record'][keep], odom['stamp'][keep], odom['q'][keep])
 
 
 @pytest.fixture(scope='module')
 def real():
-    return read_real()
+    return Recording()
 
 
 @pytest.fixture(scope='module')
@@ -78,23 +57,24 @@ def clean(real, tmp_path_factory):
 def imu_message(b, stamp, q, gyro, accel, cov0=0.0, frame='base_link'):
     covariance = np.zeros(9)
     covariance[0] = cov0
-    return b.make(IMU_TYPE, header=b.header(stamp, frame), orientation=b.quaternion(q),
+    return b.make(bh.IMU_TYPE, header=b.header(stamp, frame), orientation=b.quaternion(q),
                   orientation_covariance=covariance, angular_velocity=b.vector(gyro),
                   angular_velocity_covariance=np.zeros(9), linear_acceleration=b.vector(accel),
                   linear_acceleration_covariance=np.zeros(9))
 
 
 def write(path, rec, q=None, gyro=None, accel=None, cov0=0.0, odom=False, topic=IMU,
-          more=(), storage='sqlite3'):
+          more=(), storage='sqlite3', stamps=None):
     """Write the window as a rosbag2 bag, the IMU's fields replaced by those given."""
     b = bh.Builder()
+    stamps = rec.imu_stamp if stamps is None else stamps
     q = rec.q if q is None else q
     gyro = rec.gyro if gyro is None else gyro
     accel = rec.accel if accel is None else accel
-    messages = [(topic, IMU_TYPE, int(t), imu_message(b, s, q[k], gyro[k], accel[k], cov0))
-                for k, (t, s) in enumerate(zip(rec.imu_record, rec.imu_stamp))]
+    messages = [(topic, bh.IMU_TYPE, int(t), imu_message(b, s, q[k], gyro[k], accel[k], cov0))
+                for k, (t, s) in enumerate(zip(rec.imu_record, stamps))]
     if odom:
-        messages += [(ODOM, ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), rec.odom_q[k]))
+        messages += [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), rec.odom_q[k]))
                      for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))]
     messages += list(more)
     messages.sort(key=lambda m: m[2])
@@ -332,7 +312,7 @@ def odometry_bag(path, rec, shift=0.0):
     """Write the window's odometry alone as a rosbag2 bag, stamps and record times shifted."""
     b = bh.Builder()
     return bh.write_bag(path, [
-        (ODOM, ODOM_TYPE, int(t + shift * 1e9), b.odometry(s + shift, (0, 0, 0), rec.odom_q[k]))
+        (ODOM, bh.ODOM_TYPE, int(t + shift * 1e9), b.odometry(s + shift, (0, 0, 0), rec.odom_q[k]))
         for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))])
 
 
@@ -388,7 +368,7 @@ def test_recordings_that_do_not_overlap_are_refused(real, clean, tmp_path, capsy
 def test_topics_stamped_a_day_apart_are_refused(real, tmp_path, capsys):
     """Two bags merged by hand: each topic's stamps are of its own run."""
     b = bh.Builder()
-    later = [(ODOM, ODOM_TYPE, int(t), b.odometry(s + DAY, (0, 0, 0), q))
+    later = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(s + DAY, (0, 0, 0), q))
              for t, s, q in zip(real.odom_record, real.odom_stamp, real.odom_q)]
     bag = write(tmp_path / 'merged', real, more=later)
     imu_ns = np.round(real.imu_stamp * 1e9).astype(np.int64)
@@ -429,12 +409,12 @@ def test_missing_path_and_files_that_are_not_bags(tmp_path, capsys):
 
 def test_bag_without_an_imu_and_with_two(real, tmp_path, capsys):
     b = bh.Builder()
-    odometry = [(ODOM, ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), real.odom_q[k]))
+    odometry = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), real.odom_q[k]))
                 for k, (t, s) in enumerate(zip(real.odom_record[:20], real.odom_stamp[:20]))]
     bag = bh.write_bag(tmp_path / 'odom_only', odometry)
     one_error_line(*run_cli(capsys, 'imu-check', bag),
                    'no sensor_msgs/msg/Imu topic in the bag', ODOM)
-    imu = [(topic, IMU_TYPE, int(t), imu_message(b, s, real.q[k], real.gyro[k], real.accel[k]))
+    imu = [(topic, bh.IMU_TYPE, int(t), imu_message(b, s, real.q[k], real.gyro[k], real.accel[k]))
            for topic in ('/imu/a', '/imu/b')
            for k, (t, s) in enumerate(zip(real.imu_record[:20], real.imu_stamp[:20]))]
     bag = bh.write_bag(tmp_path / 'two', imu + odometry)
@@ -481,7 +461,7 @@ def test_messages_left_out_are_told_before_an_error_of_the_reference(real, tmp_p
     gyro = real.gyro.copy()
     gyro[3] = np.nan
     b = bh.Builder()
-    frozen = [(ODOM, ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
+    frozen = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
               for t, q in zip(real.odom_record, real.odom_q)]
     bag = write(tmp_path / 'frozen', real, gyro=gyro, more=frozen)
     status, out, err = run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM)
@@ -504,7 +484,7 @@ def test_a_finite_spike_is_left_out_as_a_nan_is(real, tmp_path, capsys):
 
 def test_a_reference_with_one_stamp_is_named(real, tmp_path, capsys):
     b = bh.Builder()
-    frozen = [(ODOM, ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
+    frozen = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
               for t, q in zip(real.odom_record, real.odom_q)]
     bag = write(tmp_path / 'frozen', real, more=frozen)
     one_error_line(*run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM),
@@ -515,9 +495,7 @@ def test_a_reference_with_one_stamp_is_named(real, tmp_path, capsys):
 def test_the_rate_is_the_stamps_rate(real, tmp_path, capsys):
     stamp = real.imu_stamp.copy()
     stamp[500:] += 100.0  # a gap of 100 s: over the whole span, 8 messages a second
-    rec = Recording(np.column_stack([real.imu_record, stamp, real.q, real.gyro, real.accel]),
-                    np.zeros((0, 6)))
-    bag = write(tmp_path / 'gap', rec)
+    bag = write(tmp_path / 'gap', real, stamps=stamp)
     status, out, err = run_cli(capsys, 'imu-check', bag)
     assert status == 1 and err == ''
     assert out.startswith(f'imu: {IMU} (frame base_link), {len(stamp)} messages, 50 Hz\n')
@@ -531,9 +509,7 @@ def test_stamps_taken_on_arrival_are_shown(real, tmp_path, capsys):
     steps = np.where(np.random.default_rng(5).random(len(real.imu_stamp) - 1) < 0.5,
                      0.018, 0.022)
     stamp = real.imu_stamp[0] + np.concatenate([[0.0], np.cumsum(steps)])
-    rec = Recording(np.column_stack([real.imu_record, stamp, real.q, real.gyro, real.accel]),
-                    np.zeros((0, 6)))
-    status, out, err = run_cli(capsys, 'imu-check', write(tmp_path / 'bursts', rec))
+    status, out, err = run_cli(capsys, 'imu-check', write(tmp_path / 'bursts', real, stamps=stamp))
     rate = f'{1 / np.median(steps):.4g} Hz'
     assert out.startswith(f'imu: {IMU} (frame base_link), {len(stamp)} messages, {rate}\n')
     row = re.search(r'\nstamps +ok +(.*)', out).group(1)

@@ -1,8 +1,4 @@
-"""
-What the package imports, and what the tests need of the machine.
-
-core and io import no ROS, no import points up, no module uses another library's ``_`` names.
-"""
+"""What the package imports, and what the tests need of the machine."""
 
 import ast
 import os

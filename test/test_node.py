@@ -1,8 +1,4 @@
-"""
-rotation_node over real DDS: node and tester in two rclpy contexts, one namespace a test.
-
-Expected values from the math module and, independently, scipy's Rotation, to 1e-12.
-"""
+"""rotation_node over real DDS, against the math module and scipy's Rotation."""
 
 import math
 import time
@@ -48,10 +44,11 @@ STAMPED = ALWAYS[1:]
 # Messages and expected values
 
 
-def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map'):
+def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map', stamp=0):
     """Build a PoseStamped with quaternion q = (x, y, z, w) and position p."""
     msg = PoseStamped()
     msg.header.frame_id = frame
+    msg.header.stamp.sec = stamp
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
     o = msg.pose.orientation
     o.x, o.y, o.z, o.w = map(float, q)

@@ -119,11 +119,7 @@ say(sent)
 
 
 class Flood:
-    """
-    Publishes ``poses`` in turn on ``topic`` at about ``rate`` msg/s, from a process.
-
-    ``rate`` 'max': back to back, ``count`` messages at most. Stamps count up from 1_000_000.
-    """
+    """Publishes ``poses`` on ``topic`` at ``rate`` msg/s ('max': ``count`` back to back)."""
 
     def __init__(self, topic, poses, rate=2000.0, count=-1):
         data = json.dumps([(_quaternion(m), _position(m), m.header.frame_id) for m in poses])
@@ -498,11 +494,7 @@ def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(
 
 def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signal(
         tester, node_process):
-    """
-    Ten ~/screw_path requests of MAX_PATH_STEPS + 1 poses each, queued, then ~/describe.
-
-    describe is answered before the tenth path; SIGINT with ten more queued ends cleanly.
-    """
+    """Ten largest ~/screw_path requests queued: describe answered first; SIGINT ends cleanly."""
     from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
     process = node_process()
     wait_until_serving(tester, process)

@@ -1,8 +1,4 @@
-"""
-rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
-
-Expected values from the input alone (scipy's Rotation and the closed-form screw), not rot_tools.
-"""
+"""rotation_node's ~/markers and ~/screw_axis, expected from the input alone."""
 
 import math
 import time

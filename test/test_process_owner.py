@@ -1,8 +1,4 @@
-"""
-rot_tools leaves the process and the wire to their owners and speaks to libraries by name.
-
-Read from each module's syntax tree.
-"""
+"""rot_tools leaves the process and the wire to their owners (read from its syntax trees)."""
 
 import ast
 import io

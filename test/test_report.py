@@ -39,7 +39,6 @@ def _json_loads(text):
     return json.loads(text, parse_constant=_no_constants)
 
 
-# ---------------------------------------------------------------------------------------
 # transform_report
 
 
@@ -249,7 +248,6 @@ def test_bad_input_raises(args, match):
         transform_report(*args)
 
 
-# ---------------------------------------------------------------------------------------
 # Numbers and text
 
 

@@ -135,7 +135,6 @@ def test_a_non_rotation_is_refused():
         matrix_to_rodrigues(np.diag([1.0, 1.0, -1.0]))
 
 
-# ---------------------------------------------------------------------------------------
 # rot-tools rodrigues and the report
 
 
