@@ -4,6 +4,7 @@ import errno
 import gc
 import io
 import itertools
+import json
 import os
 from pathlib import Path
 import secrets
@@ -63,6 +64,13 @@ def run_cli(capsys, *args):
     status = main([str(a) for a in args])
     out, err = capsys.readouterr()
     return status, out, err
+
+
+def strict_json(text):
+    """Parse JSON text; NaN and Infinity, which json.loads accepts by default, fail."""
+    def refuse(name):
+        raise ValueError(f'{name} is not JSON')
+    return json.loads(text, parse_constant=refuse)
 
 
 def rss_mb(pid='self'):

@@ -527,8 +527,7 @@ def test_sensor_data_publisher_is_served(rig):
     q, p = POSE_CASES['general']
     msg = pose_stamped(q, p)
     msg.header.stamp.sec = 4242
-    # Best effort both ways: resend until the node has seen one (a first sample may race
-    # the reader's side of the match).
+    # Best effort both ways: resend until the node has seen one.
     deadline = time.monotonic() + 5.0
     while not rig.received('screw') and time.monotonic() < deadline:
         pub.publish(msg)

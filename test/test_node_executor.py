@@ -50,9 +50,7 @@ BAD = [pose((math.nan, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 0.0, 0.0)),
 
 FLOODER = """
 import json, os, signal, sys, time
-# This process's stdout carries only its own lines ('ready', counts): Fast DDS logs to
-# stdout (e.g. a shared-memory port it could not lock, and then does without), so the
-# middleware's stdout is sent to stderr.
+# stdout carries only this process's lines ('ready', counts): Fast DDS's logs go to stderr.
 protocol = os.fdopen(os.dup(1), 'w')
 os.dup2(2, 1)
 
@@ -61,9 +59,7 @@ def say(line):
     print(line, file=protocol, flush=True)
 
 
-# SIGINT ends the flood, even where this process was started with SIGINT ignored (a
-# background job of a non-interactive shell): between two messages, so that the count says
-# exactly what was published (a KeyboardInterrupt could come between a publish and its count).
+# SIGINT (even if ignored at start) ends the flood between two messages: the count is exact.
 stopped = []
 signal.signal(signal.SIGINT, lambda signum, frame: stopped.append(signum))
 import rclpy
@@ -72,8 +68,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 topic, rate, count = sys.argv[1], sys.argv[2], int(sys.argv[6])
 poses = json.loads(sys.argv[3])  # (NaN and Infinity included)
-# No rclpy signal handler: it would shut the context down on SIGINT before Python raises
-# KeyboardInterrupt, and a publish in between would fail.
+# No rclpy signal handler: it would shut the context down before the flood stops.
 rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
 node = rclpy.create_node('flooder', namespace=sys.argv[4])
 pub = node.create_publisher(PoseStamped, topic, qos_profile_sensor_data)
@@ -312,8 +307,7 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
         while not held.is_set():  # (best effort: sent until one arrives)
             pub.publish(pose(frame='hold'))
             assert held.wait(0.1) or thread.is_alive()
-        # Held first, then flooded: a flood started before could all be sent, and taken by the
-        # running loop, before 'hold' arrived (a loaded machine's stock run: none kept after).
+        # Held first, then flooded: else the running loop could take the flood before 'hold'.
         with Flood(f'{prefix}/pose', GOOD, rate='max', count=HELD_FLOOD) as flood:
             before = rss_mb()
             assert flood.wait_sent() == HELD_FLOOD
@@ -321,10 +315,7 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
             release.set()
             assert growth < HELD_GROWTH_MB, f'{growth:.1f} MB for {HELD_FLOOD} inputs held'
             # And the node serves on: the flood's last inputs, queued behind 'hold', are taken
-            # (while the flood's publisher is still there: the middleware drops what a reader
-            # kept from a writer once that writer is gone). Services come first: a describe
-            # may be answered before them, or even between 'hold' and them when 'hold' ended
-            # a burst; ask again until they are in.
+            # (asked again until in: services may be served first).
             deadline = time.monotonic() + TIMEOUT
             report = describe(tester, prefix)
             while report['stamp']['sec'] < 1_000_000 and time.monotonic() < deadline:
@@ -371,10 +362,7 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
         assert response is not None, 'no answer from ~/describe'
         return yaml.safe_load(response.message)['refused']['total']
 
-    # A subscriber on an output, as a user's RViz or recorder: in a participant of its own,
-    # as it would be. Sharing the caller's, the node's outputs at the flood's pace would fill
-    # its receive queues, and a reply dropped there comes again only at the node's next
-    # heartbeat (the caller's loss: no node can repair it).
+    # A subscriber on an output, as a user's RViz or recorder, in a participant of its own.
     listener = rclpy.create_node('listener', namespace=f'/{RUN}', context=own_context)
     listener.create_subscription(TwistStamped, f'{name}/screw', lambda msg: None, 10)
     tester.spin_until(lambda: tester.node.count_subscribers(f'{name}/screw') >= 1,
@@ -392,11 +380,8 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
                 counts.append(refused())
     listener.destroy_node()
     lags = [b - a for a, b in zip(counts, counts[1:])]
-    # Three answers in four: a lag may come from outside the node (this test or a DDS thread
-    # descheduled by another process on the two cores, or a request or reply lost and sent
-    # again at its writer's next heartbeat, 3 s later: the node handles inputs meanwhile);
-    # the defect guarded against delays every answer. (Seen with both suites at once: 1387
-    # among lags of 23-88; another time three of 7971-10321 among sixteen of 8-40.)
+    # Three answers in four: a lag may come from outside the node (a descheduled thread, a
+    # reply resent at the next heartbeat); the defect guarded against delays every answer.
     slow = [lag for lag in lags if lag > SERVED_WITHIN]
     assert len(slow) <= len(lags) // 4, f'inputs between two answers: {lags}'
     assert process.process.poll() is None
