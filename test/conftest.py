@@ -66,6 +66,15 @@ def run_cli(capsys, *args):
     return status, out, err
 
 
+def one_error(capsys, *args, contains=''):
+    """Run rot-tools here: status 2, no stdout, one error line holding ``contains``; return it."""
+    status, out, err = run_cli(capsys, *args)
+    assert (status, out) == (2, ''), err
+    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
+    assert contains in err, err
+    return err
+
+
 def strict_json(text):
     """Parse JSON text; NaN and Infinity, which json.loads accepts by default, fail."""
     def refuse(name):

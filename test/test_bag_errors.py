@@ -5,7 +5,6 @@ Bad messages of every type read, damaged, empty and missing bags, wrong options:
 traceback nor a warning.
 """
 
-import contextlib
 import csv
 import io
 import json
@@ -14,7 +13,6 @@ import os
 import re
 import subprocess
 import sys
-import warnings
 
 import bag_helpers as bh
 from conftest import console_script, script_env
@@ -22,10 +20,10 @@ import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io.boundary import QUATERNION_TOLERANCE  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
+from test_cli import run  # noqa: E402
 
 TOL = QUATERNION_TOLERANCE
 RNG = np.random.default_rng(18)
@@ -178,15 +176,7 @@ def script():
 def one_line_error(script, *args, env=None, contains=''):
     """Assert one error line, no warning, nothing else, status 2; with ``env``, by ``script``."""
     if env is None:
-        out, err = io.StringIO(), io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
-                warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter('always')
-            status = cli.main([str(a) for a in args])
-        shown = err.getvalue() + ''.join(warnings.formatwarning(w.message, w.category,
-                                                                w.filename, w.lineno)
-                                         for w in caught)
-        proc = subprocess.CompletedProcess(args, status, out.getvalue(), shown)
+        proc = run(*args)  # in this process, Python's warnings on stderr
     else:
         proc = subprocess.run(script + [str(a) for a in args], capture_output=True, text=True,
                               timeout=120, env=env)

@@ -14,7 +14,7 @@ import sys
 import threading
 
 import bag_helpers as bh
-from conftest import console_script, run_cli, script_env
+from conftest import console_script, one_error, run_cli, script_env
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import numpy as np
 import pytest
@@ -214,8 +214,8 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypat
     """Each address is one line and status 2, within the connect bound (set to 0.3 s)."""
     root, paths = small
     monkeypatch.chdir(root)
-    status, out, err = run_cli(capsys, 'bag', *paths, '--scheduler', 'tcp://127.0.0.1:8786')
-    assert (status, out) == (2, '') and err.count('\n') == 1 and '--engine dask' in err
+    one_error(capsys, 'bag', *paths, '--scheduler', 'tcp://127.0.0.1:8786',
+              contains='--engine dask')
     status, out, err = run_cli(capsys, 'bag', *paths, '--engine', 'dask', '--scheduler', '')
     assert (status, out, err) == (2, '', "rot-tools: error: --scheduler '': no address (a "
                                   "Dask scheduler's, such as tcp://HOST:8786)\n")
@@ -393,8 +393,7 @@ def test_one_bag_alone_keeps_its_rules(small, capsys, monkeypatch):
     root, paths = small
     monkeypatch.chdir(root)
     Path('alone.bag').write_bytes(b'not a bag at all')
-    status, out, err = run_cli(capsys, 'bag', 'alone.bag', '--jobs', '2')
-    assert (status, out) == (2, '') and err.count('\n') == 1
+    err = one_error(capsys, 'bag', 'alone.bag', '--jobs', '2')
     assert err.startswith('rot-tools: error: bag: alone.bag: ')
     alone = run_cli(capsys, 'bag', paths[0])
     assert run_cli(capsys, 'bag', paths[0], '--jobs', '2', '--engine', 'processes') == alone
@@ -404,12 +403,10 @@ def test_one_bag_alone_keeps_its_rules(small, capsys, monkeypatch):
 def test_options_that_take_one_bag_or_a_count(small, capsys, monkeypatch):
     root, paths = small
     monkeypatch.chdir(root)
-    status, out, err = run_cli(capsys, 'bag', *paths, '--plot', 'rpy.png')
-    assert (status, out) == (2, '') and err.count('\n') == 1 and '--plot draws one bag' in err
+    one_error(capsys, 'bag', *paths, '--plot', 'rpy.png', contains='--plot draws one bag')
     assert not (root / 'rpy.png').exists()
     for jobs in ('0', '-1', 'two'):
-        status, out, err = run_cli(capsys, 'bag', paths[0], '--jobs', jobs)
-        assert (status, out) == (2, '') and 'must be a whole number >= 1' in err
+        one_error(capsys, 'bag', paths[0], '--jobs', jobs, contains='must be a whole number >= 1')
 
 
 def test_directories_are_searched_for_bags_in_path_order(small, tmp_path, capsys,
@@ -434,8 +431,7 @@ def test_directories_are_searched_for_bags_in_path_order(small, tmp_path, capsys
                      *bare, str(tree / 'a.bag')]
     assert fleet.find_bags([str(tree / 'b' / 'mcap')]) == ([str(tree / 'b' / 'mcap')], False)
     monkeypatch.chdir(tmp_path)
-    status, out, err = run_cli(capsys, 'bag', 'tree/c')
-    assert (status, out) == (2, '') and err.count('\n') == 1 and 'no bag' in err
+    one_error(capsys, 'bag', 'tree/c', contains='no bag')
     status, out, err = run_cli(capsys, 'bag', 'tree', '--jobs', '1', '--json')
     assert (status, err) == (0, '')
     data = json.loads(out)
@@ -547,8 +543,8 @@ def test_a_failed_run_of_one_bag_leaves_no_directory_that_reads_as_ok(
     shutil.copy(root / paths[0], 'x.bag')
     assert run_cli(capsys, 'bag', 'x.bag', '--parquet', 'pq')[0] == 0
     Path('x.bag').write_bytes(b'\0' * 100)  # damaged since
-    status, out, err = run_cli(capsys, 'bag', 'x.bag', '--parquet', 'pq')
-    assert (status, out) == (2, '') and err.startswith('rot-tools: error: bag: x.bag: ')
+    err = one_error(capsys, 'bag', 'x.bag', '--parquet', 'pq')
+    assert err.startswith('rot-tools: error: bag: x.bag: ')
     assert sorted(p.name for p in Path('pq').iterdir()) == ['_manifest.json']
     assert manifest('pq') == {'bags': [{'path': 'x.bag', 'status': 'failed', 'file': None}],
                               'files': []}

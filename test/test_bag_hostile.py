@@ -11,7 +11,8 @@ import subprocess
 import xml.etree.ElementTree as ElementTree
 
 import bag_helpers as bh
-from conftest import console_script, run_cli, script_env
+from conftest import console_script, one_error, run_cli, script_env
+from math_helpers import unit
 import numpy as np
 import pytest
 
@@ -20,19 +21,6 @@ from rot_tools.cli import bag_analysis, bag_output  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 import yaml  # noqa: E402,I100
-
-
-def one_error(capsys, *args, contains=''):
-    status, out, err = run_cli(capsys, *args)
-    assert (status, out) == (2, ''), err
-    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
-    assert contains in err, err
-    return err
-
-
-def unit(q):
-    q = np.asarray(q, float)
-    return q / np.linalg.norm(q)
 
 
 def pose_bag(path, stamps, frames=('map',), topic='/pose', storage='sqlite3'):

@@ -9,7 +9,7 @@ import sys
 import time
 
 import bag_helpers as bh
-from conftest import console_script, live_pids, run_cli, script_env
+from conftest import console_script, live_pids, one_error, run_cli, script_env
 import numpy as np
 import pytest
 import rot_tools as rt
@@ -146,8 +146,8 @@ def test_force_writes_over_a_recording(files, recordings, capsys, monkeypatch):
 def test_force_does_not_let_an_output_overwrite_an_input(files, capsys, monkeypatch):
     monkeypatch.chdir(files)
     storage = next(Path('victim').glob('*.db3'))
-    status, out, err = run_cli(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force')
-    assert (status, out) == (2, '') and 'would overwrite the bag being read' in err
+    one_error(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force',
+              contains='would overwrite the bag being read')
 
 
 def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, capsys,

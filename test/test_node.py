@@ -232,6 +232,15 @@ class Rig:
             what=f'outputs of input {stamp}')
         return {name: self.received(name)[-1] for name in names}
 
+    def output_of(self, name, stamp):
+        """Wait for output ``name`` (one message) of the input stamped ``stamp``; return it."""
+        def stamped(msg):
+            return (msg.markers[0] if name == 'markers' else msg).header.stamp.sec == stamp
+        self.tester.spin_until(lambda: any(map(stamped, self.received(name))),
+                               what=f'~/{name} of input {stamp}')
+        (msg,) = filter(stamped, self.received(name))
+        return msg
+
     def roundtrip(self, kind, msg, marker=True):
         """send() then outputs()."""
         return self.outputs(self.send(kind, msg), marker)
