@@ -710,8 +710,7 @@ def test_refusal_text_uses_the_nodes_sentence():
     assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic) == sentence
     # Not counted since: nothing.
     assert refusal_text(data, {'non_unit_quaternion': 2, 'non_finite': 1}, topic) == ''
-    # Another message refused for that reason last (another stamp, another topic): the
-    # reason's name alone, never someone else's sentence.
+    # Another message refused last for that reason: the reason's name, never its sentence.
     assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic, {(7, 8)}) == (
         'non_unit_quaternion')
     assert refusal_text(data, {}, topic, {(7, 9)}) == f'non_finite; {sentence}'

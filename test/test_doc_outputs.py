@@ -51,18 +51,11 @@ def run_client_block(name, node_name):
     return ''.join(shown)
 
 
-def test_readme_client(tmp_path):
-    process = NodeProcess(tmp_path)  # a fresh node: its first input is the README's
+@pytest.mark.parametrize('block', ['readme-client', 'node-describe'])
+def test_client_block_on_a_fresh_node(tmp_path, block):
+    process = NodeProcess(tmp_path)  # its first input is the block's, nothing refused before
     try:
-        assert_doc_output('readme-client', run_client_block('readme-client', process.name))
-    finally:
-        process.kill()
-
-
-def test_node_describe(tmp_path):
-    process = NodeProcess(tmp_path)  # a node of its own: nothing refused before
-    try:
-        assert_doc_output('node-describe', run_client_block('node-describe', process.name))
+        assert_doc_output(block, run_client_block(block, process.name))
     finally:
         process.kill()
 

@@ -177,10 +177,7 @@ def describe(tester, name):
 
 SIGNALLED_FLOODS = {'good and bad, 3000 msg/s': (GOOD + BAD, 3000.0),
                     'good, back to back': (GOOD, 'max')}
-"""The floods a node is signalled under: the signal lands in the middleware's take, a
-callback, a publish or a refusal's warning (a SIGINT in rclpy's take_message once came out
-as a traceback). An idle node is signalled at test_entry's 'ready' and 'ready + 100 ms',
-and after a flood by this module's other tests."""
+"""The floods a node is signalled under (an idle node: test_entry's sweep)."""
 
 
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
@@ -238,8 +235,7 @@ def test_a_flood_of_bad_input_is_refused_and_the_node_keeps_serving(tester, node
     begin = time.monotonic()
     with Flood(f'{name}/pose', BAD, rate=3000.0) as flood:
         time.sleep(2.0)
-    # Inputs are best effort and a flood beyond the node's pace loses some: every reason
-    # must be counted, never more than were sent.
+    # Best effort, some lost: every reason counted, never more than were sent.
     reasons = ('non_finite', 'zero_quaternion', 'non_unit_quaternion')
     refused = {}
     deadline = time.monotonic() + TIMEOUT

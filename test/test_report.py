@@ -94,9 +94,8 @@ def test_quaternion_is_scipys_canonical_one_in_ros_order(axis, angle):
     R = axis_angle_to_matrix(axis, angle)
     rep = transform_report(R)['quaternion']
     q = np.array([rep['x'], rep['y'], rep['z'], rep['w']])
-    # Independent of rot_tools: the closed form (sin(θ/2)·l̂, cos(θ/2)) and scipy. Away from
-    # π the sign is fixed (w > 0); at π rounding of R decides it, so compare up to sign and
-    # check the canonical rule: w > 0, or w = 0 and the first non-zero of x, y, z positive.
+    # The closed form (sin(θ/2)·l̂, cos(θ/2)) and scipy; at π (rounding of R decides the sign)
+    # up to sign, and the canonical rule: w > 0, or w = 0 and the first non-zero positive.
     expected = np.append(math.sin(angle / 2) * axis, math.cos(angle / 2))
     reference = Rotation.from_matrix(R).as_quat(canonical=True)
     if angle < math.pi:
