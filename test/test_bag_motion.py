@@ -16,10 +16,10 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 
 
-def real_messages(topic):
-    """{'t': stamps (s), 'q', 'p', 'gyro'} of a topic of the real recording, decoded by rosbags."""
-    d = bh.decode()[topic]
-    return dict(d, t=d['stamp'])
+@pytest.fixture(scope='module')
+def real():
+    """{topic: {'stamp', 'q', 'p', 'gyro', ...}} of the real recording, decoded by rosbags."""
+    return bh.decode()
 
 
 @pytest.fixture(scope='module')
@@ -43,11 +43,11 @@ def w_first(tmp_path_factory):
 # ---- the orientation against the gyro ------------------------------------------------------
 
 
-def test_the_threshold_is_the_noise_and_imu_check_s_gyro_scale_tolerance(capsys):
+def test_the_threshold_is_the_noise_and_imu_check_s_gyro_scale_tolerance(capsys, real):
     """Check the threshold: GYRO_NOISE + GYRO_TOL × the gyro's RMS rate over the steps."""
     status, out, err = run_cli(capsys, 'bag', bh.REAL, '--topic', IMU, '--json')
     imu = json.loads(out)['topics'][IMU]
-    gyro = real_messages(IMU)['gyro']
+    gyro = real[IMU]['gyro']
     at_step = 0.5 * (gyro[:-1] + gyro[1:])
     rate = math.sqrt(np.mean(np.sum(at_step ** 2, axis=1)))
     assert imu['gyro_rms_threshold'] == pytest.approx(GYRO_NOISE + GYRO_TOL * rate, rel=1e-12)
@@ -61,14 +61,14 @@ def test_the_real_imu_agrees_with_its_gyro(capsys):
     assert 'gyro_warning' not in imu
 
 
-def test_a_quaternion_written_w_first_is_flagged(capsys, w_first):
+def test_a_quaternion_written_w_first_is_flagged(capsys, w_first, real):
     status, out, err = run_cli(capsys, 'bag', w_first, '--json', '--deg')
     imu = json.loads(out)['topics'][IMU]
     # ω from the orientations as written, against the gyro (scipy, independent of rot_tools)
-    real = real_messages(IMU)
-    written = Rotation.from_quat(real['q'][:, [3, 0, 1, 2]])
-    omega = (written[:-1].inv() * written[1:]).as_rotvec() / np.diff(real['t'])[:, None]
-    diff = omega - 0.5 * (real['gyro'][:-1] + real['gyro'][1:])
+    q, t, gyro = real[IMU]['q'], real[IMU]['stamp'], real[IMU]['gyro']
+    written = Rotation.from_quat(q[:, [3, 0, 1, 2]])
+    omega = (written[:-1].inv() * written[1:]).as_rotvec() / np.diff(t)[:, None]
+    diff = omega - 0.5 * (gyro[:-1] + gyro[1:])
     rms = math.degrees(math.sqrt(np.mean(np.sum(diff ** 2, axis=1))))
     assert imu['gyro_rms_difference'] == pytest.approx(rms, rel=1e-7)
     assert imu['gyro_rms_difference'] > imu['gyro_rms_threshold']
@@ -90,11 +90,10 @@ def test_the_warning_goes_to_stderr_with_the_csv_on_stdout(capsys, w_first):
 # ---- positions ---------------------------------------------------------------------------
 
 
-def test_the_odometry_s_position_ranges_and_largest_speed(capsys):
+def test_the_odometry_s_position_ranges_and_largest_speed(capsys, real):
     status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     odom = json.loads(out)['topics'][ODOM]
-    real = real_messages(ODOM)
-    p, t = real['p'], real['t']
+    p, t = real[ODOM]['p'], real[ODOM]['stamp']
     for k, name in enumerate('xyz'):
         np.testing.assert_allclose(odom['position_range'][name], [p[:, k].min(), p[:, k].max()],
                                    rtol=1e-11, atol=1e-11)
