@@ -26,13 +26,7 @@ def parameters(name):
 
 
 def assert_sweeps_every_public_function(swept, excused):
-    """
-    Fail naming each public function that ``swept`` does not call and ``excused`` does not excuse.
-
-    ``swept``: the names a sweep calls; ``excused``: {name: why the sweep cannot call it}. A
-    new public function fails the sweep until it is given inputs or a reason; a name that is
-    no longer public fails it too.
-    """
+    """Fail naming each public function neither ``swept`` nor ``excused`` ({name: why})."""
     public = public_functions()
     unswept = sorted(public - set(swept) - set(excused))
     assert not unswept, f'public functions without inputs in this sweep: {unswept}'

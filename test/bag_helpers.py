@@ -1,12 +1,53 @@
 """Bags written by the tests (rosbags' writer), from the real recording or message by message."""
 
+import csv
+import io
+import json
 from pathlib import Path
 
+from conftest import run_cli
 import numpy as np
 
 REAL = Path(__file__).resolve().parents[1].parent / 'shared' / 'data' / 'jackal_imu_odometry.bag'
 """61 s of a Clearpath Jackal: 3,061 Imu on /imu/data, 3,060 Odometry on
 /jackal_velocity_controller/odom (a ROS 1 bag; see its README)."""
+
+IMU_TYPE, POSE_TYPE = 'sensor_msgs/msg/Imu', 'geometry_msgs/msg/PoseWithCovarianceStamped'
+ODOM_TYPE = 'nav_msgs/msg/Odometry'
+
+
+def decode(path=REAL):
+    """
+    Return {topic: {field: array}} of a bag's Imu and poses with covariance, decoded by rosbags.
+
+    Fields: record (ns), sec, nsec, stamp (s), frame (a list), q (x, y, z, w), p (zero for an
+    Imu), cov; an Imu's gyro and accel too.
+    """
+    from rosbags.highlevel import AnyReader
+    out = {}
+    with AnyReader([path]) as reader:
+        for conn, record, raw in reader.messages():
+            if conn.msgtype not in (IMU_TYPE, POSE_TYPE, ODOM_TYPE):
+                continue
+            msg = reader.deserialize(raw, conn.msgtype)
+            d = out.setdefault(conn.topic, {})
+            if conn.msgtype == IMU_TYPE:
+                q, p, cov = msg.orientation, None, msg.orientation_covariance
+                w, a = msg.angular_velocity, msg.linear_acceleration
+                d.setdefault('gyro', []).append((w.x, w.y, w.z))
+                d.setdefault('accel', []).append((a.x, a.y, a.z))
+            else:
+                q, p, cov = msg.pose.pose.orientation, msg.pose.pose.position, msg.pose.covariance
+            for name, value in (('record', record), ('sec', msg.header.stamp.sec),
+                                ('nsec', msg.header.stamp.nanosec),
+                                ('frame', msg.header.frame_id), ('q', (q.x, q.y, q.z, q.w)),
+                                ('p', (0.0, 0.0, 0.0) if p is None else (p.x, p.y, p.z)),
+                                ('cov', np.array(cov, float))):
+                d.setdefault(name, []).append(value)
+    for d in out.values():
+        d.update({k: np.array(v) for k, v in d.items() if k != 'frame'})
+        d['stamp'] = d['sec'] + 1e-9 * d['nsec']
+    return out
 
 
 def convert_real(dst, storage, source=REAL):
@@ -148,11 +189,9 @@ def write_ros1_bag(dst, messages):
 
 def tf_chain_messages(n=40, bad_at=7):
     """
-    [(topic, type, t, msg)] of a TF tree map → odom → base_link → imu, plus odom → wheel.
+    Return (messages, truth, static) of a TF tree map → odom → base_link → imu, plus odom → wheel.
 
-    map → odom and odom → base_link are dynamic, sampled together at 10 Hz; base_link → imu
-    is static (on /tf_static); odom → wheel has a zero quaternion at sample ``bad_at``. Returns
-    (messages, truth): truth[t] = {(parent, child): (q, translation)} of every sample.
+    base_link → imu is on /tf_static; odom → wheel has a zero quaternion at sample ``bad_at``.
     """
     b = Builder()
     rng = np.random.default_rng(17)
@@ -187,6 +226,26 @@ def without_definitions(bag):
     with sqlite3.connect(db) as con:
         con.execute('DELETE FROM message_definitions')
     return Path(bag)
+
+
+def run_quiet(capsys, *args):
+    """Return run_cli's (status, stdout, stderr), stderr without the gyro warnings."""
+    status, out, err = run_cli(capsys, *args)
+    return status, out, without_gyro_warnings(err)
+
+
+def summary_of(capsys, *args, run=run_cli):
+    """Return the --json summary of ``run`` on these words; it must succeed, stderr empty."""
+    status, out, err = run(capsys, *args, '--json')
+    assert (status, err) == (0, ''), err
+    return json.loads(out)
+
+
+def rows_of(capsys, *args, run=run_cli):
+    """Return the --csv rows of ``run`` on these words; it must succeed, stderr empty."""
+    status, out, err = run(capsys, *args, '--csv', '-')
+    assert (status, err) == (0, ''), err
+    return list(csv.DictReader(io.StringIO(out)))
 
 
 def without_gyro_warnings(err):

@@ -1,18 +1,10 @@
-"""
-Shared test fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester.
-
-Node tests use real DDS on the loopback, in a ROS_DOMAIN_ID of this run's own (from the
-pid, in 1..101) limited to LOCALHOST, and in a namespace unique to this run (:data:`RUN`),
-with one namespace per test below it: other programs on the same domain cannot answer. A
-test module that imports a package this machine lacks (ROS, scipy, rosbags, ...) is skipped,
-not an error; numpy, PyYAML, pytest and hypothesis are required. Waits are bounded waits for
-the graph, never sleeps.
-"""
+"""Shared fixtures: an isolated DDS domain and names for this run, rclpy contexts, a tester."""
 
 import errno
 import gc
 import io
 import itertools
+import json
 import os
 from pathlib import Path
 import secrets
@@ -52,11 +44,7 @@ _namespaces = itertools.count(1)
 
 
 def console_script(name, module):
-    """
-    Return the command of console script ``name``: next to this Python, on PATH, or -m.
-
-    Without an installed package it is ``python -m module``, run from this checkout.
-    """
+    """Return the command of console script ``name``: next to this Python, on PATH, or -m."""
     here = Path(sys.executable).parent / name
     script = str(here) if here.exists() else shutil.which(name)
     return [script] if script else [sys.executable, '-m', module]
@@ -68,6 +56,30 @@ def script_env(command):
     if command[0] == sys.executable:
         env['PYTHONPATH'] = os.pathsep.join(filter(None, [str(REPO), env.get('PYTHONPATH')]))
     return env
+
+
+def run_cli(capsys, *args):
+    """Run rot-tools on these words in this process; return (status, stdout, stderr)."""
+    from rot_tools.cli.main import main
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def one_error(capsys, *args, contains=''):
+    """Run rot-tools here: status 2, no stdout, one error line holding ``contains``; return it."""
+    status, out, err = run_cli(capsys, *args)
+    assert (status, out) == (2, ''), err
+    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
+    assert contains in err, err
+    return err
+
+
+def strict_json(text):
+    """Parse JSON text; NaN and Infinity, which json.loads accepts by default, fail."""
+    def refuse(name):
+        raise ValueError(f'{name} is not JSON')
+    return json.loads(text, parse_constant=refuse)
 
 
 def rss_mb(pid='self'):
@@ -105,11 +117,7 @@ def assert_clean_exit(status, stderr):
 
 
 class NodeProcess:
-    """
-    rotation_node in a child process, in a namespace of this run; stdout / stderr in files.
-
-    ``name`` is the node's fully qualified name (/RUN/pN/rot_tools).
-    """
+    """rotation_node in a child process, in a namespace of this run; ``name`` its full name."""
 
     def __init__(self, tmp_path, *ros_args, env_extra=None):
         namespace = f'/{RUN}/p{next(_namespaces)}'
@@ -149,12 +157,7 @@ class NodeProcess:
 
 
 class Tester:
-    """
-    A test-side rclpy node in ``context`` that an executor spins on demand.
-
-    Nodes under test may be added to the same executor (in-process tests) or live in another
-    process (end-to-end tests). Every wait is bounded by ``timeout`` and fails the test.
-    """
+    """A test-side rclpy node in ``context``, spun on demand; every wait bounded by ``timeout``."""
 
     def __init__(self, context, name='tester'):
         import rclpy
@@ -168,13 +171,7 @@ class Tester:
         self.logs = []
 
     def close(self):
-        """
-        Destroy the executors, then the test node (not the nodes added under test).
-
-        An executor's shutdown drops the generator of its last wait, which may still hold
-        the handles of the node's entities; it is collected here, while the node lives, not
-        by a later garbage collection after the node is gone.
-        """
+        """Destroy the executors, collect their last wait, then destroy the test node."""
         for executor in self.executors:
             executor.remove_node(self.node)
             executor.shutdown(timeout_sec=1.0)
@@ -182,13 +179,7 @@ class Tester:
         self.node.destroy_node()
 
     def add_node(self, node):
-        """
-        Spin ``node`` (a node under test, usually in another context) with the tester.
-
-        A node of another context (another DDS participant) gets an executor of its own —
-        the kind rotation_node runs on, rclpy's SingleThreadedExecutor, so that every node
-        test holds on it; both are spun in turn, in this thread.
-        """
+        """Spin ``node`` with the tester; another context's node on an executor of its own."""
         from rclpy.executors import SingleThreadedExecutor
         if node.context is self.context:
             self.executors[0].add_node(node)
@@ -268,13 +259,7 @@ class Tester:
     # -- services ----------------------------------------------------------------------
 
     def call(self, srv_type, name, request, timeout=2.0, attempts=5):
-        """
-        Call a service with a bounded wait per attempt and retries; return the response.
-
-        A reply that does not come within ``timeout`` is abandoned (the pending request is
-        removed) and the request sent again: Fast DDS can drop the first reply to a new
-        client. Fails the test when every attempt times out.
-        """
+        """Call a service, a bounded wait per attempt (Fast DDS may drop a first reply)."""
         client = self.node.create_client(srv_type, name)
         try:
             self.spin_until(lambda: client.service_is_ready(), DISCOVERY_TIMEOUT,
@@ -292,12 +277,7 @@ class Tester:
             self.node.destroy_client(client)
 
     def set_parameters(self, node_name, parameters):
-        """
-        Set parameters of node ``node_name`` through its ~/set_parameters service.
-
-        ``parameters`` are rclpy.parameter.Parameter objects; returns the list of
-        rcl_interfaces/SetParametersResult, one per parameter.
-        """
+        """Set rclpy Parameters of ``node_name`` by ~/set_parameters; return its results."""
         from rcl_interfaces.srv import SetParameters
         request = SetParameters.Request(
             parameters=[p.to_parameter_msg() for p in parameters])
@@ -371,6 +351,15 @@ def tester_context():
     context.try_shutdown()
 
 
+@pytest.fixture(scope='module')
+def here(ros_context):
+    """Run rotation_client's commands in this process (test_client.Here), one runner a module."""
+    from test_client import Here
+    runner = Here(ros_context)
+    yield runner
+    runner.close()
+
+
 @pytest.fixture
 def namespace():
     """Give each test a namespace of its own, below this run's: /RUN/tN."""
@@ -379,12 +368,7 @@ def namespace():
 
 @pytest.fixture
 def node_process(tmp_path):
-    """
-    Start rotation_node processes, each in a namespace of its own; kill them after the test.
-
-    start(*ros_args) passes ROS arguments (-p, -r, --params-file) after --ros-args;
-    start(..., env_extra={NAME: VALUE}) sets environment variables of the process.
-    """
+    """Start rotation_node processes: start(*ros_args, env_extra=None); kill them after."""
     pytest.importorskip('rclpy')
     started = []
 

@@ -1,11 +1,4 @@
-"""
-Find the example blocks of README.md and doc/*.md, so tests can compare them with real output.
-
-A ``console`` block of ``$ rot-tools`` lines and ``pycon`` blocks are run by test_docs.py;
-any other block that shows output carries ``<!-- output: NAME -->`` before its fence and is
-compared by a test with ``assert_doc_output(NAME, got)``. ``...`` in expected output matches
-any text.
-"""
+"""The example blocks of README.md and doc/*.md, to compare with real output."""
 
 import doctest
 from pathlib import Path

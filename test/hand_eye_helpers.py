@@ -62,11 +62,7 @@ def random_mounting(rng, reach=0.1):
 
 
 def arm_stations(seed, stations=25, noise_deg=0.05, noise_m=5e-4):
-    """
-    Eye in hand: the camera on the hand (X) sees the marker (Z in the base) from ``stations``.
-
-    One stamp (0, 1, 2, ... s) per station, on a half sphere above the marker.
-    """
+    """Eye in hand: the camera on the hand (X) sees the marker (Z) from ``stations``, 1 s apart."""
     rng = np.random.default_rng(seed)
     X = random_mounting(rng)
     Z = (_matrix([0.0, 0.0, rng.uniform(-np.pi, np.pi)]), np.array([0.6, 0.1, 0.0]))

@@ -1,8 +1,4 @@
-"""
-One item and a batch: the same formula, through rot_tools.core.engine's kernels.
-
-Swept over every public function (rot_tools.__all__): same values to rounding, same failures.
-"""
+"""One item and a batch give the same values and failures, for every public function."""
 
 import importlib
 import math

@@ -1,23 +1,14 @@
-"""
-rot-tools bag on the real recording and on bags written here (rosbag2 sqlite3 and MCAP).
+"""rot-tools bag on the real recording and on rosbag2 copies, against scipy and rosbags."""
 
-Every value is checked against an independent computation from the messages as rosbags
-decodes them: scipy's Rotation (from_quat, as_euler(RPY_SEQUENCE), as_rotvec, mean), numpy.unwrap,
-and a log map written here. Runs the CLI in-process (rot_tools.cli.main.main), and as the console
-script where the process itself matters (test_bag_hostile.py: its standard output).
-"""
-
-import csv
-import io
-import json
 import math
 
 import bag_helpers as bh
+from conftest import run_cli
 import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import bag_output, main as cli  # noqa: E402
+from rot_tools.cli import bag_output  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
@@ -25,51 +16,10 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 
 
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools ARGS, in-process."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def summary_of(capsys, *args):
-    status, out, err = run(capsys, *args, '--json')
-    assert (status, err) == (0, ''), err
-    return json.loads(out)
-
-
-def rows_of(capsys, *args):
-    status, out, err = run(capsys, *args, '--csv', '-')
-    assert (status, err) == (0, ''), err
-    return list(csv.DictReader(io.StringIO(out)))
-
-
 @pytest.fixture(scope='module')
 def reference():
     """{topic: dict of arrays} decoded message by message by rosbags (the user's way)."""
-    from rosbags.highlevel import AnyReader
-    out = {}
-    with AnyReader([bh.REAL]) as reader:
-        for conn, t, raw in reader.messages():
-            msg = reader.deserialize(raw, conn.msgtype)
-            d = out.setdefault(conn.topic, {'q': [], 'p': [], 'stamp': [], 'gyro': [],
-                                            'sec': [], 'nsec': [], 'frame': []})
-            if conn.msgtype == 'sensor_msgs/msg/Imu':
-                q, p = msg.orientation, None
-                g = msg.angular_velocity
-                d['gyro'].append((g.x, g.y, g.z))
-            else:
-                q, p = msg.pose.pose.orientation, msg.pose.pose.position
-            d['q'].append((q.x, q.y, q.z, q.w))
-            d['p'].append((p.x, p.y, p.z) if p is not None else (0.0, 0.0, 0.0))
-            d['sec'].append(msg.header.stamp.sec)
-            d['nsec'].append(msg.header.stamp.nanosec)
-            d['frame'].append(msg.header.frame_id)
-    for d in out.values():
-        for k in ('q', 'p', 'gyro'):
-            d[k] = np.array(d[k], float)
-        d['stamp'] = np.array(d['sec']) + 1e-9 * np.array(d['nsec'])
-    return out
+    return bh.decode()
 
 
 EXCERPT = 150
@@ -78,11 +28,7 @@ EXCERPT = 150
 
 @pytest.fixture(scope='module')
 def converted(tmp_path_factory):
-    """
-    Return an excerpt of the real recording: ROS 1 as recorded, rosbag2 sqlite3 and MCAP.
-
-    The rosbag2 bags are converted by rosbags from the ROS 1 excerpt (300 messages).
-    """
+    """Return an excerpt of the real recording: ROS 1 as recorded, rosbag2 sqlite3 and MCAP."""
     tmp = tmp_path_factory.mktemp('converted')
     ros1 = bh.real_excerpt(tmp / 'excerpt.bag', 2 * EXCERPT)
     return {'ros1': ros1, **{s: bh.convert_real(tmp / s, s, ros1) for s in ('sqlite3', 'mcap')}}
@@ -107,12 +53,11 @@ def col(rows, *names):
     return np.array([[float(r[n]) for n in names] for r in rows])
 
 
-# ---------------------------------------------------------------------------------------
 # The summary
 
 
 def test_summary_of_the_real_bag(capsys, reference):
-    s = summary_of(capsys, 'bag', bh.REAL)
+    s = bh.summary_of(capsys, 'bag', bh.REAL)
     assert s['storage'] == 'rosbag1'
     assert list(s['topics']) == [IMU, ODOM]
     imu, odom = s['topics'][IMU], s['topics'][ODOM]
@@ -159,8 +104,8 @@ def test_summary_of_the_real_bag(capsys, reference):
 
 def test_summary_in_degrees_and_yaml(capsys):
     yaml = pytest.importorskip('yaml')
-    rad = summary_of(capsys, 'bag', bh.REAL)
-    status, out, err = run(capsys, '--deg', 'bag', bh.REAL)  # an option before the command
+    rad = bh.summary_of(capsys, 'bag', bh.REAL)
+    status, out, err = run_cli(capsys, '--deg', 'bag', bh.REAL)  # an option before the command
     assert (status, err) == (0, '')
     deg = yaml.safe_load(out)
     for topic in (IMU, ODOM):
@@ -172,12 +117,11 @@ def test_summary_in_degrees_and_yaml(capsys):
         assert d['messages'] == r['messages']
 
 
-# ---------------------------------------------------------------------------------------
 # The CSV
 
 
 def test_csv_rows_of_the_real_bag(capsys, reference):
-    rows = rows_of(capsys, 'bag', bh.REAL, '--seq', 'ZYX')
+    rows = bh.rows_of(capsys, 'bag', bh.REAL, '--seq', 'ZYX')
     assert list(rows[0]) == bag_output.csv_header('ZYX') == [
         'topic', 'stamp', 'frame_id', 'x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'roll', 'pitch',
         'yaw', 'ZYX_1', 'ZYX_2', 'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz',
@@ -215,7 +159,7 @@ def test_csv_rows_of_the_real_bag(capsys, reference):
 
 
 def test_csv_wrap_and_degrees(capsys, reference):
-    rows = rows_of(capsys, 'bag', bh.REAL, '--topic', ODOM, '--wrap', '--deg')
+    rows = bh.rows_of(capsys, 'bag', bh.REAL, '--topic', ODOM, '--wrap', '--deg')
     ref = reference[ODOM]
     rot = Rotation.from_quat(ref['q'])
     got = col(rows, 'roll', 'pitch', 'yaw')
@@ -234,25 +178,20 @@ def test_csv_wrap_and_degrees(capsys, reference):
 
 @pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
 def test_rosbag2_gives_what_the_ros1_bag_gives(capsys, converted, storage):
-    want = rows_of(capsys, 'bag', converted['ros1'], '--seq', 'zyz')
-    got = rows_of(capsys, 'bag', converted[storage], '--seq', 'zyz')
+    want = bh.rows_of(capsys, 'bag', converted['ros1'], '--seq', 'zyz')
+    got = bh.rows_of(capsys, 'bag', converted[storage], '--seq', 'zyz')
     assert got == want and len(got) == 2 * EXCERPT
-    s = summary_of(capsys, 'bag', converted[storage])
+    s = bh.summary_of(capsys, 'bag', converted[storage])
     assert s['storage'] == f'rosbag2 {storage}'
-    assert s['topics'] == summary_of(capsys, 'bag', converted['ros1'])['topics']
+    assert s['topics'] == bh.summary_of(capsys, 'bag', converted['ros1'])['topics']
     # a file of the bag names the bag too
     inner = next(p for p in converted[storage].iterdir() if p.suffix in ('.db3', '.mcap'))
-    assert summary_of(capsys, 'bag', inner)['topics'] == s['topics']
+    assert bh.summary_of(capsys, 'bag', inner)['topics'] == s['topics']
 
 
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
 def test_columns_are_the_fields_rosbags_decodes(converted, reference, storage):
-    """
-    Each topic's columns hold the fields of its messages, as rosbags decodes them.
-
-    The whole real recording (ROS 1), and the rosbag2 bags of its excerpt (their first
-    messages).
-    """
+    """Each topic's columns hold the fields of its messages, as rosbags decodes them."""
     path = bh.REAL if storage == 'ros1' else converted[storage]
     n = {IMU: 3061, ODOM: 3060} if storage == 'ros1' else {IMU: EXCERPT, ODOM: EXCERPT}
     with bag_read.open_bag(path) as reader:
@@ -283,7 +222,7 @@ def test_a_bag_without_type_definitions_is_read_with_ros2_jazzy_s(capsys, tmp_pa
     from rosbags.highlevel import AnyReader, AnyReaderError
     with pytest.raises(AnyReaderError, match='no type definitions'):
         AnyReader([path]).open()  # as rosbags reads it alone
-    rows = rows_of(capsys, 'bag', path)
+    rows = bh.rows_of(capsys, 'bag', path)
     np.testing.assert_allclose(col(rows, 'qx', 'qy', 'qz', 'qw'), canonical(q), atol=1e-15)
 
 
@@ -294,7 +233,7 @@ def test_start_and_end_select_by_record_time(capsys):
         times = {}
         for conn, t, _ in reader.messages():
             times.setdefault(conn.topic, []).append((t - t0) * 1e-9)
-    s = summary_of(capsys, 'bag', bh.REAL, '--start', 10, '--end', 20.5)
+    s = bh.summary_of(capsys, 'bag', bh.REAL, '--start', 10, '--end', 20.5)
     for topic, ts in times.items():
         ts = np.array(ts)
         assert s['topics'][topic]['messages'] == int(((ts >= 10) & (ts <= 20.5)).sum()) > 400
@@ -302,7 +241,7 @@ def test_start_and_end_select_by_record_time(capsys):
 
 def test_csv_to_a_file_and_the_summary_to_stdout(capsys, tmp_path):
     path = tmp_path / 'out.csv'
-    status, out, err = run(capsys, 'bag', bh.REAL, '--csv', path, '--topic', IMU)
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--csv', path, '--topic', IMU)
     assert (status, err) == (0, '')
     assert out.startswith('bag: ') and IMU in out and ODOM not in out
     lines = path.read_text().splitlines()
@@ -312,7 +251,7 @@ def test_csv_to_a_file_and_the_summary_to_stdout(capsys, tmp_path):
 def test_plot_one_panel_per_topic(capsys, tmp_path, converted):
     pytest.importorskip('matplotlib')
     svg = tmp_path / 'rpy.svg'
-    status, _, err = run(capsys, 'bag', converted['ros1'], '--plot', svg)
+    status, _, err = run_cli(capsys, 'bag', converted['ros1'], '--plot', svg)
     assert (status, err) == (0, f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {IMU}, '
                                 f'{ODOM}\n')
     text = svg.read_text()
@@ -320,7 +259,7 @@ def test_plot_one_panel_per_topic(capsys, tmp_path, converted):
         for angle in ('roll', 'pitch', 'yaw'):
             assert f'id="{topic}:{angle}"' in text
     png = tmp_path / 'rpy.png'
-    assert run(capsys, 'bag', converted['ros1'], '--plot', png, '--deg')[0] == 0
+    assert run_cli(capsys, 'bag', converted['ros1'], '--plot', png, '--deg')[0] == 0
     assert png.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
 
 
@@ -352,12 +291,12 @@ def test_frame_ids_of_many_lengths_are_read_as_recorded(tmp_path):
 
 def test_a_topic_read_in_many_chunks_is_one_table(monkeypatch, capsys, converted):
     """Columns read a chunk of messages at a time join into one: frame ids listed once."""
-    whole = rows_of(capsys, 'bag', converted['ros1'])
+    whole = bh.rows_of(capsys, 'bag', converted['ros1'])
     monkeypatch.setattr(bag_read, 'CHUNK', 7)
-    s = summary_of(capsys, 'bag', converted['ros1'])
+    s = bh.summary_of(capsys, 'bag', converted['ros1'])
     assert s['topics'][IMU]['frame_ids'] == ['base_link']
     assert s['topics'][ODOM]['child_frame_ids'] == ['base_link']
-    assert rows_of(capsys, 'bag', converted['ros1']) == whole
+    assert bh.rows_of(capsys, 'bag', converted['ros1']) == whole
 
 
 def test_csv_numbers_are_rounded_then_written_as_the_shortest_text(capsys, converted):
@@ -365,8 +304,8 @@ def test_csv_numbers_are_rounded_then_written_as_the_shortest_text(capsys, conve
     def round_number(x, digits):  # correctly rounded by Python's formatting
         return float(f'{x:.{digits}g}') if abs(x) >= 1 else round(x, digits) + 0.0
 
-    full = rows_of(capsys, 'bag', converted['ros1'], '--topic', IMU, '--precision', '17')
-    four = rows_of(capsys, 'bag', converted['ros1'], '--topic', IMU, '--precision', '4')
+    full = bh.rows_of(capsys, 'bag', converted['ros1'], '--topic', IMU, '--precision', '17')
+    four = bh.rows_of(capsys, 'bag', converted['ros1'], '--topic', IMU, '--precision', '4')
     assert len(full) == len(four) == EXCERPT
     assert [r['stamp'] for r in full] == [r['stamp'] for r in four]  # stamps exactly
     names = [n for n in bag_output.csv_header(None) if n not in ('topic', 'stamp', 'frame_id')]

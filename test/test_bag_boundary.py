@@ -1,10 +1,4 @@
-"""
-Test rot_tools.io.boundary: one boundary for the node and for bags.
-
-rot_tools.io.boundary: one boundary for the node and for bags — the batch checks give every
-item the reason (and the rotation) the per-message converter gives it. ROS-free: the
-per-message converters take the fields' values, as rotation_node reads them from a message.
-"""
+"""rot_tools.io.boundary: each batch item refused or read as the per-message converter does."""
 
 import math
 

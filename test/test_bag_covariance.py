@@ -1,18 +1,12 @@
 """
 rot-tools bag: standard deviations of roll, pitch and yaw from the recorded covariances.
 
-The reference is independent of rot_tools: the Jacobian J of scipy's
-``Rotation.as_euler(RPY_SEQUENCE)`` with respect to a small rotation about the parent's fixed axes
-(R_true = exp([δ]×)·R, ROS's PoseWithCovariance), by central differences; then
-Σ_rpy = J·Σ·Jᵀ and σ = √diag(Σ_rpy) over the rotation block Σ (an Imu's 3×3, a pose's last
-3×3). With ``--input-covariance rpy`` σ is √diag(Σ) itself. The real recording's IMU and
-odometry carry covariances; bags written here (ROS 1, rosbag2 sqlite3 and MCAP) carry
-unknown (all zero), NaN, non-symmetric and non-PSD ones, and an orientation at pitch 90°.
+Reference: σ = √diag(J·Σ·Jᵀ), J of scipy's as_euler(RPY_SEQUENCE) about the parent's fixed
+axes by central differences; with ``--input-covariance rpy``, √diag(Σ).
 """
 
 import csv
 import io
-import json
 import math
 
 import bag_helpers as bh
@@ -20,33 +14,13 @@ import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import bag_covariance, main as cli  # noqa: E402
+from rot_tools.cli import bag_covariance  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 STD = ['roll_std', 'pitch_std', 'yaw_std']
-IMU_TYPE, POSE_TYPE = 'sensor_msgs/msg/Imu', 'geometry_msgs/msg/PoseWithCovarianceStamped'
-ODOM_TYPE = 'nav_msgs/msg/Odometry'
-
-
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, bh.without_gyro_warnings(err)
-
-
-def summary_of(capsys, *args):
-    status, out, err = run(capsys, *args, '--json')
-    assert (status, err) == (0, ''), err
-    return json.loads(out)
-
-
-def rows_of(capsys, *args):
-    status, out, err = run(capsys, *args, '--csv', '-')
-    assert (status, err) == (0, ''), err
-    return list(csv.DictReader(io.StringIO(out)))
 
 
 def cells(rows, names):
@@ -95,21 +69,7 @@ def reference_sigma(quaternions, cov, reading='rotvec'):
 
 def decoded(path):
     """{topic: (quaternions (N, 4), covariances (N, 9 or 36))}, decoded by rosbags."""
-    from rosbags.highlevel import AnyReader
-    out = {}
-    with AnyReader([path]) as reader:
-        for conn, _, raw in reader.messages():
-            if conn.msgtype not in (IMU_TYPE, POSE_TYPE, ODOM_TYPE):
-                continue
-            msg = reader.deserialize(raw, conn.msgtype)
-            if conn.msgtype == IMU_TYPE:
-                q, cov = msg.orientation, msg.orientation_covariance
-            else:
-                q, cov = msg.pose.pose.orientation, msg.pose.covariance
-            qs, covs = out.setdefault(conn.topic, ([], []))
-            qs.append((q.x, q.y, q.z, q.w))
-            covs.append(np.array(cov, float))
-    return {t: (np.array(q), np.array(c)) for t, (q, c) in out.items()}
+    return {topic: (d['q'], d['cov']) for topic, d in bh.decode(path).items()}
 
 
 @pytest.fixture(scope='module')
@@ -123,13 +83,12 @@ def excerpt(tmp_path_factory):
     return bh.real_excerpt(tmp_path_factory.mktemp('excerpt') / 'excerpt.bag')
 
 
-# ---------------------------------------------------------------------------------------
 # The real recording
 
 
 def test_real_bag_columns_and_median(capsys, real):
-    rows = rows_of(capsys, 'bag', bh.REAL)
-    s = summary_of(capsys, 'bag', bh.REAL)
+    rows = bh.rows_of(capsys, 'bag', bh.REAL)
+    s = bh.summary_of(capsys, 'bag', bh.REAL)
     for topic in (IMU, ODOM):
         q, cov = real[topic]
         want = reference_sigma(q, cov)
@@ -148,19 +107,19 @@ def test_real_bag_columns_and_median(capsys, real):
 
 
 def test_real_bag_in_degrees(capsys, real):
-    rows = rows_of(capsys, 'bag', bh.REAL, '--deg', '--topic', IMU)
+    rows = bh.rows_of(capsys, 'bag', bh.REAL, '--deg', '--topic', IMU)
     q, cov = real[IMU]
     want = np.degrees(reference_sigma(q, cov))
     np.testing.assert_allclose(cells(rows, STD), want, rtol=2e-11, atol=5e-13)
-    t = summary_of(capsys, 'bag', bh.REAL, '--deg')['topics'][IMU]
+    t = bh.summary_of(capsys, 'bag', bh.REAL, '--deg')['topics'][IMU]
     assert t['unit'] == 'deg'
     np.testing.assert_allclose(list(t['rpy_stddev_median'].values()), np.median(want, axis=0),
                                rtol=2e-11, atol=5e-13)
 
 
 def test_real_bag_read_as_rpy(capsys, real):
-    rows = rows_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
-    s = summary_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
+    rows = bh.rows_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
+    s = bh.summary_of(capsys, 'bag', bh.REAL, '--input-covariance', 'rpy')
     for topic in (IMU, ODOM):
         q, cov = real[topic]
         want = reference_sigma(q, cov, 'rpy')
@@ -189,7 +148,6 @@ def test_the_covariance_column_of_each_format(tmp_path, storage, excerpt):
     assert columns['/pose'].covariance is None
 
 
-# ---------------------------------------------------------------------------------------
 # Bags written here: covariances unknown, bad, at gimbal lock
 
 
@@ -226,12 +184,7 @@ def _cases(rng, size):
 
 
 def write_derived(path, storage, seed=3):
-    """
-    Return (bag, {topic: cases}) of an Imu, a PoseWithCovarianceStamped, an Odometry topic.
-
-    /imu/none: every covariance unknown; /pose: a PoseStamped (no covariance); /imu also has
-    a message without orientation (orientation_covariance[0] = −1), refused.
-    """
+    """Return (bag, {topic: cases}) of an Imu, a PoseWithCovarianceStamped, an Odometry topic."""
     b, rng = bh.Builder(), np.random.default_rng(seed)
     topics = {'/imu': _cases(rng, 3), '/pose_cov': _cases(rng, 6), '/odom': _cases(rng, 6)}
     messages = []
@@ -240,17 +193,17 @@ def write_derived(path, storage, seed=3):
             stamp = 5.0 + 0.02 * k
             p = (k, 0.5, -1.0)
             if topic == '/imu':
-                msg, kind = b.imu(stamp, q, cov=cov), IMU_TYPE
+                msg, kind = b.imu(stamp, q, cov=cov), bh.IMU_TYPE
             elif topic == '/pose_cov':
-                msg, kind = b.pose_with_covariance_stamped(stamp, p, q, cov=cov), POSE_TYPE
+                msg, kind = b.pose_with_covariance_stamped(stamp, p, q, cov=cov), bh.POSE_TYPE
             else:
-                msg, kind = b.odometry(stamp, p, q, cov=cov), ODOM_TYPE
+                msg, kind = b.odometry(stamp, p, q, cov=cov), bh.ODOM_TYPE
             messages.append((topic, kind, int(stamp * 1e9), msg))
     refused = np.zeros(9)
     refused[0] = -1.0
-    messages.append(('/imu', IMU_TYPE, int(9e9), b.imu(9.0, (0, 0, 0, 1), cov=refused)))
+    messages.append(('/imu', bh.IMU_TYPE, int(9e9), b.imu(9.0, (0, 0, 0, 1), cov=refused)))
     for k in range(3):
-        messages.append(('/imu/none', IMU_TYPE, int((6 + k) * 1e9),
+        messages.append(('/imu/none', bh.IMU_TYPE, int((6 + k) * 1e9),
                          b.imu(6.0 + k, (0, 0, 0, 1), cov=np.zeros(9))))
         messages.append(('/pose', 'geometry_msgs/msg/PoseStamped', int((6 + k) * 1e9),
                          b.pose_stamped(6.0 + k, (1, 2, 3), (0, 0, 0, 1))))
@@ -263,8 +216,8 @@ def write_derived(path, storage, seed=3):
 @pytest.mark.parametrize('storage', ['ros1', 'sqlite3', 'mcap'])
 def test_unknown_and_bad_covariances_leave_empty_cells(capsys, tmp_path, storage):
     path, topics = write_derived(tmp_path / 'derived', storage)
-    rows = rows_of(capsys, 'bag', path)
-    s = summary_of(capsys, 'bag', path)
+    rows = bh.rows_of(capsys, 'bag', path, run=bh.run_quiet)
+    s = bh.summary_of(capsys, 'bag', path, run=bh.run_quiet)
     for topic, cases in topics.items():
         mine = [r for r in rows if r['topic'] == topic]
         assert len(mine) == len(cases)  # /imu's message without orientation is refused
@@ -303,8 +256,8 @@ def test_unknown_and_bad_covariances_leave_empty_cells(capsys, tmp_path, storage
 
 def test_pitch_90_is_good_when_read_as_rpy(capsys, tmp_path):
     path, topics = write_derived(tmp_path / 'derived', 'mcap')
-    rows = rows_of(capsys, 'bag', path, '--input-covariance', 'rpy', '--deg')
-    s = summary_of(capsys, 'bag', path, '--input-covariance', 'rpy')
+    rows = bh.rows_of(capsys, 'bag', path, '--input-covariance', 'rpy', '--deg', run=bh.run_quiet)
+    s = bh.summary_of(capsys, 'bag', path, '--input-covariance', 'rpy', run=bh.run_quiet)
     for topic, cases in topics.items():
         mine = [r for r in rows if r['topic'] == topic]
         status = np.array([c[3] for c in cases])
@@ -319,13 +272,7 @@ def test_pitch_90_is_good_when_read_as_rpy(capsys, tmp_path):
 
 
 def test_runs_and_the_whole_batch_give_the_same(tmp_path, monkeypatch, excerpt):
-    """
-    Check the runs of one covariance against message_covariance's batch over every message.
-
-    The real recording's covariances are constant (its excerpt here): one run each,
-    converted run by run; the bag written here has a new one nearly every message: the
-    whole batch. Each both ways.
-    """
+    """Check the runs of one covariance against message_covariance's batch over every message."""
     path, _ = write_derived(tmp_path / 'derived', 'sqlite3')
     for source in (excerpt, path):
         results = {}
@@ -353,8 +300,8 @@ def test_parquet_null_where_the_csv_is_empty(capsys, tmp_path):
     pq = pytest.importorskip('pyarrow.parquet')
     import pyarrow as pa
     path, _ = write_derived(tmp_path / 'derived', 'sqlite3')
-    status, _, err = run(capsys, 'bag', path, '--parquet', tmp_path / 'pq', '--csv',
-                         tmp_path / 'rows.csv', '--deg', '--precision', '17')
+    status, _, err = bh.run_quiet(capsys, 'bag', path, '--parquet', tmp_path / 'pq', '--csv',
+                                  tmp_path / 'rows.csv', '--deg', '--precision', '17')
     assert (status, err) == (0, '')
     (file,) = (tmp_path / 'pq').glob('*.parquet')
     table = pq.read_table(file)
@@ -370,29 +317,23 @@ def test_parquet_null_where_the_csv_is_empty(capsys, tmp_path):
 
 def test_the_option_reaches_every_bag_of_a_fleet(capsys, tmp_path):
     path, _ = write_derived(tmp_path / 'derived', 'mcap')
-    data = summary_of(capsys, 'bag', bh.REAL, path, '--jobs', '1', '--input-covariance', 'rpy')
+    data = bh.summary_of(capsys, 'bag', bh.REAL, path, '--jobs', '1', '--input-covariance', 'rpy')
     readings = {t['covariances']['reading'] for e in data['bags']
                 for t in e['topics'].values() if 'covariances' in t}
     assert readings == {'rpy'} and data['fleet']['failed'] == 0
 
 
 def test_an_unknown_reading_is_refused(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--input-covariance', 'body')
+    status, out, err = bh.run_quiet(capsys, 'bag', bh.REAL, '--input-covariance', 'body')
     assert (status, out) == (2, '')
     assert "argument --input-covariance: invalid choice: 'body'" in err.splitlines()[-1]
 
 
-# ---------------------------------------------------------------------------------------
 # Covariances at float64's ends
 
 
 def extreme_bag(path):
-    """
-    Return (bag, {topic: (quaternions, covariances)}): covariances near 1e308 and 5e-324.
-
-    /imu: 1e308·I at 24 orientations (constant: one run), then 5e-324·I at 8; /odom: a pose
-    covariance whose position block is 1 m² and rotation block 1e308·I.
-    """
+    """Return (bag, {topic: (quaternions, covariances)}): covariances near 1e308 and 5e-324."""
     b, rng = bh.Builder(), np.random.default_rng(11)
     q = Rotation.random(40, random_state=7).as_quat()
     huge, tiny = 1e308 * np.eye(3).ravel(), 5e-324 * np.eye(3).ravel()
@@ -404,7 +345,7 @@ def extreme_bag(path):
             stamp = 3.0 + 0.05 * k
             msg = (b.imu(stamp, qk, cov=cov) if topic == '/imu' else
                    b.odometry(stamp, rng.normal(size=3), qk, cov=cov))
-            messages.append((topic, IMU_TYPE if topic == '/imu' else ODOM_TYPE,
+            messages.append((topic, bh.IMU_TYPE if topic == '/imu' else bh.ODOM_TYPE,
                              int(stamp * 1e9), msg))
     return bh.write_bag(path, messages), {t: (qs, np.array(c)) for t, (qs, c) in plan.items()}
 
@@ -414,14 +355,11 @@ def test_covariances_near_float64_s_ends_are_converted_at_the_scale_of_one(
     """
     σ = √max|C|·σ(C / max|C|): 1e308·I gives σ near 1e154, 5e-324·I near 2e-162, never inf or 0.
 
-    A covariance of roll, pitch, yaw beyond float64 (1e308·I far enough from level) is bad,
-    as rotation_node's ~/rpy_covariance says; every other is the reference's, whether the
-    covariances go run by run or as one batch, and the table is written whole (it raised
-    OverflowError, then RotationError, with a traceback and no CSV).
+    One beyond float64 is bad, as ~/rpy_covariance says; the table is written whole.
     """
     path, plan = extreme_bag(tmp_path / 'extreme')
     out = tmp_path / 'rows.csv'
-    status, _, err = run(capsys, 'bag', path, '--csv', out)
+    status, _, err = bh.run_quiet(capsys, 'bag', path, '--csv', out)
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out.read_text())))
     analysed = []

@@ -1,16 +1,10 @@
 """
 rot-tools bag on bad input: refusals counted by reason, or one line and exit status 2.
 
-Bags with bad messages are written here (rosbags' writer): zero quaternions on every message
-(as a public ROS 1 bag's odometry has), NaN/Inf, non-unit quaternions, Imu messages without
-orientation, in every type read. Damaged copies of the real recording, empty and missing
-bags, and wrong options must each give exactly one ``rot-tools: error:`` line, never a
-traceback nor a warning: run in this process (rot_tools.cli.main.main, with Python's warnings
-caught as the lines they would print), and as the console script only where the process is
-what is tested (an environment without rosbags).
+Bad messages of every type read, damaged, empty and missing bags, wrong options: never a
+traceback nor a warning.
 """
 
-import contextlib
 import csv
 import io
 import json
@@ -19,7 +13,6 @@ import os
 import re
 import subprocess
 import sys
-import warnings
 
 import bag_helpers as bh
 from conftest import console_script, script_env
@@ -27,10 +20,10 @@ import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io.boundary import QUATERNION_TOLERANCE  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
+from test_cli import run  # noqa: E402
 
 TOL = QUATERNION_TOLERANCE
 RNG = np.random.default_rng(18)
@@ -105,15 +98,9 @@ def bad_bag(request, tmp_path_factory):
     return path, plan
 
 
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, bh.without_gyro_warnings(err)
-
-
 def test_refusals_are_counted_by_reason(capsys, bad_bag):
     path, plan = bad_bag
-    status, out, err = run(capsys, 'bag', path, '--json')
+    status, out, err = bh.run_quiet(capsys, 'bag', path, '--json')
     assert (status, err) == (0, '')
     topics = json.loads(out)['topics']
     assert set(topics) == set(plan)  # /chatter (std_msgs/String) is not read
@@ -139,7 +126,7 @@ def test_refusals_are_counted_by_reason(capsys, bad_bag):
 
 def test_accepted_rows_are_the_normalised_inputs(capsys, bad_bag):
     path, plan = bad_bag
-    status, out, err = run(capsys, 'bag', path, '--csv', '-')
+    status, out, err = bh.run_quiet(capsys, 'bag', path, '--csv', '-')
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out)))
     assert not [r for r in rows if r['topic'] == '/odom_w0']
@@ -171,14 +158,13 @@ def test_accepted_rows_are_the_normalised_inputs(capsys, bad_bag):
 
 def test_tolerance_option(capsys, bad_bag):
     path, plan = bad_bag
-    s = json.loads(run(capsys, 'bag', path, '--json', '--tol', '0.02', '--topic', '/pose')[1])
+    s = bh.summary_of(capsys, 'bag', path, '--tol', '0.02', '--topic', '/pose', run=bh.run_quiet)
     # the 1.01 × q now passes; zero, NaN and Inf still do not
     assert s['topics']['/pose']['refused'] == {
         'total': 4, 'non_finite': 3, 'zero_quaternion': 1, 'non_unit_quaternion': 0,
         'no_orientation': 0}
 
 
-# ---------------------------------------------------------------------------------------
 # One line and exit status 2
 
 
@@ -188,23 +174,9 @@ def script():
 
 
 def one_line_error(script, *args, env=None, contains=''):
-    """
-    Assert that rot-tools ARGS prints one error line, nothing else, and exits with status 2.
-
-    In this process (rot_tools.cli.main.main, stdout and stderr redirected, every warning
-    Python would print on stderr caught and counted as lines of it); as the console script
-    ``script`` when ``env`` is given (an environment of its own).
-    """
+    """Assert one error line, no warning, nothing else, status 2; with ``env``, by ``script``."""
     if env is None:
-        out, err = io.StringIO(), io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
-                warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter('always')
-            status = cli.main([str(a) for a in args])
-        shown = err.getvalue() + ''.join(warnings.formatwarning(w.message, w.category,
-                                                                w.filename, w.lineno)
-                                         for w in caught)
-        proc = subprocess.CompletedProcess(args, status, out.getvalue(), shown)
+        proc = run(*args)  # in this process, Python's warnings on stderr
     else:
         proc = subprocess.run(script + [str(a) for a in args], capture_output=True, text=True,
                               timeout=120, env=env)
@@ -312,13 +284,7 @@ def test_a_bag_without_a_topic_to_read(script, tmp_path):
 
 
 def test_a_bag_with_nothing_asked_for_is_skipped(capsys, tmp_path):
-    """
-    Check what is BagSkipped (a fleet's ``skipped``) and what a BagError (``failed``).
-
-    Skipped: no message, none of the topics asked for, no topic of a type read. A topic asked
-    for that is missing beside others, or of a type not read, is a BagError (``failed``).
-    Alone, each is one line and exit status 2.
-    """
+    """Check what is BagSkipped (a fleet's ``skipped``) and what a BagError (``failed``)."""
     from rot_tools.cli import bag_analysis
     from rot_tools.io import bag_read
     from rosbags.rosbag2 import Writer
@@ -343,7 +309,7 @@ def test_a_bag_with_nothing_asked_for_is_skipped(capsys, tmp_path):
         with pytest.raises(bag_read.BagError, match=re.escape(contains)) as caught:
             bag_analysis.analyse(bag, options[1::2])
         assert isinstance(caught.value, bag_read.BagSkipped) == skipped, contains
-        status, out, err = run(capsys, 'bag', bag, *options)
+        status, out, err = bh.run_quiet(capsys, 'bag', bag, *options)
         assert (status, out) == (2, '') and err.count('\n') == 1 and contains in err, err
 
 
@@ -386,11 +352,11 @@ class Terminal(io.StringIO):
 
 def test_progress_bar_only_on_a_terminal(capsys, monkeypatch, bad_bag):
     path, plan = bad_bag
-    status, out, err = run(capsys, 'bag', path)
+    status, out, err = bh.run_quiet(capsys, 'bag', path)
     assert (status, err) == (0, '') and out.startswith('bag: ')
     terminal = Terminal()
     monkeypatch.setattr(sys, 'stderr', terminal)
-    status, out, _ = run(capsys, 'bag', path)
+    status, out, _ = bh.run_quiet(capsys, 'bag', path)
     total = sum(len(items) for _, items in plan.values())
     bar = bh.without_gyro_warnings(terminal.getvalue())
     assert status == 0 and out.startswith('bag: ')

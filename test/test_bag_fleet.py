@@ -1,14 +1,4 @@
-"""
-rot-tools bag over many bags: --jobs, --parquet and its manifest, --engine dask, bags that fail.
-
-Most tests read a small fleet (a hundred and twenty messages a bag, written here by rosbags)
-as a ROS 1 bag, rosbag2 sqlite3 and MCAP, in this process with ``--jobs 1``; what needs
-processes of its own (``--jobs 2``, a local Dask cluster, a worker killed) runs the console
-script. Whatever runs the per-bag jobs (one after the other, two processes, a Dask cluster),
-the summary is the same byte for byte and the Parquet tables are equal; each bag's entry is
-the summary the bag gives alone. The docs' fleet reads the real recording (../shared/data)
-three times. Signals sent to a fleet: test_fleet_signals.py.
-"""
+"""rot-tools bag over many bags: --jobs, --parquet, --engine dask, bags that fail."""
 
 import contextlib
 import csv
@@ -24,7 +14,7 @@ import sys
 import threading
 
 import bag_helpers as bh
-from conftest import console_script, script_env
+from conftest import console_script, one_error, run_cli, script_env
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import numpy as np
 import pytest
@@ -32,7 +22,7 @@ import pytest
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 pa = pytest.importorskip('pyarrow', reason="the 'bag' extra (pyarrow) is not installed")
 pq = pytest.importorskip('pyarrow.parquet')
-from rot_tools.cli import bag_parquet, fleet, main as cli, output_file  # noqa: E402
+from rot_tools.cli import bag_parquet, fleet, output_file  # noqa: E402
 
 REAL_MESSAGES = 3061 + 3060
 """Messages of the real recording (Imu and Odometry), every one accepted."""
@@ -97,13 +87,6 @@ def rot_tools_bag(cwd, *args, env=None):
     return done.returncode, done.stdout, done.stderr
 
 
-def bag_here(capsys, *args):
-    """Run rot-tools bag in this process: (status, stdout, stderr)."""
-    status = cli.main(['bag', *[str(a) for a in args]])
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err
-
-
 def tables(directory):
     """{file name: pyarrow Table} of every *.parquet in ``directory``."""
     return {p.name: pq.read_table(p) for p in sorted(Path(directory).glob('*.parquet'))}
@@ -135,7 +118,7 @@ def test_serial_processes_and_dask_give_the_same_output(small, capsys, monkeypat
                           ('dask', ['--engine', 'dask', '--jobs', '1'])):
         common = [*paths, *options, '--parquet', f'pq-{name}', '--csv', f'{name}.csv']
         if name == 'serial':  # here; the others in processes of their own
-            status, out, err = bag_here(capsys, *common)
+            status, out, err = run_cli(capsys, 'bag', *common)
         else:
             with dask_port_held():  # another cluster's dashboard (or run's): not a word
                 status, out, err = rot_tools_bag(root, *common)
@@ -157,12 +140,12 @@ def test_serial_processes_and_dask_give_the_same_output(small, capsys, monkeypat
     assert (root / 'pq-serial' / '_SUCCESS').read_bytes() == b''
     # each bag's entry is the summary the bag gives alone (minus its `bag` key)
     monkeypatch.chdir(root)
-    status, out, err = bag_here(capsys, *paths, '--jobs', '1', '--json')
+    status, out, err = run_cli(capsys, 'bag', *paths, '--jobs', '1', '--json')
     data = json.loads(out)
     assert [e['path'] for e in data['bags']] == paths
     assert data['fleet'] == {'bags': 3, 'failed': 0, 'skipped': 0, 'messages': 3 * 2 * N}
     for entry, path in zip(data['bags'], paths):
-        alone = json.loads(bag_here(capsys, path, '--json')[1])
+        alone = json.loads(run_cli(capsys, 'bag', path, '--json')[1])
         assert entry == {'path': path, 'status': 'ok',
                          **{k: v for k, v in alone.items() if k != 'bag'}}
     rows = list(csv.reader(io.StringIO(serial[1].decode())))
@@ -174,7 +157,7 @@ def test_the_csv_on_stdout_is_the_same_whatever_jobs_is(small, capsys, monkeypat
     """--csv -: the header once, then the rows, with --jobs 2 as with --jobs 1."""
     root, paths = small
     monkeypatch.chdir(root)
-    serial = bag_here(capsys, *paths, '--jobs', '1', '--csv', '-')
+    serial = run_cli(capsys, 'bag', *paths, '--jobs', '1', '--csv', '-')
     assert rot_tools_bag(root, *paths, '--jobs', '2', '--csv', '-') == serial
     assert serial[0] == 0 and serial[1].count('bag,topic,stamp') == 1
 
@@ -184,11 +167,11 @@ def test_an_existing_dask_cluster_by_its_address(small, capsys, monkeypatch):
     distributed = pytest.importorskip('distributed')
     root, paths = small
     monkeypatch.chdir(root)
-    want = bag_here(capsys, *paths, '--jobs', '1', '--parquet', 'pq-want')
+    want = run_cli(capsys, 'bag', *paths, '--jobs', '1', '--parquet', 'pq-want')
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                                   protocol='tcp', dashboard_address=':0') as cluster:
-        got = bag_here(capsys, *paths, '--engine', 'dask', '--scheduler',
-                       cluster.scheduler_address, '--parquet', 'pq-got')
+        got = run_cli(capsys, 'bag', *paths, '--engine', 'dask', '--scheduler',
+                      cluster.scheduler_address, '--parquet', 'pq-got')
     assert got == want and want[0] == 0
     assert tables('pq-got').keys() == tables('pq-want').keys()
     for name, table in tables('pq-got').items():
@@ -231,9 +214,9 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypat
     """Each address is one line and status 2, within the connect bound (set to 0.3 s)."""
     root, paths = small
     monkeypatch.chdir(root)
-    status, out, err = bag_here(capsys, *paths, '--scheduler', 'tcp://127.0.0.1:8786')
-    assert (status, out) == (2, '') and err.count('\n') == 1 and '--engine dask' in err
-    status, out, err = bag_here(capsys, *paths, '--engine', 'dask', '--scheduler', '')
+    one_error(capsys, 'bag', *paths, '--scheduler', 'tcp://127.0.0.1:8786',
+              contains='--engine dask')
+    status, out, err = run_cli(capsys, 'bag', *paths, '--engine', 'dask', '--scheduler', '')
     assert (status, out, err) == (2, '', "rot-tools: error: --scheduler '': no address (a "
                                   "Dask scheduler's, such as tcp://HOST:8786)\n")
     pytest.importorskip('distributed')
@@ -243,8 +226,8 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypat
         for name, address in (('silent', silent), ('dashboard', dashboard),
                               ('refused', 'tcp://127.0.0.1:9'), ('tls', 'tls://127.0.0.1:9'),
                               ('ucx', 'ucx://127.0.0.1:9'), ('http', 'http://127.0.0.1:9')):
-            status, out, err = bag_here(capsys, *paths, '--engine', 'dask', '--scheduler',
-                                        address, '--parquet', 'pq-unreached')
+            status, out, err = run_cli(capsys, 'bag', *paths, '--engine', 'dask', '--scheduler',
+                                       address, '--parquet', 'pq-unreached')
             assert (status, out) == (2, '') and err.count('\n') == 1, (name, err)
             prefix = f'rot-tools: error: --scheduler {address}: cannot connect: '
             assert err.startswith(prefix), (name, err)
@@ -261,7 +244,8 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(small, capsys, monkeypat
 def test_an_in_process_scheduler_address_is_one_line(small, capsys, monkeypatch):
     root, paths = small
     monkeypatch.chdir(root)
-    status, out, err = bag_here(capsys, *paths, '--engine', 'dask', '--scheduler', 'inproc://x')
+    status, out, err = run_cli(capsys, 'bag', *paths, '--engine', 'dask', '--scheduler',
+                               'inproc://x')
     assert (status, out, err) == (
         2, '', 'rot-tools: error: --scheduler inproc://x: an inproc:// address is reachable only '
         "inside the Python process that made it; give the scheduler's tcp://HOST:PORT\n")
@@ -282,7 +266,7 @@ def test_a_local_dask_cluster_has_no_more_workers_than_bags(small, capsys, monke
     monkeypatch.chdir(root)
     for given, jobs in ((paths[:2], 6), (paths, 2)):
         with pytest.raises(RuntimeError, match='no cluster'):
-            bag_here(capsys, *given, '--engine', 'dask', '--jobs', jobs)
+            run_cli(capsys, 'bag', *given, '--engine', 'dask', '--jobs', jobs)
     assert made == [2, 2]
 
 
@@ -302,7 +286,7 @@ def test_a_bag_that_fails_or_is_skipped_among_good_ones(small, tmp_path, capsys,
 
     monkeypatch.setattr(fleet.bag_analysis, 'analyse', overflowing)
     given = [good[0], 'corrupt.bag', good[1], 'strings.bag']
-    status, out, err = bag_here(capsys, *given, '--jobs', '1', '--json', '--parquet', 'pq')
+    status, out, err = run_cli(capsys, 'bag', *given, '--jobs', '1', '--json', '--parquet', 'pq')
     assert status == 1
     data = json.loads(out)
     assert [(e['path'], e['status']) for e in data['bags']] == [
@@ -324,7 +308,7 @@ def test_a_bag_that_fails_or_is_skipped_among_good_ones(small, tmp_path, capsys,
     # skipped is no failure: without the failed bags, the status is 0
     monkeypatch.undo()
     monkeypatch.chdir(tmp_path)
-    status, out, err = bag_here(capsys, good[0], 'strings.bag', '--jobs', '1', '--json')
+    status, out, err = run_cli(capsys, 'bag', good[0], 'strings.bag', '--jobs', '1', '--json')
     assert (status, err) == (0, f'rot-tools: bag: skipped: {skipped["reason"]}\n')
     assert json.loads(out)['fleet'] == {'bags': 2, 'failed': 0, 'skipped': 1,
                                         'messages': 2 * N}
@@ -354,14 +338,7 @@ sys.exit(main.main(sys.argv[1:]))
 
 
 def test_a_worker_killed_is_tried_again_once_and_a_rerun_owns_its_files(small, tmp_path):
-    """
-    --jobs 2: the worker of a.bag is killed once, b.bag's every time (as the OOM killer does).
-
-    The bags the broken pool held are read again, each alone: a.bag is whole; b.bag, killed
-    alone, is failed and the rest go on. The
-    Parquet directory held an earlier run's files: its file of b.bag goes (the bag has none
-    in this run), the file of a bag not in this run stays, and the manifest lists this run's.
-    """
+    """--jobs 2: a.bag's worker killed once is read again, b.bag's killed every time fails."""
     duckdb = pytest.importorskip('duckdb')
     root, paths = small
     for name in ('a', 'b', 'c'):
@@ -416,23 +393,20 @@ def test_one_bag_alone_keeps_its_rules(small, capsys, monkeypatch):
     root, paths = small
     monkeypatch.chdir(root)
     Path('alone.bag').write_bytes(b'not a bag at all')
-    status, out, err = bag_here(capsys, 'alone.bag', '--jobs', '2')
-    assert (status, out) == (2, '') and err.count('\n') == 1
+    err = one_error(capsys, 'bag', 'alone.bag', '--jobs', '2')
     assert err.startswith('rot-tools: error: bag: alone.bag: ')
-    alone = bag_here(capsys, paths[0])
-    assert bag_here(capsys, paths[0], '--jobs', '2', '--engine', 'processes') == alone
+    alone = run_cli(capsys, 'bag', paths[0])
+    assert run_cli(capsys, 'bag', paths[0], '--jobs', '2', '--engine', 'processes') == alone
     assert alone[1].startswith(f'bag: {paths[0]}\nstorage: rosbag1\ntopics:\n')
 
 
 def test_options_that_take_one_bag_or_a_count(small, capsys, monkeypatch):
     root, paths = small
     monkeypatch.chdir(root)
-    status, out, err = bag_here(capsys, *paths, '--plot', 'rpy.png')
-    assert (status, out) == (2, '') and err.count('\n') == 1 and '--plot draws one bag' in err
+    one_error(capsys, 'bag', *paths, '--plot', 'rpy.png', contains='--plot draws one bag')
     assert not (root / 'rpy.png').exists()
     for jobs in ('0', '-1', 'two'):
-        status, out, err = bag_here(capsys, paths[0], '--jobs', jobs)
-        assert (status, out) == (2, '') and 'must be a whole number >= 1' in err
+        one_error(capsys, 'bag', paths[0], '--jobs', jobs, contains='must be a whole number >= 1')
 
 
 def test_directories_are_searched_for_bags_in_path_order(small, tmp_path, capsys,
@@ -457,9 +431,8 @@ def test_directories_are_searched_for_bags_in_path_order(small, tmp_path, capsys
                      *bare, str(tree / 'a.bag')]
     assert fleet.find_bags([str(tree / 'b' / 'mcap')]) == ([str(tree / 'b' / 'mcap')], False)
     monkeypatch.chdir(tmp_path)
-    status, out, err = bag_here(capsys, 'tree/c')
-    assert (status, out) == (2, '') and err.count('\n') == 1 and 'no bag' in err
-    status, out, err = bag_here(capsys, 'tree', '--jobs', '1', '--json')
+    one_error(capsys, 'bag', 'tree/c', contains='no bag')
+    status, out, err = run_cli(capsys, 'bag', 'tree', '--jobs', '1', '--json')
     assert (status, err) == (0, '')
     data = json.loads(out)
     assert [e['status'] for e in data['bags']] == ['ok'] * 6
@@ -469,9 +442,9 @@ def test_directories_are_searched_for_bags_in_path_order(small, tmp_path, capsys
 def test_parquet_schema_column_by_column(small, capsys, monkeypatch):
     root, paths = small
     monkeypatch.chdir(root)
-    status, out, err = bag_here(capsys, paths[0], paths[2], '--seq', 'ZYX', '--deg',
-                                '--precision', '17', '--parquet', 'pq-schema', '--csv',
-                                'schema.csv', '--jobs', '1')
+    status, out, err = run_cli(capsys, 'bag', paths[0], paths[2], '--seq', 'ZYX', '--deg',
+                               '--precision', '17', '--parquet', 'pq-schema', '--csv',
+                               'schema.csv', '--jobs', '1')
     assert (status, err) == (0, '')
     floats = ['x', 'y', 'z', 'qx', 'qy', 'qz', 'qw', 'roll', 'pitch', 'yaw', 'ZYX_1', 'ZYX_2',
               'ZYX_3', 'rx', 'ry', 'rz', 'angle', 'wx', 'wy', 'wz', 'roll_std', 'pitch_std',
@@ -521,8 +494,8 @@ def test_bags_of_long_paths_get_their_parquet_files(small, tmp_path, capsys, mon
     for name in ('one.bag', 'two.bag'):
         shutil.copy(root / paths[0], deep / name)
     monkeypatch.chdir(tmp_path)
-    status, out, err = bag_here(capsys, deep.relative_to(tmp_path), '--jobs', '1',
-                                '--parquet', 'pq')
+    status, out, err = run_cli(capsys, 'bag', deep.relative_to(tmp_path), '--jobs', '1',
+                               '--parquet', 'pq')
     assert (status, err) == (0, '')
     written = tables('pq')
     assert len(written) == 2 and all(len(n.encode()) < 255 for n in written)
@@ -537,11 +510,11 @@ def test_a_rerun_in_which_a_bag_fails_removes_its_earlier_file(small, tmp_path, 
     monkeypatch.chdir(tmp_path)
     for name in ('a.bag', 'b.bag'):
         shutil.copy(root / paths[0], name)
-    assert bag_here(capsys, 'a.bag', 'b.bag', '--jobs', '1', '--parquet', 'pq')[0] == 0
+    assert run_cli(capsys, 'bag', 'a.bag', 'b.bag', '--jobs', '1', '--parquet', 'pq')[0] == 0
     assert sorted(p.name for p in Path('pq').iterdir()) == [
         '_SUCCESS', '_manifest.json', 'a.bag.parquet', 'b.bag.parquet']
     Path('b.bag').write_bytes(b'\0' * 100)  # damaged since
-    status, _, err = bag_here(capsys, 'a.bag', 'b.bag', '--jobs', '1', '--parquet', 'pq')
+    status, _, err = run_cli(capsys, 'bag', 'a.bag', 'b.bag', '--jobs', '1', '--parquet', 'pq')
     assert status == 1 and err.startswith('rot-tools: error: bag: b.bag: ')
     assert sorted(p.name for p in Path('pq').iterdir()) == ['_manifest.json', 'a.bag.parquet']
     assert manifest('pq')['files'] == ['a.bag.parquet']
@@ -552,8 +525,8 @@ def test_a_run_of_one_bag_keeps_its_parquet_directory_as_a_fleet_does(
     """One bag alone, and the same bag as a fleet (its directory searched): same files."""
     root, paths = small
     monkeypatch.chdir(root)
-    assert bag_here(capsys, paths[0], '--parquet', 'pq-alone')[0] == 0
-    assert bag_here(capsys, str(Path(paths[0]).parent), '--parquet', 'pq-fleet')[0] == 0
+    assert run_cli(capsys, 'bag', paths[0], '--parquet', 'pq-alone')[0] == 0
+    assert run_cli(capsys, 'bag', str(Path(paths[0]).parent), '--parquet', 'pq-fleet')[0] == 0
     name = 'fleet_ros1_run.bag.parquet'
     for directory in ('pq-alone', 'pq-fleet'):
         assert sorted(p.name for p in Path(directory).iterdir()) == [
@@ -568,10 +541,10 @@ def test_a_failed_run_of_one_bag_leaves_no_directory_that_reads_as_ok(
     root, paths = small
     monkeypatch.chdir(tmp_path)
     shutil.copy(root / paths[0], 'x.bag')
-    assert bag_here(capsys, 'x.bag', '--parquet', 'pq')[0] == 0
+    assert run_cli(capsys, 'bag', 'x.bag', '--parquet', 'pq')[0] == 0
     Path('x.bag').write_bytes(b'\0' * 100)  # damaged since
-    status, out, err = bag_here(capsys, 'x.bag', '--parquet', 'pq')
-    assert (status, out) == (2, '') and err.startswith('rot-tools: error: bag: x.bag: ')
+    err = one_error(capsys, 'bag', 'x.bag', '--parquet', 'pq')
+    assert err.startswith('rot-tools: error: bag: x.bag: ')
     assert sorted(p.name for p in Path('pq').iterdir()) == ['_manifest.json']
     assert manifest('pq') == {'bags': [{'path': 'x.bag', 'status': 'failed', 'file': None}],
                               'files': []}
@@ -651,7 +624,7 @@ def test_duckdb_reads_the_files_of_the_manifest_as_one_table(bags, capsys, monke
     assert command[:3] == ['rot-tools', 'bag', 'fleet/']
     monkeypatch.chdir(root)
     # here, one bag after the other (the same output whatever --jobs is): no fork of pytest
-    status, out, err = bag_here(capsys, *command[2:], '--jobs', '1')
+    status, out, err = run_cli(capsys, 'bag', *command[2:], '--jobs', '1')
     assert (status, err) == (0, '')
     assert_doc_output('bag-fleet-command', f'$ {line}\n{out}')
     pq.write_table(pq.read_table(root / 'table' / 'fleet_mcap.parquet'),

@@ -1,10 +1,4 @@
-"""
-rot-tools bag against what a careless or hostile user gives it, each made here.
-
-Outputs that would overwrite the bag, writes that fail midway, negative stamps, files that
-are not bags (a FIFO among them), absurd --start, a full or closed standard output, frame
-ids a spreadsheet would run, and bags with more topics than a plot can hold.
-"""
+"""rot-tools bag against what a careless or hostile user gives it, each made here."""
 
 import csv
 import errno
@@ -14,39 +8,19 @@ import os
 from pathlib import Path
 import shutil
 import subprocess
-import sys
 import xml.etree.ElementTree as ElementTree
 
 import bag_helpers as bh
-from conftest import console_script, script_env
+from conftest import console_script, one_error, run_cli, script_env
+from math_helpers import unit
 import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 from rot_tools.cli import bag_analysis, bag_output  # noqa: E402
-from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.core.euler import RPY_SEQUENCE  # noqa: E402
 from rot_tools.io import bag_read  # noqa: E402
 import yaml  # noqa: E402,I100
-
-
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def one_error(capsys, *args, contains=''):
-    status, out, err = run(capsys, *args)
-    assert (status, out) == (2, ''), err
-    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
-    assert contains in err, err
-    return err
-
-
-def unit(q):
-    q = np.asarray(q, float)
-    return q / np.linalg.norm(q)
 
 
 def pose_bag(path, stamps, frames=('map',), topic='/pose', storage='sqlite3'):
@@ -65,7 +39,6 @@ def small_bag(tmp_path_factory):
     return pose_bag(tmp_path_factory.mktemp('small') / 'bag', [1.0 + 0.1 * k for k in range(50)])
 
 
-# ---------------------------------------------------------------------------------------
 # Nothing lost
 
 
@@ -116,7 +89,7 @@ def test_a_failed_csv_write_leaves_the_old_file(capsys, tmp_path, monkeypatch):
     assert out.read_text() == 'the old table\n'
     assert sorted(p.name for p in tmp_path.iterdir()) == ['imu.csv']  # nothing left over
     monkeypatch.setattr(bag_output, 'stamp_text', real_stamp_text)
-    assert run(capsys, 'bag', bh.REAL, '--csv', out)[0] == 0  # the real one, complete
+    assert run_cli(capsys, 'bag', bh.REAL, '--csv', out)[0] == 0  # the real one, complete
     assert len(out.read_text().splitlines()) == 1 + 3061 + 3060
     assert sorted(p.name for p in tmp_path.iterdir()) == ['imu.csv']
 
@@ -127,38 +100,6 @@ def test_a_failed_plot_write_leaves_nothing(capsys, tmp_path, savefig_fills_the_
     one_error(capsys, 'bag', small_bag, '--plot', png,
               contains=f'--plot: cannot write {png}: No space left on device')
     assert list(tmp_path.iterdir()) == []
-
-
-def closed_pipe():
-    """Return the writing end of a pipe whose reader is gone (a file descriptor)."""
-    read, write = os.pipe()
-    os.close(read)
-    return write
-
-
-def test_the_summary_on_a_full_or_closed_stdout(small_bag, monkeypatch):
-    """
-    The summary and the table (--csv -) on > /dev/full, | true and >&-, in this process.
-
-    rot-tools' main says them as it says every command's (test_cli_streams.py runs the
-    console script): one line and status 1, or quiet and 141 for a reader gone.
-    """
-    for extra in ([], ['--csv', '-']):
-        for open_stdout, status, said in (
-                (lambda: open('/dev/full', 'w'), 1, 'No space left on device'),
-                (lambda: open(closed_pipe(), 'w'), 141, None),
-                (lambda: None, 1, 'it is closed')):
-            stdout, err = open_stdout(), io.StringIO()
-            monkeypatch.setattr(sys, 'stdout', stdout)
-            monkeypatch.setattr(sys, 'stderr', err)
-            try:
-                got = cli.main(['bag', str(small_bag), *extra])
-            finally:
-                monkeypatch.undo()
-                if stdout is not None:
-                    stdout.close()  # what it could not write went to /dev/null: no error
-            line = f'rot-tools: error: cannot write to stdout: {said}\n' if said else ''
-            assert (got, err.getvalue()) == (status, line), (extra, said)
 
 
 def test_an_unexpected_error_on_the_bag_is_one_line(capsys, tmp_path, small_bag, monkeypatch):
@@ -182,7 +123,7 @@ def test_an_unexpected_error_on_the_bag_is_one_line(capsys, tmp_path, small_bag,
 def interrupted(capsys, *args):
     """Return the exit status of rot-tools ARGS stopped by Ctrl-C (130)."""
     try:
-        status = run(capsys, *args)[0]
+        status = run_cli(capsys, *args)[0]
     except KeyboardInterrupt:  # main lets it through, or says it in one line
         status = 130
     capsys.readouterr()
@@ -223,19 +164,18 @@ def test_ctrl_c_while_writing_leaves_every_output_as_it_was(
     assert out.read_text() == 'the old table\n' and list(table.iterdir()) == []
 
 
-# ---------------------------------------------------------------------------------------
 # Stamps
 
 
 def test_negative_stamps_are_exact(capsys, tmp_path):
     path = pose_bag(tmp_path / 'bag', [-12345.0, -2.0, -1.5, -0.5, -1e-9, 0.25])
-    status, out, err = run(capsys, 'bag', path, '--csv', '-')
+    status, out, err = run_cli(capsys, 'bag', path, '--csv', '-')
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out)))
     assert [r['stamp'] for r in rows] == ['-12345.000000000', '-2.000000000', '-1.500000000',
                                           '-0.500000000', '-0.000000001', '0.250000000']
     assert float(rows[2]['wx'] or 0) != 0 or rows[2]['wx'] != ''  # Δt > 0: ω given
-    s = json.loads(run(capsys, 'bag', path, '--json')[1])['topics']['/pose']
+    s = json.loads(run_cli(capsys, 'bag', path, '--json')[1])['topics']['/pose']
     assert (s['start'], s['end'], s['duration']) == (-12345.0, 0.25, 12345.25)
     bag = next(iter(bag_analysis.analyse(path)[1]))
     assert bag.ns.tolist() == [-12345 * 10**9, -2 * 10**9, -15 * 10**8, -5 * 10**8, -1,
@@ -248,7 +188,7 @@ def test_start_and_end_keep_every_digit_whatever_the_precision(capsys, tmp_path)
     path = pose_bag(tmp_path / 'bag', stamps)
     ns = [1503000000_123456789, 1503000000_987654321, 1503000061_500000000]
     for extra in ((), ('--json',)):
-        status, out, err = run(capsys, 'bag', path, '--precision', '4', *extra)
+        status, out, err = run_cli(capsys, 'bag', path, '--precision', '4', *extra)
         assert (status, err) == (0, '')
         s = (json.loads(out) if extra else yaml.safe_load(out))['topics']['/pose']
         assert (s['start'], s['end']) == (ns[0] / 1e9, ns[-1] / 1e9)
@@ -256,12 +196,11 @@ def test_start_and_end_keep_every_digit_whatever_the_precision(capsys, tmp_path)
 
 
 def test_a_start_beyond_any_time_reads_nothing(capsys, small_bag):
-    status, out, err = run(capsys, 'bag', small_bag, '--start', '1e300', '--json')
+    status, out, err = run_cli(capsys, 'bag', small_bag, '--start', '1e300', '--json')
     assert (status, err) == (0, '')
     assert json.loads(out)['topics']['/pose']['messages'] == 0
 
 
-# ---------------------------------------------------------------------------------------
 # Files that are not bags
 
 
@@ -281,13 +220,13 @@ def test_a_bare_storage_file_is_read_as_a_bag(capsys, tmp_path, storage):
     shutil.copy(inner, bare)
     assert bag_read.is_bag(bare) and bag_read.is_bag(folder) and bag_read.is_bag(inner)
     assert not bag_read.is_bag(tmp_path) and not bag_read.is_bag(tmp_path / 'notes.txt')
-    of_folder, of_bare = (json.loads(run(capsys, 'bag', path, '--json')[1])
+    of_folder, of_bare = (json.loads(run_cli(capsys, 'bag', path, '--json')[1])
                           for path in (folder, bare))
     assert of_bare == {**of_folder, 'bag': str(bare)}
     assert of_bare['storage'] == f'rosbag2 {storage}'
     assert of_bare['topics']['/pose']['accepted'] == 30
-    rows = run(capsys, 'bag', bare, '--csv', '-')[1]
-    assert rows == run(capsys, 'bag', folder, '--csv', '-')[1] and rows.count('\n') == 31
+    rows = run_cli(capsys, 'bag', bare, '--csv', '-')[1]
+    assert rows == run_cli(capsys, 'bag', folder, '--csv', '-')[1] and rows.count('\n') == 31
 
 
 def test_files_named_as_bags_that_are_not(capsys, tmp_path):
@@ -331,14 +270,13 @@ def test_a_fifo_is_refused_before_opening(tmp_path):
     assert proc.stderr == f'rot-tools: error: bag: {fifo}: not a regular file or a directory\n'
 
 
-# ---------------------------------------------------------------------------------------
 # What a spreadsheet would run
 
 
 def test_text_cells_a_spreadsheet_would_run_are_escaped(capsys, tmp_path):
     frames = ('=HYPERLINK("x")', '+1', '-cmd', '@SUM(A1)', '\tx', '\rx', 'map', "'q", 'a,b\nc')
     path = pose_bag(tmp_path / 'bag', [1.0 + k for k in range(len(frames))], frames)
-    out = run(capsys, 'bag', path, '--csv', '-')[1]
+    out = run_cli(capsys, 'bag', path, '--csv', '-')[1]
     rows = list(csv.DictReader(io.StringIO(out)))
     assert [r['frame_id'] for r in rows] == ["'" + f for f in frames[:6]] + list(frames[6:])
     assert out.count('"\'=HYPERLINK(""x"")"') == 1  # quoted where CSV needs it
@@ -347,7 +285,6 @@ def test_text_cells_a_spreadsheet_would_run_are_escaped(capsys, tmp_path):
     assert bag_output.text_cell('=1+2') == "'=1+2" and bag_output.text_cell('map') == 'map'
 
 
-# ---------------------------------------------------------------------------------------
 # The plot: bounded, and tilt beside a spinning yaw
 
 
@@ -380,7 +317,7 @@ def test_the_plot_is_bounded_and_says_what_it_draws(capsys, tmp_path):
     topics = [f'/t{k:02d}' for k in range(bag_output.MAX_PLOTTED_TOPICS + 3)]
     path = spinning_bag(tmp_path / 'bag', topics)
     svg = tmp_path / 'rpy.svg'
-    status, _, err = run(capsys, 'bag', path, '--plot', svg, '--deg')
+    status, _, err = run_cli(capsys, 'bag', path, '--plot', svg, '--deg')
     drawn, left = topics[:bag_output.MAX_PLOTTED_TOPICS], topics[bag_output.MAX_PLOTTED_TOPICS:]
     assert status == 0 and err == (
         f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {", ".join(drawn)}; left out, 3 '
@@ -391,6 +328,6 @@ def test_the_plot_is_bounded_and_says_what_it_draws(capsys, tmp_path):
     assert not any(f'id="{t}:yaw"' in text for t in left)
     # roll and pitch share an axis of their own; yaw (2,000°) has another
     assert axes_of(svg, '/t00:roll') == axes_of(svg, '/t00:pitch') != axes_of(svg, '/t00:yaw')
-    status, _, err = run(capsys, 'bag', path, '--plot', svg, '--topic', left[0])
+    status, _, err = run_cli(capsys, 'bag', path, '--plot', svg, '--topic', left[0])
     assert status == 0 and err == f'rot-tools bag: --plot {svg}: roll, pitch, yaw of {left[0]}\n'
     assert f'id="{left[0]}:roll"' in svg.read_text()

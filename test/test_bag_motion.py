@@ -1,21 +1,14 @@
-"""
-rot-tools bag's checks of the motion: an Imu's orientation against its gyro, and positions.
-
-On the real recording and on copies written here: the Jackal's IMU with its quaternion
-fields written w-first (as a driver that hands Eigen's coeffs() to the message's x, y, z, w
-does), and an odometry that falls as a bad estimator's does. Expected values are computed
-here from the messages as rosbags decodes them, with scipy's Rotation.
-"""
+"""rot-tools bag's checks of an Imu's orientation against its gyro, and of positions."""
 
 import json
 import math
 
 import bag_helpers as bh
+from conftest import run_cli
 import numpy as np
 import pytest
 
 rosbags = pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
-from rot_tools.cli import main as cli  # noqa: E402
 from rot_tools.cli.bag_analysis import GYRO_NOISE  # noqa: E402
 from rot_tools.core.imu import GYRO_TOL  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
@@ -23,30 +16,10 @@ from scipy.spatial.transform import Rotation  # noqa: E402
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
 
 
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools ARGS, in-process."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
-def real_messages(topic):
-    """{'t': stamps (s), 'q': (n, 4), 'p': (n, 3) or None, 'gyro': (n, 3) or None}."""
-    from rosbags.highlevel import AnyReader
-    rows = {'t': [], 'q': [], 'p': [], 'gyro': []}
-    with AnyReader([bh.REAL]) as reader:
-        conns = [c for c in reader.connections if c.topic == topic]
-        for conn, _, raw in reader.messages(connections=conns):
-            msg = reader.deserialize(raw, conn.msgtype)
-            rows['t'].append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
-            if conn.msgtype == 'sensor_msgs/msg/Imu':
-                q, g = msg.orientation, msg.angular_velocity
-                rows['gyro'].append((g.x, g.y, g.z))
-            else:
-                q, p = msg.pose.pose.orientation, msg.pose.pose.position
-                rows['p'].append((p.x, p.y, p.z))
-            rows['q'].append((q.x, q.y, q.z, q.w))
-    return {k: np.array(v, float) if v else None for k, v in rows.items()}
+@pytest.fixture(scope='module')
+def real():
+    """{topic: {'stamp', 'q', 'p', 'gyro', ...}} of the real recording, decoded by rosbags."""
+    return bh.decode()
 
 
 @pytest.fixture(scope='module')
@@ -70,32 +43,32 @@ def w_first(tmp_path_factory):
 # ---- the orientation against the gyro ------------------------------------------------------
 
 
-def test_the_threshold_is_the_noise_and_imu_check_s_gyro_scale_tolerance(capsys):
+def test_the_threshold_is_the_noise_and_imu_check_s_gyro_scale_tolerance(capsys, real):
     """Check the threshold: GYRO_NOISE + GYRO_TOL × the gyro's RMS rate over the steps."""
-    status, out, err = run(capsys, 'bag', bh.REAL, '--topic', IMU, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--topic', IMU, '--json')
     imu = json.loads(out)['topics'][IMU]
-    gyro = real_messages(IMU)['gyro']
+    gyro = real[IMU]['gyro']
     at_step = 0.5 * (gyro[:-1] + gyro[1:])
     rate = math.sqrt(np.mean(np.sum(at_step ** 2, axis=1)))
     assert imu['gyro_rms_threshold'] == pytest.approx(GYRO_NOISE + GYRO_TOL * rate, rel=1e-12)
 
 
 def test_the_real_imu_agrees_with_its_gyro(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     imu = json.loads(out)['topics'][IMU]
     assert (status, err) == (0, '')
     assert imu['gyro_rms_difference'] < imu['gyro_rms_threshold']
     assert 'gyro_warning' not in imu
 
 
-def test_a_quaternion_written_w_first_is_flagged(capsys, w_first):
-    status, out, err = run(capsys, 'bag', w_first, '--json', '--deg')
+def test_a_quaternion_written_w_first_is_flagged(capsys, w_first, real):
+    status, out, err = run_cli(capsys, 'bag', w_first, '--json', '--deg')
     imu = json.loads(out)['topics'][IMU]
     # ω from the orientations as written, against the gyro (scipy, independent of rot_tools)
-    real = real_messages(IMU)
-    written = Rotation.from_quat(real['q'][:, [3, 0, 1, 2]])
-    omega = (written[:-1].inv() * written[1:]).as_rotvec() / np.diff(real['t'])[:, None]
-    diff = omega - 0.5 * (real['gyro'][:-1] + real['gyro'][1:])
+    q, t, gyro = real[IMU]['q'], real[IMU]['stamp'], real[IMU]['gyro']
+    written = Rotation.from_quat(q[:, [3, 0, 1, 2]])
+    omega = (written[:-1].inv() * written[1:]).as_rotvec() / np.diff(t)[:, None]
+    diff = omega - 0.5 * (gyro[:-1] + gyro[1:])
     rms = math.degrees(math.sqrt(np.mean(np.sum(diff ** 2, axis=1))))
     assert imu['gyro_rms_difference'] == pytest.approx(rms, rel=1e-7)
     assert imu['gyro_rms_difference'] > imu['gyro_rms_threshold']
@@ -107,7 +80,7 @@ def test_a_quaternion_written_w_first_is_flagged(capsys, w_first):
 
 
 def test_the_warning_goes_to_stderr_with_the_csv_on_stdout(capsys, w_first):
-    status, out, err = run(capsys, 'bag', w_first, '--csv', '-')
+    status, out, err = run_cli(capsys, 'bag', w_first, '--csv', '-')
     assert status == 0 and out.startswith('topic,stamp,')
     assert len(err.splitlines()) == 1
     assert err.startswith(f'warning: {IMU}: the orientation disagrees with the gyro: ')
@@ -117,11 +90,10 @@ def test_the_warning_goes_to_stderr_with_the_csv_on_stdout(capsys, w_first):
 # ---- positions ---------------------------------------------------------------------------
 
 
-def test_the_odometry_s_position_ranges_and_largest_speed(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--json')
+def test_the_odometry_s_position_ranges_and_largest_speed(capsys, real):
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     odom = json.loads(out)['topics'][ODOM]
-    real = real_messages(ODOM)
-    p, t = real['p'], real['t']
+    p, t = real[ODOM]['p'], real[ODOM]['stamp']
     for k, name in enumerate('xyz'):
         np.testing.assert_allclose(odom['position_range'][name], [p[:, k].min(), p[:, k].max()],
                                    rtol=1e-11, atol=1e-11)
@@ -131,7 +103,7 @@ def test_the_odometry_s_position_ranges_and_largest_speed(capsys):
 
 
 def test_an_imu_has_no_positions(capsys):
-    status, out, err = run(capsys, 'bag', bh.REAL, '--json')
+    status, out, err = run_cli(capsys, 'bag', bh.REAL, '--json')
     imu = json.loads(out)['topics'][IMU]
     assert not {'position_range', 'max_speed'} & set(imu)
 
@@ -149,7 +121,7 @@ def falling_odometry(path):
 
 
 def test_an_odometry_falling_at_80_m_s_is_seen(capsys, tmp_path):
-    status, out, err = run(capsys, 'bag', falling_odometry(tmp_path / 'fall'), '--json')
+    status, out, err = run_cli(capsys, 'bag', falling_odometry(tmp_path / 'fall'), '--json')
     odom = json.loads(out)['topics']['/odom']
     assert odom['position_range'] == {'x': [1.0, 1.0], 'y': [2.0, 2.0], 'z': [-3754.0, 0.0]}
     assert odom['max_speed'] == pytest.approx(80.0, rel=1e-9)

@@ -1,23 +1,18 @@
-"""
-rot-tools bag --tf REFERENCE BODY: a TF chain recorded in a bag, through TransformTree.
-
-The bag (written here) holds map → odom and odom → base_link, dynamic and sampled together,
-and base_link → imu on /tf_static; the lookups at the samples' stamps are exact compositions,
-checked against 4×4 homogeneous matrices built here with scipy.
-"""
+"""rot-tools bag --tf REFERENCE BODY: a TF chain in a bag, against 4×4 products (scipy)."""
 
 import csv
 import io
 import json
 
 import bag_helpers as bh
+from conftest import one_error, run_cli
 from doc_blocks import assert_doc_output
 import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 pytest.importorskip('rot_tools.core.transform_tree', reason='TransformTree has not landed')
-from rot_tools.cli import bag_analysis, main as cli  # noqa: E402
+from rot_tools.cli import bag_analysis  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 
@@ -35,15 +30,9 @@ def homogeneous(q, t):
     return T
 
 
-def run(capsys, *args):
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
 def test_tf_chain_values(capsys, tf_bag):
     path, truth, static = tf_bag
-    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'imu', '--csv', '-')
+    status, out, err = run_cli(capsys, 'bag', path, '--tf', 'map', 'imu', '--csv', '-')
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out)))
     assert len(rows) == len(truth)
@@ -63,7 +52,7 @@ def test_tf_chain_values(capsys, tf_bag):
 
 def test_tf_summary_counts_refused_transforms(capsys, tf_bag):
     path, truth, _ = tf_bag
-    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'imu', '--json')
+    status, out, err = run_cli(capsys, 'bag', path, '--tf', 'map', 'imu', '--json')
     assert (status, err) == (0, '')
     s = json.loads(out)['topics']['tf:map->imu']
     assert s['chain'] == ['map', 'odom', 'base_link', 'imu']
@@ -73,7 +62,7 @@ def test_tf_summary_counts_refused_transforms(capsys, tf_bag):
     assert s['lookups'] == len(truth)
     assert (s['frame_ids'], s['child_frame_ids']) == (['map'], ['imu'])
     # with --topic, named topics come too; without, only the chain
-    assert list(json.loads(run(capsys, 'bag', path, '--tf', 'odom', 'imu', '--json')[1])[
+    assert list(json.loads(run_cli(capsys, 'bag', path, '--tf', 'odom', 'imu', '--json')[1])[
         'topics']) == ['tf:odom->imu']
 
 
@@ -83,13 +72,11 @@ def test_tf_summary_counts_refused_transforms(capsys, tf_bag):
 ])
 def test_tf_frames_that_never_appear(capsys, tf_bag, frames, contains):
     path, _, _ = tf_bag
-    status, out, err = run(capsys, 'bag', path, '--tf', *frames)
-    assert status == 2 and out == ''
-    assert err.count('\n') == 1 and err.startswith('rot-tools: error: ') and contains in err
+    one_error(capsys, 'bag', path, '--tf', *frames, contains=contains)
 
 
 def test_tf_in_a_bag_without_tf(capsys):
-    status, _, err = run(capsys, 'bag', bh.REAL, '--tf', 'odom', 'base_link')
+    status, _, err = run_cli(capsys, 'bag', bh.REAL, '--tf', 'odom', 'base_link')
     assert status == 2 and 'no tf2_msgs/msg/TFMessage topic' in err and err.count('\n') == 1
 
 
@@ -97,7 +84,7 @@ def test_a_tf_only_bag_without_tf_names_the_option_and_its_frames(capsys, tf_bag
     """Skipped (nothing to read without --tf), with the words that read it."""
     from rot_tools.io import bag_read
     path = tf_bag[0]
-    status, out, err = run(capsys, 'bag', path)
+    status, out, err = run_cli(capsys, 'bag', path)
     assert (status, out) == (2, '') and err == (
         'rot-tools: error: bag: no topic of a type read here in the bag: /tf '
         '(tf2_msgs/msg/TFMessage), /tf_static (tf2_msgs/msg/TFMessage); its TF holds the frames '
@@ -137,7 +124,7 @@ def test_tf_an_empty_frame_and_a_loop_are_counted_and_the_rest_goes_on(capsys, t
            b.transform_stamped(1.06, (1, 2, 3), q, 'y', 'x')]  # x and y: a loop
     messages.append(('/tf', 'tf2_msgs/msg/TFMessage', 1_050_000_000, b.tf_message(bad)))
     path = bh.write_bag(tmp_path / 'bag', messages)
-    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'imu', '--json')
+    status, out, err = run_cli(capsys, 'bag', path, '--tf', 'map', 'imu', '--json')
     assert (status, err) == (0, '')
     s = json.loads(out)['topics']['tf:map->imu']
     assert s['refused'] == {'total': 3, 'non_finite': 0, 'zero_quaternion': 1,
@@ -159,13 +146,13 @@ def test_tf_a_reparented_frame_is_used_under_each_parent(capsys, tmp_path):
         T = homogeneous(q[30 + k], t[30 + k])
         truth[ns] = homogeneous(q[k], t[k]) @ T if parent == 'odom' else T
     path = tf_bag_of(tmp_path, samples)
-    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'base_link', '--json')
+    status, out, err = run_cli(capsys, 'bag', path, '--tf', 'map', 'base_link', '--json')
     assert (status, err) == (0, '')
     s = json.loads(out)['topics']['tf:map->base_link']
     assert (s['accepted'], s['lookups']) == (42, 21)
     assert s['chain'] == [['map', 'odom', 'base_link'], ['map', 'base_link']]
     rows = list(csv.DictReader(io.StringIO(
-        run(capsys, 'bag', path, '--tf', 'map', 'base_link', '--csv', '-')[1])))
+        run_cli(capsys, 'bag', path, '--tf', 'map', 'base_link', '--csv', '-')[1])))
     assert [r['stamp'] for r in rows] == [f'{ns // 10**9}.{ns % 10**9:09d}' for ns in truth]
     for row, want in zip(rows, truth.values()):
         np.testing.assert_allclose([float(row[c]) for c in 'xyz'], want[:3, 3], atol=1e-11)
@@ -178,7 +165,7 @@ def test_tf_stamps_nanoseconds_apart_are_distinct_lookups(capsys, tmp_path):
     q, t = random_transforms(rng, len(offsets))
     path = tf_bag_of(tmp_path, [(base + d, 'map', 'body', q[k], t[k])
                                 for k, d in enumerate(offsets)])
-    status, out, err = run(capsys, 'bag', path, '--tf', 'map', 'body', '--csv', '-')
+    status, out, err = run_cli(capsys, 'bag', path, '--tf', 'map', 'body', '--csv', '-')
     assert (status, err) == (0, '')
     rows = list(csv.DictReader(io.StringIO(out)))
     assert [r['stamp'] for r in rows] == [f'1700000000.{d:09d}' for d in offsets]

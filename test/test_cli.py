@@ -1,9 +1,4 @@
-"""
-rot-tools as a user runs it: every command through main, what the console script calls.
-
-Values are parsed and compared with the math module to the printed 12 digits; bad input is
-one ``rot-tools: error:`` line and exit status 2.
-"""
+"""rot-tools as a user runs it: every command through main, to the printed 12 digits."""
 
 import io
 import json
@@ -17,6 +12,7 @@ import sys
 from typing import NamedTuple
 import warnings
 
+from conftest import strict_json
 import numpy as np
 import pytest
 import rot_tools
@@ -101,13 +97,9 @@ def ok(*args):
     proc = run(*args)
     assert (proc.returncode, proc.stderr) == (0, ''), proc.stderr
     if '--json' in args:
-        return json.loads(proc.stdout, parse_constant=_no_json_constants)
+        return strict_json(proc.stdout)
     yaml = pytest.importorskip('yaml')
     return yaml.safe_load(proc.stdout)
-
-
-def _no_json_constants(name):
-    raise ValueError(f'{name} is not JSON')
 
 
 def close(actual, expected):

@@ -1,8 +1,4 @@
-"""
-The command-line pieces rot-tools and rotation_client share (rot_tools.io.arguments).
-
-Options go before, between and after a command's words; errors are one line and status 2.
-"""
+"""The command-line pieces rot-tools and rotation_client share (rot_tools.io.arguments)."""
 
 import argparse
 from importlib.metadata import version

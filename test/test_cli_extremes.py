@@ -1,8 +1,4 @@
-"""
-rot-tools on the edges of float64: a report, or exactly one error line, and no warning ever.
-
-Warnings are errors here, in process; a sample runs again as the installed script.
-"""
+"""rot-tools on float64's edges: a report or one error line, never a warning."""
 
 import itertools
 from pathlib import Path
@@ -11,9 +7,9 @@ import subprocess
 import sys
 import warnings
 
+from conftest import run_cli
 import numpy as np
 import pytest
-from rot_tools.cli import main as cli
 
 EDGES = ['1e308', '-1e308', '1.7976931348623157e308', '-1.7976931348623157e308', '1e300',
          '1e154', '1e200', '5e-324', '-5e-324', '2.2e-308', '1e-300', '0', '-0', '1', '-1',
@@ -66,9 +62,7 @@ def _run_in_process(argv, capsys):
         warnings.simplefilter('error')
         # NumPy's defaults (underflow is silent): overflow, division and invalid warn
         with np.errstate(over='warn', divide='warn', invalid='warn', under='ignore'):
-            status = cli.main(argv)
-    out, err = capsys.readouterr()
-    return status, out, err
+            return run_cli(capsys, *argv)
 
 
 def test_the_reported_matrix_gives_one_line(capsys):

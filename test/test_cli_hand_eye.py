@@ -5,6 +5,7 @@ import math
 from pathlib import Path
 
 import bag_helpers as bh
+from conftest import one_error, run_cli
 from doc_blocks import assert_doc_output, console_steps, doc_block
 from hand_eye_helpers import (
     arm_stations, arm_streams, eye_to_hand, flipped, inverted, mobile_base, rotation_error,
@@ -12,16 +13,8 @@ from hand_eye_helpers import (
 import numpy as np
 import pytest
 from rot_tools import hand_eye
-from rot_tools.cli import main as cli
 from scipy.spatial.transform import Rotation
 import yaml
-
-
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools with these words."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def eye_in_hand_files(directory, recording):
@@ -35,7 +28,7 @@ def eye_in_hand_files(directory, recording):
 def test_json_report_holds_x_z_and_their_uncertainty(capsys, tmp_path):
     recording = arm_stations(0)
     hand, marker = eye_in_hand_files(tmp_path, recording)
-    status, out, err = run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')
+    status, out, err = run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')
     assert status == 0 and err == ''
     report = json.loads(out)
     for key in ('offset', 'pairs', 'rejected', 'X', 'Z', 'residual', 'sigma', 'unobservable',
@@ -55,8 +48,8 @@ def test_json_report_holds_x_z_and_their_uncertainty(capsys, tmp_path):
 def test_the_command_reports_what_the_library_finds(capsys, tmp_path):
     recording = arm_stations(1)
     hand, marker = eye_in_hand_files(tmp_path, recording)
-    report = json.loads(run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json',
-                            '--precision', 15)[1])
+    report = json.loads(run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json',
+                                '--precision', 15)[1])
     r = recording
     found = hand_eye(r.stamps_a, r.R_a, r.b_a, r.stamps_b, r.R_b, r.b_b)
     assert np.allclose(report['X']['translation'], found.X.b, atol=1e-8)
@@ -67,8 +60,8 @@ def test_the_command_reports_what_the_library_finds(capsys, tmp_path):
 
 def test_deg_gives_the_angles_in_degrees(capsys, tmp_path):
     hand, marker = eye_in_hand_files(tmp_path, arm_stations(2))
-    rad = json.loads(run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')[1])
-    deg = json.loads(run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json', '--deg')[1])
+    rad = json.loads(run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')[1])
+    deg = json.loads(run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json', '--deg')[1])
     assert deg['unit'] == 'deg' and rad['unit'] == 'rad'
     assert np.allclose(deg['sigma']['rotation'], np.degrees(rad['sigma']['rotation']),
                        rtol=1e-9)
@@ -82,8 +75,8 @@ def test_inverting_b_is_reading_the_camera_in_the_marker(capsys, tmp_path):
     hand, marker = eye_in_hand_files(tmp_path, recording)
     camera = write_tum(tmp_path / 'camera.tum', recording.stamps_b, recording.R_b,
                        recording.b_b)
-    inverted_b = json.loads(run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')[1])
-    direct = json.loads(run(capsys, 'hand-eye', hand, camera, '--json')[1])
+    inverted_b = json.loads(run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')[1])
+    direct = json.loads(run_cli(capsys, 'hand-eye', hand, camera, '--json')[1])
     assert np.allclose(inverted_b['X']['matrix'], direct['X']['matrix'], atol=1e-9)
     assert np.allclose(inverted_b['X']['translation'], direct['X']['translation'], atol=1e-9)
 
@@ -92,7 +85,7 @@ def test_a_mobile_base_says_what_it_cannot_tell_in_one_warning(capsys, tmp_path)
     r = mobile_base(1)
     odom = write_tum(tmp_path / 'odom.tum', r.stamps_a, r.R_a, r.b_a)
     vo = write_tum(tmp_path / 'vo.tum', r.stamps_b, r.R_b, r.b_b)
-    status, out, err = run(capsys, 'hand-eye', odom, vo, '--json')
+    status, out, err = run_cli(capsys, 'hand-eye', odom, vo, '--json')
     report = json.loads(out)
     assert status == 0
     assert err == ("warning: X's translation along [0, 0, 1] (in A) is unobservable: the "
@@ -105,8 +98,8 @@ def test_a_mobile_base_says_what_it_cannot_tell_in_one_warning(capsys, tmp_path)
 def test_yaml_writes_x_as_the_static_transform_nodes_parameters(capsys, tmp_path):
     recording = arm_stations(4)
     hand, marker = eye_in_hand_files(tmp_path, recording)
-    status, out, err = run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json', '--yaml',
-                           tmp_path / 'x.yaml')
+    status, out, err = run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json', '--yaml',
+                               tmp_path / 'x.yaml')
     assert status == 0
     params = yaml.safe_load((tmp_path / 'x.yaml').read_text())['/**']['ros__parameters']
     X = json.loads(out)['X']
@@ -121,16 +114,16 @@ def test_yaml_writes_x_as_the_static_transform_nodes_parameters(capsys, tmp_path
 def test_yaml_over_an_input_is_refused(capsys, tmp_path):
     hand, marker = eye_in_hand_files(tmp_path, arm_stations(0))
     before = hand.read_bytes()
-    status, out, err = run(capsys, 'hand-eye', hand, marker, '--yaml', hand)
-    assert status == 2 and out == '' and err.count('\n') == 1
-    assert 'would overwrite an input' in err and hand.read_bytes() == before
+    one_error(capsys, 'hand-eye', hand, marker, '--yaml', hand,
+              contains='would overwrite an input')
+    assert hand.read_bytes() == before
 
 
 def test_streams_with_offset_auto_report_it_and_its_correlation(capsys, tmp_path):
     r = arm_streams(2, seconds=20.0)
     hand = write_tum(tmp_path / 'hand.tum', r.stamps_a, r.R_a, r.b_a)
     camera = write_tum(tmp_path / 'camera.tum', r.stamps_b, r.R_b, r.b_b)
-    report = json.loads(run(capsys, 'hand-eye', hand, camera, '--offset', 'auto', '--json')[1])
+    report = json.loads(run_cli(capsys, 'hand-eye', hand, camera, '--offset', 'auto', '--json')[1])
     assert report['offset'] == pytest.approx(0.12, abs=0.005)
     assert report['offset_correlation'] > 0.9
 
@@ -155,9 +148,9 @@ def test_poses_on_tf_in_a_bag_give_the_x_of_the_files(capsys, tmp_path):
     recording = arm_stations(5)
     hand, marker = eye_in_hand_files(tmp_path, recording)
     bag = tf_bag(tmp_path / 'calibration', recording)
-    files = json.loads(run(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')[1])
-    status, out, err = run(capsys, 'hand-eye', bag, bag, '--a-tf', 'base', 'tool0', '--b-tf',
-                           'camera', 'marker', '--invert-b', '--json')
+    files = json.loads(run_cli(capsys, 'hand-eye', hand, marker, '--invert-b', '--json')[1])
+    status, out, err = run_cli(capsys, 'hand-eye', bag, bag, '--a-tf', 'base', 'tool0', '--b-tf',
+                               'camera', 'marker', '--invert-b', '--json')
     assert status == 0 and err == ''
     from_bag = json.loads(out)
     assert np.allclose(from_bag['X']['matrix'], files['X']['matrix'], atol=1e-8)
@@ -190,9 +183,7 @@ def bad_inputs(tmp_path):
                                   'an option of another command', 'a bad offset'])
 def test_bad_input_is_one_line_and_status_2(capsys, tmp_path, case):
     words, said = bad_inputs(tmp_path)[case]
-    status, out, err = run(capsys, *words)
-    assert status == 2 and out == '' and err.count('\n') == 1, err
-    assert err.startswith('rot-tools: error: ') and said in err, err
+    one_error(capsys, *words, contains=said)
 
 
 # ---- the worked examples of doc/hand_eye.md ---------------------------------------------------
@@ -216,7 +207,7 @@ def test_doc_example_is_real_output_and_near_the_truth(capsys, tmp_path, monkeyp
     (command, _), = console_steps(doc_block(tag))
     words = command.split()
     assert words[:4] == ['rot-tools', 'hand-eye', name_a, name_b]
-    status, out, err = run(capsys, *words[1:])
+    status, out, err = run_cli(capsys, *words[1:])
     assert status == 0, err
     assert_doc_output(tag, f'$ {command}\n{out}{err}')  # ROT_TOOLS_UPDATE_DOCS=1 rewrites it
     report = yaml.safe_load(out)

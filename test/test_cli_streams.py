@@ -1,11 +1,4 @@
-"""
-rot-tools' outputs and streams: the one output guard, a full or closed stdout, signals.
-
-Every command checks all its output paths against its inputs, each other and recordings
-before writing (rot_tools.cli.output_file.check_outputs). What the process does on a full
-disk, a closed pipe, Ctrl-C or SIGTERM is tested on the console script where Python's own
-exit takes part, in this process otherwise.
-"""
+"""rot-tools' outputs and streams: the one output guard, a full or closed stdout, signals."""
 
 import io
 import os
@@ -16,19 +9,12 @@ import sys
 import time
 
 import bag_helpers as bh
-from conftest import console_script, live_pids, script_env
+from conftest import console_script, live_pids, one_error, run_cli, script_env
 import numpy as np
 import pytest
 import rot_tools as rt
 from rot_tools.cli import main as cli
 from rot_tools.cli import output_file
-
-
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools with these words, in this process."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def write_tum(path, n=40):
@@ -53,7 +39,6 @@ def files(tmp_path_factory):
     return where
 
 
-# ---------------------------------------------------------------------------------------
 # The one output guard
 
 
@@ -70,13 +55,13 @@ def test_compare_refuses_to_write_into_the_bag_it_reads(capsys, files, tmp_path,
             (tmp_path / 'link' / storage.name, '--csv', Path('victim/../victim') / storage.name),
             (storage, '--plot', victim / 'errors.png'),
             (victim, '--csv', victim)):
-        status, out, err = run(capsys, 'compare', est, 'ref.tum', option, output)
+        status, out, err = run_cli(capsys, 'compare', est, 'ref.tum', option, output)
         assert (status, out) == (2, ''), err
         assert err == (f'rot-tools: error: {option} {output} would overwrite the bag being read '
                        f'({est}): refused\n')
     assert {p: p.read_bytes() for p in victim.iterdir()} == before
     # the same bag written to beside it: compare runs, the bag is untouched
-    status, _, err = run(capsys, 'compare', storage, 'ref.tum', '--csv', tmp_path / 'e.csv')
+    status, _, err = run_cli(capsys, 'compare', storage, 'ref.tum', '--csv', tmp_path / 'e.csv')
     assert (status, err) == (0, ''), err
     assert (tmp_path / 'e.csv').read_text().startswith('stamp,angle')
     assert {p: p.read_bytes() for p in victim.iterdir()} == before
@@ -144,7 +129,7 @@ def test_an_output_over_a_recording_is_refused_without_force(files, recordings, 
         recordings / 'rec' / 'metadata.yaml', recordings / 'rec' / 'rec_0.db3']
     for target in targets:
         before = target.read_bytes()
-        status, out, err = run(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv', target)
+        status, out, err = run_cli(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv', target)
         assert (status, out, err) == (2, '', f'rot-tools: error: --csv {target} is a recording '
                                       '(a bag): refused; --force writes over it\n')
         assert target.read_bytes() == before
@@ -152,8 +137,8 @@ def test_an_output_over_a_recording_is_refused_without_force(files, recordings, 
 
 def test_force_writes_over_a_recording(files, recordings, capsys, monkeypatch):
     monkeypatch.chdir(files)
-    status, _, err = run(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv',
-                         recordings / 'old.bag', '--force')
+    status, _, err = run_cli(capsys, 'compare', 'ref.tum', 'ref.tum', '--csv',
+                             recordings / 'old.bag', '--force')
     assert (status, err) == (0, '')
     assert (recordings / 'old.bag').read_text().startswith('stamp,angle')
 
@@ -161,8 +146,8 @@ def test_force_writes_over_a_recording(files, recordings, capsys, monkeypatch):
 def test_force_does_not_let_an_output_overwrite_an_input(files, capsys, monkeypatch):
     monkeypatch.chdir(files)
     storage = next(Path('victim').glob('*.db3'))
-    status, out, err = run(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force')
-    assert (status, out) == (2, '') and 'would overwrite the bag being read' in err
+    one_error(capsys, 'compare', storage, 'ref.tum', '--csv', storage, '--force',
+              contains='would overwrite the bag being read')
 
 
 def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, capsys,
@@ -170,14 +155,13 @@ def test_bag_refuses_a_parquet_directory_that_is_a_recording(files, recordings, 
     """rot-tools bag's --csv and --parquet get the same guard (a rosbag2 directory as DIR)."""
     pytest.importorskip('pyarrow')
     monkeypatch.chdir(files)
-    status, out, err = run(capsys, 'bag', 'victim', '--parquet', recordings / 'rec')
+    status, out, err = run_cli(capsys, 'bag', 'victim', '--parquet', recordings / 'rec')
     assert (status, out, err) == (2, '', f'rot-tools: error: --parquet {recordings / "rec"} is '
                                   'a recording (a bag): refused; --force writes over it\n')
     left = sorted(p.name for p in (recordings / 'rec').iterdir())
     assert left == ['metadata.yaml', 'rec_0.db3']
 
 
-# ---------------------------------------------------------------------------------------
 # A standard output that cannot be written: in this process, then as the console script
 
 COMMANDS = {
@@ -185,17 +169,14 @@ COMMANDS = {
     'covariance': ['covariance', 'quaternion', 0, 0, 0, 1, '--cov', 1e-4, 0, 0, 0, 1e-4, 0, 0,
                    0, 1e-4, '--from', 'rotvec', '--to', 'rpy'],
     'one-shot': ['euler', 'ZYX', 30, 20, 10, '--deg', '--all-sequences'],
+    'bag': ['bag', 'victim'],
+    'bag table': ['bag', 'victim', '--csv', '-'],
 }
 """A command line of each kind of command that prints to stdout, run in ``files``."""
 
 
 def run_with(*words, stdout=io.StringIO):
-    """
-    Return (status, stdout, stderr) of rot-tools with these words, the streams swapped here.
-
-    ``stdout``: its standard output (None: closed); by default a StringIO, whose text is
-    returned (else None).
-    """
+    """Return (status, stdout, stderr) of rot-tools, ``stdout`` its stream (None: closed)."""
     out = stdout() if stdout is io.StringIO else stdout
     err = io.StringIO()
     real = sys.stdout, sys.stderr
@@ -267,7 +248,6 @@ def test_the_console_script_on_a_full_disk_and_a_closed_pipe(files):
         1, 'rot-tools: error: cannot write to stdout: No space left on device\n')
 
 
-# ---------------------------------------------------------------------------------------
 # Ctrl-C and SIGTERM
 
 
@@ -339,12 +319,7 @@ def ignores_sigint(pid):
 
 
 def test_ctrl_c_on_a_fleet_leaves_no_file_and_no_process(tmp_path):
-    """
-    Ctrl-C (SIGINT to the whole process group, as a terminal sends it) while a fleet runs.
-
-    Sent once the two workers are up (they leave Ctrl-C to the command, which stops them):
-    one line, status 130, no partial file, no CSV, no worker left in the session.
-    """
+    """Ctrl-C on a fleet's process group: one line, status 130, no file, no worker left."""
     pytest.importorskip('rosbags')
     pytest.importorskip('pyarrow')
     bags = tmp_path / 'bags'

@@ -1,15 +1,8 @@
 """
-rotation_client against rotation_node processes, over DDS: in this process, and as a process.
+rotation_client against a rotation_node process, over DDS: in this process, and as a process.
 
-One node process (a namespace of this run) serves the tests of this module. Most tests run
-the client's commands in this process (:class:`Here`): the same parser, command and printing
-as the console script, in one rclpy context for the module (one DDS participant, discovered
-once), each command by a client node of its own. What only a process shows — the installed
-script end to end, Ctrl-C, an encoding of stdout, another publisher streaming meanwhile — runs
-the installed ``rotation_client`` script (``python -m rot_tools.ros.client.rotation_client``
-without an installed package) and reads its stdout, stderr and exit status. Expected values
-come from scipy.spatial.transform.Rotation and closed forms, not from rot_tools. The client
-prints 12 significant digits, so numbers are compared to that.
+Most commands run here (:class:`Here`); what only a process shows runs the installed script.
+Expected values come from scipy's Rotation and closed forms, to the printed 12 digits.
 """
 
 from collections import Counter
@@ -42,11 +35,7 @@ DIGITS = {'rel': 1e-11, 'abs': 1e-12}
 
 
 def run(*args, timeout=60, **env):
-    """
-    Run rotation_client as a process with ``args`` (and ``env`` added to its environment).
-
-    Return the CompletedProcess, its output read as UTF-8 text.
-    """
+    """Run rotation_client as a process (``env`` added); return the CompletedProcess, as text."""
     command = CLIENT + [str(a) for a in args]
     return subprocess.run(command, capture_output=True, encoding='utf-8', timeout=timeout,
                           env=dict(script_env(command), **env), stdin=subprocess.DEVNULL)
@@ -73,17 +62,7 @@ class Result(NamedTuple):
 
 
 class Here:
-    """
-    rotation_client's commands run in this process, in one rclpy context.
-
-    ``here(*args)`` reads the command line as the console script does and runs its command
-    by rot_tools.ros.client.rotation_client.run_command — printing, exit status — in ``context``,
-    whose DDS participant has discovered the nodes already, with one Client for every
-    command (its endpoints discovered by the nodes once); stdout and stderr are captured. A
-    command line with ROS arguments runs through ``main``, in a context made for it, as the
-    script does (rclpy's signal handlers, which its rclpy.init installs, are uninstalled
-    after it: this process keeps its own). Return a Result.
-    """
+    """rotation_client's commands run in this process, in one rclpy context; ``here(*args)``."""
 
     def __init__(self, context):
         self.context = context
@@ -132,20 +111,8 @@ def one_line_error(result, status):
 
 
 @pytest.fixture(scope='module')
-def here(ros_context):
-    """Run rotation_client's commands in this process (:class:`Here`)."""
-    runner = Here(ros_context)
-    yield runner
-    runner.close()
-
-
-@pytest.fixture(scope='module')
 def node(tmp_path_factory, here):
-    """
-    Return a rotation_node process (default parameters) for this module; its name.
-
-    It has accepted one input, so ~/describe always has a report.
-    """
+    """Return the name of this module's rotation_node process; it has accepted one input."""
     process = NodeProcess(tmp_path_factory.mktemp('client'))
     here.answered('orientation', 0, 1, 0, 0, '--node', process.name, '--timeout', 20)
     yield process.name
@@ -157,12 +124,7 @@ def approx(values):
 
 
 def check_answer(answer, rotation, b=(0.0, 0.0, 0.0), drawn=True):
-    """
-    Return the printed answer of the node to an input with rotation ``rotation`` and position b.
-
-    ``drawn``: the node drew this input (nothing else reached it in between), so its
-    pictures must be there; else they are checked if they are.
-    """
+    """Check an answer to ``rotation`` and b; ``drawn``: its markers must be there."""
     assert answer['rotation_matrix'] == [approx(row) for row in rotation.as_matrix()]
     q = answer['quaternion']
     assert [q['x'], q['y'], q['z'], q['w']] == approx(rotation.as_quat(canonical=True))
@@ -315,11 +277,7 @@ def test_screw_path_wxyz(here, node):
 
 
 def test_answer_is_matched_among_other_inputs(node, tester):
-    """
-    Check the answer to the client's input, while another publisher streams others.
-
-    Same frame: the outputs are told apart by stamp, the matrix by content.
-    """
+    """Check the answer to the client's input, while another publisher streams others."""
     pub = tester.publisher(f'{node}/orientation', QuaternionStamped)
     rng = np.random.default_rng(5)
     command = CLIENT + ['euler', 'ZYX', '0.1', '-0.2', '0.3', '--node', node]
@@ -381,12 +339,7 @@ def test_cov_is_sent_and_the_rpy_covariance_printed(here, node, verb, position):
 
 
 def send_until(done, send, tries=40):
-    """
-    Call send() until done(), waiting half a second after each; fail after ``tries``.
-
-    For an echo started just before: the node's publisher may match its subscription a moment
-    after the subscription is in the graph, and a message published before is not its.
-    """
+    """Call send() until done(), waiting half a second after each; fail after ``tries``."""
     for _ in range(tries):
         send()
         deadline = time.monotonic() + 0.5
@@ -427,10 +380,7 @@ def test_frame_id_beyond_ascii_round_trips(here, node):
     """
     Check that an emoji (beyond U+FFFF) and an accent in frame_id: sent, reported, printed as such.
 
-    Over DDS to the node and back in ~/describe's YAML, then printed by the client. On a
-    UTF-8 stdout the characters are printed as themselves (here); on an ASCII one (a process
-    with PYTHONIOENCODING=ascii) as escapes that YAML and JSON read back to the same
-    characters.
+    On an ASCII stdout, as escapes that YAML and JSON read back to the same characters.
     """
     frame = 'caméra_😀'
     sent = here.answered('orientation', 0, 0, 0, 1, '--frame', frame, '--node', node)
@@ -490,11 +440,7 @@ REFUSED = [
 
 
 def test_refused_input(here, node):
-    """
-    Each is one line: the node's sentence (what and by how much), and the reason counted.
-
-    The node counts each of them under its reason, and keeps serving.
-    """
+    """Each is one line, the node's sentence; the node counts its reason and keeps serving."""
     reasons = Counter(why.rpartition('(')[2].rstrip(')') for _, why in REFUSED)
     before = here.answered('describe', '--node', node)['refused']
     for args, why in REFUSED:
@@ -540,13 +486,7 @@ def test_unreachable_node(here, node):
 
 
 def test_a_fresh_and_remapped_node(here, node_process):
-    """
-    Check a node whose ~/pose and ~/imu are remapped, from its start.
-
-    Before it accepts anything, ~/describe has no report, but its refusals (counts,
-    sentences); its ~/pose is away, so the client names the topic it waited for; --topic
-    reaches the remapped ~/imu, and so do the client's own ROS arguments.
-    """
+    """Check a node whose ~/pose and ~/imu are remapped, from its start (describe, --topic)."""
     remapped = f'/{RUN}/robot/imu/data'
     process = node_process('-r', f'~/pose:=/{RUN}/elsewhere', '-r', f'~/imu:={remapped}')
     name = process.name
@@ -614,12 +554,7 @@ def test_bad_arguments(here, args, message):
 @pytest.mark.parametrize('tolerance, poses', [
     ('3.4e38', 2), ('-1e-300', 21), ('-1e39', 21), ('2e-45', 'path_too_long')])
 def test_tolerances_float32_keeps_are_sent(here, node, tolerance, poses):
-    """
-    Tolerances whose meaning float32 keeps are sent as given.
-
-    3.4e38 (below float32's largest) is one step; -1e-300 and -1e39 become -0 and -inf,
-    still <= 0: 20 steps; 2e-45 becomes 1.4e-45, not 0: 1 m in such steps is too many.
-    """
+    """Tolerances whose meaning float32 keeps are sent as given (its largest, -0, -inf, tiny)."""
     path = ('screw-path', *[0] * 6, 1, 1, 0, 0, *[0] * 3, 1, '--tolerance', tolerance,
             '--node', node)
     if poses == 'path_too_long':
@@ -697,12 +632,7 @@ def _session(sid):
 
 
 def interrupt(process):
-    """
-    Send Ctrl-C's SIGINT to a client started by :func:`popen`; return (status, out, err).
-
-    Checked: it ends (within conftest.STOP_WITHIN), with no traceback, and leaves no process
-    of its session behind.
-    """
+    """SIGINT a client of :func:`popen`; check a clean end, none of its session left; return it."""
     process.send_signal(signal.SIGINT)
     try:
         process.wait(timeout=STOP_WITHIN)
@@ -725,18 +655,11 @@ def test_interrupt_exits_promptly_and_quietly(tester):
     assert interrupt(process) == (130, '', '')
 
 
-# ---------------------------------------------------------------------------------------
 # doc/client.md's examples are this output
 
 
 def console(here, *commands, names=()):
-    """
-    Return the transcript of rotation_client ``commands`` as doc/client.md shows it.
-
-    Each command is (shown, extra): the arguments shown after ``$ rotation_client``, and
-    those added to run it here (this run's node). ``names`` are (real, shown) node names,
-    replaced in the output. A failed command is followed by ``$ echo $?`` and its status.
-    """
+    """Return the transcript of ``commands``, each (shown, extra), as doc/client.md shows it."""
     lines = []
     for shown, extra in commands:
         result = here(*shown.split(), *extra)
@@ -765,7 +688,6 @@ def test_doc_examples(here, node):
         names=[shown, (absent, '/arm/rot_tools')]))
 
 
-# ---------------------------------------------------------------------------------------
 # The node's sentence on refusal, from ~/describe's data
 
 
@@ -788,8 +710,7 @@ def test_refusal_text_uses_the_nodes_sentence():
     assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic) == sentence
     # Not counted since: nothing.
     assert refusal_text(data, {'non_unit_quaternion': 2, 'non_finite': 1}, topic) == ''
-    # Another message refused for that reason last (another stamp, another topic): the
-    # reason's name alone, never someone else's sentence.
+    # Another message refused last for that reason: the reason's name, never its sentence.
     assert refusal_text(data, {'non_unit_quaternion': 1, 'non_finite': 1}, topic, {(7, 8)}) == (
         'non_unit_quaternion')
     assert refusal_text(data, {}, topic, {(7, 9)}) == f'non_finite; {sentence}'
@@ -799,7 +720,6 @@ def test_refusal_text_uses_the_nodes_sentence():
     assert refusal_text(data, {}, topic) == 'non_finite; non_unit_quaternion'
 
 
-# ---------------------------------------------------------------------------------------
 # Text beyond ASCII in the reports (rot_tools.io.report's YAML and JSON strings)
 
 
@@ -816,12 +736,7 @@ def must_escape(c):
     'nul\x00 bel\x07 esc\x1b del\x7f', 'c1\x85\x9f', 'ls\u2028 ps\u2029', 'bom\ufeff',
     '\ufffe\uffff', 'lone \ud83d and \ude00', 'quote " backslash \\'])
 def test_report_strings_round_trip(text):
-    """
-    Every string reads back the same from the YAML and the JSON report (PyYAML, json).
-
-    Printable characters are written as themselves, the rest escaped. Before, an emoji
-    became a surrogate pair, which YAML reads as two lone surrogates.
-    """
+    """Every string reads back the same from the YAML and the JSON report (PyYAML, json)."""
     from rot_tools.io.report import to_json, to_yaml
     data = {'frame_id': text, text: [text]}
     yaml_text, json_text = to_yaml(data), to_json(data)

@@ -1,8 +1,4 @@
-"""
-rotation_client's messages in this process, without DDS: the input each verb fills, the answer.
-
-Where each number typed goes is stated here field by field, apart from the client's own table.
-"""
+"""rotation_client's messages without DDS: the input each verb fills, field by field."""
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, PoseWithCovarianceStamped, QuaternionStamped

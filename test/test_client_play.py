@@ -1,26 +1,13 @@
-"""
-rotation_client play republishes every field as recorded, from ROS 1 and rosbag2 bags.
-
-Each message received equals, by the message classes' own comparison, the Jazzy message of
-the same content as rosbags serialises it.
-"""
+"""rotation_client play republishes every field as recorded, from ROS 1 and rosbag2 bags."""
 
 from pathlib import Path
 
 from conftest import TIMEOUT
 import numpy as np
 import pytest
-from test_client import Here
 
 COUNT = 2
 """Messages recorded on each topic."""
-
-
-@pytest.fixture(scope='module')
-def here(ros_context):
-    runner = Here(ros_context)
-    yield runner
-    runner.close()
 
 
 class Messages:

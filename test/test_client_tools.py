@@ -1,8 +1,4 @@
-"""
-rotation_client's tools around the inputs: the angle hint, echo, set, param, play, tf-demo.
-
-Against a rotation_node process of this run; expected values from closed forms and scipy.
-"""
+"""rotation_client's tools: the angle hint, echo, set, param, play, tf-demo."""
 
 from contextlib import redirect_stdout
 import csv
@@ -24,20 +20,11 @@ import pytest
 from rot_tools.io import interface
 from rot_tools.io.boundary import QUATERNION_TOLERANCE
 from scipy.spatial.transform import Rotation
-from test_client import approx, CLIENT, DIGITS, Here, interrupt, one_line_error, popen
-from test_client import send_until
+from test_client import approx, CLIENT, DIGITS, interrupt, one_line_error, popen, send_until
 import yaml
 
 HINT = ('rotation_client: hint: an angle of 30 rad is more than 2π: if it is in degrees, '
         'add --deg\n')
-
-
-@pytest.fixture(scope='module')
-def here(ros_context):
-    """Run rotation_client's commands in this process (test_client.Here)."""
-    runner = Here(ros_context)
-    yield runner
-    runner.close()
 
 
 @pytest.fixture(scope='module')

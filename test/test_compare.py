@@ -1,9 +1,4 @@
-"""
-rot-tools compare: evo's numbers, a recorded time offset, a simulated mounting, bad inputs.
-
-evo's Python API (what ``evo_ape``/``evo_rpe --align`` run) is the reference; without evo
-those tests skip.
-"""
+"""rot-tools compare: evo's numbers, a time offset, a simulated mounting, bad inputs."""
 
 import json
 from pathlib import Path
@@ -11,6 +6,7 @@ import shlex
 import warnings
 
 import bag_helpers as bh
+from conftest import one_error, run_cli
 from doc_blocks import assert_doc_output, console_steps, doc_block
 import numpy as np
 import pytest
@@ -19,13 +15,6 @@ from rot_tools.cli import main as cli
 import yaml
 
 STATS = ('rmse', 'mean', 'median', 'std', 'min', 'max')
-
-
-def run(capsys, *args):
-    """(status, stdout, stderr) of rot-tools with these words."""
-    status = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def turn(t):
@@ -103,14 +92,14 @@ def evo_numbers(traj_ref, traj_est):
 
 
 def ours(capsys, *args):
-    status, out, err = run(capsys, 'compare', *args, '--match', 'nearest', '--offset', '0',
-                           '--align', 'se3', '--deg', '--json', '--precision', '17')
+    status, out, err = run_cli(capsys, 'compare', *args, '--match', 'nearest', '--offset', '0',
+                               '--align', 'se3', '--deg', '--json', '--precision', '17')
     assert status == 0 and err == '', err
     return json.loads(out)
 
 
 def assert_as_evo(mine, evo):
-    assert mine['pairs'] == evo['pairs'] and mine['alignment'] == 'se3'
+    assert mine['pairs'] == evo['pairs'] > 800 and mine['alignment'] == 'se3'
     for metric in ('ape', 'rpe'):
         for key in STATS:
             assert abs(mine[metric][key] - evo[metric][key]) <= 1e-6, (metric, key)
@@ -131,7 +120,6 @@ def test_tum_files_give_evos_numbers(capsys, tmp_path, streams, longer):
     mine = ours(capsys, est_path, ref_path)
     evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path),
                       file_interface.read_tum_trajectory_file(est_path))
-    assert mine['pairs'] > 800
     assert_as_evo(mine, evo)
 
 
@@ -143,7 +131,6 @@ def test_euroc_file_gives_evos_numbers(capsys, tmp_path, streams):
     mine = ours(capsys, est_path, ref_path)
     evo = evo_numbers(file_interface.read_euroc_csv_trajectory(ref_path),
                       file_interface.read_tum_trajectory_file(est_path))
-    assert mine['pairs'] > 800
     assert_as_evo(mine, evo)
 
 
@@ -158,7 +145,6 @@ def test_bag_topic_gives_evos_numbers_and_its_tf_the_same(capsys, tmp_path, stre
     with Reader(bag) as reader:
         est = file_interface.read_bag_trajectory(reader, '/est/pose')
     evo = evo_numbers(file_interface.read_tum_trajectory_file(ref_path), est)
-    assert mine['pairs'] > 800
     assert_as_evo(mine, evo)
     by_tf = ours(capsys, bag, ref_path, '--est-tf', 'map', 'body')
     for metric in ('ape', 'rpe'):
@@ -193,8 +179,8 @@ def test_stamps_as_they_come_give_evos_numbers(capsys, tmp_path, streams):
     ref_path = tmp_path / 'ref.tum'
     repeated, backwards = as_they_come(ref_path, *streams[0])
     est_path = write_tum(tmp_path / 'est.tum', *streams[1])
-    status, out, err = run(capsys, 'compare', est_path, ref_path, '--match', 'nearest',
-                           '--align', 'se3', '--deg', '--json', '--precision', '17')
+    status, out, err = run_cli(capsys, 'compare', est_path, ref_path, '--match', 'nearest',
+                               '--align', 'se3', '--deg', '--json', '--precision', '17')
     assert status == 0
     assert err == (f'warning: REF ({ref_path}): {repeated} repeated stamps dropped (the first '
                    f'of each kept), {backwards} stamps out of order sorted\n')
@@ -220,10 +206,10 @@ def test_strict_stamps_refuse_them_saying_which(capsys, tmp_path, monkeypatch):
              'line 8)'),
             (('good.tum', 'back.csv'), 'back.csv:5: stamp 1311868229.676 goes back from '
              '1311868229.726 on line 4')]:
-        status, out, err = run(capsys, 'compare', *words, '--strict-stamps')
+        status, out, err = run_cli(capsys, 'compare', *words, '--strict-stamps')
         assert (status, out) == (2, '')
         assert err == f'rot-tools: error: compare: {says}\n'
-    status, out, err = run(capsys, 'compare', 'twice.tum', 'good.tum', '--json')
+    status, out, err = run_cli(capsys, 'compare', 'twice.tum', 'good.tum', '--json')
     assert status == 0 and err == ('warning: EST (twice.tum): 1 repeated stamp dropped (the '
                                    'first of each kept)\n')
     assert json.loads(out)['ape']['max'] == 0.0
@@ -242,12 +228,12 @@ def test_a_bag_topic_as_it_comes(capsys, tmp_path):
         ('/pose', 'geometry_msgs/msg/PoseStamped', 1_000_000_000 + n,
          builder.pose_stamped(t[k], b[k], q[k])) for n, k in enumerate(order)])
     ref = write_tum(tmp_path / 'ref.tum', t, R, b)
-    status, out, err = run(capsys, 'compare', bag, ref, '--json')
+    status, out, err = run_cli(capsys, 'compare', bag, ref, '--json')
     assert status == 0 and err == (f'warning: EST ({bag}): 1 repeated stamp dropped (the first '
                                    'of each kept), 1 stamp out of order sorted\n')
     found = json.loads(out)
     assert found['est']['poses'] == len(t) and found['ape']['max'] < 1e-7
-    status, out, err = run(capsys, 'compare', bag, ref, '--strict-stamps')
+    status, out, err = run_cli(capsys, 'compare', bag, ref, '--strict-stamps')
     assert (status, out) == (2, '')
     assert err == ('rot-tools: error: compare: EST: /pose: stamp 1311868229.65625 goes back '
                    'from 1311868229.671875 (messages 11 and 12 as recorded)\n')
@@ -268,9 +254,9 @@ def test_offset_of_the_recorded_imu_is_recovered_within_a_sample(capsys, tmp_pat
     bh.write_bag(tmp_path / 'late', [
         ('/imu/data', 'sensor_msgs/msg/Imu', int(round(s * 1e9)), builder.imu(s, q))
         for s, q in zip(stamps, imu.quaternion)])
-    status, out, err = run(capsys, 'compare', tmp_path / 'late', bh.REAL, '--est-topic',
-                           '/imu/data', '--ref-topic', '/imu/data', '--offset', 'auto',
-                           '--json')
+    status, out, err = run_cli(capsys, 'compare', tmp_path / 'late', bh.REAL, '--est-topic',
+                               '/imu/data', '--ref-topic', '/imu/data', '--offset', 'auto',
+                               '--json')
     assert status == 0 and err == '', err
     found = json.loads(out)
     period = float(np.median(np.diff(imu.ns))) / 1e9
@@ -289,8 +275,8 @@ def test_unrelated_streams_matched_by_a_weak_correlation_get_a_warning(capsys, t
     zero = np.zeros((len(t), 3))
     est = write_tum(tmp_path / 'est.tum', t[first], imu.R[first], zero[first])
     ref = write_tum(tmp_path / 'ref.tum', t[later] - 30, imu.R[later], zero[later])
-    status, out, err = run(capsys, 'compare', est, ref, '--offset', 'auto', '--max-offset',
-                           '200000', '--json')
+    status, out, err = run_cli(capsys, 'compare', est, ref, '--offset', 'auto', '--max-offset',
+                               '200000', '--json')
     found = json.loads(out)
     assert status == 0
     assert found['offset_correlation'] == pytest.approx(0.68, abs=0.005)  # doc/compare.md
@@ -304,9 +290,9 @@ def test_csv_dash_is_the_standard_output(capsys, tmp_path, monkeypatch, streams)
     monkeypatch.chdir(tmp_path)
     est = write_tum(tmp_path / 'est.tum', *streams[1])
     ref = write_tum(tmp_path / 'ref.tum', *streams[0])
-    status, out, err = run(capsys, 'compare', est, ref, '--csv', '-')
+    status, out, err = run_cli(capsys, 'compare', est, ref, '--csv', '-')
     assert (status, err) == (0, '')
-    run(capsys, 'compare', est, ref, '--csv', 'e.csv')
+    run_cli(capsys, 'compare', est, ref, '--csv', 'e.csv')
     assert out == (tmp_path / 'e.csv').read_text()
     assert not (tmp_path / '-').exists()
 
@@ -327,8 +313,8 @@ def mounted(tmp_path, motion, X, rng):
 def test_mounting_is_recovered_within_a_tenth_of_a_degree(capsys, tmp_path):
     X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))
     est, ref = mounted(tmp_path, turn, X, np.random.default_rng(8))
-    status, out, err = run(capsys, 'compare', est, ref, '--mounting', '--delta', '0.5',
-                           '--delta-unit', 's', '--align', 'rotation', '--json', '--deg')
+    status, out, err = run_cli(capsys, 'compare', est, ref, '--mounting', '--delta', '0.5',
+                               '--delta-unit', 's', '--align', 'rotation', '--json', '--deg')
     assert status == 0 and err == '', err
     found = json.loads(out)
     got = rt.quaternion_to_matrix(np.array(found['mounting']['quaternion']))
@@ -342,8 +328,8 @@ def test_motion_about_one_axis_gets_the_warning(capsys, tmp_path):
         return rt.rot_z(np.sin(0.5 * t) * 2)
     X = rt.rotvec_to_matrix(np.array([0.3, -0.5, 1.1]))
     est, ref = mounted(tmp_path, yaw_only, X, np.random.default_rng(9))
-    status, out, err = run(capsys, 'compare', est, ref, '--mounting', '--delta', '0.5',
-                           '--delta-unit', 's', '--json')
+    status, out, err = run_cli(capsys, 'compare', est, ref, '--mounting', '--delta', '0.5',
+                               '--delta-unit', 's', '--json')
     assert status == 0
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith(
@@ -361,8 +347,8 @@ def test_interpolated_matching_beats_nearest_at_two_rates(capsys, tmp_path):
     est = write_tum(tmp_path / 'est.tum', t_est, turn(t_est), path_of(t_est))
     rmse = {}
     for how in ('interpolate', 'nearest'):
-        status, out, err = run(capsys, 'compare', est, ref, '--match', how, '--max-gap',
-                               '0.05', '--json')
+        status, out, err = run_cli(capsys, 'compare', est, ref, '--match', how, '--max-gap',
+                                   '0.05', '--json')
         assert status == 0 and err == '', err
         rmse[how] = json.loads(out)['ape']['rmse']
     assert rmse['interpolate'] < 0.05 * rmse['nearest'], rmse
@@ -383,8 +369,8 @@ def test_posyaw_aligns_the_positions_by_a_yaw_and_a_shift(capsys, tmp_path):
     b_est = (b_ref + rng.normal(scale=0.02, size=b_ref.shape)) @ (yaw @ tilt).T + shift
     est = write_tum(tmp_path / 'est.tum', t, R_est, b_est)
     ref = write_tum(tmp_path / 'ref.tum', t, R_ref, b_ref)
-    status, out, err = run(capsys, 'compare', est, ref, '--align', 'posyaw', '--json',
-                           '--precision', 17)
+    status, out, err = run_cli(capsys, 'compare', est, ref, '--align', 'posyaw', '--json',
+                               '--precision', 17)
     assert status == 0 and err == '', err
     found = json.loads(out)
     b_est_read = np.loadtxt(est)[:, 1:4]  # as the file holds them, and so compare reads them
@@ -410,8 +396,8 @@ def test_roll_pitch_yaw_statistics_are_of_angles_within_a_half_turn(capsys, tmp_
     drift = rt.rot_z(0.9 * t) @ rt.rot_x(np.radians(3) * np.sin(t))  # yaw drifts 1030°
     est = write_tum(tmp_path / 'est.tum', t, R @ drift, path_of(t))
     ref = write_tum(tmp_path / 'ref.tum', t, R, path_of(t))
-    status, out, err = run(capsys, 'compare', est, ref, '--deg', '--json', '--csv',
-                           tmp_path / 'e.csv')
+    status, out, err = run_cli(capsys, 'compare', est, ref, '--deg', '--json', '--csv',
+                               tmp_path / 'e.csv')
     assert status == 0 and err == '', err
     rpy = json.loads(out)['rpy']
     assert all(-180 < x <= 180 for key in ('mean', 'median', 'min', 'max') for x in rpy[key])
@@ -430,7 +416,7 @@ def test_json_gives_matrices_as_rows_and_the_plot_names_the_alignment(capsys, tm
     est = write_tum(tmp_path / 'est.tum', t, W.T @ turn(t) @ X, (path_of(t) - shift) @ W)
     ref = write_tum(tmp_path / 'ref.tum', t, turn(t), path_of(t))
     args = ['compare', est, ref, '--align', 'se3', '--mounting', '--json', '--precision', 12]
-    status, out, err = run(capsys, *args)
+    status, out, err = run_cli(capsys, *args)
     assert status == 0 and err == '', err
     found = json.loads(out)
     assert np.abs(np.array(found['alignment_matrix']) - W).max() < 1e-6
@@ -456,7 +442,7 @@ def test_csv_has_one_row_per_pair_and_the_plot_is_drawn(capsys, tmp_path, stream
         pass
     if matplotlib is not None:
         args += ['--plot', tmp_path / 'e.png']
-    status, out, err = run(capsys, *args)
+    status, out, err = run_cli(capsys, *args)
     assert status == 0 and err == '', err
     found = json.loads(out)
     rows = (tmp_path / 'e.csv').read_text().splitlines()
@@ -511,10 +497,7 @@ def test_bad_input_is_one_line_and_status_2(capsys, tmp_path, monkeypatch, other
     bad_inputs(tmp_path)
     monkeypatch.chdir(tmp_path)
     sides = other.split() if ' ' in other else [other, 'good.tum']
-    status, out, err = run(capsys, 'compare', *sides, *options)
-    assert status == 2 and out == ''
-    assert err.count('\n') == 1 and err.startswith('rot-tools: error: '), err
-    assert says in err, err
+    one_error(capsys, 'compare', *sides, *options, contains=says)
 
 
 def hostile_files(directory):
@@ -556,7 +539,7 @@ def test_edges_of_float64_are_one_plain_line_without_numpy_warnings(
     est, ref, *options = words.split()
     with warnings.catch_warnings():
         warnings.simplefilter('error')  # a RuntimeWarning would reach stderr
-        status, out, err = run(capsys, 'compare', f'{est}.tum', f'{ref}.tum', *options)
+        status, out, err = run_cli(capsys, 'compare', f'{est}.tum', f'{ref}.tum', *options)
     if says is None:  # the fit scales the positions; the offset search finds -1.3e9 s
         assert status == 0 and err == '', err
         assert abs(yaml.safe_load(out)['offset'] - (-1.3e9 if est == 'unix' else 0)) < 0.01
@@ -570,7 +553,7 @@ def test_a_file_named_like_an_option_after_a_double_dash(capsys, tmp_path, monke
     monkeypatch.chdir(tmp_path)
     (tmp_path / '-x.tum').write_bytes((tmp_path / 'good.tum').read_bytes())
     for words in (['--', '-x.tum', 'good.tum'], ['good.tum', '--json', '--', '-x.tum']):
-        status, out, err = run(capsys, 'compare', *words)
+        status, out, err = run_cli(capsys, 'compare', *words)
         assert status == 0 and err == '', err
         assert '-x.tum' in out
 
@@ -578,7 +561,7 @@ def test_a_file_named_like_an_option_after_a_double_dash(capsys, tmp_path, monke
 def test_an_option_of_the_other_commands_before_compare(capsys, tmp_path, monkeypatch):
     bad_inputs(tmp_path)
     monkeypatch.chdir(tmp_path)
-    status, _, err = run(capsys, '--point', 1, 2, 3, 'compare', 'good.tum', 'good.tum')
+    status, _, err = run_cli(capsys, '--point', 1, 2, 3, 'compare', 'good.tum', 'good.tum')
     assert status == 2 and err == 'rot-tools: error: --point does not apply to compare\n'
 
 
@@ -591,11 +574,11 @@ def test_a_bag_of_several_topics_asks_for_one(capsys, tmp_path, streams):
         (topic, 'geometry_msgs/msg/PoseStamped', int(s * 1e9), builder.pose_stamped(s, p, qk))
         for topic in ('/a', '/b') for s, p, qk in zip(t[:5], b, q)])
     ref = write_tum(tmp_path / 'ref.tum', *streams[0])
-    status, _, err = run(capsys, 'compare', bag, ref)
+    status, _, err = run_cli(capsys, 'compare', bag, ref)
     assert status == 2 and err.count('\n') == 1
     assert '2 topics (/a, /b): choose one with --est-topic' in err
-    status, _, err = run(capsys, 'compare', bag, ref, '--est-topic', '/a', '--align', 'se3',
-                         '--est-tf', 'map', 'body')
+    status, _, err = run_cli(capsys, 'compare', bag, ref, '--est-topic', '/a', '--align', 'se3',
+                             '--est-tf', 'map', 'body')
     assert status == 2 and 'not both' in err
 
 
@@ -612,7 +595,7 @@ def test_a_bare_mcap_file_is_a_bag_and_no_output_lands_in_a_bag(capsys, tmp_path
     bare = storage.rename(tmp_path / 'alone.mcap')
     bh.write_bag(tmp_path / 'victim2', messages)
     ref = write_tum(tmp_path / 'ref.tum', t, R, b)
-    status, out, err = run(capsys, 'compare', bare, ref, '--json', '--precision', 17)
+    status, out, err = run_cli(capsys, 'compare', bare, ref, '--json', '--precision', 17)
     assert status == 0 and err == '', err
     assert json.loads(out)['pairs'] == len(t) and json.loads(out)['ape']['max'] < 1e-7
     metadata = tmp_path / 'victim2' / 'metadata.yaml'
@@ -620,9 +603,8 @@ def test_a_bare_mcap_file_is_a_bag_and_no_output_lands_in_a_bag(capsys, tmp_path
     db3 = next((tmp_path / 'victim2').glob('*.db3'))
     for est, option, target in [(tmp_path / 'victim2', '--csv', metadata), (bare, '--csv', bare),
                                 (db3, '--csv', metadata), (db3, '--plot', db3.parent / 'e.png')]:
-        status, out, err = run(capsys, 'compare', est, ref, option, target)
-        assert (status, out) == (2, '') and err.count('\n') == 1
-        assert 'would overwrite the bag being read' in err, err
+        one_error(capsys, 'compare', est, ref, option, target,
+                  contains='would overwrite the bag being read')
     assert metadata.read_bytes() == before and bare.stat().st_size > 0
 
 
@@ -633,10 +615,9 @@ def test_a_topic_whose_every_message_is_refused_is_one_line(capsys, tmp_path):
     bag = bh.write_bag(tmp_path / 'zero', [('/imu', 'sensor_msgs/msg/Imu', int(s * 1e9) + 1,
                                             builder.imu(s, (0, 0, 0, 0))) for s in t])
     ref = write_tum(tmp_path / 'ref.tum', t, turn(t), path_of(t))
-    status, out, err = run(capsys, 'compare', bag, ref)
-    assert (status, out) == (2, '') and err.count('\n') == 1
-    assert err.startswith('rot-tools: error: compare: EST: /imu: no message to compare: all 10 '
-                          'refused, the first because '), err
+    assert one_error(capsys, 'compare', bag, ref).startswith(
+        'rot-tools: error: compare: EST: /imu: no message to compare: all 10 refused, the first '
+        'because ')
 
 
 def test_se3_needs_positions(capsys, tmp_path):
@@ -647,7 +628,7 @@ def test_se3_needs_positions(capsys, tmp_path):
     bag = bh.write_bag(tmp_path / 'imu', [('/imu', 'sensor_msgs/msg/Imu', int(s * 1e9),
                                            builder.imu(s, qk)) for s, qk in zip(t, q)])
     ref = write_tum(tmp_path / 'ref.tum', t, turn(t), path_of(t))
-    status, _, err = run(capsys, 'compare', bag, ref, '--align', 'se3')
+    status, _, err = run_cli(capsys, 'compare', bag, ref, '--align', 'se3')
     assert status == 2 and err.count('\n') == 1 and 'EST has none (an Imu)' in err
 
 
@@ -669,10 +650,10 @@ def test_doc_example_is_real_output(capsys, tmp_path, monkeypatch):
     X = simulated_files(tmp_path)
     monkeypatch.chdir(tmp_path)
     ((command, _),) = console_steps(doc_block('compare-example'))
-    status, out, err = run(capsys, *shlex.split(command)[1:])
+    status, out, err = run_cli(capsys, *shlex.split(command)[1:])
     assert status == 0 and err == '', err
     assert_doc_output('compare-example', f'$ {command}\n{out}')
-    found = json.loads(run(capsys, *shlex.split(command)[1:], '--json', '--precision', 12)[1])
+    found = json.loads(run_cli(capsys, *shlex.split(command)[1:], '--json', '--precision', 12)[1])
     assert abs(found['offset'] - 0.25) < 0.01  # the 0.02 s period: within a sample
     got = rt.quaternion_to_matrix(np.array(found['mounting']['quaternion']))
     assert np.degrees(rt.rotation_distance(got, X)) < 0.1
@@ -684,6 +665,6 @@ def test_readme_example_is_real_output(capsys, monkeypatch):
         pytest.skip(f'the shared recording is not there: {bh.REAL}')
     monkeypatch.chdir(Path(__file__).resolve().parents[1])  # the README's commands' cwd
     ((command, _),) = console_steps(doc_block('readme-compare'))
-    status, out, err = run(capsys, *shlex.split(command)[1:])
+    status, out, err = run_cli(capsys, *shlex.split(command)[1:])
     assert status == 0 and err == '', err
     assert_doc_output('readme-compare', f'$ {command}\n{out}')

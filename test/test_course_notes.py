@@ -1,8 +1,7 @@
 """
 The course notes' worked examples as exact expectations, and their slips pinned numerically.
 
-Jia: Yan-Bin Jia, "Rotation in the Space" (Com S 477/577 notes).
-Cayero: Julen Cayero, "Relations between Rotation Matrix and Euler axis-angle".
+Jia: "Rotation in the Space"; Cayero: "Relations between Rotation Matrix and Euler axis-angle".
 """
 
 import math_helpers as h

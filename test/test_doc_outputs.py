@@ -1,12 +1,4 @@
-"""
-The node and client outputs shown in doc/node.md and doc/client.md, produced for real.
-
-Each tagged block (``<!-- output: NAME -->``, see doc_blocks.py) is run against a
-rotation_node process of this run: its ``$ rotation_client ...`` lines with ``--node`` set to
-that process (unless the line names a node), its ``$ rotation_node ...`` lines as a process
-of their own. The run's namespace is taken out of the output, and what changes from run to
-run — time stamps, the ROS domain — is written ``...`` (doctest's ELLIPSIS) in the docs.
-"""
+"""The node and client outputs shown in doc/node.md and doc/client.md, produced for real."""
 
 import re
 import shlex
@@ -59,18 +51,11 @@ def run_client_block(name, node_name):
     return ''.join(shown)
 
 
-def test_readme_client(tmp_path):
-    process = NodeProcess(tmp_path)  # a fresh node: its first input is the README's
+@pytest.mark.parametrize('block', ['readme-client', 'node-describe'])
+def test_client_block_on_a_fresh_node(tmp_path, block):
+    process = NodeProcess(tmp_path)  # its first input is the block's, nothing refused before
     try:
-        assert_doc_output('readme-client', run_client_block('readme-client', process.name))
-    finally:
-        process.kill()
-
-
-def test_node_describe(tmp_path):
-    process = NodeProcess(tmp_path)  # a node of its own: nothing refused before
-    try:
-        assert_doc_output('node-describe', run_client_block('node-describe', process.name))
+        assert_doc_output(block, run_client_block(block, process.name))
     finally:
         process.kill()
 

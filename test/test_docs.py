@@ -35,12 +35,7 @@ DOCTESTS = [b for b in BLOCKS if b.lang in ('pycon', 'python') and '>>>' in b.te
 
 
 def _scratch(tmp_path):
-    """
-    Make a working directory that looks like the repository (doc/ writable, ../shared).
-
-    Commands run from the repository root as the docs show them; files they write (a
-    ``--plot doc/screw.svg``) land in the scratch copy, never in the clone.
-    """
+    """Make a working directory that looks like the repository (doc/ writable, ../shared)."""
     work = tmp_path / REPO.name
     work.mkdir()
     for entry in REPO.iterdir():
@@ -95,11 +90,7 @@ def test_console_block_shows_the_real_output(block, tmp_path):
 
 
 def _rewrite(block, text):
-    """
-    Replace the body of ``block`` in its file (ROT_TOOLS_UPDATE_DOCS=1).
-
-    The block is found again by its text: an earlier rewrite may have moved its lines.
-    """
+    """Replace the body of ``block`` in its file, found again by its text."""
     now = next(b for b in blocks(block.path) if b.text == block.text)
     lines = block.path.read_text(encoding='utf-8').splitlines(keepends=True)
     end = now.line

@@ -1,14 +1,4 @@
-"""
-How rotation_node starts and stops: its console script, its arguments, its signals.
-
-The console scripts point at plain ``main`` functions. ``--help`` and ``--version`` answer
-without starting anything ROS; bad arguments, ROS arguments included, end the node with one
-line on stderr (after rcl's own error log line, for arguments rcl cannot parse) and status
-2; Ctrl-C or SIGTERM at any moment of its start-up or its run ends it (within
-conftest.STOP_WITHIN) with no process left behind — once it is up, with status 0 and
-nothing on stderr (before, Python's own KeyboardInterrupt is fine). Both ways of starting
-it, the console script and ``python -m rot_tools.ros.node.rotation_node``, behave alike.
-"""
+"""How rotation_node starts and stops: its console script, its arguments, its signals."""
 
 import os
 from pathlib import Path
@@ -51,7 +41,6 @@ def test_console_scripts_point_at_plain_main_functions():
     assert scripts['rotation_client'] == 'rot_tools.ros.client.rotation_client:main'
 
 
-# ---------------------------------------------------------------------------------------
 # Signals, from the first millisecond to after the ready line
 
 READY = 'decomposing'
@@ -126,11 +115,7 @@ class Started:
 
 
 def signal_at(command, env, when, sig):
-    """
-    Start the node, send ``sig`` at ``when``; return what went wrong, or None.
-
-    ``when``: seconds after the start, 'ready' or 'ready + 100 ms'.
-    """
+    """Start the node, send ``sig`` at ``when`` (seconds, or 'ready'); return what went wrong."""
     node = Started(command, env)
     try:
         if isinstance(when, str):
@@ -168,14 +153,7 @@ def signal_at(command, env, when, sig):
 
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
 def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
-    """
-    Check that a signal at any of 12 moments of the start-up and the run ends the node cleanly.
-
-    Within conftest.STOP_WITHIN, with no process left in its session. Once up: status 0
-    and nothing on stderr but the ready line. Before, Python's and rclpy's own handling is
-    fine (SIGINT: a KeyboardInterrupt, wherever Python was; SIGTERM: its default action until
-    rclpy's handler is in).
-    """
+    """Check that a signal at any of 12 moments of its start-up and run ends the node cleanly."""
     command = NODE_COMMANDS.get('console script', NODE_COMMANDS['python -m'])
     command = [*command, '--ros-args', '-r', f'__ns:=/{RUN}/sweep_{sig.name.lower()}']
     env = script_env(command)
@@ -189,7 +167,6 @@ def test_a_signal_from_the_first_millisecond_to_after_the_ready_line(sig):
     assert not wrong, '\n'.join(wrong)
 
 
-# ---------------------------------------------------------------------------------------
 # Arguments
 
 BAD_ROS_ARGUMENTS = {

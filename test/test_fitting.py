@@ -1,8 +1,4 @@
-"""
-Comparing, averaging, fitting and sampling rotations, against scipy and closed forms.
-
-scipy.spatial.transform.Rotation, scipy.stats.kstest for the Haar angle law, closed forms.
-"""
+"""Comparing, averaging, fitting and sampling rotations, against scipy and closed forms."""
 
 import re
 

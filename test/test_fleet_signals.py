@@ -1,13 +1,4 @@
-"""
-A fleet ended by a signal: no worker left, no file left half written, the caller sees EOF.
-
-``rot-tools bag DIR --jobs 2 --csv F --parquet D`` is sent SIGTERM or SIGKILL once its two
-workers are up. Within a generous bound the caller reads the end of the command's output, no
-worker is left, and neither F nor a manifest is in D; D holds only whole Parquet files of
-bags done, and after SIGTERM no temporary file either (SIGKILL may leave a hidden
-``.NAME.XXXXXXXX.partial``). The same with ``--engine dask`` (a local cluster) and SIGKILL.
-Ctrl-C on a fleet: test_cli_streams.py.
-"""
+"""A fleet ended by a signal: no worker left, no file half written, the caller sees EOF."""
 
 from pathlib import Path
 import shutil
@@ -39,12 +30,7 @@ def alive(pid):
 
 
 def signalled(tmp_path, command, signum, ready):
-    """
-    Run ``command`` in tmp_path over bags/; send ``signum`` once ``ready(pid)`` is true.
-
-    Returns (status, stdout, stderr, the command's children at the signal still alive BOUND
-    s after it).
-    """
+    """Run ``command`` over bags/, ``signum`` once ``ready(pid)``; return it and children left."""
     bags = tmp_path / 'bags'
     bags.mkdir()
     for k in range(BAGS):

@@ -1,8 +1,4 @@
-"""
-hand_eye and screw_congruence on simulated recordings whose X and Z are known.
-
-The arm at stations is also checked against OpenCV's five methods.
-"""
+"""hand_eye and screw_congruence on simulated recordings, and against OpenCV's methods."""
 
 import math
 

@@ -1,26 +1,21 @@
-"""
-rot-tools imu-check end to end, in-process: faulty copies of the real recording, bad input.
-
-Each fault (accelerometer in g, gyro in deg/s, NED, no orientation) is found and its fix said.
-"""
+"""rot-tools imu-check in-process: faulty copies of the real recording, bad input."""
 
 import json
 import math
 import re
 
 import bag_helpers as bh
+from conftest import run_cli
 from doc_blocks import assert_doc_output, console_steps, doc_block, REPO
 import numpy as np
 import pytest
 
 pytest.importorskip('rosbags', reason="the 'bag' extra (rosbags) is not installed")
 from rot_tools.cli import imu_check, imu_recording  # noqa: E402
-from rot_tools.cli.main import main  # noqa: E402
 from rot_tools.core.stamps import plain  # noqa: E402
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 IMU, ODOM = '/imu/data', '/jackal_velocity_controller/odom'
-IMU_TYPE, ODOM_TYPE = 'sensor_msgs/msg/Imu', 'nav_msgs/msg/Odometry'
 
 WINDOW = (0.0, 20.0)
 """The seconds of the real recording (from its first IMU stamp) written into the test bags."""
@@ -32,39 +27,23 @@ G = 9.80665
 
 
 class Recording:
-    """The real recording's window as arrays: record times (ns), stamps (s), fields."""
+    """The real recording's window, decoded by rosbags: record times (ns), stamps (s), fields."""
 
-    def __init__(self, imu, odom):
-        self.imu_record, self.imu_stamp = imu[:, 0].astype(np.int64), imu[:, 1]
-        self.q, self.gyro, self.accel = imu[:, 2:6], imu[:, 6:9], imu[:, 9:12]
+    def __init__(self):
+        real = bh.decode()
+        imu, odom = real[IMU], real[ODOM]
+        t0 = imu['stamp'][0]
+        keep = (imu['stamp'] >= t0 + WINDOW[0]) & (imu['stamp'] < t0 + WINDOW[1])
+        self.imu_record, self.imu_stamp = imu['record'][keep], imu['stamp'][keep]
+        self.q, self.gyro, self.accel = imu['q'][keep], imu['gyro'][keep], imu['accel'][keep]
+        keep = (odom['stamp'] >= t0 + WINDOW[0]) & (odom['stamp'] < t0 + WINDOW[1])
         self.odom_record, self.odom_stamp, self.odom_q = (
-            odom[:, 0].astype(np.int64), odom[:, 1], odom[:, 2:6])
-
-
-def read_real():
-    """Read the window of the real recording with rosbags (not through rot_tools)."""
-    from rosbags.highlevel import AnyReader
-    imu, odom = [], []
-    with AnyReader([bh.REAL]) as reader:
-        for conn, record, raw in reader.messages():
-            m = reader.deserialize(raw, conn.msgtype)
-            stamp = m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
-            if conn.topic == IMU:
-                o, w, a = m.orientation, m.angular_velocity, m.linear_acceleration
-                imu.append((record, stamp, o.x, o.y, o.z, o.w, w.x, w.y, w.z, a.x, a.y, a.z))
-            elif conn.topic == ODOM:
-                o = m.pose.pose.orientation
-                odom.append((record, stamp, o.x, o.y, o.z, o.w))
-    imu, odom = np.array(imu), np.array(odom)
-    t0 = imu[0, 1]
-    keep_imu = (imu[:, 1] >= t0 + WINDOW[0]) & (imu[:, 1] < t0 + WINDOW[1])
-    keep_odom = (odom[:, 1] >= t0 + WINDOW[0]) & (odom[:, 1] < t0 + WINDOW[1])
-    return Recording(imu[keep_imu], odom[keep_odom])
+            odom['record'][keep], odom['stamp'][keep], odom['q'][keep])
 
 
 @pytest.fixture(scope='module')
 def real():
-    return read_real()
+    return Recording()
 
 
 @pytest.fixture(scope='module')
@@ -78,38 +57,32 @@ def clean(real, tmp_path_factory):
 def imu_message(b, stamp, q, gyro, accel, cov0=0.0, frame='base_link'):
     covariance = np.zeros(9)
     covariance[0] = cov0
-    return b.make(IMU_TYPE, header=b.header(stamp, frame), orientation=b.quaternion(q),
+    return b.make(bh.IMU_TYPE, header=b.header(stamp, frame), orientation=b.quaternion(q),
                   orientation_covariance=covariance, angular_velocity=b.vector(gyro),
                   angular_velocity_covariance=np.zeros(9), linear_acceleration=b.vector(accel),
                   linear_acceleration_covariance=np.zeros(9))
 
 
 def write(path, rec, q=None, gyro=None, accel=None, cov0=0.0, odom=False, topic=IMU,
-          more=(), storage='sqlite3'):
+          more=(), storage='sqlite3', stamps=None):
     """Write the window as a rosbag2 bag, the IMU's fields replaced by those given."""
     b = bh.Builder()
+    stamps = rec.imu_stamp if stamps is None else stamps
     q = rec.q if q is None else q
     gyro = rec.gyro if gyro is None else gyro
     accel = rec.accel if accel is None else accel
-    messages = [(topic, IMU_TYPE, int(t), imu_message(b, s, q[k], gyro[k], accel[k], cov0))
-                for k, (t, s) in enumerate(zip(rec.imu_record, rec.imu_stamp))]
+    messages = [(topic, bh.IMU_TYPE, int(t), imu_message(b, s, q[k], gyro[k], accel[k], cov0))
+                for k, (t, s) in enumerate(zip(rec.imu_record, stamps))]
     if odom:
-        messages += [(ODOM, ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), rec.odom_q[k]))
+        messages += [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), rec.odom_q[k]))
                      for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))]
     messages += list(more)
     messages.sort(key=lambda m: m[2])
     return bh.write_bag(path, messages, storage)
 
 
-def run(capsys, *argv):
-    """Run rot-tools in this process; return (status, stdout, stderr)."""
-    status = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
 def run_json(capsys, *argv):
-    status, out, err = run(capsys, *argv, '--json')
+    status, out, err = run_cli(capsys, *argv, '--json')
     assert err == ''
     return status, json.loads(out)
 
@@ -152,7 +125,7 @@ def test_gyro_in_degrees(real, tmp_path, capsys):
     gyro = np.degrees(real.gyro)
     gyro[7] = np.nan  # a message left out, with a warning
     bag = write(tmp_path / 'deg', real, gyro=gyro)
-    status, out, err = run(capsys, 'imu-check', bag)
+    status, out, err = run_cli(capsys, 'imu-check', bag)
     assert status == 1
     assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out: 1 with a NaN or Inf '
                    'in angular_velocity or linear_acceleration\n')
@@ -181,7 +154,7 @@ def one_fault(out, name):
 def test_quaternion_written_w_first(real, tmp_path, capsys):
     """The fields x, y, z, w hold w, x, y, z: only the quaternion check is at fault."""
     written = real.q[:, [3, 0, 1, 2]]
-    status, out, err = run(capsys, 'imu-check', write(tmp_path / 'w_first', real, q=written))
+    status, out, err = run_cli(capsys, 'imu-check', write(tmp_path / 'w_first', real, q=written))
     assert status == 1 and err == ''
     assert re.search(r'\nquaternion +fault +w-first ', out)
     shown = one_fault(out, 'quaternion')
@@ -196,7 +169,7 @@ def test_quaternion_written_w_first(real, tmp_path, capsys):
 def test_quaternion_inverted(real, tmp_path, capsys):
     """The conjugate, the world in the IMU frame: only the quaternion check is at fault."""
     written = Rotation.from_quat(real.q).inv().as_quat()
-    status, out, err = run(capsys, 'imu-check', write(tmp_path / 'inverted', real, q=written))
+    status, out, err = run_cli(capsys, 'imu-check', write(tmp_path / 'inverted', real, q=written))
     assert status == 1 and err == ''
     assert re.search(r'\nquaternion +fault +inverted ', out)
     shown = one_fault(out, 'quaternion')
@@ -211,7 +184,7 @@ def test_gyro_axis_negated_is_a_mirror(real, tmp_path, capsys):
     """A left-handed gyro: the fix negates its y axis; no rotation is offered for it."""
     gyro = real.gyro * [1, -1, 1]
     bag = write(tmp_path / 'mirror', real, gyro=gyro, odom=True)
-    status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
+    status, out, err = run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM)
     assert status == 1 and err == ''
     assert re.search(r'\ngyro_axes +fault +x = \+x, y = -y, z = \+z, mirror, negate y ', out)
     shown = one_fault(out, 'gyro_axes')
@@ -234,7 +207,7 @@ def test_ned_device_with_the_odometry(real, tmp_path, capsys):
     frd = flu_frd.inv()
     bag = write(tmp_path / 'ned', real, q=q, gyro=frd.apply(real.gyro),
                 accel=frd.apply(real.accel), odom=True)
-    status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
+    status, out, err = run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM)
     assert status == 1 and err == ''
     assert table_faults(out) == {'orientation_vs_accel', 'world_up'}
     lines = [line for line in out.splitlines() if 'static_transform_publisher' in line]
@@ -339,7 +312,7 @@ def odometry_bag(path, rec, shift=0.0):
     """Write the window's odometry alone as a rosbag2 bag, stamps and record times shifted."""
     b = bh.Builder()
     return bh.write_bag(path, [
-        (ODOM, ODOM_TYPE, int(t + shift * 1e9), b.odometry(s + shift, (0, 0, 0), rec.odom_q[k]))
+        (ODOM, bh.ODOM_TYPE, int(t + shift * 1e9), b.odometry(s + shift, (0, 0, 0), rec.odom_q[k]))
         for k, (t, s) in enumerate(zip(rec.odom_record, rec.odom_stamp))])
 
 
@@ -375,18 +348,18 @@ def test_the_tf_reference_from_another_recording(real, clean, tmp_path, capsys):
 
 def test_a_ref_bag_without_what_was_asked_is_named(clean, capsys):
     imu, odom = clean['imu'], clean['odom']
-    one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-tf', 'odom',
-                        'base_link'),
+    one_error_line(*run_cli(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-tf', 'odom',
+                            'base_link'),
                    f'imu-check: --ref-bag {odom}: --ref-tf: the bag has no '
                    'tf2_msgs/msg/TFMessage topic\n')
-    one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', '/odom'),
+    one_error_line(*run_cli(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', '/odom'),
                    f'imu-check: --ref-bag {odom}: --ref-topic: no topic /odom in the bag')
 
 
 def test_recordings_that_do_not_overlap_are_refused(real, clean, tmp_path, capsys):
     imu = clean['imu']
     odom = odometry_bag(tmp_path / 'odom', real, DAY)
-    one_error_line(*run(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', ODOM),
+    one_error_line(*run_cli(capsys, 'imu-check', imu, '--ref-bag', odom, '--ref-topic', ODOM),
                    f'imu-check: {imu} (recorded {span(real.imu_record)}) and --ref-bag {odom} '
                    f'(recorded {span(real.odom_record + DAY * 10 ** 9)}) do not overlap in '
                    'time: 27.0 h apart\n')
@@ -395,12 +368,12 @@ def test_recordings_that_do_not_overlap_are_refused(real, clean, tmp_path, capsy
 def test_topics_stamped_a_day_apart_are_refused(real, tmp_path, capsys):
     """Two bags merged by hand: each topic's stamps are of its own run."""
     b = bh.Builder()
-    later = [(ODOM, ODOM_TYPE, int(t), b.odometry(s + DAY, (0, 0, 0), q))
+    later = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(s + DAY, (0, 0, 0), q))
              for t, s, q in zip(real.odom_record, real.odom_stamp, real.odom_q)]
     bag = write(tmp_path / 'merged', real, more=later)
     imu_ns = np.round(real.imu_stamp * 1e9).astype(np.int64)
     odom_ns = np.round((real.odom_stamp + DAY) * 1e9).astype(np.int64)
-    one_error_line(*run(capsys, 'imu-check', bag, '--ref-topic', ODOM),
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM),
                    f'imu-check: {IMU} (stamped {span(imu_ns)}) and {ODOM} (stamped '
                    f'{span(odom_ns)}) do not overlap in time: 27.0 h apart\n')
 
@@ -415,7 +388,7 @@ def test_doc_example_is_real_output(capsys, monkeypatch):
     for command, _ in console_steps(doc_block('imu-check-jackal')):
         argv = command.split()
         assert argv[0] == 'rot-tools'
-        status, out, err = run(capsys, *argv[1:])
+        status, out, err = run_cli(capsys, *argv[1:])
         assert status == 0 and err == ''
         shown += f'$ {command}\n{out}'
     assert_doc_output('imu-check-jackal', shown)  # ROT_TOOLS_UPDATE_DOCS=1 rewrites it
@@ -425,38 +398,38 @@ def test_doc_example_is_real_output(capsys, monkeypatch):
 
 
 def test_missing_path_and_files_that_are_not_bags(tmp_path, capsys):
-    one_error_line(*run(capsys, 'imu-check', tmp_path / 'none.bag'), 'no such file')
+    one_error_line(*run_cli(capsys, 'imu-check', tmp_path / 'none.bag'), 'no such file')
     text = tmp_path / 'notes.txt'
     text.write_text('not a bag\n')
-    one_error_line(*run(capsys, 'imu-check', text), 'not a bag')
+    one_error_line(*run_cli(capsys, 'imu-check', text), 'not a bag')
     fake = tmp_path / 'fake.bag'
     fake.write_bytes(b'#ROSBAG V2.0\n' + bytes(range(256)) * 4)
-    one_error_line(*run(capsys, 'imu-check', fake), 'cannot read the bag')
+    one_error_line(*run_cli(capsys, 'imu-check', fake), 'cannot read the bag')
 
 
 def test_bag_without_an_imu_and_with_two(real, tmp_path, capsys):
     b = bh.Builder()
-    odometry = [(ODOM, ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), real.odom_q[k]))
+    odometry = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(s, (0, 0, 0), real.odom_q[k]))
                 for k, (t, s) in enumerate(zip(real.odom_record[:20], real.odom_stamp[:20]))]
     bag = bh.write_bag(tmp_path / 'odom_only', odometry)
-    one_error_line(*run(capsys, 'imu-check', bag),
+    one_error_line(*run_cli(capsys, 'imu-check', bag),
                    'no sensor_msgs/msg/Imu topic in the bag', ODOM)
-    imu = [(topic, IMU_TYPE, int(t), imu_message(b, s, real.q[k], real.gyro[k], real.accel[k]))
+    imu = [(topic, bh.IMU_TYPE, int(t), imu_message(b, s, real.q[k], real.gyro[k], real.accel[k]))
            for topic in ('/imu/a', '/imu/b')
            for k, (t, s) in enumerate(zip(real.imu_record[:20], real.imu_stamp[:20]))]
     bag = bh.write_bag(tmp_path / 'two', imu + odometry)
-    one_error_line(*run(capsys, 'imu-check', bag), '/imu/a, /imu/b', '--imu-topic')
-    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', ODOM), 'not a sensor_msgs')
-    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/c'), 'no topic /imu/c')
-    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-topic',
-                        '/imu/b'), 'not a reference orientation')
-    status, out, err = run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-tf', 'odom',
-                           'base_link')
+    one_error_line(*run_cli(capsys, 'imu-check', bag), '/imu/a, /imu/b', '--imu-topic')
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--imu-topic', ODOM), 'not a sensor_msgs')
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--imu-topic', '/imu/c'), 'no topic /imu/c')
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-topic',
+                            '/imu/b'), 'not a reference orientation')
+    status, out, err = run_cli(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--ref-tf',
+                               'odom', 'base_link')
     one_error_line(status, out, err, '--ref-tf: the bag has no tf2_msgs/msg/TFMessage topic')
     assert '--tf:' not in err
-    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--start', 100),
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--start', 100),
                    'no message between --start and --end')
-    one_error_line(*run(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--end', 0.1),
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--imu-topic', '/imu/a', '--end', 0.1),
                    '/imu/a: stamps has 6 sample(s): at least 10 needed')
 
 
@@ -464,7 +437,7 @@ def test_every_message_left_out_says_why(real, tmp_path, capsys):
     q = real.q * 2  # not unit quaternions: the boundary refuses them
     q[:5] = np.nan
     bag = write(tmp_path / 'refused', real, q=q)
-    one_error_line(*run(capsys, 'imu-check', bag),
+    one_error_line(*run_cli(capsys, 'imu-check', bag),
                    f'imu-check: {IMU}: all {len(q)} messages left out: 5 with a NaN or Inf in '
                    f'the orientation, {len(q) - 5} with a quaternion whose norm is off 1 by '
                    'more than 0.001: nothing to check\n')
@@ -474,7 +447,7 @@ def test_messages_left_out_are_told_before_an_error(real, tmp_path, capsys):
     accel = real.accel.copy()
     accel[4:] = np.inf  # 4 messages left: too few for the checks
     bag = write(tmp_path / 'few', real, accel=accel)
-    status, out, err = run(capsys, 'imu-check', bag)
+    status, out, err = run_cli(capsys, 'imu-check', bag)
     warning, line = err.splitlines()
     assert status == 2 and out == ''
     assert warning == (f'warning: {IMU}: {len(accel) - 4} of {len(accel)} messages left out: '
@@ -488,10 +461,10 @@ def test_messages_left_out_are_told_before_an_error_of_the_reference(real, tmp_p
     gyro = real.gyro.copy()
     gyro[3] = np.nan
     b = bh.Builder()
-    frozen = [(ODOM, ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
+    frozen = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
               for t, q in zip(real.odom_record, real.odom_q)]
     bag = write(tmp_path / 'frozen', real, gyro=gyro, more=frozen)
-    status, out, err = run(capsys, 'imu-check', bag, '--ref-topic', ODOM)
+    status, out, err = run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM)
     warning, line = err.splitlines()
     assert status == 2 and out == ''
     assert warning.startswith(f'warning: {IMU}: 1 of {len(gyro)} messages left out: ')
@@ -502,7 +475,7 @@ def test_a_finite_spike_is_left_out_as_a_nan_is(real, tmp_path, capsys):
     gyro = real.gyro.copy()
     gyro[5, 0] = 1.5e298
     bag = write(tmp_path / 'spike', real, gyro=gyro)
-    status, out, err = run(capsys, 'imu-check', bag)
+    status, out, err = run_cli(capsys, 'imu-check', bag)
     assert status == 0 and out.endswith('\nno fault\n')
     assert err == (f'warning: {IMU}: 1 of {len(gyro)} messages left out: 1 with a reading '
                    'beyond 1e+09 in angular_velocity or linear_acceleration (no sensor reads '
@@ -511,10 +484,10 @@ def test_a_finite_spike_is_left_out_as_a_nan_is(real, tmp_path, capsys):
 
 def test_a_reference_with_one_stamp_is_named(real, tmp_path, capsys):
     b = bh.Builder()
-    frozen = [(ODOM, ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
+    frozen = [(ODOM, bh.ODOM_TYPE, int(t), b.odometry(real.odom_stamp[0], (0, 0, 0), q))
               for t, q in zip(real.odom_record, real.odom_q)]
     bag = write(tmp_path / 'frozen', real, more=frozen)
-    one_error_line(*run(capsys, 'imu-check', bag, '--ref-topic', ODOM),
+    one_error_line(*run_cli(capsys, 'imu-check', bag, '--ref-topic', ODOM),
                    f'imu-check: {ODOM}: the reference has 1 distinct stamp(s) among its '
                    f'{len(frozen)} usable orientations: at least 10 needed\n')
 
@@ -522,14 +495,12 @@ def test_a_reference_with_one_stamp_is_named(real, tmp_path, capsys):
 def test_the_rate_is_the_stamps_rate(real, tmp_path, capsys):
     stamp = real.imu_stamp.copy()
     stamp[500:] += 100.0  # a gap of 100 s: over the whole span, 8 messages a second
-    rec = Recording(np.column_stack([real.imu_record, stamp, real.q, real.gyro, real.accel]),
-                    np.zeros((0, 6)))
-    bag = write(tmp_path / 'gap', rec)
-    status, out, err = run(capsys, 'imu-check', bag)
+    bag = write(tmp_path / 'gap', real, stamps=stamp)
+    status, out, err = run_cli(capsys, 'imu-check', bag)
     assert status == 1 and err == ''
     assert out.startswith(f'imu: {IMU} (frame base_link), {len(stamp)} messages, 50 Hz\n')
     assert re.search(r'\nstamps +fault +period 0.02 s, ', out)
-    assert json.loads(run(capsys, 'imu-check', bag, '--json')[1])['imu']['rate'] == \
+    assert json.loads(run_cli(capsys, 'imu-check', bag, '--json')[1])['imu']['rate'] == \
         pytest.approx(50, rel=1e-3)
 
 
@@ -538,9 +509,7 @@ def test_stamps_taken_on_arrival_are_shown(real, tmp_path, capsys):
     steps = np.where(np.random.default_rng(5).random(len(real.imu_stamp) - 1) < 0.5,
                      0.018, 0.022)
     stamp = real.imu_stamp[0] + np.concatenate([[0.0], np.cumsum(steps)])
-    rec = Recording(np.column_stack([real.imu_record, stamp, real.q, real.gyro, real.accel]),
-                    np.zeros((0, 6)))
-    status, out, err = run(capsys, 'imu-check', write(tmp_path / 'bursts', rec))
+    status, out, err = run_cli(capsys, 'imu-check', write(tmp_path / 'bursts', real, stamps=stamp))
     rate = f'{1 / np.median(steps):.4g} Hz'
     assert out.startswith(f'imu: {IMU} (frame base_link), {len(stamp)} messages, {rate}\n')
     row = re.search(r'\nstamps +ok +(.*)', out).group(1)
@@ -561,10 +530,10 @@ def test_damaged_bags_are_named(real, tmp_path, capsys):
     """The damage is met while the messages are read, after the bag opened."""
     ros1 = bh.real_excerpt(tmp_path / 'excerpt.bag', 600)
     damage(ros1)
-    one_error_line(*run(capsys, 'imu-check', ros1), f'{ros1}: cannot read the bag: ')
+    one_error_line(*run_cli(capsys, 'imu-check', ros1), f'{ros1}: cannot read the bag: ')
     mcap = write(tmp_path / 'mcap', real, storage='mcap')
     damage(next(mcap.glob('*.mcap')), at=0.1)
-    one_error_line(*run(capsys, 'imu-check', mcap), f'{mcap}: cannot read the bag: ')
+    one_error_line(*run_cli(capsys, 'imu-check', mcap), f'{mcap}: cannot read the bag: ')
 
 
 def test_options_that_do_not_fit(capsys):
@@ -573,12 +542,12 @@ def test_options_that_do_not_fit(capsys):
             (['--ref-bag', bh.REAL], ['--ref-bag: say which reference to take from it']),
             (['--start', 10, '--end', 5], ['--end 5 is before --start 10']),
             (['--start', -1], ['>= 0 seconds'])):
-        status, out, err = run(capsys, 'imu-check', bh.REAL, *argv)
+        status, out, err = run_cli(capsys, 'imu-check', bh.REAL, *argv)
         assert status == 2 and out == '' and err.count('\n') == 1, err
         assert err.startswith('rot-tools: error: ')
         for word in words:
             assert word in err, err
-    status, out, err = run(capsys, '--plot', 'x.png', 'imu-check', bh.REAL)
+    status, out, err = run_cli(capsys, '--plot', 'x.png', 'imu-check', bh.REAL)
     assert (status, out, err) == (2, '', 'rot-tools: error: --plot does not apply to '
                                   'imu-check\n')
 

@@ -1,8 +1,4 @@
-"""
-check_imu blames the right culprit, and says unknown where the data cannot tell.
-
-Faults put into the real Jackal recording and a synthetic body, by scipy and plain NumPy.
-"""
+"""check_imu blames the right culprit, and says unknown where the data cannot tell."""
 
 import math
 

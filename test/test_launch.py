@@ -1,9 +1,4 @@
-"""
-launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would.
-
-launch_ros is not on PyPI: :func:`launch_command` reads the few tags the file uses, and any
-other tag fails the test.
-"""
+"""launch/rot_tools.launch.xml: checked against the package, and run as ros2 launch would."""
 
 from pathlib import Path
 import re

@@ -1,8 +1,4 @@
-"""
-rot_tools.ros.node.messages' MarkerArray of a picture, and the ~/screw_axis DELETE (no DDS needed).
-
-Expected values come from (R, b) and a screw chosen here, never from rot_tools.io.drawing.
-"""
+"""The node's MarkerArray and ~/screw_axis DELETE, expected from (R, b), not io.drawing."""
 
 import math
 

@@ -4,6 +4,7 @@ import math
 
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Quaternion
 from geometry_msgs.msg import QuaternionStamped, TransformStamped, Vector3Stamped
+from math_helpers import unit
 from nav_msgs.msg import Odometry
 import numpy as np
 import pytest
@@ -69,11 +70,6 @@ def quaternion_fields(q):
 
 def quaternion(q):
     return Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
-
-
-def unit(v):
-    v = np.asarray(v, dtype=float)
-    return v / np.linalg.norm(v)
 
 
 # Inbound

@@ -1,9 +1,4 @@
-"""
-A newcomer's walk: README.md's commands, run as written in a fresh clone after ``make run``.
-
-doc/development.md ("A newcomer's walk") says what the walk does and what it leaves out:
-every README.md command is walked or named in :data:`NOT_WALKED` with its reason.
-"""
+"""README.md's commands, run as written in a fresh clone after ``make run``."""
 
 from importlib import metadata
 import os

@@ -1,12 +1,4 @@
-"""
-What the package imports, and what the tests need of the machine.
-
-core and io import no ROS, no import points up, no module uses another library's private
-names; a test module that needs what this machine lacks is skipped, not an error.
-
-A name starting with ``_`` is a library's own business (so is ``rclpy.impl``): its next
-release may rename it. Dunder names and the documented namedtuple methods are public.
-"""
+"""What the package imports, and what the tests need of the machine."""
 
 import ast
 import os

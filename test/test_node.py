@@ -1,8 +1,4 @@
-"""
-rotation_node over real DDS: node and tester in two rclpy contexts, one namespace a test.
-
-Expected values from the math module and, independently, scipy's Rotation, to 1e-12.
-"""
+"""rotation_node over real DDS, against the math module and scipy's Rotation."""
 
 import math
 import time
@@ -48,10 +44,11 @@ STAMPED = ALWAYS[1:]
 # Messages and expected values
 
 
-def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map'):
+def pose_stamped(q=(0.0, 0.0, 0.0, 1.0), p=(0.0, 0.0, 0.0), frame='map', stamp=0):
     """Build a PoseStamped with quaternion q = (x, y, z, w) and position p."""
     msg = PoseStamped()
     msg.header.frame_id = frame
+    msg.header.stamp.sec = stamp
     msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
     o = msg.pose.orientation
     o.x, o.y, o.z, o.w = map(float, q)
@@ -234,6 +231,15 @@ class Rig:
             lambda: all(self.received(n)[-1].header.stamp.sec == stamp for n in names[1:]),
             what=f'outputs of input {stamp}')
         return {name: self.received(name)[-1] for name in names}
+
+    def output_of(self, name, stamp):
+        """Wait for output ``name`` (one message) of the input stamped ``stamp``; return it."""
+        def stamped(msg):
+            return (msg.markers[0] if name == 'markers' else msg).header.stamp.sec == stamp
+        self.tester.spin_until(lambda: any(map(stamped, self.received(name))),
+                               what=f'~/{name} of input {stamp}')
+        (msg,) = filter(stamped, self.received(name))
+        return msg
 
     def roundtrip(self, kind, msg, marker=True):
         """send() then outputs()."""
@@ -530,8 +536,7 @@ def test_sensor_data_publisher_is_served(rig):
     q, p = POSE_CASES['general']
     msg = pose_stamped(q, p)
     msg.header.stamp.sec = 4242
-    # Best effort both ways: resend until the node has seen one (a first sample may race
-    # the reader's side of the match).
+    # Best effort both ways: resend until the node has seen one.
     deadline = time.monotonic() + 5.0
     while not rig.received('screw') and time.monotonic() < deadline:
         pub.publish(msg)

@@ -79,15 +79,6 @@ def defaults(rig):
     assert set_one(rig.node, 'input_covariance', 'rotvec').successful
 
 
-def covariance_of(rig, stamp):
-    """Wait for the ~/rpy_covariance of the input stamped ``stamp``; return it."""
-    def found():
-        return [m for m in rig.received('rpy_covariance') if m.header.stamp.sec == stamp]
-    rig.tester.spin_until(found, what=f'~/rpy_covariance of input {stamp}')
-    (msg,) = found()
-    return msg
-
-
 def served(rig, kind, msg):
     """Send msg; wait for its outputs (not ~/rpy_covariance); return its stamp."""
     stamp = rig.send(kind, msg)
@@ -98,7 +89,7 @@ def served(rig, kind, msg):
 def assert_no_covariance(rig, kind, stamp):
     """Check ~/rpy_covariance has nothing for ``stamp``: a good input sent after it has one."""
     later = served(rig, kind, BUILD[kind](np.eye(SIZE[kind]) * 1e-4))
-    covariance_of(rig, later)
+    rig.output_of('rpy_covariance', later)
     assert [m for m in rig.received('rpy_covariance') if m.header.stamp.sec == stamp] == []
 
 
@@ -110,7 +101,7 @@ def refused(rig):
 def test_each_input_publishes_its_rpy_covariance(rig, kind):
     cov = spd(SIZE[kind], seed=len(kind))
     stamp = served(rig, kind, BUILD[kind](cov))
-    msg = covariance_of(rig, stamp)
+    msg = rig.output_of('rpy_covariance', stamp)
     assert isinstance(msg, PoseWithCovarianceStamped) and msg.header.frame_id == 'map'
     assert quat(msg.pose.pose.orientation).tolist() == Q.tolist()
     assert xyz(msg.pose.pose.position).tolist() == (list(P) if SIZE[kind] == 6 else [0.0] * 3)
@@ -136,7 +127,7 @@ def test_describe_gives_the_standard_deviations_in_angle_unit(rig):
     cov = np.diag([1e-4, 4e-4, 9e-4])
     stamp = served(rig, 'imu', BUILD['imu'](cov))
     expected = expected_covariance(Q, cov)
-    got = np.reshape(covariance_of(rig, stamp).pose.covariance, (6, 6))  # rad², always
+    got = np.reshape(rig.output_of('rpy_covariance', stamp).pose.covariance, (6, 6))  # always rad²
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
     stddev = rig.report()['rpy_stddev']
     assert stddev['unit'] == 'deg'
@@ -171,7 +162,7 @@ def test_input_covariance_rpy_passes_the_block_through(rig):
     assert set_one(rig.node, 'input_covariance', 'rpy').successful
     for kind in ('odometry', 'imu'):
         cov = spd(SIZE[kind], seed=11)
-        got = covariance_of(rig, served(rig, kind, BUILD[kind](cov))).pose.covariance
+        got = rig.output_of('rpy_covariance', served(rig, kind, BUILD[kind](cov))).pose.covariance
         expected = np.zeros((6, 6))
         expected[6 - len(cov):, 6 - len(cov):] = cov
         np.testing.assert_array_equal(np.reshape(got, (6, 6)), expected)
@@ -196,7 +187,7 @@ def test_gimbal_lock_publishes_nothing_and_describe_says_so(rig):
     assert report['refused'] == before  # not a refusal of the input
     assert_no_covariance(rig, 'imu', stamp)
     assert set_one(rig.node, 'input_covariance', 'rpy').successful  # given as roll/pitch/yaw
-    got = covariance_of(rig, served(rig, 'imu', BUILD['imu'](np.eye(3) * 1e-4, q)))
+    got = rig.output_of('rpy_covariance', served(rig, 'imu', BUILD['imu'](np.eye(3) * 1e-4, q)))
     np.testing.assert_array_equal(np.reshape(got.pose.covariance, (6, 6))[3:, 3:],
                                   np.eye(3) * 1e-4)
 
@@ -245,9 +236,10 @@ def test_huge_and_subnormal_covariances_are_published_as_they_are(rig):
     huge = np.diag([1e308, 2e307, 1e307, 1e308, 1e308, 1e308])
     with warnings.catch_warnings(record=True) as caught:  # the node runs in this thread
         warnings.simplefilter('always')
-        got = np.reshape(covariance_of(rig, served(rig, 'odometry', BUILD['odometry'](huge)))
-                         .pose.covariance, (6, 6))
-        tiny = covariance_of(rig, served(rig, 'imu', BUILD['imu'](5e-324 * np.eye(3))))
+        stamp = served(rig, 'odometry', BUILD['odometry'](huge))
+        got = np.reshape(rig.output_of('rpy_covariance', stamp).pose.covariance, (6, 6))
+        stamp = served(rig, 'imu', BUILD['imu'](5e-324 * np.eye(3)))
+        tiny = rig.output_of('rpy_covariance', stamp)
     assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
     expected = expected_covariance(Q, huge / 1e308) * 1e308  # linear in the covariance
     assert np.isfinite(got).all()

@@ -1,8 +1,4 @@
-"""
-rotation_node's /diagnostics over real DDS: an IMU's conventions and the inputs' counts.
-
-The Jackal's IMU replayed in real time to two nodes, as recorded and with its gyro in deg/s.
-"""
+"""rotation_node's /diagnostics: an IMU's conventions and the inputs' counts."""
 
 from pathlib import Path
 import time

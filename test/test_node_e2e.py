@@ -1,13 +1,4 @@
-"""
-End-to-end: rotation_node as a separate process, driven over DDS from this one.
-
-Starts the ``rotation_node`` console script (next to this Python, or on PATH; without an
-installed package, ``python -m rot_tools.ros.node.rotation_node``) in a namespace unique to
-this test run, publishes to its inputs, receives every output, calls both services and a
-parameter service, then stops it with SIGTERM or SIGINT: exit status 0, and
-no traceback. Also: a remapped input, the start-up warning for a misspelt parameter, and the
-shipped parameter file.
-"""
+"""rotation_node as a separate process, driven over DDS from this one."""
 
 import math
 import os
@@ -31,24 +22,11 @@ from rot_tools import (
 from rot_tools.ros.node.rotation_node import PARAMETERS
 from scipy.spatial.transform import Rotation
 from std_srvs.srv import Trigger
+from test_node import pose_stamped, xyz
 import yaml
 
 ATOL = 1e-12
 PARAMETER_FILE = REPO / 'config' / 'rot_tools.yaml'
-
-
-def pose_stamped(q, p, stamp):
-    msg = PoseStamped()
-    msg.header.frame_id = 'map'
-    msg.header.stamp.sec = stamp
-    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = map(float, p)
-    o = msg.pose.orientation
-    o.x, o.y, o.z, o.w = map(float, q)
-    return msg
-
-
-def xyz(v):
-    return np.array([v.x, v.y, v.z])
 
 
 class Remote:
@@ -81,11 +59,7 @@ class Remote:
         return dict(zip(names, map(parameter_value_to_python, response.values)))
 
     def send(self, kind, msg, marker=True):
-        """
-        Publish msg until its outputs come back; return {output: message}.
-
-        Inputs are best effort: a first sample can race the node's side of discovery.
-        """
+        """Publish msg until its outputs come back (best effort); return {output: message}."""
         names = ('quaternion', 'axis_angle', 'euler_angles', 'screw') + (
             ('screw_axis',) if marker else ())
 
@@ -137,7 +111,7 @@ def test_node_process_end_to_end(tester, node_process):
     # Every input, every output.
     q, p = np.array([0.1, -0.5, 0.3, 0.8]), (1.0, 2.0, -0.5)
     q /= np.linalg.norm(q)
-    check_outputs(remote.send('pose', pose_stamped(q, p, 0)), quaternion_to_matrix(q),
+    check_outputs(remote.send('pose', pose_stamped(q, p)), quaternion_to_matrix(q),
                   np.asarray(p))
     euler = Vector3Stamped()
     euler.header.frame_id = 'map'
@@ -161,8 +135,8 @@ def test_node_process_end_to_end(tester, node_process):
     assert report['refused']['total'] == report['refused']['rodrigues_at_pi'] == 1  # a half turn
 
     # ~/screw_path.
-    request = GetPlan.Request(start=pose_stamped((0, 0, 0, 1), (0, 0, 0), 1),
-                              goal=pose_stamped((0, 0, 1, 0), (0, 0, 2), 2), tolerance=0.0)
+    request = GetPlan.Request(start=pose_stamped((0, 0, 0, 1), (0, 0, 0), stamp=1),
+                              goal=pose_stamped((0, 0, 1, 0), (0, 0, 2), stamp=2), tolerance=0.0)
     plan = tester.call(GetPlan, f'{node}/screw_path', request).plan
     assert len(plan.poses) == 21 and plan.header.frame_id == 'map'
     assert plan.poses[0] == request.start and plan.poses[-1] == request.goal
@@ -181,9 +155,9 @@ def test_node_process_end_to_end(tester, node_process):
     deadline = time.monotonic() + 10.0
     while remote.describe()['refused']['zero_quaternion'] == 0:
         assert time.monotonic() < deadline, 'the zero quaternion was never refused'
-        remote.pubs['pose'].publish(pose_stamped((0, 0, 0, 0), (0, 0, 0), 999))
+        remote.pubs['pose'].publish(pose_stamped((0, 0, 0, 0), (0, 0, 0), stamp=999))
         tester.spin_for(0.2)
-    out = remote.send('pose', pose_stamped((0, 0, 0.6, 0.8), (1, 0, 0), 0))
+    out = remote.send('pose', pose_stamped((0, 0, 0.6, 0.8), (1, 0, 0)))
     check_outputs(out, quaternion_to_matrix((0, 0, 0.6, 0.8)), np.array([1.0, 0.0, 0.0]),
                   degrees=True)
     refused = remote.describe()['refused']
@@ -199,7 +173,7 @@ def test_node_process_end_to_end(tester, node_process):
 def test_signal_ends_the_node_cleanly(tester, node_process, signum):
     process = node_process()
     remote = Remote(tester, process.name)
-    remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
+    remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
     assert_clean_exit(*process.stop(signum))
 
 
@@ -366,19 +340,14 @@ FAST_DDS_PROFILE = REPO / 'config' / 'fastdds_profile.xml'
 
 def test_the_opt_in_fast_dds_profile_is_read_whole_with_the_users_two_settings(
         tester, node_process):
-    """
-    Check that the shipped profile turns on as doc/node.md says, and the node runs under it.
-
-    Fast DDS reads it (an XML error would be logged and the profile left out), and the node
-    answers as without it.
-    """
+    """Check that the shipped profile turns on as doc/node.md says, and the node runs under it."""
     page = (REPO / 'doc' / 'node.md').read_text(encoding='utf-8')
     for setting in ('FASTRTPS_DEFAULT_PROFILES_FILE=', 'RMW_FASTRTPS_USE_QOS_FROM_XML=1'):
         assert f'export {setting}' in page
     process = node_process(env_extra={'FASTRTPS_DEFAULT_PROFILES_FILE': str(FAST_DDS_PROFILE),
                                       'RMW_FASTRTPS_USE_QOS_FROM_XML': '1'})
     remote = Remote(tester, process.name)
-    out = remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), 0))
+    out = remote.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
     check_outputs(out, quaternion_to_matrix((0, 0, 1, 0)), np.array([1.0, 0.0, 0.0]))
     assert_clean_exit(*process.stop(signal.SIGINT))
     logs = process.out_path.read_text() + process.err_path.read_text()  # (Fast DDS: stdout)

@@ -1,27 +1,8 @@
 """
-The executor rotation_node runs on, rclpy's SingleThreadedExecutor, proved in use.
+The executor rotation_node runs on (rclpy's SingleThreadedExecutor) under floods and signals.
 
-It was chosen over rclpy's EventsExecutor, whose event queue grows without bound under a
-flood beyond the node's pace and makes service calls wait behind it
-(bench/bench_overload.py). The node spins it through rclpy.spin, in one
-context (one DDS participant) with its services; these tests show, on the real executor and
-(where a signal or the process matters) on the real console script:
-
-- SIGINT and SIGTERM under a flood of poses, good and bad at 3000 msg/s and back to back:
-  exit status 0 (within conftest.STOP_WITHIN), no traceback (and after floods, with ten
-  screw paths queued; idle, test_entry's sweep);
-- both services and the parameter services answer, correctly, while ~/pose is flooded;
-- overload, measured in messages rather than seconds so that no machine's speed decides:
-  100,000 poses arriving while the loop is held cost no memory (the EventsExecutor took
-  ~14 MB for them, an event per message), and while a back-to-back flood saturates the
-  node, every call of ~/describe and the parameter services is served within a few
-  bursts of inputs (the EventsExecutor served them after the whole queue);
-- a flood of bad input is refused and counted, and the node keeps serving;
-- a parameter request rclpy cannot read is refused with one log line, and the node serves on;
-- the graph (what ``ros2 node info`` prints) lists the node's services as its own.
-
-The in-process node tests (test_node.py) run on the same executor: conftest's Tester spins
-nodes under test on a SingleThreadedExecutor of their context.
+Clean exits on SIGINT/SIGTERM under a flood, services answered while flooded, overload counted
+in messages (never seconds), malformed requests refused, the services listed as the node's own.
 """
 
 import contextlib
@@ -69,9 +50,7 @@ BAD = [pose((math.nan, 0.0, 0.0, 1.0)), pose((0.0, 0.0, 0.0, 0.0)),
 
 FLOODER = """
 import json, os, signal, sys, time
-# This process's stdout carries only its own lines ('ready', counts): Fast DDS logs to
-# stdout (e.g. a shared-memory port it could not lock, and then does without), so the
-# middleware's stdout is sent to stderr.
+# stdout carries only this process's lines ('ready', counts): Fast DDS's logs go to stderr.
 protocol = os.fdopen(os.dup(1), 'w')
 os.dup2(2, 1)
 
@@ -80,9 +59,7 @@ def say(line):
     print(line, file=protocol, flush=True)
 
 
-# SIGINT ends the flood, even where this process was started with SIGINT ignored (a
-# background job of a non-interactive shell): between two messages, so that the count says
-# exactly what was published (a KeyboardInterrupt could come between a publish and its count).
+# SIGINT (even if ignored at start) ends the flood between two messages: the count is exact.
 stopped = []
 signal.signal(signal.SIGINT, lambda signum, frame: stopped.append(signum))
 import rclpy
@@ -91,8 +68,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.signals import SignalHandlerOptions
 topic, rate, count = sys.argv[1], sys.argv[2], int(sys.argv[6])
 poses = json.loads(sys.argv[3])  # (NaN and Infinity included)
-# No rclpy signal handler: it would shut the context down on SIGINT before Python raises
-# KeyboardInterrupt, and a publish in between would fail.
+# No rclpy signal handler: it would shut the context down before the flood stops.
 rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
 node = rclpy.create_node('flooder', namespace=sys.argv[4])
 pub = node.create_publisher(PoseStamped, topic, qos_profile_sensor_data)
@@ -138,15 +114,7 @@ say(sent)
 
 
 class Flood:
-    """
-    Publishes ``poses`` in turn on ``topic`` at about ``rate`` msg/s, from a process.
-
-    A process of its own, so that the flood keeps its pace whatever this one does. ``rate``
-    'max' publishes back to back, as fast as one publisher can; then ``count`` messages at
-    most (wait_sent() waits for them). Each message's header.stamp.sec counts up from
-    1_000_000, so a flooded output is told apart; ``sent`` is how many were published, once
-    the flood has ended.
-    """
+    """Publishes ``poses`` on ``topic`` at ``rate`` msg/s ('max': ``count`` back to back)."""
 
     def __init__(self, topic, poses, rate=2000.0, count=-1):
         data = json.dumps([(_quaternion(m), _position(m), m.header.frame_id) for m in poses])
@@ -209,10 +177,7 @@ def describe(tester, name):
 
 SIGNALLED_FLOODS = {'good and bad, 3000 msg/s': (GOOD + BAD, 3000.0),
                     'good, back to back': (GOOD, 'max')}
-"""The floods a node is signalled under: the signal lands in the middleware's take, a
-callback, a publish or a refusal's warning (a SIGINT in rclpy's take_message once came out
-as a traceback). An idle node is signalled at test_entry's 'ready' and 'ready + 100 ms',
-and after a flood by this module's other tests."""
+"""The floods a node is signalled under (an idle node: test_entry's sweep)."""
 
 
 @pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
@@ -270,8 +235,7 @@ def test_a_flood_of_bad_input_is_refused_and_the_node_keeps_serving(tester, node
     begin = time.monotonic()
     with Flood(f'{name}/pose', BAD, rate=3000.0) as flood:
         time.sleep(2.0)
-    # Inputs are best effort and a flood beyond the node's pace loses some: every reason
-    # must be counted, never more than were sent.
+    # Best effort, some lost: every reason counted, never more than were sent.
     reasons = ('non_finite', 'zero_quaternion', 'non_unit_quaternion')
     refused = {}
     deadline = time.monotonic() + TIMEOUT
@@ -317,14 +281,7 @@ HELD_GROWTH_MB = 4.0
 
 def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
         tester, own_context, namespace, monkeypatch):
-    """
-    Check that a flood beyond the node's pace costs lost inputs, never memory.
-
-    The node's loop is held in a callback (as by a node busy beyond its pace) while 100,000
-    poses arrive. Whatever the machine's speed, the middleware keeps the input's last 10;
-    an executor that queued anything per arriving message (the EventsExecutor: an event
-    each, ~140 bytes) would grow with the count, however slowly they came.
-    """
+    """Check that poses arriving while the node's loop is held cost lost inputs, never memory."""
     held, release = threading.Event(), threading.Event()
     real = RotationNode.on_pose
 
@@ -346,8 +303,7 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
         while not held.is_set():  # (best effort: sent until one arrives)
             pub.publish(pose(frame='hold'))
             assert held.wait(0.1) or thread.is_alive()
-        # Held first, then flooded: a flood started before could all be sent, and taken by the
-        # running loop, before 'hold' arrived (a loaded machine's stock run: none kept after).
+        # Held first, then flooded: else the running loop could take the flood before 'hold'.
         with Flood(f'{prefix}/pose', GOOD, rate='max', count=HELD_FLOOD) as flood:
             before = rss_mb()
             assert flood.wait_sent() == HELD_FLOOD
@@ -355,10 +311,7 @@ def test_inputs_arriving_while_the_loop_is_held_cost_no_memory(
             release.set()
             assert growth < HELD_GROWTH_MB, f'{growth:.1f} MB for {HELD_FLOOD} inputs held'
             # And the node serves on: the flood's last inputs, queued behind 'hold', are taken
-            # (while the flood's publisher is still there: the middleware drops what a reader
-            # kept from a writer once that writer is gone). Services come first: a describe
-            # may be answered before them, or even between 'hold' and them when 'hold' ended
-            # a burst; ask again until they are in.
+            # (asked again until in: services may be served first).
             deadline = time.monotonic() + TIMEOUT
             report = describe(tester, prefix)
             while report['stamp']['sec'] < 1_000_000 and time.monotonic() < deadline:
@@ -382,13 +335,7 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
     """
     Check that a node saturated by the fastest flood one publisher sends still answers every call.
 
-    Promptly is counted in inputs, not seconds, so that no machine's speed decides: the
-    flood mixes good poses with bad ones, which the node counts as refused, and ~/describe
-    reports the count. Calls go one at a time, each parameter call between two describes;
-    between two describe answers the node may handle only what arrives during the round
-    trips plus the burst under way — a few dozen inputs on any machine, since the node and
-    this test share the CPUs alike. The EventsExecutor answered after every input event
-    queued before the call: thousands (and some calls not within 16 s).
+    Promptly is counted in inputs: the refusals ~/describe counts between two answers.
     """
     process = node_process()
     name = process.name
@@ -411,10 +358,7 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
         assert response is not None, 'no answer from ~/describe'
         return yaml.safe_load(response.message)['refused']['total']
 
-    # A subscriber on an output, as a user's RViz or recorder: in a participant of its own,
-    # as it would be. Sharing the caller's, the node's outputs at the flood's pace would fill
-    # its receive queues, and a reply dropped there comes again only at the node's next
-    # heartbeat (the caller's loss: no node can repair it).
+    # A subscriber on an output, as a user's RViz or recorder, in a participant of its own.
     listener = rclpy.create_node('listener', namespace=f'/{RUN}', context=own_context)
     listener.create_subscription(TwistStamped, f'{name}/screw', lambda msg: None, 10)
     tester.spin_until(lambda: tester.node.count_subscribers(f'{name}/screw') >= 1,
@@ -432,11 +376,8 @@ def test_every_call_is_answered_promptly_under_a_back_to_back_flood(
                 counts.append(refused())
     listener.destroy_node()
     lags = [b - a for a, b in zip(counts, counts[1:])]
-    # Three answers in four: a lag may come from outside the node (this test or a DDS thread
-    # descheduled by another process on the two cores, or a request or reply lost and sent
-    # again at its writer's next heartbeat, 3 s later: the node handles inputs meanwhile);
-    # the defect guarded against delays every answer. (Seen with both suites at once: 1387
-    # among lags of 23-88; another time three of 7971-10321 among sixteen of 8-40.)
+    # Three answers in four: a lag may come from outside the node (a descheduled thread, a
+    # reply resent at the next heartbeat); the defect guarded against delays every answer.
     slow = [lag for lag in lags if lag > SERVED_WITHIN]
     assert len(slow) <= len(lags) // 4, f'inputs between two answers: {lags}'
     assert process.process.poll() is None
@@ -448,13 +389,7 @@ PARAMETER_SERVICES = ('describe_parameters', 'get_parameter_types', 'get_paramet
 
 
 def test_the_graph_lists_the_services_as_the_nodes_own(tester, node_process):
-    """
-    Check that the node's services are its own, as ``ros2 node info`` reports them.
-
-    ``ros2 node info`` prints Node.get_service_names_and_types_by_node: ~/describe,
-    ~/screw_path and the parameter services must be there, under the node's name, and no
-    other node (a hidden one of a second participant) may serve them.
-    """
+    """Check that the node's services are its own, as ``ros2 node info`` reports them."""
     process = node_process('-p', 'angle_unit:=deg')
     wait_until_serving(tester, process)
     namespace, node = process.name.rsplit('/', 1)
@@ -513,13 +448,7 @@ def test_the_inputs_keep_a_burst_of_50(own_context, namespace):
 @pytest.mark.parametrize('malformed', ['type_99', 'empty_name'])
 def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(
         tester, node_process, malformed):
-    """
-    Check a SetParameters request rclpy cannot read: refused, one log line, no traceback.
-
-    A parameter of type 99 (no rcl_interfaces/msg/ParameterType) makes rclpy's own
-    SetParameters service raise as it reads the request; a parameter without a name would
-    be declared. Both are answered as refused and every later call is answered.
-    """
+    """Check a SetParameters request rclpy cannot read: refused, one log line, no traceback."""
     from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterValue
     process = node_process()
     name = process.name
@@ -546,13 +475,7 @@ def test_a_malformed_parameter_request_is_refused_and_the_node_keeps_serving(
 
 def test_ten_queued_screw_paths_of_the_largest_hold_neither_describe_nor_a_signal(
         tester, node_process):
-    """
-    Ten ~/screw_path requests of MAX_PATH_STEPS + 1 poses each, queued, then ~/describe.
-
-    The executor serves each ready service in turn: describe's answer comes before the
-    tenth path (a queue served in arrival order answers it last), and SIGINT with ten more
-    queued ends the node cleanly.
-    """
+    """Ten largest ~/screw_path requests queued: describe answered first; SIGINT ends cleanly."""
     from rot_tools.ros.node.screw_path import MAX_PATH_STEPS
     process = node_process()
     wait_until_serving(tester, process)

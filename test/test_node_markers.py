@@ -1,8 +1,4 @@
-"""
-rotation_node's pictures over real DDS: ~/markers (MarkerArray) and ~/screw_axis (Marker).
-
-Expected values from the input alone (scipy's Rotation and the closed-form screw), not rot_tools.
-"""
+"""rotation_node's ~/markers and ~/screw_axis, expected from the input alone."""
 
 import math
 import time
@@ -38,24 +34,6 @@ def helix(u, c, theta, d, p0, n):
     """p0 carried by the constant-screw motion, at s = 0, 1/n, ..., 1."""
     s = np.linspace(0.0, 1.0, n + 1)
     return c + Rotation.from_rotvec(np.outer(s, theta * u)).apply(p0 - c) + np.outer(s * d, u)
-
-
-def markers_of(rig, stamp):  # noqa: F811
-    """Wait for the ~/markers array of the input stamped ``stamp``; return it."""
-    def arrays():
-        return [a for a in rig.received('markers') if a.markers[0].header.stamp.sec == stamp]
-    rig.tester.spin_until(arrays, what=f'~/markers of input {stamp}')
-    (array,) = arrays()
-    return array
-
-
-def screw_axis_of(rig, stamp):  # noqa: F811
-    """Wait for the ~/screw_axis Marker of the input stamped ``stamp``; return it."""
-    def markers():
-        return [m for m in rig.received('screw_axis') if m.header.stamp.sec == stamp]
-    rig.tester.spin_until(markers, what=f'~/screw_axis of input {stamp}')
-    (marker,) = markers()
-    return marker
 
 
 def check_array(array, stamp, frame):
@@ -94,7 +72,7 @@ def test_markers_of_a_screw_motion(make_rig, case, kind):  # noqa: F811
     rig = make_rig(marker_scale=scale)  # noqa: F811
     build = pose_stamped if kind == 'pose' else transform_stamped
     stamp = rig.send(kind, build(q, b, frame='odom'))
-    m = check_array(markers_of(rig, stamp), stamp, 'odom')
+    m = check_array(rig.output_of('markers', stamp), stamp, 'odom')
     R, u, c, theta, d = expected_screw(q, b)
     check_triad(m, R, b, scale)
     size = 1 + np.linalg.norm(c) + abs(d)
@@ -123,7 +101,7 @@ def test_markers_of_a_screw_motion(make_rig, case, kind):  # noqa: F811
     assert label.text == (f'theta = {theta:.4g} rad, d = {d + 0.0:.4g}, '
                           f'screw pitch = {d / theta + 0.0:.4g} /rad\npath: origin')
     # ~/screw_axis of the same input: the arrow from c along l̂, marker_scale long.
-    arrow = screw_axis_of(rig, stamp)
+    arrow = rig.output_of('screw_axis', stamp)
     assert (arrow.ns, arrow.id, arrow.action) == ('screw_axis', 0, Marker.ADD)
     np.testing.assert_allclose(xyz(arrow.points[0]), c, rtol=0, atol=1e-12 * size)
     np.testing.assert_allclose(xyz(arrow.points[1]) - c, scale * u, rtol=0, atol=1e-12 * size)
@@ -132,7 +110,7 @@ def test_markers_of_a_screw_motion(make_rig, case, kind):  # noqa: F811
 def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):  # noqa: F811
     rig = make_rig(angle_unit='deg', marker_scale=2.0)  # noqa: F811
     stamp = rig.send('euler', euler_stamped((90.0, 0.0, 0.0)))  # ZYX: 90° about z
-    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    m = check_array(rig.output_of('markers', stamp), stamp, 'map')
     R = Rotation.from_rotvec([0.0, 0.0, math.pi / 2]).as_matrix()
     check_triad(m, R, np.zeros(3), 2.0)
     arc = np.array([xyz(p) for p in m[PATH].points])
@@ -147,26 +125,26 @@ def test_pure_rotation_draws_the_arc_of_the_x_tip(make_rig):  # noqa: F811
 
 def test_identity_deletes_what_was_drawn_on_both_topics(rig):  # noqa: F811
     before = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
-    markers_of(rig, before)
-    screw_axis_of(rig, before)
+    rig.output_of('markers', before)
+    rig.output_of('screw_axis', before)
     stamp = rig.send('pose', pose_stamped((0, 0, 0, 1)))
-    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    m = check_array(rig.output_of('markers', stamp), stamp, 'map')
     assert [m[i].action for i in range(6)] == [Marker.DELETE] * 6
-    arrow = screw_axis_of(rig, stamp)
+    arrow = rig.output_of('screw_axis', stamp)
     assert (arrow.ns, arrow.id, arrow.action) == ('screw_axis', 0, Marker.DELETE)
     assert quat(arrow.pose.orientation).tolist() == [0.0, 0.0, 0.0, 1.0]
     # Drawing again after the identity: ADD on both.
     after = rig.send('euler', euler_stamped((0.5, 0.0, 0.0)))
-    assert all(x.action == Marker.ADD for x in markers_of(rig, after).markers)
-    assert screw_axis_of(rig, after).action == Marker.ADD
+    assert all(x.action == Marker.ADD for x in rig.output_of('markers', after).markers)
+    assert rig.output_of('screw_axis', after).action == Marker.ADD
 
 
 def test_pure_translation_deletes_the_axis_and_draws_a_straight_path(rig):  # noqa: F811
     before = rig.send('pose', pose_stamped((0.6, 0, 0, 0.8), (0, 1, 0)))
-    markers_of(rig, before)
+    rig.output_of('markers', before)
     b = np.array([1.0, -2.0, 2.0])
     stamp = rig.send('transform', transform_stamped((0, 0, 0, 1), b))
-    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    m = check_array(rig.output_of('markers', stamp), stamp, 'map')
     assert m[AXIS].action == Marker.DELETE
     check_triad(m, np.eye(3), b, 1.0)
     assert [xyz(p).tolist() for p in m[PATH].points] == [[0, 0, 0], b.tolist()]
@@ -188,8 +166,8 @@ def test_publish_markers_false_silences_both(make_rig):  # noqa: F811
         rig.roundtrip('pose', msg, marker=False)
     assert set_one(rig.node, 'publish_markers', True).successful
     stamp = rig.send('pose', pose_stamped((0, 1, 0, 0), (0, 0, 1), frame='odom'))
-    markers_of(rig, stamp)
-    screw_axis_of(rig, stamp)
+    rig.output_of('markers', stamp)
+    rig.output_of('screw_axis', stamp)
     assert set_one(rig.node, 'publish_markers', False).successful
     rig.roundtrip('pose', pose_stamped((0, 0, 0, 1)), marker=False)
     rig.roundtrip('pose', pose_stamped((1, 0, 0, 0), (1, 1, 1)), marker=False)
@@ -212,7 +190,7 @@ def test_the_picture_timer_exists_only_while_markers_are_published(make_rig):  #
     assert set_one(rig.node, 'publish_markers', True).successful
     assert len(picture_timers()) == 1
     stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
-    markers_of(rig, stamp)
+    rig.output_of('markers', stamp)
     assert set_one(rig.node, 'publish_markers', False).successful
     assert picture_timers() == []
 
@@ -223,8 +201,8 @@ def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
     monkeypatch.setattr(pictures, 'MARKER_RATE', 0.5)
     rig = make_rig()  # noqa: F811
     shown = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0), frame='odom'))
-    markers_of(rig, shown)
-    screw_axis_of(rig, shown)
+    rig.output_of('markers', shown)
+    rig.output_of('screw_axis', shown)
     waiting = rig.roundtrip('euler', euler_stamped((0.5, 0.0, 0.0), frame='base_link'),
                             marker=False)['screw'].header.stamp.sec
     drawn = ([(shown, 'odom', [Marker.ADD] * 6)], [(shown, 'odom', [Marker.ADD])])
@@ -240,7 +218,7 @@ def test_switching_markers_off_deletes_the_picture_and_drops_the_one_waiting(
     assert actions(rig) == deleted, f'the picture of input {waiting} was drawn'
     # Switched on again, the next input is drawn; off after an identity: nothing to delete.
     after = rig.send('pose', pose_stamped((0, 0, 0, 1)))
-    markers_of(rig, after)
+    rig.output_of('markers', after)
     assert set_one(rig.node, 'publish_markers', False).successful
     rig.tester.spin_for(0.5)
     assert [a[1:] for a in actions(rig)[0][2:]] == [('map', [Marker.DELETE] * 6)]
@@ -254,8 +232,8 @@ def test_markers_are_throttled_and_the_last_input_is_drawn(rig):  # noqa: F811
         angle = 0.02 * (k + 1)
         last = rig.send('pose', pose_stamped((0, 0, math.sin(angle), math.cos(angle)),
                                              (0.01 * k, 0, 0)))
-    markers_of(rig, last)  # the last input is always drawn
-    screw_axis_of(rig, last)
+    rig.output_of('markers', last)  # the last input is always drawn
+    rig.output_of('screw_axis', last)
     elapsed = time.monotonic() - start
     rig.tester.spin_for(2.0 / MARKER_RATE)
     arrays = rig.received('markers')
@@ -270,15 +248,15 @@ def test_markers_are_throttled_and_the_last_input_is_drawn(rig):  # noqa: F811
 def test_a_picture_too_large_for_float64_deletes_and_warns(make_rig):  # noqa: F811
     rig = make_rig(marker_scale=1e308)  # noqa: F811
     stamp = rig.send('pose', pose_stamped((0, 0, 0.6, 0.8), (1, 0, 0)))
-    m = check_array(markers_of(rig, stamp), stamp, 'map')
+    m = check_array(rig.output_of('markers', stamp), stamp, 'map')
     assert [m[i].action for i in range(6)] == [Marker.DELETE] * 6
-    assert screw_axis_of(rig, stamp).action == Marker.DELETE
+    assert rig.output_of('screw_axis', stamp).action == Marker.DELETE
     rig.tester.spin_until(lambda: rig.node_logs(Log.WARN), what='the warning on /rosout')
     (warning,) = rig.node_logs(Log.WARN)
     assert 'no picture: the picture of this motion overflows float64' in warning.msg
     assert set_one(rig.node, 'marker_scale', 1.0).successful  # and the node keeps drawing
     stamp = rig.send('pose', pose_stamped((0, 0, 1, 0), (1, 0, 0)))
-    assert all(x.action == Marker.ADD for x in markers_of(rig, stamp).markers)
+    assert all(x.action == Marker.ADD for x in rig.output_of('markers', stamp).markers)
 
 
 def test_markers_qos(rig):  # noqa: F811

@@ -203,8 +203,7 @@ def test_node_publishes_the_chain_at_each_new_common_time(followed):
     tester, node, reference = followed.tester, followed.node, followed.reference
     outputs = {name: tester.wait_messages(f'{node.name}/{name}', 1, TIMEOUT * 4)
                for name in ('quaternion', 'axis_angle', 'screw')}
-    # The test side may hear the publisher later than the node: outputs are checked from
-    # when it hears the chain.
+    # Outputs are checked from when the test side hears the chain (maybe after the node).
     tester.spin_until(lambda: len(reference.samples.get('gimbal', (0, {}))[1]) >= 2
                       and 'camera' in reference.static, TIMEOUT * 4, 'the TF chain')
     enough = len(outputs['quaternion']) + 15
@@ -250,8 +249,7 @@ def test_describe_names_source_frames_and_chain_and_the_type_hash_is_upstreams(f
     assert data['frame_id'] == 'odom'
     assert data['tf'] == {'source': f'{namespace}/tf', 'reference_frame': 'odom',
                           'body_frame': 'gimbal', 'chain': CHAIN}
-    # Every endpoint of /tf and /tf_static, the node's and the publisher's, has upstream
-    # Jazzy's type hash.
+    # Every endpoint of /tf and /tf_static has upstream Jazzy's type hash.
     for topic in (f'{namespace}/tf', f'{namespace}/tf_static'):
         tester.spin_until(
             lambda: tester.node.get_publishers_info_by_topic(topic)

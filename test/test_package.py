@@ -66,12 +66,7 @@ def _imported_top_level_modules(path, module_level_only=False):
 
 
 def undeclared_imports(paths, declared):
-    """
-    Return {rosdep key: [file names]} for the imports of ``paths`` not in ``declared``.
-
-    Standard library, rot_tools, the test directory's own modules and PIP_ONLY modules need
-    no key; any other module must be a ROS package of the ament index or in ROSDEP_KEYS.
-    """
+    """Return {rosdep key: [file names]} for the imports of ``paths`` not in ``declared``."""
     local = {path.stem for path in (REPO / 'test').glob('*.py')} | {PACKAGE}
     missing = {}
     for path in paths:

@@ -1,8 +1,4 @@
-"""
-rot_tools.cli.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files.
-
-The helix against the closed form with scipy's Rotation; files by their bytes and parsed SVG.
-"""
+"""rot_tools.cli.plot and ``rot-tools ... --plot FILE``: the figure's artists and the files."""
 
 import math
 from pathlib import Path

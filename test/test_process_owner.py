@@ -1,10 +1,4 @@
-"""
-rot_tools leaves the process and the wire to their owners and speaks to libraries by name.
-
-Read from each module's syntax tree: no hand-written serialisation, no taking over the process
-(os._exit, gc, ctypes, environment, signal handlers but rot-tools' main), no reaching into
-rclpy's or rosbags' internals, and no measured figure in a docstring or comment.
-"""
+"""rot_tools leaves the process and the wire to their owners (read from its syntax trees)."""
 
 import ast
 import io

@@ -1,10 +1,10 @@
 """rot_tools.io.report: the report's keys and values, and its YAML / JSON text."""
 
-import json
 import math
 import subprocess
 import sys
 
+from conftest import strict_json
 import numpy as np
 import pytest
 import rot_tools as rt
@@ -30,16 +30,6 @@ def _walk(x):
             yield from _walk(v)
 
 
-def _no_constants(name):
-    raise ValueError(f'JSON constant {name} is not valid JSON')
-
-
-def _json_loads(text):
-    """Strict JSON: NaN / Infinity tokens (which json.loads accepts by default) fail."""
-    return json.loads(text, parse_constant=_no_constants)
-
-
-# ---------------------------------------------------------------------------------------
 # transform_report
 
 
@@ -104,9 +94,8 @@ def test_quaternion_is_scipys_canonical_one_in_ros_order(axis, angle):
     R = axis_angle_to_matrix(axis, angle)
     rep = transform_report(R)['quaternion']
     q = np.array([rep['x'], rep['y'], rep['z'], rep['w']])
-    # Independent of rot_tools: the closed form (sin(θ/2)·l̂, cos(θ/2)) and scipy. Away from
-    # π the sign is fixed (w > 0); at π rounding of R decides it, so compare up to sign and
-    # check the canonical rule: w > 0, or w = 0 and the first non-zero of x, y, z positive.
+    # The closed form (sin(θ/2)·l̂, cos(θ/2)) and scipy; at π (rounding of R decides the sign)
+    # up to sign, and the canonical rule: w > 0, or w = 0 and the first non-zero positive.
     expected = np.append(math.sin(angle / 2) * axis, math.cos(angle / 2))
     reference = Rotation.from_matrix(R).as_quat(canonical=True)
     if angle < math.pi:
@@ -222,8 +211,8 @@ def test_pure_translation_has_infinite_pitch():
     assert 'pitch: .inf\n' in to_yaml(rep)
     text = to_json(rep)
     assert '"pitch": "inf"' in text
-    assert _json_loads(text)['screw']['pitch'] == 'inf'
-    assert float(_json_loads(text)['screw']['pitch']) == math.inf
+    assert strict_json(text)['screw']['pitch'] == 'inf'
+    assert float(strict_json(text)['screw']['pitch']) == math.inf
 
 
 def test_identity_screw():
@@ -249,7 +238,6 @@ def test_bad_input_raises(args, match):
         transform_report(*args)
 
 
-# ---------------------------------------------------------------------------------------
 # Numbers and text
 
 
@@ -383,9 +371,9 @@ def test_yaml_round_trips_through_pyyaml():
 def test_json_round_trips():
     text = to_json(TRICKY, precision=None)
     expected = dict(TRICKY, floats=TRICKY['floats'][:-2] + ['inf', '-inf'])
-    assert _json_loads(text) == expected
+    assert strict_json(text) == expected
     rep = transform_report(R0, B0, all_sequences=True)
-    assert _json_loads(to_json(rep, precision=None)) == rep
+    assert strict_json(to_json(rep, precision=None)) == rep
     assert to_json({'x': [-0.0, math.nan], 'k': {'n': 1}}) == (
         '{\n  "x": [\n    0.0,\n    "nan"\n  ],\n  "k": {\n    "n": 1\n  }\n}\n')
 
@@ -414,7 +402,7 @@ def test_yaml_and_json_read_back_to_the_same_numbers(precision):
     yaml = pytest.importorskip('yaml')
     for rep in _reports():
         from_yaml = yaml.safe_load(to_yaml(rep, precision))
-        from_json = _numbers_of_json(_json_loads(to_json(rep, precision)))
+        from_json = _numbers_of_json(strict_json(to_json(rep, precision)))
         assert from_yaml == from_json
         assert from_yaml['matrix'] == [[round_number(x, precision) for x in row]
                                        for row in rep['matrix']]
@@ -425,7 +413,7 @@ def test_yaml_and_json_read_back_to_the_same_numbers(precision):
 def test_numpy_scalars_are_written_as_python_ones():
     data = {'f': np.float32(0.5), 'i': np.int64(-3), 'b': np.bool_(True), 'g': np.float64(-0.0)}
     assert to_yaml(data) == 'f: 0.5\ni: -3\nb: true\ng: 0.0\n'
-    assert _json_loads(to_json(data)) == {'f': 0.5, 'i': -3, 'b': True, 'g': 0.0}
+    assert strict_json(to_json(data)) == {'f': 0.5, 'i': -3, 'b': True, 'g': 0.0}
 
 
 def test_writers_refuse_unknown_types():
@@ -471,9 +459,7 @@ def test_decompose_matches_the_separate_functions():
 
 
 def test_decompose_fields_are_the_public_functions_bit_for_bit():
-    # The node's and the report's one pass: every field is what its public function gives,
-    # bit for bit, one item and a batch (π, gimbal lock of rpy and of XYZ, identity, pure
-    # translation), as NumPy scalars and arrays for one item.
+    # Every field of the one pass is what its public function gives, bit for bit.
     rng = np.random.default_rng(8)
     R = np.concatenate([rt.rotvec_to_matrix(rng.normal(size=(20, 3))),
                         rt.axis_angle_to_matrix(rng.normal(size=(5, 3)), np.pi),

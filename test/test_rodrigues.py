@@ -1,9 +1,7 @@
 """
 The Rodrigues (Gibbs) vector g = tan(θ/2)·l̂: library, ``rot-tools rodrigues``, the report.
 
-Cross-checked against scipy's rotation vector (tan(θ/2)·axis of Rotation.as_rotvec) and
-scipy's matrices; round trips over random and adversarial inputs (near 0, near π); at θ = π
-g is infinite and refused. The node's ~/rodrigues: test_node.py.
+Cross-checked against scipy's rotation vector and matrices; at θ = π g is refused.
 """
 
 import math
@@ -137,7 +135,6 @@ def test_a_non_rotation_is_refused():
         matrix_to_rodrigues(np.diag([1.0, 1.0, -1.0]))
 
 
-# ---------------------------------------------------------------------------------------
 # rot-tools rodrigues and the report
 
 

@@ -1,8 +1,4 @@
-"""
-Chasles' screw decomposition, its inverse, exponential coordinates and interpolation.
-
-Transforms are built from known screws; the checks are a screw's defining properties.
-"""
+"""Chasles' screw decomposition, its inverse, exponential coordinates and interpolation."""
 
 from hypothesis import given, settings
 import math_helpers as h

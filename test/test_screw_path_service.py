@@ -1,8 +1,4 @@
-"""
-~/screw_path against a hostile caller: every failure counted, replies bounded in bytes.
-
-A reply's size is checked against rclpy's own CDR serialisation of it.
-"""
+"""~/screw_path against a hostile caller: failures counted, replies bounded in bytes."""
 
 import math
 

@@ -1,8 +1,4 @@
-"""
-tf2_msgs on the pip path: the TFMessage that tools/build_tf2_msgs.py builds from vendor/.
-
-It is Jazzy's /tf type (its hash), crosses DDS between processes, and a failed build is one line.
-"""
+"""tf2_msgs on the pip path: the TFMessage tools/build_tf2_msgs.py builds from vendor/."""
 
 import importlib.util
 import os

@@ -1,8 +1,4 @@
-"""
-An orientation against ground truth: matching, time offset, alignment, mounting and errors.
-
-References: scipy's expm and Rotation, brute-force searches, and simulated motion.
-"""
+"""An orientation against ground truth: matching, time offset, alignment, mounting, errors."""
 
 import math
 import tracemalloc

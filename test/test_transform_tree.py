@@ -1,8 +1,4 @@
-"""
-TransformTree: lookups across a tree of frames, at any time, and its refusals.
-
-References: 4×4 products from the root down, and T0·expm(s·logm(T0⁻¹·T1)) with scipy.linalg.
-"""
+"""TransformTree: lookups across a tree of frames, at any time, and its refusals."""
 
 import math
 from pathlib import Path
