@@ -636,8 +636,10 @@ def main(args=None):
         if rclpy.ok() and not str(exc).startswith(LOST_INTERRUPT):
             raise
     finally:
-        executor.shutdown()
+        # The reverse of their making: the executor's signal guard condition, which rclpy's
+        # signal thread triggers, goes after the node.
         node.destroy_node()
+        executor.shutdown()
         rclpy.try_shutdown()
     return 0
 
