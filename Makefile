@@ -57,10 +57,15 @@ test:
 	  $(MAKE) --no-print-directory test-pinned; \
 	fi
 
+# The package's bytecode first, as an install writes it: the tests start hundreds of
+# rot-tools and rotation_node processes, and without it (PYTHONDONTWRITEBYTECODE) each one
+# compiles the source again.
 test-pinned: $(VENV)/.stamp-test
+	$(BIN)/python -m compileall -q rot_tools
 	$(BIN)/python -m pytest -p no:cacheprovider $(PYTEST_ARGS)
 
 test-stock: $(STOCK_VENV)/.stamp-test
+	$(STOCK_BIN)/python -m compileall -q rot_tools
 	$(STOCK_BIN)/python -m pytest -p no:cacheprovider $(PYTEST_ARGS)
 
 bench: $(VENV)/.stamp-tf2_msgs
